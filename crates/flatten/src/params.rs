@@ -1,0 +1,120 @@
+//! Parameters, results and errors of a flattening.
+
+use flatcut_geom::DVec2;
+use flatcut_mesh::TopologyError;
+
+use crate::Method;
+
+/// A vertex held at a fixed 2D position (mm) during the flattening.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pin {
+    pub vertex: u32,
+    pub position: DVec2,
+}
+
+/// What to compute. Build with `FlattenParams::new(method)` and the `with_*` builders.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct FlattenParams {
+    pub method: Method,
+    /// Largest allowed stretch in percent (principal stretch σ1 ≤ 1 + P/100), if any.
+    pub max_stretch_pct: Option<f64>,
+    /// Largest allowed compression in percent (σ2 ≥ 1 − P/100), if any; 0 for leather.
+    pub max_compress_pct: Option<f64>,
+    /// Pinned vertices.
+    pub pins: Vec<Pin>,
+    /// Iteration cap of the nonlinear methods.
+    pub max_iters: usize,
+    /// Relative decrease of the energy below which a nonlinear method stops.
+    pub rel_tolerance: f64,
+    /// Relative length error below which a developable input counts as developable (`developable`).
+    pub developable_tolerance: f64,
+}
+
+impl FlattenParams {
+    pub const DEFAULT_MAX_ITERS: usize = 200;
+    pub const DEFAULT_REL_TOLERANCE: f64 = 1e-9;
+    pub const DEFAULT_DEVELOPABLE_TOLERANCE: f64 = 1e-6;
+
+    pub fn new(method: Method) -> Self {
+        Self {
+            method,
+            max_stretch_pct: None,
+            max_compress_pct: None,
+            pins: Vec::new(),
+            max_iters: Self::DEFAULT_MAX_ITERS,
+            rel_tolerance: Self::DEFAULT_REL_TOLERANCE,
+            developable_tolerance: Self::DEFAULT_DEVELOPABLE_TOLERANCE,
+        }
+    }
+
+    pub fn with_max_stretch_pct(mut self, p: Option<f64>) -> Self {
+        self.max_stretch_pct = p;
+        self
+    }
+
+    pub fn with_max_compress_pct(mut self, p: Option<f64>) -> Self {
+        self.max_compress_pct = p;
+        self
+    }
+
+    pub fn with_pins(mut self, pins: Vec<Pin>) -> Self {
+        self.pins = pins;
+        self
+    }
+
+    pub fn with_max_iters(mut self, n: usize) -> Self {
+        self.max_iters = n;
+        self
+    }
+}
+
+/// How the solve went.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FlattenInfo {
+    pub iterations: usize,
+    /// Final value of the method's energy (area-weighted mean density where that applies).
+    pub final_energy: f64,
+    /// Messages for the user: constraints that could not be met, fallbacks taken (with where).
+    pub warnings: Vec<String>,
+}
+
+/// A flattening: one 2D position per vertex of the input mesh, in mm at true scale.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Flattening {
+    pub uv: Vec<DVec2>,
+    pub info: FlattenInfo,
+}
+
+/// Why a flattening failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum FlattenError {
+    /// The mesh is not a single manifold disk (or has bad elements).
+    #[error(transparent)]
+    Topology(#[from] TopologyError),
+    /// `developable` was asked for a surface that is not developable.
+    #[error(
+        "the surface is not developable: largest |K| = {max_abs_k:.3e} /mm² (angle defect {angle_defect:.3e} rad) at vertex {vertex} ({x:.3}, {y:.3}, {z:.3}); use --method isometric"
+    )]
+    NotDevelopable {
+        max_abs_k: f64,
+        angle_defect: f64,
+        vertex: u32,
+        x: f64,
+        y: f64,
+        z: f64,
+    },
+    /// A pin refers to a vertex that does not exist, or pins contradict each other.
+    #[error("pin {index}: {reason}")]
+    BadPin { index: usize, reason: String },
+    /// The linear solver failed (the system was singular or not positive definite).
+    #[error("linear solve failed in {stage}: {reason}")]
+    Solver { stage: &'static str, reason: String },
+    /// The method did not reach a valid (finite, flip-free) result.
+    #[error("{method} did not converge: {reason}")]
+    NoConvergence { method: Method, reason: String },
+    /// A bug in flatcut: please report it.
+    #[error("internal error (please report): {0}")]
+    Internal(String),
+}

@@ -1,0 +1,15 @@
+//! Triangle meshes in millimetres: the indexed [`TriMesh`], readers and writers (OBJ, STL, PLY),
+//! topology (edges, boundary loops, components, manifold checks), tessellation of parametric
+//! surfaces to a chordal tolerance, geodesic distances, and the per-triangle distortion kernel
+//! shared by the flattener and the report.
+//!
+//! **Architecture invariant:** this crate knows 3D surfaces and 2D maps of them, but nothing of
+//! patterns, sheets or machines.
+
+pub mod distortion;
+pub mod topology;
+pub mod trimesh;
+
+pub use distortion::{FaceDistortion, face_distortion};
+pub use topology::{Topology, TopologyError, check_disk};
+pub use trimesh::TriMesh;

@@ -1,0 +1,1 @@
+//! Curves: Bézier, B-spline/NURBS, Hermite, interpolating splines, arc length, Frenet frames.

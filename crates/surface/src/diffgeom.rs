@@ -1,0 +1,1 @@
+//! Differential geometry of surfaces through [`crate::ParamSurface`].

@@ -1,0 +1,21 @@
+//! Parametric curves and surfaces in millimetres, and their differential geometry.
+//!
+//! The two capability traits are [`ParamCurve`] and [`ParamSurface`]; every curve and patch type
+//! implements one of them, and everything downstream (differential geometry, tessellation,
+//! flattening) works through them.
+//!
+//! Vocabulary (shared with the rest of flatcut): `eval` (a point), `deriv` (derivatives),
+//! `subdivide`, `nearest` (closest point), `arclen`.
+//!
+//! **Architecture invariant:** evaluators are pure and total on their domain; construction
+//! validates (knots non-decreasing, weights positive, counts consistent, coordinates finite) and
+//! returns [`SurfaceError`] rather than panicking later.
+
+pub mod curve;
+pub mod diffgeom;
+pub mod error;
+pub mod patch;
+pub mod traits;
+
+pub use error::SurfaceError;
+pub use traits::{Domain2, DomainKind, ParamCurve, ParamSurface, SurfaceDerivs};
