@@ -7,9 +7,12 @@
 //! patterns, sheets or machines.
 
 pub mod distortion;
+pub mod io;
 pub mod topology;
 pub mod trimesh;
+pub mod weld;
 
 pub use distortion::{FaceDistortion, face_distortion};
+pub use io::{MeshIoError, read_mesh, write_obj};
 pub use topology::{Topology, TopologyError, check_disk};
 pub use trimesh::TriMesh;

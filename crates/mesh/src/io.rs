@@ -1,0 +1,816 @@
+//! Mesh files: OBJ, STL (ASCII and binary) and PLY (ASCII and binary) readers, OBJ and STL
+//! writers.
+//!
+//! The OBJ reader is our own: `tobj` reports no line numbers, and a pattern maker fixing a broken
+//! export needs "line 1234, column 7: vertex index 9001 is out of range (the file has 8000
+//! vertices)". STL goes through `stl_io`, PLY through `ply-rs-bw`; their coincident vertices are
+//! welded within a tolerance (STL stores every triangle's corners separately).
+//!
+//! OBJ texture coordinates (`vt`) are read as a flattening in mm (`TriMesh::flat`): when each
+//! position uses one `vt` throughout the file the mesh keeps its vertices; when a position uses
+//! several (a UV seam), the vertex is split, one copy per distinct `vt`.
+//!
+//! Writers are deterministic (fixed float formatting) and atomic (a temporary file in the same
+//! directory is renamed over the target, so a crash never leaves a half-written pattern).
+
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use flatcut_geom::{DVec2, DVec3, Tolerances};
+
+use crate::TriMesh;
+
+/// Why a mesh file could not be read or written. Every message names the file, and the line and
+/// column where the format has them.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MeshIoError {
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}:{line}:{col}: {msg}", path.display())]
+    Parse {
+        path: PathBuf,
+        line: usize,
+        col: usize,
+        msg: String,
+    },
+    #[error("{}:{line}:{col}: {what} index {index} is out of range (the file has {count} {what}s at this point)", path.display())]
+    BadIndex {
+        path: PathBuf,
+        line: usize,
+        col: usize,
+        what: &'static str,
+        index: i64,
+        count: usize,
+    },
+    #[error("{}:{line}:{col}: {what} has a non-finite coordinate ({text})", path.display())]
+    NonFinite {
+        path: PathBuf,
+        line: usize,
+        col: usize,
+        what: &'static str,
+        text: String,
+    },
+    #[error("{}: {msg}", path.display())]
+    Format { path: PathBuf, msg: String },
+    #[error("{}: the file contains no triangles", path.display())]
+    Empty { path: PathBuf },
+    #[error("{}: unknown mesh format (expected .obj, .stl or .ply)", path.display())]
+    UnknownFormat { path: PathBuf },
+}
+
+/// Reads a mesh, choosing the format from the extension (`.obj`, `.stl`, `.ply`, any case).
+/// STL and PLY vertices closer than [`Tolerances::DEFAULT_WELD_MM`] are welded.
+pub fn read_mesh(path: &Path) -> Result<TriMesh, MeshIoError> {
+    read_mesh_with(path, &Tolerances::DEFAULT)
+}
+
+/// [`read_mesh`] with an explicit weld tolerance (`tol.weld_mm`).
+pub fn read_mesh_with(path: &Path, tol: &Tolerances) -> Result<TriMesh, MeshIoError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default();
+    let bytes = std::fs::read(path).map_err(|source| MeshIoError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    match ext.as_str() {
+        "obj" => {
+            let text = String::from_utf8_lossy(&bytes);
+            parse_obj(&text, path)
+        }
+        "stl" => parse_stl(&bytes, path, tol.weld_mm),
+        "ply" => parse_ply(&bytes, path, tol.weld_mm),
+        _ => Err(MeshIoError::UnknownFormat {
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
+/// True when the path has a mesh extension this module reads.
+pub fn is_mesh_path(path: &Path) -> bool {
+    matches!(
+        path.extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .as_deref(),
+        Some("obj" | "stl" | "ply")
+    )
+}
+
+/// One whitespace-separated token with its 1-based column.
+fn tokens(line: &str) -> impl Iterator<Item = (usize, &str)> {
+    let mut out = Vec::new();
+    let mut start: Option<usize> = None;
+    for (i, c) in line.char_indices() {
+        if c.is_whitespace() {
+            if let Some(s) = start.take() {
+                out.push((s, &line[s..i]));
+            }
+        } else if start.is_none() {
+            start = Some(i);
+        }
+    }
+    if let Some(s) = start {
+        out.push((s, &line[s..]));
+    }
+    out.into_iter()
+        .map(move |(s, t)| (line[..s].chars().count() + 1, t))
+}
+
+struct ObjCtx<'a> {
+    path: &'a Path,
+    line: usize,
+}
+
+impl ObjCtx<'_> {
+    fn parse_err(&self, col: usize, msg: String) -> MeshIoError {
+        MeshIoError::Parse {
+            path: self.path.to_path_buf(),
+            line: self.line,
+            col,
+            msg,
+        }
+    }
+
+    fn float(
+        &self,
+        tok: Option<(usize, &str)>,
+        what: &'static str,
+        eol_col: usize,
+    ) -> Result<f64, MeshIoError> {
+        let Some((col, t)) = tok else {
+            return Err(self.parse_err(eol_col, format!("{what} needs more coordinates")));
+        };
+        let v: f64 = t
+            .parse()
+            .map_err(|_| self.parse_err(col, format!("{what}: '{t}' is not a number")))?;
+        if !v.is_finite() {
+            return Err(MeshIoError::NonFinite {
+                path: self.path.to_path_buf(),
+                line: self.line,
+                col,
+                what,
+                text: t.to_string(),
+            });
+        }
+        Ok(v)
+    }
+
+    /// Resolves an OBJ index (1-based, or negative relative to the current count) to 0-based.
+    fn index(
+        &self,
+        text: &str,
+        col: usize,
+        what: &'static str,
+        count: usize,
+    ) -> Result<u32, MeshIoError> {
+        let i: i64 = text
+            .parse()
+            .map_err(|_| self.parse_err(col, format!("'{text}' is not a {what} index")))?;
+        let resolved = if i > 0 { i - 1 } else { count as i64 + i };
+        if i == 0 || resolved < 0 || resolved >= count as i64 {
+            return Err(MeshIoError::BadIndex {
+                path: self.path.to_path_buf(),
+                line: self.line,
+                col,
+                what,
+                index: i,
+                count,
+            });
+        }
+        Ok(resolved as u32)
+    }
+}
+
+/// Parses OBJ text. `path` only names the source in errors.
+///
+/// Supported: `v x y z [w]` (extra values such as vertex colours are ignored), `vt u [v [w]]`,
+/// `vn` (validated, not kept: normals are recomputed from the geometry), `f` with `a`, `a/b`,
+/// `a/b/c`, `a//c` corners and negative (relative) indices, polygons fan-triangulated. `o`, `g`,
+/// `s`, `usemtl`, `mtllib`, `l`, `p` and unknown statements are ignored; `#` starts a comment.
+pub fn parse_obj(text: &str, path: &Path) -> Result<TriMesh, MeshIoError> {
+    let mut positions: Vec<DVec3> = Vec::new();
+    let mut texcoords: Vec<DVec2> = Vec::new();
+    let mut normal_count = 0usize;
+    // Triangles of (position, texcoord) corners.
+    let mut corners: Vec<[(u32, Option<u32>); 3]> = Vec::new();
+    let mut ctx = ObjCtx { path, line: 0 };
+    for (ln, raw) in text.lines().enumerate() {
+        ctx.line = ln + 1;
+        let line = raw.split('#').next().unwrap_or("");
+        let eol_col = line.trim_end().chars().count() + 1;
+        let mut toks = tokens(line);
+        let Some((_, kw)) = toks.next() else {
+            continue;
+        };
+        match kw {
+            "v" => {
+                let x = ctx.float(toks.next(), "vertex", eol_col)?;
+                let y = ctx.float(toks.next(), "vertex", eol_col)?;
+                let z = ctx.float(toks.next(), "vertex", eol_col)?;
+                positions.push(DVec3::new(x, y, z));
+            }
+            "vt" => {
+                let u = ctx.float(toks.next(), "texture coordinate", eol_col)?;
+                let v = match toks.next() {
+                    Some(t) => ctx.float(Some(t), "texture coordinate", eol_col)?,
+                    None => 0.0,
+                };
+                texcoords.push(DVec2::new(u, v));
+            }
+            "vn" => {
+                for _ in 0..3 {
+                    ctx.float(toks.next(), "normal", eol_col)?;
+                }
+                normal_count += 1;
+            }
+            "f" | "fo" => {
+                let mut poly: Vec<(u32, Option<u32>)> = Vec::new();
+                for (col, t) in toks {
+                    let mut parts = t.split('/');
+                    let vi = parts.next().unwrap_or("");
+                    let v = ctx.index(vi, col, "vertex", positions.len())?;
+                    let vt = match parts.next() {
+                        Some("") | None => None,
+                        Some(s) => {
+                            Some(ctx.index(s, col, "texture coordinate", texcoords.len())?)
+                        }
+                    };
+                    if let Some(s) = parts.next()
+                        && !s.is_empty()
+                    {
+                        ctx.index(s, col, "normal", normal_count)?;
+                    }
+                    if parts.next().is_some() {
+                        return Err(ctx.parse_err(
+                            col,
+                            format!("face corner '{t}' has more than three indices"),
+                        ));
+                    }
+                    poly.push((v, vt));
+                }
+                if poly.len() < 3 {
+                    return Err(ctx.parse_err(
+                        1,
+                        format!(
+                            "a face needs at least 3 corners, this one has {}",
+                            poly.len()
+                        ),
+                    ));
+                }
+                for k in 1..poly.len() - 1 {
+                    corners.push([poly[0], poly[k], poly[k + 1]]);
+                }
+            }
+            _ => {}
+        }
+    }
+    if corners.is_empty() {
+        return Err(MeshIoError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    let all_vt = corners.iter().all(|t| t.iter().all(|c| c.1.is_some()));
+    if !all_vt {
+        return Ok(TriMesh::new(
+            positions,
+            corners.iter().map(|t| t.map(|c| c.0)).collect(),
+        ));
+    }
+    // One vt per position?
+    let mut vt_of: Vec<Option<u32>> = vec![None; positions.len()];
+    let mut consistent = true;
+    for t in &corners {
+        for &(v, vt) in t {
+            let vt = vt.unwrap_or(0);
+            match vt_of[v as usize] {
+                None => vt_of[v as usize] = Some(vt),
+                Some(o) if o != vt && texcoords[o as usize] != texcoords[vt as usize] => {
+                    consistent = false
+                }
+                Some(_) => {}
+            }
+        }
+    }
+    if consistent {
+        let flat = vt_of
+            .iter()
+            .map(|o| o.map(|i| texcoords[i as usize]).unwrap_or(DVec2::ZERO))
+            .collect();
+        let mut m = TriMesh::new(positions, corners.iter().map(|t| t.map(|c| c.0)).collect());
+        m.flat = Some(flat);
+        return Ok(m);
+    }
+    // Split positions along UV seams: one vertex per distinct (position, texcoord value).
+    let mut key_of: BTreeMap<(u32, [u64; 2]), u32> = BTreeMap::new();
+    let mut new_pos = Vec::new();
+    let mut flat = Vec::new();
+    let mut tris = Vec::with_capacity(corners.len());
+    for t in &corners {
+        let tri = t.map(|(v, vt)| {
+            let uv = texcoords[vt.unwrap_or(0) as usize];
+            let key = (v, [uv.x.to_bits(), uv.y.to_bits()]);
+            *key_of.entry(key).or_insert_with(|| {
+                new_pos.push(positions[v as usize]);
+                flat.push(uv);
+                (new_pos.len() - 1) as u32
+            })
+        });
+        tris.push(tri);
+    }
+    let mut m = TriMesh::new(new_pos, tris);
+    m.flat = Some(flat);
+    Ok(m)
+}
+
+/// Parses STL bytes (ASCII or binary, detected by `stl_io`), welding corners within `weld_mm`.
+pub fn parse_stl(bytes: &[u8], path: &Path, weld_mm: f64) -> Result<TriMesh, MeshIoError> {
+    if bytes.iter().all(|b| b.is_ascii_whitespace()) {
+        return Err(MeshIoError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    let mut cur = std::io::Cursor::new(bytes);
+    let fmt = |e: std::io::Error| MeshIoError::Format {
+        path: path.to_path_buf(),
+        msg: format!("not a valid STL file: {e}"),
+    };
+    let reader = stl_io::create_stl_reader(&mut cur).map_err(fmt)?;
+    let mut pts = Vec::new();
+    for (t, tri) in reader.enumerate() {
+        let tri = tri.map_err(|e| MeshIoError::Format {
+            path: path.to_path_buf(),
+            msg: format!("facet {t}: {e}"),
+        })?;
+        for (k, v) in tri.vertices.iter().enumerate() {
+            let p = DVec3::new(v.0[0] as f64, v.0[1] as f64, v.0[2] as f64);
+            if !flatcut_geom::finite3(p) {
+                return Err(MeshIoError::Format {
+                    path: path.to_path_buf(),
+                    msg: format!("facet {t} corner {k} has a non-finite coordinate"),
+                });
+            }
+            pts.push(p);
+        }
+    }
+    if pts.is_empty() {
+        return Err(MeshIoError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    let tris = (0..pts.len() as u32 / 3)
+        .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+        .collect();
+    let m = TriMesh::new(pts, tris).welded(weld_mm);
+    if m.triangles.is_empty() {
+        return Err(MeshIoError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(m)
+}
+
+fn ply_scalar(p: &ply_rs_bw::ply::Property) -> Option<f64> {
+    use ply_rs_bw::ply::Property as P;
+    Some(match *p {
+        P::Char(v) => v as f64,
+        P::UChar(v) => v as f64,
+        P::Short(v) => v as f64,
+        P::UShort(v) => v as f64,
+        P::Int(v) => v as f64,
+        P::UInt(v) => v as f64,
+        P::Float(v) => v as f64,
+        P::Double(v) => v,
+        _ => return None,
+    })
+}
+
+fn ply_list(p: &ply_rs_bw::ply::Property) -> Option<Vec<i64>> {
+    use ply_rs_bw::ply::Property as P;
+    Some(match p {
+        P::ListChar(v) => v.iter().map(|&x| x as i64).collect(),
+        P::ListUChar(v) => v.iter().map(|&x| x as i64).collect(),
+        P::ListShort(v) => v.iter().map(|&x| x as i64).collect(),
+        P::ListUShort(v) => v.iter().map(|&x| x as i64).collect(),
+        P::ListInt(v) => v.iter().map(|&x| x as i64).collect(),
+        P::ListUInt(v) => v.iter().map(|&x| x as i64).collect(),
+        _ => return None,
+    })
+}
+
+/// Parses PLY bytes (ASCII or binary). Needs a `vertex` element with `x`, `y`, `z` and a `face`
+/// element with a `vertex_indices` (or `vertex_index`) list; `u`/`v` or `s`/`t` per vertex become
+/// the flattening. Vertices are welded within `weld_mm`.
+pub fn parse_ply(bytes: &[u8], path: &Path, weld_mm: f64) -> Result<TriMesh, MeshIoError> {
+    if bytes.is_empty() {
+        return Err(MeshIoError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    let fmt = |msg: String| MeshIoError::Format {
+        path: path.to_path_buf(),
+        msg,
+    };
+    let parser = ply_rs_bw::parser::Parser::<ply_rs_bw::ply::DefaultElement>::new();
+    let mut cur = std::io::Cursor::new(bytes);
+    let ply = parser
+        .read_ply(&mut cur)
+        .map_err(|e| fmt(format!("not a valid PLY file: {e}")))?;
+    let verts = ply
+        .payload
+        .get("vertex")
+        .ok_or_else(|| fmt("no 'vertex' element".into()))?;
+    let mut positions = Vec::with_capacity(verts.len());
+    let mut uv = Vec::with_capacity(verts.len());
+    let mut has_uv = true;
+    for (i, v) in verts.iter().enumerate() {
+        let get = |k: &str| v.get(k).and_then(ply_scalar);
+        let (Some(x), Some(y), Some(z)) = (get("x"), get("y"), get("z")) else {
+            return Err(fmt(format!("vertex {i} lacks a numeric x, y or z")));
+        };
+        let p = DVec3::new(x, y, z);
+        if !flatcut_geom::finite3(p) {
+            return Err(fmt(format!("vertex {i} has a non-finite coordinate")));
+        }
+        positions.push(p);
+        match (get("u").or(get("s")), get("v").or(get("t"))) {
+            (Some(a), Some(b)) if a.is_finite() && b.is_finite() => uv.push(DVec2::new(a, b)),
+            _ => has_uv = false,
+        }
+    }
+    let faces = ply.payload.get("face").map(|f| f.as_slice()).unwrap_or(&[]);
+    let mut tris = Vec::new();
+    for (fi, f) in faces.iter().enumerate() {
+        let list = f
+            .get("vertex_indices")
+            .or_else(|| f.get("vertex_index"))
+            .and_then(ply_list)
+            .ok_or_else(|| fmt(format!("face {fi} has no vertex_indices list")))?;
+        if list.len() < 3 {
+            return Err(fmt(format!(
+                "face {fi} has {} corners, needs at least 3",
+                list.len()
+            )));
+        }
+        for &i in &list {
+            if i < 0 || i as usize >= positions.len() {
+                return Err(fmt(format!(
+                    "face {fi} refers to vertex {i}, but the file has {} vertices",
+                    positions.len()
+                )));
+            }
+        }
+        for k in 1..list.len() - 1 {
+            tris.push([list[0] as u32, list[k] as u32, list[k + 1] as u32]);
+        }
+    }
+    if tris.is_empty() {
+        return Err(MeshIoError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    let mut m = TriMesh::new(positions, tris);
+    if has_uv {
+        m.flat = Some(uv);
+        // Welding would merge vertices on a UV seam; keep the file's vertices.
+        return Ok(m);
+    }
+    Ok(m.welded(weld_mm))
+}
+
+/// Digits after the decimal point in written coordinates: 1e-6 mm is far below any weld or
+/// chord tolerance, and fixed formatting makes the output byte-identical across runs.
+const OBJ_DECIMALS: usize = 6;
+
+/// Formats a mesh as OBJ text: `v` per vertex, one `vt` per vertex (mm, true scale) when the mesh
+/// has a flattening, and `f a/a b/b c/c` (or `f a b c`).
+pub fn obj_string(mesh: &TriMesh) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# flatcut mesh: {} vertices, {} triangles, millimetres",
+        mesh.positions.len(),
+        mesh.triangles.len()
+    );
+    let d = OBJ_DECIMALS;
+    let z = |x: f64| if x == 0.0 { 0.0 } else { x }; // no "-0.000000"
+    for p in &mesh.positions {
+        let _ = writeln!(s, "v {:.d$} {:.d$} {:.d$}", z(p.x), z(p.y), z(p.z));
+    }
+    if let Some(f) = &mesh.flat {
+        for q in f {
+            let _ = writeln!(s, "vt {:.d$} {:.d$}", z(q.x), z(q.y));
+        }
+    }
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| i + 1);
+        if mesh.flat.is_some() {
+            let _ = writeln!(s, "f {a}/{a} {b}/{b} {c}/{c}");
+        } else {
+            let _ = writeln!(s, "f {a} {b} {c}");
+        }
+    }
+    s
+}
+
+/// Writes bytes atomically: to a temporary file in the target's directory, then renamed.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), MeshIoError> {
+    let io = |source| MeshIoError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    let res = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if res.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    res.map_err(io)
+}
+
+/// Writes the mesh as OBJ (see [`obj_string`]), atomically.
+pub fn write_obj(mesh: &TriMesh, path: &Path) -> Result<(), MeshIoError> {
+    write_atomic(path, obj_string(mesh).as_bytes())
+}
+
+/// Writes the mesh as binary STL (f32 coordinates, facet normals from the geometry), atomically.
+pub fn write_stl(mesh: &TriMesh, path: &Path) -> Result<(), MeshIoError> {
+    let tris: Vec<stl_io::Triangle> = (0..mesh.triangles.len())
+        .map(|t| {
+            let c = mesh.corners(t);
+            let n = (c[1] - c[0]).cross(c[2] - c[0]).normalize_or_zero();
+            stl_io::Triangle {
+                normal: stl_io::Normal::new([n.x as f32, n.y as f32, n.z as f32]),
+                vertices: c.map(|p| stl_io::Vertex::new([p.x as f32, p.y as f32, p.z as f32])),
+            }
+        })
+        .collect();
+    let mut buf = Vec::new();
+    stl_io::write_stl(&mut buf, tris.iter()).map_err(|source| MeshIoError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    write_atomic(path, &buf)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p() -> &'static Path {
+        Path::new("test.obj")
+    }
+
+    #[test]
+    fn obj_faces_of_all_forms_and_polygons() {
+        let text = "# a quad and a triangle\no thing\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0 1.0\nvn 0 0 1\ng grp\nf 1 2 3 4\nf -4//1 -2//1 -1//1\n";
+        let m = parse_obj(text, p()).unwrap();
+        assert_eq!(m.positions.len(), 4);
+        assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3], [0, 2, 3]]);
+        assert!(m.flat.is_none());
+    }
+
+    #[test]
+    fn obj_consistent_vt_maps_to_flat() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 10 0\nvt 0 10\nvt 10 10\nf 1/1 2/2 3/3\nf 2/2 4/4 3/3\n";
+        let m = parse_obj(text, p()).unwrap();
+        assert_eq!(m.positions.len(), 4);
+        assert_eq!(m.flat.as_ref().unwrap()[3], DVec2::new(10.0, 10.0));
+    }
+
+    #[test]
+    fn obj_inconsistent_vt_splits_vertices() {
+        // Vertex 2 and 3 carry different vt in the two triangles: a UV seam along edge 2-3.
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 5 5\nvt 6 6\nvt 7 7\nf 1/1 2/2 3/3\nf 2/4 4/5 3/6\n";
+        let m = parse_obj(text, p()).unwrap();
+        assert_eq!(m.positions.len(), 6);
+        assert_eq!(m.triangles, vec![[0, 1, 2], [3, 4, 5]]);
+        let f = m.flat.unwrap();
+        assert_eq!(f[3], DVec2::new(5.0, 5.0));
+        assert_eq!(m.positions[3], m.positions[1]);
+    }
+
+    #[test]
+    fn obj_errors_name_line_and_column() {
+        let e = parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n", p()).unwrap_err();
+        match &e {
+            MeshIoError::BadIndex {
+                line,
+                col,
+                index,
+                count,
+                ..
+            } => assert_eq!((*line, *col, *index, *count), (4, 7, 7, 3)),
+            other => panic!("{other:?}"),
+        }
+        assert!(e.to_string().starts_with("test.obj:4:7:"), "{e}");
+        let e = parse_obj("v 0 0 0\nv 1 nan 0\n", p()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                MeshIoError::NonFinite {
+                    line: 2,
+                    col: 5,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        let e = parse_obj("v 0 0 0\n  v 1 inf 0\n", p()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                MeshIoError::NonFinite {
+                    line: 2,
+                    col: 7,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        let e = parse_obj("v 0 0 x0\n", p()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                MeshIoError::Parse {
+                    line: 1,
+                    col: 7,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        let e = parse_obj("v 0 0\n", p()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                MeshIoError::Parse {
+                    line: 1,
+                    col: 6,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        let e = parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n", p()).unwrap_err();
+        assert!(matches!(e, MeshIoError::BadIndex { index: 0, .. }), "{e:?}");
+        let e = parse_obj("v 0 0 0\nv 1 0 0\nf 1 -3 2\n", p()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                MeshIoError::BadIndex {
+                    index: -3,
+                    col: 5,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        let e = parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/4 2 3\n", p()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                MeshIoError::BadIndex {
+                    what: "texture coordinate",
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        let e = parse_obj("v 0 0 0\nv 1 0 0\nf 1 2\n", p()).unwrap_err();
+        assert!(matches!(e, MeshIoError::Parse { line: 3, .. }), "{e:?}");
+        assert!(matches!(parse_obj("", p()), Err(MeshIoError::Empty { .. })));
+        assert!(matches!(
+            parse_obj("# only comments\nv 1 2 3\n", p()),
+            Err(MeshIoError::Empty { .. })
+        ));
+    }
+
+    #[test]
+    fn obj_round_trip_is_exact_to_written_precision_and_deterministic() {
+        let mut m = TriMesh::new(
+            vec![
+                DVec3::new(0.0, 0.0, 0.0),
+                DVec3::new(12.345678, -0.0, 1.0),
+                DVec3::new(0.0, 3.0, -7.25),
+            ],
+            vec![[0, 1, 2]],
+        );
+        m.flat = Some(vec![
+            DVec2::ZERO,
+            DVec2::new(12.0, 1.0),
+            DVec2::new(0.5, 7.0),
+        ]);
+        let s = obj_string(&m);
+        assert!(!s.contains("-0.000000"));
+        assert_eq!(s, obj_string(&m.clone()));
+        let back = parse_obj(&s, p()).unwrap();
+        assert_eq!(back.positions, m.positions);
+        assert_eq!(back.triangles, m.triangles);
+        assert_eq!(back.flat, m.flat);
+    }
+
+    fn tmpdir(tag: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("flatcut-mesh-io-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn files_dispatch_on_extension_and_write_atomically() {
+        let d = tmpdir("dispatch");
+        let m = TriMesh::new(
+            vec![
+                DVec3::new(0.0, 0.0, 0.0),
+                DVec3::new(1.0, 0.0, 0.0),
+                DVec3::new(1.0, 1.0, 0.0),
+                DVec3::new(0.0, 1.0, 0.5),
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+        );
+        let obj = d.join("a.OBJ");
+        write_obj(&m, &obj).unwrap();
+        assert_eq!(read_mesh(&obj).unwrap().triangles, m.triangles);
+        let stl = d.join("a.stl");
+        write_stl(&m, &stl).unwrap();
+        let back = read_mesh(&stl).unwrap();
+        assert_eq!(back.positions.len(), 4, "STL corners are welded");
+        assert_eq!(back.triangles.len(), 2);
+        assert!((back.area() - m.area()).abs() < 1e-6);
+        // No temporary file is left behind.
+        let names: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert!(names.iter().all(|n| !n.contains(".tmp")), "{names:?}");
+        assert!(matches!(
+            read_mesh(&d.join("a.xyz")),
+            Err(MeshIoError::Io { .. })
+        ));
+        std::fs::write(d.join("b.xyz"), "x").unwrap();
+        assert!(matches!(
+            read_mesh(&d.join("b.xyz")),
+            Err(MeshIoError::UnknownFormat { .. })
+        ));
+        std::fs::write(d.join("e.stl"), "").unwrap();
+        assert!(matches!(
+            read_mesh(&d.join("e.stl")),
+            Err(MeshIoError::Empty { .. })
+        ));
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn ascii_stl_with_nan_is_rejected() {
+        let good = "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n";
+        let m = parse_stl(good.as_bytes(), Path::new("t.stl"), 1e-3).unwrap();
+        assert_eq!(m.triangles.len(), 1);
+        let bad = good.replace("vertex 1 0 0", "vertex 1 nan 0");
+        let e = parse_stl(bad.as_bytes(), Path::new("t.stl"), 1e-3).unwrap_err();
+        assert!(e.to_string().starts_with("t.stl:"), "{e}");
+    }
+
+    #[test]
+    fn ply_ascii_and_binary() {
+        let ascii = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+        let m = parse_ply(ascii.as_bytes(), Path::new("q.ply"), 1e-3).unwrap();
+        assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+        let mut bin = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n".to_vec();
+        for v in [[0.0f64, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 1.0]] {
+            for c in v {
+                bin.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        bin.push(3);
+        for i in [0u32, 1, 2] {
+            bin.extend_from_slice(&i.to_le_bytes());
+        }
+        let m = parse_ply(&bin, Path::new("b.ply"), 1e-3).unwrap();
+        assert_eq!(m.positions[2], DVec3::new(0.0, 2.0, 1.0));
+        let bad = ascii.replace("4 0 1 2 3", "3 0 1 9");
+        let e = parse_ply(bad.as_bytes(), Path::new("q.ply"), 1e-3).unwrap_err();
+        assert!(e.to_string().contains("face 0 refers to vertex 9"), "{e}");
+        let nan = ascii.replace("1 1 0\n", "1 nan 0\n");
+        assert!(parse_ply(nan.as_bytes(), Path::new("q.ply"), 1e-3).is_err());
+    }
+}

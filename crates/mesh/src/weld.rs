@@ -1,0 +1,149 @@
+//! Welding coincident vertices: points closer than a tolerance become one vertex.
+//!
+//! A uniform grid of cell size `tol` keyed in a `BTreeMap` (deterministic, no hashing) finds the
+//! candidates in the 27 neighbouring cells, so welding is O(n log n). The first vertex (in index
+//! order) of a cluster is its representative, which keeps the result independent of map order.
+
+use std::collections::BTreeMap;
+
+use flatcut_geom::DVec3;
+
+use crate::TriMesh;
+
+/// Smallest weld tolerance used for cell sizing: below this the grid key would overflow for
+/// coordinates of a few metres, and such a tolerance means "bitwise equal" anyway.
+const MIN_CELL_MM: f64 = 1e-12;
+
+/// Clusters points closer than `tol` (mm). Returns the representatives (in first-appearance
+/// order) and, for each input point, the index of its representative.
+///
+/// Clustering is greedy: a point joins the first earlier representative within `tol`, so chains
+/// of points each within `tol` of the next are not merged transitively beyond one step.
+pub fn weld_points(points: &[DVec3], tol: f64) -> (Vec<DVec3>, Vec<u32>) {
+    let cell = tol.max(MIN_CELL_MM);
+    let key = |p: DVec3| {
+        (
+            (p.x / cell).floor() as i64,
+            (p.y / cell).floor() as i64,
+            (p.z / cell).floor() as i64,
+        )
+    };
+    let mut grid: BTreeMap<(i64, i64, i64), Vec<u32>> = BTreeMap::new();
+    let mut reps: Vec<DVec3> = Vec::new();
+    let mut remap = Vec::with_capacity(points.len());
+    let tol2 = tol * tol;
+    for &p in points {
+        let (kx, ky, kz) = key(p);
+        let mut found: Option<u32> = None;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some(list) = grid.get(&(kx + dx, ky + dy, kz + dz)) {
+                        for &r in list {
+                            let d2 = reps[r as usize].distance_squared(p);
+                            if d2 <= tol2 && found.is_none_or(|f| r < f) {
+                                found = Some(r);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let idx = match found {
+            Some(r) => r,
+            None => {
+                let r = reps.len() as u32;
+                reps.push(p);
+                grid.entry((kx, ky, kz)).or_default().push(r);
+                r
+            }
+        };
+        remap.push(idx);
+    }
+    (reps, remap)
+}
+
+impl TriMesh {
+    /// Merges vertices closer than `tol` mm, remaps the triangles and drops triangles that
+    /// collapse (two corners welded together). Per-vertex data (params, patch, flat) is taken
+    /// from each cluster's first vertex.
+    pub fn welded(&self, tol: f64) -> TriMesh {
+        let (positions, remap) = weld_points(&self.positions, tol);
+        let n = positions.len();
+        let pick = |src: &Option<Vec<_>>| -> Option<Vec<_>> {
+            src.as_ref().map(|v: &Vec<_>| {
+                let mut out = vec![None; n];
+                for (i, &r) in remap.iter().enumerate() {
+                    if out[r as usize].is_none() {
+                        out[r as usize] = Some(v[i]);
+                    }
+                }
+                out.into_iter().map(|x| x.unwrap_or_default()).collect()
+            })
+        };
+        let params = pick(&self.params);
+        let flat = pick(&self.flat);
+        let patch_of_vertex = self.patch_of_vertex.as_ref().map(|v| {
+            let mut out = vec![None; n];
+            for (i, &r) in remap.iter().enumerate() {
+                if out[r as usize].is_none() {
+                    out[r as usize] = Some(v[i]);
+                }
+            }
+            out.into_iter().map(|x| x.unwrap_or(0)).collect()
+        });
+        let triangles = self
+            .triangles
+            .iter()
+            .map(|t| t.map(|v| remap[v as usize]))
+            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+            .collect();
+        TriMesh {
+            positions,
+            triangles,
+            params,
+            patch_of_vertex,
+            flat,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn close_points_merge_far_points_stay() {
+        let pts = [
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 0.0, 4e-4),
+            DVec3::new(1.0, 2e-3, 0.0),
+            DVec3::new(1.0 - 1e-4, 0.0, 0.0),
+        ];
+        let (reps, remap) = weld_points(&pts, 1e-3);
+        assert_eq!(reps.len(), 3);
+        assert_eq!(remap, vec![0, 1, 0, 2, 1]);
+    }
+
+    #[test]
+    fn welding_two_triangles_shares_the_edge_and_drops_collapsed() {
+        let m = TriMesh::new(
+            vec![
+                DVec3::new(0.0, 0.0, 0.0),
+                DVec3::new(1.0, 0.0, 0.0),
+                DVec3::new(0.0, 1.0, 0.0),
+                DVec3::new(1.0, 0.0, 0.0),
+                DVec3::new(1.0, 1.0, 0.0),
+                DVec3::new(0.0, 1.0 + 1e-7, 0.0),
+                DVec3::new(5.0, 5.0, 5.0),
+                DVec3::new(5.0, 5.0, 5.0 + 1e-9),
+                DVec3::new(6.0, 5.0, 5.0),
+            ],
+            vec![[0, 1, 2], [3, 4, 5], [6, 7, 8]],
+        );
+        let w = m.welded(1e-6);
+        assert_eq!(w.positions.len(), 6);
+        assert_eq!(w.triangles, vec![[0, 1, 2], [1, 3, 2]]);
+    }
+}
