@@ -219,6 +219,11 @@ impl Bezier {
             });
         }
         check_finite(coeffs, "power coefficient")?;
+        Ok(Self::from_power_unchecked(coeffs))
+    }
+
+    /// [`Bezier::from_power`] for non-empty coefficients already known to be finite.
+    pub(crate) fn from_power_unchecked(coeffs: &[DVec3]) -> Bezier {
         let n = coeffs.len() - 1;
         let points = (0..=n)
             .map(|i| {
@@ -227,7 +232,7 @@ impl Bezier {
                 })
             })
             .collect();
-        Ok(Bezier { points })
+        Bezier { points }
     }
 
     /// The Bézier curve of degree `points.len() − 1` that passes through `points[i]` at parameter

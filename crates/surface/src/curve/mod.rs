@@ -6,5 +6,7 @@
 
 pub mod basis;
 pub mod bezier;
+pub mod bspline;
 
 pub use bezier::Bezier;
+pub use bspline::{BSpline, Nurbs};
