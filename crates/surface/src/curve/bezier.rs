@@ -77,6 +77,12 @@ impl Bezier {
         Ok(Self { points })
     }
 
+    /// Wraps control points already known to be finite and non-empty.
+    pub(crate) fn from_points_unchecked(points: Vec<DVec3>) -> Self {
+        debug_assert!(!points.is_empty());
+        Self { points }
+    }
+
     /// The control points `b_0..b_n`.
     pub fn points(&self) -> &[DVec3] {
         &self.points

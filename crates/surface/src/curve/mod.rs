@@ -7,6 +7,12 @@
 pub mod basis;
 pub mod bezier;
 pub mod bspline;
+pub mod ext;
+pub mod hermite;
 
 pub use bezier::Bezier;
 pub use bspline::{BSpline, Nurbs};
+pub use ext::{CurveExt, Frenet};
+pub use hermite::{
+    Hermite, manning_cubic, manning_speeds, min_energy_cubic, min_energy_speeds,
+};
