@@ -59,7 +59,7 @@ pub fn local_frame(a: DVec3, b: DVec3, c: DVec3) -> Option<([DVec2; 3], DVec3, D
     let l1 = e1.length();
     let n = e1.cross(c - a);
     let nl = n.length();
-    if !(l1 > 0.0) || !(nl > 0.0) || !nl.is_finite() {
+    if l1.is_nan() || l1 <= 0.0 || nl.is_nan() || nl <= 0.0 || !nl.is_finite() {
         return None;
     }
     let x = e1 / l1;

@@ -8,11 +8,13 @@
 
 pub mod distortion;
 pub mod io;
+pub mod tessellate;
 pub mod topology;
 pub mod trimesh;
 pub mod weld;
 
 pub use distortion::{FaceDistortion, face_distortion};
 pub use io::{MeshIoError, read_mesh, write_obj};
+pub use tessellate::{TessError, tessellate, tessellate_patches};
 pub use topology::{Topology, TopologyError, check_disk};
 pub use trimesh::TriMesh;
