@@ -7,7 +7,9 @@
 //! patterns, sheets or machines.
 
 pub mod distortion;
+pub mod geodesic;
 pub mod io;
+pub mod seams;
 pub mod tessellate;
 pub mod topology;
 pub mod trimesh;
@@ -15,6 +17,7 @@ pub mod weld;
 
 pub use distortion::{FaceDistortion, face_distortion};
 pub use io::{MeshIoError, read_mesh, write_obj};
+pub use seams::{cut_along_seams, seam_from_points};
 pub use tessellate::{TessError, tessellate, tessellate_patches};
 pub use topology::{Topology, TopologyError, check_disk};
 pub use trimesh::TriMesh;

@@ -57,6 +57,18 @@ pub enum TopologyError {
     SeveralComponents { count: usize },
     #[error("the mesh has Euler characteristic {chi}, a disk has 1: add seams to cut handles open")]
     NotADisk { chi: i64 },
+    #[error("seam {seam}: vertex {vertex} does not exist (the mesh has {count} vertices)")]
+    SeamBadVertex {
+        seam: usize,
+        vertex: u32,
+        count: usize,
+    },
+    #[error("seam {seam}: vertices {a} and {b} are consecutive but not joined by a mesh edge")]
+    SeamNotAnEdge { seam: usize, a: u32, b: u32 },
+    #[error(
+        "seam {seam}: point {point} cannot be reached from the previous point along mesh edges"
+    )]
+    SeamUnreachable { seam: usize, point: usize },
 }
 
 /// An undirected edge `(min, max)` with the triangles on each side.
