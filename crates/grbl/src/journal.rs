@@ -1,0 +1,383 @@
+//! The send journal: an append-only text file recording, as it happens, every line GRBL
+//! acknowledged and every point at which the driver knew the acknowledged lines had executed.
+//! `--resume` reads it back and sends exactly the lines that are not known to be done.
+//!
+//! Format (one record per line, `#` lines are comments):
+//! ```text
+//! flatcut-journal 1 <job hash, 16 hex digits> <line count>
+//! R <run number>          a send run starts (acks and confirmations below belong to it)
+//! A <index>               line <index> (0-based job line) was answered `ok`
+//! E <index> <code>        line <index> was answered `error:<code>` (it did not run)
+//! X <index>               every line acknowledged in this run with index <= <index> has executed
+//! N <text>                a note (why the run stopped)
+//! D                       the job completed
+//! ```
+//! An `ok` means GRBL queued the line, not that it moved: a reset or hang-up discards the
+//! planner. So a line counts as done only if it was acknowledged *and* covered by a later
+//! `X` of the same run (the driver writes `X` when the machine reports `Idle` with nothing in
+//! flight, and when GRBL's planner capacity proves older lines finished).
+
+use crate::job::Job;
+use std::fs::{File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+const MAGIC: &str = "flatcut-journal";
+const VERSION: u32 = 1;
+
+/// Journal failures.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum JournalError {
+    /// Reading or writing the file failed.
+    #[error("journal {path}: {source}")]
+    Io {
+        /// Journal path.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The file is not a journal or is damaged.
+    #[error("journal {path}, line {line}: {what}")]
+    Malformed {
+        /// Journal path.
+        path: PathBuf,
+        /// 1-based line in the journal.
+        line: usize,
+        /// What is wrong.
+        what: String,
+    },
+    /// The journal belongs to another job file.
+    #[error(
+        "journal {path} was written for a different job (hash {journal_hash:016x}, {journal_lines} lines; this file has hash {job_hash:016x}, {job_lines} lines): refusing to resume"
+    )]
+    DifferentJob {
+        /// Journal path.
+        path: PathBuf,
+        /// Hash recorded in the journal.
+        journal_hash: u64,
+        /// Line count recorded in the journal.
+        journal_lines: usize,
+        /// Hash of the job given.
+        job_hash: u64,
+        /// Line count of the job given.
+        job_lines: usize,
+    },
+}
+
+/// What a journal says about a job.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JournalState {
+    /// Job hash recorded in the header.
+    pub hash: u64,
+    /// Job line count recorded in the header.
+    pub lines: usize,
+    /// Per job line: known executed.
+    pub done: Vec<bool>,
+    /// Per job line: rejected with this error code in the latest run that sent it.
+    pub rejected: Vec<Option<u8>>,
+    /// Number of runs recorded.
+    pub runs: u32,
+    /// Whether a run completed the job.
+    pub finished: bool,
+    /// Highest line index acknowledged in any run.
+    pub last_acked: Option<usize>,
+    /// Notes, in order.
+    pub notes: Vec<String>,
+}
+
+impl JournalState {
+    /// Indices of lines still to run, in order.
+    pub fn remaining(&self) -> Vec<usize> {
+        (0..self.lines).filter(|&i| !self.done[i]).collect()
+    }
+
+    /// Number of lines known executed.
+    pub fn done_count(&self) -> usize {
+        self.done.iter().filter(|d| **d).count()
+    }
+
+    /// Highest index `k` such that every line `0..=k` is done (the "last completed line").
+    pub fn completed_prefix(&self) -> Option<usize> {
+        let n = self.done.iter().take_while(|d| **d).count();
+        n.checked_sub(1)
+    }
+}
+
+/// An open journal, appending records for one run.
+#[derive(Debug)]
+pub struct Journal {
+    path: PathBuf,
+    file: File,
+    buf: String,
+}
+
+fn io_err(path: &Path) -> impl Fn(std::io::Error) -> JournalError + '_ {
+    move |source| JournalError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+impl Journal {
+    /// Creates (truncating) a journal for `job` and starts run 1.
+    pub fn create(path: impl AsRef<Path>, job: &Job) -> Result<Journal, JournalError> {
+        let path = path.as_ref();
+        let file = File::create(path).map_err(io_err(path))?;
+        let mut j = Journal {
+            path: path.to_path_buf(),
+            file,
+            buf: String::new(),
+        };
+        j.buf.push_str(&format!(
+            "{MAGIC} {VERSION} {:016x} {}\nR 1\n",
+            job.hash,
+            job.len()
+        ));
+        j.sync()?;
+        Ok(j)
+    }
+
+    /// Opens an existing journal to resume `job`: checks that it was written for the same job,
+    /// returns its state, and starts a new run in it.
+    pub fn resume(
+        path: impl AsRef<Path>,
+        job: &Job,
+    ) -> Result<(Journal, JournalState), JournalError> {
+        let path = path.as_ref();
+        let state = Journal::read(path)?;
+        if state.hash != job.hash || state.lines != job.len() {
+            return Err(JournalError::DifferentJob {
+                path: path.to_path_buf(),
+                journal_hash: state.hash,
+                journal_lines: state.lines,
+                job_hash: job.hash,
+                job_lines: job.len(),
+            });
+        }
+        let file = OpenOptions::new()
+            .append(true)
+            .open(path)
+            .map_err(io_err(path))?;
+        let mut j = Journal {
+            path: path.to_path_buf(),
+            file,
+            buf: String::new(),
+        };
+        j.buf.push_str(&format!("R {}\n", state.runs + 1));
+        j.sync()?;
+        Ok((j, state))
+    }
+
+    /// Reads a journal. A torn last line (crash mid-write) is ignored.
+    pub fn read(path: impl AsRef<Path>) -> Result<JournalState, JournalError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(io_err(path))?;
+        let bad = |line: usize, what: &str| JournalError::Malformed {
+            path: path.to_path_buf(),
+            line,
+            what: what.to_string(),
+        };
+        let complete = if text.ends_with('\n') {
+            text.as_str()
+        } else {
+            text.rsplit_once('\n').map(|(a, _)| a).unwrap_or("")
+        };
+        let mut it = complete.lines().enumerate();
+        let (_, header) = it.next().ok_or_else(|| bad(1, "empty file"))?;
+        let h: Vec<&str> = header.split_whitespace().collect();
+        if h.len() != 4 || h[0] != MAGIC {
+            return Err(bad(1, "not a flatcut journal header"));
+        }
+        if h[1] != VERSION.to_string() {
+            return Err(bad(1, &format!("unsupported journal version {}", h[1])));
+        }
+        let hash = u64::from_str_radix(h[2], 16).map_err(|_| bad(1, "bad job hash"))?;
+        let lines: usize = h[3].parse().map_err(|_| bad(1, "bad line count"))?;
+        let mut st = JournalState {
+            hash,
+            lines,
+            done: vec![false; lines],
+            rejected: vec![None; lines],
+            runs: 0,
+            finished: false,
+            last_acked: None,
+            notes: Vec::new(),
+        };
+        // Acks of the current run not yet confirmed, kept sorted by arrival (= index order
+        // within a run except across resume gaps).
+        let mut pending: Vec<usize> = Vec::new();
+        let index = |n: usize, s: Option<&str>| -> Result<usize, JournalError> {
+            let i: usize = s
+                .and_then(|s| s.parse().ok())
+                .ok_or_else(|| bad(n, "missing index"))?;
+            if i >= lines {
+                return Err(bad(
+                    n,
+                    &format!("line index {i} beyond the job's {lines} lines"),
+                ));
+            }
+            Ok(i)
+        };
+        for (n0, rec) in it {
+            let n = n0 + 1;
+            let mut parts = rec.splitn(2, ' ');
+            let kind = parts.next().unwrap_or("");
+            let rest = parts.next();
+            match kind {
+                "" | "#" => {}
+                "R" => {
+                    st.runs += 1;
+                    pending.clear();
+                }
+                "A" => {
+                    let i = index(n, rest)?;
+                    st.rejected[i] = None;
+                    st.last_acked = Some(st.last_acked.map_or(i, |l| l.max(i)));
+                    pending.push(i);
+                }
+                "E" => {
+                    let mut w = rest.unwrap_or("").split_whitespace();
+                    let i = index(n, w.next())?;
+                    let code = w
+                        .next()
+                        .and_then(|c| c.parse().ok())
+                        .ok_or_else(|| bad(n, "missing code"))?;
+                    st.rejected[i] = Some(code);
+                }
+                "X" => {
+                    let k = index(n, rest)?;
+                    pending.retain(|&i| {
+                        if i <= k {
+                            st.done[i] = true;
+                            false
+                        } else {
+                            true
+                        }
+                    });
+                }
+                "N" => st.notes.push(rest.unwrap_or("").to_string()),
+                "D" => st.finished = true,
+                _ => return Err(bad(n, &format!("unknown record '{kind}'"))),
+            }
+        }
+        Ok(st)
+    }
+
+    /// Path of the journal file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Records that line `index` was acknowledged (buffered until [`Journal::sync`]).
+    pub fn ack(&mut self, index: usize) {
+        self.buf.push_str(&format!("A {index}\n"));
+    }
+
+    /// Records that line `index` was rejected with `error:code`.
+    pub fn reject(&mut self, index: usize, code: u8) {
+        self.buf.push_str(&format!("E {index} {code}\n"));
+    }
+
+    /// Records that every line acknowledged in this run with index <= `index` has executed.
+    pub fn executed_through(&mut self, index: usize) {
+        self.buf.push_str(&format!("X {index}\n"));
+    }
+
+    /// Records a note (single line).
+    pub fn note(&mut self, text: &str) {
+        let t = text.replace(['\n', '\r'], " ");
+        self.buf.push_str(&format!("N {t}\n"));
+    }
+
+    /// Records that the job completed.
+    pub fn finish(&mut self) {
+        self.buf.push_str("D\n");
+    }
+
+    /// Writes buffered records and fsyncs them (called once per batch of acknowledgements).
+    pub fn sync(&mut self) -> Result<(), JournalError> {
+        if self.buf.is_empty() {
+            return Ok(());
+        }
+        let path = self.path.clone();
+        self.file
+            .write_all(self.buf.as_bytes())
+            .map_err(io_err(&path))?;
+        self.file.sync_data().map_err(io_err(&path))?;
+        self.buf.clear();
+        Ok(())
+    }
+}
+
+impl Drop for Journal {
+    fn drop(&mut self) {
+        let _ = self.sync();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tmp(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("flatcut-grbl-journal-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir.join(name)
+    }
+
+    #[test]
+    fn only_confirmed_acks_of_the_same_run_count_as_done() {
+        let job = Job::parse("G1X1F100\nG1X2\nG1X3\nG1X4\nG1X5\n").unwrap();
+        let p = tmp("runs.journal");
+        {
+            let mut j = Journal::create(&p, &job).unwrap();
+            j.ack(0);
+            j.reject(1, 20);
+            j.ack(2);
+            j.executed_through(2);
+            j.ack(3); // acked but never confirmed: may have been lost in the planner
+            j.note("hang-up");
+            j.sync().unwrap();
+        }
+        let st = Journal::read(&p).unwrap();
+        assert_eq!(st.done, vec![true, false, true, false, false]);
+        assert_eq!(st.rejected[1], Some(20));
+        assert_eq!(st.remaining(), vec![1, 3, 4]);
+        assert_eq!(st.completed_prefix(), Some(0));
+        assert_eq!(st.last_acked, Some(3));
+        {
+            let (mut j, st0) = Journal::resume(&p, &job).unwrap();
+            assert_eq!(st0, st);
+            j.ack(1);
+            // An X in run 2 must not confirm run 1's unconfirmed ack of line 3.
+            j.executed_through(3);
+            j.sync().unwrap();
+        }
+        let st = Journal::read(&p).unwrap();
+        assert_eq!(st.remaining(), vec![3, 4]);
+        assert_eq!(st.runs, 2);
+    }
+
+    #[test]
+    fn refuses_a_different_job_and_tolerates_a_torn_tail() {
+        let job = Job::parse("G1X1F100\nG1X2\n").unwrap();
+        let other = Job::parse("G1X1F100\nG1X3\n").unwrap();
+        let p = tmp("other.journal");
+        drop(Journal::create(&p, &job).unwrap());
+        let err = Journal::resume(&p, &other).unwrap_err();
+        assert!(matches!(err, JournalError::DifferentJob { .. }), "{err}");
+        assert!(err.to_string().contains("refusing to resume"));
+        let mut text = std::fs::read_to_string(&p).unwrap();
+        text.push_str("A 0\nX 0\nA 1\nX");
+        std::fs::write(&p, text).unwrap();
+        let st = Journal::read(&p).unwrap();
+        assert_eq!(st.done, vec![true, false]);
+        std::fs::write(&p, "hello\n").unwrap();
+        assert!(matches!(
+            Journal::read(&p),
+            Err(JournalError::Malformed { line: 1, .. })
+        ));
+    }
+}
