@@ -200,7 +200,11 @@ pub fn check_knots(n: usize, p: usize, knots: &[f64]) -> Result<(), crate::Surfa
                 next: knots[i],
             });
         }
-        mult = if knots[i] == knots[i - 1] { mult + 1 } else { 1 };
+        mult = if knots[i] == knots[i - 1] {
+            mult + 1
+        } else {
+            1
+        };
         if mult > p + 1 {
             return Err(SurfaceError::Invalid(format!(
                 "knot {i} ({}) has multiplicity {mult}, more than degree + 1 = {}",

@@ -376,7 +376,13 @@ mod tests {
             assert!(close(r.points()[i], wr[i], 1e-15));
         }
         let e = tv1().elevate();
-        let we = [v2(0., 0.), v2(0.75, 1.5), v2(2.5, 2.), v2(4.5, 1.5), v2(6., 0.)];
+        let we = [
+            v2(0., 0.),
+            v2(0.75, 1.5),
+            v2(2.5, 2.),
+            v2(4.5, 1.5),
+            v2(6., 0.),
+        ];
         for i in 0..5 {
             assert!(close(e.points()[i], we[i], 1e-15));
         }
@@ -419,11 +425,19 @@ mod tests {
     fn tv3_split_at_one_third() {
         let (l, r) = tv3().subdivide(1.0 / 3.0);
         let n9 = |x: f64, y: f64, z: f64| DVec3::new(x / 9.0, y / 9.0, z / 9.0);
-        assert!(close(l.points()[1], DVec3::new(1. / 3., 1., 2. / 3.), 1e-15));
+        assert!(close(
+            l.points()[1],
+            DVec3::new(1. / 3., 1., 2. / 3.),
+            1e-15
+        ));
         assert!(close(l.points()[2], n9(8., 10., 4.), 1e-15));
         assert!(close(l.points()[3], n9(14., 11., 3.), 1e-15));
         assert!(close(r.points()[1], n9(26., 13., 1.), 1e-15));
-        assert!(close(r.points()[2], DVec3::new(14. / 3., 5. / 3., 1. / 3.), 1e-15));
+        assert!(close(
+            r.points()[2],
+            DVec3::new(14. / 3., 5. / 3., 1. / 3.),
+            1e-15
+        ));
     }
 
     #[test]

@@ -14,6 +14,8 @@ use super::basis::{
     MAX_STACK_DEGREE, basis_funs, check_knots, ders_basis_funs, ders_scratch_len, find_span,
 };
 use super::bezier::{Bezier, binomial, check_finite};
+use super::ext::{flatten_with_breaks, nearest_from_samples};
+use super::spline::refine;
 use crate::{ParamCurve, SurfaceError};
 
 /// Vector types the B-spline kernels work on: points (`DVec3`) and homogeneous points (`DVec4`).
@@ -113,9 +115,7 @@ fn insert<V: Lin>(
     uq.extend_from_slice(&knots[k + 1..]);
     let mut q = vec![V::default(); n + r];
     q[..=(k - p)].copy_from_slice(&pts[..=(k - p)]);
-    for i in (k - s)..=np {
-        q[i + r] = pts[i];
-    }
+    q[(k - s + r)..=(np + r)].copy_from_slice(&pts[(k - s)..=np]);
     let mut rw: Vec<V> = (0..=(p - s)).map(|i| pts[k - p + i]).collect();
     let mut l = 0;
     for j in 1..=r {
@@ -127,8 +127,8 @@ fn insert<V: Lin>(
         q[l] = rw[0];
         q[k + r - j - s] = rw[p - j - s];
     }
-    for i in (l + 1)..(k - s) {
-        q[i] = rw[i - l];
+    if l + 1 < k - s {
+        q[(l + 1)..(k - s)].copy_from_slice(&rw[1..(k - s - l)]);
     }
     Ok((uq, q))
 }
@@ -226,6 +226,22 @@ impl BSpline {
     /// The distinct knot values inside the domain, including both ends (segment breakpoints).
     pub fn breakpoints(&self) -> Vec<f64> {
         breakpoints(self.degree, &self.knots, self.points.len())
+    }
+
+    /// Flattens within chordal tolerance `tol` (mm), starting from the knots so that no span is
+    /// skipped and kinks at multiple knots become vertices.
+    pub fn flatten(&self, tol: f64) -> Vec<(f64, DVec3)> {
+        flatten_with_breaks(self, tol, &refine(&self.breakpoints(), 2))
+    }
+
+    /// Closest point `(t, distance)`, sampling every knot span.
+    pub fn nearest(&self, p: DVec3, accuracy: f64) -> (f64, f64) {
+        nearest_from_samples(
+            self,
+            p,
+            accuracy,
+            &refine(&self.breakpoints(), 4 * self.degree.max(2)),
+        )
     }
 
     /// Splits the curve into its polynomial pieces as Bézier curves, one per non-empty knot span,
@@ -406,7 +422,9 @@ impl Nurbs {
             ));
         }
         let theta = (a1 - a0).min(std::f64::consts::TAU);
-        let narcs = (theta / std::f64::consts::FRAC_PI_2 - 1e-12).ceil().max(1.0) as usize;
+        let narcs = (theta / std::f64::consts::FRAC_PI_2 - 1e-12)
+            .ceil()
+            .max(1.0) as usize;
         let dtheta = theta / narcs as f64;
         let w1 = (0.5 * dtheta).cos();
         let on = |a: f64| center + radius * (a.cos() * x + a.sin() * y);
@@ -468,6 +486,21 @@ impl Nurbs {
     /// The distinct knot values inside the domain, including both ends.
     pub fn breakpoints(&self) -> Vec<f64> {
         breakpoints(self.degree, &self.knots, self.points.len())
+    }
+
+    /// Flattens within chordal tolerance `tol` (mm), starting from the knots.
+    pub fn flatten(&self, tol: f64) -> Vec<(f64, DVec3)> {
+        flatten_with_breaks(self, tol, &refine(&self.breakpoints(), 2))
+    }
+
+    /// Closest point `(t, distance)`, sampling every knot span.
+    pub fn nearest(&self, p: DVec3, accuracy: f64) -> (f64, f64) {
+        nearest_from_samples(
+            self,
+            p,
+            accuracy,
+            &refine(&self.breakpoints(), 4 * self.degree.max(2)),
+        )
     }
 
     /// Inserts the knot `t` `times` times on the homogeneous points; the curve is unchanged.
@@ -590,15 +623,25 @@ mod tests {
             assert!(close(unit.eval(t), tv13().eval(t), 1e-15));
         }
         // w2 → 0: segment 2 becomes ((2−t)² P1 + (t−1)² P3)/(5 − 6t + 2t²).
-        let tiny = Nurbs::new(2, TV13_KNOTS.to_vec(), pts.clone(), vec![1., 1., 1e-11, 1., 1.])
-            .unwrap();
+        let tiny = Nurbs::new(
+            2,
+            TV13_KNOTS.to_vec(),
+            pts.clone(),
+            vec![1., 1., 1e-11, 1., 1.],
+        )
+        .unwrap();
         for t in [1.2f64, 1.5, 1.9] {
             let den = 5.0 - 6.0 * t + 2.0 * t * t;
             let want = ((2.0 - t).powi(2) * pts[1] + (t - 1.0).powi(2) * pts[3]) / den;
             assert!(close(tiny.eval(t), want, 1e-9));
         }
         assert!(matches!(
-            Nurbs::new(2, TV13_KNOTS.to_vec(), pts.clone(), vec![1., 1., 0., 1., 1.]),
+            Nurbs::new(
+                2,
+                TV13_KNOTS.to_vec(),
+                pts.clone(),
+                vec![1., 1., 0., 1., 1.]
+            ),
             Err(SurfaceError::BadWeight { index: 2, .. })
         ));
         assert!(matches!(
@@ -671,8 +714,16 @@ mod tests {
         let yn = (y - y.dot(xn) * xn).normalize();
         for (a0, a1) in [(0.0, 0.3), (0.2, FRAC_PI_2), (-1.0, 2.0), (0.5, 0.5 + TAU)] {
             let c = Nurbs::circle_arc(center, x, y, 2.5, a0, a1).unwrap();
-            assert!(close(c.eval(0.0), center + 2.5 * (a0.cos() * xn + a0.sin() * yn), 1e-14));
-            assert!(close(c.eval(1.0), center + 2.5 * (a1.cos() * xn + a1.sin() * yn), 1e-14));
+            assert!(close(
+                c.eval(0.0),
+                center + 2.5 * (a0.cos() * xn + a0.sin() * yn),
+                1e-14
+            ));
+            assert!(close(
+                c.eval(1.0),
+                center + 2.5 * (a1.cos() * xn + a1.sin() * yn),
+                1e-14
+            ));
             for i in 0..=200 {
                 let p = c.eval(i as f64 / 200.0) - center;
                 assert!((p.length() - 2.5).abs() < 1e-14);
@@ -716,7 +767,10 @@ mod tests {
             for k in 1..=3 {
                 let fd = (c.deriv(t + h, k - 1) - c.deriv(t - h, k - 1)) / (2.0 * h);
                 let d = c.deriv(t, k);
-                assert!(close(d, fd, 2e-5 * (1.0 + d.length())), "t={t} k={k} {d} {fd}");
+                assert!(
+                    close(d, fd, 2e-5 * (1.0 + d.length())),
+                    "t={t} k={k} {d} {fd}"
+                );
             }
         }
         // Above the degree the rational curve still has non-zero derivatives.
@@ -781,7 +835,10 @@ mod tests {
                     }
                     acc += gaps[gaps.len() - 1];
                     knots.extend(std::iter::repeat_n(acc, p + 1));
-                    let pts = pts.into_iter().map(|(x, y, z)| DVec3::new(x, y, z)).collect();
+                    let pts = pts
+                        .into_iter()
+                        .map(|(x, y, z)| DVec3::new(x, y, z))
+                        .collect();
                     BSpline::new(p, knots, pts).unwrap()
                 },
             )

@@ -79,7 +79,11 @@ pub trait CurveExt: ParamCurve {
                 lo = t;
             }
             let speed = self.deriv(t, 1).length();
-            let mut next = if speed > 0.0 { t - err / speed } else { f64::NAN };
+            let mut next = if speed > 0.0 {
+                t - err / speed
+            } else {
+                f64::NAN
+            };
             if !(next > lo && next < hi) {
                 next = 0.5 * (lo + hi);
             }
@@ -97,7 +101,7 @@ pub trait CurveExt: ParamCurve {
         let d1 = self.deriv(t, 1);
         let d2 = self.deriv(t, 2);
         let s = d1.length();
-        if !(s > 0.0) {
+        if s.is_nan() || s <= 0.0 {
             return None;
         }
         let k = d1.cross(d2).length() / (s * s * s);
@@ -110,7 +114,7 @@ pub trait CurveExt: ParamCurve {
         let d1 = self.deriv(t, 1).truncate();
         let d2 = self.deriv(t, 2).truncate();
         let s = d1.length();
-        if !(s > 0.0) {
+        if s.is_nan() || s <= 0.0 {
             return None;
         }
         let k = d1.perp_dot(d2) / (s * s * s);
@@ -124,7 +128,7 @@ pub trait CurveExt: ParamCurve {
         let d2 = self.deriv(t, 2);
         let c = d1.cross(d2);
         let c2 = c.length_squared();
-        if !(c2.sqrt() > COLLINEAR_SINE * d1.length() * d2.length()) {
+        if c2.is_nan() || c2.sqrt() <= COLLINEAR_SINE * d1.length() * d2.length() {
             return None;
         }
         let tau = c.dot(self.deriv(t, 3)) / c2;
@@ -136,7 +140,7 @@ pub trait CurveExt: ParamCurve {
         let d1 = self.deriv(t, 1);
         let d2 = self.deriv(t, 2);
         let c = d1.cross(d2);
-        if !(c.length() > COLLINEAR_SINE * d1.length() * d2.length()) {
+        if c.is_nan() || c.length() <= COLLINEAR_SINE * d1.length() * d2.length() {
             return None;
         }
         let tt = d1.normalize();
@@ -186,7 +190,11 @@ pub fn nearest_from_samples<C: ParamCurve + ?Sized>(
     }
     for i in 0..=last {
         let left = if i > 0 { dist2[i - 1] } else { f64::INFINITY };
-        let right = if i < last { dist2[i + 1] } else { f64::INFINITY };
+        let right = if i < last {
+            dist2[i + 1]
+        } else {
+            f64::INFINITY
+        };
         if dist2[i] <= left && dist2[i] <= right {
             let lo = ts[i.saturating_sub(1)];
             let hi = ts[(i + 1).min(last)];
@@ -380,11 +388,23 @@ mod tests {
         let mut acc = 1e-3;
         while acc >= 1e-11 {
             let v = Parabola(0.0, 1.0).arclen(acc);
-            assert!((v - exact).abs() <= acc, "parabola acc {acc}: err {}", v - exact);
+            assert!(
+                (v - exact).abs() <= acc,
+                "parabola acc {acc}: err {}",
+                v - exact
+            );
             let v = hx.arclen(acc);
-            assert!((v - hx_exact).abs() <= acc, "helix acc {acc}: err {}", v - hx_exact);
+            assert!(
+                (v - hx_exact).abs() <= acc,
+                "helix acc {acc}: err {}",
+                v - hx_exact
+            );
             let v = circ.arclen(acc);
-            assert!((v - 6.0 * PI).abs() <= acc, "circle acc {acc}: err {}", v - 6.0 * PI);
+            assert!(
+                (v - 6.0 * PI).abs() <= acc,
+                "circle acc {acc}: err {}",
+                v - 6.0 * PI
+            );
             acc /= 10.0;
         }
         // TV38: the cubic quarter circle is 1.5710166981 long; TV1 length 6.979054670.
@@ -415,7 +435,10 @@ mod tests {
         for frac in [0.0, 0.1, 0.5, 0.77, 1.0] {
             let s = frac * total;
             let t = c.inv_arclen(s, 1e-10);
-            assert!((c.arclen_range(-1.0, t, 1e-12) - s).abs() <= 1e-9, "frac {frac}");
+            assert!(
+                (c.arclen_range(-1.0, t, 1e-12) - s).abs() <= 1e-9,
+                "frac {frac}"
+            );
         }
         assert_eq!(c.inv_arclen(-1.0, 1e-9), -1.0);
         assert_eq!(c.inv_arclen(total + 1.0, 1e-9), 2.0);
@@ -523,10 +546,17 @@ mod tests {
             assert!(worst <= tol, "tol {tol}: worst {worst}");
             // Not wasteful: within a factor 2 of the optimal segment count.
             let optimal = (PI / (1.0 - tol / r).acos()).ceil();
-            assert!((pts.len() - 1) as f64 <= 2.0 * optimal + 16.0, "{} vs {optimal}", pts.len());
+            assert!(
+                (pts.len() - 1) as f64 <= 2.0 * optimal + 16.0,
+                "{} vs {optimal}",
+                pts.len()
+            );
         }
         let half = Nurbs::circle_arc(DVec3::ZERO, DVec3::X, DVec3::Y, 1.0, 0.0, FRAC_PI_2).unwrap();
         let pts = half.flatten(0.0);
-        assert!(pts.len() > 2, "non-positive tolerance falls back to the default");
+        assert!(
+            pts.len() > 2,
+            "non-positive tolerance falls back to the default"
+        );
     }
 }

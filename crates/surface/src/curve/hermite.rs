@@ -148,7 +148,7 @@ pub fn min_energy_speeds(
     let a = 3.0 * (4.0 * g0 + c * g1) / det;
     let b = 3.0 * (4.0 * g1 + c * g0) / det;
     for (speed, which) in [(a, "start"), (b, "end")] {
-        if !(speed > 0.0) {
+        if speed.is_nan() || speed <= 0.0 {
             return Err(SurfaceError::Invalid(format!(
                 "minimum-energy cubic has {which} speed {speed} ≤ 0: the tangent would be reversed \
                  (tangents point away from the chord)"
