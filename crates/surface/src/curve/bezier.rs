@@ -11,11 +11,17 @@ use crate::{ParamCurve, SurfaceError};
 /// Control-point count up to which evaluation works in a stack buffer (degree ≤ 15); higher
 /// degrees copy to the heap.
 const STACK_POINTS: usize = 16;
+/// Control points of a cubic: the common case gets the smallest buffer (less to initialise).
+const CUBIC_POINTS: usize = 4;
 
 /// Runs `f` on a mutable copy of `pts`, on the stack when it is small enough.
 #[inline]
 pub(crate) fn with_scratch<R>(pts: &[DVec3], f: impl FnOnce(&mut [DVec3]) -> R) -> R {
-    if pts.len() <= STACK_POINTS {
+    if pts.len() <= CUBIC_POINTS {
+        let mut a = [DVec3::ZERO; CUBIC_POINTS];
+        a[..pts.len()].copy_from_slice(pts);
+        f(&mut a[..pts.len()])
+    } else if pts.len() <= STACK_POINTS {
         let mut a = [DVec3::ZERO; STACK_POINTS];
         a[..pts.len()].copy_from_slice(pts);
         f(&mut a[..pts.len()])

@@ -25,13 +25,18 @@ pub(crate) trait Lin:
 }
 impl<T: Copy + Default + Add<Output = T> + Sub<Output = T> + Mul<f64, Output = T>> Lin for T {}
 
-/// Runs `f` on a zeroed buffer of `len` elements, on the stack when `len ≤ N`.
+/// Runs `f` on a zeroed buffer of `len` elements: a `[T; S]` stack array when `len ≤ S` (sized
+/// for cubics, so the hot path initialises little memory), a `[T; N]` one when `len ≤ N`, the
+/// heap beyond.
 #[inline]
-pub(crate) fn with_buf<T: Copy + Default, const N: usize, R>(
+pub(crate) fn with_buf<T: Copy + Default, const S: usize, const N: usize, R>(
     len: usize,
     f: impl FnOnce(&mut [T]) -> R,
 ) -> R {
-    if len <= N {
+    if len <= S {
+        let mut a = [T::default(); S];
+        f(&mut a[..len])
+    } else if len <= N {
         let mut a = [T::default(); N];
         f(&mut a[..len])
     } else {
@@ -46,13 +51,18 @@ const STACK_DERS: usize = STACK_BASIS * STACK_BASIS;
 const STACK_SCRATCH: usize = ders_scratch_len(MAX_STACK_DEGREE);
 /// Derivative orders computed on the stack (k < 8).
 const STACK_ORDERS: usize = 8;
+/// The same sizes for degree ≤ 3 and derivative order ≤ 3, the hot path.
+const CUBIC_BASIS: usize = 4;
+const CUBIC_DERS: usize = 16;
+const CUBIC_SCRATCH: usize = ders_scratch_len(3);
+const CUBIC_ORDERS: usize = 4;
 
 /// `Σ N_j P_{span−p+j}` at `t`.
 #[inline]
 fn point_at<V: Lin>(p: usize, knots: &[f64], pts: &[V], t: f64) -> V {
     let n = pts.len();
     let span = find_span(n, p, t, knots);
-    with_buf::<f64, STACK_BASIS, _>(p + 1, |nb| {
+    with_buf::<f64, CUBIC_BASIS, STACK_BASIS, _>(p + 1, |nb| {
         basis_funs(span, t, p, knots, nb);
         let mut acc = V::default();
         for j in 0..=p {
@@ -68,8 +78,8 @@ fn ders_at<V: Lin>(p: usize, knots: &[f64], pts: &[V], t: f64, out: &mut [V]) {
     let span = find_span(n, p, t, knots);
     let kmax = out.len() - 1;
     let nd = kmax.min(p);
-    with_buf::<f64, STACK_DERS, _>((nd + 1) * (p + 1), |nders| {
-        with_buf::<f64, STACK_SCRATCH, _>(ders_scratch_len(p), |scr| {
+    with_buf::<f64, CUBIC_DERS, STACK_DERS, _>((nd + 1) * (p + 1), |nders| {
+        with_buf::<f64, CUBIC_SCRATCH, STACK_SCRATCH, _>(ders_scratch_len(p), |scr| {
             ders_basis_funs(span, t, p, nd, knots, nders, scr);
             for (k, o) in out.iter_mut().enumerate() {
                 *o = V::default();
@@ -295,7 +305,7 @@ impl ParamCurve for BSpline {
         if k > self.degree {
             return DVec3::ZERO;
         }
-        with_buf::<DVec3, STACK_ORDERS, _>(k + 1, |out| {
+        with_buf::<DVec3, CUBIC_ORDERS, STACK_ORDERS, _>(k + 1, |out| {
             ders_at(self.degree, &self.knots, &self.points, t, out);
             out[k]
         })
@@ -520,7 +530,7 @@ impl Nurbs {
     /// Derivatives of orders `0..out.len()` by the quotient rule (Piegl & Tiller A4.2):
     /// `C^(k) = (A^(k) − Σ_{i=1..k} C(k,i) w^(i) C^(k−i)) / w`.
     fn ders_into(&self, t: f64, out: &mut [DVec3]) {
-        with_buf::<DVec4, STACK_ORDERS, _>(out.len(), |h| {
+        with_buf::<DVec4, CUBIC_ORDERS, STACK_ORDERS, _>(out.len(), |h| {
             ders_at(self.degree, &self.knots, &self.hom, t, h);
             let w0 = h[0].w;
             for k in 0..out.len() {
@@ -552,7 +562,7 @@ impl ParamCurve for Nurbs {
     }
 
     fn deriv(&self, t: f64, k: usize) -> DVec3 {
-        with_buf::<DVec3, STACK_ORDERS, _>(k + 1, |out| {
+        with_buf::<DVec3, CUBIC_ORDERS, STACK_ORDERS, _>(k + 1, |out| {
             self.ders_into(t, out);
             out[k]
         })

@@ -15,6 +15,7 @@ pub mod bspline;
 pub mod ext;
 pub mod hermite;
 pub mod polyline;
+pub mod rational;
 pub mod spline;
 
 pub use bezier::Bezier;
@@ -22,4 +23,5 @@ pub use bspline::{BSpline, Nurbs};
 pub use ext::{CurveExt, Frenet, flatten_with_breaks, nearest_from_samples};
 pub use hermite::{Hermite, manning_cubic, manning_speeds, min_energy_cubic, min_energy_speeds};
 pub use polyline::Polyline;
+pub use rational::RationalBezier;
 pub use spline::{CubicSpline, SplineEnds, SplineParam};
