@@ -1,1 +1,208 @@
-//! placeholder
+//! A GRBL 1.1h controller (Arduino Uno build) simulated behind a pseudo-terminal, for tests and for users with no
+//! plotter attached.
+//!
+//! The simulator is the independent check on the sender and the G-code writer: it shares no code with them.
+//! It has two layers:
+//! * [`Grbl`], a sans-IO core on virtual time: feed it received bytes with [`Grbl::receive`], advance the clock
+//!   with [`Grbl::tick`], and collect the bytes it answers with [`Grbl::take_output`]. Deterministic, for unit tests.
+//! * [`PtySim`], a thread that puts the core behind a pseudo-terminal, paces bytes at the baud rate in both
+//!   directions and runs the clock in (optionally scaled) real time, so that `serialport` opens [`PtySim::path`] like
+//!   a USB serial adapter.
+//!
+//! What is modelled from the firmware (GRBL 1.1h, build 20190830): the 128-byte RX ring that silently drops overflow,
+//! realtime bytes taken out before the ring, the line pre-parser (79 significant characters), the g-code parser with
+//! its modal groups and error numbers, `$` system commands and settings, check mode, alarm lock, soft limits, a
+//! 15-block planner with junction deviation and trapezoidal acceleration, feed hold / resume / soft reset, overrides,
+//! laser mode, jogging and a simulated homing cycle. A motion trace (JSON lines) and an SVG of what was drawn come
+//! out as evidence.
+
+mod gcode;
+mod machine;
+mod planner;
+mod pty;
+mod rng;
+mod settings;
+mod status;
+mod svg;
+
+pub use gcode::{Flow, GcState, Motion, Persist, Spindle, read_float};
+pub use machine::{BANNER, Grbl, SimEvent, State};
+pub use planner::PLANNER_BLOCKS;
+pub use pty::PtySim;
+pub use settings::{N_AXIS, Settings, fmt_float};
+pub use status::{Status, alarm};
+pub use svg::trace_svg;
+
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// Size of GRBL's serial receive buffer on an Uno (`RX_BUFFER_SIZE`, `serial.h`).
+pub const RX_BUFFER_SIZE: usize = 128;
+
+/// What happens to received bytes when the 128-byte RX buffer is full.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum RxOverflow {
+    /// Dropped silently, as the real device does (`serial.c`).
+    #[default]
+    Drop,
+    /// Left unread in the pseudo-terminal until there is room (as if the link had hardware flow control).
+    Block,
+}
+
+/// Injected faults; all off by default.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Faults {
+    /// Probability that a received byte is dropped.
+    pub drop_rate: f64,
+    /// Probability that a received byte is corrupted (one bit flipped).
+    pub corrupt_rate: f64,
+    /// Extra latency before each response, ms.
+    pub response_delay_ms: u64,
+    /// Answer `error:N` to the n-th received line (1-based, counting every line).
+    pub error_at_line: Option<(u32, u8)>,
+    /// Raise `ALARM:N` when the n-th line executes.
+    pub alarm_at_line: Option<(u32, u8)>,
+    /// Spontaneous soft reset (banner again) when the n-th line arrives.
+    pub reset_at_line: Option<u32>,
+    /// Close the device (port hang-up) when the n-th line arrives.
+    pub hangup_at_line: Option<u32>,
+}
+
+/// Simulator configuration. `Default` is GRBL 1.1h on an Uno at 115200 baud with real-time motion.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimConfig {
+    /// Byte pacing: bytes/s = baud/10 in both directions.
+    pub baud: u32,
+    /// 1.0 = real time; 10.0 = motion runs 10× faster.
+    pub time_scale: f64,
+    /// Motion completes instantly (the planner never fills).
+    pub instant_motion: bool,
+    /// RX overflow behaviour.
+    pub rx_overflow: RxOverflow,
+    /// `$n=value` overrides at start (e.g. `(32, 1.0)` laser mode, `(130, 400.0)` travel).
+    pub settings: Vec<(u16, f64)>,
+    /// Fault injection.
+    pub faults: Faults,
+    /// Every executed motion segment as a JSON line, written at stop (also kept in memory).
+    pub trace_jsonl: Option<PathBuf>,
+    /// SVG of what was drawn/cut (tool-on moves), written at stop.
+    pub trace_svg: Option<PathBuf>,
+    /// Seed of the fault-injection random generator.
+    pub seed: u64,
+}
+
+/// Default baud rate of GRBL 1.1 (`config.h`).
+pub const DEFAULT_BAUD: u32 = 115_200;
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        SimConfig {
+            baud: DEFAULT_BAUD,
+            time_scale: 1.0,
+            instant_motion: false,
+            rx_overflow: RxOverflow::Drop,
+            settings: Vec::new(),
+            faults: Faults::default(),
+            trace_jsonl: None,
+            trace_svg: None,
+            seed: 0,
+        }
+    }
+}
+
+impl SimConfig {
+    /// Sets the baud rate.
+    pub fn with_baud(mut self, baud: u32) -> Self {
+        self.baud = baud;
+        self
+    }
+    /// Sets the time scale (`--speed`).
+    pub fn with_time_scale(mut self, scale: f64) -> Self {
+        self.time_scale = scale;
+        self
+    }
+    /// Makes motion instant.
+    pub fn with_instant_motion(mut self, instant: bool) -> Self {
+        self.instant_motion = instant;
+        self
+    }
+    /// Adds a `$n=value` setting applied at start.
+    pub fn with_setting(mut self, n: u16, value: f64) -> Self {
+        self.settings.push((n, value));
+        self
+    }
+    /// Sets the faults.
+    pub fn with_faults(mut self, faults: Faults) -> Self {
+        self.faults = faults;
+        self
+    }
+}
+
+/// One executed motion: a g-code motion command (an arc is one segment with its centre).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TraceSegment {
+    /// Received line (1-based) that produced it.
+    pub line: u32,
+    /// That line as executed (stripped, upper-case).
+    pub text: String,
+    /// `G0`, `G1`, `G2`, `G3`, `G28`, `G30`, `G38.2`, `JOG`, `HOME`.
+    pub motion: String,
+    /// Start, machine mm.
+    pub from: [f64; 3],
+    /// End, machine mm.
+    pub to: [f64; 3],
+    /// Arc centre, machine mm.
+    pub arc_center: Option<[f64; 3]>,
+    /// Programmed feed, mm/min (0 for rapids).
+    pub feed: f64,
+    /// Spindle/laser on with S > 0 (laser mode: never during G0), or pen down (work Z < 0) when `$32=0`.
+    pub tool_on: bool,
+    /// S value in effect (laser mode: 0 during G0).
+    pub power: f64,
+    /// Simulated start time, s.
+    pub t_start: f64,
+    /// Simulated end time, s.
+    pub t_end: f64,
+}
+
+/// Counters of a run.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct SimStats {
+    /// Bytes read from the link (realtime bytes included).
+    pub bytes_received: u64,
+    /// Bytes lost because the RX buffer was full.
+    pub bytes_dropped_overflow: u64,
+    /// Bytes dropped by fault injection.
+    pub bytes_dropped_fault: u64,
+    /// Bytes corrupted by fault injection.
+    pub bytes_corrupted: u64,
+    /// Highest RX buffer fill seen, bytes.
+    pub max_rx_fill: usize,
+    /// Highest planner fill seen, blocks.
+    pub max_planner_fill: usize,
+    /// Times motion stopped because the planner ran dry while running.
+    pub planner_starvations: u64,
+    /// Lines received (every line terminator counts).
+    pub lines_received: u32,
+    /// `ok` responses sent.
+    pub oks: u64,
+    /// `error:N` responses sent.
+    pub errors: u64,
+    /// `ALARM:N` sent.
+    pub alarms: u64,
+    /// Soft resets (realtime 0x18, `$C` off, faults).
+    pub resets: u64,
+    /// Bytes written to the link.
+    pub bytes_sent: u64,
+}
+
+/// What [`PtySim::stop`] returns.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct SimReport {
+    /// Every executed motion.
+    pub trace: Vec<TraceSegment>,
+    /// Counters.
+    pub stats: SimStats,
+    /// Simulated time at stop, s.
+    pub sim_time: f64,
+}

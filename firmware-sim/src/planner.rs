@@ -1,0 +1,348 @@
+//! The 15-block look-ahead planner and the motion executor, on virtual time.
+//!
+//! Planning follows GRBL's `planner.c`: targets are rounded to whole steps, junction speeds come from the
+//! junction-deviation model (`$11`), per-axis acceleration and rate limits (`$110..$122`) are projected on the
+//! move direction, and a reverse then a forward pass bound every entry speed so that the machine can always stop at
+//! the end of the buffer. Execution integrates a trapezoidal speed profile in small time steps instead of generating
+//! step pulses: at each instant the speed is raised by the acceleration, capped by the nominal speed and by the
+//! speed from which the block exit speed is still reachable.
+
+use crate::settings::{N_AXIS, Settings};
+use std::collections::VecDeque;
+
+/// Planner depth of an Uno build (`BLOCK_BUFFER_SIZE` 16 minus one, `planner.h`).
+pub const PLANNER_BLOCKS: usize = 15;
+/// `MINIMUM_JUNCTION_SPEED` (mm/s): zero, a reversal comes to a full stop.
+const MINIMUM_JUNCTION_SPEED: f64 = 0.0;
+/// `MINIMUM_FEED_RATE` of GRBL, mm/min.
+const MINIMUM_FEED_RATE: f64 = 1.0;
+/// Cosine beyond which a junction counts as straight or as a reversal (`planner.c`: 0.999999).
+const JUNCTION_COS_LIMIT: f64 = 0.999_999;
+/// Length below which a block counts as finished, mm (well under one step of 0.004 mm).
+const LENGTH_EPS_MM: f64 = 1e-9;
+
+/// One planned straight move.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanBlock {
+    /// Start, machine mm (step-rounded).
+    pub start: [f64; N_AXIS],
+    /// Target, machine mm (step-rounded).
+    pub target: [f64; N_AXIS],
+    /// Length, mm.
+    pub len: f64,
+    /// Unit direction.
+    pub unit: [f64; N_AXIS],
+    /// Acceleration along the move, mm/s².
+    pub accel: f64,
+    /// Rapid rate along the move, mm/s.
+    pub rapid_rate: f64,
+    /// Programmed rate, mm/s (ignored for rapids).
+    pub feed_rate: f64,
+    /// Rapid move (rapid override applies).
+    pub rapid: bool,
+    /// Not subject to the feed override (jog).
+    pub no_feed_override: bool,
+    /// Junction limit, (mm/s)².
+    pub max_junction_sq: f64,
+    /// Planned entry speed, (mm/s)².
+    pub entry_sq: f64,
+    /// Trace record this block belongs to.
+    pub record: usize,
+    /// Execution started.
+    pub started: bool,
+}
+
+impl PlanBlock {
+    /// Nominal speed with the overrides (percent), mm/s.
+    pub fn nominal(&self, feed_ovr: f64, rapid_ovr: f64) -> f64 {
+        let v = if self.rapid {
+            self.rapid_rate * rapid_ovr / 100.0
+        } else if self.no_feed_override {
+            self.feed_rate
+        } else {
+            self.feed_rate * feed_ovr / 100.0
+        };
+        v.max(MINIMUM_FEED_RATE / 60.0).min(self.rapid_rate)
+    }
+}
+
+/// What happened during one executor step.
+#[derive(Debug, Default, Clone, PartialEq)]
+pub struct StepEvents {
+    /// Records whose first block began.
+    pub started: Vec<usize>,
+    /// Records one of whose blocks ended.
+    pub finished: Vec<usize>,
+}
+
+/// Planner buffer plus executor state.
+#[derive(Debug, Clone)]
+pub struct Planner {
+    /// Queued blocks; the front one is executing.
+    pub blocks: VecDeque<PlanBlock>,
+    /// Planner position in steps.
+    pub position_steps: [i64; N_AXIS],
+    prev_unit: [f64; N_AXIS],
+    /// Distance done along the front block, mm.
+    pub s: f64,
+    /// Current speed, mm/s.
+    pub v: f64,
+    /// Executed (continuous) machine position, mm.
+    pub pos: [f64; N_AXIS],
+}
+
+/// Largest value of `limits[i] / |unit[i]|` over the axes the direction uses (`limit_value_by_axis_maximum`).
+fn limit_by_axis(limits: &[f64; N_AXIS], unit: &[f64; N_AXIS]) -> f64 {
+    let mut v = f64::INFINITY;
+    for i in 0..N_AXIS {
+        if unit[i] != 0.0 {
+            v = v.min(limits[i] / unit[i].abs());
+        }
+    }
+    v
+}
+
+impl Planner {
+    /// An empty planner at machine position `pos`.
+    pub fn new(pos: [f64; N_AXIS], settings: &Settings) -> Self {
+        let mut p = Planner {
+            blocks: VecDeque::new(),
+            position_steps: [0; N_AXIS],
+            prev_unit: [0.0; N_AXIS],
+            s: 0.0,
+            v: 0.0,
+            pos,
+        };
+        p.sync_position(settings);
+        p
+    }
+
+    /// Sets the planner position from the executed position (after a reset or a flush).
+    pub fn sync_position(&mut self, settings: &Settings) {
+        for i in 0..N_AXIS {
+            self.position_steps[i] = (self.pos[i] * settings.steps_per_mm[i]).round() as i64;
+        }
+    }
+
+    /// Planner position in mm.
+    pub fn position_mm(&self, settings: &Settings) -> [f64; N_AXIS] {
+        let mut p = [0.0; N_AXIS];
+        for i in 0..N_AXIS {
+            p[i] = self.position_steps[i] as f64 / settings.steps_per_mm[i];
+        }
+        p
+    }
+
+    /// True when no more blocks fit.
+    pub fn is_full(&self) -> bool {
+        self.blocks.len() >= PLANNER_BLOCKS
+    }
+
+    /// Removes all blocks and stops (reset, jog cancel after stop).
+    pub fn clear(&mut self, settings: &Settings) {
+        self.blocks.clear();
+        self.s = 0.0;
+        self.v = 0.0;
+        self.sync_position(settings);
+    }
+
+    /// Queues a move to `target` (mm). Returns false for a zero-step move, which GRBL drops.
+    pub fn push(
+        &mut self,
+        target: [f64; N_AXIS],
+        rapid: bool,
+        feed_mm_min: f64,
+        inverse_time: bool,
+        no_feed_override: bool,
+        record: usize,
+        settings: &Settings,
+        feed_ovr: f64,
+        rapid_ovr: f64,
+    ) -> bool {
+        let mut steps = [0i64; N_AXIS];
+        let mut delta = [0.0; N_AXIS];
+        let mut any = false;
+        for i in 0..N_AXIS {
+            steps[i] = (target[i] * settings.steps_per_mm[i]).round() as i64;
+            let d = steps[i] - self.position_steps[i];
+            any |= d != 0;
+            delta[i] = d as f64 / settings.steps_per_mm[i];
+        }
+        if !any {
+            return false;
+        }
+        let len = (delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2]).sqrt();
+        let mut unit = [0.0; N_AXIS];
+        for i in 0..N_AXIS {
+            unit[i] = delta[i] / len;
+        }
+        let accel = limit_by_axis(&settings.acceleration, &unit);
+        let max_rate_s = settings.max_rate.map(|r| r / 60.0);
+        let rapid_rate = limit_by_axis(&max_rate_s, &unit);
+        let feed_rate = if inverse_time {
+            len * feed_mm_min / 60.0
+        } else {
+            feed_mm_min / 60.0
+        };
+        // Junction speed from the deviation model.
+        let max_junction_sq = if self.blocks.is_empty() {
+            0.0
+        } else {
+            let cos = -(0..N_AXIS)
+                .map(|i| self.prev_unit[i] * unit[i])
+                .sum::<f64>();
+            if cos > JUNCTION_COS_LIMIT {
+                MINIMUM_JUNCTION_SPEED * MINIMUM_JUNCTION_SPEED
+            } else if cos < -JUNCTION_COS_LIMIT {
+                f64::INFINITY
+            } else {
+                let mut ju = [0.0; N_AXIS];
+                for i in 0..N_AXIS {
+                    ju[i] = unit[i] - self.prev_unit[i];
+                }
+                let n = (ju[0] * ju[0] + ju[1] * ju[1] + ju[2] * ju[2]).sqrt();
+                for v in &mut ju {
+                    *v /= n;
+                }
+                let ja = limit_by_axis(&settings.acceleration, &ju);
+                let sin_half = (0.5 * (1.0 - cos)).sqrt();
+                (ja * settings.junction_deviation * sin_half / (1.0 - sin_half))
+                    .max(MINIMUM_JUNCTION_SPEED * MINIMUM_JUNCTION_SPEED)
+            }
+        };
+        let start = self.position_mm(settings);
+        let mut tgt = [0.0; N_AXIS];
+        for i in 0..N_AXIS {
+            tgt[i] = steps[i] as f64 / settings.steps_per_mm[i];
+        }
+        self.blocks.push_back(PlanBlock {
+            start,
+            target: tgt,
+            len,
+            unit,
+            accel,
+            rapid_rate,
+            feed_rate,
+            rapid,
+            no_feed_override,
+            max_junction_sq,
+            entry_sq: 0.0,
+            record,
+            started: false,
+        });
+        self.position_steps = steps;
+        self.prev_unit = unit;
+        self.recalculate(feed_ovr, rapid_ovr);
+        true
+    }
+
+    /// Reverse and forward passes over the buffer (`planner_recalculate`), with the front block fixed at its
+    /// current speed.
+    pub fn recalculate(&mut self, feed_ovr: f64, rapid_ovr: f64) {
+        let n = self.blocks.len();
+        if n < 2 {
+            return;
+        }
+        let nominal: Vec<f64> = self
+            .blocks
+            .iter()
+            .map(|b| b.nominal(feed_ovr, rapid_ovr))
+            .collect();
+        // Reverse pass: every block can stop by the end of the buffer.
+        let mut next_entry_sq = 0.0;
+        for i in (1..n).rev() {
+            let max_entry = self.blocks[i]
+                .max_junction_sq
+                .min(nominal[i] * nominal[i])
+                .min(nominal[i - 1] * nominal[i - 1]);
+            let b = &mut self.blocks[i];
+            b.entry_sq = max_entry.min(next_entry_sq + 2.0 * b.accel * b.len);
+            next_entry_sq = b.entry_sq;
+        }
+        // Forward pass: entries reachable by acceleration from the executing block's speed.
+        let front = &self.blocks[0];
+        let mut reach_sq = self.v * self.v + 2.0 * front.accel * (front.len - self.s).max(0.0);
+        for i in 1..n {
+            let b = &mut self.blocks[i];
+            b.entry_sq = b.entry_sq.min(reach_sq);
+            reach_sq = b.entry_sq + 2.0 * b.accel * b.len;
+        }
+    }
+
+    /// Advances the executor by `h` seconds. `hold` decelerates to a stop.
+    pub fn step(&mut self, mut h: f64, hold: bool, feed_ovr: f64, rapid_ovr: f64) -> StepEvents {
+        let mut ev = StepEvents::default();
+        while h > 0.0 {
+            let Some(front) = self.blocks.front_mut() else {
+                self.v = 0.0;
+                break;
+            };
+            if !front.started {
+                front.started = true;
+                ev.started.push(front.record);
+            }
+            let front = self.blocks[0].clone();
+            let remaining = front.len - self.s;
+            let exit_sq = if hold {
+                0.0
+            } else {
+                self.blocks.get(1).map_or(0.0, |b| b.entry_sq)
+            };
+            let vn = if hold {
+                0.0
+            } else {
+                front.nominal(feed_ovr, rapid_ovr)
+            };
+            let a = front.accel;
+            let v_dec = (exit_sq + 2.0 * a * remaining.max(0.0)).sqrt();
+            let v_target = vn.min(v_dec);
+            let v_new = if self.v < v_target {
+                (self.v + a * h).min(v_target)
+            } else {
+                (self.v - a * h).max(v_target)
+            };
+            let ds = 0.5 * (self.v + v_new) * h;
+            if ds >= remaining - LENGTH_EPS_MM
+                && !(hold && v_new <= 0.0 && ds < remaining - LENGTH_EPS_MM)
+            {
+                let used = if ds > 0.0 {
+                    h * (remaining / ds).clamp(0.0, 1.0)
+                } else {
+                    h
+                };
+                h -= used;
+                self.v = v_new.min(exit_sq.sqrt());
+                self.s = 0.0;
+                self.pos = front.target;
+                self.blocks.pop_front();
+                ev.finished.push(front.record);
+                if h <= 0.0 {
+                    break;
+                }
+                continue;
+            }
+            self.s += ds;
+            self.v = v_new;
+            for i in 0..N_AXIS {
+                self.pos[i] = front.start[i] + front.unit[i] * self.s;
+            }
+            h = 0.0;
+        }
+        ev
+    }
+
+    /// Runs every queued block to completion at once (instant motion).
+    pub fn complete_all(&mut self) -> StepEvents {
+        let mut ev = StepEvents::default();
+        while let Some(b) = self.blocks.pop_front() {
+            if !b.started {
+                ev.started.push(b.record);
+            }
+            ev.finished.push(b.record);
+            self.pos = b.target;
+        }
+        self.s = 0.0;
+        self.v = 0.0;
+        ev
+    }
+}

@@ -1,0 +1,312 @@
+//! The simulator on a pseudo-terminal: a thread that paces bytes at the baud rate in both directions, feeds the
+//! [`Grbl`] core and runs its clock in (scaled) real time.
+//!
+//! The thread keeps its own descriptor of the slave end open, so that reads on the master never fail with EIO
+//! when a client closes the port; a later client simply opens the same path again (the device "stays plugged in").
+
+use crate::machine::{Grbl, SimEvent};
+use crate::{RxOverflow, SimConfig, SimReport, SimStats, TraceSegment};
+use nix::errno::Errno;
+use nix::fcntl::{FcntlArg, OFlag, fcntl};
+use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
+use nix::sys::termios::{SetArg, cfmakeraw, tcgetattr, tcsetattr};
+use std::collections::VecDeque;
+use std::io;
+use std::os::fd::{AsFd, OwnedFd};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// Poll period of the I/O loop, ms: 1 ms is about 11 bytes at 115200 baud.
+const POLL_MS: u8 = 1;
+/// Longest burst the pacing lets through after a late wake-up, seconds of link time (a UART FIFO's worth).
+const MAX_BURST_S: f64 = 0.005;
+/// Longest real-time step fed to the core in one go, s (a descheduled thread does not teleport the machine).
+const MAX_TICK_S: f64 = 0.05;
+
+#[derive(Debug, Default)]
+struct Shared {
+    trace: Vec<TraceSegment>,
+    stats: SimStats,
+    lines: u32,
+    sim_time: f64,
+    hung_up: bool,
+}
+
+/// A running simulator on a pseudo-terminal, on its own thread.
+#[derive(Debug)]
+pub struct PtySim {
+    path: PathBuf,
+    shared: Arc<Mutex<Shared>>,
+    stop: Arc<AtomicBool>,
+    handle: Option<JoinHandle<()>>,
+    links: Mutex<Vec<PathBuf>>,
+    config: SimConfig,
+}
+
+fn lock(m: &Mutex<Shared>) -> MutexGuard<'_, Shared> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn io_err(e: Errno) -> io::Error {
+    io::Error::from_raw_os_error(e as i32)
+}
+
+impl PtySim {
+    /// Creates the pseudo-terminal pair and starts the simulator thread. The banner is already waiting when a
+    /// client opens [`PtySim::path`].
+    pub fn spawn(config: SimConfig) -> io::Result<PtySim> {
+        if config.baud == 0 || !(config.time_scale > 0.0 && config.time_scale.is_finite()) {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!(
+                    "sim config: baud {} and time_scale {} must be positive",
+                    config.baud, config.time_scale
+                ),
+            ));
+        }
+        let pty = nix::pty::openpty(None, None).map_err(io_err)?;
+        let (master, slave) = (pty.master, pty.slave);
+        let mut t = tcgetattr(&slave).map_err(io_err)?;
+        cfmakeraw(&mut t);
+        tcsetattr(&slave, SetArg::TCSANOW, &t).map_err(io_err)?;
+        let path = nix::unistd::ttyname(&slave).map_err(io_err)?;
+        let flags = OFlag::from_bits_truncate(fcntl(&master, FcntlArg::F_GETFL).map_err(io_err)?);
+        fcntl(&master, FcntlArg::F_SETFL(flags | OFlag::O_NONBLOCK)).map_err(io_err)?;
+        let shared = Arc::new(Mutex::new(Shared::default()));
+        let stop = Arc::new(AtomicBool::new(false));
+        let (sh, st, cfg) = (shared.clone(), stop.clone(), config.clone());
+        let handle = std::thread::Builder::new()
+            .name("firmware-sim".into())
+            .spawn(move || run(master, slave, cfg, sh, st))?;
+        Ok(PtySim {
+            path,
+            shared,
+            stop,
+            handle: Some(handle),
+            links: Mutex::new(Vec::new()),
+            config,
+        })
+    }
+
+    /// Device path to open with `serialport` (e.g. `/dev/pts/5`).
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Makes a symlink `path` → the device (`--link PATH`); an existing symlink there is replaced. Removed at stop.
+    pub fn link(&self, path: &Path) -> io::Result<()> {
+        if let Ok(meta) = std::fs::symlink_metadata(path) {
+            if meta.file_type().is_symlink() {
+                std::fs::remove_file(path)?;
+            }
+        }
+        std::os::unix::fs::symlink(&self.path, path)?;
+        self.links
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(path.to_path_buf());
+        Ok(())
+    }
+
+    /// Snapshot of the executed segments so far.
+    pub fn trace(&self) -> Vec<TraceSegment> {
+        lock(&self.shared).trace.clone()
+    }
+
+    /// Lines received so far (every line terminator counts).
+    pub fn lines_received(&self) -> u32 {
+        lock(&self.shared).lines
+    }
+
+    /// Counters so far.
+    pub fn stats(&self) -> SimStats {
+        lock(&self.shared).stats.clone()
+    }
+
+    /// Simulated time so far, s.
+    pub fn sim_time(&self) -> f64 {
+        lock(&self.shared).sim_time
+    }
+
+    /// True once a hang-up fault closed the device.
+    pub fn hung_up(&self) -> bool {
+        lock(&self.shared).hung_up
+    }
+
+    /// Stops the thread, writes the trace files of the configuration and returns trace and counters.
+    pub fn stop(mut self) -> SimReport {
+        self.shutdown();
+        let sh = lock(&self.shared);
+        let report = SimReport {
+            trace: sh.trace.clone(),
+            stats: sh.stats.clone(),
+            sim_time: sh.sim_time,
+        };
+        drop(sh);
+        if let Some(p) = &self.config.trace_jsonl {
+            let mut s = String::new();
+            for seg in &report.trace {
+                if let Ok(j) = serde_json::to_string(seg) {
+                    s.push_str(&j);
+                    s.push('\n');
+                }
+            }
+            if let Err(e) = std::fs::write(p, s) {
+                eprintln!("firmware-sim: cannot write trace {}: {e}", p.display());
+            }
+        }
+        if let Some(p) = &self.config.trace_svg {
+            if let Err(e) = std::fs::write(p, crate::svg::trace_svg(&report.trace)) {
+                eprintln!("firmware-sim: cannot write SVG {}: {e}", p.display());
+            }
+        }
+        report
+    }
+
+    fn shutdown(&mut self) {
+        self.stop.store(true, Ordering::SeqCst);
+        if let Some(h) = self.handle.take() {
+            let _ = h.join();
+        }
+        for l in self
+            .links
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .drain(..)
+        {
+            let _ = std::fs::remove_file(l);
+        }
+    }
+}
+
+impl Drop for PtySim {
+    fn drop(&mut self) {
+        self.shutdown();
+    }
+}
+
+/// Token bucket pacing bytes at `rate` bytes/s.
+struct Pace {
+    rate: f64,
+    credit: f64,
+}
+
+impl Pace {
+    fn add(&mut self, dt: f64) {
+        self.credit = (self.credit + dt * self.rate).min((self.rate * MAX_BURST_S).max(1.0));
+    }
+    fn available(&self) -> usize {
+        self.credit.max(0.0).floor() as usize
+    }
+    fn take(&mut self, n: usize) {
+        self.credit -= n as f64;
+    }
+}
+
+fn run(
+    master: OwnedFd,
+    slave: OwnedFd,
+    config: SimConfig,
+    shared: Arc<Mutex<Shared>>,
+    stop: Arc<AtomicBool>,
+) {
+    let mut core = Grbl::new(&config);
+    let bps = f64::from(config.baud) / 10.0;
+    let mut rx_pace = Pace {
+        rate: bps,
+        credit: 0.0,
+    };
+    let mut tx_pace = Pace {
+        rate: bps,
+        credit: 0.0,
+    };
+    let delay = Duration::from_millis(config.faults.response_delay_ms);
+    let mut txq: VecDeque<(Instant, u8)> = VecDeque::new();
+    let mut master = Some(master);
+    let mut slave = Some(slave);
+    let mut last = Instant::now();
+    let mut buf = [0u8; 512];
+    let mut pushed_trace = 0;
+    while !stop.load(Ordering::SeqCst) {
+        if let Some(m) = &master {
+            let mut fds = [PollFd::new(m.as_fd(), PollFlags::POLLIN)];
+            let _ = poll(&mut fds, PollTimeout::from(POLL_MS));
+        } else {
+            std::thread::sleep(Duration::from_millis(u64::from(POLL_MS)));
+        }
+        let now = Instant::now();
+        let dt = now.duration_since(last).as_secs_f64().min(MAX_TICK_S);
+        last = now;
+        rx_pace.add(dt);
+        tx_pace.add(dt);
+        // Receive, paced.
+        if let Some(m) = &master {
+            let mut n = rx_pace.available().min(buf.len());
+            if config.rx_overflow == RxOverflow::Block {
+                n = n.min(core.rx_free());
+            }
+            if n > 0 {
+                match nix::unistd::read(m, &mut buf[..n]) {
+                    Ok(k) => {
+                        rx_pace.take(k);
+                        core.receive_all(&buf[..k]);
+                    }
+                    Err(Errno::EAGAIN) | Err(Errno::EIO) | Err(Errno::EINTR) => {}
+                    Err(_) => {}
+                }
+            }
+        }
+        core.tick(dt * config.time_scale);
+        for ev in core.take_events() {
+            match ev {
+                SimEvent::Hangup => {
+                    master = None;
+                    slave = None;
+                    txq.clear();
+                    lock(&shared).hung_up = true;
+                }
+            }
+        }
+        let out = core.take_output();
+        if master.is_some() {
+            let ready = now + delay;
+            txq.extend(out.into_iter().map(|b| (ready, b)));
+        }
+        // Transmit, paced.
+        if let Some(m) = &master {
+            let mut chunk = Vec::new();
+            let budget = tx_pace.available();
+            for &(t, b) in txq.iter() {
+                if chunk.len() >= budget || t > now {
+                    break;
+                }
+                chunk.push(b);
+            }
+            if !chunk.is_empty() {
+                match nix::unistd::write(m, &chunk) {
+                    Ok(k) => {
+                        tx_pace.take(k);
+                        txq.drain(..k);
+                    }
+                    Err(_) => {
+                        // EAGAIN: nobody reads and the pty buffer is full; EIO: no client. Keep the bytes.
+                    }
+                }
+            }
+        }
+        let mut sh = lock(&shared);
+        let tr = core.trace();
+        if tr.len() > pushed_trace {
+            sh.trace.extend_from_slice(&tr[pushed_trace..]);
+            pushed_trace = tr.len();
+        }
+        sh.stats = core.stats();
+        sh.lines = core.lines_received();
+        sh.sim_time = core.clock();
+    }
+    drop(slave);
+    drop(master);
+}
