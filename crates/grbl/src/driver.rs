@@ -32,8 +32,6 @@ const DEFAULT_PLANNER_BLOCKS: usize = 15;
 const POSITION_TOL_MM: f64 = 0.01;
 /// Longest single read wait, so control requests and polls stay responsive.
 const READ_SLICE: Duration = Duration::from_millis(20);
-/// Minimum interval between observer calls.
-const PROGRESS_INTERVAL: Duration = Duration::from_millis(50);
 
 /// A reference to one job line, for messages.
 #[derive(Debug, Clone, PartialEq)]
@@ -267,6 +265,8 @@ pub struct SendOptions {
     pub silence_timeout: Duration,
     /// Compare the final position with the job's end point.
     pub verify_end_position: bool,
+    /// Minimum interval between observer calls while streaming.
+    pub progress_interval: Duration,
 }
 
 impl SendOptions {
@@ -280,6 +280,14 @@ impl SendOptions {
     pub const DEFAULT_IDLE_ACK_TIMEOUT: Duration = Duration::from_secs(2);
     /// Default silence timeout.
     pub const DEFAULT_SILENCE_TIMEOUT: Duration = Duration::from_secs(10);
+    /// Default observer interval: 20 updates a second is smooth for a progress bar.
+    pub const DEFAULT_PROGRESS_INTERVAL: Duration = Duration::from_millis(50);
+
+    /// Sets [`SendOptions::progress_interval`].
+    pub fn with_progress_interval(mut self, d: Duration) -> Self {
+        self.progress_interval = d;
+        self
+    }
 
     /// Sets [`SendOptions::banner_timeout`].
     pub fn with_banner_timeout(mut self, d: Duration) -> Self {
@@ -358,6 +366,7 @@ impl Default for SendOptions {
             idle_ack_timeout: SendOptions::DEFAULT_IDLE_ACK_TIMEOUT,
             silence_timeout: SendOptions::DEFAULT_SILENCE_TIMEOUT,
             verify_end_position: true,
+            progress_interval: SendOptions::DEFAULT_PROGRESS_INTERVAL,
         }
     }
 }
@@ -524,6 +533,8 @@ struct Session<'a, T: Transport + ?Sized> {
     messages: Vec<String>,
     alarm_lock: bool,
     setup_seq: u32,
+    /// Banners seen so far.
+    resets: u64,
 }
 
 impl<'a, T: Transport + ?Sized> Session<'a, T> {
@@ -568,6 +579,7 @@ impl<'a, T: Transport + ?Sized> Session<'a, T> {
                 }
                 Event::Alarm(_) => self.alarm_lock = true,
                 Event::Reset { version, .. } => {
+                    self.resets += 1;
                     self.version = version.clone();
                     self.wco = [0.0; 3];
                 }
@@ -578,20 +590,25 @@ impl<'a, T: Transport + ?Sized> Session<'a, T> {
     }
 
     fn wait_banner(&mut self, timeout: Duration) -> Result<bool, TransportError> {
+        let seen = self.resets;
+        self.wait_banner_after(seen, timeout)
+    }
+
+    /// Waits until more than `seen` banners have arrived (one may already have come in while
+    /// waiting for something else), then lets the push messages that follow it arrive.
+    fn wait_banner_after(&mut self, seen: u64, timeout: Duration) -> Result<bool, TransportError> {
         let until = Instant::now() + timeout;
-        while Instant::now() < until {
-            for e in self.pump(READ_SLICE)? {
-                if let Event::Reset { .. } = e {
-                    // Let push messages that follow the banner ([MSG:..unlock]) arrive.
-                    let settle = Instant::now() + Duration::from_millis(30);
-                    while Instant::now() < settle {
-                        self.pump(Duration::from_millis(10))?;
-                    }
-                    return Ok(true);
-                }
+        while self.resets <= seen {
+            if Instant::now() >= until {
+                return Ok(false);
             }
+            self.pump(READ_SLICE)?;
         }
-        Ok(false)
+        let settle = Instant::now() + Duration::from_millis(30);
+        while Instant::now() < settle {
+            self.pump(Duration::from_millis(10))?;
+        }
+        Ok(true)
     }
 
     /// Sends one command with send-response and waits for its answer.
@@ -819,6 +836,7 @@ pub fn send_job(
         messages: Vec::new(),
         alarm_lock: false,
         setup_seq: 0,
+        resets: 0,
     };
     let mut progress = Progress {
         phase: Phase::Connecting,
@@ -1196,7 +1214,7 @@ pub fn send_job(
             stream_start.elapsed(),
             previously_done,
         ));
-        if last_progress.elapsed() >= PROGRESS_INTERVAL {
+        if last_progress.elapsed() >= opts.progress_interval {
             observer(&progress);
             last_progress = Instant::now();
         }
@@ -1365,9 +1383,10 @@ fn check_pass<T: Transport + ?Sized>(
         }
     }
     // Leaving check mode soft-resets GRBL: wait for the banner.
+    let seen = sess.resets;
     sess.command_ok("$C", opts.command_timeout)?;
     if !sess
-        .wait_banner(opts.banner_timeout)
+        .wait_banner_after(seen, opts.banner_timeout)
         .map_err(|e| transport(e, None))?
     {
         return Err(SendError::NoBanner(opts.banner_timeout));
@@ -1412,6 +1431,7 @@ fn abort<T: Transport + ?Sized>(
     sess.s.realtime(0x18);
     let _ = sess.wait_banner(Duration::from_secs(3));
     // After the reset GRBL's spindle/laser is off (M5); say so explicitly if it accepts lines.
+    sess.s.set_feeding(true);
     sess.s
         .push(Tag::Setup(u32::MAX), "M5", SendMode::SendResponse);
     let until = Instant::now() + Duration::from_millis(500);
@@ -1428,3 +1448,7 @@ fn abort<T: Transport + ?Sized>(
         last_done: tracker.last_done(job),
     })
 }
+
+#[cfg(test)]
+#[path = "driver_tests.rs"]
+mod tests;

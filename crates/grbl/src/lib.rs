@@ -14,6 +14,8 @@
 
 pub mod codes;
 pub mod driver;
+#[cfg(test)]
+mod fake;
 pub mod job;
 pub mod journal;
 pub mod response;
