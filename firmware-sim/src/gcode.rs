@@ -904,8 +904,7 @@ pub fn execute(line: &[u8], jog: bool, ctx: &mut Context<'_>) -> Result<Vec<Acti
     let mut actions = Vec::new();
     let gc = &mut *ctx.gc;
     if jog {
-        gc.inches = inches;
-        gc.incremental = incremental;
+        // A jog leaves the parser modes alone (`jog_execute`); only the position follows.
         if axis_words != 0 {
             actions.push(Action::Motion(MotionCmd {
                 name: "JOG".into(),

@@ -752,6 +752,7 @@ impl Grbl {
             }
             State::Jog if self.jog_cancel && stopped => {
                 self.stop_motion();
+                self.gc.position = self.machine_position();
                 self.state = State::Idle;
                 self.jog_cancel = false;
             }
