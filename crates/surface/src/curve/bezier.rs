@@ -303,10 +303,25 @@ impl ParamCurve for Bezier {
     }
 
     fn eval(&self, t: f64) -> DVec3 {
-        with_scratch(&self.points, |b| {
-            casteljau_in_place(b, t);
-            b[0]
-        })
+        let s = 1.0 - t;
+        match *self.points.as_slice() {
+            // Unrolled de Casteljau for the common low degrees (same operations, same rounding).
+            [a] => a,
+            [a, b] => s * a + t * b,
+            [a, b, c] => {
+                let (ab, bc) = (s * a + t * b, s * b + t * c);
+                s * ab + t * bc
+            }
+            [a, b, c, d] => {
+                let (ab, bc, cd) = (s * a + t * b, s * b + t * c, s * c + t * d);
+                let (abc, bcd) = (s * ab + t * bc, s * bc + t * cd);
+                s * abc + t * bcd
+            }
+            _ => with_scratch(&self.points, |b| {
+                casteljau_in_place(b, t);
+                b[0]
+            }),
+        }
     }
 
     /// `r^{(k)}(t) = n!/(n−k)! Σ Δ^k b_i B_i^{n−k}(t)` (digest A3).
@@ -314,6 +329,22 @@ impl ParamCurve for Bezier {
         let n = self.degree();
         if k > n {
             return DVec3::ZERO;
+        }
+        if let [a, b, c, d] = *self.points.as_slice() {
+            let s = 1.0 - t;
+            match k {
+                1 => {
+                    let (d0, d1, d2) = (b - a, c - b, d - c);
+                    let (e0, e1) = (s * d0 + t * d1, s * d1 + t * d2);
+                    return 3.0 * (s * e0 + t * e1);
+                }
+                2 => {
+                    let (d0, d1) = (c - 2.0 * b + a, d - 2.0 * c + b);
+                    return 6.0 * (s * d0 + t * d1);
+                }
+                3 => return 6.0 * (d - 3.0 * c + 3.0 * b - a),
+                _ => {}
+            }
         }
         with_scratch(&self.points, |b| {
             let mut scale = 1.0;

@@ -93,6 +93,41 @@ fn ders_at<V: Lin>(p: usize, knots: &[f64], pts: &[V], t: f64, out: &mut [V]) {
     });
 }
 
+/// The `k`-th derivative at `t` for `k ≤ p` by differencing the `p + 1` active control points
+/// `k` times (`Q^l_i = (p−l+1)(Q^{l−1}_i − Q^{l−1}_{i−1}) / (U_{i+p−l+1} − U_i)`, Piegl & Tiller
+/// §3.3) and evaluating them against the degree `p − k` basis of the same span. Cheaper than the
+/// full derivative table of [`ders_basis_funs`] when one order is wanted.
+fn deriv_at<V: Lin>(p: usize, knots: &[f64], pts: &[V], t: f64, k: usize) -> V {
+    debug_assert!(k <= p);
+    let n = pts.len();
+    let span = find_span(n, p, t, knots);
+    let first = span - p;
+    with_buf::<V, CUBIC_BASIS, STACK_BASIS, _>(p + 1, |q| {
+        q.copy_from_slice(&pts[first..=span]);
+        for l in 1..=k {
+            let f = (p - l + 1) as f64;
+            for j in (l..=p).rev() {
+                let i = first + j;
+                let den = knots[i + p - l + 1] - knots[i];
+                // 0/0 := 0: a zero-length support means the basis function vanishes.
+                q[j] = if den != 0.0 {
+                    (q[j] - q[j - 1]) * (f / den)
+                } else {
+                    V::default()
+                };
+            }
+        }
+        with_buf::<f64, CUBIC_BASIS, STACK_BASIS, _>(p - k + 1, |nb| {
+            basis_funs(span, t, p - k, knots, nb);
+            let mut acc = V::default();
+            for m in 0..=(p - k) {
+                acc = acc + q[k + m] * nb[m];
+            }
+            acc
+        })
+    })
+}
+
 /// Boehm/Piegl–Tiller knot insertion (A5.1) of `t` `r` times; returns the new knots and points.
 fn insert<V: Lin>(
     p: usize,
@@ -305,10 +340,7 @@ impl ParamCurve for BSpline {
         if k > self.degree {
             return DVec3::ZERO;
         }
-        with_buf::<DVec3, CUBIC_ORDERS, STACK_ORDERS, _>(k + 1, |out| {
-            ders_at(self.degree, &self.knots, &self.points, t, out);
-            out[k]
-        })
+        deriv_at(self.degree, &self.knots, &self.points, t, k)
     }
 }
 
@@ -531,7 +563,13 @@ impl Nurbs {
     /// `C^(k) = (A^(k) − Σ_{i=1..k} C(k,i) w^(i) C^(k−i)) / w`.
     fn ders_into(&self, t: f64, out: &mut [DVec3]) {
         with_buf::<DVec4, CUBIC_ORDERS, STACK_ORDERS, _>(out.len(), |h| {
-            ders_at(self.degree, &self.knots, &self.hom, t, h);
+            for (kk, hk) in h.iter_mut().enumerate() {
+                *hk = if kk <= self.degree {
+                    deriv_at(self.degree, &self.knots, &self.hom, t, kk)
+                } else {
+                    DVec4::ZERO
+                };
+            }
             let w0 = h[0].w;
             for k in 0..out.len() {
                 let mut v = h[k].truncate();
