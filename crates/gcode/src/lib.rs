@@ -1,1 +1,22 @@
-//! placeholder
+//! G-code for pen plotters, drag knives and laser cutters, in the GRBL 1.1 dialect.
+//!
+//! [`plan`] turns a [`flatcut_pattern::Drawing`] into a [`Plan`]: strokes mapped into machine
+//! coordinates, ordered (engrave, draw, inner cuts, outer cuts; travel minimised by nearest
+//! neighbour and 2-opt), compensated (drag-knife blade offset with corner swivels and overcut) and
+//! arc-fitted. [`Plan::to_gcode`] writes deterministic text; [`Plan::summary`] estimates run time
+//! with GRBL's own motion model (junction deviation and trapezoidal acceleration).
+//!
+//! **Architecture invariant:** depends on neither the sender (`flatcut-grbl`) nor the simulator:
+//! the simulator is the independent check on what this crate writes.
+
+pub mod arcs;
+pub mod emit;
+pub mod knife;
+pub mod order;
+pub mod plan;
+pub mod profile;
+pub mod time;
+
+pub use emit::{GRBL_MAX_LINE, frame_job};
+pub use plan::{GcodeError, GcodeOptions, Move, Plan, Summary, Toolpath, plan};
+pub use profile::{Profile, ProfileError, ToolKind};

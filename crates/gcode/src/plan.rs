@@ -1,0 +1,391 @@
+//! From a drawing to ordered, compensated, arc-fitted toolpaths in machine coordinates.
+
+use flatcut_geom::{Aabb2, DVec2};
+use flatcut_pattern::{Drawing, Layer};
+
+use crate::arcs;
+use crate::knife;
+use crate::order::{self, OrderItem};
+use crate::profile::{Profile, ToolKind};
+
+/// One motion while the tool works, in machine coordinates (mm).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Move {
+    Line(DVec2),
+    /// A circular arc to `to` around `center`, counter-clockwise (`G3`) or clockwise (`G2`).
+    Arc {
+        to: DVec2,
+        center: DVec2,
+        ccw: bool,
+    },
+}
+
+impl Move {
+    pub fn end(&self) -> DVec2 {
+        match *self {
+            Move::Line(p) => p,
+            Move::Arc { to, .. } => to,
+        }
+    }
+}
+
+/// A continuous tool-down path.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Toolpath {
+    pub layer: Layer,
+    /// The stroke's id from the drawing.
+    pub id: String,
+    pub start: DVec2,
+    pub moves: Vec<Move>,
+    /// Feed while working, mm/min.
+    pub feed: f64,
+    /// Laser `S` value (0 for pens and knives).
+    pub power_s: f64,
+    /// How many times the path is run (laser passes).
+    pub passes: u32,
+}
+
+impl Toolpath {
+    /// Length of one pass in mm (arcs exactly).
+    pub fn length(&self) -> f64 {
+        let mut at = self.start;
+        let mut sum = 0.0;
+        for m in &self.moves {
+            sum += match *m {
+                Move::Line(p) => at.distance(p),
+                Move::Arc { to, center, ccw } => {
+                    let r = at.distance(center);
+                    let mut sweep = (to - center).to_angle() - (at - center).to_angle();
+                    if ccw && sweep <= 0.0 {
+                        sweep += std::f64::consts::TAU;
+                    }
+                    if !ccw && sweep >= 0.0 {
+                        sweep -= std::f64::consts::TAU;
+                    }
+                    r * sweep.abs()
+                }
+            };
+            at = m.end();
+        }
+        sum
+    }
+
+    pub fn end(&self) -> DVec2 {
+        self.moves.last().map_or(self.start, Move::end)
+    }
+}
+
+/// Options of a plan beyond the profile.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct GcodeOptions {
+    /// Reorder strokes to shorten travel (otherwise drawing order within each layer group).
+    pub reorder: bool,
+    /// Fit arcs (the profile's `arc_tolerance_mm`); off gives lines only.
+    pub arcs: bool,
+    /// A title written into the header comment.
+    pub title: String,
+}
+
+impl Default for GcodeOptions {
+    fn default() -> Self {
+        Self {
+            reorder: true,
+            arcs: true,
+            title: String::from("flatcut job"),
+        }
+    }
+}
+
+/// Why no G-code could be planned.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum GcodeError {
+    #[error("nothing to do: the drawing has no strokes on a layer the {profile} profile runs")]
+    Empty { profile: String },
+    #[error(
+        "stroke '{id}' leaves the work area of profile {profile} ({w} × {h} mm) by {excess:.3} mm at machine ({x:.3}, {y:.3}); move the drawing (offset_mm) or use a larger machine"
+    )]
+    OutsideWorkArea {
+        id: String,
+        profile: String,
+        w: f64,
+        h: f64,
+        excess: f64,
+        x: f64,
+        y: f64,
+    },
+    #[error("stroke '{id}' has a non-finite coordinate")]
+    NonFinite { id: String },
+}
+
+/// The planned job: toolpaths in execution order plus the profile that will run them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    pub profile: Profile,
+    pub paths: Vec<Toolpath>,
+    pub title: String,
+}
+
+/// Figures of a job.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Summary {
+    pub lines: usize,
+    pub cut_length_mm: f64,
+    pub travel_length_mm: f64,
+    pub est_time_s: f64,
+    pub paths: usize,
+}
+
+/// Consecutive points closer than this are merged (mm): below any machine's resolution.
+const DEDUP_MM: f64 = 1e-4;
+
+/// Plans the drawing for the profile: layer order (engrave, draw, inner cuts, outer cuts), travel
+/// ordering, knife compensation, arc fitting, work-area check.
+pub fn plan(drawing: &Drawing, profile: &Profile, opts: &GcodeOptions) -> Result<Plan, GcodeError> {
+    // Strokes in machine coordinates, cleaned.
+    struct S {
+        layer: Layer,
+        outer: bool,
+        closed: bool,
+        id: String,
+        pts: Vec<DVec2>,
+    }
+    let mut strokes = Vec::new();
+    for s in &drawing.strokes {
+        if !profile.layer(s.layer).enabled {
+            continue;
+        }
+        if s.points.iter().any(|p| !flatcut_geom::finite2(*p)) {
+            return Err(GcodeError::NonFinite { id: s.id.clone() });
+        }
+        let mut pts: Vec<DVec2> = Vec::with_capacity(s.points.len());
+        for &p in &s.points {
+            let q = profile.to_machine(p);
+            if pts.last().is_none_or(|l: &DVec2| l.distance(q) > DEDUP_MM) {
+                pts.push(q);
+            }
+        }
+        let mut closed = s.closed;
+        if closed && pts.len() > 2 && pts[0].distance(pts[pts.len() - 1]) <= DEDUP_MM {
+            pts.pop();
+        }
+        if pts.len() < 2 {
+            continue;
+        }
+        if pts.len() < 3 {
+            closed = false;
+        }
+        strokes.push(S {
+            layer: s.layer,
+            outer: s.outer,
+            closed,
+            id: s.id.clone(),
+            pts,
+        });
+    }
+    if strokes.is_empty() {
+        return Err(GcodeError::Empty {
+            profile: profile.name.clone(),
+        });
+    }
+
+    let groups: [(Layer, Option<bool>); 4] = [
+        (Layer::Engrave, None),
+        (Layer::Draw, None),
+        (Layer::Cut, Some(false)),
+        (Layer::Cut, Some(true)),
+    ];
+    let mut paths = Vec::new();
+    let mut at = profile.to_machine(DVec2::ZERO);
+    at = DVec2::new(at.x.max(0.0), at.y.max(0.0));
+    for (layer, outer) in groups {
+        let members: Vec<&S> = strokes
+            .iter()
+            .filter(|s| s.layer == layer && outer.is_none_or(|o| s.outer == o))
+            .collect();
+        if members.is_empty() {
+            continue;
+        }
+        let items: Vec<OrderItem<'_>> = members
+            .iter()
+            .map(|s| OrderItem {
+                points: &s.pts,
+                closed: s.closed,
+            })
+            .collect();
+        let tour = if opts.reorder {
+            order::order(&items, at)
+        } else {
+            (0..items.len())
+                .map(|i| order::Visit {
+                    item: i,
+                    reversed: false,
+                    start: 0,
+                })
+                .collect()
+        };
+        let cfg = profile.layer(layer);
+        let feed = profile.layer_feed(layer);
+        let power_s = match (&profile.laser, profile.kind) {
+            (Some(l), ToolKind::Laser) => l.s_max * cfg.power_pct.unwrap_or(100.0) / 100.0,
+            _ => 0.0,
+        };
+        for v in tour {
+            let s = members[v.item];
+            let pts = order::visit_points(&items[v.item], &v);
+            let (start, moves) = match (&profile.knife, profile.kind) {
+                (Some(k), ToolKind::Knife) => {
+                    let pts = if s.closed {
+                        knife::with_overcut(&pts, k.overcut_mm)
+                    } else {
+                        pts
+                    };
+                    let (start, moves) = knife::compensate(&pts, k);
+                    (start, refit_lines(start, moves, opts, profile))
+                }
+                _ => (pts[0], arcs::fit(&pts, arc_tolerance(opts, profile))),
+            };
+            let tp = Toolpath {
+                layer,
+                id: s.id.clone(),
+                start,
+                moves,
+                feed,
+                power_s,
+                passes: if profile.kind == ToolKind::Laser {
+                    cfg.passes
+                } else {
+                    1
+                },
+            };
+            check_work_area(&tp, profile)?;
+            at = tp.end();
+            paths.push(tp);
+        }
+    }
+    Ok(Plan {
+        profile: profile.clone(),
+        paths,
+        title: opts.title.clone(),
+    })
+}
+
+/// Arc-fits the maximal runs of lines in a compensated knife path (swivel arcs stay as they are).
+fn refit_lines(
+    start: DVec2,
+    moves: Vec<Move>,
+    opts: &GcodeOptions,
+    profile: &Profile,
+) -> Vec<Move> {
+    let tol = arc_tolerance(opts, profile);
+    let mut out = Vec::with_capacity(moves.len());
+    let mut run = vec![start];
+    for m in moves {
+        match m {
+            Move::Line(p) => run.push(p),
+            arc @ Move::Arc { .. } => {
+                out.extend(arcs::fit(&run, tol));
+                run = vec![arc.end()];
+                out.push(arc);
+            }
+        }
+    }
+    out.extend(arcs::fit(&run, tol));
+    out
+}
+
+/// The tolerance handed to the arc fitter: the profile's, less what rounding the printed
+/// coordinates can add (half a unit in the last digit, in x and y), so the G-code as written stays
+/// within the profile's tolerance of the drawing.
+fn arc_tolerance(opts: &GcodeOptions, profile: &Profile) -> f64 {
+    if !opts.arcs {
+        return 0.0;
+    }
+    let rounding = 0.5 * 10f64.powi(-(profile.decimals as i32)) * std::f64::consts::SQRT_2;
+    (profile.arc_tolerance_mm - rounding).max(0.0)
+}
+
+fn check_work_area(tp: &Toolpath, profile: &Profile) -> Result<(), GcodeError> {
+    let [w, h] = profile.work_area_mm;
+    let mut pts = vec![tp.start];
+    let mut at = tp.start;
+    for m in &tp.moves {
+        match *m {
+            Move::Line(p) => pts.push(p),
+            Move::Arc { to, center, ccw } => {
+                pts.extend(arcs::sample_arc(at, to, center, ccw, 0.01))
+            }
+        }
+        at = m.end();
+    }
+    // Slack for the last printed digit.
+    let slack = 0.5 * 10f64.powi(-(profile.decimals as i32));
+    for p in pts {
+        let excess = (-p.x).max(p.x - w).max(-p.y).max(p.y - h);
+        if excess > slack {
+            return Err(GcodeError::OutsideWorkArea {
+                id: tp.id.clone(),
+                profile: profile.name.clone(),
+                w,
+                h,
+                excess,
+                x: p.x,
+                y: p.y,
+            });
+        }
+    }
+    Ok(())
+}
+
+impl Plan {
+    /// Bounding box of all tool-down motion, machine coordinates.
+    pub fn bbox(&self) -> Aabb2 {
+        let mut b = Aabb2::EMPTY;
+        for tp in &self.paths {
+            b.add(tp.start);
+            let mut at = tp.start;
+            for m in &tp.moves {
+                match *m {
+                    Move::Line(p) => b.add(p),
+                    Move::Arc { to, center, ccw } => arcs::sample_arc(at, to, center, ccw, 0.01)
+                        .into_iter()
+                        .for_each(|p| b.add(p)),
+                }
+                at = m.end();
+            }
+        }
+        b
+    }
+
+    /// Tool-down length over all passes, mm.
+    pub fn cut_length(&self) -> f64 {
+        self.paths
+            .iter()
+            .map(|p| p.length() * p.passes as f64)
+            .sum()
+    }
+
+    /// Tool-up travel from the start position through all paths and back to the origin, mm.
+    pub fn travel_length(&self) -> f64 {
+        let mut at = self.home();
+        let mut sum = 0.0;
+        for p in &self.paths {
+            for _ in 0..p.passes {
+                sum += at.distance(p.start);
+                at = p.end();
+            }
+        }
+        sum + at.distance(self.home())
+    }
+
+    /// Where the job starts and ends (machine coordinates of the drawing origin, clamped into the
+    /// work area).
+    pub fn home(&self) -> DVec2 {
+        let o = self.profile.to_machine(DVec2::ZERO);
+        DVec2::new(
+            o.x.clamp(0.0, self.profile.work_area_mm[0]),
+            o.y.clamp(0.0, self.profile.work_area_mm[1]),
+        )
+    }
+}

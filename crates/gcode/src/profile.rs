@@ -1,0 +1,452 @@
+//! Machine profiles: tool kind, speeds, work area, axis conventions and per-layer settings,
+//! read from TOML with bundled defaults for a pen plotter, a drag knife and a laser.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use flatcut_geom::DVec2;
+use flatcut_pattern::Layer;
+use serde::{Deserialize, Serialize};
+
+/// What the machine carries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ToolKind {
+    Pen,
+    Knife,
+    Laser,
+}
+
+/// Where machine (0, 0) sits on the sheet, seen from above with the operator at the bottom.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Corner {
+    LowerLeft,
+    UpperLeft,
+    LowerRight,
+    UpperRight,
+}
+
+/// Direction of a positive machine axis on the sheet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AxisDir {
+    Right,
+    Left,
+    Up,
+    Down,
+}
+
+/// How a pen is lifted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PenMode {
+    /// A servo on the spindle PWM: `M3 S<down>` / `M3 S<up>` followed by a `G4` dwell.
+    Servo,
+    /// A Z axis: `G0 Z<up>` / `G1 Z<down>`.
+    Z,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PenConfig {
+    pub mode: PenMode,
+    #[serde(default)]
+    pub up_s: f64,
+    #[serde(default = "PenConfig::default_down_s")]
+    pub down_s: f64,
+    #[serde(default = "PenConfig::default_dwell_s")]
+    pub dwell_s: f64,
+    #[serde(default = "PenConfig::default_z_up")]
+    pub z_up: f64,
+    #[serde(default)]
+    pub z_down: f64,
+    #[serde(default = "PenConfig::default_plunge")]
+    pub plunge_mm_min: f64,
+}
+
+impl PenConfig {
+    fn default_down_s() -> f64 {
+        1000.0
+    }
+    fn default_dwell_s() -> f64 {
+        0.15
+    }
+    fn default_z_up() -> f64 {
+        3.0
+    }
+    fn default_plunge() -> f64 {
+        1000.0
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KnifeConfig {
+    /// The blade tip trails the tool axis by this distance (mm).
+    pub blade_offset_mm: f64,
+    /// Direction changes larger than this (degrees) get a swivel arc around the tip.
+    pub swivel_angle_deg: f64,
+    /// Closed loops are cut this far past their start so the piece comes free (mm).
+    pub overcut_mm: f64,
+    pub z_up: f64,
+    pub z_down: f64,
+    pub plunge_mm_min: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LaserConfig {
+    /// The controller's `$30` (spindle max): `S` for 100 % power.
+    pub s_max: f64,
+    /// `M8` while the job runs, `M9` at the end.
+    #[serde(default)]
+    pub air_assist: bool,
+}
+
+/// Settings of one drawing layer.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LayerConfig {
+    #[serde(default = "yes")]
+    pub enabled: bool,
+    /// Feed for this layer; the profile's `feed_mm_min` when absent.
+    pub feed_mm_min: Option<f64>,
+    /// Laser power in percent of `s_max`.
+    pub power_pct: Option<f64>,
+    /// Number of passes (lasers cutting thick material).
+    #[serde(default = "one")]
+    pub passes: u32,
+}
+
+fn yes() -> bool {
+    true
+}
+fn one() -> u32 {
+    1
+}
+
+impl Default for LayerConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            feed_mm_min: None,
+            power_pct: None,
+            passes: 1,
+        }
+    }
+}
+
+/// A machine profile. All lengths in mm, feeds in mm/min.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Profile {
+    pub name: String,
+    pub kind: ToolKind,
+    pub feed_mm_min: f64,
+    pub travel_mm_min: f64,
+    /// Acceleration used for the run-time estimate (GRBL `$120`/`$121`).
+    pub accel_mm_s2: f64,
+    /// GRBL `$11`, used for the run-time estimate.
+    pub junction_deviation_mm: f64,
+    /// Machine travel in X and Y (GRBL `$130`, `$131`).
+    pub work_area_mm: [f64; 2],
+    pub origin: Corner,
+    pub x_axis: AxisDir,
+    pub y_axis: AxisDir,
+    /// Machine position of the drawing's origin.
+    #[serde(default)]
+    pub offset_mm: [f64; 2],
+    /// Digits after the decimal point in the output.
+    #[serde(default = "Profile::default_decimals")]
+    pub decimals: u8,
+    /// Arc fitting tolerance (0 disables arcs).
+    #[serde(default = "Profile::default_arc_tol")]
+    pub arc_tolerance_mm: f64,
+    pub pen: Option<PenConfig>,
+    pub knife: Option<KnifeConfig>,
+    pub laser: Option<LaserConfig>,
+    #[serde(default)]
+    pub layers: BTreeMap<String, LayerConfig>,
+}
+
+/// A profile that cannot be used.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ProfileError {
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("{path}: {message}")]
+    Parse { path: String, message: String },
+    #[error("profile {profile}: {key} = {value}: {reason}")]
+    Invalid {
+        profile: String,
+        key: &'static str,
+        value: String,
+        reason: &'static str,
+    },
+    #[error("unknown profile '{0}': use pen, knife, laser or a path to a .toml file")]
+    Unknown(String),
+}
+
+const PEN: &str = include_str!("../profiles/pen.toml");
+const KNIFE: &str = include_str!("../profiles/knife.toml");
+const LASER: &str = include_str!("../profiles/laser.toml");
+
+impl Profile {
+    fn default_decimals() -> u8 {
+        3
+    }
+    fn default_arc_tol() -> f64 {
+        0.01
+    }
+
+    /// The bundled pen-plotter profile.
+    pub fn pen() -> Self {
+        Self::from_toml(PEN, "pen.toml").expect("bundled profile parses")
+    }
+    /// The bundled drag-knife profile.
+    pub fn knife() -> Self {
+        Self::from_toml(KNIFE, "knife.toml").expect("bundled profile parses")
+    }
+    /// The bundled laser profile.
+    pub fn laser() -> Self {
+        Self::from_toml(LASER, "laser.toml").expect("bundled profile parses")
+    }
+
+    /// `pen`, `knife`, `laser`, or a path to a TOML profile.
+    pub fn resolve(name_or_path: &str) -> Result<Self, ProfileError> {
+        match name_or_path {
+            "pen" => Ok(Self::pen()),
+            "knife" => Ok(Self::knife()),
+            "laser" => Ok(Self::laser()),
+            p if p.ends_with(".toml") => Self::load(Path::new(p)),
+            other => Err(ProfileError::Unknown(other.to_string())),
+        }
+    }
+
+    pub fn load(path: &Path) -> Result<Self, ProfileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ProfileError::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        Self::from_toml(&text, &path.display().to_string())
+    }
+
+    /// Parses and validates a profile; `origin` names the source in messages.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Self, ProfileError> {
+        let p: Profile = toml::from_str(text).map_err(|e| ProfileError::Parse {
+            path: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        p.validate()?;
+        Ok(p)
+    }
+
+    fn invalid(&self, key: &'static str, value: f64, reason: &'static str) -> ProfileError {
+        ProfileError::Invalid {
+            profile: self.name.clone(),
+            key,
+            value: format!("{value}"),
+            reason,
+        }
+    }
+
+    /// Checks ranges and that the tool section matches the kind.
+    pub fn validate(&self) -> Result<(), ProfileError> {
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        if !pos(self.feed_mm_min) {
+            return Err(self.invalid("feed_mm_min", self.feed_mm_min, "must be > 0"));
+        }
+        if !pos(self.travel_mm_min) {
+            return Err(self.invalid("travel_mm_min", self.travel_mm_min, "must be > 0"));
+        }
+        if !pos(self.accel_mm_s2) {
+            return Err(self.invalid("accel_mm_s2", self.accel_mm_s2, "must be > 0"));
+        }
+        if !(self.junction_deviation_mm.is_finite() && self.junction_deviation_mm >= 0.0) {
+            return Err(self.invalid(
+                "junction_deviation_mm",
+                self.junction_deviation_mm,
+                "must be >= 0",
+            ));
+        }
+        for v in self.work_area_mm {
+            if !pos(v) {
+                return Err(self.invalid("work_area_mm", v, "must be > 0"));
+            }
+        }
+        if self.decimals > 5 || self.decimals < 2 {
+            return Err(self.invalid(
+                "decimals",
+                self.decimals as f64,
+                "must be 2..=5 (GRBL parses at most ~8 significant digits)",
+            ));
+        }
+        if !(self.arc_tolerance_mm.is_finite() && self.arc_tolerance_mm >= 0.0) {
+            return Err(self.invalid("arc_tolerance_mm", self.arc_tolerance_mm, "must be >= 0"));
+        }
+        let horizontal = |a: AxisDir| matches!(a, AxisDir::Left | AxisDir::Right);
+        if horizontal(self.x_axis) == horizontal(self.y_axis) {
+            return Err(ProfileError::Invalid {
+                profile: self.name.clone(),
+                key: "x_axis/y_axis",
+                value: format!("{:?}/{:?}", self.x_axis, self.y_axis),
+                reason: "one axis must be horizontal and the other vertical",
+            });
+        }
+        match self.kind {
+            ToolKind::Pen if self.pen.is_none() => {
+                return Err(ProfileError::Invalid {
+                    profile: self.name.clone(),
+                    key: "pen",
+                    value: "missing".into(),
+                    reason: "a pen profile needs a [pen] section",
+                });
+            }
+            ToolKind::Knife => {
+                let Some(k) = &self.knife else {
+                    return Err(ProfileError::Invalid {
+                        profile: self.name.clone(),
+                        key: "knife",
+                        value: "missing".into(),
+                        reason: "a knife profile needs a [knife] section",
+                    });
+                };
+                if !(k.blade_offset_mm.is_finite()
+                    && k.blade_offset_mm >= 0.0
+                    && k.blade_offset_mm < 5.0)
+                {
+                    return Err(self.invalid(
+                        "knife.blade_offset_mm",
+                        k.blade_offset_mm,
+                        "must be in [0, 5)",
+                    ));
+                }
+                if !(k.overcut_mm.is_finite() && k.overcut_mm >= 0.0) {
+                    return Err(self.invalid("knife.overcut_mm", k.overcut_mm, "must be >= 0"));
+                }
+                if !(k.z_down < k.z_up) {
+                    return Err(self.invalid("knife.z_down", k.z_down, "must be below z_up"));
+                }
+            }
+            ToolKind::Laser => {
+                let Some(l) = &self.laser else {
+                    return Err(ProfileError::Invalid {
+                        profile: self.name.clone(),
+                        key: "laser",
+                        value: "missing".into(),
+                        reason: "a laser profile needs a [laser] section",
+                    });
+                };
+                if !pos(l.s_max) {
+                    return Err(self.invalid(
+                        "laser.s_max",
+                        l.s_max,
+                        "must be > 0 (the controller's $30)",
+                    ));
+                }
+            }
+            _ => {}
+        }
+        for (name, l) in &self.layers {
+            if !["engrave", "draw", "cut"].contains(&name.as_str()) {
+                return Err(ProfileError::Invalid {
+                    profile: self.name.clone(),
+                    key: "layers",
+                    value: name.clone(),
+                    reason: "layers are engrave, draw and cut",
+                });
+            }
+            if let Some(f) = l.feed_mm_min {
+                if !pos(f) {
+                    return Err(self.invalid("layers.*.feed_mm_min", f, "must be > 0"));
+                }
+            }
+            if let Some(p) = l.power_pct {
+                if !(p.is_finite() && (0.0..=100.0).contains(&p)) {
+                    return Err(self.invalid("layers.*.power_pct", p, "must be in [0, 100]"));
+                }
+            }
+            if l.passes == 0 || l.passes > 50 {
+                return Err(self.invalid("layers.*.passes", l.passes as f64, "must be 1..=50"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The settings of a layer (defaults when the profile does not mention it).
+    pub fn layer(&self, layer: Layer) -> LayerConfig {
+        self.layers.get(layer.name()).cloned().unwrap_or_default()
+    }
+
+    /// Feed of a layer in mm/min.
+    pub fn layer_feed(&self, layer: Layer) -> f64 {
+        self.layer(layer).feed_mm_min.unwrap_or(self.feed_mm_min)
+    }
+
+    /// Maps a drawing point (mm, x right, y up, drawing origin) to machine coordinates.
+    pub fn to_machine(&self, p: DVec2) -> DVec2 {
+        let sheet = |a: AxisDir, p: DVec2| match a {
+            AxisDir::Right => p.x,
+            AxisDir::Left => -p.x,
+            AxisDir::Up => p.y,
+            AxisDir::Down => -p.y,
+        };
+        DVec2::new(
+            self.offset_mm[0] + sheet(self.x_axis, p),
+            self.offset_mm[1] + sheet(self.y_axis, p),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bundled_profiles_parse_and_validate() {
+        assert_eq!(Profile::pen().kind, ToolKind::Pen);
+        assert_eq!(Profile::knife().kind, ToolKind::Knife);
+        assert_eq!(Profile::laser().kind, ToolKind::Laser);
+        assert_eq!(Profile::laser().layer(Layer::Cut).passes, 2);
+    }
+
+    #[test]
+    fn bad_profiles_name_the_key() {
+        let text = PEN.replace("feed_mm_min = 3000.0\ntravel", "feed_mm_min = -1.0\ntravel");
+        let e = Profile::from_toml(&text, "x.toml").unwrap_err().to_string();
+        assert!(e.contains("feed_mm_min"), "{e}");
+        let e = Profile::from_toml(
+            &PEN.replace("y_axis = \"up\"", "y_axis = \"right\""),
+            "x.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("horizontal"), "{e}");
+        let e = Profile::from_toml("name = 1", "y.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("y.toml"), "{e}");
+        assert!(matches!(
+            Profile::resolve("plasma"),
+            Err(ProfileError::Unknown(_))
+        ));
+    }
+
+    #[test]
+    fn axis_directions_are_explicit() {
+        let mut p = Profile::pen();
+        assert_eq!(p.to_machine(DVec2::new(3.0, 4.0)), DVec2::new(3.0, 4.0));
+        p.y_axis = AxisDir::Down;
+        p.offset_mm = [0.0, 300.0];
+        assert_eq!(p.to_machine(DVec2::new(3.0, 4.0)), DVec2::new(3.0, 296.0));
+        p.x_axis = AxisDir::Up;
+        p.y_axis = AxisDir::Right;
+        p.offset_mm = [0.0, 0.0];
+        assert_eq!(p.to_machine(DVec2::new(3.0, 4.0)), DVec2::new(4.0, 3.0));
+    }
+}
