@@ -291,6 +291,15 @@ impl Bezier {
         Ok(Bezier { points: out })
     }
 
+    /// Gravesen's arc-length estimate `(2ℓ_c + (n − 1)ℓ_p)/(n + 1)` from the chord `ℓ_c` and the
+    /// control-polygon length `ℓ_p` (digest A18; exact for straight lines, error O(h⁴) under
+    /// subdivision). For a cheap bound; [`crate::curve::CurveExt::arclen`] is accurate.
+    pub fn arclen_estimate(&self) -> f64 {
+        let n = self.degree() as f64;
+        let lc = self.points[0].distance(self.points[self.points.len() - 1]);
+        (2.0 * lc + (n - 1.0) * self.polygon_length()) / (n + 1.0)
+    }
+
     /// Length of the control polygon (an upper bound of the arc length).
     pub fn polygon_length(&self) -> f64 {
         self.points.windows(2).map(|w| w[0].distance(w[1])).sum()
@@ -423,8 +432,14 @@ mod tests {
         for i in 0..5 {
             assert!(close(e.points()[i], we[i], 1e-15));
         }
-        // G's control-polygon length (ℓp of TV1).
+        // G's control-polygon length (ℓp of TV1) and arc-length estimate.
         assert!((tv1().polygon_length() - 8.064495102).abs() < 1e-9);
+        assert!((tv1().arclen_estimate() - 7.032247551).abs() < 1e-9);
+        let (l, r) = tv1().subdivide(0.5);
+        let (ll, lr) = l.subdivide(0.5);
+        let (rl, rr) = r.subdivide(0.5);
+        let refined: f64 = [ll, lr, rl, rr].iter().map(Bezier::arclen_estimate).sum();
+        assert!((refined - 6.979054670).abs() < 2e-3, "{refined}");
     }
 
     #[test]

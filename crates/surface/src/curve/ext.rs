@@ -96,6 +96,47 @@ pub trait CurveExt: ParamCurve {
         t
     }
 
+    /// The parameters at the given arc lengths from the domain start (sorted ascending, clamped
+    /// to `[0, arclen]`), each to absolute arc-length `accuracy`: equal spacing of notches,
+    /// stitch marks or drill holes along a seam. One sweep, integrating only between
+    /// consecutive targets.
+    fn params_at_arclens(&self, lengths: &[f64], accuracy: f64) -> Vec<f64> {
+        let (a, b) = self.domain();
+        let piece_acc = accuracy / 16.0;
+        let mut out = Vec::with_capacity(lengths.len());
+        let (mut t, mut cur) = (a, 0.0);
+        for &s in lengths {
+            let (mut lo, mut hi) = (t, b);
+            for _ in 0..100 {
+                let err = cur - s;
+                if err.abs() <= accuracy {
+                    break;
+                }
+                if err > 0.0 {
+                    hi = t;
+                } else {
+                    lo = t;
+                }
+                if hi - lo <= f64::EPSILON * (b - a).abs().max(1.0) {
+                    break;
+                }
+                let speed = self.deriv(t, 1).length();
+                let mut next = if speed > 0.0 {
+                    t - err / speed
+                } else {
+                    f64::NAN
+                };
+                if !(next > lo && next < hi) {
+                    next = 0.5 * (lo + hi);
+                }
+                cur += self.arclen_range(t, next, piece_acc);
+                t = next;
+            }
+            out.push(t);
+        }
+        out
+    }
+
     /// Curvature `|r' × r''| / |r'|³`; `None` where the parametrisation is singular (`r' = 0`).
     fn curvature(&self, t: f64) -> Option<f64> {
         let d1 = self.deriv(t, 1);
@@ -447,6 +488,26 @@ mod tests {
         let t = circ.inv_arclen(2.0 * 1.0, 1e-11);
         let p = circ.eval(t);
         assert!((p - DVec3::new(2.0 * 1f64.cos(), 2.0 * 1f64.sin(), 0.0)).length() < 1e-10);
+    }
+
+    #[test]
+    fn equal_arclength_division() {
+        let h = Helix(2.0, 0.5);
+        let total = h.arclen(1e-12);
+        let targets: Vec<f64> = (0..=10).map(|i| total * i as f64 / 10.0).collect();
+        let ts = h.params_at_arclens(&targets, 1e-10);
+        // Helix speed is constant: equal lengths are equal parameter steps.
+        for (i, t) in ts.iter().enumerate() {
+            assert!((t - 4.0 * PI * i as f64 / 10.0).abs() < 1e-9, "{i}: {t}");
+        }
+        let c = Parabola(-1.0, 2.0);
+        let total = c.arclen(1e-12);
+        let targets = [0.0, 0.3, 1.0, 2.5, total, total + 5.0];
+        let ts = c.params_at_arclens(&targets, 1e-10);
+        for (s, t) in targets.iter().zip(&ts) {
+            let got = c.arclen_range(-1.0, *t, 1e-12);
+            assert!((got - s.min(total)).abs() < 1e-9, "{s}: {got}");
+        }
     }
 
     #[test]

@@ -21,7 +21,10 @@ pub mod spline;
 pub use bezier::Bezier;
 pub use bspline::{BSpline, Nurbs};
 pub use ext::{CurveExt, Frenet, flatten_with_breaks, nearest_from_samples};
-pub use hermite::{Hermite, manning_cubic, manning_speeds, min_energy_cubic, min_energy_speeds};
+pub use hermite::{
+    Hermite, HermiteSpline, SpeedRule, manning_cubic, manning_speeds, min_energy_cubic,
+    min_energy_speeds,
+};
 pub use polyline::Polyline;
 pub use rational::RationalBezier;
 pub use spline::{CubicSpline, SplineEnds, SplineParam};
