@@ -12,24 +12,88 @@
 //! faer, no hash-map iteration, no threads whose scheduling changes results); never returns a
 //! flipped triangle from a method documented flip-free; never rescales the result.
 
+pub mod lscm;
 pub mod method;
 pub mod nonlinear;
+pub mod ops;
 pub mod params;
+pub mod sparse;
+pub mod testmesh;
+pub mod tutte;
 
 pub use method::Method;
 pub use params::{FlattenError, FlattenInfo, FlattenParams, Flattening, Pin};
 
 use flatcut_mesh::{TriMesh, check_disk};
 
+/// Two pins closer than this fraction of the mesh's bounding-box diagonal count as the same
+/// point: pinning two different vertices there would force a degenerate map.
+const PIN_COINCIDENT_REL: f64 = 1e-9;
+
 /// Flattens a disk-topology mesh with the method and constraints in `params`.
 pub fn flatten(mesh: &TriMesh, params: &FlattenParams) -> Result<Flattening, FlattenError> {
     let topo = check_disk(mesh)?;
+    validate_pins(mesh, &params.pins)?;
     match params.method {
         Method::Isometric | Method::Conformal | Method::Minmax | Method::BoundaryIsometric => {
             nonlinear::solve(mesh, &topo, params)
         }
+        Method::Lscm => lscm::lscm(mesh, &topo, &params.pins),
         m => Err(FlattenError::Internal(format!(
             "method {m} is not available in this build"
         ))),
     }
+}
+
+/// Checks that every pin names a vertex used by the mesh, at a finite position, that no vertex
+/// is pinned twice and that no two pinned vertices share a position.
+pub fn validate_pins(mesh: &TriMesh, pins: &[Pin]) -> Result<(), FlattenError> {
+    let used = ops::used_mask(mesh);
+    let diag = mesh.bbox().diagonal();
+    for (index, p) in pins.iter().enumerate() {
+        let v = p.vertex as usize;
+        if v >= mesh.positions.len() {
+            return Err(FlattenError::BadPin {
+                index,
+                reason: format!(
+                    "vertex {} does not exist (the mesh has {} vertices)",
+                    p.vertex,
+                    mesh.positions.len()
+                ),
+            });
+        }
+        if !used[v] {
+            return Err(FlattenError::BadPin {
+                index,
+                reason: format!("vertex {} belongs to no triangle", p.vertex),
+            });
+        }
+        if !flatcut_geom::finite2(p.position) {
+            return Err(FlattenError::BadPin {
+                index,
+                reason: format!(
+                    "the position of vertex {} is not finite ({}, {})",
+                    p.vertex, p.position.x, p.position.y
+                ),
+            });
+        }
+        for (j, q) in pins[..index].iter().enumerate() {
+            if q.vertex == p.vertex {
+                return Err(FlattenError::BadPin {
+                    index,
+                    reason: format!("vertex {} is already pinned by pin {j}", p.vertex),
+                });
+            }
+            if (q.position - p.position).length() <= PIN_COINCIDENT_REL * diag {
+                return Err(FlattenError::BadPin {
+                    index,
+                    reason: format!(
+                        "vertex {} is pinned at the same point as vertex {} (pin {j})",
+                        p.vertex, q.vertex
+                    ),
+                });
+            }
+        }
+    }
+    Ok(())
 }

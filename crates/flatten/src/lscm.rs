@@ -1,0 +1,142 @@
+//! Least-squares conformal maps (Lévy et al. 2002) with a free boundary, at true scale.
+//!
+//! The energy is the conformal energy `E_C = Σ_T A_T (½‖J‖²_F − det J) = E_Dirichlet − Area`
+//! (Desbrun et al. 2002 / Mullen et al. 2008 form of LSCM: per triangle it equals
+//! `½ A_T (σ1 − σ2)²`, zero exactly for a similarity). It is a positive semi-definite quadratic
+//! form whose null space is the similarities of the plane, so two pinned vertices give a unique
+//! minimizer, independent (up to a similarity) of which two vertices are pinned.
+//!
+//! **Scale.** Without user pins the two farthest-apart boundary vertices are pinned, and the
+//! result is then scaled uniformly so that **its total area equals the 3D area** (conformal maps
+//! are scale-free; area matching is the least-squares choice for `log(σ1σ2)` and keeps a
+//! planar input exactly at scale). With one user pin the same map is translated onto the pin;
+//! with two or more user pins the pins are hard constraints and fix the scale themselves.
+
+use flatcut_geom::DVec2;
+use flatcut_mesh::{Topology, TriMesh};
+
+use crate::ops::{QuadraticBuilder, corner_cotans, used_mask, uv_area};
+use crate::{FlattenError, FlattenInfo, Flattening, Method, Pin};
+
+/// Solves LSCM on the disk `mesh` (topology from `check_disk`) with the (validated) `pins`.
+pub fn lscm(mesh: &TriMesh, topo: &Topology, pins: &[Pin]) -> Result<Flattening, FlattenError> {
+    let mut warnings = Vec::new();
+    let hard: Vec<(u32, DVec2)> = if pins.len() >= 2 {
+        pins.iter().map(|p| (p.vertex, p.position)).collect()
+    } else {
+        let (a, b) = farthest_boundary_pair(mesh, topo)?;
+        let d = (mesh.positions[b as usize] - mesh.positions[a as usize]).length();
+        vec![(a, DVec2::ZERO), (b, DVec2::new(d, 0.0))]
+    };
+    let mut uv = solve_pinned(mesh, &hard)?;
+    if pins.len() < 2 {
+        let a2 = uv_area(&mesh.triangles, &uv);
+        if !(a2 > 0.0) || !a2.is_finite() {
+            return Err(FlattenError::NoConvergence {
+                method: Method::Lscm,
+                reason: format!("the conformal map has non-positive total area {a2:.3e} mm²"),
+            });
+        }
+        let s = (mesh.area() / a2).sqrt();
+        uv.iter_mut().for_each(|p| *p *= s);
+        if let Some(p) = pins.first() {
+            let shift = p.position - uv[p.vertex as usize];
+            uv.iter_mut().for_each(|q| *q += shift);
+        }
+    }
+    let flips = crate::ops::count_flips(&mesh.triangles, &uv);
+    if flips > 0 {
+        warnings.push(format!(
+            "lscm: {flips} triangle(s) flipped (first: {}); try --method isometric, which is flip-free",
+            crate::ops::first_flip(&mesh.triangles, &uv).unwrap_or(0)
+        ));
+    }
+    let energy = conformal_energy(mesh, &uv) / mesh.area();
+    Ok(Flattening {
+        uv,
+        info: FlattenInfo {
+            iterations: 1,
+            final_energy: energy,
+            warnings,
+        },
+    })
+}
+
+/// The LSCM minimizer with the vertices of `hard` held at their positions (at least two
+/// distinct vertices). Vertices used by no triangle are put at the origin.
+pub fn solve_pinned(mesh: &TriMesh, hard: &[(u32, DVec2)]) -> Result<Vec<DVec2>, FlattenError> {
+    let n = mesh.positions.len();
+    let mut fixed = vec![false; 2 * n];
+    let mut x = vec![0.0; 2 * n];
+    for (v, used) in used_mask(mesh).into_iter().enumerate() {
+        if !used {
+            fixed[2 * v] = true;
+            fixed[2 * v + 1] = true;
+        }
+    }
+    for &(v, p) in hard {
+        fixed[2 * v as usize] = true;
+        fixed[2 * v as usize + 1] = true;
+        x[2 * v as usize] = p.x;
+        x[2 * v as usize + 1] = p.y;
+    }
+    let cot = corner_cotans(&mesh.positions, &mesh.triangles);
+    let mut q = QuadraticBuilder::new(&fixed, 30 * mesh.triangles.len());
+    for (tri, c) in mesh.triangles.iter().zip(&cot) {
+        for k in 0..3 {
+            let (a, b) = (tri[(k + 1) % 3] as usize, tri[(k + 2) % 3] as usize);
+            // Dirichlet energy ¼ Σ cot (u_a − u_b)² = ½ Σ (cot/2)(u_a − u_b)², both coordinates.
+            let w = 0.5 * c[k];
+            q.add_edge(2 * a, 2 * b, w);
+            q.add_edge(2 * a + 1, 2 * b + 1, w);
+            // Minus the signed area ½ (x_a y_b − x_b y_a) of the directed edge a → b.
+            q.add(2 * a, 2 * b + 1, -0.5);
+            q.add(2 * b, 2 * a + 1, 0.5);
+        }
+    }
+    let sys = q.build("lscm")?;
+    let mut fields = vec![x];
+    sys.solve(&mut fields, None)?;
+    let x = &fields[0];
+    Ok((0..n).map(|v| DVec2::new(x[2 * v], x[2 * v + 1])).collect())
+}
+
+/// `Σ_T A_T (½‖J‖² − det J) = Σ_T ½ A_T (σ1 − σ2)²` of the map `uv`.
+pub fn conformal_energy(mesh: &TriMesh, uv: &[DVec2]) -> f64 {
+    (0..mesh.triangles.len())
+        .filter_map(|t| {
+            let tri = mesh.triangles[t];
+            let d = flatcut_mesh::face_distortion(mesh.corners(t), tri.map(|v| uv[v as usize]))?;
+            let s2 = if d.det < 0.0 { -d.sigma2 } else { d.sigma2 };
+            Some(0.5 * mesh.triangle_area(t) * (d.sigma1 - s2).powi(2))
+        })
+        .sum()
+}
+
+/// Two boundary vertices far apart (the double sweep: the farthest from the first boundary
+/// vertex, then the farthest from that one), distinct.
+pub fn farthest_boundary_pair(mesh: &TriMesh, topo: &Topology) -> Result<(u32, u32), FlattenError> {
+    let lp = topo
+        .boundary_loops
+        .first()
+        .ok_or_else(|| FlattenError::Internal("lscm: the mesh has no boundary".into()))?;
+    let far = |from: u32| {
+        let p = mesh.positions[from as usize];
+        let mut best = (from, -1.0);
+        for &v in lp {
+            let d = (mesh.positions[v as usize] - p).length_squared();
+            if d > best.1 {
+                best = (v, d);
+            }
+        }
+        best.0
+    };
+    let a = far(lp[0]);
+    let b = far(a);
+    if a == b {
+        return Err(FlattenError::Internal(
+            "lscm: the boundary has a single vertex".into(),
+        ));
+    }
+    Ok((a.min(b), a.max(b)))
+}

@@ -1,0 +1,268 @@
+//! Discrete differential operators on a triangle mesh: corner angles, cotangent weights,
+//! angle defects, and Laplace problems with Dirichlet data (the building block of Tutte,
+//! harmonic extension, the Yamabe solve and the ARAP global step).
+
+use flatcut_geom::{DVec2, DVec3};
+use flatcut_mesh::{Topology, TriMesh};
+
+use crate::FlattenError;
+use crate::sparse::{SpdSolver, SymTriplets};
+
+/// Interior angle at each corner of each triangle (radians), corner `k` at `triangles[t][k]`.
+pub fn corner_angles(mesh: &TriMesh) -> Vec<[f64; 3]> {
+    mesh.triangles
+        .iter()
+        .enumerate()
+        .map(|(t, _)| {
+            let p = mesh.corners(t);
+            std::array::from_fn(|k| {
+                let a = p[(k + 1) % 3] - p[k];
+                let b = p[(k + 2) % 3] - p[k];
+                // atan2(|a×b|, a·b) is accurate for all angles, unlike acos of the cosine.
+                a.cross(b).length().atan2(a.dot(b))
+            })
+        })
+        .collect()
+}
+
+/// Cotangent of the angle at each corner: `cot[t][k]` weights the edge opposite corner `k`,
+/// i.e. the edge `(triangles[t][k+1], triangles[t][k+2])`.
+pub fn corner_cotans(positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {
+    triangles
+        .iter()
+        .map(|tri| {
+            let p = tri.map(|v| positions[v as usize]);
+            std::array::from_fn(|k| {
+                let a = p[(k + 1) % 3] - p[k];
+                let b = p[(k + 2) % 3] - p[k];
+                a.dot(b) / a.cross(b).length()
+            })
+        })
+        .collect()
+}
+
+/// Which vertices lie on the boundary (`true`) of a mesh with topology `topo`.
+pub fn boundary_mask(n: usize, topo: &Topology) -> Vec<bool> {
+    let mut b = vec![false; n];
+    for lp in &topo.boundary_loops {
+        for &v in lp {
+            b[v as usize] = true;
+        }
+    }
+    b
+}
+
+/// Which vertices are used by at least one triangle.
+pub fn used_mask(mesh: &TriMesh) -> Vec<bool> {
+    let mut u = vec![false; mesh.positions.len()];
+    for tri in &mesh.triangles {
+        for &v in tri {
+            u[v as usize] = true;
+        }
+    }
+    u
+}
+
+/// Angle sum at each vertex (radians).
+pub fn angle_sums(mesh: &TriMesh, angles: &[[f64; 3]]) -> Vec<f64> {
+    let mut s = vec![0.0; mesh.positions.len()];
+    for (tri, a) in mesh.triangles.iter().zip(angles) {
+        for k in 0..3 {
+            s[tri[k] as usize] += a[k];
+        }
+    }
+    s
+}
+
+/// Twice the signed area of the 2D triangle `(a, b, c)` (positive when counter-clockwise).
+pub fn orient2(a: DVec2, b: DVec2, c: DVec2) -> f64 {
+    (b - a).perp_dot(c - a)
+}
+
+/// Index of the first triangle whose image in `uv` is flipped or degenerate, if any.
+pub fn first_flip(triangles: &[[u32; 3]], uv: &[DVec2]) -> Option<usize> {
+    triangles.iter().position(|t| {
+        let o = orient2(uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
+        !(o > 0.0)
+    })
+}
+
+/// Number of triangles whose image in `uv` is flipped or degenerate.
+pub fn count_flips(triangles: &[[u32; 3]], uv: &[DVec2]) -> usize {
+    triangles
+        .iter()
+        .filter(|t| !(orient2(uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]) > 0.0))
+        .count()
+}
+
+/// Signed area of the image of the mesh in `uv`.
+pub fn uv_area(triangles: &[[u32; 3]], uv: &[DVec2]) -> f64 {
+    triangles
+        .iter()
+        .map(|t| 0.5 * orient2(uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]))
+        .sum()
+}
+
+/// A quadratic energy `½ xᵀ Q x − bᵀ x` over degrees of freedom, some of which are held at
+/// given values. [`QuadraticBuilder`] accumulates `Q`; the free block `Q_ff` must be positive
+/// definite. Solving gives `Q_ff x_f = b_f − Q_fc x_c`.
+#[derive(Debug)]
+pub struct Reduced {
+    /// Free-unknown index of each dof (`usize::MAX` for a fixed dof).
+    free_index: Vec<usize>,
+    /// Dof of each free unknown.
+    free: Vec<u32>,
+    /// `(free row, fixed dof, Q entry)`: couplings moved to the right-hand side.
+    coupling: Vec<(usize, u32, f64)>,
+    triplets: SymTriplets,
+    solver: SpdSolver,
+}
+
+/// Accumulates the symmetric matrix `Q` of a [`Reduced`] problem.
+#[derive(Debug)]
+pub struct QuadraticBuilder {
+    free_index: Vec<usize>,
+    free: Vec<u32>,
+    coupling: Vec<(usize, u32, f64)>,
+    triplets: SymTriplets,
+}
+
+impl QuadraticBuilder {
+    /// A builder over `fixed.len()` dofs; `fixed[i]` marks the dofs with given values.
+    pub fn new(fixed: &[bool], capacity: usize) -> Self {
+        let mut free_index = vec![usize::MAX; fixed.len()];
+        let mut free = Vec::new();
+        for (i, &f) in fixed.iter().enumerate() {
+            if !f {
+                free_index[i] = free.len();
+                free.push(i as u32);
+            }
+        }
+        let triplets = SymTriplets::with_capacity(free.len(), capacity);
+        Self {
+            free_index,
+            free,
+            coupling: Vec::new(),
+            triplets,
+        }
+    }
+
+    /// Adds `v` to `Q[i][j]` and, when `i ≠ j`, to `Q[j][i]`.
+    pub fn add(&mut self, i: usize, j: usize, v: f64) {
+        match (self.free_index[i], self.free_index[j]) {
+            (usize::MAX, usize::MAX) => {}
+            (fi, usize::MAX) => self.coupling.push((fi, j as u32, v)),
+            (usize::MAX, fj) => self.coupling.push((fj, i as u32, v)),
+            (fi, fj) => self.triplets.add(fi, fj, v),
+        }
+    }
+
+    /// Adds the Laplacian term `w (x_i − x_j)²/2` to the energy.
+    pub fn add_edge(&mut self, i: usize, j: usize, w: f64) {
+        self.add(i, i, w);
+        self.add(j, j, w);
+        self.add(i, j, -w);
+    }
+
+    /// Factors `Q_ff`.
+    pub fn build(self, stage: &'static str) -> Result<Reduced, FlattenError> {
+        if self.free.is_empty() {
+            return Err(FlattenError::Internal(format!(
+                "{stage}: every unknown is fixed"
+            )));
+        }
+        let solver = SpdSolver::from_triplets(&self.triplets, stage)?;
+        Ok(Reduced {
+            free_index: self.free_index,
+            free: self.free,
+            coupling: self.coupling,
+            triplets: self.triplets,
+            solver,
+        })
+    }
+}
+
+impl Reduced {
+    /// Number of free unknowns.
+    pub fn free_count(&self) -> usize {
+        self.free.len()
+    }
+
+    /// True when dof `i` is a free unknown.
+    pub fn is_free(&self, i: usize) -> bool {
+        self.free_index[i] != usize::MAX
+    }
+
+    /// Minimizes for several fields at once: `values[c]` holds the values of field `c` at the
+    /// fixed dofs (free entries are overwritten with the solution); `source[c]`, when given, is
+    /// the linear term `b` (read at free dofs).
+    pub fn solve(
+        &self,
+        values: &mut [Vec<f64>],
+        source: Option<&[Vec<f64>]>,
+    ) -> Result<(), FlattenError> {
+        let m = self.free.len();
+        let k = values.len();
+        let mut rhs = vec![0.0; m * k];
+        for c in 0..k {
+            let col = &mut rhs[c * m..(c + 1) * m];
+            if let Some(s) = source {
+                for (i, &v) in self.free.iter().enumerate() {
+                    col[i] = s[c][v as usize];
+                }
+            }
+            for &(i, v, q) in &self.coupling {
+                col[i] -= q * values[c][v as usize];
+            }
+        }
+        self.solver.solve_many_in_place(&mut rhs, k)?;
+        for c in 0..k {
+            for (i, &v) in self.free.iter().enumerate() {
+                values[c][v as usize] = rhs[c * m + i];
+            }
+        }
+        Ok(())
+    }
+
+    /// The triplets of `Q_ff`, in assembly order.
+    pub fn triplets(&self) -> &SymTriplets {
+        &self.triplets
+    }
+}
+
+/// The Laplace problem `Σ w (x_a − x_b)²/2 → min` with the weights given per triangle corner
+/// (the weight of the edge opposite the corner, as for cotangent weights) and the vertices
+/// `fixed` held at given values.
+pub fn laplace(
+    triangles: &[[u32; 3]],
+    corner_weights: &[[f64; 3]],
+    fixed: &[bool],
+    stage: &'static str,
+) -> Result<Reduced, FlattenError> {
+    let mut b = QuadraticBuilder::new(fixed, 9 * triangles.len());
+    for (tri, w) in triangles.iter().zip(corner_weights) {
+        for k in 0..3 {
+            b.add_edge(tri[(k + 1) % 3] as usize, tri[(k + 2) % 3] as usize, w[k]);
+        }
+    }
+    b.build(stage)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn angles_and_cotans_of_a_right_triangle() {
+        let m = TriMesh::new(
+            vec![DVec3::ZERO, DVec3::X, DVec3::new(0.0, 2.0, 0.0)],
+            vec![[0, 1, 2]],
+        );
+        let a = corner_angles(&m)[0];
+        assert!((a[0] - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+        assert!((a.iter().sum::<f64>() - std::f64::consts::PI).abs() < 1e-15);
+        let c = corner_cotans(&m.positions, &m.triangles)[0];
+        assert!(c[0].abs() < 1e-15);
+        assert!((c[1] - 0.5).abs() < 1e-14 && (c[2] - 2.0).abs() < 1e-14);
+    }
+}

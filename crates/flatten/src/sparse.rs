@@ -1,0 +1,410 @@
+//! Thin helpers over faer's sparse matrices: triplet assembly with a reusable pattern, and a
+//! symmetric positive definite solver whose symbolic Cholesky factorization is computed once.
+//!
+//! Every linear method of this crate (Tutte, LSCM, ARAP, the Yamabe solve of
+//! `conformal-boundary`) reduces to SPD systems whose sparsity pattern is fixed by the mesh
+//! while the values change (ARAP, Newton-type solvers of the nonlinear methods). The pattern is
+//! therefore captured once as a [`SymPattern`] (a faer symbolic matrix plus the permutation that
+//! sorts the triplets) and the fill-reducing ordering and elimination tree once as a
+//! [`SpdSolver`]; each [`SpdSolver::factor`] call only redoes the numeric factorization.
+//!
+//! All faer calls run with [`Par::Seq`] passed explicitly: on small machines faer's default
+//! rayon parallelism is an order of magnitude slower for these sizes, and sequential execution
+//! keeps results bit-identical from run to run.
+
+use faer::Par;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky,
+};
+use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
+use faer::{Conj, MatMut, Side};
+
+use crate::FlattenError;
+
+/// The parallelism of every faer call in this crate (see the module docs).
+pub const PAR: Par = Par::Seq;
+
+/// Entries of a symmetric matrix, accumulated as `(row, col, value)` triplets. Only the lower
+/// triangle is stored: an entry above the diagonal is mirrored below it. Duplicate positions
+/// are summed on assembly.
+#[derive(Clone, Debug, Default)]
+pub struct SymTriplets {
+    n: usize,
+    rows: Vec<usize>,
+    cols: Vec<usize>,
+    vals: Vec<f64>,
+}
+
+impl SymTriplets {
+    /// An empty `n × n` symmetric matrix.
+    pub fn new(n: usize) -> Self {
+        Self {
+            n,
+            ..Default::default()
+        }
+    }
+
+    /// An empty matrix with room for `cap` entries.
+    pub fn with_capacity(n: usize, cap: usize) -> Self {
+        Self {
+            n,
+            rows: Vec::with_capacity(cap),
+            cols: Vec::with_capacity(cap),
+            vals: Vec::with_capacity(cap),
+        }
+    }
+
+    /// The dimension `n`.
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+
+    /// Number of triplets (before duplicates are summed).
+    pub fn len(&self) -> usize {
+        self.vals.len()
+    }
+
+    /// True when no triplet was added.
+    pub fn is_empty(&self) -> bool {
+        self.vals.is_empty()
+    }
+
+    /// Adds `v` at `(i, j)` and, implicitly, at `(j, i)` (an off-diagonal call therefore adds
+    /// `v` to both symmetric positions; call it once per unordered pair).
+    pub fn add(&mut self, i: usize, j: usize, v: f64) {
+        let (r, c) = if i >= j { (i, j) } else { (j, i) };
+        self.rows.push(r);
+        self.cols.push(c);
+        self.vals.push(v);
+    }
+
+    /// The values in the order they were added (the order [`SymPattern::matrix`] and
+    /// [`SpdSolver::factor`] expect).
+    pub fn values(&self) -> &[f64] {
+        &self.vals
+    }
+
+    /// Mutable values, to refill a matrix of the same pattern.
+    pub fn values_mut(&mut self) -> &mut [f64] {
+        &mut self.vals
+    }
+
+    /// Forgets the values but keeps the positions (all values set to zero).
+    pub fn zero_values(&mut self) {
+        self.vals.iter_mut().for_each(|v| *v = 0.0);
+    }
+}
+
+/// The sparsity pattern of a [`SymTriplets`] (lower triangle, duplicates merged), with the
+/// order that maps triplet values to matrix values. Built once per mesh, reused for every
+/// refill.
+#[derive(Clone, Debug)]
+pub struct SymPattern {
+    n: usize,
+    n_triplets: usize,
+    symbolic: SymbolicSparseColMat<usize>,
+    argsort: Argsort<usize>,
+}
+
+impl SymPattern {
+    /// Captures the pattern of `t`. `stage` names the computation in errors.
+    pub fn new(t: &SymTriplets, stage: &'static str) -> Result<Self, FlattenError> {
+        let pairs: Vec<Pair<usize, usize>> = t
+            .rows
+            .iter()
+            .zip(&t.cols)
+            .map(|(&row, &col)| Pair { row, col })
+            .collect();
+        let (symbolic, argsort) = SymbolicSparseColMat::try_new_from_indices(t.n, t.n, &pairs)
+            .map_err(|e| FlattenError::Solver {
+                stage,
+                reason: format!("cannot build the sparse pattern: {e:?}"),
+            })?;
+        Ok(Self {
+            n: t.n,
+            n_triplets: t.len(),
+            symbolic,
+            argsort,
+        })
+    }
+
+    /// The dimension `n`.
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+
+    /// The lower-triangular matrix with these triplet `values` (same order as they were added).
+    pub fn matrix(
+        &self,
+        values: &[f64],
+        stage: &'static str,
+    ) -> Result<SparseColMat<usize, f64>, FlattenError> {
+        if values.len() != self.n_triplets {
+            return Err(FlattenError::Internal(format!(
+                "{stage}: {} values for a pattern of {} triplets",
+                values.len(),
+                self.n_triplets
+            )));
+        }
+        SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, values).map_err(|e| {
+            FlattenError::Solver {
+                stage,
+                reason: format!("cannot assemble the matrix: {e:?}"),
+            }
+        })
+    }
+}
+
+/// `y = A x` for the symmetric matrix whose lower triangle is `lower` (as built by
+/// [`SymPattern::matrix`]).
+pub fn sym_mul(lower: &SparseColMat<usize, f64>, x: &[f64], y: &mut [f64]) {
+    y.iter_mut().for_each(|v| *v = 0.0);
+    let a = lower.as_ref();
+    for j in 0..a.ncols() {
+        let rows = a.symbolic().row_idx_of_col_raw(j);
+        let vals = a.val_of_col(j);
+        for (&i, &v) in rows.iter().zip(vals) {
+            y[i] += v * x[j];
+            if i != j {
+                y[j] += v * x[i];
+            }
+        }
+    }
+}
+
+/// Sparse Cholesky `A = L Lᵀ` of a symmetric positive definite matrix with a fixed pattern: the
+/// fill-reducing ordering and symbolic factorization are computed in [`SpdSolver::new`], each
+/// [`SpdSolver::factor`] redoes only the numeric part.
+#[derive(Debug)]
+pub struct SpdSolver {
+    stage: &'static str,
+    pattern: SymPattern,
+    symbolic: SymbolicCholesky<usize>,
+    l_values: Vec<f64>,
+    factored: bool,
+}
+
+impl SpdSolver {
+    /// Analyses `pattern` (ordering, elimination tree, supernodes). `stage` names the
+    /// computation in errors ("lscm", "arap global step", ...).
+    pub fn new(pattern: SymPattern, stage: &'static str) -> Result<Self, FlattenError> {
+        let symbolic = factorize_symbolic_cholesky(
+            pattern.symbolic.as_ref(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| FlattenError::Solver {
+            stage,
+            reason: format!("symbolic factorization failed: {e:?}"),
+        })?;
+        let l_values = vec![0.0; symbolic.len_val()];
+        Ok(Self {
+            stage,
+            pattern,
+            symbolic,
+            l_values,
+            factored: false,
+        })
+    }
+
+    /// Builds the pattern of `t` and analyses it, then factors `t`'s values.
+    pub fn from_triplets(t: &SymTriplets, stage: &'static str) -> Result<Self, FlattenError> {
+        let mut s = Self::new(SymPattern::new(t, stage)?, stage)?;
+        s.factor(t.values())?;
+        Ok(s)
+    }
+
+    /// The dimension `n`.
+    pub fn dim(&self) -> usize {
+        self.pattern.n
+    }
+
+    /// The pattern this solver was built for.
+    pub fn pattern(&self) -> &SymPattern {
+        &self.pattern
+    }
+
+    /// Numeric factorization of the matrix with these triplet `values` (same order as the
+    /// triplets the pattern was built from). Fails with [`FlattenError::Solver`] when the
+    /// matrix is not numerically positive definite or holds a non-finite value.
+    pub fn factor(&mut self, values: &[f64]) -> Result<(), FlattenError> {
+        self.factored = false;
+        if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+            return Err(FlattenError::Solver {
+                stage: self.stage,
+                reason: format!("matrix entry {k} is not finite"),
+            });
+        }
+        let a = self.pattern.matrix(values, self.stage)?;
+        let mut mem = MemBuffer::try_new(
+            self.symbolic
+                .factorize_numeric_llt_scratch::<f64>(PAR, Default::default()),
+        )
+        .map_err(|e| FlattenError::Solver {
+            stage: self.stage,
+            reason: format!("out of memory: {e:?}"),
+        })?;
+        self.symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut self.l_values,
+                a.as_ref(),
+                Side::Lower,
+                LltRegularization::default(),
+                PAR,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .map_err(|e| FlattenError::Solver {
+                stage: self.stage,
+                reason: format!("the system is not positive definite ({e:?})"),
+            })?;
+        self.factored = true;
+        Ok(())
+    }
+
+    /// Solves `A x = rhs` in place for one right-hand side.
+    pub fn solve_in_place(&self, rhs: &mut [f64]) -> Result<(), FlattenError> {
+        let n = self.dim();
+        if rhs.len() != n {
+            return Err(FlattenError::Internal(format!(
+                "{}: right-hand side of length {} for a system of size {n}",
+                self.stage,
+                rhs.len()
+            )));
+        }
+        self.solve_cols_in_place(MatMut::from_column_major_slice_mut(rhs, n, 1))
+    }
+
+    /// Solves `A X = RHS` in place for the columns of `rhs` (column-major `n × k` slice).
+    pub fn solve_many_in_place(&self, rhs: &mut [f64], k: usize) -> Result<(), FlattenError> {
+        let n = self.dim();
+        if rhs.len() != n * k {
+            return Err(FlattenError::Internal(format!(
+                "{}: right-hand side of length {} for {k} columns of size {n}",
+                self.stage,
+                rhs.len()
+            )));
+        }
+        self.solve_cols_in_place(MatMut::from_column_major_slice_mut(rhs, n, k))
+    }
+
+    fn solve_cols_in_place(&self, rhs: MatMut<'_, f64>) -> Result<(), FlattenError> {
+        if !self.factored {
+            return Err(FlattenError::Internal(format!(
+                "{}: solve before a successful factorization",
+                self.stage
+            )));
+        }
+        let k = rhs.ncols();
+        let mut mem = MemBuffer::try_new(self.symbolic.solve_in_place_scratch::<f64>(k, PAR))
+            .map_err(|e| FlattenError::Solver {
+                stage: self.stage,
+                reason: format!("out of memory: {e:?}"),
+            })?;
+        let mut rhs = rhs;
+        LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
+            Conj::No,
+            rhs.as_mut(),
+            PAR,
+            MemStack::new(&mut mem),
+        );
+        for j in 0..k {
+            for i in 0..rhs.nrows() {
+                if !rhs[(i, j)].is_finite() {
+                    return Err(FlattenError::Solver {
+                        stage: self.stage,
+                        reason: format!("the solution is not finite at unknown {i}"),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 1D Laplacian plus identity on `n` unknowns: SPD, known product.
+    fn tridiag(n: usize) -> SymTriplets {
+        let mut t = SymTriplets::new(n);
+        for i in 0..n {
+            t.add(i, i, 3.0);
+            if i + 1 < n {
+                // Given in the upper triangle on purpose: it must be mirrored.
+                t.add(i, i + 1, -1.0);
+            }
+        }
+        // A duplicate that must be summed: diagonal 0 becomes 3.5.
+        t.add(0, 0, 0.5);
+        t
+    }
+
+    #[test]
+    fn solves_and_refactors_with_the_same_pattern() {
+        let n = 50;
+        let mut t = tridiag(n);
+        let mut s = SpdSolver::from_triplets(&t, "test").unwrap();
+        let x_true: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+        let a = s.pattern().matrix(t.values(), "test").unwrap();
+        let mut b = vec![0.0; n];
+        sym_mul(&a, &x_true, &mut b);
+        // Check the product against the dense definition.
+        for i in 0..n {
+            let mut r = 3.0 * x_true[i] + if i == 0 { 0.5 * x_true[0] } else { 0.0 };
+            if i > 0 {
+                r -= x_true[i - 1];
+            }
+            if i + 1 < n {
+                r -= x_true[i + 1];
+            }
+            assert!((b[i] - r).abs() < 1e-14);
+        }
+        s.solve_in_place(&mut b).unwrap();
+        for i in 0..n {
+            assert!((b[i] - x_true[i]).abs() < 1e-12);
+        }
+        // New values, same pattern: scale the matrix by 2, the solution halves.
+        t.values_mut().iter_mut().for_each(|v| *v *= 2.0);
+        s.factor(t.values()).unwrap();
+        let mut b2 = vec![0.0; 2 * n];
+        sym_mul(&a, &x_true, &mut b2[..n]);
+        b2[n..].copy_from_slice(&x_true);
+        s.solve_many_in_place(&mut b2, 2).unwrap();
+        for i in 0..n {
+            assert!((b2[i] - 0.5 * x_true[i]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn indefinite_and_non_finite_are_solver_errors() {
+        let mut t = SymTriplets::new(2);
+        t.add(0, 0, 1.0);
+        t.add(1, 1, -1.0);
+        assert!(matches!(
+            SpdSolver::from_triplets(&t, "test"),
+            Err(FlattenError::Solver { stage: "test", .. })
+        ));
+        let mut t = SymTriplets::new(2);
+        t.add(0, 0, 1.0);
+        t.add(1, 1, f64::NAN);
+        assert!(matches!(
+            SpdSolver::from_triplets(&t, "test"),
+            Err(FlattenError::Solver { .. })
+        ));
+    }
+
+    #[test]
+    fn solve_before_factor_and_bad_length_are_errors() {
+        let t = tridiag(4);
+        let s = SpdSolver::new(SymPattern::new(&t, "test").unwrap(), "test").unwrap();
+        assert!(s.solve_in_place(&mut [0.0; 4]).is_err());
+        let s = SpdSolver::from_triplets(&t, "test").unwrap();
+        assert!(s.solve_in_place(&mut [0.0; 3]).is_err());
+    }
+}

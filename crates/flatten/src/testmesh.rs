@@ -1,0 +1,185 @@
+//! Reference surfaces with known flattenings, built in code (mm): spherical caps, exactly
+//! developable cylinder and cone patches, a saddle and a jittered planar grid. Used by the
+//! tests and benchmarks of the flattener and handy for demonstrations.
+//!
+//! The cylinder and cone patches are triangulated on their rulings so that every quad is
+//! planar: the polyhedral surface is then *exactly* developable (zero angle defect up to
+//! round-off), unlike a generic triangulation of the smooth surface.
+
+use std::f64::consts::TAU;
+
+use flatcut_geom::{DVec2, DVec3};
+use flatcut_mesh::TriMesh;
+
+/// A spherical cap of sphere radius `radius` and geodesic radius `alpha` (radians, < π),
+/// centred on the +z pole, with `rings` concentric rings (ring k has 6k vertices, all
+/// rings start at longitude 0). Triangles are counter-clockwise seen from outside.
+pub fn spherical_cap(radius: f64, alpha: f64, rings: usize) -> TriMesh {
+    let rings = rings.max(1);
+    let mut pos = vec![DVec3::new(0.0, 0.0, radius)];
+    let mut ring_start = vec![0usize];
+    let mut ring_phi: Vec<Vec<f64>> = vec![vec![0.0]];
+    for k in 1..=rings {
+        let rho = alpha * k as f64 / rings as f64;
+        let m = 6 * k;
+        ring_start.push(pos.len());
+        let mut phis = Vec::with_capacity(m);
+        for j in 0..m {
+            let phi = TAU * j as f64 / m as f64;
+            phis.push(phi);
+            pos.push(radius * DVec3::new(rho.sin() * phi.cos(), rho.sin() * phi.sin(), rho.cos()));
+        }
+        ring_phi.push(phis);
+    }
+    let mut tris = Vec::new();
+    for k in 1..=rings {
+        let (a0, b0) = (ring_start[k - 1], ring_start[k]);
+        let (ma, mb) = (ring_phi[k - 1].len(), ring_phi[k].len());
+        if ma == 1 {
+            for j in 0..mb {
+                tris.push([a0 as u32, (b0 + j) as u32, (b0 + (j + 1) % mb) as u32]);
+            }
+            continue;
+        }
+        zip_rings(&mut tris, a0, &ring_phi[k - 1], b0, &ring_phi[k]);
+    }
+    TriMesh::new(pos, tris)
+}
+
+/// Triangulates the band between an inner ring (first vertex `a0`, longitudes `pa`) and an
+/// outer ring (`b0`, `pb`), both counter-clockwise and starting at longitude 0.
+fn zip_rings(tris: &mut Vec<[u32; 3]>, a0: usize, pa: &[f64], b0: usize, pb: &[f64]) {
+    let (ma, mb) = (pa.len(), pb.len());
+    let next = |p: &[f64], i: usize| if i + 1 < p.len() { p[i + 1] } else { TAU };
+    let (mut i, mut j) = (0usize, 0usize);
+    while i < ma || j < mb {
+        let advance_a = j == mb || (i < ma && next(pa, i) <= next(pb, j));
+        let ai = (a0 + i % ma) as u32;
+        let bj = (b0 + j % mb) as u32;
+        if advance_a {
+            tris.push([ai, bj, (a0 + (i + 1) % ma) as u32]);
+            i += 1;
+        } else {
+            tris.push([ai, bj, (b0 + (j + 1) % mb) as u32]);
+            j += 1;
+        }
+    }
+}
+
+/// A cylinder patch of radius `radius`, angular span `span` (radians) and height `height`,
+/// `nu × nv` planar rectangles each split in two (diagonals alternate). Exactly developable:
+/// its development is a `radius·span × height` rectangle.
+pub fn cylinder_patch(radius: f64, span: f64, height: f64, nu: usize, nv: usize) -> TriMesh {
+    grid_surface(nu, nv, |s, t| {
+        let th = span * s;
+        DVec3::new(radius * th.cos(), radius * th.sin(), height * t)
+    })
+}
+
+/// A patch of the cone with apex at the origin, axis +z and half-angle `half_angle`, between
+/// distances `t0 < t1` from the apex along the rulings and over the angular span `span`
+/// (radians around the axis). Planar trapezoids split in two: exactly developable.
+pub fn cone_patch(half_angle: f64, t0: f64, t1: f64, span: f64, nu: usize, nv: usize) -> TriMesh {
+    let (sb, cb) = half_angle.sin_cos();
+    grid_surface(nu, nv, |s, t| {
+        let th = span * s;
+        let d = t0 + (t1 - t0) * t;
+        d * DVec3::new(sb * th.cos(), sb * th.sin(), cb)
+    })
+}
+
+/// The saddle `z = (x² − y²)/(2c)` over the square of side `size` centred at the origin, with
+/// `c = size` (Gaussian curvature about −1/c² at the centre), `n × n` cells.
+pub fn saddle(size: f64, n: usize) -> TriMesh {
+    grid_surface(n, n, |s, t| {
+        let x = size * (s - 0.5);
+        let y = size * (t - 0.5);
+        DVec3::new(x, y, (x * x - y * y) / (2.0 * size))
+    })
+}
+
+/// A planar `n × n` grid of side `size` whose interior vertices are jittered (by up to 30 % of a
+/// cell, deterministically), rotated into a tilted plane and translated: flat input that every
+/// method must reproduce up to a rigid motion. Returns the mesh and the 2D coordinates of its
+/// vertices in the plane (the exact development).
+pub fn jittered_plane(size: f64, n: usize) -> (TriMesh, Vec<DVec2>) {
+    let h = size / n as f64;
+    let mut flat = Vec::new();
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut rnd = move || {
+        // SplitMix64: a fixed, portable sequence.
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    for j in 0..=n {
+        for i in 0..=n {
+            let mut p = DVec2::new(i as f64 * h, j as f64 * h);
+            if i > 0 && j > 0 && i < n && j < n {
+                p += 0.6 * h * DVec2::new(rnd(), rnd());
+            }
+            flat.push(p);
+        }
+    }
+    let ex = DVec3::new(2.0, 1.0, 2.0) / 3.0;
+    let ey = DVec3::new(-1.0, 2.0, 0.0).normalize();
+    let ey = (ey - ex * ex.dot(ey)).normalize();
+    let o = DVec3::new(10.0, -20.0, 5.0);
+    let pos = flat.iter().map(|p| o + ex * p.x + ey * p.y).collect();
+    (TriMesh::new(pos, grid_triangles(n, n)), flat)
+}
+
+fn grid_surface(nu: usize, nv: usize, f: impl Fn(f64, f64) -> DVec3) -> TriMesh {
+    let (nu, nv) = (nu.max(1), nv.max(1));
+    let mut pos = Vec::with_capacity((nu + 1) * (nv + 1));
+    for j in 0..=nv {
+        for i in 0..=nu {
+            pos.push(f(i as f64 / nu as f64, j as f64 / nv as f64));
+        }
+    }
+    TriMesh::new(pos, grid_triangles(nu, nv))
+}
+
+/// Triangles of an `nu × nv` vertex grid (row-major, `nu + 1` vertices per row), counter-
+/// clockwise in the parameter plane, with alternating diagonals.
+fn grid_triangles(nu: usize, nv: usize) -> Vec<[u32; 3]> {
+    let id = |i: usize, j: usize| (j * (nu + 1) + i) as u32;
+    let mut t = Vec::with_capacity(2 * nu * nv);
+    for j in 0..nv {
+        for i in 0..nu {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            if (i + j) % 2 == 0 {
+                t.push([a, b, c]);
+                t.push([a, c, d]);
+            } else {
+                t.push([a, b, d]);
+                t.push([b, c, d]);
+            }
+        }
+    }
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flatcut_mesh::check_disk;
+
+    #[test]
+    fn test_surfaces_are_disks() {
+        let cap = spherical_cap(100.0, 1.0, 8);
+        assert_eq!(cap.triangle_count(), 6 * 8 * 8);
+        for m in [
+            cap,
+            cylinder_patch(50.0, 2.0, 60.0, 6, 4),
+            cone_patch(0.5, 20.0, 80.0, 2.5, 6, 4),
+            saddle(80.0, 5),
+            jittered_plane(50.0, 6).0,
+        ] {
+            let topo = check_disk(&m).unwrap();
+            assert_eq!(topo.boundary_loops.len(), 1);
+        }
+    }
+}

@@ -1,0 +1,273 @@
+//! Tests of the linear flattening methods (lscm, conformal-boundary, arap, developable) against
+//! analytic truth on surfaces built in code.
+
+use flatcut_flatten::{FlattenError, FlattenParams, Flattening, Method, Pin, flatten, testmesh};
+use flatcut_geom::{DVec2, DVec3};
+use flatcut_mesh::{TopologyError, TriMesh, face_distortion};
+
+/// Area-weighted means of log(σ1/σ2), δ2 and the number of flipped triangles.
+struct Score {
+    conf: f64,
+    delta2_mean: f64,
+    delta2_integral: f64,
+    flips: usize,
+}
+
+fn score(mesh: &TriMesh, uv: &[DVec2]) -> Score {
+    let (mut conf, mut d2, mut area, mut flips) = (0.0, 0.0, 0.0, 0);
+    for t in 0..mesh.triangles.len() {
+        let tri = mesh.triangles[t];
+        let d = face_distortion(mesh.corners(t), tri.map(|v| uv[v as usize])).unwrap();
+        let a = mesh.triangle_area(t);
+        if d.flipped() {
+            flips += 1;
+        }
+        conf += a * (d.sigma1 / d.sigma2).ln();
+        d2 += a * d.delta2();
+        area += a;
+    }
+    Score {
+        conf: conf / area,
+        delta2_mean: d2 / area,
+        delta2_integral: d2,
+        flips,
+    }
+}
+
+/// Largest relative edge-length error of the map.
+fn max_rel_edge_error(mesh: &TriMesh, uv: &[DVec2]) -> f64 {
+    let mut e: f64 = 0.0;
+    for tri in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (tri[k] as usize, tri[(k + 1) % 3] as usize);
+            let l3 = (mesh.positions[a] - mesh.positions[b]).length();
+            let l2 = (uv[a] - uv[b]).length();
+            e = e.max((l2 - l3).abs() / l3);
+        }
+    }
+    e
+}
+
+/// Largest distance between `uv` and `flat` after the best rigid motion (2D Kabsch).
+fn rigid_residual(uv: &[DVec2], flat: &[DVec2]) -> f64 {
+    let n = uv.len() as f64;
+    let cu = uv.iter().copied().sum::<DVec2>() / n;
+    let cf = flat.iter().copied().sum::<DVec2>() / n;
+    let (mut sxx, mut sxy) = (0.0, 0.0);
+    for (p, q) in flat.iter().zip(uv) {
+        let (a, b) = (*p - cf, *q - cu);
+        sxx += a.dot(b);
+        sxy += a.perp_dot(b);
+    }
+    let th = sxy.atan2(sxx);
+    let r = DVec2::from_angle(th);
+    flat.iter()
+        .zip(uv)
+        .map(|(p, q)| (r.rotate(*p - cf) + cu - *q).length())
+        .fold(0.0, f64::max)
+}
+
+fn run(mesh: &TriMesh, m: Method) -> Flattening {
+    flatten(mesh, &FlattenParams::new(m)).unwrap_or_else(|e| panic!("{m}: {e}"))
+}
+
+#[test]
+fn lscm_reproduces_a_plane_at_scale() {
+    let (mesh, flat) = testmesh::jittered_plane(60.0, 12);
+    let f = run(&mesh, Method::Lscm);
+    assert!(rigid_residual(&f.uv, &flat) < 1e-9 * 60.0);
+    assert!(f.info.final_energy < 1e-20);
+}
+
+#[test]
+fn lscm_on_a_cap_matches_the_stereographic_floor() {
+    // Sphere radius 100 mm, geodesic radius 1.0 rad.
+    let r = 100.0;
+    let mesh = testmesh::spherical_cap(r, 1.0, 16);
+    let f = run(&mesh, Method::Lscm);
+    let s = score(&mesh, &f.uv);
+    assert_eq!(s.flips, 0);
+    // The stereographic projection from the antipode is exactly conformal on the sphere; on
+    // the chord triangles it is the discrete floor LSCM must reach (its own energy is lower).
+    let stereo: Vec<DVec2> = mesh
+        .positions
+        .iter()
+        .map(|p| DVec2::new(p.x, p.y) * (2.0 * r / (r + p.z)))
+        .collect();
+    let s0 = score(&mesh, &stereo);
+    assert!(s0.conf > 1e-3, "floor {}", s0.conf);
+    assert!(
+        s.conf <= 1.02 * s0.conf,
+        "lscm {} vs stereographic {}",
+        s.conf,
+        s0.conf
+    );
+    // True scale: same total area as the surface.
+    let a2: f64 = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            0.5 * (f.uv[t[1] as usize] - f.uv[t[0] as usize])
+                .perp_dot(f.uv[t[2] as usize] - f.uv[t[0] as usize])
+        })
+        .sum();
+    assert!((a2 / mesh.area() - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn lscm_is_exact_on_developable_patches() {
+    for mesh in [
+        testmesh::cylinder_patch(40.0, 2.5, 70.0, 20, 8),
+        testmesh::cone_patch(0.6, 30.0, 90.0, 2.0, 16, 8),
+    ] {
+        let f = run(&mesh, Method::Lscm);
+        let s = score(&mesh, &f.uv);
+        assert!(
+            s.conf < 1e-9 && s.delta2_mean < 1e-12,
+            "{} {}",
+            s.conf,
+            s.delta2_mean
+        );
+        assert!(max_rel_edge_error(&mesh, &f.uv) < 1e-8);
+    }
+}
+
+#[test]
+fn lscm_honours_pins() {
+    let mesh = testmesh::saddle(80.0, 10);
+    let pins = vec![
+        Pin {
+            vertex: 0,
+            position: DVec2::new(5.0, 5.0),
+        },
+        Pin {
+            vertex: 10,
+            position: DVec2::new(90.0, 5.0),
+        },
+        Pin {
+            vertex: 120,
+            position: DVec2::new(90.0, 90.0),
+        },
+    ];
+    let f = flatten(
+        &mesh,
+        &FlattenParams::new(Method::Lscm).with_pins(pins.clone()),
+    )
+    .unwrap();
+    for p in &pins {
+        assert_eq!(f.uv[p.vertex as usize], p.position);
+    }
+    // One pin: the free map, translated onto it.
+    let f1 = flatten(
+        &mesh,
+        &FlattenParams::new(Method::Lscm).with_pins(pins[..1].to_vec()),
+    )
+    .unwrap();
+    let f0 = run(&mesh, Method::Lscm);
+    assert!((f1.uv[0] - pins[0].position).length() < 1e-12);
+    let d = f1.uv[0] - f0.uv[0];
+    assert!(
+        f1.uv
+            .iter()
+            .zip(&f0.uv)
+            .all(|(a, b)| (*a - *b - d).length() < 1e-9)
+    );
+}
+
+#[test]
+fn bad_pins_are_refused() {
+    let mesh = testmesh::saddle(80.0, 4);
+    let p = |vertex, x: f64| Pin {
+        vertex,
+        position: DVec2::new(x, 0.0),
+    };
+    for (pins, index) in [
+        (vec![p(0, 0.0), p(999, 1.0)], 1),
+        (vec![p(0, 0.0), p(0, 1.0)], 1),
+        (vec![p(0, 0.0), p(3, 0.0)], 1),
+        (vec![p(0, f64::NAN)], 0),
+    ] {
+        let e = flatten(&mesh, &FlattenParams::new(Method::Lscm).with_pins(pins)).unwrap_err();
+        assert!(
+            matches!(e, FlattenError::BadPin { index: i, .. } if i == index),
+            "{e}"
+        );
+    }
+}
+
+#[test]
+fn bad_input_gives_the_right_topology_error() {
+    let cap = testmesh::spherical_cap(50.0, 1.0, 4);
+    // Closed: glue a second cap mirrored onto the first's boundary (a sphere-like closed mesh).
+    let closed = {
+        let mut m = cap.clone();
+        let n = m.positions.len() as u32;
+        let ring = 6 * 4;
+        let first_ring = n - ring;
+        m.positions.push(DVec3::new(0.0, 0.0, -50.0));
+        for j in 0..ring {
+            m.triangles
+                .push([n, first_ring + (j + 1) % ring, first_ring + j]);
+        }
+        m
+    };
+    let two = {
+        let mut m = cap.clone();
+        let n = m.positions.len() as u32;
+        m.positions.extend(
+            cap.positions
+                .iter()
+                .map(|p| *p + DVec3::new(500.0, 0.0, 0.0)),
+        );
+        m.triangles
+            .extend(cap.triangles.iter().map(|t| t.map(|v| v + n)));
+        m
+    };
+    let mut nan = cap.clone();
+    nan.positions[3].y = f64::NAN;
+    let mut nonmanifold = cap.clone();
+    let k = nonmanifold.positions.len() as u32;
+    nonmanifold.positions.push(DVec3::new(0.0, 0.0, 200.0));
+    let t0 = nonmanifold.triangles[0];
+    nonmanifold.triangles.push([t0[0], t0[1], k]);
+    for m in Method::ALL {
+        let p = FlattenParams::new(m);
+        assert!(matches!(
+            flatten(&closed, &p),
+            Err(FlattenError::Topology(TopologyError::NoBoundary))
+        ));
+        assert!(matches!(
+            flatten(&two, &p),
+            Err(FlattenError::Topology(TopologyError::SeveralComponents {
+                count: 2
+            }))
+        ));
+        assert!(matches!(
+            flatten(&nan, &p),
+            Err(FlattenError::Topology(TopologyError::NonFinite {
+                vertex: 3
+            }))
+        ));
+        assert!(matches!(
+            flatten(&nonmanifold, &p),
+            Err(FlattenError::Topology(
+                TopologyError::NonManifoldEdge { .. }
+                    | TopologyError::InconsistentOrientation { .. }
+            ))
+        ));
+    }
+}
+
+#[test]
+fn linear_methods_are_deterministic() {
+    let mesh = testmesh::spherical_cap(80.0, 1.2, 10);
+    for m in [Method::Lscm] {
+        let a = run(&mesh, m);
+        let b = run(&mesh, m);
+        assert!(
+            a.uv.iter()
+                .zip(&b.uv)
+                .all(|(p, q)| p.x.to_bits() == q.x.to_bits() && p.y.to_bits() == q.y.to_bits())
+        );
+    }
+}
