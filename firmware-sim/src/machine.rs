@@ -69,6 +69,7 @@ struct Record {
     live: usize,
     all_queued: bool,
     alarm: Option<u8>,
+    last_target: [f64; N_AXIS],
 }
 
 #[derive(Debug, Clone)]
@@ -766,12 +767,12 @@ impl Grbl {
     }
 
     fn handle_events(&mut self, ev: StepEvents, t_start: f64) {
-        for id in ev.started {
+        for (id, dt) in ev.started {
             let mut alarm_now = None;
             if let Some(r) = self.records.get_mut(&id) {
                 if !r.started {
                     r.started = true;
-                    r.seg.t_start = t_start;
+                    r.seg.t_start = t_start + dt;
                     alarm_now = r.alarm.take();
                 }
             }
@@ -780,7 +781,7 @@ impl Grbl {
                 return;
             }
         }
-        for id in ev.finished {
+        for (id, dt) in ev.finished {
             let done = if let Some(r) = self.records.get_mut(&id) {
                 r.live = r.live.saturating_sub(1);
                 r.live == 0 && r.all_queued
@@ -788,16 +789,20 @@ impl Grbl {
                 false
             };
             if done {
-                self.finish_record(id);
+                self.finish_record_at(id, t_start + dt);
             }
         }
     }
 
     fn finish_record(&mut self, id: usize) {
+        self.finish_record_at(id, self.clock);
+    }
+
+    fn finish_record_at(&mut self, id: usize, t: f64) {
         if let Some(mut r) = self.records.remove(&id) {
             if r.started {
-                r.seg.to = self.machine_position();
-                r.seg.t_end = self.clock;
+                r.seg.to = r.last_target;
+                r.seg.t_end = t;
                 self.trace.push(r.seg);
             }
         }
@@ -963,11 +968,14 @@ impl Grbl {
                     );
                     am.next += 1;
                     if queued {
-                        if let Some(r) = self.records.get_mut(&am.record) {
+                        let back = self.planner.blocks.back().map(|b| (b.start, b.target));
+                        if let (Some(r), Some((start, target))) =
+                            (self.records.get_mut(&am.record), back)
+                        {
                             if r.live == 0 && !r.started && r.seg.from == [f64::MAX; 3] {
-                                r.seg.from =
-                                    self.planner.blocks.back().map_or([0.0; 3], |b| b.start);
+                                r.seg.from = start;
                             }
+                            r.last_target = target;
                             r.live += 1;
                         }
                         self.stats.max_planner_fill =
@@ -1001,7 +1009,7 @@ impl Grbl {
             };
             match action {
                 Action::Sync => {
-                    if !self.planner.blocks.is_empty() {
+                    if !self.planner.blocks.is_empty() || self.dwell_left > 0.0 {
                         self.pending.push_front(Action::Sync);
                         return false;
                     }
@@ -1129,6 +1137,7 @@ impl Grbl {
                 live: 0,
                 all_queued: false,
                 alarm,
+                last_target: [0.0; N_AXIS],
             },
         );
         id

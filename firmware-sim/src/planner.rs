@@ -20,6 +20,8 @@ const MINIMUM_FEED_RATE: f64 = 1.0;
 const JUNCTION_COS_LIMIT: f64 = 0.999_999;
 /// Length below which a block counts as finished, mm (well under one step of 0.004 mm).
 const LENGTH_EPS_MM: f64 = 1e-9;
+/// Relative speed tolerance deciding which profile phase applies (guards against round-off ping-pong).
+const SPEED_REL_EPS: f64 = 1e-9;
 
 /// One planned straight move.
 #[derive(Debug, Clone, PartialEq)]
@@ -69,10 +71,10 @@ impl PlanBlock {
 /// What happened during one executor step.
 #[derive(Debug, Default, Clone, PartialEq)]
 pub struct StepEvents {
-    /// Records whose first block began.
-    pub started: Vec<usize>,
-    /// Records one of whose blocks ended.
-    pub finished: Vec<usize>,
+    /// Records whose block began, with the time into the step, s.
+    pub started: Vec<(usize, f64)>,
+    /// Records one of whose blocks ended, with the time into the step, s.
+    pub finished: Vec<(usize, f64)>,
 }
 
 /// Planner buffer plus executor state.
@@ -270,63 +272,106 @@ impl Planner {
     }
 
     /// Advances the executor by `h` seconds. `hold` decelerates to a stop.
+    ///
+    /// The speed profile is integrated piecewise exactly: constant acceleration up to the nominal speed or to the
+    /// deceleration curve `v² = v_exit² + 2·a·remaining`, cruise, then constant deceleration along that curve.
     pub fn step(&mut self, mut h: f64, hold: bool, feed_ovr: f64, rapid_ovr: f64) -> StepEvents {
         let mut ev = StepEvents::default();
-        while h > 0.0 {
+        let h0 = h;
+        let mut guard = 0;
+        while h > 0.0 && guard < 64 {
+            guard += 1;
             let Some(front) = self.blocks.front_mut() else {
                 self.v = 0.0;
                 break;
             };
             if !front.started {
                 front.started = true;
-                ev.started.push(front.record);
+                ev.started.push((front.record, h0 - h));
             }
-            let front = self.blocks[0].clone();
-            let remaining = front.len - self.s;
-            let exit_sq = if hold {
+            let (len, a, start, unit, target, record) = (
+                front.len,
+                front.accel,
+                front.start,
+                front.unit,
+                front.target,
+                front.record,
+            );
+            let vn = front.nominal(feed_ovr, rapid_ovr);
+            let rem = (len - self.s).max(0.0);
+            let ve = if hold {
                 0.0
             } else {
-                self.blocks.get(1).map_or(0.0, |b| b.entry_sq)
+                self.blocks.get(1).map_or(0.0, |b| b.entry_sq.sqrt())
             };
-            let vn = if hold {
+            let v = self.v;
+            let v_dec = (ve * ve + 2.0 * a * rem).sqrt();
+            // Time to reach the end of the block when braking at `a` from now (∞ if it stops before).
+            let disc = v * v - 2.0 * a * rem;
+            let t_hit = if rem <= LENGTH_EPS_MM {
                 0.0
+            } else if disc >= 0.0 {
+                (v - disc.sqrt()) / a
             } else {
-                front.nominal(feed_ovr, rapid_ovr)
+                f64::INFINITY
             };
-            let a = front.accel;
-            let v_dec = (exit_sq + 2.0 * a * remaining.max(0.0)).sqrt();
-            let v_target = vn.min(v_dec);
-            let v_new = if self.v < v_target {
-                (self.v + a * h).min(v_target)
-            } else {
-                (self.v - a * h).max(v_target)
-            };
-            let ds = 0.5 * (self.v + v_new) * h;
-            if ds >= remaining - LENGTH_EPS_MM
-                && !(hold && v_new <= 0.0 && ds < remaining - LENGTH_EPS_MM)
-            {
-                let used = if ds > 0.0 {
-                    h * (remaining / ds).clamp(0.0, 1.0)
+            let braking = hold || v >= v_dec * (1.0 - SPEED_REL_EPS);
+            let (dt, ds, v_new, finished) = if braking {
+                if t_hit <= h {
+                    (t_hit, rem, (v - a * t_hit).max(0.0), true)
                 } else {
-                    h
-                };
-                h -= used;
-                self.v = v_new.min(exit_sq.sqrt());
-                self.s = 0.0;
-                self.pos = front.target;
-                self.blocks.pop_front();
-                ev.finished.push(front.record);
-                if h <= 0.0 {
-                    break;
+                    let t_stop = v / a;
+                    if hold && t_stop <= h {
+                        (t_stop, 0.5 * v * t_stop, 0.0, false)
+                    } else {
+                        (h, v * h - 0.5 * a * h * h, v - a * h, false)
+                    }
                 }
+            } else if v > vn * (1.0 + SPEED_REL_EPS) {
+                // Above nominal (override lowered): slow down to nominal.
+                let t1 = ((v - vn) / a).min(h);
+                (t1, v * t1 - 0.5 * a * t1 * t1, v - a * t1, false)
+            } else if v < vn * (1.0 - SPEED_REL_EPS) {
+                // Accelerate up to nominal or to where the deceleration curve is met.
+                let s_meet = ((ve * ve + 2.0 * a * rem - v * v) / (4.0 * a)).max(0.0);
+                let v_top = vn.min((v * v + 2.0 * a * s_meet).sqrt());
+                let t1 = ((v_top - v) / a).max(0.0);
+                if t1 <= h {
+                    (t1, (v_top * v_top - v * v) / (2.0 * a), v_top, false)
+                } else {
+                    (h, v * h + 0.5 * a * h * h, v + a * h, false)
+                }
+            } else {
+                // Cruise until the deceleration point.
+                let s_cruise = (rem - (vn * vn - ve * ve).max(0.0) / (2.0 * a)).max(0.0);
+                let t_c = if vn > 0.0 {
+                    s_cruise / vn
+                } else {
+                    f64::INFINITY
+                };
+                if t_c <= h {
+                    (t_c, s_cruise, vn, false)
+                } else {
+                    (h, vn * h, vn, false)
+                }
+            };
+            h -= dt;
+            if finished || self.s + ds >= len - LENGTH_EPS_MM {
+                self.v = v_new.min(ve).max(0.0);
+                self.s = 0.0;
+                self.pos = target;
+                self.blocks.pop_front();
+                ev.finished.push((record, h0 - h));
                 continue;
             }
             self.s += ds;
-            self.v = v_new;
+            self.v = v_new.max(0.0);
             for i in 0..N_AXIS {
-                self.pos[i] = front.start[i] + front.unit[i] * self.s;
+                self.pos[i] = start[i] + unit[i] * self.s;
             }
-            h = 0.0;
+            if hold && self.v <= 0.0 {
+                break;
+            }
         }
         ev
     }
@@ -336,9 +381,9 @@ impl Planner {
         let mut ev = StepEvents::default();
         while let Some(b) = self.blocks.pop_front() {
             if !b.started {
-                ev.started.push(b.record);
+                ev.started.push((b.record, 0.0));
             }
-            ev.finished.push(b.record);
+            ev.finished.push((b.record, 0.0));
             self.pos = b.target;
         }
         self.s = 0.0;
