@@ -549,6 +549,55 @@ mod tests {
     }
 
     #[test]
+    fn tv20_quarter_circles() {
+        // Cubic: handle k = 4(√2 − 1)/3, max radius 1.00027253 at t = (3 − √3)/6.
+        let k = 4.0 * (2f64.sqrt() - 1.0) / 3.0;
+        let c = Bezier::new(vec![v2(1., 0.), v2(1., k), v2(k, 1.), v2(0., 1.)]).unwrap();
+        let pw = c.to_power();
+        assert!(close(pw[3], v2(0.3431457505, -0.3431457505), 1e-10));
+        assert!(close(pw[2], v2(-1.3431457505, -0.3137084990), 1e-10));
+        assert!(close(pw[1], v2(0.0, 1.6568542495), 1e-10));
+        let t = (3.0 - 3f64.sqrt()) / 6.0;
+        assert!((c.eval(t).length() - 1.00027253).abs() < 1e-8);
+        assert!((c.eval(1.0 - t).length() - 1.00027253).abs() < 1e-8);
+        // Quadratic, k = (2√2 − 1)/2: errata E21 — the worst point is the minimum radius
+        // 0.9892185757 at t = (2 − √2)/4, not 0.995685.
+        let k = (2.0 * 2f64.sqrt() - 1.0) / 2.0;
+        let q = Bezier::new(vec![v2(1., 0.), v2(k, k), v2(0., 1.)]).unwrap();
+        let (tmin, rmin) = (0..=100_000)
+            .map(|i| i as f64 / 100_000.0)
+            .map(|t| (t, q.eval(t).length()))
+            .fold((0.0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+        assert!((rmin - 0.9892185757).abs() < 1e-9, "{rmin}");
+        assert!((tmin - (2.0 - 2f64.sqrt()) / 4.0).abs() < 1e-4, "{tmin}");
+        assert!((q.eval((2.0 - 2f64.sqrt()) / 4.0).length() - 0.9892185757).abs() < 1e-10);
+        assert!((q.eval(0.5).length() - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn tv5_osculating_planes() {
+        // Binormal ∝ (t², −t, 1 − 3t): z = 0 at t = 0, 0.25x − 0.5y − 0.5z = 0.125 at ½,
+        // x − y − 2z = 1 at 1.
+        use crate::curve::CurveExt;
+        let c = Bezier::new(vec![
+            DVec3::ZERO,
+            DVec3::new(1., 0., 0.),
+            DVec3::new(2., 1., 0.),
+            DVec3::new(3., 0., 1.),
+        ])
+        .unwrap();
+        for (t, n, d) in [
+            (0.0, DVec3::new(0., 0., 1.), 0.0),
+            (0.5, DVec3::new(0.25, -0.5, -0.5), 0.125),
+            (1.0, DVec3::new(1., -1., -2.), 1.0),
+        ] {
+            let b = c.frenet(t).unwrap().b;
+            assert!((b.cross(n.normalize())).length() < 1e-14, "t={t}");
+            assert!((n.dot(c.eval(t)) - d).abs() < 1e-14);
+        }
+    }
+
+    #[test]
     fn rejects_bad_input() {
         assert!(matches!(
             Bezier::new(vec![]),

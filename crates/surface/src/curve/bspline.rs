@@ -870,6 +870,45 @@ mod tests {
         }
     }
 
+    #[test]
+    fn tv20_uniform_bspline_circles() {
+        // m = 4: R = 3/2, the segment from (0, 1) to (−1, 0) is ¼(2t³ − 6t, 2t³ − 6t² + 4).
+        let r = 1.5;
+        let p = vec![v2(r, 0.), v2(0., r), v2(-r, 0.), v2(0., -r)];
+        let c = BSpline::periodic(3, p).unwrap();
+        for t in [0.0, 0.25, 0.5, 1.0] {
+            let want = 0.25
+                * v2(
+                    2.0 * t * t * t - 6.0 * t,
+                    2.0 * t * t * t - 6.0 * t * t + 4.0,
+                );
+            assert!(close(c.eval(t), want, 1e-15), "t={t}");
+        }
+        assert!(close(c.eval(0.5), v2(-0.6875, 0.6875), 1e-15));
+        for (m, dev) in [(4, 0.0277282), (5, 0.0094067), (6, 0.0040708)] {
+            let a = TAU / m as f64;
+            let big_r = 3.0 / (2.0 + a.cos());
+            let pts = (0..m)
+                .map(|i| big_r * v2((i as f64 * a).cos(), (i as f64 * a).sin()))
+                .collect();
+            let c = BSpline::periodic(3, pts).unwrap();
+            let (lo, hi) = (0..=4000)
+                .map(|i| c.eval(m as f64 * i as f64 / 4000.0).length())
+                .fold((f64::INFINITY, 0.0f64), |(lo, hi), r| {
+                    (lo.min(r), hi.max(r))
+                });
+            assert!(
+                (hi - 1.0).abs() < 1e-14,
+                "m={m}: knots lie on the unit circle"
+            );
+            assert!(
+                (1.0 - lo - dev).abs() < 1e-7,
+                "m={m}: deviation {}",
+                1.0 - lo
+            );
+        }
+    }
+
     fn arb_bspline() -> impl Strategy<Value = BSpline> {
         (1usize..5, proptest::collection::vec(0.05f64..1.0, 1..6)).prop_flat_map(|(p, gaps)| {
             let n = gaps.len() + p;
