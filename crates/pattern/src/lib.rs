@@ -6,5 +6,21 @@
 //! (the crate graph enforces it); the facade turns a flattened boundary into a piece.
 
 pub mod drawing;
+pub mod dxf;
+pub mod error;
+pub mod fit;
+pub mod font;
+pub mod io;
+pub mod piece;
+pub mod poly;
+pub mod seam;
+pub mod svg;
 
 pub use drawing::{Drawing, Layer, Stroke};
+pub use error::PatternError;
+pub use fit::PathSeg;
+pub use io::write_atomic;
+pub use piece::{
+    LabelInfo, Mark, MarkKind, NotchStyle, Piece, PieceInput, PieceOptions, PlacedPiece, Placement,
+};
+pub use seam::CornerStyle;

@@ -1,0 +1,205 @@
+//! Small exact polygon kernels in f64 mm: signed area, containment, segment crossing, simplicity
+//! and distances. Written here because they are a few lines each and the validation of the seam
+//! offset must be independent of the library that computed it.
+
+use flatcut_geom::DVec2;
+
+/// Signed area (positive for counter-clockwise) of a closed polygon without repeated end point.
+pub fn signed_area(p: &[DVec2]) -> f64 {
+    let n = p.len();
+    (0..n).map(|i| p[i].perp_dot(p[(i + 1) % n])).sum::<f64>() * 0.5
+}
+
+/// Even-odd point-in-polygon test.
+pub fn contains(poly: &[DVec2], q: DVec2) -> bool {
+    let n = poly.len();
+    let mut inside = false;
+    let mut j = n.wrapping_sub(1);
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[j]);
+        if (a.y > q.y) != (b.y > q.y) && q.x < (b.x - a.x) * (q.y - a.y) / (b.y - a.y) + a.x {
+            inside = !inside;
+        }
+        j = i;
+    }
+    inside
+}
+
+/// Distance from `q` to the segment `a`–`b` and the parameter of the nearest point.
+pub fn seg_nearest(a: DVec2, b: DVec2, q: DVec2) -> (f64, f64) {
+    let d = b - a;
+    let l2 = d.length_squared();
+    let t = if l2 > 0.0 {
+        ((q - a).dot(d) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    ((a + d * t).distance(q), t)
+}
+
+/// Distance from `q` to a closed polyline.
+pub fn dist_to_closed(poly: &[DVec2], q: DVec2) -> f64 {
+    let n = poly.len();
+    (0..n)
+        .map(|i| seg_nearest(poly[i], poly[(i + 1) % n], q).0)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Proper or touching intersection point of segments `a0a1` and `b0b1`, if any.
+pub fn seg_intersection(a0: DVec2, a1: DVec2, b0: DVec2, b1: DVec2) -> Option<DVec2> {
+    let r = a1 - a0;
+    let s = b1 - b0;
+    let den = r.perp_dot(s);
+    let qp = b0 - a0;
+    if den.abs() <= f64::EPSILON * r.length() * s.length() {
+        // Parallel: report an overlap of collinear segments as an intersection.
+        if qp.perp_dot(r).abs() > 1e-12 * (1.0 + r.length_squared()) {
+            return None;
+        }
+        let rr = r.length_squared();
+        if rr == 0.0 {
+            return None;
+        }
+        let t0 = qp.dot(r) / rr;
+        let t1 = (b1 - a0).dot(r) / rr;
+        let (lo, hi) = (t0.min(t1), t0.max(t1));
+        if hi < 0.0 || lo > 1.0 {
+            return None;
+        }
+        return Some(a0 + r * lo.max(0.0));
+    }
+    let t = qp.perp_dot(s) / den;
+    let u = qp.perp_dot(r) / den;
+    ((0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u)).then(|| a0 + r * t)
+}
+
+/// First pair of non-adjacent crossing edges of a closed polygon (edge i runs from vertex i to
+/// i+1), found with a sweep over x-sorted edge boxes: O(n log n + k).
+pub fn first_self_intersection(p: &[DVec2]) -> Option<(usize, usize, DVec2)> {
+    let n = p.len();
+    if n < 4 {
+        return None;
+    }
+    let mut order: Vec<usize> = (0..n).collect();
+    let lo = |i: usize| p[i].x.min(p[(i + 1) % n].x);
+    let hi = |i: usize| p[i].x.max(p[(i + 1) % n].x);
+    order.sort_by(|&a, &b| lo(a).total_cmp(&lo(b)).then(a.cmp(&b)));
+    let mut active: Vec<usize> = Vec::new();
+    let mut found: Option<(usize, usize, DVec2)> = None;
+    for &i in &order {
+        let x = lo(i);
+        active.retain(|&j| hi(j) >= x);
+        for &j in &active {
+            let adjacent = (i + 1) % n == j || (j + 1) % n == i;
+            if adjacent {
+                continue;
+            }
+            let (ylo_i, yhi_i) = (p[i].y.min(p[(i + 1) % n].y), p[i].y.max(p[(i + 1) % n].y));
+            let (ylo_j, yhi_j) = (p[j].y.min(p[(j + 1) % n].y), p[j].y.max(p[(j + 1) % n].y));
+            if yhi_i < ylo_j || yhi_j < ylo_i {
+                continue;
+            }
+            if let Some(x) = seg_intersection(p[i], p[(i + 1) % n], p[j], p[(j + 1) % n]) {
+                let (a, b) = (i.min(j), i.max(j));
+                if found.is_none_or(|(fa, fb, _)| (a, b) < (fa, fb)) {
+                    found = Some((a, b, x));
+                }
+            }
+        }
+        active.push(i);
+    }
+    found
+}
+
+/// Removes consecutive duplicates (closer than `eps`) including a repeated closing point.
+pub fn dedup_closed(p: &[DVec2], eps: f64) -> Vec<DVec2> {
+    let mut out: Vec<DVec2> = Vec::with_capacity(p.len());
+    for &q in p {
+        if out.last().is_none_or(|l| l.distance(q) > eps) {
+            out.push(q);
+        }
+    }
+    while out.len() > 1 && out[0].distance(out[out.len() - 1]) <= eps {
+        out.pop();
+    }
+    out
+}
+
+/// Arc length of a closed polyline up to each vertex (len n+1, last = perimeter).
+pub fn cumulative_length(p: &[DVec2]) -> Vec<f64> {
+    let n = p.len();
+    let mut s = Vec::with_capacity(n + 1);
+    s.push(0.0);
+    for i in 0..n {
+        let l = s[i] + p[i].distance(p[(i + 1) % n]);
+        s.push(l);
+    }
+    s
+}
+
+/// Nearest point on a closed polyline: (edge index, parameter on the edge, point, distance).
+pub fn nearest_on_closed(p: &[DVec2], q: DVec2) -> (usize, f64, DVec2, f64) {
+    let n = p.len();
+    let mut best = (0, 0.0, p[0], f64::INFINITY);
+    for i in 0..n {
+        let (a, b) = (p[i], p[(i + 1) % n]);
+        let (d, t) = seg_nearest(a, b, q);
+        if d < best.3 {
+            best = (i, t, a.lerp(b, t), d);
+        }
+    }
+    best
+}
+
+/// First crossing of the ray `o + s·dir` (s > 0) with a closed polyline: the smallest s.
+pub fn ray_hit(poly: &[DVec2], o: DVec2, dir: DVec2) -> Option<f64> {
+    let n = poly.len();
+    let mut best: Option<f64> = None;
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[(i + 1) % n]);
+        let s = b - a;
+        let den = dir.perp_dot(s);
+        if den.abs() < 1e-15 {
+            continue;
+        }
+        let qp = a - o;
+        let t = qp.perp_dot(s) / den;
+        let u = qp.perp_dot(dir) / den;
+        if t > 0.0 && (0.0..=1.0).contains(&u) && best.is_none_or(|bb| t < bb) {
+            best = Some(t);
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn v(x: f64, y: f64) -> DVec2 {
+        DVec2::new(x, y)
+    }
+
+    #[test]
+    fn area_and_containment_of_unit_square() {
+        let sq = [v(0., 0.), v(1., 0.), v(1., 1.), v(0., 1.)];
+        assert_eq!(signed_area(&sq), 1.0);
+        assert!(contains(&sq, v(0.5, 0.5)));
+        assert!(!contains(&sq, v(1.5, 0.5)));
+        assert!(first_self_intersection(&sq).is_none());
+    }
+
+    #[test]
+    fn bow_tie_is_self_intersecting() {
+        let bow = [v(0., 0.), v(2., 2.), v(2., 0.), v(0., 2.)];
+        let (a, b, x) = first_self_intersection(&bow).unwrap();
+        assert_eq!((a, b), (0, 2));
+        assert!(x.distance(v(1., 1.)) < 1e-12);
+    }
+
+    #[test]
+    fn ray_hits_nearest_edge() {
+        let sq = [v(0., 0.), v(4., 0.), v(4., 4.), v(0., 4.)];
+        assert!((ray_hit(&sq, v(1., 1.), v(1., 0.)).unwrap() - 3.0).abs() < 1e-12);
+    }
+}

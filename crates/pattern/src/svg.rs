@@ -1,0 +1,585 @@
+//! SVG export at true size and SVG import.
+//!
+//! Export: `width`/`height` in mm and `viewBox="0 0 W H"`, so 1 user unit = 1 mm and nothing
+//! scales; y is flipped by writing `H − y` (our frame is y-up), never by a transform. Three
+//! groups with the stroke colours laser software keys on: `id="cut"` (#ff0000, cut lines,
+//! notches, drill holes), `id="draw"` (#0000ff, sew line, marks, grain line) and
+//! `id="engrave"` (#000000, labels); fill none, stroke width 0.1 mm. Element ids say what
+//! each element is (`vamp-1-cut`, `vamp-1-sew`, `vamp-1-notch-2`). Numbers are written with
+//! 3 decimals, so the output is byte-identical for identical input.
+//!
+//! Import: `usvg` resolves units, transforms, basic shapes and arcs into paths; curves are
+//! flattened here within a chordal tolerance. Layers come from the enclosing group id, then
+//! from the element id, then from the stroke colour (blue = draw, anything else = cut).
+
+use crate::drawing::{Drawing, Layer, Stroke};
+use crate::fit::PathSeg;
+use crate::piece::PlacedPiece;
+use crate::{PatternError, poly};
+use flatcut_geom::{Aabb2, DVec2};
+use svg::node::element::{Group, Path, Polygon, Polyline};
+
+/// Stroke width of every exported element (mm): thin enough for hairline-cut detection.
+pub const STROKE_WIDTH_MM: f64 = 0.1;
+/// Margin around the drawing when no sheet size is given (mm).
+pub const DEFAULT_MARGIN_MM: f64 = 5.0;
+/// CSS pixels per millimetre (96 dpi), the unit usvg resolves lengths to.
+const PX_PER_MM: f64 = 96.0 / 25.4;
+
+/// Colour of a layer's group.
+pub fn layer_colour(layer: Layer) -> &'static str {
+    match layer {
+        Layer::Cut => "#ff0000",
+        Layer::Draw => "#0000ff",
+        Layer::Engrave => "#000000",
+    }
+}
+
+/// Fixed 3-decimal formatting without negative zero.
+fn f(v: f64) -> String {
+    let s = format!("{v:.3}");
+    if s == "-0.000" { "0.000".into() } else { s }
+}
+
+struct Frame {
+    origin: DVec2,
+    size: DVec2,
+}
+
+impl Frame {
+    fn new(bbox: Aabb2, sheet: Option<DVec2>) -> Frame {
+        match sheet {
+            Some(s) => Frame {
+                origin: DVec2::ZERO,
+                size: s,
+            },
+            None if bbox.min.is_finite() && bbox.max.is_finite() => {
+                let m = DVec2::splat(DEFAULT_MARGIN_MM);
+                Frame {
+                    origin: bbox.min - m,
+                    size: bbox.max - bbox.min + 2.0 * m,
+                }
+            }
+            None => Frame {
+                origin: DVec2::ZERO,
+                size: DVec2::splat(1.0),
+            },
+        }
+    }
+    fn map(&self, p: DVec2) -> (String, String) {
+        (
+            f(p.x - self.origin.x),
+            f(self.size.y - (p.y - self.origin.y)),
+        )
+    }
+    fn pts(&self, p: &[DVec2]) -> String {
+        p.iter()
+            .map(|q| {
+                let (x, y) = self.map(*q);
+                format!("{x},{y}")
+            })
+            .collect::<Vec<_>>()
+            .join(" ")
+    }
+}
+
+enum Item {
+    Stroke(Stroke),
+    /// A curved path (id, layer, d attribute).
+    Path(Layer, String, String),
+}
+
+fn document(items: Vec<Item>, frame: &Frame) -> String {
+    let mut doc = svg::Document::new()
+        .set("width", format!("{}mm", f(frame.size.x)))
+        .set("height", format!("{}mm", f(frame.size.y)))
+        .set(
+            "viewBox",
+            format!("0 0 {} {}", f(frame.size.x), f(frame.size.y)),
+        );
+    for layer in [Layer::Cut, Layer::Draw, Layer::Engrave] {
+        let mut g = Group::new()
+            .set("id", layer.name())
+            .set("fill", "none")
+            .set("stroke", layer_colour(layer))
+            .set("stroke-width", f(STROKE_WIDTH_MM));
+        for it in &items {
+            match it {
+                Item::Stroke(s) if s.layer == layer && s.points.len() >= 2 => {
+                    let pts = frame.pts(&s.points);
+                    if s.closed {
+                        g = g.add(Polygon::new().set("id", s.id.clone()).set("points", pts));
+                    } else {
+                        g = g.add(Polyline::new().set("id", s.id.clone()).set("points", pts));
+                    }
+                }
+                Item::Path(l, id, d) if *l == layer => {
+                    g = g.add(Path::new().set("id", id.clone()).set("d", d.clone()));
+                }
+                _ => {}
+            }
+        }
+        doc = doc.add(g);
+    }
+    let mut s = doc.to_string();
+    s.push('\n');
+    s
+}
+
+/// Writes a drawing; `sheet` = (width, height) in mm with the origin at the lower-left corner,
+/// or `None` for the drawing's bounding box plus a margin.
+pub fn write_drawing(d: &Drawing, sheet: Option<DVec2>) -> String {
+    let frame = Frame::new(d.bbox(), sheet);
+    document(
+        d.strokes.iter().cloned().map(Item::Stroke).collect(),
+        &frame,
+    )
+}
+
+/// SVG path data of a fitted closed path under a placement (lines, arcs, cubics kept exact).
+fn path_d(segs: &[PathSeg], map: impl Fn(DVec2) -> DVec2, mirror: bool, frame: &Frame) -> String {
+    let mut d = String::new();
+    if let Some(first) = segs.first() {
+        let (x, y) = frame.map(map(first.start()));
+        d.push_str(&format!("M{x},{y}"));
+    }
+    for s in segs {
+        match *s {
+            PathSeg::Line { p1, .. } => {
+                let (x, y) = frame.map(map(p1));
+                d.push_str(&format!(" L{x},{y}"));
+            }
+            PathSeg::Arc { p0, p1, bulge } => {
+                let (_, r, _, sweep) = crate::fit::arc_geometry(p0, p1, bulge);
+                let ccw = (sweep > 0.0) != mirror;
+                let large = u8::from(sweep.abs() > std::f64::consts::PI);
+                // y is flipped in SVG: a counter-clockwise arc has sweep-flag 0 there
+                let sflag = u8::from(!ccw);
+                let (x, y) = frame.map(map(p1));
+                d.push_str(&format!(" A{},{} 0 {large} {sflag} {x},{y}", f(r), f(r)));
+            }
+            PathSeg::Cubic { c1, c2, p1, .. } => {
+                let (ax, ay) = frame.map(map(c1));
+                let (bx, by) = frame.map(map(c2));
+                let (x, y) = frame.map(map(p1));
+                d.push_str(&format!(" C{ax},{ay} {bx},{by} {x},{y}"));
+            }
+        }
+    }
+    d.push_str(" Z");
+    d
+}
+
+/// Writes placed pieces on a sheet (`None`: fit the drawing). The sew line keeps its fitted
+/// lines, arcs and cubics as a `<path>`; everything else is polylines.
+pub fn write_pieces(placed: &[PlacedPiece], sheet: Option<DVec2>) -> String {
+    let mut items = Vec::new();
+    let mut bbox = Aabb2::from_points(std::iter::empty());
+    let drawings: Vec<Drawing> = placed.iter().map(|p| p.to_drawing()).collect();
+    for d in &drawings {
+        let b = d.bbox();
+        bbox = Aabb2::from_points(
+            [bbox.min, bbox.max, b.min, b.max]
+                .into_iter()
+                .filter(|p| p.is_finite()),
+        );
+    }
+    let frame = Frame::new(bbox, sheet);
+    for (pp, d) in placed.iter().zip(drawings) {
+        let sew_id = format!("{}-sew", pp.piece.instance_id(pp.instance));
+        for s in d.strokes {
+            if s.id == sew_id && !pp.piece.sew.is_empty() {
+                let pl = pp.placement;
+                items.push(Item::Path(
+                    Layer::Draw,
+                    s.id,
+                    path_d(&pp.piece.sew, |q| pl.apply(q), pl.mirror, &frame),
+                ));
+            } else {
+                items.push(Item::Stroke(s));
+            }
+        }
+    }
+    document(items, &frame)
+}
+
+fn layer_from_id(id: &str) -> Option<Layer> {
+    match id {
+        "cut" => return Some(Layer::Cut),
+        "draw" => return Some(Layer::Draw),
+        "engrave" => return Some(Layer::Engrave),
+        _ => {}
+    }
+    let parts: Vec<&str> = id.rsplitn(3, '-').collect();
+    let what = |w: &str| parts.iter().any(|p| *p == w);
+    if id.ends_with("-cut") || what("notch") || what("drill") {
+        Some(Layer::Cut)
+    } else if id.ends_with("-sew")
+        || id.contains("-grain")
+        || what("point")
+        || id.contains("-point-")
+    {
+        Some(Layer::Draw)
+    } else if id.contains("-label-") {
+        Some(Layer::Engrave)
+    } else {
+        None
+    }
+}
+
+/// Piece prefix of one of our element ids (`vamp-1-notch-2` → `vamp-1`).
+fn piece_prefix(id: &str) -> Option<&str> {
+    for key in [
+        "-cut", "-sew", "-notch-", "-drill-", "-point-", "-grain", "-label-",
+    ] {
+        if let Some(i) = id.rfind(key) {
+            if key.ends_with('-')
+                || i + key.len() == id.len()
+                || id[i + key.len()..].starts_with('-')
+            {
+                return Some(&id[..i]);
+            }
+        }
+    }
+    None
+}
+
+fn flatten_usvg_path(path: &usvg::Path, tol_mm: f64, height_mm: f64) -> Vec<(Vec<DVec2>, bool)> {
+    use tiny_skia_path::PathSegment as S;
+    let ts = path.abs_transform();
+    let to_mm = |p: tiny_skia_path::Point| {
+        let mut q = p;
+        ts.map_point(&mut q);
+        DVec2::new(q.x as f64 / PX_PER_MM, height_mm - q.y as f64 / PX_PER_MM)
+    };
+    let mut out: Vec<(Vec<DVec2>, bool)> = Vec::new();
+    let mut cur: Vec<DVec2> = Vec::new();
+    let finish = |cur: &mut Vec<DVec2>, closed: bool, out: &mut Vec<(Vec<DVec2>, bool)>| {
+        let mut pts = std::mem::take(cur);
+        if closed {
+            pts = poly::dedup_closed(&pts, 1e-9);
+        }
+        if pts.len() >= 2 {
+            out.push((pts, closed));
+        }
+    };
+    for seg in path.data().segments() {
+        match seg {
+            S::MoveTo(p) => {
+                finish(&mut cur, false, &mut out);
+                cur.push(to_mm(p));
+            }
+            S::LineTo(p) => cur.push(to_mm(p)),
+            S::QuadTo(c, p) => {
+                let p0 = *cur.last().unwrap_or(&to_mm(c));
+                let (c, p1) = (to_mm(c), to_mm(p));
+                let seg = PathSeg::Cubic {
+                    p0,
+                    c1: p0 + (c - p0) * (2.0 / 3.0),
+                    c2: p1 + (c - p1) * (2.0 / 3.0),
+                    p1,
+                };
+                seg.flatten(tol_mm, &mut cur);
+            }
+            S::CubicTo(a, b, p) => {
+                let p0 = *cur.last().unwrap_or(&to_mm(a));
+                PathSeg::Cubic {
+                    p0,
+                    c1: to_mm(a),
+                    c2: to_mm(b),
+                    p1: to_mm(p),
+                }
+                .flatten(tol_mm, &mut cur);
+            }
+            S::Close => {
+                let start = cur.first().copied();
+                finish(&mut cur, true, &mut out);
+                if let Some(s) = start {
+                    cur.push(s); // a following LineTo continues from the subpath start
+                }
+            }
+        }
+    }
+    finish(&mut cur, false, &mut out);
+    out.retain(|(p, _)| p.len() >= 2);
+    out
+}
+
+fn walk(
+    g: &usvg::Group,
+    layer: Option<Layer>,
+    tol: f64,
+    h: f64,
+    out: &mut Vec<(Stroke, Option<String>)>,
+) {
+    for node in g.children() {
+        match node {
+            usvg::Node::Group(sub) => {
+                let l = layer_from_id(sub.id())
+                    .filter(|_| matches!(sub.id(), "cut" | "draw" | "engrave"))
+                    .or(layer);
+                walk(sub, l, tol, h, out);
+            }
+            usvg::Node::Path(p) => {
+                if !p.is_visible() {
+                    continue;
+                }
+                let id = p.id().to_string();
+                let colour_layer = match p.stroke().map(|s| s.paint()) {
+                    Some(usvg::Paint::Color(c)) if c.blue > 128 && c.red < 128 && c.green < 128 => {
+                        Some(Layer::Draw)
+                    }
+                    _ => None,
+                };
+                let lay = layer
+                    .or_else(|| layer_from_id(&id))
+                    .or(colour_layer)
+                    .unwrap_or(Layer::Cut);
+                let prefix = piece_prefix(&id).map(str::to_string);
+                for (k, (pts, closed)) in flatten_usvg_path(p, tol, h).into_iter().enumerate() {
+                    let sid = if k == 0 {
+                        id.clone()
+                    } else {
+                        format!("{id}-{k}")
+                    };
+                    let outer = lay == Layer::Cut && id.ends_with("-cut");
+                    out.push((
+                        Stroke {
+                            layer: lay,
+                            points: pts,
+                            closed,
+                            piece: None,
+                            outer,
+                            id: sid,
+                        },
+                        prefix.clone(),
+                    ));
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Parses an SVG (ours or any SVG with real units) into a drawing in mm, y up, origin at the
+/// lower-left corner of the document; curves are flattened within `chord_tol` mm.
+///
+/// Pieces: strokes with our ids are grouped by their id prefix; in other SVGs every closed
+/// cut contour not inside another one is a piece (`outer`), and strokes inside it belong to it.
+pub fn read_svg(text: &str, source_name: &str, chord_tol: f64) -> Result<Drawing, PatternError> {
+    let err = |reason: String| PatternError::Svg {
+        source_name: source_name.to_string(),
+        reason,
+    };
+    if !(chord_tol.is_finite() && chord_tol > 0.0) {
+        return Err(err(format!(
+            "chord tolerance must be positive, got {chord_tol}"
+        )));
+    }
+    let tree =
+        usvg::Tree::from_str(text, &usvg::Options::default()).map_err(|e| err(e.to_string()))?;
+    let h_mm = tree.size().height() as f64 / PX_PER_MM;
+    let mut raw = Vec::new();
+    walk(tree.root(), None, chord_tol, h_mm, &mut raw);
+    // piece numbering
+    let mut prefixes: Vec<String> = Vec::new();
+    let mut strokes: Vec<Stroke> = Vec::with_capacity(raw.len());
+    let ours = raw.iter().any(|(_, p)| p.is_some());
+    for (mut s, prefix) in raw {
+        if let Some(p) = prefix {
+            let idx = prefixes.iter().position(|q| *q == p).unwrap_or_else(|| {
+                prefixes.push(p.clone());
+                prefixes.len() - 1
+            });
+            s.piece = Some(idx as u32);
+        }
+        strokes.push(s);
+    }
+    if !ours {
+        // outer contours: closed cut strokes not inside another closed cut stroke
+        let closed_cut: Vec<usize> = (0..strokes.len())
+            .filter(|&i| strokes[i].closed && strokes[i].layer == Layer::Cut)
+            .collect();
+        let inside = |a: usize, b: usize| {
+            strokes[a]
+                .points
+                .iter()
+                .all(|q| poly::contains(&strokes[b].points, *q))
+        };
+        let outers: Vec<usize> = closed_cut
+            .iter()
+            .copied()
+            .filter(|&i| !closed_cut.iter().any(|&j| j != i && inside(i, j)))
+            .collect();
+        for (k, &i) in outers.iter().enumerate() {
+            strokes[i].outer = true;
+            strokes[i].piece = Some(k as u32);
+        }
+        for i in 0..strokes.len() {
+            if strokes[i].piece.is_some() {
+                continue;
+            }
+            let q = strokes[i].points[0];
+            if let Some(k) = outers
+                .iter()
+                .position(|&o| poly::contains(&strokes[o].points, q))
+            {
+                strokes[i].piece = Some(k as u32);
+            }
+        }
+    }
+    Ok(Drawing { strokes })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::piece::{Mark, MarkKind, Piece, PieceInput, PieceOptions, PlacedPiece, Placement};
+
+    fn sample_piece() -> Piece {
+        // a rounded-corner rectangle: straight sides and quarter circles
+        let mut pts = Vec::new();
+        let (w, h, r) = (120.0, 60.0, 15.0);
+        let centers = [
+            DVec2::new(w - r, r),
+            DVec2::new(w - r, h - r),
+            DVec2::new(r, h - r),
+            DVec2::new(r, r),
+        ];
+        for (k, c) in centers.iter().enumerate() {
+            let a0 = -std::f64::consts::FRAC_PI_2 + k as f64 * std::f64::consts::FRAC_PI_2;
+            for j in 0..=12 {
+                pts.push(
+                    *c + r * DVec2::from_angle(a0 + j as f64 / 12.0 * std::f64::consts::FRAC_PI_2),
+                );
+            }
+        }
+        let mut input = PieceInput::new("vamp", pts);
+        input.marks.push(Mark {
+            kind: MarkKind::Notch,
+            pos: DVec2::new(60., 0.),
+            boundary_index: None,
+        });
+        input.grain = Some((DVec2::new(20., 30.), DVec2::new(100., 30.)));
+        Piece::build(&input, &PieceOptions::default()).unwrap()
+    }
+
+    #[test]
+    fn true_size_header_and_groups() {
+        let p = sample_piece();
+        let s = write_pieces(
+            &[PlacedPiece {
+                piece: &p,
+                instance: 1,
+                placement: Placement::IDENTITY,
+            }],
+            Some(DVec2::new(600., 400.)),
+        );
+        assert!(
+            s.contains(r#"width="600.000mm""#) && s.contains(r#"height="400.000mm""#),
+            "{s}"
+        );
+        assert!(s.contains(r#"viewBox="0 0 600.000 400.000""#));
+        for (id, c) in [
+            ("cut", "#ff0000"),
+            ("draw", "#0000ff"),
+            ("engrave", "#000000"),
+        ] {
+            assert!(s.contains(&format!(r#"id="{id}""#)) && s.contains(c));
+        }
+        assert!(
+            s.contains(r#"id="vamp-1-cut""#)
+                && s.contains(r#"id="vamp-1-sew""#)
+                && s.contains(r#"id="vamp-1-notch-1""#)
+        );
+        assert!(!s.contains("transform"));
+        assert!(s.contains(" A"), "arcs kept in the sew path");
+    }
+
+    #[test]
+    fn parse_back_gives_same_cut_line_and_sew_curve() {
+        let p = sample_piece();
+        let pl = Placement {
+            rotation: 0.4,
+            mirror: true,
+            translation: DVec2::new(200., 150.),
+        };
+        let s = write_pieces(
+            &[PlacedPiece {
+                piece: &p,
+                instance: 2,
+                placement: pl,
+            }],
+            Some(DVec2::new(600., 400.)),
+        );
+        let d = read_svg(&s, "test", 0.01).unwrap();
+        let cut = d.strokes.iter().find(|s| s.id == "vamp-2-cut").unwrap();
+        assert!(cut.outer && cut.layer == Layer::Cut && cut.piece == Some(0));
+        let expect: Vec<DVec2> = p.cut.iter().map(|q| pl.apply(*q)).collect();
+        let l0: f64 = (0..expect.len())
+            .map(|i| expect[i].distance(expect[(i + 1) % expect.len()]))
+            .sum();
+        assert!(
+            (cut.length() - l0).abs() < 0.01 * expect.len() as f64 * 1e-3 + 1e-2,
+            "{} vs {l0}",
+            cut.length()
+        );
+        for q in &cut.points {
+            assert!(poly::dist_to_closed(&expect, *q) < 2e-3);
+        }
+        // the curved sew path flattens back onto the sew polyline
+        let sew = d.strokes.iter().find(|s| s.id == "vamp-2-sew").unwrap();
+        let sew_exp: Vec<DVec2> = p.sew_polyline.iter().map(|q| pl.apply(*q)).collect();
+        for q in &sew.points {
+            assert!(poly::dist_to_closed(&sew_exp, *q) < 0.05, "{q}");
+        }
+        assert!(d.strokes.iter().any(|s| s.layer == Layer::Engrave));
+    }
+
+    #[test]
+    fn general_svg_in_inches_with_transform() {
+        let s = r#"<svg xmlns="http://www.w3.org/2000/svg" width="4in" height="2in" viewBox="0 0 400 200">
+            <g transform="translate(100,50)"><rect x="0" y="0" width="100" height="50" stroke="black" fill="none"/>
+            <circle cx="50" cy="25" r="10" stroke="black" fill="none"/></g></svg>"#;
+        let d = read_svg(s, "in.svg", 0.01).unwrap();
+        assert_eq!(d.strokes.len(), 2);
+        let outer = d.strokes.iter().find(|s| s.outer).unwrap();
+        // 100 user units = 1 in = 25.4 mm
+        assert!(
+            (outer.length() - 2.0 * (25.4 + 12.7)).abs() < 1e-3,
+            "{}",
+            outer.length()
+        );
+        let bb = Aabb2::from_points(outer.points.iter().copied());
+        assert!(
+            (bb.min.x - 25.4).abs() < 1e-3 && (bb.max.y - (50.8 - 12.7)).abs() < 1e-3,
+            "{bb:?}"
+        );
+        let hole = d.strokes.iter().find(|s| !s.outer).unwrap();
+        assert_eq!(hole.piece, Some(0));
+        // a polygon inscribed within 0.01 mm chordal error is at most ~2·0.01/r shorter
+        let c = 2.0 * std::f64::consts::PI * 2.54;
+        assert!(
+            hole.length() <= c && hole.length() > c * (1.0 - 2.0 * 0.01 / 2.54),
+            "{}",
+            hole.length()
+        );
+    }
+
+    #[test]
+    fn deterministic_output() {
+        let p = sample_piece();
+        let pp = [PlacedPiece {
+            piece: &p,
+            instance: 1,
+            placement: Placement::IDENTITY,
+        }];
+        assert_eq!(write_pieces(&pp, None), write_pieces(&pp, None));
+    }
+
+    #[test]
+    fn garbage_is_an_error_naming_the_source() {
+        let e = read_svg("<svg", "broken.svg", 0.01).unwrap_err();
+        assert!(e.to_string().contains("broken.svg"));
+    }
+}
