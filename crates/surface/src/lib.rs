@@ -7,6 +7,12 @@
 //! Vocabulary (shared with the rest of flatcut): `eval` (a point), `deriv` (derivatives),
 //! `subdivide`, `nearest` (closest point), `arclen`.
 //!
+//! Patches ([`patch`]): [`BezierPatch`], [`HermitePatch`], [`BSplinePatch`] (with exact sphere,
+//! cylinder, cone and torus pieces), [`CoonsPatch`], [`GordonSurface`], [`RuledSurface`],
+//! [`DevelopableSurface`], [`TriBezierPatch`], and the multi-patch [`Model`]. Differential
+//! geometry ([`diffgeom`]): normals, fundamental forms, curvatures, Christoffel symbols,
+//! geodesics, developability tests.
+//!
 //! **Architecture invariant:** evaluators are pure and total on their domain; construction
 //! validates (knots non-decreasing, weights positive, counts consistent, coordinates finite) and
 //! returns [`SurfaceError`] rather than panicking later.
@@ -18,4 +24,8 @@ pub mod patch;
 pub mod traits;
 
 pub use error::SurfaceError;
+pub use patch::{
+    BSplinePatch, BezierPatch, CoonsPatch, DevelopableOptions, DevelopableSurface, GordonSurface,
+    HermitePatch, Model, RuledSurface, SharedEdge, Side, TriBezierPatch,
+};
 pub use traits::{Domain2, DomainKind, ParamCurve, ParamSurface, SurfaceDerivs};

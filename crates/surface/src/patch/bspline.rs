@@ -1,0 +1,851 @@
+//! Tensor-product B-spline and NURBS patches (Gravesen §3.3, Salomon §7.15, Piegl–Tiller A2.1–A2.3),
+//! with exact rational quadric and torus pieces built as surfaces of revolution (digest B3).
+//!
+//! Evaluation finds the knot span by binary search, computes the `p + 1` nonzero basis functions
+//! with derivatives by the triangular Cox–de Boor scheme (all in fixed-size stack arrays, so no
+//! allocation per evaluation), and contracts them with the `(p + 1) × (q + 1)` active poles.
+//! Rational patches contract homogeneous poles `(w P, w)` and apply the quotient rule:
+//! `S = A/w`, `S_u = (A_u − w_u S)/w`, `S_uu = (A_uu − 2 w_u S_u − w_uu S)/w`,
+//! `S_uv = (A_uv − w_uv S − w_u S_v − w_v S_u)/w`.
+//!
+//! Written here rather than taken from a crate: the NURBS crates available (curvo, truck) bring
+//! a second linear-algebra stack or lack a no-allocation `D1` hot path; this file is ~400 lines.
+
+use crate::{Domain2, ParamSurface, SurfaceDerivs, SurfaceError};
+use glam::{DVec3, DVec4};
+use std::ops::{AddAssign, Mul};
+
+/// Highest supported degree (the same limit as OpenCASCADE's `Geom_BSplineSurface::MaxDegree`);
+/// it bounds the stack arrays of the basis evaluation.
+pub const MAX_DEGREE: usize = 25;
+
+/// `cos 45°`, the middle weight of a rational quadratic quarter circle.
+const QUARTER_WEIGHT: f64 = std::f64::consts::FRAC_1_SQRT_2;
+
+/// A (rational) tensor-product B-spline patch.
+///
+/// Poles `P_ij`, `i < count_u`, `j < count_v`, are stored with **v varying fastest**
+/// (`points[i * count_v + j]`); knot vectors have `count + degree + 1` entries (clamped or not);
+/// the domain is `[knots_u[p], knots_u[count_u]] × [knots_v[q], knots_v[count_v]]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BSplinePatch {
+    degree_u: usize,
+    degree_v: usize,
+    knots_u: Vec<f64>,
+    knots_v: Vec<f64>,
+    count_u: usize,
+    count_v: usize,
+    points: Vec<DVec3>,
+    weights: Option<Vec<f64>>,
+    /// Homogeneous poles `(w x, w y, w z, w)`; filled only for rational patches.
+    hpoints: Vec<DVec4>,
+}
+
+fn check_knots(
+    knots: &[f64],
+    degree: usize,
+    count: usize,
+    dir: &'static str,
+) -> Result<(), SurfaceError> {
+    if degree == 0 {
+        return Err(SurfaceError::BadDegree {
+            degree,
+            reason: "B-spline patch degrees must be at least 1",
+        });
+    }
+    if degree > MAX_DEGREE {
+        return Err(SurfaceError::BadDegree {
+            degree,
+            reason: "above the supported maximum of 25",
+        });
+    }
+    if count < degree + 1 {
+        return Err(SurfaceError::Invalid(format!(
+            "{dir}: {count} poles are too few for degree {degree} (need at least {})",
+            degree + 1
+        )));
+    }
+    if knots.len() != count + degree + 1 {
+        return Err(SurfaceError::KnotCount {
+            expected: count + degree + 1,
+            got: knots.len(),
+        });
+    }
+    if let Some(i) = knots.iter().position(|k| !k.is_finite()) {
+        return Err(SurfaceError::Invalid(format!(
+            "{dir} knot {i} is not finite"
+        )));
+    }
+    for i in 1..knots.len() {
+        if knots[i] < knots[i - 1] {
+            return Err(SurfaceError::DecreasingKnots {
+                index: i,
+                prev: knots[i - 1],
+                next: knots[i],
+            });
+        }
+    }
+    if knots[degree] >= knots[count] {
+        return Err(SurfaceError::Invalid(format!(
+            "{dir}: empty parameter domain [{}, {}]",
+            knots[degree], knots[count]
+        )));
+    }
+    // Interior multiplicity above the degree would make the patch discontinuous.
+    let mut i = degree + 1;
+    while i < count {
+        let mut j = i;
+        while j + 1 < count && knots[j + 1] == knots[i] {
+            j += 1;
+        }
+        let mult = j - i + 1;
+        if mult > degree {
+            return Err(SurfaceError::Invalid(format!(
+                "{dir} knot {} = {} has multiplicity {mult} > degree {degree}",
+                i, knots[i]
+            )));
+        }
+        i = j + 1;
+    }
+    Ok(())
+}
+
+/// The index `k` of the knot span `[knots[k], knots[k+1])` containing `t` (clamped to the domain).
+#[inline]
+fn find_span(knots: &[f64], degree: usize, count: usize, t: f64) -> usize {
+    if t >= knots[count] {
+        // Last non-empty span.
+        let mut k = count - 1;
+        while k > degree && knots[k] == knots[k + 1] {
+            k -= 1;
+        }
+        return k;
+    }
+    if t <= knots[degree] {
+        let mut k = degree;
+        while knots[k + 1] == knots[k] {
+            k += 1;
+        }
+        return k;
+    }
+    let (mut lo, mut hi) = (degree, count);
+    while hi - lo > 1 {
+        let mid = (lo + hi) / 2;
+        if t < knots[mid] {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    lo
+}
+
+/// Nonzero basis functions and their derivatives up to order `nd ≤ 2` at `t` in span `span`
+/// (Piegl–Tiller A2.3). `N` is the array size and must exceed the degree.
+#[inline(always)]
+fn basis_ders<const N: usize>(
+    knots: &[f64],
+    span: usize,
+    p: usize,
+    t: f64,
+    nd: usize,
+    ders: &mut [[f64; N]; 3],
+) {
+    let mut ndu = [[0.0f64; N]; N];
+    let mut left = [0.0f64; N];
+    let mut right = [0.0f64; N];
+    ndu[0][0] = 1.0;
+    for j in 1..=p {
+        left[j] = t - knots[span + 1 - j];
+        right[j] = knots[span + j] - t;
+        let mut saved = 0.0;
+        for r in 0..j {
+            ndu[j][r] = right[r + 1] + left[j - r];
+            let temp = ndu[r][j - 1] / ndu[j][r];
+            ndu[r][j] = saved + right[r + 1] * temp;
+            saved = left[j - r] * temp;
+        }
+        ndu[j][j] = saved;
+    }
+    for j in 0..=p {
+        ders[0][j] = ndu[j][p];
+    }
+    if nd == 0 {
+        return;
+    }
+    let mut a = [[0.0f64; N]; 2];
+    for r in 0..=p {
+        let (mut s1, mut s2) = (0usize, 1usize);
+        a[0][0] = 1.0;
+        for k in 1..=nd.min(p) {
+            let mut d = 0.0;
+            let rk = r as isize - k as isize;
+            let pk = p - k;
+            if r >= k {
+                a[s2][0] = a[s1][0] / ndu[pk + 1][rk as usize];
+                d = a[s2][0] * ndu[rk as usize][pk];
+            }
+            let j1 = if rk >= -1 { 1 } else { (-rk) as usize };
+            let j2 = if r <= pk + 1 { k - 1 } else { p - r };
+            for j in j1..=j2 {
+                let idx = (rk + j as isize) as usize;
+                a[s2][j] = (a[s1][j] - a[s1][j - 1]) / ndu[pk + 1][idx];
+                d += a[s2][j] * ndu[idx][pk];
+            }
+            if r <= pk {
+                a[s2][k] = -a[s1][k - 1] / ndu[pk + 1][r];
+                d += a[s2][k] * ndu[r][pk];
+            }
+            ders[k][r] = d;
+            std::mem::swap(&mut s1, &mut s2);
+        }
+        for k in (p + 1)..=nd {
+            ders[k][r] = 0.0;
+        }
+    }
+    let mut f = p as f64;
+    for k in 1..=nd.min(p) {
+        for j in 0..=p {
+            ders[k][j] *= f;
+        }
+        f *= (p - k) as f64;
+    }
+}
+
+/// Partial sums of a tensor contraction: `out[a][b] = Σ_ij N_u^(a)_i N_v^(b)_j P_ij`
+/// for the derivative orders the caller needs.
+trait Pole: Copy + Default + Mul<f64, Output = Self> + AddAssign {}
+impl Pole for DVec3 {}
+impl Pole for DVec4 {}
+
+/// Derivative pairs (order in u, order in v) requested by `deriv1` and `deriv2`.
+const D1_PAIRS: [(usize, usize); 3] = [(0, 0), (1, 0), (0, 1)];
+const D2_PAIRS: [(usize, usize); 6] = [(0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2)];
+
+impl BSplinePatch {
+    /// Builds a B-spline (`weights = None`) or NURBS patch; poles v fastest.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        degree_u: usize,
+        degree_v: usize,
+        knots_u: Vec<f64>,
+        knots_v: Vec<f64>,
+        count_u: usize,
+        count_v: usize,
+        points: Vec<DVec3>,
+        weights: Option<Vec<f64>>,
+    ) -> Result<Self, SurfaceError> {
+        check_knots(&knots_u, degree_u, count_u, "u")?;
+        check_knots(&knots_v, degree_v, count_v, "v")?;
+        if points.len() != count_u * count_v {
+            return Err(SurfaceError::ControlPointCount {
+                expected: count_u * count_v,
+                got: points.len(),
+            });
+        }
+        super::check_finite(&points, "B-spline pole")?;
+        let mut hpoints = Vec::new();
+        if let Some(w) = &weights {
+            if w.len() != points.len() {
+                return Err(SurfaceError::Invalid(format!(
+                    "{} weights given for {} poles",
+                    w.len(),
+                    points.len()
+                )));
+            }
+            if let Some(index) = w.iter().position(|x| !(x.is_finite() && *x > 0.0)) {
+                return Err(SurfaceError::BadWeight {
+                    index,
+                    value: w[index],
+                });
+            }
+            hpoints = points
+                .iter()
+                .zip(w)
+                .map(|(p, &wi)| (*p * wi).extend(wi))
+                .collect();
+        }
+        Ok(Self {
+            degree_u,
+            degree_v,
+            knots_u,
+            knots_v,
+            count_u,
+            count_v,
+            points,
+            weights,
+            hpoints,
+        })
+    }
+
+    /// Degrees `(p, q)`.
+    pub fn degrees(&self) -> (usize, usize) {
+        (self.degree_u, self.degree_v)
+    }
+    /// Pole counts `(count_u, count_v)`.
+    pub fn counts(&self) -> (usize, usize) {
+        (self.count_u, self.count_v)
+    }
+    /// Knot vectors `(u, v)`.
+    pub fn knots(&self) -> (&[f64], &[f64]) {
+        (&self.knots_u, &self.knots_v)
+    }
+    /// Poles, v fastest.
+    pub fn points(&self) -> &[DVec3] {
+        &self.points
+    }
+    /// Weights of a NURBS patch.
+    pub fn weights(&self) -> Option<&[f64]> {
+        self.weights.as_deref()
+    }
+    /// True for a rational patch.
+    pub fn is_rational(&self) -> bool {
+        self.weights.is_some()
+    }
+
+    /// Contracts the active poles with the basis derivatives for each requested (a, b) pair.
+    #[inline(always)]
+    fn contract<T: Pole, const N: usize, const K: usize>(
+        &self,
+        poles: &[T],
+        u: f64,
+        v: f64,
+        nd: usize,
+        pairs: &[(usize, usize); K],
+    ) -> [T; K] {
+        let (p, q) = (self.degree_u, self.degree_v);
+        let su = find_span(&self.knots_u, p, self.count_u, u);
+        let sv = find_span(&self.knots_v, q, self.count_v, v);
+        let mut nu = [[0.0; N]; 3];
+        let mut nv = [[0.0; N]; 3];
+        basis_ders::<N>(&self.knots_u, su, p, u, nd, &mut nu);
+        basis_ders::<N>(&self.knots_v, sv, q, v, nd, &mut nv);
+        let mut out = [T::default(); K];
+        // For each row i, the v-contractions of order 0..=nd, then blend along u.
+        for i in 0..=p {
+            let base = (su - p + i) * self.count_v + (sv - q);
+            let row = &poles[base..base + q + 1];
+            let mut rv = [T::default(); 3];
+            for (j, pt) in row.iter().enumerate() {
+                for b in 0..=nd {
+                    rv[b] += *pt * nv[b][j];
+                }
+            }
+            for (o, &(a, b)) in out.iter_mut().zip(pairs.iter()) {
+                *o += rv[b] * nu[a][i];
+            }
+        }
+        out
+    }
+
+    fn eval_pairs<const K: usize>(
+        &self,
+        u: f64,
+        v: f64,
+        nd: usize,
+        pairs: &[(usize, usize); K],
+    ) -> [DVec3; K] {
+        let pmax = self.degree_u.max(self.degree_v);
+        if self.weights.is_none() {
+            return if pmax < 4 {
+                self.contract::<DVec3, 4, K>(&self.points, u, v, nd, pairs)
+            } else if pmax < 8 {
+                self.contract::<DVec3, 8, K>(&self.points, u, v, nd, pairs)
+            } else {
+                self.contract::<DVec3, { MAX_DEGREE + 1 }, K>(&self.points, u, v, nd, pairs)
+            };
+        }
+        let h: [DVec4; K] = if pmax < 4 {
+            self.contract::<DVec4, 4, K>(&self.hpoints, u, v, nd, pairs)
+        } else if pmax < 8 {
+            self.contract::<DVec4, 8, K>(&self.hpoints, u, v, nd, pairs)
+        } else {
+            self.contract::<DVec4, { MAX_DEGREE + 1 }, K>(&self.hpoints, u, v, nd, pairs)
+        };
+        // Quotient rule; pairs are ordered (0,0),(1,0),(0,1)[,(2,0),(1,1),(0,2)].
+        let mut out = [DVec3::ZERO; K];
+        let w = h[0].w;
+        let inv = 1.0 / w;
+        let s = h[0].truncate() * inv;
+        out[0] = s;
+        if K >= 3 {
+            let (wu, wv) = (h[1].w, h[2].w);
+            let su = (h[1].truncate() - s * wu) * inv;
+            let sv = (h[2].truncate() - s * wv) * inv;
+            out[1] = su;
+            out[2] = sv;
+            if K >= 6 {
+                let (wuu, wuv, wvv) = (h[3].w, h[4].w, h[5].w);
+                out[3] = (h[3].truncate() - su * (2.0 * wu) - s * wuu) * inv;
+                out[4] = (h[4].truncate() - s * wuv - sv * wu - su * wv) * inv;
+                out[5] = (h[5].truncate() - sv * (2.0 * wv) - s * wvv) * inv;
+            }
+        }
+        out
+    }
+
+    /// A surface of revolution about the z axis through `center`: the rational profile
+    /// `(r_i, z_i)` with weights `pw_i` in u, revolved by the full rational quadratic circle in v
+    /// (nine poles, weights 1, √2/2, …). Poles `P_ij = center + (r_i x_j, r_i y_j, z_i)`,
+    /// weights `pw_i · cw_j`.
+    pub fn revolve(
+        center: DVec3,
+        degree_u: usize,
+        knots_u: Vec<f64>,
+        profile: &[(f64, f64)],
+        profile_weights: &[f64],
+    ) -> Result<Self, SurfaceError> {
+        let s = QUARTER_WEIGHT;
+        let circle: [(f64, f64, f64); 9] = [
+            (1.0, 0.0, 1.0),
+            (1.0, 1.0, s),
+            (0.0, 1.0, 1.0),
+            (-1.0, 1.0, s),
+            (-1.0, 0.0, 1.0),
+            (-1.0, -1.0, s),
+            (0.0, -1.0, 1.0),
+            (1.0, -1.0, s),
+            (1.0, 0.0, 1.0),
+        ];
+        let knots_v = vec![
+            0.0, 0.0, 0.0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1.0, 1.0, 1.0,
+        ];
+        Self::revolve_with(
+            center,
+            degree_u,
+            knots_u,
+            profile,
+            profile_weights,
+            &circle,
+            knots_v,
+        )
+    }
+
+    fn revolve_with(
+        center: DVec3,
+        degree_u: usize,
+        knots_u: Vec<f64>,
+        profile: &[(f64, f64)],
+        profile_weights: &[f64],
+        circle: &[(f64, f64, f64)],
+        knots_v: Vec<f64>,
+    ) -> Result<Self, SurfaceError> {
+        if profile.len() != profile_weights.len() {
+            return Err(SurfaceError::Invalid(format!(
+                "profile has {} points but {} weights",
+                profile.len(),
+                profile_weights.len()
+            )));
+        }
+        let mut pts = Vec::with_capacity(profile.len() * circle.len());
+        let mut w = Vec::with_capacity(pts.capacity());
+        for (&(r, z), &pw) in profile.iter().zip(profile_weights) {
+            for &(x, y, cw) in circle {
+                pts.push(center + DVec3::new(r * x, r * y, z));
+                w.push(pw * cw);
+            }
+        }
+        Self::new(
+            degree_u,
+            2,
+            knots_u,
+            knots_v,
+            profile.len(),
+            circle.len(),
+            pts,
+            Some(w),
+        )
+    }
+
+    fn check_positive(what: &'static str, x: f64) -> Result<(), SurfaceError> {
+        if x.is_finite() && x > 0.0 {
+            Ok(())
+        } else {
+            Err(SurfaceError::Invalid(format!(
+                "{what} must be finite and > 0, got {x}"
+            )))
+        }
+    }
+
+    /// The exact sphere: u runs from the south pole (u = 0) to the north pole (u = 1) along a
+    /// rational semicircle, v once around the z axis.
+    pub fn sphere(center: DVec3, radius: f64) -> Result<Self, SurfaceError> {
+        Self::check_positive("sphere radius", radius)?;
+        let r = radius;
+        let s = QUARTER_WEIGHT;
+        Self::revolve(
+            center,
+            2,
+            vec![0.0, 0.0, 0.0, 0.5, 0.5, 1.0, 1.0, 1.0],
+            &[(0.0, -r), (r, -r), (r, 0.0), (r, r), (0.0, r)],
+            &[1.0, s, 1.0, s, 1.0],
+        )
+    }
+
+    /// The exact first octant of a sphere as one biquadratic rational Bézier patch (TV37): u from
+    /// the equator to the north pole, v from the +x to the +y direction.
+    pub fn sphere_octant(center: DVec3, radius: f64) -> Result<Self, SurfaceError> {
+        Self::check_positive("sphere radius", radius)?;
+        let r = radius;
+        let s = QUARTER_WEIGHT;
+        let quarter = [(1.0, 0.0, 1.0), (1.0, 1.0, s), (0.0, 1.0, 1.0)];
+        Self::revolve_with(
+            center,
+            2,
+            vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+            &[(r, 0.0), (r, r), (0.0, r)],
+            &[1.0, s, 1.0],
+            &quarter,
+            vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+        )
+    }
+
+    /// The exact circular cylinder of the given radius around the z axis through `base`, from
+    /// `z = base.z` (u = 0) to `z = base.z + height` (u = 1).
+    pub fn cylinder(base: DVec3, radius: f64, height: f64) -> Result<Self, SurfaceError> {
+        Self::check_positive("cylinder radius", radius)?;
+        Self::check_positive("cylinder height", height)?;
+        Self::revolve(
+            base,
+            1,
+            vec![0.0, 0.0, 1.0, 1.0],
+            &[(radius, 0.0), (radius, height)],
+            &[1.0, 1.0],
+        )
+    }
+
+    /// The exact right circular cone (frustum) around the z axis through `base`: radius
+    /// `base_radius` at u = 0 (z = base.z), `top_radius` at u = 1 (z = base.z + height). A zero
+    /// top radius gives the cone with its apex (a degenerate, singular edge).
+    pub fn cone(
+        base: DVec3,
+        base_radius: f64,
+        top_radius: f64,
+        height: f64,
+    ) -> Result<Self, SurfaceError> {
+        Self::check_positive("cone base radius", base_radius)?;
+        Self::check_positive("cone height", height)?;
+        if !(top_radius.is_finite() && top_radius >= 0.0) {
+            return Err(SurfaceError::Invalid(format!(
+                "cone top radius must be finite and >= 0, got {top_radius}"
+            )));
+        }
+        Self::revolve(
+            base,
+            1,
+            vec![0.0, 0.0, 1.0, 1.0],
+            &[(base_radius, 0.0), (top_radius, height)],
+            &[1.0, 1.0],
+        )
+    }
+
+    /// The exact torus around the z axis through `center`: tube of radius `minor` whose centre
+    /// circle has radius `major > minor`. u runs around the tube starting on the outer equator,
+    /// v around the axis.
+    pub fn torus(center: DVec3, major: f64, minor: f64) -> Result<Self, SurfaceError> {
+        Self::check_positive("torus major radius", major)?;
+        Self::check_positive("torus minor radius", minor)?;
+        if minor >= major {
+            return Err(SurfaceError::Invalid(format!(
+                "torus minor radius {minor} must be below the major radius {major}"
+            )));
+        }
+        let s = QUARTER_WEIGHT;
+        let c: [(f64, f64); 9] = [
+            (1.0, 0.0),
+            (1.0, 1.0),
+            (0.0, 1.0),
+            (-1.0, 1.0),
+            (-1.0, 0.0),
+            (-1.0, -1.0),
+            (0.0, -1.0),
+            (1.0, -1.0),
+            (1.0, 0.0),
+        ];
+        let profile: Vec<(f64, f64)> = c
+            .iter()
+            .map(|&(x, y)| (major + minor * x, minor * y))
+            .collect();
+        Self::revolve(
+            center,
+            2,
+            vec![
+                0.0, 0.0, 0.0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1.0, 1.0, 1.0,
+            ],
+            &profile,
+            &[1.0, s, 1.0, s, 1.0, s, 1.0, s, 1.0],
+        )
+    }
+}
+
+impl ParamSurface for BSplinePatch {
+    fn domain(&self) -> Domain2 {
+        Domain2 {
+            u: (self.knots_u[self.degree_u], self.knots_u[self.count_u]),
+            v: (self.knots_v[self.degree_v], self.knots_v[self.count_v]),
+        }
+    }
+
+    fn eval(&self, u: f64, v: f64) -> DVec3 {
+        self.eval_pairs(u, v, 0, &[(0, 0)])[0]
+    }
+
+    fn deriv1(&self, u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
+        let [p, su, sv] = self.eval_pairs(u, v, 1, &D1_PAIRS);
+        (p, su, sv)
+    }
+
+    fn deriv2(&self, u: f64, v: f64) -> SurfaceDerivs {
+        let [p, su, sv, suu, suv, svv] = self.eval_pairs(u, v, 2, &D2_PAIRS);
+        SurfaceDerivs {
+            p,
+            su,
+            sv,
+            suu,
+            suv,
+            svv,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::patch::BezierPatch;
+    use crate::patch::testutil::check_derivs_fd;
+    use proptest::prelude::*;
+
+    fn wavy() -> BSplinePatch {
+        // The 10×10 bicubic patch of the OpenCASCADE benchmark (surfaces_def.py).
+        let xs: Vec<f64> = (0..10).map(|i| -100.0 + 200.0 * i as f64 / 9.0).collect();
+        let mut pts = Vec::new();
+        for i in 0..10 {
+            for j in 0..10 {
+                let z = 20.0
+                    * (std::f64::consts::PI * i as f64 / 3.0).sin()
+                    * (std::f64::consts::PI * j as f64 / 4.0).cos();
+                pts.push(DVec3::new(xs[i], xs[j], z));
+            }
+        }
+        let mut k = vec![0.0; 3];
+        k.extend((0..8).map(|i| i as f64 / 7.0));
+        k.extend([1.0; 3]);
+        BSplinePatch::new(3, 3, k.clone(), k, 10, 10, pts, None).unwrap()
+    }
+
+    #[test]
+    fn validation_names_the_problem() {
+        let pts = vec![DVec3::ZERO; 9];
+        let k = vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0];
+        let e = BSplinePatch::new(
+            2,
+            2,
+            vec![0.0, 0.0, 0.0, 1.0, 1.0],
+            k.clone(),
+            3,
+            3,
+            pts.clone(),
+            None,
+        )
+        .unwrap_err();
+        assert_eq!(
+            e,
+            SurfaceError::KnotCount {
+                expected: 6,
+                got: 5
+            }
+        );
+        let e = BSplinePatch::new(
+            2,
+            2,
+            vec![0.0, 0.0, 0.5, 0.2, 1.0, 1.0],
+            k.clone(),
+            3,
+            3,
+            pts.clone(),
+            None,
+        )
+        .unwrap_err();
+        assert!(matches!(e, SurfaceError::DecreasingKnots { index: 3, .. }));
+        let mut w = vec![1.0; 9];
+        w[5] = 0.0;
+        let e =
+            BSplinePatch::new(2, 2, k.clone(), k.clone(), 3, 3, pts.clone(), Some(w)).unwrap_err();
+        assert_eq!(
+            e,
+            SurfaceError::BadWeight {
+                index: 5,
+                value: 0.0
+            }
+        );
+        let e = BSplinePatch::new(
+            0,
+            2,
+            vec![0.0, 1.0, 2.0, 3.0],
+            k.clone(),
+            3,
+            3,
+            pts.clone(),
+            None,
+        )
+        .unwrap_err();
+        assert!(matches!(e, SurfaceError::BadDegree { degree: 0, .. }));
+        let e = BSplinePatch::sphere(DVec3::ZERO, -1.0).unwrap_err();
+        assert!(e.to_string().contains("sphere radius"));
+        let e = BSplinePatch::torus(DVec3::ZERO, 1.0, 2.0).unwrap_err();
+        assert!(e.to_string().contains("minor radius"));
+    }
+
+    #[test]
+    fn tv24_uniform_biquadratic() {
+        let mut pts = Vec::new();
+        for i in 0..3 {
+            for j in 0..3 {
+                let z = if i == 1 && j == 1 { 1.0 } else { 0.0 };
+                pts.push(DVec3::new(i as f64, j as f64, z));
+            }
+        }
+        let k: Vec<f64> = (0..6).map(|x| x as f64).collect();
+        let s = BSplinePatch::new(2, 2, k.clone(), k, 3, 3, pts, None).unwrap();
+        assert_eq!(
+            s.domain(),
+            Domain2 {
+                u: (2.0, 3.0),
+                v: (2.0, 3.0)
+            }
+        );
+        let exact = |u: f64, w: f64| {
+            DVec3::new(
+                u + 0.5,
+                w + 0.5,
+                (2.0 * u * u - 2.0 * u - 1.0) * (2.0 * w * w - 2.0 * w - 1.0) / 4.0,
+            )
+        };
+        for &(u, w) in &[
+            (0.0, 0.0),
+            (0.0, 1.0),
+            (1.0, 0.0),
+            (1.0, 1.0),
+            (0.5, 0.5),
+            (0.3, 0.8),
+        ] {
+            assert!(
+                (s.eval(2.0 + u, 2.0 + w) - exact(u, w)).length() < 1e-14,
+                "({u},{w})"
+            );
+        }
+        assert!((s.eval(2.5, 2.5) - DVec3::new(1.0, 1.0, 9.0 / 16.0)).length() < 1e-15);
+        assert!((s.eval(2.0, 2.0) - DVec3::new(0.5, 0.5, 0.25)).length() < 1e-15);
+        check_derivs_fd(&s, 1e-6);
+    }
+
+    #[test]
+    fn tv37_sphere_octant_is_exact() {
+        let s = BSplinePatch::sphere_octant(DVec3::ZERO, 1.0).unwrap();
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        assert!((s.eval(0.5, 0.5) - DVec3::new(0.5, 0.5, h)).length() < 1e-10);
+        let q = DVec3::new(0.8645062848, 0.3422501546, 0.3680947096);
+        assert!((s.eval(0.25, 0.25) - q).length() < 1e-10);
+        for i in 0..=20 {
+            for j in 0..=20 {
+                let p = s.eval(i as f64 / 20.0, j as f64 / 20.0);
+                assert!((p.length() - 1.0).abs() < 1e-14);
+            }
+        }
+        check_derivs_fd(&s, 1e-6);
+    }
+
+    #[test]
+    fn exact_primitives_lie_on_their_quadrics() {
+        let c = DVec3::new(1.0, -2.0, 3.0);
+        let sphere = BSplinePatch::sphere(c, 2.5).unwrap();
+        let cyl = BSplinePatch::cylinder(c, 2.0, 5.0).unwrap();
+        let cone = BSplinePatch::cone(c, 3.0, 1.0, 4.0).unwrap();
+        let torus = BSplinePatch::torus(c, 5.0, 1.5).unwrap();
+        for i in 0..=16 {
+            for j in 0..=16 {
+                let (u, v) = (i as f64 / 16.0, j as f64 / 16.0);
+                let p = sphere.eval(u, v) - c;
+                assert!((p.length() - 2.5).abs() < 1e-13);
+                let p = cyl.eval(u, v) - c;
+                assert!((p.truncate().length() - 2.0).abs() < 1e-13);
+                assert!((p.z - 5.0 * u).abs() < 1e-13);
+                let p = cone.eval(u, v) - c;
+                assert!((p.truncate().length() - (3.0 - 2.0 * p.z / 4.0)).abs() < 1e-13);
+                let p = torus.eval(u, v) - c;
+                let rho = p.truncate().length() - 5.0;
+                assert!((rho.hypot(p.z) - 1.5).abs() < 1e-13);
+            }
+        }
+        // Ends: poles of the sphere.
+        assert!((sphere.eval(0.0, 0.3) - (c - DVec3::Z * 2.5)).length() < 1e-13);
+        assert!((sphere.eval(1.0, 0.7) - (c + DVec3::Z * 2.5)).length() < 1e-13);
+        for s in [&sphere, &cyl, &cone, &torus] {
+            check_derivs_fd(s, 1e-6);
+        }
+    }
+
+    #[test]
+    fn bspline_with_bezier_knots_is_the_bezier_patch() {
+        let bz = BezierPatch::new(
+            3,
+            2,
+            (0..12)
+                .map(|k| DVec3::new((k / 3) as f64, (k % 3) as f64, ((k * 7) % 5) as f64 * 0.3))
+                .collect(),
+        )
+        .unwrap();
+        let bs = BSplinePatch::new(
+            3,
+            2,
+            vec![0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0],
+            vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+            4,
+            3,
+            bz.points().to_vec(),
+            None,
+        )
+        .unwrap();
+        for &(u, v) in &[(0.0, 0.0), (0.3, 0.6), (1.0, 1.0), (0.99, 0.01)] {
+            let (a, b) = (bz.deriv2(u, v), bs.deriv2(u, v));
+            assert!((a.p - b.p).length() < 1e-13);
+            assert!((a.su - b.su).length() < 1e-12);
+            assert!((a.suv - b.suv).length() < 1e-11);
+            assert!((a.svv - b.svv).length() < 1e-11);
+        }
+    }
+
+    #[test]
+    fn derivatives_match_finite_differences() {
+        check_derivs_fd(&wavy(), 1e-5);
+        // A rational patch with non-uniform weights and a degree-5 direction.
+        let mut pts = Vec::new();
+        let mut w = Vec::new();
+        for i in 0..7 {
+            for j in 0..4 {
+                pts.push(DVec3::new(i as f64, j as f64, ((i * j) % 3) as f64));
+                w.push(0.5 + ((i + 2 * j) % 4) as f64 * 0.4);
+            }
+        }
+        let ku = vec![
+            0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.4, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0,
+        ];
+        let kv = vec![0.0, 0.0, 0.0, 0.5, 1.0, 1.0, 1.0];
+        let s = BSplinePatch::new(5, 2, ku, kv, 7, 4, pts, Some(w)).unwrap();
+        check_derivs_fd(&s, 1e-5);
+    }
+
+    proptest! {
+        #[test]
+        fn partition_of_unity_and_affine_invariance(u in 0.0f64..1.0, v in 0.0f64..1.0, dz in -10.0f64..10.0) {
+            // Translating every pole (equal weights per row are irrelevant: rational basis also sums to 1).
+            let s = BSplinePatch::torus(DVec3::ZERO, 4.0, 1.0).unwrap();
+            let t = BSplinePatch::torus(DVec3::new(0.0, 0.0, dz), 4.0, 1.0).unwrap();
+            prop_assert!((t.eval(u, v) - s.eval(u, v) - DVec3::new(0.0, 0.0, dz)).length() < 1e-12);
+            let w = wavy();
+            let shifted = BSplinePatch::new(3, 3, w.knots_u.clone(), w.knots_v.clone(), 10, 10,
+                w.points.iter().map(|p| *p + DVec3::new(1.0, 2.0, dz)).collect(), None).unwrap();
+            prop_assert!((shifted.eval(u, v) - w.eval(u, v) - DVec3::new(1.0, 2.0, dz)).length() < 1e-11);
+        }
+    }
+}
