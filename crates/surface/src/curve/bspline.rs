@@ -15,6 +15,7 @@ use super::basis::{
 };
 use super::bezier::{Bezier, binomial, check_finite};
 use super::ext::{flatten_with_breaks, nearest_from_samples};
+use super::rational::RationalBezier;
 use super::spline::refine;
 use crate::{ParamCurve, SurfaceError};
 
@@ -126,6 +127,42 @@ fn deriv_at<V: Lin>(p: usize, knots: &[f64], pts: &[V], t: f64, k: usize) -> V {
             acc
         })
     })
+}
+
+/// The knot vector of the reversed curve: `t ↦ U_0 + U_last − t`.
+fn reversed_knots(knots: &[f64]) -> Vec<f64> {
+    let (a, b) = (knots[0], knots[knots.len() - 1]);
+    knots.iter().rev().map(|k| a + b - k).collect()
+}
+
+/// Bézier control points of each polynomial span on `[0, 1]`, from the Taylor coefficients at
+/// the span start (right derivatives scaled by `h^j/j!`) converted by
+/// `b_i = Σ_{j ≤ i} C(i, j)/C(p, j) a_j`.
+fn span_beziers<V: Lin>(p: usize, knots: &[f64], pts: &[V]) -> Vec<Vec<V>> {
+    let br = breakpoints(p, knots, pts.len());
+    br.windows(2)
+        .map(|w| {
+            let h = w[1] - w[0];
+            let mut d = vec![V::default(); p + 1];
+            ders_at(p, knots, pts, w[0], &mut d);
+            let mut fact = 1.0;
+            let mut hp = 1.0;
+            for (j, dj) in d.iter_mut().enumerate() {
+                if j > 0 {
+                    fact *= j as f64;
+                    hp *= h;
+                }
+                *dj = *dj * (hp / fact);
+            }
+            (0..=p)
+                .map(|i| {
+                    (0..=i).fold(V::default(), |acc, j| {
+                        acc + d[j] * (binomial(i, j) / binomial(p, j))
+                    })
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// Boehm/Piegl–Tiller knot insertion (A5.1) of `t` `r` times; returns the new knots and points.
@@ -290,30 +327,23 @@ impl BSpline {
     }
 
     /// Splits the curve into its polynomial pieces as Bézier curves, one per non-empty knot span,
-    /// each on `[0, 1]` (every interior knot is inserted to multiplicity `p`, and the ends are
-    /// clamped by restriction).
+    /// each on `[0, 1]` (for SVG/G-code output and Bézier algorithms).
     pub fn to_beziers(&self) -> Vec<Bezier> {
-        let p = self.degree;
-        let br = self.breakpoints();
-        br.windows(2)
-            .map(|w| {
-                let (a, b) = (w[0], w[1]);
-                // The span is a degree-p polynomial: its Taylor coefficients at the span start
-                // (right derivatives, scaled to the unit parameter) are its power form.
-                let h = b - a;
-                let d = self.ders(a, p);
-                let mut fact = 1.0;
-                let coeffs: Vec<DVec3> = (0..=p)
-                    .map(|j| {
-                        if j > 0 {
-                            fact *= j as f64;
-                        }
-                        d[j] * (h.powi(j as i32) / fact)
-                    })
-                    .collect();
-                Bezier::from_power_unchecked(&coeffs)
-            })
+        span_beziers(self.degree, &self.knots, &self.points)
+            .into_iter()
+            .map(Bezier::from_points_unchecked)
             .collect()
+    }
+
+    /// The same curve traversed backwards, on the reflected knot vector `U_0 + U_last − t`.
+    pub fn reversed(&self) -> BSpline {
+        let mut points = self.points.clone();
+        points.reverse();
+        BSpline {
+            degree: self.degree,
+            knots: reversed_knots(&self.knots),
+            points,
+        }
     }
 }
 
@@ -543,6 +573,26 @@ impl Nurbs {
             accuracy,
             &refine(&self.breakpoints(), 4 * self.degree.max(2)),
         )
+    }
+
+    /// Splits the curve into rational Bézier pieces, one per non-empty knot span, each on
+    /// `[0, 1]`.
+    pub fn to_rational_beziers(&self) -> Result<Vec<RationalBezier>, SurfaceError> {
+        span_beziers(self.degree, &self.knots, &self.hom)
+            .into_iter()
+            .map(RationalBezier::from_homogeneous)
+            .collect()
+    }
+
+    /// The same curve traversed backwards, on the reflected knot vector `U_0 + U_last − t`.
+    pub fn reversed(&self) -> Nurbs {
+        Nurbs {
+            degree: self.degree,
+            knots: reversed_knots(&self.knots),
+            points: self.points.iter().rev().copied().collect(),
+            weights: self.weights.iter().rev().copied().collect(),
+            hom: self.hom.iter().rev().copied().collect(),
+        }
     }
 
     /// Inserts the knot `t` `times` times on the homogeneous points; the curve is unchanged.
@@ -852,6 +902,31 @@ mod tests {
         }
         // Clamped ends: the first Bézier starts at the first control point.
         assert!(close(bz[0].points()[0], c.points()[0], 1e-15));
+    }
+
+    #[test]
+    fn reversal_and_rational_extraction() {
+        let c = Nurbs::circle_arc(DVec3::ZERO, DVec3::X, DVec3::Y, 2.0, 0.3, 4.0).unwrap();
+        let r = c.reversed();
+        let (a, b) = c.domain();
+        assert_eq!(r.domain(), (a, b));
+        for t in [0.0, 0.2, 0.5, 0.9, 1.0] {
+            assert!(close(r.eval(a + b - t), c.eval(t), 1e-14));
+        }
+        let pieces = c.to_rational_beziers().unwrap();
+        let br = c.breakpoints();
+        assert_eq!(pieces.len(), br.len() - 1);
+        for (i, pc) in pieces.iter().enumerate() {
+            for s in [0.0, 0.4, 1.0] {
+                let t = br[i] + s * (br[i + 1] - br[i]);
+                assert!(close(pc.eval(s), c.eval(t), 1e-14));
+            }
+        }
+        let bs = tv13();
+        let rb = bs.reversed();
+        for t in [0.0, 0.7, 2.2, 3.0] {
+            assert!(close(rb.eval(3.0 - t), bs.eval(t), 1e-15));
+        }
     }
 
     #[test]

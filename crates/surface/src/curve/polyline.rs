@@ -96,6 +96,15 @@ impl Polyline {
         best
     }
 
+    /// The same polyline traversed backwards (vertices reversed, parameter from 0 again).
+    pub fn reversed(&self) -> Polyline {
+        let total = self.length();
+        let mut points = self.points.clone();
+        points.reverse();
+        let s = self.s.iter().rev().map(|x| total - x).collect();
+        Polyline { points, s }
+    }
+
     fn segment_of(&self, t: f64) -> usize {
         let n = self.points.len() - 1;
         self.s[1..n].partition_point(|&k| k <= t)
@@ -161,5 +170,8 @@ mod tests {
         .unwrap();
         assert!(sq.is_closed());
         assert_eq!(sq.length(), 4.0);
+        let rev = pl.reversed();
+        assert_eq!(rev.domain(), (0.0, 17.0));
+        assert!((rev.eval(17.0 - 2.5) - pl.eval(2.5)).length() < 1e-14);
     }
 }
