@@ -786,10 +786,8 @@ pub fn execute(line: &[u8], jog: bool, ctx: &mut Context<'_>) -> Result<Vec<Acti
                     }
                 }
                 NonModal::SetHome0 | NonModal::SetHome1 => {}
-                NonModal::AbsoluteOverride => {
-                    if !matches!(motion, Motion::Seek | Motion::Linear) {
-                        return Err(Status::G53InvalidMotionMode);
-                    }
+                NonModal::AbsoluteOverride if !matches!(motion, Motion::Seek | Motion::Linear) => {
+                    return Err(Status::G53InvalidMotionMode);
                 }
                 _ => {}
             }
@@ -811,10 +809,8 @@ pub fn execute(line: &[u8], jog: bool, ctx: &mut Context<'_>) -> Result<Vec<Acti
                 return Err(Status::UndefinedFeedRate);
             }
             match motion {
-                Motion::Linear => {
-                    if axis_words == 0 {
-                        axis_command = AxisCommand::None;
-                    }
+                Motion::Linear if axis_words == 0 => {
+                    axis_command = AxisCommand::None;
                 }
                 Motion::Cw | Motion::Ccw => {
                     if axis_words == 0 {
@@ -873,10 +869,8 @@ pub fn execute(line: &[u8], jog: bool, ctx: &mut Context<'_>) -> Result<Vec<Acti
                     }
                     arc = Some((ijk, radius, motion == Motion::Cw));
                 }
-                Motion::Probe(_) => {
-                    if st.position == xyz {
-                        return Err(Status::InvalidTarget);
-                    }
+                Motion::Probe(_) if st.position == xyz => {
+                    return Err(Status::InvalidTarget);
                 }
                 _ => {}
             }
@@ -955,11 +949,11 @@ pub fn execute(line: &[u8], jog: bool, ctx: &mut Context<'_>) -> Result<Vec<Acti
     }
     gc.plane = plane;
     gc.inches = inches;
-    if axis_command == AxisCommand::ToolLengthOffset || tlo_mode.is_some() {
-        if gc.tool_length_offset != tool_length_offset {
-            gc.tool_length_offset = tool_length_offset;
-            actions.push(Action::WcoChanged);
-        }
+    if (axis_command == AxisCommand::ToolLengthOffset || tlo_mode.is_some())
+        && gc.tool_length_offset != tool_length_offset
+    {
+        gc.tool_length_offset = tool_length_offset;
+        actions.push(Action::WcoChanged);
     }
     if gc.coord_select != coord_select
         || command_words & G_COORD != 0 && gc.coord_system != block_coord_system

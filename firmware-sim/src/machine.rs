@@ -661,12 +661,12 @@ impl Grbl {
         let pos = self.machine_position();
         let ids: Vec<usize> = self.records.keys().copied().collect();
         for id in ids {
-            if let Some(mut r) = self.records.remove(&id) {
-                if r.started {
-                    r.seg.to = pos;
-                    r.seg.t_end = self.clock;
-                    self.trace.push(r.seg);
-                }
+            if let Some(mut r) = self.records.remove(&id)
+                && r.started
+            {
+                r.seg.to = pos;
+                r.seg.t_end = self.clock;
+                self.trace.push(r.seg);
             }
         }
         self.planner.pos = pos;
@@ -769,12 +769,12 @@ impl Grbl {
     fn handle_events(&mut self, ev: StepEvents, t_start: f64) {
         for (id, dt) in ev.started {
             let mut alarm_now = None;
-            if let Some(r) = self.records.get_mut(&id) {
-                if !r.started {
-                    r.started = true;
-                    r.seg.t_start = t_start + dt;
-                    alarm_now = r.alarm.take();
-                }
+            if let Some(r) = self.records.get_mut(&id)
+                && !r.started
+            {
+                r.started = true;
+                r.seg.t_start = t_start + dt;
+                alarm_now = r.alarm.take();
             }
             if let Some(code) = alarm_now {
                 self.raise_alarm(code);
@@ -799,12 +799,12 @@ impl Grbl {
     }
 
     fn finish_record_at(&mut self, id: usize, t: f64) {
-        if let Some(mut r) = self.records.remove(&id) {
-            if r.started {
-                r.seg.to = r.last_target;
-                r.seg.t_end = t;
-                self.trace.push(r.seg);
-            }
+        if let Some(mut r) = self.records.remove(&id)
+            && r.started
+        {
+            r.seg.to = r.last_target;
+            r.seg.t_end = t;
+            self.trace.push(r.seg);
         }
     }
 
@@ -877,11 +877,11 @@ impl Grbl {
             self.events.push(SimEvent::Hangup);
             return;
         }
-        if let Some((at, code)) = self.faults.error_at_line {
-            if at == n {
-                self.respond(Err(Status::Other(code)));
-                return;
-            }
+        if let Some((at, code)) = self.faults.error_at_line
+            && at == n
+        {
+            self.respond(Err(Status::Other(code)));
+            return;
         }
         self.cur_line_no = n;
         self.cur_line_text = String::from_utf8_lossy(&line).into_owned();
@@ -1147,10 +1147,10 @@ impl Grbl {
         let finish = match self.records.get_mut(&id) {
             Some(r) => {
                 r.all_queued = true;
-                if r.live == 0 {
-                    if let Some(code) = r.alarm.take() {
-                        self.cur_line_alarm = Some(code);
-                    }
+                if r.live == 0
+                    && let Some(code) = r.alarm.take()
+                {
+                    self.cur_line_alarm = Some(code);
                 }
                 r.live == 0
             }
@@ -1184,12 +1184,12 @@ impl Grbl {
                 let actions = self.gcode_line(&line[3..], true)?;
                 if self.settings.soft_limits {
                     for a in &actions {
-                        if let Action::Motion(m) = a {
-                            if m.moves.iter().any(|mv| self.outside_travel(&mv.target)) {
-                                // Undo the parser position update: the jog is refused.
-                                self.gc.position = self.planner.position_mm(&self.settings);
-                                return Err(Status::TravelExceeded);
-                            }
+                        if let Action::Motion(m) = a
+                            && m.moves.iter().any(|mv| self.outside_travel(&mv.target))
+                        {
+                            // Undo the parser position update: the jog is refused.
+                            self.gc.position = self.planner.position_mm(&self.settings);
+                            return Err(Status::TravelExceeded);
                         }
                     }
                 }

@@ -176,9 +176,8 @@ fn main() -> ExitCode {
     let report = sim.stop();
     let s = &report.stats;
     eprintln!(
-        "firmware-sim: {} ({:?}); {} lines, {} ok, {} errors, {} alarms, {} bytes dropped on overflow, {} segments, \
+        "firmware-sim: stopped ({:?}); {} lines, {} ok, {} errors, {} alarms, {} bytes dropped on overflow, {} segments, \
          {:.1} s simulated",
-        "stopped",
         sig.ok(),
         s.lines_received,
         s.oks,

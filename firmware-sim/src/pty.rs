@@ -98,10 +98,10 @@ impl PtySim {
 
     /// Makes a symlink `path` → the device (`--link PATH`); an existing symlink there is replaced. Removed at stop.
     pub fn link(&self, path: &Path) -> io::Result<()> {
-        if let Ok(meta) = std::fs::symlink_metadata(path) {
-            if meta.file_type().is_symlink() {
-                std::fs::remove_file(path)?;
-            }
+        if let Ok(meta) = std::fs::symlink_metadata(path)
+            && meta.file_type().is_symlink()
+        {
+            std::fs::remove_file(path)?;
         }
         std::os::unix::fs::symlink(&self.path, path)?;
         self.links
@@ -158,10 +158,10 @@ impl PtySim {
                 eprintln!("firmware-sim: cannot write trace {}: {e}", p.display());
             }
         }
-        if let Some(p) = &self.config.trace_svg {
-            if let Err(e) = std::fs::write(p, crate::svg::trace_svg(&report.trace)) {
-                eprintln!("firmware-sim: cannot write SVG {}: {e}", p.display());
-            }
+        if let Some(p) = &self.config.trace_svg
+            && let Err(e) = std::fs::write(p, crate::svg::trace_svg(&report.trace))
+        {
+            eprintln!("firmware-sim: cannot write SVG {}: {e}", p.display());
         }
         report
     }
@@ -263,10 +263,11 @@ fn run(
         for ev in core.take_events() {
             match ev {
                 SimEvent::Hangup => {
+                    publish(&core, &shared, &mut pushed_trace);
+                    lock(&shared).hung_up = true;
                     master = None;
                     slave = None;
                     txq.clear();
-                    lock(&shared).hung_up = true;
                 }
             }
         }
@@ -297,16 +298,21 @@ fn run(
                 }
             }
         }
-        let mut sh = lock(&shared);
-        let tr = core.trace();
-        if tr.len() > pushed_trace {
-            sh.trace.extend_from_slice(&tr[pushed_trace..]);
-            pushed_trace = tr.len();
-        }
-        sh.stats = core.stats();
-        sh.lines = core.lines_received();
-        sh.sim_time = core.clock();
+        publish(&core, &shared, &mut pushed_trace);
     }
     drop(slave);
     drop(master);
+}
+
+/// Copies the core's counters and new trace segments to the shared snapshot.
+fn publish(core: &Grbl, shared: &Mutex<Shared>, pushed_trace: &mut usize) {
+    let mut sh = lock(shared);
+    let tr = core.trace();
+    if tr.len() > *pushed_trace {
+        sh.trace.extend_from_slice(&tr[*pushed_trace..]);
+        *pushed_trace = tr.len();
+    }
+    sh.stats = core.stats();
+    sh.lines = core.lines_received();
+    sh.sim_time = core.clock();
 }

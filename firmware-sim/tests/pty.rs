@@ -82,3 +82,136 @@ fn serialport_round_trip() {
     assert_eq!(report.trace[0].to, [5.0, 5.0, 0.0]);
     assert_eq!(report.stats.oks, 2);
 }
+
+fn open(path: &std::path::Path) -> Box<dyn serialport::SerialPort> {
+    serialport::new(path.to_string_lossy(), 115_200)
+        .timeout(Duration::from_millis(20))
+        .open()
+        .unwrap()
+}
+
+#[test]
+fn link_trace_files_and_reopen() {
+    let dir = std::env::temp_dir().join(format!("fw-sim-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (jsonl, svg, link) = (dir.join("t.jsonl"), dir.join("t.svg"), dir.join("grbl"));
+    let sim = PtySim::spawn(SimConfig {
+        instant_motion: true,
+        trace_jsonl: Some(jsonl.clone()),
+        trace_svg: Some(svg.clone()),
+        ..SimConfig::default()
+    })
+    .unwrap();
+    sim.link(&link).unwrap();
+    let mut port = open(&link);
+    let mut acc = String::new();
+    assert!(read_until(
+        port.as_mut(),
+        &mut acc,
+        "for help]\r\n",
+        Duration::from_secs(3)
+    ));
+    port.write_all(b"M3 S1000\nG1 X10 F1000\n").unwrap();
+    acc.clear();
+    assert!(
+        read_until(
+            port.as_mut(),
+            &mut acc,
+            "ok\r\nok\r\n",
+            Duration::from_secs(3)
+        ),
+        "{acc:?}"
+    );
+    drop(port);
+    // A second client opens the same device; the simulator kept running.
+    let mut port = open(&link);
+    port.write_all(b"G1 Y10\n").unwrap();
+    acc.clear();
+    assert!(
+        read_until(port.as_mut(), &mut acc, "ok\r\n", Duration::from_secs(3)),
+        "{acc:?}"
+    );
+    drop(port);
+    let report = sim.stop();
+    assert!(!link.exists(), "the link is removed at stop");
+    assert_eq!(report.trace.len(), 2);
+    let text = std::fs::read_to_string(&jsonl).unwrap();
+    assert_eq!(text.lines().count(), 2);
+    assert!(text.lines().next().unwrap().contains(r#""motion":"G1""#));
+    let svg_text = std::fs::read_to_string(&svg).unwrap();
+    assert!(svg_text.starts_with("<svg") && svg_text.contains("polyline"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn hangup_fault_closes_the_device() {
+    let sim = PtySim::spawn(SimConfig {
+        instant_motion: true,
+        faults: flatcut_firmware_sim::Faults {
+            hangup_at_line: Some(2),
+            ..Default::default()
+        },
+        ..SimConfig::default()
+    })
+    .unwrap();
+    let mut port = open(sim.path());
+    port.write_all(b"G0 X1\nG0 X2\n").unwrap();
+    let t0 = Instant::now();
+    let mut buf = [0u8; 64];
+    let mut broken = false;
+    while t0.elapsed() < Duration::from_secs(3) {
+        match port.read(&mut buf) {
+            Ok(_) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
+            Err(e) => {
+                eprintln!("client error after hang-up: {e:?}");
+                broken = true;
+                break;
+            }
+        }
+    }
+    assert!(broken, "the client sees the hang-up");
+    assert_eq!(sim.lines_received(), 2);
+    assert!(sim.hung_up());
+}
+
+#[test]
+fn response_delay_and_overflow_through_the_pty() {
+    let sim = PtySim::spawn(SimConfig {
+        faults: flatcut_firmware_sim::Faults {
+            response_delay_ms: 150,
+            ..Default::default()
+        },
+        ..SimConfig::default()
+    })
+    .unwrap();
+    let mut port = open(sim.path());
+    let mut acc = String::new();
+    assert!(read_until(
+        port.as_mut(),
+        &mut acc,
+        "for help]\r\n",
+        Duration::from_secs(3)
+    ));
+    acc.clear();
+    let t0 = Instant::now();
+    port.write_all(b"G4 P0\n").unwrap();
+    assert!(read_until(
+        port.as_mut(),
+        &mut acc,
+        "ok\r\n",
+        Duration::from_secs(3)
+    ));
+    let dt = t0.elapsed();
+    assert!(dt >= Duration::from_millis(150), "{dt:?}");
+    // 200 lines at once, no flow control: the device drops what does not fit.
+    let text: String = (0..200).map(|i| format!("G1 X{} F200\n", i % 2)).collect();
+    port.write_all(text.as_bytes()).unwrap();
+    std::thread::sleep(Duration::from_millis(800));
+    let st = sim.stats();
+    assert!(st.bytes_dropped_overflow > 1000, "{st:?}");
+    assert!(st.max_rx_fill == 128, "{st:?}");
+    drop(port);
+    let report = sim.stop();
+    assert!(report.stats.lines_received < 60, "{:?}", report.stats);
+}
