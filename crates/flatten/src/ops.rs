@@ -248,6 +248,46 @@ pub fn laplace(
     b.build(stage)
 }
 
+/// Moves `uv` by the rigid motion (rotation and translation, no mirror, no scale) that best fits
+/// the pinned vertices to their positions in the least-squares sense. Returns the largest
+/// remaining distance of a pinned vertex from its pin (0 for at most one pin).
+pub fn fit_rigid_to_pins(uv: &mut [DVec2], pins: &[crate::Pin]) -> f64 {
+    if pins.is_empty() {
+        return 0.0;
+    }
+    let k = pins.len() as f64;
+    let cs = pins.iter().map(|p| uv[p.vertex as usize]).sum::<DVec2>() / k;
+    let cd = pins.iter().map(|p| p.position).sum::<DVec2>() / k;
+    let (mut c, mut s) = (0.0, 0.0);
+    for p in pins {
+        let (a, b) = (uv[p.vertex as usize] - cs, p.position - cd);
+        c += a.dot(b);
+        s += a.perp_dot(b);
+    }
+    let rot = if pins.len() >= 2 && (c != 0.0 || s != 0.0) {
+        DVec2::from_angle(s.atan2(c))
+    } else {
+        DVec2::X
+    };
+    uv.iter_mut().for_each(|q| *q = rot.rotate(*q - cs) + cd);
+    pins.iter()
+        .map(|p| (uv[p.vertex as usize] - p.position).length())
+        .fold(0.0, f64::max)
+}
+
+/// Area-weighted mean of Duncan's δ2 of the map `uv` (∞ if a triangle is flipped or degenerate).
+pub fn mean_delta2(mesh: &TriMesh, uv: &[DVec2]) -> f64 {
+    let mut s = 0.0;
+    for t in 0..mesh.triangles.len() {
+        let tri = mesh.triangles[t];
+        match flatcut_mesh::face_distortion(mesh.corners(t), tri.map(|v| uv[v as usize])) {
+            Some(d) if !d.flipped() => s += mesh.triangle_area(t) * d.delta2(),
+            _ => return f64::INFINITY,
+        }
+    }
+    s / mesh.area()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -261,7 +261,7 @@ fn bad_input_gives_the_right_topology_error() {
 #[test]
 fn linear_methods_are_deterministic() {
     let mesh = testmesh::spherical_cap(80.0, 1.2, 10);
-    for m in [Method::Lscm] {
+    for m in [Method::Lscm, Method::ConformalBoundary] {
         let a = run(&mesh, m);
         let b = run(&mesh, m);
         assert!(
@@ -270,4 +270,113 @@ fn linear_methods_are_deterministic() {
                 .all(|(p, q)| p.x.to_bits() == q.x.to_bits() && p.y.to_bits() == q.y.to_bits())
         );
     }
+}
+
+#[test]
+fn developable_unfolds_cylinders_and_cones_exactly() {
+    for (mesh, chords) in [
+        (
+            testmesh::cylinder_patch(40.0, 2.5, 70.0, 40, 12),
+            Some(40usize),
+        ),
+        (testmesh::cone_patch(0.6, 30.0, 90.0, 2.0, 30, 10), None),
+    ] {
+        let f = run(&mesh, Method::Developable);
+        let s = score(&mesh, &f.uv);
+        assert_eq!(s.flips, 0);
+        assert!(s.delta2_mean < 1e-8, "{}", s.delta2_mean);
+        let e = max_rel_edge_error(&mesh, &f.uv);
+        assert!(e <= 1e-9, "{e}");
+        if let Some(nu) = chords {
+            // The cylinder patch's rulings stay parallel and its bottom chords collinear: the
+            // bottom corners (vertices 0 and nu) end up the sum of the chord lengths apart.
+            let expected = nu as f64 * 2.0 * 40.0 * (2.5 / (2.0 * nu as f64)).sin();
+            let d = (f.uv[nu] - f.uv[0]).length();
+            assert!((d / expected - 1.0).abs() < 1e-12, "{d} vs {expected}");
+        }
+    }
+}
+
+#[test]
+fn developable_refuses_a_cap_and_names_the_vertex() {
+    let mesh = testmesh::spherical_cap(100.0, 1.0, 6);
+    match flatten(&mesh, &FlattenParams::new(Method::Developable)) {
+        Err(FlattenError::NotDevelopable {
+            max_abs_k,
+            angle_defect,
+            vertex,
+            ..
+        }) => {
+            // K = 1/R² = 1e-4 /mm² on the sphere; the discrete estimate is within 20 %.
+            assert!((max_abs_k / 1e-4 - 1.0).abs() < 0.2, "{max_abs_k}");
+            assert!(angle_defect > 0.0);
+            assert!((vertex as usize) < mesh.positions.len());
+        }
+        other => panic!("expected NotDevelopable, got {other:?}"),
+    }
+}
+
+#[test]
+fn developable_reproduces_a_plane() {
+    let (mesh, flat) = testmesh::jittered_plane(60.0, 12);
+    let f = run(&mesh, Method::Developable);
+    assert!(rigid_residual(&f.uv, &flat) < 1e-9 * 60.0);
+}
+
+#[test]
+fn conformal_boundary_matches_tv43_on_a_spherical_cap() {
+    // TV43: alpha = pi/4 on the unit sphere: image disc of radius sin(alpha), integrated
+    // delta2 = 0.064297741135 (scaled by R^2 for a sphere of radius R).
+    let r = 100.0;
+    let alpha = std::f64::consts::FRAC_PI_4;
+    let mesh = testmesh::spherical_cap(r, alpha, 24);
+    let f = run(&mesh, Method::ConformalBoundary);
+    let s = score(&mesh, &f.uv);
+    assert_eq!(s.flips, 0);
+    let expected = 0.064297741135 * r * r;
+    assert!(
+        (s.delta2_integral / expected - 1.0).abs() < 0.03,
+        "integrated delta2 {} vs {}",
+        s.delta2_integral,
+        expected
+    );
+    // Conformal up to discretisation.
+    assert!(s.conf < 0.01, "{}", s.conf);
+    // Boundary: isometric (each boundary edge keeps its length) and on a circle of radius
+    // R sin(alpha) around the image of the pole (vertex 0).
+    let ring = 6 * 24;
+    let n = mesh.positions.len();
+    for j in 0..ring {
+        let (a, b) = (n - ring + j, n - ring + (j + 1) % ring);
+        let l3 = (mesh.positions[a] - mesh.positions[b]).length();
+        let l2 = (f.uv[a] - f.uv[b]).length();
+        assert!(
+            (l2 / l3 - 1.0).abs() < 0.01,
+            "boundary edge {j}: {l2} vs {l3}"
+        );
+        let rho = (f.uv[a] - f.uv[0]).length();
+        assert!((rho / (r * alpha.sin()) - 1.0).abs() < 0.01, "{rho}");
+    }
+    // sigma at the pole: cos^2(alpha/2) (TV43), measured on the fan around vertex 0.
+    let fan: Vec<usize> = (0..6).collect();
+    for t in fan {
+        let tri = mesh.triangles[t];
+        let d = face_distortion(mesh.corners(t), tri.map(|v| f.uv[v as usize])).unwrap();
+        let sigma = (d.sigma1 * d.sigma2).sqrt();
+        assert!(
+            (sigma / (alpha / 2.0).cos().powi(2) - 1.0).abs() < 0.02,
+            "{sigma}"
+        );
+    }
+}
+
+#[test]
+fn conformal_boundary_reproduces_a_plane() {
+    let (mesh, flat) = testmesh::jittered_plane(60.0, 12);
+    let f = run(&mesh, Method::ConformalBoundary);
+    assert!(
+        rigid_residual(&f.uv, &flat) < 1e-9 * 60.0,
+        "{}",
+        rigid_residual(&f.uv, &flat)
+    );
 }

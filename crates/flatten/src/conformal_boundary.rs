@@ -1,0 +1,208 @@
+//! Duncan's f2: a conformal map that is locally isometric along the boundary, computed the
+//! boundary-first-flattening way (Sawhney & Crane 2017) with zero boundary scale factors.
+//!
+//! 1. Solve the discrete Yamabe equation `Δu = K` for the log scale factor `u = log σ`, with
+//!    `u = 0` on the boundary: `L u = −Ω` at interior vertices (`L` the positive semi-definite
+//!    cotangent Laplacian, `Ω` the angle defects). The metric `e^{2u} g` is flat.
+//! 2. The boundary curvature of the flat metric is `κ̃ = κ + (L u)_B` (`κ` = π − angle sum at a
+//!    boundary vertex); its sum is exactly 2π by discrete Gauss–Bonnet. Boundary edges keep
+//!    their 3D lengths since `u = 0` there.
+//! 3. Integrate the boundary polygon from these turning angles and lengths. Discretisation
+//!    leaves a small gap; it is closed by the smallest change of the lengths in the norm
+//!    `Σ (l̃ − l)²/l` (BFF's closing step).
+//! 4. Extend the boundary harmonically (cotangent weights) into the interior: conformal maps are
+//!    harmonic, so this reproduces the conformal map up to discretisation.
+//!
+//! The result is at true scale with no rescaling: the boundary has its 3D length. The image
+//! boundary may self-overlap on strongly curved pieces (Duncan's caveat); flips are reported as
+//! warnings, not hidden.
+
+use flatcut_geom::DVec2;
+use flatcut_mesh::{Topology, TriMesh};
+
+use crate::ops::{
+    angle_sums, boundary_mask, corner_angles, corner_cotans, count_flips, fit_rigid_to_pins,
+    laplace, mean_delta2, used_mask,
+};
+use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
+
+/// Log scale factors `u = log σ` of the flat conformal metric with `u = 0` on the boundary.
+pub fn log_scale_factors(mesh: &TriMesh, topo: &Topology) -> Result<Vec<f64>, FlattenError> {
+    let n = mesh.positions.len();
+    let sums = angle_sums(mesh, &corner_angles(mesh));
+    let bnd = boundary_mask(n, topo);
+    let used = used_mask(mesh);
+    let fixed: Vec<bool> = (0..n).map(|v| bnd[v] || !used[v]).collect();
+    let mut u = vec![vec![0.0; n]];
+    if fixed.iter().all(|&f| f) {
+        return Ok(u.pop().unwrap_or_default());
+    }
+    let w = half_cotans(mesh);
+    let sys = laplace(
+        &mesh.triangles,
+        &w,
+        &fixed,
+        "conformal-boundary: Yamabe equation",
+    )?;
+    // L u = −Ω with Ω = 2π − angle sum at the free (interior) vertices.
+    let source: Vec<f64> = sums.iter().map(|s| s - std::f64::consts::TAU).collect();
+    sys.solve(&mut u, Some(&[source]))?;
+    Ok(u.pop().unwrap_or_default())
+}
+
+/// Cotangent Laplacian weights per corner: `L_ab = −½(cot α + cot β)`.
+fn half_cotans(mesh: &TriMesh) -> Vec<[f64; 3]> {
+    corner_cotans(&mesh.positions, &mesh.triangles)
+        .into_iter()
+        .map(|c| c.map(|x| 0.5 * x))
+        .collect()
+}
+
+/// Flattens the disk `mesh` conformally with an isometric boundary (see the module docs).
+/// Pins are met by the best rigid motion (the map has no other freedom); a pin that cannot be
+/// met is a warning.
+pub fn conformal_boundary(
+    mesh: &TriMesh,
+    topo: &Topology,
+    params: &FlattenParams,
+) -> Result<Flattening, FlattenError> {
+    let n = mesh.positions.len();
+    let lp = topo
+        .boundary_loops
+        .first()
+        .ok_or_else(|| FlattenError::Internal("conformal-boundary: no boundary loop".into()))?;
+    let u = log_scale_factors(mesh, topo)?;
+    let sums = angle_sums(mesh, &corner_angles(mesh));
+    let w = half_cotans(mesh);
+    // (L u) at every vertex.
+    let mut lu = vec![0.0; n];
+    for (tri, wt) in mesh.triangles.iter().zip(&w) {
+        for k in 0..3 {
+            let (a, b) = (tri[(k + 1) % 3] as usize, tri[(k + 2) % 3] as usize);
+            let d = wt[k] * (u[a] - u[b]);
+            lu[a] += d;
+            lu[b] -= d;
+        }
+    }
+    let m = lp.len();
+    let turn: Vec<f64> = lp
+        .iter()
+        .map(|&v| std::f64::consts::PI - sums[v as usize] + lu[v as usize])
+        .collect();
+    let len: Vec<f64> = (0..m)
+        .map(|i| {
+            (mesh.positions[lp[(i + 1) % m] as usize] - mesh.positions[lp[i] as usize]).length()
+        })
+        .collect();
+    // Tangent of edge i (from lp[i] to lp[i+1]): turn at lp[1..=i] accumulated.
+    let mut phi = 0.0;
+    let tangents: Vec<DVec2> = (0..m)
+        .map(|i| {
+            if i > 0 {
+                phi += turn[i];
+            }
+            DVec2::from_angle(phi)
+        })
+        .collect();
+    let closed = close_lengths(&len, &tangents)?;
+    let mut gamma = Vec::with_capacity(m);
+    let mut p = DVec2::ZERO;
+    for i in 0..m {
+        gamma.push(p);
+        p += closed[i] * tangents[i];
+    }
+    // Harmonic extension of both coordinates.
+    let used = used_mask(mesh);
+    let bnd = boundary_mask(n, topo);
+    let fixed: Vec<bool> = (0..n).map(|v| bnd[v] || !used[v]).collect();
+    let mut x = vec![0.0; n];
+    let mut y = vec![0.0; n];
+    for (i, &v) in lp.iter().enumerate() {
+        x[v as usize] = gamma[i].x;
+        y[v as usize] = gamma[i].y;
+    }
+    let mut fields = vec![x, y];
+    if !fixed.iter().all(|&f| f) {
+        let sys = laplace(
+            &mesh.triangles,
+            &w,
+            &fixed,
+            "conformal-boundary: harmonic extension",
+        )?;
+        sys.solve(&mut fields, None)?;
+    }
+    let mut uv: Vec<DVec2> = fields[0]
+        .iter()
+        .zip(&fields[1])
+        .map(|(&x, &y)| DVec2::new(x, y))
+        .collect();
+    let mut warnings = Vec::new();
+    let flips = count_flips(&mesh.triangles, &uv);
+    if flips > 0 {
+        warnings.push(format!(
+            "conformal-boundary: {flips} triangle(s) flipped by the harmonic extension; use --method isometric"
+        ));
+    }
+    let miss = fit_rigid_to_pins(&mut uv, &params.pins);
+    if params.pins.len() >= 2 && miss > 1e-6 * mesh.bbox().diagonal() {
+        warnings.push(format!(
+            "conformal-boundary: the pins cannot all be met by a rigid motion (largest miss {miss:.3} mm)"
+        ));
+    }
+    let energy = if flips == 0 {
+        mean_delta2(mesh, &uv)
+    } else {
+        f64::INFINITY
+    };
+    tracing::debug!(
+        target: "flatcut_flatten",
+        method = "conformal-boundary",
+        max_abs_log_scale = u.iter().fold(0.0f64, |a, b| a.max(b.abs())),
+        energy,
+        "solved"
+    );
+    Ok(Flattening {
+        uv,
+        info: FlattenInfo {
+            iterations: 1,
+            final_energy: energy,
+            warnings,
+        },
+    })
+}
+
+/// BFF's closing step: lengths `l̃` nearest to `l` in `Σ (l̃ − l)²/l` with `Σ l̃ T = 0`.
+fn close_lengths(len: &[f64], t: &[DVec2]) -> Result<Vec<f64>, FlattenError> {
+    // λ = (T N⁻¹ Tᵀ)⁻¹ T l with N⁻¹ = diag(l); l̃ = l − N⁻¹ Tᵀ λ.
+    let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
+    let mut r = DVec2::ZERO;
+    for (l, ti) in len.iter().zip(t) {
+        a += l * ti.x * ti.x;
+        b += l * ti.x * ti.y;
+        c += l * ti.y * ti.y;
+        r += *l * *ti;
+    }
+    let det = a * c - b * b;
+    if !(det > 0.0) {
+        return Err(FlattenError::NoConvergence {
+            method: Method::ConformalBoundary,
+            reason: "the boundary tangents do not span the plane; the boundary cannot be closed"
+                .into(),
+        });
+    }
+    let lam = DVec2::new(c * r.x - b * r.y, a * r.y - b * r.x) / det;
+    let out: Vec<f64> = len
+        .iter()
+        .zip(t)
+        .map(|(l, ti)| l - l * ti.dot(lam))
+        .collect();
+    if let Some(i) = out.iter().position(|l| !(*l > 0.0)) {
+        return Err(FlattenError::NoConvergence {
+            method: Method::ConformalBoundary,
+            reason: format!(
+                "closing the boundary would give boundary edge {i} a non-positive length; the mesh is too coarse for its curvature"
+            ),
+        });
+    }
+    Ok(out)
+}
