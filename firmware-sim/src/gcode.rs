@@ -151,8 +151,8 @@ impl GcState {
         w
     }
 
-    /// The `$G` report line.
-    pub fn report(&self) -> String {
+    /// The `$G` report line; the feed is shown in inches only when `$13=1` (`report_inches`), as GRBL does.
+    pub fn report(&self, report_inches: bool) -> String {
         let mut s = String::from("[GC:");
         s.push_str(&self.motion.name());
         s.push_str(&format!(" G{}", 54 + self.coord_select));
@@ -182,15 +182,12 @@ impl GcState {
             }
         }
         s.push_str(&format!(" T{}", self.tool));
-        let f = if self.inches {
-            self.feed / MM_PER_INCH
+        let (f, decimals) = if report_inches {
+            (self.feed / MM_PER_INCH, 1)
         } else {
-            self.feed
+            (self.feed, 0)
         };
-        s.push_str(&format!(
-            " F{}",
-            crate::settings::fmt_float(f, if self.inches { 1 } else { 0 })
-        ));
+        s.push_str(&format!(" F{}", crate::settings::fmt_float(f, decimals)));
         s.push_str(&format!(
             " S{}]",
             crate::settings::fmt_float(self.spindle_speed, 0)
@@ -1177,4 +1174,87 @@ fn arc_moves(
         jog: false,
     });
     (moves, center)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn read_float_follows_grbl() {
+        let cases: &[(&str, Option<f64>, usize)] = &[
+            ("1.5X", Some(1.5), 3),
+            ("-.5", Some(-0.5), 3),
+            ("+2", Some(2.0), 2),
+            ("1.2.3", Some(1.2), 3),
+            ("-", None, 0),
+            (".", None, 0),
+            ("X", None, 0),
+        ];
+        for (text, want, end) in cases {
+            let mut p = 0;
+            assert_eq!(read_float(text.as_bytes(), &mut p), *want, "{text}");
+            assert_eq!(p, *end, "{text}");
+        }
+    }
+
+    fn run(line: &str, gc: &mut GcState) -> Result<Vec<Action>, Status> {
+        let settings = Settings::default();
+        let mut persist = Persist::default();
+        let mut ctx = Context {
+            gc,
+            settings: &settings,
+            persist: &mut persist,
+            machine_position: [0.0; 3],
+        };
+        execute(line.as_bytes(), false, &mut ctx)
+    }
+
+    #[test]
+    fn radius_arc_centre_matches_the_offset_form() {
+        // Quarter circle from (0,0) to (10,10), radius 10, CW: centre (10,0) (the short way).
+        let mut gc = GcState::new([0.0; 3], [0.0; 3]);
+        let a = run("G2X10Y10R10F100", &mut gc).unwrap();
+        let Action::Motion(m) = &a[0] else {
+            panic!("{a:?}")
+        };
+        let c = m.arc_center.unwrap();
+        assert!((c[0] - 10.0).abs() < 1e-12 && c[1].abs() < 1e-12, "{c:?}");
+        // Negative R takes the long way: centre (0,10).
+        let mut gc = GcState::new([0.0; 3], [0.0; 3]);
+        let a = run("G2X10Y10R-10F100", &mut gc).unwrap();
+        let Action::Motion(m) = &a[0] else {
+            panic!("{a:?}")
+        };
+        let c = m.arc_center.unwrap();
+        assert!(c[0].abs() < 1e-12 && (c[1] - 10.0).abs() < 1e-12, "{c:?}");
+        // Chords: every vertex on the circle, chord sagitta within $12.
+        let r: f64 = 10.0;
+        for mv in &m.moves {
+            let d = (mv.target[0] - c[0]).hypot(mv.target[1] - c[1]);
+            assert!((d - r).abs() < 1e-9);
+        }
+        let n = m.moves.len() as f64;
+        let theta = 1.5 * std::f64::consts::PI / n;
+        // `mc_arc` floors the segment count, so a chord may exceed the tolerance by that rounding only.
+        let sagitta = r * (1.0 - (theta / 2.0).cos());
+        assert!(sagitta <= 0.002 * ((n + 1.0) / n).powi(2), "{sagitta}");
+        assert!(sagitta > 0.0018);
+    }
+
+    #[test]
+    fn inches_and_incremental() {
+        let mut gc = GcState::new([0.0; 3], [0.0; 3]);
+        run("G20G91G0X1", &mut gc).unwrap();
+        run("X1", &mut gc).unwrap();
+        assert!((gc.position[0] - 50.8).abs() < 1e-12);
+        assert_eq!(
+            gc.report(false),
+            "[GC:G0 G54 G17 G20 G91 G94 M5 M9 T0 F0 S0]"
+        );
+        // A rejected line changes nothing.
+        let before = gc.clone();
+        assert_eq!(run("G90G1X0", &mut gc), Err(Status::UndefinedFeedRate));
+        assert_eq!(gc, before);
+    }
 }

@@ -342,7 +342,7 @@ impl Grbl {
                 self.soft_reset();
             }
             b'?' => {
-                if !self.critical && self.state != State::Sleep {
+                if !self.critical {
                     self.status_report();
                 }
             }
@@ -1209,7 +1209,7 @@ impl Grbl {
                         self.emit(&l);
                     }
                     b'G' => {
-                        let r = self.gc.report();
+                        let r = self.gc.report(self.settings.report_inches);
                         self.emit_line(&r);
                     }
                     b'C' => {

@@ -391,3 +391,76 @@ impl Planner {
         ev
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn junction_speed_of_a_right_angle() {
+        let s = Settings::default();
+        let mut p = Planner::new([0.0; 3], &s);
+        assert!(p.push(
+            [10.0, 0.0, 0.0],
+            false,
+            300.0,
+            false,
+            false,
+            0,
+            &s,
+            100.0,
+            100.0
+        ));
+        assert!(p.push(
+            [10.0, 10.0, 0.0],
+            false,
+            300.0,
+            false,
+            false,
+            1,
+            &s,
+            100.0,
+            100.0
+        ));
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let want = (10.0 / h) * 0.01 * h / (1.0 - h);
+        assert!((p.blocks[1].max_junction_sq - want).abs() < 1e-12);
+        assert!((p.blocks[1].entry_sq - want).abs() < 1e-12);
+        // Zero-step moves are dropped.
+        assert!(!p.push(
+            [10.001, 10.0, 0.0],
+            false,
+            300.0,
+            false,
+            false,
+            2,
+            &s,
+            100.0,
+            100.0
+        ));
+    }
+
+    #[test]
+    fn hold_stops_within_the_braking_distance() {
+        let s = Settings::default();
+        let mut p = Planner::new([0.0; 3], &s);
+        p.push(
+            [100.0, 0.0, 0.0],
+            false,
+            300.0,
+            false,
+            false,
+            0,
+            &s,
+            100.0,
+            100.0,
+        );
+        p.step(5.0, false, 100.0, 100.0);
+        let x0 = p.pos[0];
+        assert!((p.v - 5.0).abs() < 1e-12);
+        p.step(10.0, true, 100.0, 100.0);
+        assert_eq!(p.v, 0.0);
+        // v²/2a = 1.25 mm.
+        assert!((p.pos[0] - x0 - 1.25).abs() < 1e-9, "{}", p.pos[0] - x0);
+    }
+}

@@ -30,3 +30,23 @@ impl Rng {
         p > 0.0 && self.next_f64() < p
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn deterministic_and_uniform_enough() {
+        let a: Vec<u64> = (0..5)
+            .scan(Rng::new(1), |r, _| Some(r.next_u64()))
+            .collect();
+        let b: Vec<u64> = (0..5)
+            .scan(Rng::new(1), |r, _| Some(r.next_u64()))
+            .collect();
+        assert_eq!(a, b);
+        let mut r = Rng::new(42);
+        let hits = (0..100_000).filter(|_| r.chance(0.25)).count();
+        assert!((hits as f64 / 100_000.0 - 0.25).abs() < 0.01);
+        assert!(!Rng::new(3).chance(0.0));
+    }
+}

@@ -236,3 +236,37 @@ impl Settings {
         s
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn store_checks_like_settings_c() {
+        let mut s = Settings::default();
+        assert_eq!(s.store(0, 2.0), Err(Status::SettingStepPulseMin));
+        assert_eq!(s.store(20, 1.0), Err(Status::SoftLimitError));
+        assert_eq!(s.store(22, 1.0), Ok(()));
+        assert_eq!(s.store(20, 1.0), Ok(()));
+        // Turning homing off forces soft limits off.
+        assert_eq!(s.store(22, 0.0), Ok(()));
+        assert!(!s.soft_limits);
+        assert_eq!(s.store(121, 50.0), Ok(()));
+        assert_eq!(s.acceleration, [10.0, 50.0, 10.0]);
+        assert_eq!(s.store(133, 1.0), Err(Status::InvalidStatement));
+        assert_eq!(s.store(140, 1.0), Err(Status::InvalidStatement));
+        assert_eq!(s.store(7, 1.0), Err(Status::InvalidStatement));
+        // 250 steps/mm × 7300 mm/min = 30.4 kHz > 30 kHz.
+        assert_eq!(s.store(110, 7300.0), Err(Status::MaxStepRateExceeded));
+        assert_eq!(s.store(110, 7200.0), Ok(()));
+        assert_eq!(s.store(11, -0.1), Err(Status::NegativeValue));
+    }
+
+    #[test]
+    fn floats_print_like_grbl() {
+        assert_eq!(fmt_float(0.01, 3), "0.010");
+        assert_eq!(fmt_float(-0.0001, 3), "0.000");
+        assert_eq!(fmt_float(-1.5, 3), "-1.500");
+        assert_eq!(fmt_float(999.6, 0), "1000");
+    }
+}
