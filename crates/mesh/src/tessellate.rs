@@ -640,13 +640,16 @@ pub fn tessellate_with(
     for t in b.tris.iter().filter(|t| t.alive) {
         triangles.push(t.v.map(|v| new_id[v as usize]));
     }
+    // Collapsed domain sides (sphere poles, cone apex) become single vertices; parameter seams
+    // (coincident but not joined by an edge) stay open.
     Ok(TriMesh {
         positions,
         triangles,
         params: Some(params),
         patch_of_vertex: Some(patch_of_vertex),
         flat: None,
-    })
+    }
+    .collapsed_short_edges(tol.weld_mm))
 }
 
 #[cfg(test)]
@@ -1045,6 +1048,29 @@ mod tests {
             e,
             Err(TessError::TooManyVertices { limit: 1000, .. })
         ));
+    }
+
+    #[test]
+    fn full_sphere_poles_collapse_and_the_seam_stays_open() {
+        let s = Sphere {
+            r: 50.0,
+            dom: Domain2 {
+                u: (0.0, 2.0 * PI),
+                v: (0.0, PI),
+            },
+        };
+        let m = tessellate(&s, &Tolerances::DEFAULT.with_chord_mm(0.1)).unwrap();
+        // A disk: the two poles are single vertices on the boundary (the meridian seam, twice).
+        let topo = crate::check_disk(&m).unwrap();
+        let poles = m
+            .positions
+            .iter()
+            .filter(|p| p.x.hypot(p.y) < 1e-9)
+            .count();
+        assert_eq!(poles, 2);
+        let exact = 4.0 * PI * 2500.0;
+        assert!((m.area() - exact).abs() / exact < 5e-3);
+        assert_eq!(topo.boundary_loops.len(), 1);
     }
 
     #[test]

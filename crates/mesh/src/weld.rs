@@ -108,9 +108,95 @@ impl TriMesh {
     }
 }
 
+impl TriMesh {
+    /// Merges the end points of every edge shorter than `tol` mm (union–find over such edges) and
+    /// drops the triangles that collapse. Unlike [`TriMesh::welded`], coincident vertices that
+    /// are not joined by an edge stay apart: this closes the collapsed sides of a parameter
+    /// domain (sphere poles, a cone apex) without closing a parameter seam.
+    pub fn collapsed_short_edges(&self, tol: f64) -> TriMesh {
+        let n = self.positions.len();
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn find(p: &mut [u32], mut x: u32) -> u32 {
+            while p[x as usize] != x {
+                p[x as usize] = p[p[x as usize] as usize];
+                x = p[x as usize];
+            }
+            x
+        }
+        let mut any = false;
+        for t in &self.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                if self.positions[a as usize].distance(self.positions[b as usize]) <= tol {
+                    let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+                    if ra != rb {
+                        parent[ra.max(rb) as usize] = ra.min(rb);
+                        any = true;
+                    }
+                }
+            }
+        }
+        if !any {
+            return self.clone();
+        }
+        // Keep representatives in index order, renumber densely.
+        let mut new_id = vec![u32::MAX; n];
+        let mut keep = Vec::new();
+        for v in 0..n as u32 {
+            let r = find(&mut parent, v);
+            if r == v {
+                new_id[v as usize] = keep.len() as u32;
+                keep.push(v);
+            }
+        }
+        let remap: Vec<u32> = (0..n as u32)
+            .map(|v| new_id[find(&mut parent, v) as usize])
+            .collect();
+        let pick = |src: &Option<Vec<_>>| {
+            src.as_ref()
+                .map(|s: &Vec<_>| keep.iter().map(|&v| s[v as usize]).collect())
+        };
+        TriMesh {
+            positions: keep.iter().map(|&v| self.positions[v as usize]).collect(),
+            triangles: self
+                .triangles
+                .iter()
+                .map(|t| t.map(|v| remap[v as usize]))
+                .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+                .collect(),
+            params: pick(&self.params),
+            patch_of_vertex: self
+                .patch_of_vertex
+                .as_ref()
+                .map(|s| keep.iter().map(|&v| s[v as usize]).collect()),
+            flat: pick(&self.flat),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn short_edges_collapse_but_unconnected_twins_stay() {
+        // A strip whose left side is collapsed to one point (like a pole), and whose two
+        // right corners coincide with the left ones of another strip but share no edge.
+        let m = TriMesh::new(
+            vec![
+                DVec3::new(0.0, 0.0, 0.0),
+                DVec3::new(0.0, 0.0, 0.0),
+                DVec3::new(1.0, 0.0, 0.0),
+                DVec3::new(1.0, 1.0, 0.0),
+                DVec3::new(1.0, 0.0, 0.0),
+                DVec3::new(2.0, 0.0, 0.0),
+            ],
+            vec![[0, 2, 3], [0, 3, 1], [4, 5, 3]],
+        );
+        let c = m.collapsed_short_edges(1e-9);
+        assert_eq!(c.positions.len(), 5);
+        assert_eq!(c.triangles, vec![[0, 1, 2], [3, 4, 2]]);
+    }
 
     #[test]
     fn close_points_merge_far_points_stay() {
