@@ -26,7 +26,7 @@ mod status;
 mod svg;
 
 pub use gcode::{Flow, GcState, Motion, Persist, Spindle, read_float};
-pub use machine::{BANNER, Grbl, SimEvent, State};
+pub use machine::{BANNER, Grbl, Machine, SimEvent, State};
 pub use planner::PLANNER_BLOCKS;
 pub use pty::PtySim;
 pub use settings::{N_AXIS, Settings, fmt_float};

@@ -17,6 +17,10 @@ pub const LINE_MAX: usize = 79;
 const STEP_S: f64 = 0.001;
 /// Build date string of `$I` (`grbl.h`).
 const BUILD: &str = "1.1h.20190830";
+/// `SAFETY_DOOR_SPINDLE_DELAY` (s): spin-up wait when resuming from a door stop (not in laser mode).
+const DOOR_SPINDLE_DELAY_S: f64 = 4.0;
+/// `SAFETY_DOOR_COOLANT_DELAY` (s).
+const DOOR_COOLANT_DELAY_S: f64 = 1.0;
 /// Override limits and steps (`config.h:241-260`), percent.
 const FEED_OVR_RANGE: (u8, u8) = (10, 200);
 const SPINDLE_OVR_RANGE: (u8, u8) = (10, 200);
@@ -45,6 +49,8 @@ pub enum State {
     Homing,
     /// `$SLP`.
     Sleep,
+    /// Safety door (0x84): stopped with spindle and coolant off until cycle start.
+    Door,
 }
 
 /// Something the I/O layer must act on.
@@ -129,6 +135,8 @@ pub struct Grbl {
     stats: SimStats,
     events: Vec<SimEvent>,
     probe_pos: [f64; N_AXIS],
+    door_restore_left: f64,
+    door_saved: (Spindle, f64, bool, bool),
 }
 
 fn axes(v: [f64; N_AXIS], inches: bool) -> String {
@@ -214,6 +222,8 @@ impl Grbl {
             stats: SimStats::default(),
             events: Vec::new(),
             probe_pos: [0.0; N_AXIS],
+            door_restore_left: 0.0,
+            door_saved: (Spindle::Off, 0.0, false, false),
         };
         g.startup();
         g
@@ -411,7 +421,8 @@ impl Grbl {
                     self.ovr_counter = 0;
                 }
             }
-            0x84 | 0xa1 => {} // Safety door and mist (ENABLE_M7) are not part of the Uno build's simulation.
+            0x84 => self.safety_door(),
+            0xa1 => {} // Mist coolant needs ENABLE_M7, which the Uno build leaves out.
             _ => return false,
         }
         true
@@ -440,11 +451,60 @@ impl Grbl {
         }
     }
 
+    /// 0x84: stop like a feed hold and switch spindle and coolant off. The simulated door switch closes again at
+    /// once, so the state reads `Door:2` while braking and `Door:0` (ready to resume) once stopped.
+    fn safety_door(&mut self) {
+        if self.critical || matches!(self.state, State::Alarm | State::CheckMode | State::Sleep) {
+            return;
+        }
+        self.emit_line("[MSG:Check Door]");
+        match self.state {
+            State::Jog => self.jog_cancel = true,
+            State::Door => {}
+            _ => {
+                self.door_saved = (
+                    self.spindle_out,
+                    self.spindle_speed_out,
+                    self.flood_out,
+                    self.mist_out,
+                );
+                self.spindle_out = Spindle::Off;
+                self.spindle_speed_out = 0.0;
+                self.flood_out = false;
+                self.mist_out = false;
+                self.hold_complete = self.planner.blocks.is_empty() || self.planner.v <= 0.0;
+                self.door_restore_left = 0.0;
+                self.state = State::Door;
+            }
+        }
+    }
+
     fn cycle_start(&mut self) {
         if self.critical {
             return;
         }
         match self.state {
+            State::Door if self.hold_complete && self.door_restore_left <= 0.0 => {
+                let (sp, speed, flood, mist) = self.door_saved;
+                let mut delay = 0.0;
+                if sp != Spindle::Off && !self.settings.laser_mode {
+                    delay += DOOR_SPINDLE_DELAY_S;
+                }
+                if flood || mist {
+                    delay += DOOR_COOLANT_DELAY_S;
+                }
+                (
+                    self.spindle_out,
+                    self.spindle_speed_out,
+                    self.flood_out,
+                    self.mist_out,
+                ) = (sp, speed, flood, mist);
+                if delay > 0.0 {
+                    self.door_restore_left = delay;
+                } else {
+                    self.finish_door_restore();
+                }
+            }
             State::Hold if self.hold_complete => {
                 self.m0_pause = false;
                 self.spindle_stop_ovr = false;
@@ -458,6 +518,16 @@ impl Grbl {
             State::Idle if !self.planner.blocks.is_empty() => self.state = State::Cycle,
             _ => {}
         }
+    }
+
+    fn finish_door_restore(&mut self) {
+        self.door_restore_left = 0.0;
+        self.hold_complete = false;
+        self.state = if self.planner.blocks.is_empty() {
+            State::Idle
+        } else {
+            State::Cycle
+        };
     }
 
     // ----- output ----------------------------------------------------------------------------------------------
@@ -495,6 +565,16 @@ impl Grbl {
             State::CheckMode => "Check".to_string(),
             State::Homing => "Home".to_string(),
             State::Sleep => "Sleep".to_string(),
+            State::Door => {
+                let n = if self.door_restore_left > 0.0 {
+                    3
+                } else if self.hold_complete {
+                    0
+                } else {
+                    2
+                };
+                format!("Door:{n}")
+            }
         };
         let inches = self.settings.report_inches;
         let mpos = self.machine_position();
@@ -529,7 +609,7 @@ impl Grbl {
         ));
         let busy = matches!(
             self.state,
-            State::Cycle | State::Hold | State::Jog | State::Homing
+            State::Cycle | State::Hold | State::Jog | State::Homing | State::Door
         );
         if self.wco_counter > 0 {
             self.wco_counter -= 1;
@@ -580,7 +660,7 @@ impl Grbl {
 
     fn moving(&self) -> bool {
         matches!(self.state, State::Cycle | State::Jog | State::Homing)
-            || (self.state == State::Hold && !self.planner.blocks.is_empty())
+            || (matches!(self.state, State::Hold | State::Door) && !self.planner.blocks.is_empty())
     }
 
     /// Soft reset (0x18, `$C` off, `$RST`, faults): `mc_reset` then the re-initialisation of `main.c`.
@@ -695,7 +775,9 @@ impl Grbl {
         self.process();
         let mut left = dt;
         while left > 0.0 {
-            let busy = !self.planner.blocks.is_empty() || self.dwell_left > 0.0;
+            let busy = !self.planner.blocks.is_empty()
+                || self.dwell_left > 0.0
+                || self.door_restore_left > 0.0;
             if !busy {
                 self.clock += left;
                 break;
@@ -730,7 +812,15 @@ impl Grbl {
         if self.dwell_left > 0.0 {
             self.dwell_left -= h;
         }
-        let holding = (self.state == State::Hold) || self.jog_cancel || self.soft_limit_wait;
+        let holding = matches!(self.state, State::Hold | State::Door)
+            || self.jog_cancel
+            || self.soft_limit_wait;
+        if self.door_restore_left > 0.0 {
+            self.door_restore_left -= h;
+            if self.door_restore_left <= 0.0 {
+                self.finish_door_restore();
+            }
+        }
         let had_blocks = !self.planner.blocks.is_empty();
         let ev = self.planner.step(
             h,
@@ -746,7 +836,9 @@ impl Grbl {
         let stopped = self.planner.v <= 0.0 || self.planner.blocks.is_empty();
         match self.state {
             State::Cycle if self.planner.blocks.is_empty() => self.state = State::Idle,
-            State::Hold if !self.hold_complete && stopped => self.hold_complete = true,
+            State::Hold | State::Door if !self.hold_complete && stopped => {
+                self.hold_complete = true
+            }
             State::Jog if self.planner.blocks.is_empty() => {
                 self.state = State::Idle;
                 self.jog_cancel = false;
@@ -1406,3 +1498,6 @@ impl Grbl {
 pub fn is_realtime(b: u8) -> bool {
     matches!(b, b'?' | b'!' | b'~' | 0x18) || b > 0x7f
 }
+
+/// The sans-IO core under its other common name.
+pub type Machine = Grbl;

@@ -423,3 +423,147 @@ fn dollar_commands_need_idle() {
         "ok\r\nerror:8\r\nerror:8\r\nerror:8\r\n"
     );
 }
+
+#[test]
+fn safety_door_stops_and_resumes_after_spin_up() {
+    let mut g = grbl(SimConfig::default());
+    g.receive_all(b"M3 S500\nG1 X40 F300\n");
+    g.tick(3.0);
+    g.take_output();
+    g.receive(0x84);
+    assert_eq!(
+        String::from_utf8(g.take_output()).unwrap(),
+        "[MSG:Check Door]\r\n"
+    );
+    g.receive(b'?');
+    assert!(
+        String::from_utf8(g.take_output())
+            .unwrap()
+            .starts_with("<Door:2|")
+    );
+    g.tick(1.0);
+    g.receive(b'?');
+    let s = String::from_utf8(g.take_output()).unwrap();
+    assert!(s.starts_with("<Door:0|") && s.contains("FS:0,0"), "{s}");
+    let x = g.machine_position()[0];
+    g.receive(b'~');
+    g.tick(2.0);
+    g.receive(b'?');
+    assert!(
+        String::from_utf8(g.take_output())
+            .unwrap()
+            .starts_with("<Door:3|")
+    );
+    assert_eq!(
+        g.machine_position()[0],
+        x,
+        "no motion while the spindle spins up"
+    );
+    g.tick(2.5);
+    assert_eq!(g.state(), State::Cycle);
+    g.run_until_idle(60.0);
+    assert_eq!(g.machine_position()[0], 40.0);
+}
+
+#[test]
+fn startup_lines_sleep_and_restore() {
+    let mut g = grbl(SimConfig::default());
+    assert_eq!(err(&mut g, "$N0=G20G91"), "ok");
+    assert_eq!(lines(&send(&mut g, "$N")), ["$N0=G20G91", "$N1=", "ok"]);
+    g.receive(0x18);
+    let out = String::from_utf8(g.take_output()).unwrap();
+    assert_eq!(out, format!("{BANNER}>G20G91:ok\r\n"));
+    assert_eq!(
+        lines(&send(&mut g, "$G"))[0],
+        "[GC:G0 G54 G17 G20 G91 G94 M5 M9 T0 F0 S0]"
+    );
+    // GRBL checks the feed before it notices that G1 has no axis words.
+    assert_eq!(err(&mut g, "$N0=G1"), "error:22");
+    assert_eq!(err(&mut g, "$N0=G21"), "ok");
+    assert_eq!(err(&mut g, "$N1=G1 X1"), "error:22");
+    assert_eq!(err(&mut g, "$110=600"), "ok");
+    // Restoring resets the controller: banner again, and the startup lines (kept by `$RST=$`) run.
+    assert_eq!(
+        lines(&send(&mut g, "$RST=$")),
+        ["[MSG:Restoring defaults]", "ok", BANNER.trim(), ">G21:ok"]
+    );
+    assert!(send(&mut g, "$$").contains("$110=500.000\r\n"));
+    assert_eq!(lines(&send(&mut g, "$SLP")), ["ok", "[MSG:Sleeping]"]);
+    assert_eq!(g.state(), State::Sleep);
+    assert!(send(&mut g, "G0 X1").is_empty(), "asleep until reset");
+    g.receive(0x18);
+    assert!(
+        String::from_utf8(g.take_output())
+            .unwrap()
+            .ends_with("[MSG:'$H'|'$X' to unlock]\r\n")
+    );
+}
+
+#[test]
+fn home_positions_offsets_and_tool_length() {
+    let mut g = grbl(SimConfig::default().with_instant_motion(true));
+    send(&mut g, "G0 X5 Y6 Z-1");
+    assert_eq!(err(&mut g, "G28.1"), "ok");
+    send(&mut g, "G0 X0 Y0 Z0");
+    assert_eq!(err(&mut g, "G28 X2"), "ok");
+    let tr = g.trace();
+    let n = tr.len();
+    assert_eq!(
+        (tr[n - 2].motion.as_str(), tr[n - 2].to),
+        ("G28", [2.0, 0.0, 0.0])
+    );
+    assert_eq!(
+        (tr[n - 1].motion.as_str(), tr[n - 1].to),
+        ("G28", [5.0, 6.0, -1.0])
+    );
+    // G10 L20: make the current point X=1 in G55.
+    assert_eq!(err(&mut g, "G10 L20 P2 X1"), "ok");
+    assert!(send(&mut g, "$#").contains("[G55:4.000,0.000,0.000]"));
+    send(&mut g, "G55 G0 X0");
+    assert_eq!(g.machine_position()[0], 4.0);
+    // Dynamic tool length offset shifts Z.
+    assert_eq!(err(&mut g, "G43.1 Z2"), "ok");
+    send(&mut g, "G0 Z0");
+    assert_eq!(g.machine_position()[2], 2.0);
+    assert!(send(&mut g, "$#").contains("[TLO:2.000]"));
+    send(&mut g, "G49");
+    // G18 arc in the ZX plane.
+    send(&mut g, "G54 G0 X0 Y0 Z0");
+    assert_eq!(err(&mut g, "G18 G2 X10 Z0 I5 K0 F500"), "ok");
+    assert_eq!(g.trace().last().unwrap().arc_center, Some([5.0, 0.0, 0.0]));
+}
+
+#[test]
+fn inverse_time_feed_and_probe_without_contact() {
+    let mut g = grbl(SimConfig::default());
+    // G93 F6: the move takes 1/6 min = 10 s.
+    assert_eq!(err(&mut g, "G93 G1 X40 F6"), "ok");
+    let seg = g.trace().last().unwrap().clone();
+    assert!((seg.t_end - seg.t_start - 10.0).abs() < 0.7, "{seg:?}");
+    assert_eq!(
+        err(&mut g, "G1 X0"),
+        "error:22",
+        "G93 needs F on every move"
+    );
+    let mut g = grbl(SimConfig::default().with_instant_motion(true));
+    let out = send(&mut g, "G38.2 Z-5 F100");
+    assert_eq!(
+        lines(&out),
+        [
+            "ok",
+            "ALARM:5",
+            "",
+            "Grbl 1.1h ['$' for help]",
+            "[MSG:'$H'|'$X' to unlock]"
+        ]
+        .iter()
+        .filter(|l| !l.is_empty())
+        .copied()
+        .collect::<Vec<_>>()
+    );
+    send(&mut g, "$X");
+    assert_eq!(
+        lines(&send(&mut g, "G38.3 Z-6 F100")),
+        ["[PRB:0.000,0.000,-6.000:0]", "ok"]
+    );
+}
