@@ -15,6 +15,29 @@
 //! 15-block planner with junction deviation and trapezoidal acceleration, feed hold / resume / soft reset, overrides,
 //! laser mode, jogging and a simulated homing cycle. A motion trace (JSON lines) and an SVG of what was drawn come
 //! out as evidence.
+//!
+//! In-process, on virtual time:
+//! ```
+//! use flatcut_firmware_sim::{Grbl, SimConfig};
+//! let mut g = Grbl::new(&SimConfig::default());
+//! assert!(g.take_output().starts_with(b"\r\nGrbl 1.1h"));
+//! g.receive_all(b"G1 X10 F600\n");
+//! g.run_until_idle(60.0);
+//! assert_eq!(g.take_output(), b"ok\r\n");
+//! assert_eq!(g.machine_position(), [10.0, 0.0, 0.0]);
+//! assert_eq!(g.trace()[0].to, [10.0, 0.0, 0.0]);
+//! ```
+//!
+//! On a pseudo-terminal, for a sender under test:
+//! ```no_run
+//! use flatcut_firmware_sim::{PtySim, SimConfig};
+//! let sim = PtySim::spawn(SimConfig { time_scale: 10.0, ..SimConfig::default() })?;
+//! let port = serialport::new(sim.path().to_string_lossy(), 115_200).open();
+//! // ... stream a job through `port` ...
+//! let report = sim.stop();
+//! println!("{} segments, {} bytes lost to overflow", report.trace.len(), report.stats.bytes_dropped_overflow);
+//! # Ok::<(), std::io::Error>(())
+//! ```
 
 mod gcode;
 mod machine;

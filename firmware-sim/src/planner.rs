@@ -22,6 +22,8 @@ const JUNCTION_COS_LIMIT: f64 = 0.999_999;
 const LENGTH_EPS_MM: f64 = 1e-9;
 /// Relative speed tolerance deciding which profile phase applies (guards against round-off ping-pong).
 const SPEED_REL_EPS: f64 = 1e-9;
+/// Floor of the acceleration, mm/s²: `$120=0` is accepted by GRBL but would divide by zero here.
+const MIN_ACCEL_MM_S2: f64 = 1e-3;
 
 /// One planned straight move.
 #[derive(Debug, Clone, PartialEq)]
@@ -178,7 +180,7 @@ impl Planner {
         for i in 0..N_AXIS {
             unit[i] = delta[i] / len;
         }
-        let accel = limit_by_axis(&settings.acceleration, &unit);
+        let accel = limit_by_axis(&settings.acceleration, &unit).max(MIN_ACCEL_MM_S2);
         let max_rate_s = settings.max_rate.map(|r| r / 60.0);
         let rapid_rate = limit_by_axis(&max_rate_s, &unit);
         let feed_rate = if inverse_time {
@@ -206,7 +208,7 @@ impl Planner {
                 for v in &mut ju {
                     *v /= n;
                 }
-                let ja = limit_by_axis(&settings.acceleration, &ju);
+                let ja = limit_by_axis(&settings.acceleration, &ju).max(MIN_ACCEL_MM_S2);
                 let sin_half = (0.5 * (1.0 - cos)).sqrt();
                 (ja * settings.junction_deviation * sin_half / (1.0 - sin_half))
                     .max(MINIMUM_JUNCTION_SPEED * MINIMUM_JUNCTION_SPEED)
