@@ -272,6 +272,62 @@ impl BSpline {
         Self::new(degree, knots, pts)
     }
 
+    /// Joins Bézier pieces of one degree into a B-spline: piece `i` covers `[breaks[i],
+    /// breaks[i+1]]`, interior knots get multiplicity `p` (C⁰ in general, exact whatever the
+    /// joins), and consecutive pieces must share their end point (within `join_tol` mm; the
+    /// shared control point is their midpoint).
+    pub fn from_beziers(
+        pieces: &[Bezier],
+        breaks: &[f64],
+        join_tol: f64,
+    ) -> Result<BSpline, SurfaceError> {
+        let Some(first) = pieces.first() else {
+            return Err(SurfaceError::ControlPointCount {
+                expected: 1,
+                got: 0,
+            });
+        };
+        let p = first.degree();
+        if p == 0 {
+            return Err(SurfaceError::BadDegree {
+                degree: 0,
+                reason: "Bézier pieces of degree 0 cannot be joined",
+            });
+        }
+        if breaks.len() != pieces.len() + 1 {
+            return Err(SurfaceError::Invalid(format!(
+                "{} Bézier pieces need {} breakpoints, got {}",
+                pieces.len(),
+                pieces.len() + 1,
+                breaks.len()
+            )));
+        }
+        let mut points = first.points().to_vec();
+        let mut knots = vec![breaks[0]; p + 1];
+        for (i, pc) in pieces.iter().enumerate().skip(1) {
+            if pc.degree() != p {
+                return Err(SurfaceError::Invalid(format!(
+                    "Bézier piece {i} has degree {}, piece 0 has degree {p}",
+                    pc.degree()
+                )));
+            }
+            let (end, start) = (points[points.len() - 1], pc.points()[0]);
+            if end.distance(start) > join_tol {
+                return Err(SurfaceError::Invalid(format!(
+                    "Bézier piece {i} starts {} mm away from the end of piece {}",
+                    end.distance(start),
+                    i - 1
+                )));
+            }
+            let last = points.len() - 1;
+            points[last] = 0.5 * (end + start);
+            points.extend_from_slice(&pc.points()[1..]);
+            knots.extend(std::iter::repeat_n(breaks[i], p));
+        }
+        knots.extend(std::iter::repeat_n(breaks[pieces.len()], p + 1));
+        Self::new(p, knots, points)
+    }
+
     /// The degree `p`.
     pub fn degree(&self) -> usize {
         self.degree

@@ -259,6 +259,16 @@ impl CubicSpline {
         ]))
     }
 
+    /// The same curve as a cubic B-spline on the same parameter, interior knots of multiplicity
+    /// 3 (the exact Bézier form of each segment; for the patch constructions that take B-spline
+    /// boundaries).
+    pub fn to_bspline(&self) -> Result<super::BSpline, SurfaceError> {
+        let pieces: Vec<Bezier> = (0..self.segment_count())
+            .filter_map(|i| self.segment_bezier(i))
+            .collect();
+        super::BSpline::from_beziers(&pieces, &self.params, 0.0)
+    }
+
     /// Flattens within chordal tolerance `tol` (mm), starting from the knots.
     pub fn flatten(&self, tol: f64) -> Vec<(f64, DVec3)> {
         flatten_with_breaks(self, tol, &self.params)
@@ -649,6 +659,20 @@ mod tests {
         .unwrap();
         assert!(close(s.eval(2.5), v2(1.5, 2.0), 1e-15));
         assert!(close(s.deriv(1.0, 1), v2(0.6, 0.8), 1e-15));
+    }
+
+    #[test]
+    fn bspline_form_is_the_same_curve() {
+        let s = CubicSpline::interpolate(&SQUARE, SplineEnds::Closed, SplineParam::ChordLength)
+            .unwrap();
+        let b = s.to_bspline().unwrap();
+        assert_eq!(b.domain(), s.domain());
+        let (lo, hi) = s.domain();
+        for i in 0..=50 {
+            let t = lo + (hi - lo) * i as f64 / 50.0;
+            assert!(close(b.eval(t), s.eval(t), 1e-13));
+            assert!(close(b.deriv(t, 1), s.deriv(t, 1), 1e-12));
+        }
     }
 
     proptest! {
