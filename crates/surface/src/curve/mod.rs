@@ -5,7 +5,8 @@
 //! (arc length and its inverse, curvature, torsion, Frenet frame, closest point, flattening to a
 //! polyline within a chordal tolerance) live in the blanket extension trait [`CurveExt`].
 //! Piecewise types (B-spline, NURBS, spline, polyline) also have inherent `flatten`/`nearest`
-//! that start from their breakpoints.
+//! that start from their breakpoints; the [`Curve`] enum keeps that knowledge for mixed
+//! collections, where `dyn ParamCurve` would hide it.
 //!
 //! The B-spline basis kernels in [`basis`] are shared with the tensor-product patches.
 //!
@@ -31,6 +32,7 @@
 //! # Ok::<(), flatcut_surface::SurfaceError>(())
 //! ```
 
+pub mod any;
 pub mod basis;
 pub mod bezier;
 pub mod bspline;
@@ -40,6 +42,7 @@ pub mod polyline;
 pub mod rational;
 pub mod spline;
 
+pub use any::Curve;
 pub use bezier::Bezier;
 pub use bspline::{BSpline, Nurbs};
 pub use ext::{CurveExt, Frenet, flatten_with_breaks, nearest_from_samples};
