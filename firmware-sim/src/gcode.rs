@@ -264,7 +264,12 @@ pub enum Action {
     WaitResume,
     /// End of the homing cycle: back to IDLE.
     HomingDone,
+    /// An EEPROM write of this many changed bytes (the RX interrupt is off meanwhile).
+    EepromWrite(u32),
 }
+
+/// Bytes GRBL writes for one coordinate record: three floats and a checksum.
+pub const COORD_RECORD_BYTES: u32 = 4 * N_AXIS as u32 + 1;
 
 const G_NONMODAL: u32 = 1 << 0;
 const G_MOTION: u32 = 1 << 1;
@@ -964,7 +969,8 @@ pub fn execute(line: &[u8], jog: bool, ctx: &mut Context<'_>) -> Result<Vec<Acti
     match non_modal {
         NonModal::SetCoordData => {
             let (idx, data) = coord_data_write.unwrap_or((0, [0.0; N_AXIS]));
-            actions.push(Action::Sync); // EEPROM write syncs the buffer (FORCE_BUFFER_SYNC_DURING_EEPROM_WRITE)
+            actions.push(Action::Sync);
+            actions.push(Action::EepromWrite(COORD_RECORD_BYTES)); // EEPROM write syncs the buffer (FORCE_BUFFER_SYNC_DURING_EEPROM_WRITE)
             ctx.persist.coord[idx] = data;
             if idx == gc.coord_select {
                 gc.coord_system = data;
@@ -1010,10 +1016,12 @@ pub fn execute(line: &[u8], jog: bool, ctx: &mut Context<'_>) -> Result<Vec<Acti
         }
         NonModal::SetHome0 => {
             actions.push(Action::Sync);
+            actions.push(Action::EepromWrite(COORD_RECORD_BYTES));
             ctx.persist.g28 = ctx.machine_position;
         }
         NonModal::SetHome1 => {
             actions.push(Action::Sync);
+            actions.push(Action::EepromWrite(COORD_RECORD_BYTES));
             ctx.persist.g30 = ctx.machine_position;
         }
         NonModal::SetCoordOffset | NonModal::ResetCoordOffset => {

@@ -197,6 +197,8 @@ pub struct SimStats {
     pub bytes_dropped_overflow: u64,
     /// Bytes dropped by fault injection.
     pub bytes_dropped_fault: u64,
+    /// Bytes lost while an EEPROM write held the RX interrupt off (`$x=`, G10, G28.1, `$N`, `$RST`).
+    pub bytes_dropped_eeprom: u64,
     /// Bytes corrupted by fault injection.
     pub bytes_corrupted: u64,
     /// Highest RX buffer fill seen, bytes.

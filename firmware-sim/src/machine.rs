@@ -17,6 +17,11 @@ pub const LINE_MAX: usize = 79;
 const STEP_S: f64 = 0.001;
 /// Build date string of `$I` (`grbl.h`).
 const BUILD: &str = "1.1h.20190830";
+/// Time the ATmega328P needs to program one EEPROM byte, s (datasheet: 3.3 ms). GRBL keeps interrupts off while it
+/// waits, so the UART loses what arrives meanwhile except about one byte per write.
+const EEPROM_BYTE_S: f64 = 0.0034;
+/// Changed bytes of one `$x=` write: a float and the checksum.
+const SETTING_WRITE_BYTES: u32 = 5;
 /// `SAFETY_DOOR_SPINDLE_DELAY` (s): spin-up wait when resuming from a door stop (not in laser mode).
 const DOOR_SPINDLE_DELAY_S: f64 = 4.0;
 /// `SAFETY_DOOR_COOLANT_DELAY` (s).
@@ -137,6 +142,9 @@ pub struct Grbl {
     probe_pos: [f64; N_AXIS],
     door_restore_left: f64,
     door_saved: (Spindle, f64, bool, bool),
+    eeprom_left: f64,
+    eeprom_total: f64,
+    eeprom_slot: i64,
 }
 
 fn axes(v: [f64; N_AXIS], inches: bool) -> String {
@@ -224,6 +232,9 @@ impl Grbl {
             probe_pos: [0.0; N_AXIS],
             door_restore_left: 0.0,
             door_saved: (Spindle::Off, 0.0, false, false),
+            eeprom_left: 0.0,
+            eeprom_total: 0.0,
+            eeprom_slot: -1,
         };
         g.startup();
         g
@@ -315,6 +326,15 @@ impl Grbl {
             return false;
         }
         self.stats.bytes_received += 1;
+        if self.eeprom_left > 0.0 {
+            // Interrupts are off while the EEPROM programs; one byte per write survives in the UART.
+            let slot = ((self.eeprom_total - self.eeprom_left) / EEPROM_BYTE_S).floor() as i64;
+            if slot == self.eeprom_slot {
+                self.stats.bytes_dropped_eeprom += 1;
+                return true;
+            }
+            self.eeprom_slot = slot;
+        }
         if self.rng.chance(self.faults.drop_rate) {
             self.stats.bytes_dropped_fault += 1;
             return true;
@@ -693,6 +713,7 @@ impl Grbl {
         self.active_motion = None;
         self.after_ok = AfterOk::Nothing;
         self.dwell_left = 0.0;
+        self.eeprom_left = 0.0;
         self.hold_complete = false;
         self.jog_cancel = false;
         self.m0_pause = false;
@@ -777,7 +798,8 @@ impl Grbl {
         while left > 0.0 {
             let busy = !self.planner.blocks.is_empty()
                 || self.dwell_left > 0.0
-                || self.door_restore_left > 0.0;
+                || self.door_restore_left > 0.0
+                || self.eeprom_left > 0.0;
             if !busy {
                 self.clock += left;
                 break;
@@ -811,6 +833,9 @@ impl Grbl {
         let t0 = self.clock;
         if self.dwell_left > 0.0 {
             self.dwell_left -= h;
+        }
+        if self.eeprom_left > 0.0 {
+            self.eeprom_left -= h;
         }
         let holding = matches!(self.state, State::Hold | State::Door)
             || self.jog_cancel
@@ -1101,7 +1126,10 @@ impl Grbl {
             };
             match action {
                 Action::Sync => {
-                    if !self.planner.blocks.is_empty() || self.dwell_left > 0.0 {
+                    if !self.planner.blocks.is_empty()
+                        || self.dwell_left > 0.0
+                        || self.eeprom_left > 0.0
+                    {
                         self.pending.push_front(Action::Sync);
                         return false;
                     }
@@ -1154,6 +1182,13 @@ impl Grbl {
                         self.pending.push_front(Action::WaitResume);
                         return false;
                     }
+                }
+                Action::EepromWrite(n) => {
+                    self.eeprom_total = f64::from(n) * EEPROM_BYTE_S;
+                    self.eeprom_left = self.eeprom_total;
+                    self.eeprom_slot = -1;
+                    self.pending.push_front(Action::Sync);
+                    return false;
                 }
                 Action::HomingDone => {
                     if self.state == State::Homing {
@@ -1362,6 +1397,8 @@ impl Grbl {
                             Ok(())
                         } else if c2 == b'=' {
                             self.build_info = String::from_utf8_lossy(&line[3..]).into_owned();
+                            self.pending
+                                .push_back(Action::EepromWrite(line.len() as u32 - 2));
                             Ok(())
                         } else {
                             Err(Status::InvalidStatement)
@@ -1371,6 +1408,7 @@ impl Grbl {
                         if line.len() != 6 || &line[1..5] != b"RST=" {
                             return Err(Status::InvalidStatement);
                         }
+                        let old_listing = self.settings.listing();
                         match line[5] {
                             b'$' => self.settings = Settings::default(),
                             b'#' => self.persist.coord = Default::default(),
@@ -1380,6 +1418,20 @@ impl Grbl {
                             }
                             _ => return Err(Status::InvalidStatement),
                         }
+                        // Charge the changed settings and records (all of them when everything differs).
+                        let changed = old_listing
+                            .lines()
+                            .zip(self.settings.listing().lines())
+                            .filter(|(a, b)| a != b)
+                            .count() as u32;
+                        let records = if line[5] == b'$' {
+                            0
+                        } else {
+                            8 * gcode::COORD_RECORD_BYTES
+                        };
+                        self.pending.push_back(Action::EepromWrite(
+                            changed * SETTING_WRITE_BYTES + records + 1,
+                        ));
                         self.emit_line("[MSG:Restoring defaults]");
                         self.after_ok = AfterOk::Reset;
                         Ok(())
@@ -1417,6 +1469,8 @@ impl Grbl {
                             self.persist.startup[idx as usize] =
                                 String::from_utf8_lossy(&text).into_owned();
                             self.pending.extend(actions);
+                            self.pending
+                                .push_back(Action::EepromWrite(text.len() as u32 + 1));
                             return Ok(());
                         }
                         let value =
@@ -1425,6 +1479,8 @@ impl Grbl {
                             return Err(Status::InvalidStatement);
                         }
                         self.settings.store(parameter.trunc() as u32, value)?;
+                        self.pending
+                            .push_back(Action::EepromWrite(SETTING_WRITE_BYTES));
                         Ok(())
                     }
                 }
