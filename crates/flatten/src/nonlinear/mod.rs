@@ -1,9 +1,31 @@
 //! The nonlinear, flip-free methods: isometric (δ2), conformal (δ1), min-max (δ0) and
 //! boundary-isometric (Duncan's f1), with material stretch limits.
+//!
+//! All of them start from a flip-free map (Tutte, [`init`]) and keep every iterate flip-free
+//! with a line search bounded by the first inversion ([`newton`]). Results are at true scale in
+//! mm: isometric and boundary-isometric fix the scale by their energies; conformal is scaled to
+//! the 3D area (the only free parameter of a conformal map's scale).
 
-use flatcut_mesh::{Topology, TriMesh};
+pub mod boundary;
+pub mod init;
+pub mod kernel;
+// minmax pending
+pub mod newton;
+pub mod spd;
 
-use crate::{FlattenError, FlattenParams, Flattening};
+use flatcut_geom::DVec2;
+use flatcut_mesh::{Topology, TriMesh, face_distortion};
+
+use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
+use kernel::{IsoEnergy, Mips, RestTri, SymDirichlet, WithLimits};
+
+/// Newton decrement (energy units per mm² of surface) below which a solve has converged: far
+/// below any distortion a pattern maker can see (δ2 ~ 1e-12).
+const ABS_DECREMENT_PER_AREA: f64 = 1e-15;
+/// Stiffness schedule of the material-limit penalty (relative to the δ2 density).
+const LIMIT_STIFFNESS: [f64; 3] = [10.0, 1e2, 1e3];
+/// Slack on a material limit before a violation is reported (0.05 % of stretch).
+const LIMIT_REPORT_SLACK: f64 = 5e-4;
 
 /// Solves one of the nonlinear methods (`Isometric`, `Conformal`, `Minmax`, `BoundaryIsometric`).
 pub fn solve(
@@ -11,9 +33,240 @@ pub fn solve(
     topo: &Topology,
     params: &FlattenParams,
 ) -> Result<Flattening, FlattenError> {
-    let _ = (mesh, topo);
-    Err(FlattenError::Internal(format!(
-        "method {} is not available in this build",
-        params.method
-    )))
+    let rest = kernel::rest_frames(mesh).map_err(|t| {
+        FlattenError::Internal(format!("triangle {t} is degenerate after the disk check"))
+    })?;
+    let mut out = match params.method {
+        Method::Isometric => isometric(mesh, topo, &rest, params)?,
+        Method::Conformal => conformal(mesh, topo, &rest, params)?,
+        Method::BoundaryIsometric => boundary::boundary_isometric(mesh, topo, &rest, params)?,
+
+        m => {
+            return Err(FlattenError::Internal(format!(
+                "method {m} is not a nonlinear method"
+            )));
+        }
+    };
+    check_flip_free(mesh, &out.uv, params.method)?;
+    apply_pins(&mut out, mesh, params)?;
+    Ok(out)
+}
+
+/// Runs projected Newton on `energy` from `x0`.
+pub(crate) fn newton_solve<E: IsoEnergy>(
+    rest: &[RestTri],
+    n: usize,
+    energy: E,
+    x0: &[DVec2],
+    params: &FlattenParams,
+    method: Method,
+) -> Result<newton::NewtonRun, FlattenError> {
+    let problem =
+        newton::MapProblem::new(rest, n, energy, None).map_err(|reason| FlattenError::Solver {
+            stage: "newton",
+            reason,
+        })?;
+    let abs = ABS_DECREMENT_PER_AREA * problem.total_area;
+    let (run, _) = newton::run(problem, x0, params.max_iters, params.rel_tolerance, abs)
+        .map_err(|reason| FlattenError::NoConvergence { method, reason })?;
+    Ok(run)
+}
+
+/// Duncan's isometric distortion δ2 (symmetric Dirichlet), with material limits if asked.
+fn isometric(
+    mesh: &TriMesh,
+    topo: &Topology,
+    rest: &[RestTri],
+    params: &FlattenParams,
+) -> Result<Flattening, FlattenError> {
+    let n = mesh.positions.len();
+    let x0 = init::tutte(mesh, topo)?;
+    let run = newton_solve(rest, n, SymDirichlet, &x0, params, Method::Isometric)?;
+    let mut info = FlattenInfo {
+        iterations: run.iterations,
+        final_energy: run.energy / total_area(rest),
+        warnings: Vec::new(),
+    };
+    let mut x = run.x;
+    let s_max = params.max_stretch_pct.map(|p| 1.0 + p / 100.0);
+    let s_min = params.max_compress_pct.map(|p| 1.0 - p / 100.0);
+    if s_max.is_some() || s_min.is_some() {
+        let (s_max, s_min) = (s_max.unwrap_or(f64::INFINITY), s_min.unwrap_or(0.0));
+        if !(s_max >= 1.0) || !(s_min <= 1.0) {
+            return Err(FlattenError::Internal(format!(
+                "material limits must allow the identity (σ ≤ {s_max}, σ ≥ {s_min})"
+            )));
+        }
+        for k in LIMIT_STIFFNESS {
+            let e = WithLimits {
+                inner: SymDirichlet,
+                s_max,
+                s_min,
+                k,
+            };
+            let r = newton_solve(rest, n, e, &x, params, Method::Isometric)?;
+            info.iterations += r.iterations;
+            x = r.x;
+        }
+        info.final_energy = mean_density(rest, &x, &SymDirichlet);
+        info.warnings
+            .extend(limit_violations(mesh, &x, s_max, s_min));
+    }
+    Ok(Flattening { uv: x, info })
+}
+
+/// Duncan's conformal distortion δ1 via the MIPS energy, scaled to the 3D area.
+fn conformal(
+    mesh: &TriMesh,
+    topo: &Topology,
+    rest: &[RestTri],
+    params: &FlattenParams,
+) -> Result<Flattening, FlattenError> {
+    let n = mesh.positions.len();
+    let x0 = init::tutte(mesh, topo)?;
+    let run = newton_solve(rest, n, Mips, &x0, params, Method::Conformal)?;
+    let mut x = run.x;
+    init::scale_to_area(mesh, &mut x);
+    Ok(Flattening {
+        info: FlattenInfo {
+            iterations: run.iterations,
+            final_energy: mean_density(rest, &x, &Mips),
+            warnings: Vec::new(),
+        },
+        uv: x,
+    })
+}
+
+/// Σ A_t.
+pub(crate) fn total_area(rest: &[RestTri]) -> f64 {
+    rest.iter().map(|r| r.area).sum()
+}
+
+/// Area-weighted mean of an energy density.
+pub(crate) fn mean_density<E: IsoEnergy>(rest: &[RestTri], x: &[DVec2], e: &E) -> f64 {
+    let s: f64 = rest.iter().map(|r| kernel::tri_energy(e, r, x)).sum();
+    s / total_area(rest)
+}
+
+/// Reports where the material limits are not met: counts, the worst triangle of each kind and
+/// where it is on the 3D surface.
+fn limit_violations(mesh: &TriMesh, x: &[DVec2], s_max: f64, s_min: f64) -> Vec<String> {
+    let mut worst_stretch: Option<(usize, f64)> = None;
+    let mut worst_compress: Option<(usize, f64)> = None;
+    let (mut n_stretch, mut n_compress) = (0usize, 0usize);
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        let c3 = mesh.corners(t);
+        let c2 = tri.map(|v| x[v as usize]);
+        let Some(d) = face_distortion(c3, c2) else {
+            continue;
+        };
+        if d.sigma1 > s_max + LIMIT_REPORT_SLACK {
+            n_stretch += 1;
+            if worst_stretch.is_none_or(|(_, s)| d.sigma1 > s) {
+                worst_stretch = Some((t, d.sigma1));
+            }
+        }
+        if d.sigma2 < s_min - LIMIT_REPORT_SLACK {
+            n_compress += 1;
+            if worst_compress.is_none_or(|(_, s)| d.sigma2 < s) {
+                worst_compress = Some((t, d.sigma2));
+            }
+        }
+    }
+    let mut w = Vec::new();
+    let at = |t: usize| {
+        let c = mesh.corners(t);
+        (c[0] + c[1] + c[2]) / 3.0
+    };
+    if let Some((t, s)) = worst_stretch {
+        let p = at(t);
+        w.push(format!(
+            "max stretch {:.2}% not met on {n_stretch} triangles; worst: triangle {t} near ({:.2}, {:.2}, {:.2}) stretches {:.2}%",
+            (s_max - 1.0) * 100.0,
+            p.x,
+            p.y,
+            p.z,
+            (s - 1.0) * 100.0
+        ));
+    }
+    if let Some((t, s)) = worst_compress {
+        let p = at(t);
+        w.push(format!(
+            "max compression {:.2}% not met on {n_compress} triangles; worst: triangle {t} near ({:.2}, {:.2}, {:.2}) compresses {:.2}%",
+            (1.0 - s_min) * 100.0,
+            p.x,
+            p.y,
+            p.z,
+            (1.0 - s) * 100.0
+        ));
+    }
+    w
+}
+
+/// Refuses a result with a non-finite coordinate or an inverted triangle.
+fn check_flip_free(mesh: &TriMesh, uv: &[DVec2], method: Method) -> Result<(), FlattenError> {
+    if let Some(v) = uv.iter().position(|p| !p.is_finite()) {
+        return Err(FlattenError::NoConvergence {
+            method,
+            reason: format!("vertex {v} has a non-finite position"),
+        });
+    }
+    if let Some(t) = (0..mesh.triangles.len()).find(|&t| !(init::signed_area(mesh, uv, t) > 0.0)) {
+        return Err(FlattenError::NoConvergence {
+            method,
+            reason: format!("triangle {t} is inverted in the result"),
+        });
+    }
+    Ok(())
+}
+
+/// Places the result by the pins with a rigid motion (the shape is never distorted to meet
+/// them): one pin fixes the position, a second one the direction. A second pin whose distance
+/// differs from the flattened one is reported; further pins are reported with their errors.
+fn apply_pins(
+    out: &mut Flattening,
+    mesh: &TriMesh,
+    params: &FlattenParams,
+) -> Result<(), FlattenError> {
+    let n = mesh.positions.len();
+    for (i, p) in params.pins.iter().enumerate() {
+        if p.vertex as usize >= n {
+            return Err(FlattenError::BadPin {
+                index: i,
+                reason: format!("vertex {} does not exist (mesh has {n})", p.vertex),
+            });
+        }
+        if !p.position.is_finite() {
+            return Err(FlattenError::BadPin {
+                index: i,
+                reason: "position is not finite".into(),
+            });
+        }
+    }
+    let Some(first) = params.pins.first() else {
+        return Ok(());
+    };
+    let a = out.uv[first.vertex as usize];
+    let mut rot = flatcut_geom::DMat2::IDENTITY;
+    if let Some(second) = params.pins.get(1) {
+        let d_have = out.uv[second.vertex as usize] - a;
+        let d_want = second.position - first.position;
+        if d_have.length() > 0.0 && d_want.length() > 0.0 {
+            let ang = d_want.y.atan2(d_want.x) - d_have.y.atan2(d_have.x);
+            rot = flatcut_geom::DMat2::from_angle(ang);
+        }
+    }
+    for p in out.uv.iter_mut() {
+        *p = first.position + rot * (*p - a);
+    }
+    for (i, p) in params.pins.iter().enumerate().skip(1) {
+        let err = (out.uv[p.vertex as usize] - p.position).length();
+        if err > 1e-6 {
+            out.info.warnings.push(format!(
+                "pin {i} (vertex {}) is {err:.3} mm from its target: pins only place the pattern rigidly",
+                p.vertex
+            ));
+        }
+    }
+    Ok(())
 }

@@ -1,0 +1,552 @@
+//! Per-triangle kernel of the nonlinear methods: the rest frame of each 3D triangle, the
+//! Jacobian of the map, its rotation-aware 2×2 SVD, isotropic distortion energies Ψ(σ1, σ2)
+//! with their gradient and the analytically eigen-projected (positive semi-definite) Hessian.
+//!
+//! The projection follows Smith, de Goes & Kim, "Analytic eigensystems for isotropic distortion
+//! energies" (TOG 2019): for any energy of the singular values, the 4×4 Hessian in F-space has
+//! two "scaling" eigenvectors U diag(a) Vᵀ (a from the 2×2 Hessian of Ψ in σ), the symmetric
+//! off-diagonal mode U [[0,1],[1,0]] Vᵀ/√2 with eigenvalue (Ψ₁ − Ψ₂)/(σ₁ − σ₂) ("twist" below)
+//! and the skew, rotation-like mode U [[0,−1],[1,0]] Vᵀ/√2 with eigenvalue (Ψ₁ + Ψ₂)/(σ₁ + σ₂)
+//! ("flip" below, the one that goes negative). Clamping the eigenvalues at zero gives the projected
+//! Newton Hessian without any numerical eigensolver. Written here (not taken from a library)
+//! because no maintained Rust crate provides it and it is ~200 lines.
+
+use flatcut_geom::{DMat2, DVec2};
+use flatcut_mesh::TriMesh;
+use flatcut_mesh::distortion::local_frame;
+
+/// Relative gap |σ₁ − σ₂| / (σ₁ + σ₂) below which the twist eigenvalue is taken from its limit
+/// (Ψ₁₁ − Ψ₁₂) instead of the difference quotient, which would lose all digits there.
+const TWIST_LIMIT_GAP: f64 = 1e-7;
+
+/// The rest shape of one triangle: inverse of its edge matrix in an orthonormal frame of its
+/// plane, and its 3D area.
+#[derive(Clone, Copy, Debug)]
+pub struct RestTri {
+    /// Vertex indices.
+    pub v: [usize; 3],
+    /// Inverse of the rest edge matrix [p1 − p0, p2 − p0] (columns), frame coordinates.
+    pub dm_inv: DMat2,
+    /// 3D area (mm²).
+    pub area: f64,
+    /// Gradient coefficients g_v = ∂F/∂x_v (row vector) for the three corners: F = Σ x_v g_vᵀ.
+    pub g: [DVec2; 3],
+}
+
+impl RestTri {
+    /// The Jacobian F (2×2, columns = images of the frame axes) of the map for positions `x`.
+    #[inline]
+    pub fn jacobian(&self, x: &[DVec2]) -> DMat2 {
+        let p0 = x[self.v[0]];
+        let ds = DMat2::from_cols(x[self.v[1]] - p0, x[self.v[2]] - p0);
+        ds * self.dm_inv
+    }
+}
+
+/// Builds the rest frames of every triangle. Returns the index of the first degenerate
+/// triangle (zero area or non-finite corners) as the error.
+pub fn rest_frames(mesh: &TriMesh) -> Result<Vec<RestTri>, usize> {
+    let mut out = Vec::with_capacity(mesh.triangles.len());
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        let c = mesh.corners(t);
+        let (loc, _, _) = local_frame(c[0], c[1], c[2]).ok_or(t)?;
+        let dm = DMat2::from_cols(loc[1] - loc[0], loc[2] - loc[0]);
+        let det = dm.determinant();
+        if !(det > 0.0) || !det.is_finite() {
+            return Err(t);
+        }
+        let dm_inv = dm.inverse();
+        // F = Ds Dm⁻¹ with Ds = [x1 − x0, x2 − x0]: row j of Dm⁻¹ is the coefficient of x_{j+1}.
+        let r0 = DVec2::new(dm_inv.x_axis.x, dm_inv.y_axis.x);
+        let r1 = DVec2::new(dm_inv.x_axis.y, dm_inv.y_axis.y);
+        out.push(RestTri {
+            v: [tri[0] as usize, tri[1] as usize, tri[2] as usize],
+            dm_inv,
+            area: 0.5 * det,
+            g: [-(r0 + r1), r0, r1],
+        });
+    }
+    Ok(out)
+}
+
+/// Rotation-aware SVD F = U diag(σ1, σ2) Vᵀ with U, V proper rotations; σ2 is negative for a
+/// reflected map (signed SVD).
+#[derive(Clone, Copy, Debug)]
+pub struct Svd2 {
+    pub u: DMat2,
+    pub v: DMat2,
+    pub s1: f64,
+    pub s2: f64,
+}
+
+/// Closed-form signed SVD of a 2×2 matrix (Blinn's construction).
+pub fn svd2(f: DMat2) -> Svd2 {
+    let (a, c) = (f.x_axis.x, f.x_axis.y);
+    let (b, d) = (f.y_axis.x, f.y_axis.y);
+    let e = 0.5 * (a + d);
+    let ff = 0.5 * (a - d);
+    let g = 0.5 * (c + b);
+    let h = 0.5 * (c - b);
+    let q = (e * e + h * h).sqrt();
+    let r = (ff * ff + g * g).sqrt();
+    let a1 = g.atan2(ff);
+    let a2 = h.atan2(e);
+    let theta = 0.5 * (a2 - a1);
+    let phi = 0.5 * (a2 + a1);
+    // F = R(φ) diag(σ1, σ2) R(θ), so V = R(θ)ᵀ.
+    Svd2 {
+        u: DMat2::from_angle(phi),
+        v: DMat2::from_angle(-theta),
+        s1: q + r,
+        s2: q - r,
+    }
+}
+
+/// An isotropic per-triangle energy density Ψ(σ1, σ2) (dimensionless; integrated over 3D area).
+pub trait IsoEnergy {
+    /// Ψ at σ1 ≥ |σ2|, σ2 > 0; +∞ where the map is degenerate or reflected if the energy is a
+    /// barrier.
+    fn psi(&self, s1: f64, s2: f64) -> f64;
+    /// (∂Ψ/∂σ1, ∂Ψ/∂σ2).
+    fn grad(&self, s1: f64, s2: f64) -> [f64; 2];
+    /// The 2×2 Hessian [[Ψ11, Ψ12], [Ψ12, Ψ22]].
+    fn hess(&self, s1: f64, s2: f64) -> [[f64; 2]; 2];
+    /// Twist eigenvalue (Ψ1 − Ψ2)/(σ1 − σ2), with its limit at σ1 = σ2.
+    fn twist(&self, s1: f64, s2: f64) -> f64 {
+        if (s1 - s2).abs() <= TWIST_LIMIT_GAP * (s1.abs() + s2.abs()) {
+            let h = self.hess(s1, s2);
+            h[0][0] - h[0][1]
+        } else {
+            let g = self.grad(s1, s2);
+            (g[0] - g[1]) / (s1 - s2)
+        }
+    }
+    /// Flip eigenvalue (Ψ1 + Ψ2)/(σ1 + σ2).
+    fn flip(&self, s1: f64, s2: f64) -> f64 {
+        let g = self.grad(s1, s2);
+        (g[0] + g[1]) / (s1 + s2)
+    }
+    /// True if the energy goes to +∞ as a triangle degenerates (so a line search on it can
+    /// never step onto an inverted triangle by itself).
+    fn is_barrier(&self) -> bool;
+}
+
+/// Duncan's isometric distortion δ2 = (σ1² + σ1⁻² + σ2² + σ2⁻² − 4)/2 (symmetric Dirichlet).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SymDirichlet;
+
+impl IsoEnergy for SymDirichlet {
+    fn psi(&self, s1: f64, s2: f64) -> f64 {
+        if !(s2 > 0.0) {
+            return f64::INFINITY;
+        }
+        0.5 * (s1 * s1 + 1.0 / (s1 * s1) + s2 * s2 + 1.0 / (s2 * s2) - 4.0)
+    }
+    fn grad(&self, s1: f64, s2: f64) -> [f64; 2] {
+        [s1 - 1.0 / (s1 * s1 * s1), s2 - 1.0 / (s2 * s2 * s2)]
+    }
+    fn hess(&self, s1: f64, s2: f64) -> [[f64; 2]; 2] {
+        [
+            [1.0 + 3.0 / (s1 * s1 * s1 * s1), 0.0],
+            [0.0, 1.0 + 3.0 / (s2 * s2 * s2 * s2)],
+        ]
+    }
+    fn twist(&self, s1: f64, s2: f64) -> f64 {
+        let p = s1 * s2;
+        1.0 + (s1 * s1 + s1 * s2 + s2 * s2) / (p * p * p)
+    }
+    fn flip(&self, s1: f64, s2: f64) -> f64 {
+        let p = s1 * s2;
+        1.0 - (s1 * s1 - s1 * s2 + s2 * s2) / (p * p * p)
+    }
+    fn is_barrier(&self) -> bool {
+        true
+    }
+}
+
+/// The MIPS energy σ1/σ2 + σ2/σ1 − 2 = 2 cosh(δ1/2) − 2, a monotone function of Duncan's
+/// conformal distortion δ1 = 2 log(σ1/σ2).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Mips;
+
+impl IsoEnergy for Mips {
+    fn psi(&self, s1: f64, s2: f64) -> f64 {
+        if !(s2 > 0.0) {
+            return f64::INFINITY;
+        }
+        s1 / s2 + s2 / s1 - 2.0
+    }
+    fn grad(&self, s1: f64, s2: f64) -> [f64; 2] {
+        [1.0 / s2 - s2 / (s1 * s1), 1.0 / s1 - s1 / (s2 * s2)]
+    }
+    fn hess(&self, s1: f64, s2: f64) -> [[f64; 2]; 2] {
+        let h12 = -1.0 / (s1 * s1) - 1.0 / (s2 * s2);
+        [
+            [2.0 * s2 / (s1 * s1 * s1), h12],
+            [h12, 2.0 * s1 / (s2 * s2 * s2)],
+        ]
+    }
+    fn twist(&self, s1: f64, s2: f64) -> f64 {
+        let p = s1 * s2;
+        1.0 / p + (s1 * s1 + s1 * s2 + s2 * s2) / (p * p)
+    }
+    fn flip(&self, s1: f64, s2: f64) -> f64 {
+        let p = s1 * s2;
+        1.0 / p - (s1 * s1 - s1 * s2 + s2 * s2) / (p * p)
+    }
+    fn is_barrier(&self) -> bool {
+        true
+    }
+}
+
+/// Duncan's pointwise deviation δ = (λ1 − 1)² + (λ2 − 1)² with λi = σi² the principal values of
+/// the metric (the Green–Lagrange strain norm). Not a barrier: flips are excluded by the line
+/// search only.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GreenStrain;
+
+impl IsoEnergy for GreenStrain {
+    fn psi(&self, s1: f64, s2: f64) -> f64 {
+        let (a, b) = (s1 * s1 - 1.0, s2 * s2 - 1.0);
+        a * a + b * b
+    }
+    fn grad(&self, s1: f64, s2: f64) -> [f64; 2] {
+        [4.0 * s1 * (s1 * s1 - 1.0), 4.0 * s2 * (s2 * s2 - 1.0)]
+    }
+    fn hess(&self, s1: f64, s2: f64) -> [[f64; 2]; 2] {
+        [[12.0 * s1 * s1 - 4.0, 0.0], [0.0, 12.0 * s2 * s2 - 4.0]]
+    }
+    fn twist(&self, s1: f64, s2: f64) -> f64 {
+        4.0 * (s1 * s1 + s1 * s2 + s2 * s2 - 1.0)
+    }
+    fn flip(&self, s1: f64, s2: f64) -> f64 {
+        4.0 * (s1 * s1 - s1 * s2 + s2 * s2 - 1.0)
+    }
+    fn is_barrier(&self) -> bool {
+        false
+    }
+}
+
+/// Material limits as a one-sided quadratic penalty on each principal stretch:
+/// k·(σ − s_max)₊² + k·(s_min − σ)₊², added to an inner energy.
+#[derive(Clone, Copy, Debug)]
+pub struct WithLimits<E> {
+    pub inner: E,
+    /// Largest allowed stretch factor σ1 (∞ for none).
+    pub s_max: f64,
+    /// Smallest allowed stretch factor σ2 (0 for none).
+    pub s_min: f64,
+    /// Penalty stiffness (dimensionless, relative to the inner density).
+    pub k: f64,
+}
+
+impl<E: IsoEnergy> WithLimits<E> {
+    fn f(&self, s: f64) -> f64 {
+        let a = (s - self.s_max).max(0.0);
+        let b = (self.s_min - s).max(0.0);
+        self.k * (a * a + b * b)
+    }
+    fn df(&self, s: f64) -> f64 {
+        let a = (s - self.s_max).max(0.0);
+        let b = (self.s_min - s).max(0.0);
+        2.0 * self.k * (a - b)
+    }
+    fn d2f(&self, s: f64) -> f64 {
+        if s > self.s_max || s < self.s_min {
+            2.0 * self.k
+        } else {
+            0.0
+        }
+    }
+}
+
+impl<E: IsoEnergy> IsoEnergy for WithLimits<E> {
+    fn psi(&self, s1: f64, s2: f64) -> f64 {
+        self.inner.psi(s1, s2) + self.f(s1) + self.f(s2)
+    }
+    fn grad(&self, s1: f64, s2: f64) -> [f64; 2] {
+        let g = self.inner.grad(s1, s2);
+        [g[0] + self.df(s1), g[1] + self.df(s2)]
+    }
+    fn hess(&self, s1: f64, s2: f64) -> [[f64; 2]; 2] {
+        let mut h = self.inner.hess(s1, s2);
+        h[0][0] += self.d2f(s1);
+        h[1][1] += self.d2f(s2);
+        h
+    }
+    fn twist(&self, s1: f64, s2: f64) -> f64 {
+        let extra = if (s1 - s2).abs() <= TWIST_LIMIT_GAP * (s1.abs() + s2.abs()) {
+            self.d2f(s1)
+        } else {
+            (self.df(s1) - self.df(s2)) / (s1 - s2)
+        };
+        self.inner.twist(s1, s2) + extra
+    }
+    fn flip(&self, s1: f64, s2: f64) -> f64 {
+        self.inner.flip(s1, s2) + (self.df(s1) + self.df(s2)) / (s1 + s2)
+    }
+    fn is_barrier(&self) -> bool {
+        self.inner.is_barrier()
+    }
+}
+
+/// Energy, gradient (3 corners × 2) and projected Hessian (6×6, dof order (v0x, v0y, v1x, …))
+/// of one triangle, all multiplied by the triangle's area.
+pub struct TriEval {
+    pub energy: f64,
+    pub grad: [DVec2; 3],
+    pub hess: [[f64; 6]; 6],
+}
+
+/// Evaluates the area-weighted energy of one triangle only (`None` if not finite).
+#[inline]
+pub fn tri_energy<E: IsoEnergy>(e: &E, r: &RestTri, x: &[DVec2]) -> f64 {
+    let f = r.jacobian(x);
+    let det = f.determinant();
+    if !(det > 0.0) && e.is_barrier() {
+        return f64::INFINITY;
+    }
+    let s = svd2(f);
+    r.area * e.psi(s.s1, s.s2)
+}
+
+/// Full evaluation of one triangle; `with_hess` = false skips the Hessian.
+pub fn tri_eval<E: IsoEnergy>(e: &E, r: &RestTri, x: &[DVec2], with_hess: bool) -> TriEval {
+    let f = r.jacobian(x);
+    let s = svd2(f);
+    let (s1, s2) = (s.s1, s.s2);
+    let energy = r.area * e.psi(s1, s2);
+    let g = e.grad(s1, s2);
+    // P = ∂Ψ/∂F = U diag(g) Vᵀ; ∂E/∂x_v = A · P g_v.
+    let p = s.u * DMat2::from_diagonal(DVec2::new(g[0], g[1])) * s.v.transpose();
+    let grad = [
+        r.area * (p * r.g[0]),
+        r.area * (p * r.g[1]),
+        r.area * (p * r.g[2]),
+    ];
+    let mut hess = [[0.0; 6]; 6];
+    if with_hess {
+        let h = e.hess(s1, s2);
+        // Eigen-decomposition of the symmetric 2×2 scaling block.
+        let (a, b, c) = (h[0][0], h[0][1], h[1][1]);
+        let mean = 0.5 * (a + c);
+        let rad = (0.25 * (a - c) * (a - c) + b * b).sqrt();
+        let (l1, l2) = (mean + rad, mean - rad);
+        // Eigenvector of l1: robust choice between the two formulas.
+        let ev1 = if b.abs() > 0.0 {
+            let v = if a >= c {
+                DVec2::new(l1 - c, b)
+            } else {
+                DVec2::new(b, l1 - a)
+            };
+            v.normalize()
+        } else if a >= c {
+            DVec2::X
+        } else {
+            DVec2::Y
+        };
+        let ev2 = DVec2::new(-ev1.y, ev1.x);
+        let inv_sqrt2 = std::f64::consts::FRAC_1_SQRT_2;
+        let vt = s.v.transpose();
+        let modes = [
+            (l1, s.u * DMat2::from_diagonal(ev1) * vt),
+            (l2, s.u * DMat2::from_diagonal(ev2) * vt),
+            (
+                e.twist(s1, s2),
+                s.u * DMat2::from_cols(DVec2::new(0.0, inv_sqrt2), DVec2::new(inv_sqrt2, 0.0)) * vt,
+            ),
+            (
+                e.flip(s1, s2),
+                s.u * DMat2::from_cols(DVec2::new(0.0, inv_sqrt2), DVec2::new(-inv_sqrt2, 0.0))
+                    * vt,
+            ),
+        ];
+        for (lambda, m) in modes {
+            if !(lambda > 0.0) || !lambda.is_finite() {
+                continue;
+            }
+            // Mode vector in x-space: for corner v, m · g_v.
+            let w = [m * r.g[0], m * r.g[1], m * r.g[2]];
+            let q = [w[0].x, w[0].y, w[1].x, w[1].y, w[2].x, w[2].y];
+            let scale = r.area * lambda;
+            for i in 0..6 {
+                let si = scale * q[i];
+                for j in 0..6 {
+                    hess[i][j] += si * q[j];
+                }
+            }
+        }
+    }
+    TriEval { energy, grad, hess }
+}
+
+/// The largest step t ∈ (0, ∞] such that det F(x + s·d) > 0 for all s ∈ [0, t) for one
+/// triangle, i.e. the smallest positive root of the quadratic det(Ds + t dDs) = 0.
+pub fn max_step_tri(r: &RestTri, x: &[DVec2], d: &[DVec2]) -> f64 {
+    let (i0, i1, i2) = (r.v[0], r.v[1], r.v[2]);
+    let a0 = x[i1] - x[i0];
+    let b0 = x[i2] - x[i0];
+    let da = d[i1] - d[i0];
+    let db = d[i2] - d[i0];
+    let c = a0.perp_dot(b0);
+    let b = a0.perp_dot(db) + da.perp_dot(b0);
+    let a = da.perp_dot(db);
+    smallest_positive_root(a, b, c)
+}
+
+/// Smallest positive root of a t² + b t + c (c > 0 expected), +∞ if none.
+fn smallest_positive_root(a: f64, b: f64, c: f64) -> f64 {
+    let scale = a.abs().max(b.abs()).max(c.abs());
+    if scale == 0.0 {
+        return f64::INFINITY;
+    }
+    // Relative size under which the quadratic term is negligible against the others.
+    const QUAD_NEGLIGIBLE: f64 = 1e-14;
+    if a.abs() <= QUAD_NEGLIGIBLE * scale {
+        return if b < 0.0 { -c / b } else { f64::INFINITY };
+    }
+    let disc = b * b - 4.0 * a * c;
+    if disc < 0.0 {
+        return f64::INFINITY;
+    }
+    let sq = disc.sqrt();
+    let q = -0.5 * (b + b.signum() * sq);
+    let mut best = f64::INFINITY;
+    for t in [q / a, if q != 0.0 { c / q } else { f64::INFINITY }] {
+        if t > 0.0 && t < best {
+            best = t;
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flatcut_geom::DVec3;
+
+    fn tri_mesh() -> (TriMesh, Vec<RestTri>) {
+        let m = TriMesh::new(
+            vec![
+                DVec3::new(0.3, -0.2, 0.1),
+                DVec3::new(2.1, 0.4, -0.3),
+                DVec3::new(0.7, 1.9, 0.5),
+            ],
+            vec![[0, 1, 2]],
+        );
+        let r = rest_frames(&m).unwrap();
+        (m, r)
+    }
+
+    #[test]
+    fn svd_reconstructs_and_signs() {
+        for f in [
+            DMat2::from_cols(DVec2::new(1.3, 0.2), DVec2::new(-0.4, 0.8)),
+            DMat2::from_cols(DVec2::new(-1.0, 0.5), DVec2::new(0.3, 0.9)),
+            DMat2::from_cols(DVec2::new(2.0, 0.0), DVec2::new(0.0, 2.0)),
+        ] {
+            let s = svd2(f);
+            let back = s.u * DMat2::from_diagonal(DVec2::new(s.s1, s.s2)) * s.v.transpose();
+            assert!((back - f).abs().to_cols_array().iter().all(|e| *e < 1e-13));
+            assert!((s.s1 * s.s2 - f.determinant()).abs() < 1e-13);
+            assert!(s.s1 >= s.s2.abs());
+        }
+    }
+
+    fn check_fd<E: IsoEnergy>(e: &E) {
+        let (_, r) = tri_mesh();
+        let r = r[0];
+        // A stretched (σ > 1), sheared and rotated image of the rest triangle: every eigenvalue
+        // of the exact Hessian is positive there, so the projection is inactive.
+        let (m, _) = tri_mesh();
+        let c = m.corners(0);
+        let (loc, _, _) = local_frame(c[0], c[1], c[2]).unwrap();
+        let a =
+            DMat2::from_angle(0.4) * DMat2::from_cols(DVec2::new(1.3, 0.1), DVec2::new(0.15, 1.2));
+        let x: Vec<DVec2> = loc.iter().map(|p| a * *p + DVec2::new(0.5, -0.2)).collect();
+        let ev = tri_eval(e, &r, &x, true);
+        let h = 1e-6;
+        for k in 0..6 {
+            let mut xp = x.clone();
+            let mut xm = x.clone();
+            if k % 2 == 0 {
+                xp[k / 2].x += h;
+                xm[k / 2].x -= h;
+            } else {
+                xp[k / 2].y += h;
+                xm[k / 2].y -= h;
+            }
+            let fd = (tri_energy(e, &r, &xp) - tri_energy(e, &r, &xm)) / (2.0 * h);
+            let an = if k % 2 == 0 {
+                ev.grad[k / 2].x
+            } else {
+                ev.grad[k / 2].y
+            };
+            assert!(
+                (fd - an).abs() < 1e-6 * (1.0 + an.abs()),
+                "grad {k}: {fd} vs {an}"
+            );
+            // Hessian column by differencing the gradient.
+            let gp = tri_eval(e, &r, &xp, false).grad;
+            let gm = tri_eval(e, &r, &xm, false).grad;
+            for j in 0..6 {
+                let (a, b) = if j % 2 == 0 {
+                    (gp[j / 2].x, gm[j / 2].x)
+                } else {
+                    (gp[j / 2].y, gm[j / 2].y)
+                };
+                let fdh = (a - b) / (2.0 * h);
+                assert!(
+                    (fdh - ev.hess[j][k]).abs() < 1e-5 * (1.0 + fdh.abs()),
+                    "hess {j},{k}: {fdh} vs {}",
+                    ev.hess[j][k]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn symdirichlet_derivatives_match_finite_differences() {
+        check_fd(&SymDirichlet);
+    }
+
+    #[test]
+    fn green_strain_derivatives_match_finite_differences() {
+        check_fd(&GreenStrain);
+    }
+
+    #[test]
+    fn projected_hessian_is_psd_far_from_rest() {
+        let (_, r) = tri_mesh();
+        let x = vec![
+            DVec2::new(0.0, 0.0),
+            DVec2::new(5.0, 0.1),
+            DVec2::new(0.3, 0.05),
+        ];
+        for h in [
+            tri_eval(&SymDirichlet, &r[0], &x, true).hess,
+            tri_eval(&Mips, &r[0], &x, true).hess,
+        ] {
+            let m = nalgebra::SMatrix::<f64, 6, 6>::from_fn(|i, j| h[i][j]);
+            let ev = m.symmetric_eigenvalues();
+            let scale = ev.amax();
+            assert!(ev.iter().all(|l| *l >= -1e-10 * scale), "{ev}");
+        }
+    }
+
+    #[test]
+    fn max_step_hits_zero_area() {
+        let (_, r) = tri_mesh();
+        let x = vec![
+            DVec2::new(0.0, 0.0),
+            DVec2::new(1.0, 0.0),
+            DVec2::new(0.0, 1.0),
+        ];
+        // Move the apex straight down: it crosses the base at t = 0.5.
+        let d = vec![DVec2::ZERO, DVec2::ZERO, DVec2::new(0.3, -2.0)];
+        let t = max_step_tri(&r[0], &x, &d);
+        assert!((t - 0.5).abs() < 1e-14, "{t}");
+        let d = vec![DVec2::ZERO, DVec2::ZERO, DVec2::new(0.0, 1.0)];
+        assert!(max_step_tri(&r[0], &x, &d).is_infinite());
+    }
+}

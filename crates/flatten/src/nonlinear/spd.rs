@@ -1,0 +1,169 @@
+//! A symmetric positive-definite sparse system with a fixed pattern: faer's supernodal/simplicial
+//! sparse Cholesky (AMD ordering) whose symbolic factorisation is computed once and reused for
+//! every Newton step, run sequentially (`Par::Seq`: faster on small machines and bit-for-bit
+//! deterministic, see crates.md §3).
+//!
+//! Only the upper triangle is stored (CSC, rows ≤ column).
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{
+    LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par, Side};
+
+/// A fixed-pattern SPD matrix and its reusable symbolic Cholesky factorisation.
+pub struct SpdSystem {
+    n: usize,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    /// Values of the upper triangle, in CSC order.
+    pub values: Vec<f64>,
+    /// Slot of each diagonal entry.
+    diag: Vec<usize>,
+    symbolic: SymbolicCholesky<usize>,
+    l_values: Vec<f64>,
+    factor_buf: MemBuffer,
+    solve_buf: MemBuffer,
+}
+
+impl SpdSystem {
+    /// Builds the pattern from (row, col) pairs (any order, duplicates allowed; entries with
+    /// row > col are mirrored). Every diagonal entry is added.
+    pub fn new(n: usize, mut entries: Vec<(usize, usize)>) -> Result<Self, String> {
+        for e in entries.iter_mut() {
+            if e.0 > e.1 {
+                *e = (e.1, e.0);
+            }
+        }
+        entries.extend((0..n).map(|i| (i, i)));
+        // Sort by (col, row) for CSC.
+        entries.sort_unstable_by_key(|&(r, c)| (c, r));
+        entries.dedup();
+        let mut col_ptr = vec![0usize; n + 1];
+        let mut row_idx = Vec::with_capacity(entries.len());
+        for &(r, c) in &entries {
+            col_ptr[c + 1] += 1;
+            row_idx.push(r);
+        }
+        for c in 0..n {
+            col_ptr[c + 1] += col_ptr[c];
+        }
+        let diag = (0..n)
+            .map(|c| col_ptr[c + 1] - 1) // rows sorted, the diagonal is last in its column
+            .collect();
+        let sym = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
+        let symbolic = factorize_symbolic_cholesky(
+            sym,
+            Side::Upper,
+            SymmetricOrdering::Amd,
+            Default::default(),
+        )
+        .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
+        let l_values = vec![0.0; symbolic.len_val()];
+        let factor_buf = MemBuffer::new(
+            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+        );
+        let solve_buf = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+        let nnz = row_idx.len();
+        Ok(Self {
+            n,
+            col_ptr,
+            row_idx,
+            values: vec![0.0; nnz],
+            diag,
+            symbolic,
+            l_values,
+            factor_buf,
+            solve_buf,
+        })
+    }
+
+    /// Dimension.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// The slot of entry (r, c) of the upper triangle (r ≤ c); `None` if not in the pattern.
+    pub fn slot(&self, r: usize, c: usize) -> Option<usize> {
+        let (r, c) = if r <= c { (r, c) } else { (c, r) };
+        let rows = &self.row_idx[self.col_ptr[c]..self.col_ptr[c + 1]];
+        rows.binary_search(&r).ok().map(|k| self.col_ptr[c] + k)
+    }
+
+    /// Slot of diagonal entry i.
+    pub fn diag_slot(&self, i: usize) -> usize {
+        self.diag[i]
+    }
+
+    /// Zeroes all values.
+    pub fn clear(&mut self) {
+        self.values.iter_mut().for_each(|v| *v = 0.0);
+    }
+
+    /// Factorises the current values (numeric phase only) and solves A x = b in place.
+    /// Returns an error if the matrix is not numerically positive definite.
+    pub fn factor_solve(&mut self, b: &mut [f64]) -> Result<(), String> {
+        let sym = SymbolicSparseColMatRef::new_checked(
+            self.n,
+            self.n,
+            &self.col_ptr,
+            None,
+            &self.row_idx,
+        );
+        let mat = SparseColMatRef::new(sym, &self.values);
+        let llt = self
+            .symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut self.l_values,
+                mat,
+                Side::Upper,
+                LltRegularization::default(),
+                Par::Seq,
+                MemStack::new(&mut self.factor_buf),
+                Default::default(),
+            )
+            .map_err(|e| format!("{e:?}"))?;
+        let llt: LltRef<'_, usize, f64> = llt;
+        let rhs = MatMut::from_column_major_slice_mut(b, self.n, 1);
+        llt.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.solve_buf));
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn solves_a_small_spd_system() {
+        // Tridiagonal 1-D Laplacian + I.
+        let n = 50;
+        let mut entries = Vec::new();
+        for i in 0..n - 1 {
+            entries.push((i, i + 1));
+        }
+        let mut s = SpdSystem::new(n, entries).unwrap();
+        for i in 0..n {
+            let d = s.diag_slot(i);
+            s.values[d] = 3.0;
+            if i + 1 < n {
+                let k = s.slot(i, i + 1).unwrap();
+                s.values[k] = -1.0;
+            }
+        }
+        let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+        let mut b: Vec<f64> = (0..n)
+            .map(|i| {
+                3.0 * x[i]
+                    - if i > 0 { x[i - 1] } else { 0.0 }
+                    - if i + 1 < n { x[i + 1] } else { 0.0 }
+            })
+            .collect();
+        s.factor_solve(&mut b).unwrap();
+        for i in 0..n {
+            assert!((b[i] - x[i]).abs() < 1e-12);
+        }
+    }
+}
