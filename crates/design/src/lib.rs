@@ -78,7 +78,7 @@ pub enum DesignError {
         file: String,
         index: usize,
         piece: String,
-        source: MeshIoError,
+        source: Box<MeshIoError>,
     },
     #[error("{file}: piece {index} '{piece}': {source}")]
     Tessellation {
@@ -247,11 +247,13 @@ pub enum SurfaceDef {
     Mesh { file: String },
 }
 
-/// A seam: 3D points (joined by shortest mesh-edge paths) or, for mesh pieces, vertex indices.
+/// A seam: 3D points `[x, y, z]` (joined by shortest mesh-edge paths), surface parameters
+/// `[u, v]` of a single-patch piece (same), or, for mesh pieces, vertex indices.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(untagged)]
 pub enum SeamDef {
     Points(Vec<P3>),
+    Params(Vec<[f64; 2]>),
     Vertices(Vec<u32>),
 }
 
@@ -463,8 +465,12 @@ impl Design {
             }
             check_surface(&ctx, &p.surface)?;
             for (k, seam) in p.seams.iter().enumerate() {
-                if let SeamDef::Points(pts) = seam {
-                    check_points(&ctx, &format!("seam {k}"), pts)?;
+                match seam {
+                    SeamDef::Points(pts) => check_points(&ctx, &format!("seam {k}"), pts)?,
+                    SeamDef::Params(uv) if uv.iter().flatten().any(|x| !x.is_finite()) => {
+                        return Err(ctx.err(format!("seam {k}: non-finite (u, v)")));
+                    }
+                    _ => {}
                 }
             }
             for m in &p.marks {
@@ -1040,7 +1046,7 @@ impl PieceDef {
                 file: ctx.file.clone(),
                 index: ctx.index,
                 piece: ctx.piece.clone(),
-                source,
+                source: Box::new(source),
             })?;
             if self.mesh_scale != 1.0 {
                 m.positions.iter_mut().for_each(|p| *p *= self.mesh_scale);
@@ -1076,6 +1082,20 @@ impl PieceDef {
                 SeamDef::Vertices(v) => v.clone(),
                 SeamDef::Points(p) => flatcut_mesh::seam_from_points(&m, &pts(p))
                     .map_err(|err| ctx.err(format!("seam {k}: {err}")))?,
+                SeamDef::Params(uv) => {
+                    if m.patch_of_vertex.is_some() || m.params.is_none() {
+                        return Err(ctx.err(format!(
+                            "seam {k}: (u, v) seams need a single-patch surface; give 3D points"
+                        )));
+                    }
+                    let uv: Vec<flatcut_geom::DVec2> = uv
+                        .iter()
+                        .map(|q| flatcut_geom::DVec2::from_array(*q))
+                        .collect();
+                    flatcut_mesh::seams::seam_from_params(&m, &uv)
+                        .unwrap_or(Ok(Vec::new()))
+                        .map_err(|err| ctx.err(format!("seam {k}: {err}")))?
+                }
             };
             lists.push(list);
         }

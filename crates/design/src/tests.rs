@@ -238,3 +238,20 @@ fn geometry_errors_name_the_piece() {
     );
     assert!(e.contains("piece 1 'panel': quantity"), "{e}");
 }
+
+#[test]
+fn seams_in_uv_cut_a_closed_cylinder_open_along_a_generator() {
+    // A torus is cut at both parameter seams already; a (u, v) seam across it adds a slit.
+    let text = "[[piece]]\nname = \"t\"\nseams = [[[0.0, 0.5], [0.5, 0.5]]]\n[piece.surface]\ntype = \"torus\"\ncenter = [0,0,0]\nmajor = 60\nminor = 20\n";
+    let d = Design::from_toml_str(text, "t.toml").unwrap();
+    assert!(matches!(d.pieces[0].seams[0], SeamDef::Params(_)));
+    let plain = d.pieces[0]
+        .build(Path::new("."))
+        .unwrap()
+        .tessellate(&TOL)
+        .unwrap();
+    let cut = d.pieces[0].mesh(Path::new("."), &TOL).unwrap();
+    assert!(cut.vertex_count() > plain.vertex_count());
+    flatcut_mesh::check_disk(&cut).unwrap();
+    assert!((cut.area() - plain.area()).abs() < 1e-9 * plain.area());
+}

@@ -67,16 +67,16 @@ pub fn distances_from_many(mesh: &TriMesh, sources: &[u32]) -> Vec<f64> {
                 let other = tri.iter().copied().find(|&x| x != v && x != w).unwrap_or(v);
                 let mut cand = d + pos[v as usize].distance(pos[w as usize]);
                 let d_other = dist[other as usize];
-                if d_other.is_finite() {
-                    if let Some(c) = unfold_update(
+                if d_other.is_finite()
+                    && let Some(c) = unfold_update(
                         pos[w as usize],
                         pos[v as usize],
                         d,
                         pos[other as usize],
                         d_other,
-                    ) {
-                        cand = cand.min(c);
-                    }
+                    )
+                {
+                    cand = cand.min(c);
                 }
                 let old = dist[w as usize];
                 if cand < old && (old - cand) > REL_IMPROVEMENT * cand.max(f64::MIN_POSITIVE) {

@@ -813,4 +813,31 @@ mod tests {
         let nan = ascii.replace("1 1 0\n", "1 nan 0\n");
         assert!(parse_ply(nan.as_bytes(), Path::new("q.ply"), 1e-3).is_err());
     }
+
+    proptest::proptest! {
+        #[test]
+        fn obj_round_trip_property(
+            pts in proptest::collection::vec((-1_000_000i64..1_000_000i64, -1_000_000i64..1_000_000i64, -1_000_000i64..1_000_000i64), 3..40),
+            seed in 0u64..1000,
+        ) {
+            // Coordinates on the written 1e-6 grid round-trip exactly.
+            let positions: Vec<DVec3> = pts
+                .iter()
+                .map(|&(x, y, z)| DVec3::new(x as f64 * 1e-3, y as f64 * 1e-3, z as f64 * 1e-3))
+                .collect();
+            let n = positions.len() as u64;
+            let triangles: Vec<[u32; 3]> = (0..n)
+                .map(|k| {
+                    let a = (k * 7 + seed) % n;
+                    [a as u32, ((a + 1) % n) as u32, ((a + 2) % n) as u32]
+                })
+                .collect();
+            let m = TriMesh::new(positions, triangles);
+            let back = parse_obj(&obj_string(&m), p()).unwrap();
+            proptest::prop_assert_eq!(back.triangles, m.triangles);
+            for (a, b) in back.positions.iter().zip(&m.positions) {
+                proptest::prop_assert!((*a - *b).abs().max_element() <= 5e-7);
+            }
+        }
+    }
 }

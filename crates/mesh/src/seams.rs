@@ -15,9 +15,14 @@ use flatcut_geom::{DVec2, DVec3};
 use crate::{Topology, TopologyError, TriMesh};
 
 /// Total order on f64 distances for the priority queue (all values are finite, non-negative).
-#[derive(Clone, Copy, PartialEq, PartialOrd)]
+#[derive(Clone, Copy, PartialEq)]
 pub(crate) struct Dist(pub f64);
 impl Eq for Dist {}
+impl PartialOrd for Dist {
+    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(o))
+    }
+}
 impl Ord for Dist {
     fn cmp(&self, o: &Self) -> std::cmp::Ordering {
         self.0.total_cmp(&o.0)

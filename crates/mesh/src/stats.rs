@@ -170,6 +170,44 @@ pub struct MeshStats {
     pub has_flat: bool,
 }
 
+impl std::fmt::Display for MeshStats {
+    /// A human-readable summary, one fact per line (what `inspect` prints for a mesh).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let opt = |x: Option<usize>| x.map_or("invalid topology".to_string(), |v| v.to_string());
+        writeln!(f, "vertices          {}", self.vertices)?;
+        writeln!(f, "triangles         {}", self.triangles)?;
+        writeln!(f, "area              {:.3} mm²", self.area)?;
+        let s = self.bbox.size();
+        writeln!(
+            f,
+            "bounding box      {:.3} x {:.3} x {:.3} mm",
+            s.x, s.y, s.z
+        )?;
+        writeln!(f, "components        {}", opt(self.components))?;
+        writeln!(f, "boundary loops    {}", opt(self.boundary_loops))?;
+        writeln!(f, "boundary length   {:.3} mm", self.boundary_length)?;
+        writeln!(f, "euler             {}", self.euler)?;
+        writeln!(
+            f,
+            "edges             {:.4} / {:.4} / {:.4} mm (min / mean / max)",
+            self.edge_min, self.edge_mean, self.edge_max
+        )?;
+        writeln!(f, "max valence       {}", self.valence_max)?;
+        if let Some((lo, hi)) = self.gaussian_range {
+            writeln!(f, "gaussian K        {lo:.3e} .. {hi:.3e} 1/mm²")?;
+        }
+        if let Some((lo, hi)) = self.mean_range {
+            writeln!(f, "mean H            {lo:.3e} .. {hi:.3e} 1/mm")?;
+        }
+        writeln!(f, "angle defect      {:.6} rad", self.total_angle_defect)?;
+        write!(
+            f,
+            "flattening (vt)   {}",
+            if self.has_flat { "yes" } else { "no" }
+        )
+    }
+}
+
 fn range(v: &[Option<f64>]) -> Option<(f64, f64)> {
     v.iter().flatten().fold(None, |acc, &x| match acc {
         None => Some((x, x)),
@@ -314,6 +352,8 @@ mod tests {
         assert_eq!(s.euler, 2);
         assert_eq!(s.boundary_loops, Some(0));
         assert!((s.total_angle_defect - 4.0 * PI).abs() < 1e-9);
+        let text = s.to_string();
+        assert!(text.contains("boundary loops    0") && text.contains("euler             2"));
         assert!((s.area - 4.0 * PI * 2500.0).abs() / (4.0 * PI * 2500.0) < 1e-2);
         // Away from the poles K ≈ 1/r², H ≈ −1/r (outward normals bend away).
         let k = gaussian_curvature(&m);

@@ -1062,11 +1062,7 @@ mod tests {
         let m = tessellate(&s, &Tolerances::DEFAULT.with_chord_mm(0.1)).unwrap();
         // A disk: the two poles are single vertices on the boundary (the meridian seam, twice).
         let topo = crate::check_disk(&m).unwrap();
-        let poles = m
-            .positions
-            .iter()
-            .filter(|p| p.x.hypot(p.y) < 1e-9)
-            .count();
+        let poles = m.positions.iter().filter(|p| p.x.hypot(p.y) < 1e-9).count();
         assert_eq!(poles, 2);
         let exact = 4.0 * PI * 2500.0;
         assert!((m.area() - exact).abs() / exact < 5e-3);

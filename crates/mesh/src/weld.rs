@@ -232,4 +232,27 @@ mod tests {
         assert_eq!(w.positions.len(), 6);
         assert_eq!(w.triangles, vec![[0, 1, 2], [1, 3, 2]]);
     }
+
+    proptest::proptest! {
+        #[test]
+        fn every_point_is_within_tolerance_of_its_representative(
+            pts in proptest::collection::vec((-50i32..50, -50i32..50, -5i32..5), 1..200),
+        ) {
+            let pts: Vec<DVec3> = pts
+                .iter()
+                .map(|&(x, y, z)| DVec3::new(x as f64 * 0.01, y as f64 * 0.01, z as f64 * 0.01))
+                .collect();
+            let tol = 0.015;
+            let (reps, remap) = weld_points(&pts, tol);
+            for (i, &r) in remap.iter().enumerate() {
+                proptest::prop_assert!(pts[i].distance(reps[r as usize]) <= tol);
+            }
+            // Representatives are pairwise farther apart than the tolerance.
+            for a in 0..reps.len() {
+                for b in a + 1..reps.len() {
+                    proptest::prop_assert!(reps[a].distance(reps[b]) > tol);
+                }
+            }
+        }
+    }
 }
