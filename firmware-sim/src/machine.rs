@@ -735,6 +735,25 @@ impl Grbl {
         self.startup();
     }
 
+    /// Power cycle (the device was unplugged and plugged in again): motion and output are gone, the position is
+    /// zero, settings and EEPROM data are kept, and the banner comes as at power-up.
+    pub fn power_cycle(&mut self) {
+        self.out.clear();
+        self.line_active = false;
+        self.critical = false;
+        self.pending.clear();
+        self.active_motion = None;
+        self.stop_motion();
+        self.planner.pos = [0.0; N_AXIS];
+        self.planner.sync_position(&self.settings);
+        self.state = if self.settings.homing {
+            State::Alarm
+        } else {
+            State::Idle
+        };
+        self.soft_reset();
+    }
+
     fn startup(&mut self) {
         self.emit(BANNER);
         if self.state == State::Alarm {

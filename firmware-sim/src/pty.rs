@@ -25,6 +25,8 @@ const POLL_MS: u8 = 1;
 const MAX_BURST_S: f64 = 0.005;
 /// Longest real-time step fed to the core in one go, s (a descheduled thread does not teleport the machine).
 const MAX_TICK_S: f64 = 0.05;
+/// After a hang-up the device comes back (like a USB adapter re-enumerating) after this long, s.
+const REPLUG_DELAY_S: f64 = 1.0;
 
 #[derive(Debug, Default)]
 struct Shared {
@@ -33,6 +35,9 @@ struct Shared {
     lines: u32,
     sim_time: f64,
     hung_up: bool,
+    path: PathBuf,
+    links: Vec<PathBuf>,
+    replugs: u32,
 }
 
 /// A running simulator on a pseudo-terminal, on its own thread.
@@ -42,7 +47,6 @@ pub struct PtySim {
     shared: Arc<Mutex<Shared>>,
     stop: Arc<AtomicBool>,
     handle: Option<JoinHandle<()>>,
-    links: Mutex<Vec<PathBuf>>,
     config: SimConfig,
 }
 
@@ -67,15 +71,12 @@ impl PtySim {
                 ),
             ));
         }
-        let pty = nix::pty::openpty(None, None).map_err(io_err)?;
-        let (master, slave) = (pty.master, pty.slave);
-        let mut t = tcgetattr(&slave).map_err(io_err)?;
-        cfmakeraw(&mut t);
-        tcsetattr(&slave, SetArg::TCSANOW, &t).map_err(io_err)?;
-        let path = nix::unistd::ttyname(&slave).map_err(io_err)?;
-        let flags = OFlag::from_bits_truncate(fcntl(&master, FcntlArg::F_GETFL).map_err(io_err)?);
-        fcntl(&master, FcntlArg::F_SETFL(flags | OFlag::O_NONBLOCK)).map_err(io_err)?;
-        let shared = Arc::new(Mutex::new(Shared::default()));
+        let (master, slave, path) = open_pty()?;
+        let shared = Arc::new(Mutex::new(Shared {
+            path: path.clone(),
+            ..Shared::default()
+        }));
+
         let stop = Arc::new(AtomicBool::new(false));
         let (sh, st, cfg) = (shared.clone(), stop.clone(), config.clone());
         let handle = std::thread::Builder::new()
@@ -86,7 +87,6 @@ impl PtySim {
             shared,
             stop,
             handle: Some(handle),
-            links: Mutex::new(Vec::new()),
             config,
         })
     }
@@ -103,11 +103,9 @@ impl PtySim {
         {
             std::fs::remove_file(path)?;
         }
-        std::os::unix::fs::symlink(&self.path, path)?;
-        self.links
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .push(path.to_path_buf());
+        let mut sh = lock(&self.shared);
+        std::os::unix::fs::symlink(&sh.path, path)?;
+        sh.links.push(path.to_path_buf());
         Ok(())
     }
 
@@ -131,9 +129,19 @@ impl PtySim {
         lock(&self.shared).sim_time
     }
 
-    /// True once a hang-up fault closed the device.
+    /// True while a hang-up fault has the device closed.
     pub fn hung_up(&self) -> bool {
         lock(&self.shared).hung_up
+    }
+
+    /// The device path now: after a hang-up the device comes back on a new pseudo-terminal (the links follow it).
+    pub fn current_path(&self) -> PathBuf {
+        lock(&self.shared).path.clone()
+    }
+
+    /// How many times the device came back after a hang-up.
+    pub fn replugs(&self) -> u32 {
+        lock(&self.shared).replugs
     }
 
     /// Stops the thread, writes the trace files of the configuration and returns trace and counters.
@@ -171,12 +179,8 @@ impl PtySim {
         if let Some(h) = self.handle.take() {
             let _ = h.join();
         }
-        for l in self
-            .links
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .drain(..)
-        {
+        let links: Vec<PathBuf> = lock(&self.shared).links.drain(..).collect();
+        for l in links {
             let _ = std::fs::remove_file(l);
         }
     }
@@ -206,6 +210,33 @@ impl Pace {
     }
 }
 
+/// Opens a pseudo-terminal pair in raw mode with a non-blocking master; returns (master, slave, slave path).
+fn open_pty() -> io::Result<(OwnedFd, OwnedFd, PathBuf)> {
+    let pty = nix::pty::openpty(None, None).map_err(io_err)?;
+    let (master, slave) = (pty.master, pty.slave);
+    let mut t = tcgetattr(&slave).map_err(io_err)?;
+    cfmakeraw(&mut t);
+    tcsetattr(&slave, SetArg::TCSANOW, &t).map_err(io_err)?;
+    let path = nix::unistd::ttyname(&slave).map_err(io_err)?;
+    let flags = OFlag::from_bits_truncate(fcntl(&master, FcntlArg::F_GETFL).map_err(io_err)?);
+    fcntl(&master, FcntlArg::F_SETFL(flags | OFlag::O_NONBLOCK)).map_err(io_err)?;
+    Ok((master, slave, path))
+}
+
+/// Brings the device back on a fresh pseudo-terminal and re-points the links.
+fn replug(shared: &Mutex<Shared>) -> Option<(OwnedFd, OwnedFd)> {
+    let (master, slave, path) = open_pty().ok()?;
+    let mut sh = lock(shared);
+    for l in &sh.links {
+        let _ = std::fs::remove_file(l);
+        let _ = std::os::unix::fs::symlink(&path, l);
+    }
+    sh.path = path;
+    sh.hung_up = false;
+    sh.replugs += 1;
+    Some((master, slave))
+}
+
 fn run(
     master: OwnedFd,
     slave: OwnedFd,
@@ -230,7 +261,18 @@ fn run(
     let mut last = Instant::now();
     let mut buf = [0u8; 512];
     let mut pushed_trace = 0;
+    let mut unplugged_at: Option<Instant> = None;
     while !stop.load(Ordering::SeqCst) {
+        if let Some(t) = unplugged_at {
+            if t.elapsed().as_secs_f64() >= REPLUG_DELAY_S {
+                if let Some((m, s)) = replug(&shared) {
+                    master = Some(m);
+                    slave = Some(s);
+                    unplugged_at = None;
+                    core.power_cycle();
+                }
+            }
+        }
         if let Some(m) = &master {
             let mut fds = [PollFd::new(m.as_fd(), PollFlags::POLLIN)];
             let _ = poll(&mut fds, PollTimeout::from(POLL_MS));
@@ -268,6 +310,7 @@ fn run(
                     master = None;
                     slave = None;
                     txq.clear();
+                    unplugged_at = Some(Instant::now());
                 }
             }
         }

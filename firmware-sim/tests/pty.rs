@@ -173,6 +173,31 @@ fn hangup_fault_closes_the_device() {
     assert!(broken, "the client sees the hang-up");
     assert_eq!(sim.lines_received(), 2);
     assert!(sim.hung_up());
+    drop(port);
+    // The device comes back like a re-plugged USB adapter: new path, power-up banner, position zero.
+    let t0 = Instant::now();
+    while sim.replugs() == 0 && t0.elapsed() < Duration::from_secs(5) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!(sim.replugs(), 1);
+    assert!(!sim.hung_up());
+    let mut port = open(&sim.current_path());
+    let mut acc = String::new();
+    assert!(
+        read_until(
+            port.as_mut(),
+            &mut acc,
+            "for help]\r\n",
+            Duration::from_secs(3)
+        ),
+        "{acc:?}"
+    );
+    port.write_all(b"?").unwrap();
+    assert!(
+        read_until(port.as_mut(), &mut acc, ">\r\n", Duration::from_secs(3)),
+        "{acc:?}"
+    );
+    assert!(acc.contains("<Idle|MPos:0.000,0.000,0.000|"), "{acc:?}");
 }
 
 #[test]

@@ -283,7 +283,10 @@ fn eeprom_writes_lose_bytes_under_character_counting_only() {
     g.take_output();
     let answers = char_count_stream(&mut g, &lines, RX_BUFFER_SIZE);
     assert!(g.stats().bytes_dropped_eeprom > 0);
-    assert!(answers.len() < lines.len() || answers.iter().any(|a| a != "ok"), "{answers:?}");
+    assert!(
+        answers.len() < lines.len() || answers.iter().any(|a| a != "ok"),
+        "{answers:?}"
+    );
     // Send-response (limit of one line in flight): nothing is lost.
     let mut g = Grbl::new(&SimConfig::default());
     g.take_output();
