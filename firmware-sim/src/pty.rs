@@ -263,15 +263,14 @@ fn run(
     let mut pushed_trace = 0;
     let mut unplugged_at: Option<Instant> = None;
     while !stop.load(Ordering::SeqCst) {
-        if let Some(t) = unplugged_at {
-            if t.elapsed().as_secs_f64() >= REPLUG_DELAY_S {
-                if let Some((m, s)) = replug(&shared) {
-                    master = Some(m);
-                    slave = Some(s);
-                    unplugged_at = None;
-                    core.power_cycle();
-                }
-            }
+        if let Some(t) = unplugged_at
+            && t.elapsed().as_secs_f64() >= REPLUG_DELAY_S
+            && let Some((m, s)) = replug(&shared)
+        {
+            master = Some(m);
+            slave = Some(s);
+            unplugged_at = None;
+            core.power_cycle();
         }
         if let Some(m) = &master {
             let mut fds = [PollFd::new(m.as_fd(), PollFlags::POLLIN)];
