@@ -455,7 +455,9 @@ impl Builder<'_> {
                 .filter(|&t| self.tris[t].alive)
                 .collect();
             let bset: Vec<u32> = (0..self.pos.len() as u32)
-                .filter(|&v| self.on_boundary[v as usize] && rep[v as usize] == v)
+                .filter(|&v| {
+                    self.on_boundary[v as usize] && rep.get(v as usize).is_none_or(|&r| r == v)
+                })
                 .collect();
             for &t in &live {
                 let tri = self.tris[t];
@@ -679,6 +681,7 @@ mod tests {
         w: f64,
         q: i32,
         h: f64,
+        qv: i32,
     }
     /// A curved triangular patch: barycentric map onto a paraboloid cap.
     #[derive(Debug)]
@@ -744,7 +747,7 @@ mod tests {
         DomainKind::Rectangle,
         |s: &Saddle, u: f64, v: f64| {
             let x = s.x0 + s.w * u.powi(s.q);
-            let y = s.h * v;
+            let y = s.h * v.powi(s.qv);
             DVec3::new(x, y, s.a * x * y)
         }
     );
@@ -940,6 +943,7 @@ mod tests {
             w: 100.0,
             q: 1,
             h: 100.0,
+            qv: 1,
         };
         let m = tessellate(&s, &Tolerances::DEFAULT).unwrap();
         assert_eq!(m.vertex_count(), 81, "initial 8x8 grid only");
@@ -971,6 +975,7 @@ mod tests {
             w: 50.0,
             q: 1,
             h: 100.0,
+            qv: 1,
         };
         let b = Saddle {
             a: 0.004,
@@ -978,6 +983,7 @@ mod tests {
             w: 50.0,
             q: 2,
             h: 100.0,
+            qv: 1,
         };
         let tol = Tolerances::DEFAULT.with_chord_mm(0.02);
         let surfs: [&dyn ParamSurface; 2] = [&a, &b];
@@ -996,6 +1002,45 @@ mod tests {
         let pv = m.patch_of_vertex.as_ref().unwrap();
         assert!(pv.contains(&0) && pv.contains(&1));
         assert!(mesh_to_surface(&m, &surfs, 4) <= 0.02);
+    }
+
+    #[test]
+    fn t_junctions_between_patches_are_resolved() {
+        // The right half runs along the shared edge x = 50 as y = 100 v², so none of its initial
+        // samples there (except the ends) coincide with the left half's: every one is a
+        // T-junction until the boundary edges are split at the foreign vertices.
+        let a = Saddle {
+            a: 0.004,
+            x0: 0.0,
+            w: 50.0,
+            q: 1,
+            h: 100.0,
+            qv: 1,
+        };
+        let b = Saddle {
+            a: 0.004,
+            x0: 50.0,
+            w: 50.0,
+            q: 1,
+            h: 100.0,
+            qv: 2,
+        };
+        let tol = Tolerances::DEFAULT.with_chord_mm(0.05);
+        let surfs: [&dyn ParamSurface; 2] = [&a, &b];
+        let m = tessellate_patches(&surfs, &tol).unwrap();
+        let topo = crate::check_disk(&m).unwrap();
+        assert_eq!(topo.boundary_loops.len(), 1);
+        // No boundary edge runs along the interior line x = 50 (0 < y < 100).
+        let lp = &topo.boundary_loops[0];
+        for i in 0..lp.len() {
+            let (p, q) = (
+                m.positions[lp[i] as usize],
+                m.positions[lp[(i + 1) % lp.len()] as usize],
+            );
+            let on_seam = |r: DVec3| (r.x - 50.0).abs() < 1e-9 && r.y > 1e-9 && r.y < 100.0 - 1e-9;
+            assert!(!(on_seam(p) && on_seam(q)), "crack at {p} - {q}");
+        }
+        assert!(mesh_to_surface(&m, &surfs, 4) <= 0.05);
     }
 
     #[test]
