@@ -266,6 +266,8 @@ pub enum Action {
     HomingDone,
     /// An EEPROM write of this many changed bytes (the RX interrupt is off meanwhile).
     EepromWrite(u32),
+    /// M2/M30 put the overrides back to 100 % (`RESTORE_OVERRIDES_AFTER_PROGRAM_END`, on in `config.h`).
+    RestoreOverrides,
 }
 
 /// Bytes GRBL writes for one coordinate record: three floats and a checksum.
@@ -1111,6 +1113,7 @@ pub fn execute(line: &[u8], jog: bool, ctx: &mut Context<'_>) -> Result<Vec<Acti
             actions.push(Action::WcoChanged);
             actions.push(Action::Spindle(Spindle::Off, 0.0));
             actions.push(Action::Coolant(false, false));
+            actions.push(Action::RestoreOverrides);
             actions.push(Action::Message("Pgm End"));
         }
         Flow::Running => {}

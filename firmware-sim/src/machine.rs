@@ -1209,6 +1209,12 @@ impl Grbl {
                     self.pending.push_front(Action::Sync);
                     return false;
                 }
+                Action::RestoreOverrides => {
+                    if (self.feed_ovr, self.rapid_ovr, self.spindle_ovr) != (100, 100, 100) {
+                        (self.feed_ovr, self.rapid_ovr, self.spindle_ovr) = (100, 100, 100);
+                        self.ovr_counter = 0;
+                    }
+                }
                 Action::HomingDone => {
                     if self.state == State::Homing {
                         self.state = State::Idle;

@@ -379,7 +379,13 @@ fn m0_holds_its_ok_until_cycle_start() {
 fn program_end_resets_modes() {
     let mut g = grbl(SimConfig::default().with_instant_motion(true));
     send(&mut g, "G91 G1 X1 F100 M3 S100");
+    g.receive(0x91);
+    g.receive(0x96);
     assert_eq!(lines(&send(&mut g, "M2")), ["[MSG:Pgm End]", "ok"]);
+    g.receive(b'?');
+    g.receive(b'?');
+    let s = String::from_utf8(g.take_output()).unwrap();
+    assert!(s.contains("|Ov:100,100,100"), "overrides restored: {s}");
     assert_eq!(
         lines(&send(&mut g, "$G"))[0],
         "[GC:G1 G54 G17 G21 G90 G94 M5 M9 T0 F100 S100]"
