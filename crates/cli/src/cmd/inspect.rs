@@ -1,0 +1,31 @@
+//! `flatcut inspect FILE [--json]`: what a design or mesh file contains.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context as _;
+use flatcut::geom::Tolerances;
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// A design file (.toml, .json) or a mesh (.obj, .stl, .ply).
+    pub file: PathBuf,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Chordal tolerance of the tessellation in mm.
+    #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM)]
+    pub chord: f64,
+}
+
+pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    anyhow::ensure!(a.chord.is_finite() && a.chord > 0.0, "--chord must be a positive length in mm, got {}", a.chord);
+    let tol = Tolerances::DEFAULT.with_chord_mm(a.chord);
+    let report = flatcut::inspect::inspect_file(&a.file, &tol).with_context(|| format!("cannot inspect {}", a.file.display()))?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print!("{report}");
+    }
+    Ok(ExitCode::SUCCESS)
+}

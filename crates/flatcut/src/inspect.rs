@@ -1,0 +1,271 @@
+//! `inspect`: what a design or mesh file contains — per piece its area, bounding box, curvature
+//! ranges, developability, patch, vertex and triangle counts.
+//!
+//! For parametric pieces area and mean Gaussian curvature are integrated on the exact surface
+//! (Gauss–Legendre on a grid of cells), and curvature ranges are sampled at the tessellation's
+//! vertices with the exact differential geometry; for mesh pieces they come from the discrete
+//! estimates (angle defect, cotangent Laplacian).
+
+use std::path::Path;
+
+use flatcut_design::{Design, DesignError, PieceGeometry};
+use flatcut_geom::{Aabb3, DVec3, Tolerances};
+use flatcut_mesh::{MeshStats, TriMesh};
+use flatcut_surface::diffgeom::{self, FundamentalForms};
+use flatcut_surface::{DomainKind, ParamSurface};
+use serde::Serialize;
+
+/// A parametric patch is called developable when `max |K| · diag²` over its sample grid stays
+/// below this (dimensionless; a hemisphere is about 10, a cylinder 0 up to round-off).
+pub const DEVELOPABLE_SCALED_K: f64 = 1e-6;
+/// A mesh is called developable when no interior vertex has an angle defect above this (rad).
+pub const DEVELOPABLE_ANGLE_DEFECT: f64 = 1e-6;
+/// Grid of sample cells per patch side for curvature extremes and the developability test.
+const SAMPLES_PER_SIDE: usize = 24;
+/// Squared sine of the smallest angle between r_u and r_v at which curvature is still evaluated.
+const SINGULAR_RATIO: f64 = 1e-8;
+/// Quadrature cells per patch side (each with a 16×16 Gauss–Legendre rule).
+const QUAD_CELLS: usize = 6;
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Range3 {
+    pub min: f64,
+    pub max: f64,
+    pub mean: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Range2 {
+    pub min: f64,
+    pub max: f64,
+}
+
+/// One piece as `inspect --json` reports it (keys are a stable contract).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PieceSummary {
+    pub name: String,
+    pub kind: &'static str,
+    pub quantity: u32,
+    pub area_mm2: f64,
+    pub bbox_mm: [[f64; 3]; 2],
+    /// Gaussian curvature in 1/mm² (mean: area-weighted).
+    pub gaussian_curvature: Range3,
+    /// Mean curvature in 1/mm (sign follows the normal r_u × r_v).
+    pub mean_curvature: Range2,
+    pub developable: bool,
+    /// `max |K| · diag²` (patches) or the largest interior angle defect in rad (meshes).
+    pub developability_measure: f64,
+    pub patches: usize,
+    pub vertices: usize,
+    pub triangles: usize,
+    pub boundary_loops: Option<usize>,
+    pub boundary_length_mm: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct InspectReport {
+    pub source: String,
+    pub pieces: Vec<PieceSummary>,
+}
+
+/// Loads a design or mesh file and summarises every piece.
+pub fn inspect_file(path: &Path, tol: &Tolerances) -> Result<InspectReport, DesignError> {
+    let design = Design::load(path)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let mut pieces = Vec::new();
+    for def in &design.pieces {
+        let geom = def.build(base)?;
+        let mesh = def.mesh(base, tol)?;
+        pieces.push(summarise(&def.name, def.quantity, &geom, &mesh));
+    }
+    Ok(InspectReport { source: design.source.clone(), pieces })
+}
+
+fn bbox_arr(b: &Aabb3) -> [[f64; 3]; 2] {
+    [b.min.to_array(), b.max.to_array()]
+}
+
+/// The summary of one built piece and its mesh.
+pub fn summarise(name: &str, quantity: u32, geom: &PieceGeometry, mesh: &TriMesh) -> PieceSummary {
+    let stats = MeshStats::of(mesh);
+    match geom {
+        PieceGeometry::Mesh(_) => {
+            let worst_defect = max_interior_angle_defect(mesh);
+            let (kmin, kmax) = stats.gaussian_range.unwrap_or((0.0, 0.0));
+            let (hmin, hmax) = stats.mean_range.unwrap_or((0.0, 0.0));
+            let kmean = if stats.area > 0.0 { stats.total_angle_defect / stats.area } else { 0.0 };
+            PieceSummary {
+                name: name.to_string(),
+                kind: "mesh",
+                quantity,
+                area_mm2: stats.area,
+                bbox_mm: bbox_arr(&stats.bbox),
+                gaussian_curvature: Range3 { min: kmin, max: kmax, mean: kmean },
+                mean_curvature: Range2 { min: hmin, max: hmax },
+                developable: worst_defect < DEVELOPABLE_ANGLE_DEFECT,
+                developability_measure: worst_defect,
+                patches: 0,
+                vertices: stats.vertices,
+                triangles: stats.triangles,
+                boundary_loops: stats.boundary_loops,
+                boundary_length_mm: stats.boundary_length,
+            }
+        }
+        PieceGeometry::Patches(patches) => {
+            let (mut area, mut total_k) = (0.0, 0.0);
+            let (mut kmin, mut kmax, mut hmin, mut hmax) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+            let mut worst_scaled: f64 = 0.0;
+            let mut bbox = Aabb3::EMPTY;
+            for p in patches {
+                let (a, k) = integrate_area_and_curvature(p.as_ref());
+                area += a;
+                total_k += k;
+                worst_scaled = worst_scaled.max(diffgeom::developability(p.as_ref(), SAMPLES_PER_SIDE).max_scaled_k);
+                for_each_sample(p.as_ref(), SAMPLES_PER_SIDE, |pt, ff| {
+                    bbox.add(pt);
+                    if let Some(ff) = ff {
+                        let (k, h) = (ff.gaussian(), ff.mean());
+                        kmin = kmin.min(k);
+                        kmax = kmax.max(k);
+                        hmin = hmin.min(h);
+                        hmax = hmax.max(h);
+                    }
+                });
+            }
+            // The tessellation's vertices lie on the surface: they complete the bounding box.
+            bbox = bbox.union(&mesh.bbox());
+            let fin = |v: f64| if v.is_finite() { v } else { 0.0 };
+            PieceSummary {
+                name: name.to_string(),
+                kind: "patches",
+                quantity,
+                area_mm2: area,
+                bbox_mm: bbox_arr(&bbox),
+                gaussian_curvature: Range3 { min: fin(kmin), max: fin(kmax), mean: if area > 0.0 { total_k / area } else { 0.0 } },
+                mean_curvature: Range2 { min: fin(hmin), max: fin(hmax) },
+                developable: worst_scaled < DEVELOPABLE_SCALED_K,
+                developability_measure: worst_scaled,
+                patches: patches.len(),
+                vertices: stats.vertices,
+                triangles: stats.triangles,
+                boundary_loops: stats.boundary_loops,
+                boundary_length_mm: stats.boundary_length,
+            }
+        }
+    }
+}
+
+/// The largest |2π − Σ angles| over interior vertices (rad): zero for a polyhedral developable.
+fn max_interior_angle_defect(mesh: &TriMesh) -> f64 {
+    let bnd = flatcut_mesh::stats::boundary_vertices(mesh);
+    let mut sum = vec![0.0f64; mesh.positions.len()];
+    let mut used = vec![false; mesh.positions.len()];
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        let p = mesh.corners(t);
+        for k in 0..3 {
+            sum[tri[k] as usize] += (p[(k + 1) % 3] - p[k]).angle_between(p[(k + 2) % 3] - p[k]);
+            used[tri[k] as usize] = true;
+        }
+    }
+    (0..sum.len())
+        .filter(|&v| used[v] && !bnd[v])
+        .map(|v| (std::f64::consts::TAU - sum[v]).abs())
+        .filter(|d| d.is_finite())
+        .fold(0.0, f64::max)
+}
+
+/// Visits an (n+1)×(n+1) grid of the patch's domain (the lower-left triangle for triangular
+/// patches) with the point and the fundamental forms (None where the parametrisation is singular).
+fn for_each_sample(s: &dyn ParamSurface, n: usize, mut f: impl FnMut(DVec3, Option<FundamentalForms>)) {
+    let d = s.domain();
+    let tri = s.domain_kind() == DomainKind::Triangle;
+    for i in 0..=n {
+        for j in 0..=n {
+            let (a, b) = (i as f64 / n as f64, j as f64 / n as f64);
+            if tri && a + b > 1.0 + 1e-12 {
+                continue;
+            }
+            let (u, v) = (d.u.0 + a * (d.u.1 - d.u.0), d.v.0 + b * (d.v.1 - d.v.0));
+            let dd = s.deriv2(u, v);
+            // Near a degenerate point (a pole, a collapsed edge) the forms exist numerically but
+            // the curvature is meaningless: skip samples whose area element is tiny relative to
+            // |r_u||r_v|.
+            let regular = dd.su.cross(dd.sv).length_squared() > SINGULAR_RATIO * dd.su.length_squared() * dd.sv.length_squared();
+            f(dd.p, if regular { FundamentalForms::from_derivs(&dd) } else { None });
+        }
+    }
+}
+
+/// ∬ √(EG − F²) du dv and ∬ K √(EG − F²) du dv over the patch's domain.
+fn integrate_area_and_curvature(s: &dyn ParamSurface) -> (f64, f64) {
+    let d = s.domain();
+    let tri = s.domain_kind() == DomainKind::Triangle;
+    let (du, dv) = ((d.u.1 - d.u.0) / QUAD_CELLS as f64, (d.v.1 - d.v.0) / QUAD_CELLS as f64);
+    let (mut area, mut curv) = (0.0, 0.0);
+    for i in 0..QUAD_CELLS {
+        for j in 0..QUAD_CELLS {
+            let (u0, v0) = (d.u.0 + i as f64 * du, d.v.0 + j as f64 * dv);
+            let cell = |g: &mut dyn FnMut(f64, f64) -> f64| {
+                flatcut_geom::num::gauss16(|u| flatcut_geom::num::gauss16(|v| g(u, v), v0, v0 + dv), u0, u0 + du)
+            };
+            if tri {
+                // Map the cell of the unit square onto the triangle by the Duffy transform
+                // (u, v) = (a, (1 − a) b), Jacobian (1 − a).
+                area += cell(&mut |a, b| {
+                    let (u, v) = (a, (1.0 - a) * b);
+                    let dd = s.deriv2(u, v);
+                    dd.su.cross(dd.sv).length() * (1.0 - a)
+                });
+                curv += cell(&mut |a, b| {
+                    let (u, v) = (a, (1.0 - a) * b);
+                    let dd = s.deriv2(u, v);
+                    FundamentalForms::from_derivs(&dd).map_or(0.0, |ff| ff.gaussian()) * dd.su.cross(dd.sv).length() * (1.0 - a)
+                });
+            } else {
+                area += cell(&mut |u, v| {
+                    let (_, su, sv) = s.deriv1(u, v);
+                    su.cross(sv).length()
+                });
+                curv += cell(&mut |u, v| {
+                    let dd = s.deriv2(u, v);
+                    FundamentalForms::from_derivs(&dd).map_or(0.0, |ff| ff.gaussian()) * dd.su.cross(dd.sv).length()
+                });
+            }
+        }
+    }
+    (area, curv)
+}
+
+impl std::fmt::Display for InspectReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "{}: {} piece(s)", self.source, self.pieces.len())?;
+        for p in &self.pieces {
+            let [lo, hi] = p.bbox_mm;
+            writeln!(f)?;
+            writeln!(f, "piece {} ({}, quantity {})", p.name, p.kind, p.quantity)?;
+            writeln!(f, "  area              {:.3} mm²", p.area_mm2)?;
+            writeln!(f, "  bounding box      {:.3} × {:.3} × {:.3} mm", hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2])?;
+            writeln!(
+                f,
+                "  Gaussian K        {:.4e} .. {:.4e} 1/mm² (area mean {:.4e})",
+                p.gaussian_curvature.min, p.gaussian_curvature.max, p.gaussian_curvature.mean
+            )?;
+            writeln!(f, "  mean H            {:.4e} .. {:.4e} 1/mm", p.mean_curvature.min, p.mean_curvature.max)?;
+            writeln!(
+                f,
+                "  developable       {} (measure {:.2e})",
+                if p.developable { "yes" } else { "no" },
+                p.developability_measure
+            )?;
+            if p.patches > 0 {
+                writeln!(f, "  patches           {}", p.patches)?;
+            }
+            writeln!(f, "  mesh              {} vertices, {} triangles", p.vertices, p.triangles)?;
+            match p.boundary_loops {
+                Some(n) => writeln!(f, "  boundary          {n} loop(s), {:.3} mm", p.boundary_length_mm)?,
+                None => writeln!(f, "  boundary          invalid topology")?,
+            }
+        }
+        Ok(())
+    }
+}
