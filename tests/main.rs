@@ -1,1 +1,4 @@
-//! End-to-end tests.
+//! End-to-end tests of flatcut: one test binary with a module tree (architecture rules, the
+//! command line, the pipeline against the simulated controller).
+
+mod tidy;

@@ -1,0 +1,105 @@
+//! Architecture invariants as ordinary tests: the crate graph keeps its promises (2D crates know
+//! nothing of 3D, the simulator shares no code with the sender or the G-code writer, only the
+//! binary uses `anyhow`), and every source file opens with a `//!` module doc.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Package name → set of its normal (non-dev) dependency names, for every workspace member.
+fn workspace_deps() -> BTreeMap<String, Vec<String>> {
+    let mut out = BTreeMap::new();
+    let mut dirs: Vec<PathBuf> =
+        std::fs::read_dir(root().join("crates")).unwrap().map(|e| e.unwrap().path()).filter(|p| p.join("Cargo.toml").exists()).collect();
+    dirs.push(root().join("firmware-sim"));
+    dirs.sort();
+    for d in dirs {
+        let text = std::fs::read_to_string(d.join("Cargo.toml")).unwrap();
+        let v: toml::Value = toml::from_str(&text).unwrap();
+        let name = v["package"]["name"].as_str().unwrap().to_string();
+        let deps = v.get("dependencies").and_then(|d| d.as_table()).map(|t| t.keys().cloned().collect()).unwrap_or_default();
+        out.insert(name, deps);
+    }
+    out
+}
+
+/// All packages reachable from `name` through normal dependencies inside the workspace.
+fn closure(graph: &BTreeMap<String, Vec<String>>, name: &str) -> Vec<String> {
+    let mut seen = Vec::new();
+    let mut stack = vec![name.to_string()];
+    while let Some(n) = stack.pop() {
+        for d in graph.get(&n).into_iter().flatten() {
+            if graph.contains_key(d) && !seen.contains(d) {
+                seen.push(d.clone());
+                stack.push(d.clone());
+            }
+        }
+    }
+    seen.sort();
+    seen
+}
+
+#[test]
+fn simulator_is_independent_of_every_workspace_crate() {
+    let g = workspace_deps();
+    assert_eq!(closure(&g, "flatcut-firmware-sim"), Vec::<String>::new(), "firmware-sim must share no code with the sender or the G-code writer");
+}
+
+#[test]
+fn sender_is_independent_of_the_gcode_writer_and_geometry() {
+    let g = workspace_deps();
+    assert_eq!(closure(&g, "flatcut-grbl"), Vec::<String>::new(), "flatcut-grbl streams any file: no workspace dependency");
+}
+
+#[test]
+fn two_dimensional_crates_know_nothing_of_surfaces() {
+    let g = workspace_deps();
+    for krate in ["flatcut-pattern", "flatcut-nest", "flatcut-gcode"] {
+        for forbidden in ["flatcut-surface", "flatcut-mesh", "flatcut-flatten", "flatcut-design", "flatcut-report", "flatcut-grbl", "flatcut-firmware-sim"] {
+            assert!(!closure(&g, krate).contains(&forbidden.to_string()), "{krate} must not depend on {forbidden}");
+        }
+    }
+}
+
+#[test]
+fn only_the_binary_uses_anyhow() {
+    for (name, deps) in workspace_deps() {
+        if name != "flatcut-cli" {
+            assert!(!deps.contains(&"anyhow".to_string()), "{name}: libraries return typed errors, anyhow is for the binary only");
+        }
+    }
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            rust_files(&p, out);
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push(p);
+        }
+    }
+}
+
+#[test]
+fn every_source_file_opens_with_a_module_doc() {
+    let mut files = Vec::new();
+    for d in std::fs::read_dir(root().join("crates")).unwrap() {
+        let src = d.unwrap().path().join("src");
+        if src.exists() {
+            rust_files(&src, &mut files);
+        }
+    }
+    rust_files(&root().join("firmware-sim/src"), &mut files);
+    let missing: Vec<_> = files
+        .iter()
+        .filter(|f| {
+            let text = std::fs::read_to_string(f).unwrap();
+            !text.trim_start().starts_with("//!")
+        })
+        .collect();
+    assert!(missing.is_empty(), "files without a //! module doc: {missing:?}");
+}
