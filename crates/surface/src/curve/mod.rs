@@ -37,6 +37,7 @@ pub mod basis;
 pub mod bezier;
 pub mod bspline;
 pub mod ext;
+pub mod fit;
 pub mod hermite;
 pub mod polyline;
 pub mod rational;
@@ -46,6 +47,7 @@ pub use any::Curve;
 pub use bezier::Bezier;
 pub use bspline::{BSpline, Nurbs};
 pub use ext::{CurveExt, Frenet, flatten_with_breaks, nearest_from_samples};
+pub use fit::{Fit, fit_bspline};
 pub use hermite::{
     Hermite, HermiteSpline, SpeedRule, manning_cubic, manning_speeds, min_energy_cubic,
     min_energy_speeds,
