@@ -133,7 +133,69 @@ impl Default for SimConfig {
     }
 }
 
+/// A configuration the simulator cannot run with.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// Zero baud rate.
+    #[error("sim config: baud rate must be positive (got {0})")]
+    Baud(u32),
+    /// Non-positive or non-finite time scale.
+    #[error("sim config: time_scale must be positive and finite (got {0})")]
+    TimeScale(f64),
+    /// A probability outside [0, 1].
+    #[error("sim config: faults.{name} must be a probability in [0, 1] (got {value})")]
+    Probability {
+        /// Field name.
+        name: &'static str,
+        /// Value given.
+        value: f64,
+    },
+    /// A `$n=value` start setting that GRBL would refuse.
+    #[error("sim config: setting ${n}={value} refused with error:{code}")]
+    Setting {
+        /// Setting number.
+        n: u16,
+        /// Value given.
+        value: f64,
+        /// GRBL's error code for it.
+        code: u8,
+    },
+}
+
 impl SimConfig {
+    /// Checks the configuration: positive baud and time scale, probabilities in [0, 1], and start settings that
+    /// GRBL accepts (soft limits may be enabled without homing: homing is switched on for them).
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        if self.baud == 0 {
+            return Err(ConfigError::Baud(self.baud));
+        }
+        if !(self.time_scale > 0.0 && self.time_scale.is_finite()) {
+            return Err(ConfigError::TimeScale(self.time_scale));
+        }
+        for (name, value) in [
+            ("drop_rate", self.faults.drop_rate),
+            ("corrupt_rate", self.faults.corrupt_rate),
+        ] {
+            if !(0.0..=1.0).contains(&value) {
+                return Err(ConfigError::Probability { name, value });
+            }
+        }
+        let mut s = Settings::default();
+        for &(n, value) in &self.settings {
+            if n == 20 && value != 0.0 {
+                s.homing = true;
+            }
+            s.store(u32::from(n), value)
+                .map_err(|e| ConfigError::Setting {
+                    n,
+                    value,
+                    code: e.code(),
+                })?;
+        }
+        Ok(())
+    }
+
     /// Sets the baud rate.
     pub fn with_baud(mut self, baud: u32) -> Self {
         self.baud = baud;

@@ -105,7 +105,7 @@ fn config(args: &Args) -> Result<SimConfig, String> {
             return Err(format!("--{name} {r}: must be a probability in [0, 1]"));
         }
     }
-    Ok(SimConfig {
+    let cfg = SimConfig {
         baud: args.baud,
         time_scale: args.speed,
         instant_motion: args.instant,
@@ -135,7 +135,9 @@ fn config(args: &Args) -> Result<SimConfig, String> {
         trace_jsonl: args.trace.clone(),
         trace_svg: args.trace_svg.clone(),
         seed: args.seed,
-    })
+    };
+    cfg.validate().map_err(|e| e.to_string())?;
+    Ok(cfg)
 }
 
 fn main() -> ExitCode {

@@ -62,15 +62,9 @@ impl PtySim {
     /// Creates the pseudo-terminal pair and starts the simulator thread. The banner is already waiting when a
     /// client opens [`PtySim::path`].
     pub fn spawn(config: SimConfig) -> io::Result<PtySim> {
-        if config.baud == 0 || !(config.time_scale > 0.0 && config.time_scale.is_finite()) {
-            return Err(io::Error::new(
-                io::ErrorKind::InvalidInput,
-                format!(
-                    "sim config: baud {} and time_scale {} must be positive",
-                    config.baud, config.time_scale
-                ),
-            ));
-        }
+        config
+            .validate()
+            .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e.to_string()))?;
         let (master, slave, path) = open_pty()?;
         let shared = Arc::new(Mutex::new(Shared {
             path: path.clone(),

@@ -573,3 +573,52 @@ fn inverse_time_feed_and_probe_without_contact() {
         ["[PRB:0.000,0.000,-6.000:0]", "ok"]
     );
 }
+
+#[test]
+fn invalid_configurations_are_refused_with_a_reason() {
+    use flatcut_firmware_sim::{ConfigError, Faults, PtySim};
+    assert_eq!(SimConfig::default().validate(), Ok(()));
+    assert_eq!(
+        SimConfig::default().with_baud(0).validate(),
+        Err(ConfigError::Baud(0))
+    );
+    assert!(matches!(
+        SimConfig::default().with_time_scale(f64::NAN).validate(),
+        Err(ConfigError::TimeScale(_))
+    ));
+    let bad = SimConfig::default().with_faults(Faults {
+        drop_rate: 1.5,
+        ..Faults::default()
+    });
+    assert!(matches!(
+        bad.validate(),
+        Err(ConfigError::Probability {
+            name: "drop_rate",
+            ..
+        })
+    ));
+    let e = SimConfig::default()
+        .with_setting(0, 1.0)
+        .validate()
+        .unwrap_err();
+    assert_eq!(
+        e,
+        ConfigError::Setting {
+            n: 0,
+            value: 1.0,
+            code: 6
+        }
+    );
+    assert_eq!(
+        e.to_string(),
+        "sim config: setting $0=1 refused with error:6"
+    );
+    // Soft limits in the start settings switch homing on, so they are accepted.
+    assert_eq!(
+        SimConfig::default().with_setting(20, 1.0).validate(),
+        Ok(())
+    );
+    let err = PtySim::spawn(SimConfig::default().with_setting(999, 1.0)).unwrap_err();
+    assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
+    assert!(err.to_string().contains("$999=1"), "{err}");
+}

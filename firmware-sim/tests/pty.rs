@@ -243,19 +243,31 @@ fn response_delay_and_overflow_through_the_pty() {
 
 #[test]
 fn character_counting_through_the_pty_loses_nothing() {
-    let sim = PtySim::spawn(SimConfig { time_scale: 50.0, ..SimConfig::default() }).unwrap();
+    let sim = PtySim::spawn(SimConfig {
+        time_scale: 50.0,
+        ..SimConfig::default()
+    })
+    .unwrap();
     let mut port = open(sim.path());
     let mut acc = String::new();
-    assert!(read_until(port.as_mut(), &mut acc, "for help]\r\n", Duration::from_secs(3)));
+    assert!(read_until(
+        port.as_mut(),
+        &mut acc,
+        "for help]\r\n",
+        Duration::from_secs(3)
+    ));
     acc.clear();
-    let lines: Vec<String> = (0..120).map(|i| format!("G1X{}Y{}F2000", i % 9, (i * 7) % 5)).collect();
+    let lines: Vec<String> = (0..120)
+        .map(|i| format!("G1X{}Y{}F2000", i % 9, (i * 7) % 5))
+        .collect();
     let mut in_flight: std::collections::VecDeque<usize> = Default::default();
     let (mut next, mut answered, mut errors) = (0, 0, 0);
     let t0 = Instant::now();
     let mut buf = [0u8; 256];
     while answered < lines.len() && t0.elapsed() < Duration::from_secs(20) {
         while next < lines.len() && in_flight.iter().sum::<usize>() + lines[next].len() < 128 {
-            port.write_all(format!("{}\n", lines[next]).as_bytes()).unwrap();
+            port.write_all(format!("{}\n", lines[next]).as_bytes())
+                .unwrap();
             in_flight.push_back(lines[next].len() + 1);
             next += 1;
         }
@@ -277,7 +289,10 @@ fn character_counting_through_the_pty_loses_nothing() {
     let st = sim.stats();
     assert_eq!(st.bytes_dropped_overflow, 0, "{st:?}");
     assert!(st.max_rx_fill <= 128);
-    assert!(st.max_planner_fill == 15, "the planner filled: the stream was limited by motion, {st:?}");
+    assert!(
+        st.max_planner_fill == 15,
+        "the planner filled: the stream was limited by motion, {st:?}"
+    );
     drop(port);
     sim.stop();
 }
