@@ -183,7 +183,7 @@ fn close_lengths(len: &[f64], t: &[DVec2]) -> Result<Vec<f64>, FlattenError> {
         r += *l * *ti;
     }
     let det = a * c - b * b;
-    if !(det > 0.0) {
+    if det.is_nan() || det <= 0.0 {
         return Err(FlattenError::NoConvergence {
             method: Method::ConformalBoundary,
             reason: "the boundary tangents do not span the plane; the boundary cannot be closed"
@@ -196,7 +196,7 @@ fn close_lengths(len: &[f64], t: &[DVec2]) -> Result<Vec<f64>, FlattenError> {
         .zip(t)
         .map(|(l, ti)| l - l * ti.dot(lam))
         .collect();
-    if let Some(i) = out.iter().position(|l| !(*l > 0.0)) {
+    if let Some(i) = out.iter().position(|l| l.is_nan() || *l <= 0.0) {
         return Err(FlattenError::NoConvergence {
             method: Method::ConformalBoundary,
             reason: format!(

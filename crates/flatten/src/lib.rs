@@ -12,6 +12,7 @@
 //! faer, no hash-map iteration, no threads whose scheduling changes results); never returns a
 //! flipped triangle from a method documented flip-free; never rescales the result.
 
+pub mod arap;
 pub mod conformal_boundary;
 pub mod developable;
 pub mod lscm;
@@ -43,9 +44,7 @@ pub fn flatten(mesh: &TriMesh, params: &FlattenParams) -> Result<Flattening, Fla
         Method::Lscm => lscm::lscm(mesh, &topo, &params.pins),
         Method::ConformalBoundary => conformal_boundary::conformal_boundary(mesh, &topo, params),
         Method::Developable => developable::developable(mesh, &topo, params),
-        m => Err(FlattenError::Internal(format!(
-            "method {m} is not available in this build"
-        ))),
+        Method::Arap => arap::arap(mesh, &topo, params),
     }
 }
 

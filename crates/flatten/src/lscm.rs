@@ -31,7 +31,7 @@ pub fn lscm(mesh: &TriMesh, topo: &Topology, pins: &[Pin]) -> Result<Flattening,
     let mut uv = solve_pinned(mesh, &hard)?;
     if pins.len() < 2 {
         let a2 = uv_area(&mesh.triangles, &uv);
-        if !(a2 > 0.0) || !a2.is_finite() {
+        if a2.is_nan() || a2 <= 0.0 || a2.is_infinite() {
             return Err(FlattenError::NoConvergence {
                 method: Method::Lscm,
                 reason: format!("the conformal map has non-positive total area {a2:.3e} mm²"),

@@ -83,7 +83,7 @@ pub fn orient2(a: DVec2, b: DVec2, c: DVec2) -> f64 {
 pub fn first_flip(triangles: &[[u32; 3]], uv: &[DVec2]) -> Option<usize> {
     triangles.iter().position(|t| {
         let o = orient2(uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
-        !(o > 0.0)
+        o.is_nan() || o <= 0.0
     })
 }
 
@@ -91,7 +91,10 @@ pub fn first_flip(triangles: &[[u32; 3]], uv: &[DVec2]) -> Option<usize> {
 pub fn count_flips(triangles: &[[u32; 3]], uv: &[DVec2]) -> usize {
     triangles
         .iter()
-        .filter(|t| !(orient2(uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]) > 0.0))
+        .filter(|t| {
+            let o = orient2(uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
+            o.is_nan() || o <= 0.0
+        })
         .count()
 }
 

@@ -138,7 +138,7 @@ mod tests {
             let b = crate::ops::boundary_mask(mesh.positions.len(), &topo);
             let mut sum = vec![DVec2::ZERO; uv.len()];
             let mut cnt = vec![0.0; uv.len()];
-            for (&(a, c), _) in &topo.edges {
+            for &(a, c) in topo.edges.keys() {
                 sum[a as usize] += uv[c as usize];
                 cnt[a as usize] += 1.0;
                 sum[c as usize] += uv[a as usize];

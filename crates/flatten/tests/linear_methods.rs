@@ -261,7 +261,7 @@ fn bad_input_gives_the_right_topology_error() {
 #[test]
 fn linear_methods_are_deterministic() {
     let mesh = testmesh::spherical_cap(80.0, 1.2, 10);
-    for m in [Method::Lscm, Method::ConformalBoundary] {
+    for m in [Method::Lscm, Method::ConformalBoundary, Method::Arap] {
         let a = run(&mesh, m);
         let b = run(&mesh, m);
         assert!(
@@ -379,4 +379,67 @@ fn conformal_boundary_reproduces_a_plane() {
         "{}",
         rigid_residual(&f.uv, &flat)
     );
+}
+
+#[test]
+fn arap_reproduces_a_plane() {
+    let (mesh, flat) = testmesh::jittered_plane(60.0, 12);
+    let f = run(&mesh, Method::Arap);
+    assert!(
+        rigid_residual(&f.uv, &flat) < 1e-8 * 60.0,
+        "{}",
+        rigid_residual(&f.uv, &flat)
+    );
+}
+
+#[test]
+fn arap_is_flip_free_and_more_isometric_than_lscm() {
+    for mesh in [
+        testmesh::spherical_cap(100.0, 1.4, 14),
+        testmesh::saddle(80.0, 14),
+    ] {
+        let f = run(&mesh, Method::Arap);
+        let s = score(&mesh, &f.uv);
+        assert_eq!(s.flips, 0);
+        let l = score(&mesh, &run(&mesh, Method::Lscm).uv);
+        assert!(
+            s.delta2_mean < l.delta2_mean,
+            "arap {} vs lscm {}",
+            s.delta2_mean,
+            l.delta2_mean
+        );
+        assert!(f.info.iterations >= 1);
+    }
+    // Developable: ARAP reaches the isometry (libigl's ARAP stalls at conf 0.39 there).
+    for mesh in [
+        testmesh::cylinder_patch(40.0, 2.5, 70.0, 30, 10),
+        testmesh::cone_patch(0.6, 30.0, 90.0, 2.0, 24, 8),
+    ] {
+        let s = score(&mesh, &run(&mesh, Method::Arap).uv);
+        assert!(s.delta2_mean < 1e-8 && s.flips == 0, "{}", s.delta2_mean);
+    }
+}
+
+#[test]
+fn arap_honours_pins() {
+    let mesh = testmesh::spherical_cap(100.0, 1.0, 10);
+    let pins = vec![
+        Pin {
+            vertex: 0,
+            position: DVec2::new(0.0, 0.0),
+        },
+        Pin {
+            vertex: 200,
+            position: DVec2::new(60.0, 20.0),
+        },
+    ];
+    let f = flatten(
+        &mesh,
+        &FlattenParams::new(Method::Arap).with_pins(pins.clone()),
+    )
+    .unwrap();
+    for p in &pins {
+        assert_eq!(f.uv[p.vertex as usize], p.position);
+    }
+    assert_eq!(score(&mesh, &f.uv).flips, 0);
 }
