@@ -142,6 +142,10 @@ struct Builder<'a> {
     tris: Vec<Tri>,
     /// Edge (lo, hi) -> split vertex and the patch that created it.
     split: BTreeMap<(u32, u32), (u32, u32)>,
+    /// Alive triangles on each edge (lo, hi).
+    edge_tris: BTreeMap<(u32, u32), Vec<u32>>,
+    /// Triangles to check for hanging vertices in the conformity closure.
+    work: Vec<u32>,
     opts: TessOptions,
     chord: f64,
 }
@@ -375,6 +379,7 @@ impl Builder<'_> {
             }
         };
         self.tris[t].alive = false;
+        self.unindex(t as u32);
         for (v, uv) in [([a, m, c], [ua, um, uc]), ([m, b, c], [um, ub, uc])] {
             self.tris.push(Tri {
                 v,
@@ -383,8 +388,49 @@ impl Builder<'_> {
                 alive: true,
                 checked: false,
             });
+            let id = (self.tris.len() - 1) as u32;
+            self.index(id);
+            self.work.push(id);
         }
+        // The neighbours across the split edge now have a hanging vertex.
+        self.wake_edge(key(a, b));
         Ok(())
+    }
+
+    fn index(&mut self, t: u32) {
+        let v = self.tris[t as usize].v;
+        for k in 0..3 {
+            self.edge_tris
+                .entry(key(v[k], v[(k + 1) % 3]))
+                .or_default()
+                .push(t);
+        }
+    }
+
+    fn unindex(&mut self, t: u32) {
+        let v = self.tris[t as usize].v;
+        for k in 0..3 {
+            if let Some(l) = self.edge_tris.get_mut(&key(v[k], v[(k + 1) % 3])) {
+                l.retain(|&x| x != t);
+            }
+        }
+    }
+
+    /// Rebuilds the edge index from the alive triangles (after vertices were renumbered).
+    fn reindex(&mut self) {
+        self.edge_tris.clear();
+        for t in 0..self.tris.len() as u32 {
+            if self.tris[t as usize].alive {
+                self.index(t);
+            }
+        }
+    }
+
+    /// Queues the alive triangles on an edge for the closure.
+    fn wake_edge(&mut self, e: (u32, u32)) {
+        if let Some(l) = self.edge_tris.get(&e) {
+            self.work.extend_from_slice(l);
+        }
     }
 
     /// Index (0..3) of the longest edge of triangle `t` in 3D, ties broken by vertex ids so that
@@ -407,26 +453,22 @@ impl Builder<'_> {
     }
 
     /// Bisects every triangle that has a split edge until the triangulation is conforming.
+    /// Works from the queue of triangles touched by splits, so each round costs in proportion to
+    /// the triangles it changes.
     fn close(&mut self) -> Result<(), TessError> {
-        loop {
-            let mut changed = false;
-            let n = self.tris.len();
-            for t in 0..n {
-                if !self.tris[t].alive {
-                    continue;
-                }
-                let v = self.tris[t].v;
-                let hanging = (0..3).any(|k| self.split.contains_key(&key(v[k], v[(k + 1) % 3])));
-                if hanging {
-                    let k = self.longest_edge(t);
-                    self.bisect(t, k)?;
-                    changed = true;
-                }
+        while let Some(t) = self.work.pop() {
+            let t = t as usize;
+            if !self.tris[t].alive {
+                continue;
             }
-            if !changed {
-                return Ok(());
+            let v = self.tris[t].v;
+            let hanging = (0..3).any(|k| self.split.contains_key(&key(v[k], v[(k + 1) % 3])));
+            if hanging {
+                let k = self.longest_edge(t);
+                self.bisect(t, k)?;
             }
         }
+        Ok(())
     }
 
     /// Welds initial boundary vertices of different patches and splits boundary edges at foreign
@@ -448,6 +490,7 @@ impl Builder<'_> {
         for t in &mut self.tris {
             t.v = t.v.map(|v| rep[v as usize]);
         }
+        self.reindex();
         // 2. Split boundary edges at foreign boundary vertices (T-junctions), repeatedly.
         loop {
             let mut registered = false;
@@ -500,6 +543,7 @@ impl Builder<'_> {
                     }
                     if let Some((_, c)) = best {
                         self.split.insert(key(a, b), (c, self.home[c as usize].0));
+                        self.wake_edge(key(a, b));
                         registered = true;
                     }
                 }
@@ -554,9 +598,13 @@ impl Builder<'_> {
     }
 
     fn refine(&mut self) -> Result<(), TessError> {
+        // Triangles below `start` are dead or already passed the test: triangles are immutable
+        // and new ones are appended, so each round only looks at the new ones.
+        let mut start = 0;
         loop {
             let mut marked = Vec::new();
-            for t in 0..self.tris.len() {
+            let end = self.tris.len();
+            for t in start..end {
                 if self.tris[t].alive && !self.tris[t].checked {
                     if self.needs_split(t)? {
                         marked.push(t);
@@ -565,6 +613,7 @@ impl Builder<'_> {
                     }
                 }
             }
+            start = end;
             if marked.is_empty() {
                 return Ok(());
             }
@@ -608,12 +657,15 @@ pub fn tessellate_with(
         on_boundary: Vec::new(),
         tris: Vec::new(),
         split: BTreeMap::new(),
+        edge_tris: BTreeMap::new(),
+        work: Vec::new(),
         opts: *opts,
         chord: tol.chord_mm,
     };
     for p in 0..surfaces.len() as u32 {
         b.init_patch(p)?;
     }
+    b.reindex();
     if surfaces.len() > 1 {
         b.conform_patches(tol.weld_mm)?;
     }
