@@ -225,6 +225,18 @@ pub enum SendError {
         /// Reported work position, mm.
         actual: [f64; 3],
     },
+    /// The machine stayed in a state this sender did not ask for (a hold nobody released, check
+    /// mode): lines it acknowledges there are not being cut.
+    #[error(
+        "the controller is in state {state}, which this sender did not request; stopped. Last line known executed: {}",
+        opt_line(last_done)
+    )]
+    UnexpectedState {
+        /// GRBL's state name.
+        state: String,
+        /// Last line known executed.
+        last_done: Option<LineRef>,
+    },
     /// `resume` was asked without a journal path.
     #[error("resume needs a journal path")]
     NoJournal,
@@ -267,6 +279,9 @@ pub struct SendOptions {
     pub verify_end_position: bool,
     /// Minimum interval between observer calls while streaming.
     pub progress_interval: Duration,
+    /// Give up when the machine sits in a feed hold or door state that this sender did not
+    /// request for this long (`None`: wait for the operator indefinitely, as after `M0`).
+    pub hold_timeout: Option<Duration>,
 }
 
 impl SendOptions {
@@ -282,6 +297,12 @@ impl SendOptions {
     pub const DEFAULT_SILENCE_TIMEOUT: Duration = Duration::from_secs(10);
     /// Default observer interval: 20 updates a second is smooth for a progress bar.
     pub const DEFAULT_PROGRESS_INTERVAL: Duration = Duration::from_millis(50);
+
+    /// Sets [`SendOptions::hold_timeout`].
+    pub fn with_hold_timeout(mut self, d: Option<Duration>) -> Self {
+        self.hold_timeout = d;
+        self
+    }
 
     /// Sets [`SendOptions::progress_interval`].
     pub fn with_progress_interval(mut self, d: Duration) -> Self {
@@ -367,6 +388,7 @@ impl Default for SendOptions {
             silence_timeout: SendOptions::DEFAULT_SILENCE_TIMEOUT,
             verify_end_position: true,
             progress_interval: SendOptions::DEFAULT_PROGRESS_INTERVAL,
+            hold_timeout: None,
         }
     }
 }
@@ -697,6 +719,12 @@ struct Tracker {
     capacity: usize,
     length_done: f64,
     time_done: f64,
+    /// Lines done before this run (not sent in it).
+    prior_done: Vec<bool>,
+    /// Position match tolerance, mm.
+    pos_tol: f64,
+    /// Highest job index handed to the port in this run.
+    last_sent: Option<usize>,
 }
 
 impl Tracker {
@@ -740,14 +768,28 @@ impl Tracker {
         }
     }
 
-    /// Confirms by the reported position: the first unconfirmed motion line whose path contains
-    /// `pos` is where the machine is; everything before it is done (and it too if `pos` is its
-    /// end point).
-    fn confirm_by_position(&mut self, job: &Job, pos: [f64; 3], journal: &mut Option<Journal>) {
-        let mut count = None;
-        for (k, &i) in self.unconfirmed.iter().enumerate() {
+    /// Confirms every unconfirmed line with index below `bound`.
+    fn confirm_below(&mut self, job: &Job, bound: usize, journal: &mut Option<Journal>) {
+        let c = self.unconfirmed.iter().take_while(|&&i| i < bound).count();
+        self.confirm(job, c, journal);
+    }
+
+    /// Confirms by the reported position `pos`: the first line sent in this run (up to index
+    /// `upto`, acknowledged or not) whose path contains `pos` is where the machine stopped;
+    /// every acknowledged line before it is done, and it too if `pos` is its end point.
+    fn confirm_by_position(
+        &mut self,
+        job: &Job,
+        pos: [f64; 3],
+        upto: usize,
+        journal: &mut Option<Journal>,
+    ) {
+        let Some(&first) = self.unconfirmed.front() else {
+            return;
+        };
+        for i in first..=upto.min(job.len().saturating_sub(1)) {
             let l = &job.lines[i];
-            if !l.moves {
+            if self.prior_done[i] || !l.moves {
                 continue;
             }
             let a = add(l.before.position, l.before.g92);
@@ -757,17 +799,14 @@ impl Tracker {
                 .map(|n| &n.before)
                 .unwrap_or(&job.end_state);
             let b = add(after.position, after.g92);
-            if dist(pos, b) <= POSITION_TOL_MM {
-                count = Some(k + 1);
-                break;
+            if dist(pos, b) <= self.pos_tol {
+                self.confirm_below(job, i + 1, journal);
+                return;
             }
-            if seg_dist(pos, a, b) <= POSITION_TOL_MM {
-                count = Some(k);
-                break;
+            if seg_dist(pos, a, b) <= self.pos_tol {
+                self.confirm_below(job, i, journal);
+                return;
             }
-        }
-        if let Some(c) = count {
-            self.confirm(job, c, journal);
         }
     }
 
@@ -922,6 +961,12 @@ pub fn send_job(
         capacity: sess.blocks + SEGMENT_BUFFER,
         length_done: 0.0,
         time_done: 0.0,
+        prior_done: prior
+            .as_ref()
+            .map(|p| p.done.clone())
+            .unwrap_or_else(|| vec![false; n]),
+        pos_tol: position_tolerance(&sess.settings),
+        last_sent: None,
     };
     let mut previously_done = 0;
     if let Some(st) = &prior {
@@ -985,6 +1030,7 @@ pub fn send_job(
     let mut failure: Option<SendError> = None;
     let mut stream_end = None;
     let mut end_status_seq = 0;
+    let mut hold_since: Option<Instant> = None;
     loop {
         // Control requests.
         let c = cancel.take();
@@ -1015,6 +1061,9 @@ pub fn send_job(
                 return Err(transport(e, last));
             }
         };
+        if let Some(Tag::Job(i)) = sess.s.last_sent() {
+            tracker.last_sent = Some(tracker.last_sent.map_or(i, |l| l.max(i)));
+        }
         let mut acked_any = false;
         for e in evs {
             match e {
@@ -1066,76 +1115,24 @@ pub fn send_job(
                 }
                 Event::Rejected(_, _) => {}
                 Event::Alarm(code) => {
-                    sess.s.set_feeding(false);
-                    sess.s.clear_queue();
-                    if let Some(j) = journal.as_mut() {
-                        j.note(&format!(
-                            "ALARM:{code} {}",
-                            alarm_meaning(code).unwrap_or("")
-                        ));
-                    }
-                    // Responses to lines still in GRBL's buffer (error:9) may follow; collect
-                    // them, then locate the machine.
-                    let settle = Instant::now() + Duration::from_millis(300);
-                    while Instant::now() < settle {
-                        for e in sess
-                            .pump(READ_SLICE)
-                            .map_err(|e| transport(e, tracker.last_done(job)))?
-                        {
-                            if let Event::Rejected(Tag::Job(i), c) = e {
-                                if let Some(j) = journal.as_mut() {
-                                    j.reject(i, c);
-                                }
-                            }
-                        }
-                    }
-                    if alarm_is_critical(code) {
-                        // GRBL blocks everything until reset; position is reported after it.
-                        sess.s.forget_in_flight();
-                        sess.s.realtime(0x18);
-                        let _ = sess.wait_banner(opts.banner_timeout);
-                    }
-                    if let Ok(Some(_)) = sess.query_status(Duration::from_millis(500)) {
-                        if let Some(p) = sess.work_position() {
-                            tracker.confirm_by_position(job_t, p, &mut journal);
-                        }
-                    }
-                    if let Some(j) = journal.as_mut() {
-                        j.sync()?;
-                    }
-                    return Err(SendError::Alarm {
-                        code,
-                        last_done: tracker.last_done(job),
-                    });
+                    let err = on_alarm(&mut sess, job_t, code, opts, &mut tracker, &mut journal)?;
+                    return Err(err);
                 }
                 Event::Reset { lost, .. } => {
-                    if let Some(j) = journal.as_mut() {
-                        j.note(&format!(
-                            "unexpected reset; {} line(s) in flight lost",
-                            lost.len()
-                        ));
-                    }
-                    sess.s.set_feeding(false);
-                    sess.s.clear_queue();
-                    if let Ok(Some(_)) = sess.query_status(Duration::from_millis(500)) {
-                        if let Some(p) = sess.work_position() {
-                            tracker.confirm_by_position(job_t, p, &mut journal);
-                        }
-                    }
-                    if let Some(j) = journal.as_mut() {
-                        j.sync()?;
-                    }
-                    return Err(SendError::UnexpectedReset {
-                        lost: lost.len(),
-                        last_done: tracker.last_done(job),
-                    });
+                    let err = on_reset(&mut sess, job_t, lost, &mut tracker, &mut journal)?;
+                    return Err(err);
                 }
                 Event::Status(st) => {
                     if st.state == MachineState::Idle {
-                        // Planner empty: every line acknowledged so far has executed.
-                        let k = tracker.unconfirmed.len();
-                        tracker.confirm(job_t, k, &mut journal);
-                        if sess.s.in_flight() > 0 {
+                        if sess.s.in_flight() == 0 {
+                            // Idle with GRBL's RX buffer empty: it already ran its auto cycle
+                            // start, so the planner is empty and every acknowledged line ran.
+                            // (Idle while lines wait in the RX buffer may still hold queued,
+                            // unstarted blocks: GRBL starts the cycle only when the planner is
+                            // full or the RX buffer is empty.)
+                            let k = tracker.unconfirmed.len();
+                            tracker.confirm(job_t, k, &mut journal);
+                        } else {
                             idle_since_response += 1;
                         }
                     }
@@ -1166,6 +1163,23 @@ pub fn send_job(
                 in_flight: n_in,
                 last_done: tracker.last_done(job),
             });
+        }
+        let state_now = sess.status.as_ref().map(|s| s.state);
+        let foreign_hold = matches!(
+            state_now,
+            Some(MachineState::Hold { .. }) | Some(MachineState::Door(_))
+        ) && !holding;
+        if foreign_hold {
+            let since = *hold_since.get_or_insert_with(Instant::now);
+            if opts.hold_timeout.is_some_and(|t| since.elapsed() >= t) {
+                return Err(stop_unexpected(&mut sess, job, &tracker, &mut journal)?);
+            }
+        } else {
+            hold_since = None;
+        }
+        if state_now == Some(MachineState::Check) {
+            // Lines acknowledged in check mode do not move: never count them as done.
+            return Err(stop_unexpected(&mut sess, job, &tracker, &mut journal)?);
         }
         let waiting_on_user = matches!(
             sess.status.as_ref().map(|s| s.state),
@@ -1274,6 +1288,21 @@ pub fn send_job(
     })
 }
 
+/// Half a step on the coarsest axis plus the 3-decimal rounding of status reports: how far a
+/// reported position may sit from a programmed point that was reached.
+fn position_tolerance(settings: &BTreeMap<u16, f64>) -> f64 {
+    let min_steps = (100..=102)
+        .filter_map(|n| settings.get(&n).copied())
+        .filter(|v| *v > 0.0 && v.is_finite())
+        .fold(f64::INFINITY, f64::min);
+    let half_step = if min_steps.is_finite() {
+        0.5 / min_steps
+    } else {
+        0.5 / 250.0
+    };
+    half_step + 0.0011
+}
+
 /// G28/G30/G53 and `$` motion (homing, jog) go to places this model does not track.
 fn job_uses_unknown_moves(job: &Job) -> bool {
     job.lines.iter().any(|l| {
@@ -1298,6 +1327,192 @@ fn eta(job: &Job, tr: &Tracker, elapsed: Duration, _prev: usize) -> Duration {
         1.0
     };
     Duration::from_secs_f64((remaining * ratio).max(0.0))
+}
+
+/// Stops because the machine is in a state this sender did not ask for.
+fn stop_unexpected<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    job: &Job,
+    tracker: &Tracker,
+    journal: &mut Option<Journal>,
+) -> Result<SendError, SendError> {
+    sess.s.set_feeding(false);
+    sess.s.clear_queue();
+    let state = sess
+        .status
+        .as_ref()
+        .map(|s| s.state.name())
+        .unwrap_or_default();
+    if let Some(j) = journal.as_mut() {
+        j.note(&format!("stopped: unexpected state {state}"));
+        j.sync()?;
+    }
+    Ok(SendError::UnexpectedState {
+        state,
+        last_done: tracker.last_done(job),
+    })
+}
+
+/// Stops on `ALARM:N`: collects the answers to lines still in GRBL's buffer, resets a critical
+/// alarm (GRBL answers nothing else until then), and locates the machine on the path.
+fn on_alarm<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    job: &Job,
+    code: u8,
+    opts: &SendOptions,
+    tracker: &mut Tracker,
+    journal: &mut Option<Journal>,
+) -> Result<SendError, SendError> {
+    sess.s.set_feeding(false);
+    sess.s.clear_queue();
+    if let Some(j) = journal.as_mut() {
+        j.note(&format!(
+            "ALARM:{code} {}",
+            alarm_meaning(code).unwrap_or("")
+        ));
+    }
+    // The `ok` of the line that raised it and `error:9`s for lines behind it may follow.
+    let settle = Instant::now() + Duration::from_millis(300);
+    while Instant::now() < settle {
+        let evs = match sess.pump(READ_SLICE) {
+            Ok(e) => e,
+            Err(e) => return Err(transport(e, tracker.last_done(job))),
+        };
+        for e in evs {
+            match e {
+                Event::Ack(Tag::Job(i)) => {
+                    if let Some(j) = journal.as_mut() {
+                        j.ack(i);
+                    }
+                    tracker.ack(job, i, journal);
+                }
+                Event::Rejected(Tag::Job(i), c) => {
+                    if let Some(j) = journal.as_mut() {
+                        j.reject(i, c);
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    if let Some(Tag::Job(i)) = sess.s.last_sent() {
+        tracker.last_sent = Some(tracker.last_sent.map_or(i, |l| l.max(i)));
+    }
+    if alarm_is_critical(code) {
+        // GRBL blocks everything until reset; position is reported after it.
+        sess.s.forget_in_flight();
+        sess.s.realtime(0x18);
+        let _ = sess.wait_banner(opts.banner_timeout);
+    }
+    if let Ok(Some(_)) = sess.query_status(Duration::from_millis(500)) {
+        if let (Some(p), Some(upto)) = (sess.work_position(), tracker.last_sent) {
+            tracker.confirm_by_position(job, p, upto, journal);
+        }
+    }
+    if let Some(j) = journal.as_mut() {
+        j.sync()?;
+    }
+    Ok(SendError::Alarm {
+        code,
+        last_done: tracker.last_done(job),
+    })
+}
+
+/// Whether line `i` does the same thing right after a soft reset (GRBL's parser back at G0 G54
+/// G17 G21 G90 G94 M5 M9, no G92) as it would in the job: then a line that GRBL took in after
+/// resetting really ran as the job meant it.
+fn same_after_reset(job: &Job, i: usize) -> bool {
+    let st = &job.lines[i].before;
+    let d = crate::job::ModalState::default();
+    let explicit_motion = job.lines[i].text.contains("G0")
+        || job.lines[i].text.contains("G1")
+        || st.motion == d.motion;
+    st.units == d.units
+        && st.incremental == d.incremental
+        && st.plane == d.plane
+        && st.wcs == d.wcs
+        && st.inverse_time == d.inverse_time
+        && st.spindle == d.spindle
+        && st.mist == d.mist
+        && st.flood == d.flood
+        && st.g92 == d.g92
+        && explicit_motion
+}
+
+/// Stops on an unexpected banner. GRBL cleared its RX buffer at the reset, but bytes still on
+/// the wire landed in the fresh buffer and ran: their answers arrive after the banner and belong
+/// to the newest lines that were in flight.
+fn on_reset<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    job: &Job,
+    lost: Vec<Tag>,
+    tracker: &mut Tracker,
+    journal: &mut Option<Journal>,
+) -> Result<SendError, SendError> {
+    sess.s.set_feeding(false);
+    sess.s.clear_queue();
+    if let Some(Tag::Job(i)) = lost.iter().rev().find(|t| matches!(t, Tag::Job(_))) {
+        tracker.last_sent = Some(tracker.last_sent.map_or(*i, |l| l.max(*i)));
+    }
+    let mut late = Vec::new();
+    let mut quiet_since = Instant::now();
+    let until = Instant::now() + Duration::from_millis(1000);
+    while Instant::now() < until && quiet_since.elapsed() < Duration::from_millis(150) {
+        let evs = match sess.pump(READ_SLICE) {
+            Ok(e) => e,
+            Err(e) => return Err(transport(e, tracker.last_done(job))),
+        };
+        for e in evs {
+            match e {
+                Event::Unmatched(r) => {
+                    late.push(r);
+                    quiet_since = Instant::now();
+                }
+                Event::Alarm(_) | Event::Message(_) | Event::Other(_) => {
+                    quiet_since = Instant::now();
+                }
+                _ => {}
+            }
+        }
+    }
+    let m = late.len().min(lost.len());
+    let mut ran_after_reset = 0;
+    for (tag, r) in lost[lost.len() - m..].iter().zip(&late[late.len() - m..]) {
+        if let (Tag::Job(i), crate::response::Response::Ok) = (tag, r) {
+            ran_after_reset += 1;
+            if same_after_reset(job, *i) {
+                if let Some(j) = journal.as_mut() {
+                    j.ack(*i);
+                }
+                tracker.ack(job, *i, journal);
+            }
+        }
+    }
+    if let Some(j) = journal.as_mut() {
+        j.note(&format!(
+            "unexpected reset; {} line(s) in flight, {ran_after_reset} of them ran after the reset",
+            lost.len()
+        ));
+    }
+    // Wait for the motion those lines queued, then locate the machine.
+    let until = Instant::now() + Duration::from_secs(30);
+    while Instant::now() < until {
+        match sess.query_status(Duration::from_millis(500)) {
+            Ok(Some(st)) if st.state != MachineState::Run => break,
+            Ok(_) => {}
+            Err(e) => return Err(transport(e, tracker.last_done(job))),
+        }
+    }
+    if let (Some(p), Some(upto)) = (sess.work_position(), tracker.last_sent) {
+        tracker.confirm_by_position(job, p, upto, journal);
+    }
+    if let Some(j) = journal.as_mut() {
+        j.sync()?;
+    }
+    Ok(SendError::UnexpectedReset {
+        lost: lost.len() - ran_after_reset,
+        last_done: tracker.last_done(job),
+    })
 }
 
 fn check_travel(
@@ -1424,8 +1639,11 @@ fn abort<T: Transport + ?Sized>(
             Err(e) => return Err(transport(e, tracker.last_done(job))),
         }
     }
-    if let Some(p) = sess.work_position() {
-        tracker.confirm_by_position(job, p, journal);
+    if let Some(Tag::Job(i)) = sess.s.last_sent() {
+        tracker.last_sent = Some(tracker.last_sent.map_or(i, |l| l.max(i)));
+    }
+    if let (Some(p), Some(upto)) = (sess.work_position(), tracker.last_sent) {
+        tracker.confirm_by_position(job, p, upto, journal);
     }
     sess.s.forget_in_flight();
     sess.s.realtime(0x18);

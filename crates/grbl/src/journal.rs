@@ -9,6 +9,8 @@
 //! A <index>               line <index> (0-based job line) was answered `ok`
 //! E <index> <code>        line <index> was answered `error:<code>` (it did not run)
 //! X <index>               every line acknowledged in this run with index <= <index> has executed
+//! U <index>               lines of this run with index >= <index> are not known executed after
+//!                         all (the machine was found somewhere else: a line was corrupted)
 //! N <text>                a note (why the run stopped)
 //! D                       the job completed
 //! ```
@@ -208,6 +210,7 @@ impl Journal {
         // Acks of the current run not yet confirmed, kept sorted by arrival (= index order
         // within a run except across resume gaps).
         let mut pending: Vec<usize> = Vec::new();
+        let mut confirmed: Vec<usize> = Vec::new();
         let index = |n: usize, s: Option<&str>| -> Result<usize, JournalError> {
             let i: usize = s
                 .and_then(|s| s.parse().ok())
@@ -230,6 +233,7 @@ impl Journal {
                 "R" => {
                     st.runs += 1;
                     pending.clear();
+                    confirmed.clear();
                 }
                 "A" => {
                     let i = index(n, rest)?;
@@ -251,6 +255,18 @@ impl Journal {
                     pending.retain(|&i| {
                         if i <= k {
                             st.done[i] = true;
+                            confirmed.push(i);
+                            false
+                        } else {
+                            true
+                        }
+                    });
+                }
+                "U" => {
+                    let k = index(n, rest)?;
+                    confirmed.retain(|&i| {
+                        if i >= k {
+                            st.done[i] = false;
                             false
                         } else {
                             true
@@ -283,6 +299,11 @@ impl Journal {
     /// Records that every line acknowledged in this run with index <= `index` has executed.
     pub fn executed_through(&mut self, index: usize) {
         self.buf.push_str(&format!("X {index}\n"));
+    }
+
+    /// Records that lines of this run with index >= `index` are not known executed after all.
+    pub fn unconfirm_from(&mut self, index: usize) {
+        self.buf.push_str(&format!("U {index}\n"));
     }
 
     /// Records a note (single line).
@@ -353,10 +374,16 @@ mod tests {
             j.ack(1);
             // An X in run 2 must not confirm run 1's unconfirmed ack of line 3.
             j.executed_through(3);
+            j.ack(3);
+            j.ack(4);
+            j.executed_through(4);
+            // ... and a U in run 2 only withdraws run 2's confirmations.
+            j.unconfirm_from(2);
             j.sync().unwrap();
         }
         let st = Journal::read(&p).unwrap();
         assert_eq!(st.remaining(), vec![3, 4]);
+        assert_eq!(st.done, vec![true, true, true, false, false]);
         assert_eq!(st.runs, 2);
     }
 

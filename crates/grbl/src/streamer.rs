@@ -99,6 +99,7 @@ pub struct Streamer {
     feeding: bool,
     bytes_written: u64,
     max_in_flight_bytes: usize,
+    last_sent: Option<Tag>,
 }
 
 impl Default for Streamer {
@@ -120,6 +121,7 @@ impl Streamer {
             feeding: true,
             bytes_written: 0,
             max_in_flight_bytes: 0,
+            last_sent: None,
         }
     }
 
@@ -195,6 +197,11 @@ impl Streamer {
         self.queue.len()
     }
 
+    /// The tag of the last line handed out by [`Streamer::poll_transmit`].
+    pub fn last_sent(&self) -> Option<Tag> {
+        self.last_sent
+    }
+
     /// Total bytes handed out by [`Streamer::poll_transmit`].
     pub fn bytes_written(&self) -> u64 {
         self.bytes_written
@@ -235,6 +242,7 @@ impl Streamer {
             out.push(b'\n');
             self.in_flight_bytes += need;
             self.max_in_flight_bytes = self.max_in_flight_bytes.max(self.in_flight_bytes);
+            self.last_sent = Some(p.tag);
             self.in_flight.push_back(InFlight {
                 tag: p.tag,
                 bytes: need,

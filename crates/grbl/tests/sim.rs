@@ -1,0 +1,408 @@
+//! The sender against firmware-sim over a real pseudo-terminal: complete streaming, every
+//! fault-injection mode, resume from the journal.
+
+use flatcut_firmware_sim::{Faults, PtySim, SimConfig, TraceSegment};
+use flatcut_grbl::driver::Phase;
+use flatcut_grbl::{CancelToken, Job, Journal, SendError, SendOptions, open_port, send_job};
+use std::collections::BTreeSet;
+use std::path::Path;
+use std::time::Duration;
+
+/// A pen-plotter job of `n` zig-zag strokes with unique line texts.
+fn zigzag(n: usize) -> String {
+    let mut s = String::from("G21 G90\nG0 Z2\nG0 X0 Y0\nG1 Z-0.5 F300\n");
+    for i in 1..=n {
+        // X on the 250 steps/mm grid (3 steps apart), so positions are exact in steps.
+        s.push_str(&format!(
+            "G1 X{:.3} Y{} F3000\n",
+            i as f64 * 0.012,
+            (i % 2) * 5
+        ));
+    }
+    s.push_str("G0 Z1.5\n");
+    s
+}
+
+fn opts() -> SendOptions {
+    SendOptions::default()
+        .with_banner_timeout(Duration::from_millis(500))
+        .with_idle_ack_timeout(Duration::from_millis(1500))
+        .with_silence_timeout(Duration::from_secs(5))
+        .with_hold_timeout(Some(Duration::from_secs(2)))
+}
+
+fn spawn(cfg: SimConfig) -> PtySim {
+    PtySim::spawn(cfg).expect("spawn firmware-sim")
+}
+
+fn run(sim: &PtySim, job: &Job, o: &SendOptions) -> Result<flatcut_grbl::SendReport, SendError> {
+    let mut port = open_port(sim.path().to_str().unwrap(), 115_200).expect("open pty");
+    send_job(&mut port, job, o, &mut |_| {}, &CancelToken::new())
+}
+
+const TOL: f64 = 1e-3;
+
+fn close(a: [f64; 3], b: [f64; 3]) -> bool {
+    (0..3).all(|k| (a[k] - b[k]).abs() <= TOL)
+}
+
+/// Expected motion of the job: (text, from, to) of every line that moves.
+fn geometry(job: &Job) -> Vec<(String, [f64; 3], [f64; 3])> {
+    let mut out = Vec::new();
+    for (i, l) in job.lines.iter().enumerate() {
+        if l.moves && l.length > 1e-6 {
+            let to = job
+                .lines
+                .get(i + 1)
+                .map(|n| n.before.position)
+                .unwrap_or(job.end_state.position);
+            out.push((l.text.clone(), l.before.position, to));
+        }
+    }
+    out
+}
+
+fn moving(trace: &[TraceSegment]) -> Vec<&TraceSegment> {
+    trace.iter().filter(|s| !close(s.from, s.to)).collect()
+}
+
+fn assert_trace_is_job(job: &Job, trace: &[TraceSegment]) {
+    let want = geometry(job);
+    let got = moving(trace);
+    assert_eq!(got.len(), want.len(), "segment count");
+    for (k, (w, g)) in want.iter().zip(&got).enumerate() {
+        assert_eq!(g.text, w.0, "segment {k}");
+        assert!(
+            close(g.from, w.1) && close(g.to, w.2),
+            "segment {k}: {g:?} vs {w:?}"
+        );
+    }
+}
+
+/// Every job motion with a unique text (not also written by a resume preamble) ran exactly once
+/// over the traces of all runs, at the right place.
+fn assert_exactly_once(job: &Job, traces: &[&[TraceSegment]]) {
+    assert_exactly_once_except(job, traces, &BTreeSet::new());
+}
+
+fn assert_exactly_once_except(job: &Job, traces: &[&[TraceSegment]], except: &BTreeSet<String>) {
+    let preamble: BTreeSet<String> = (1..job.len())
+        .flat_map(|k| job.resume_preamble(k))
+        .collect();
+    for (text, from, to) in geometry(job) {
+        if preamble.contains(&text)
+            || except.contains(&text)
+            || job.lines.iter().filter(|l| l.text == text).count() != 1
+        {
+            continue;
+        }
+        let hits: Vec<&TraceSegment> = traces
+            .iter()
+            .flat_map(|t| t.iter())
+            .filter(|s| s.text == text)
+            .collect();
+        assert_eq!(hits.len(), 1, "`{text}` ran {} times", hits.len());
+        assert!(
+            close(hits[0].to, to),
+            "`{text}` ended at {:?}, want {to:?}",
+            hits[0].to
+        );
+        let _ = from;
+    }
+}
+
+#[test]
+fn ten_thousand_lines_stream_completely_in_order() {
+    let job = Job::parse(&zigzag(10_000)).unwrap();
+    let sim = spawn(
+        SimConfig::default()
+            .with_baud(230_400)
+            .with_instant_motion(true),
+    );
+    let mut phases = Vec::new();
+    let mut port = open_port(sim.path().to_str().unwrap(), 230_400).unwrap();
+    let rep = send_job(
+        &mut port,
+        &job,
+        &opts(),
+        &mut |p| {
+            if phases.last() != Some(&p.phase) {
+                phases.push(p.phase);
+            }
+        },
+        &CancelToken::new(),
+    )
+    .unwrap();
+    drop(port);
+    let report = sim.stop();
+    assert_trace_is_job(&job, &report.trace);
+    assert_eq!(report.stats.bytes_dropped_overflow, 0);
+    assert!(report.stats.max_rx_fill <= 128);
+    assert_eq!(report.stats.errors, 0);
+    assert_eq!(rep.lines_sent, job.len());
+    assert_eq!(phases.first(), Some(&Phase::Connecting));
+    assert_eq!(phases.last(), Some(&Phase::Done));
+}
+
+fn fault_case(
+    name: &str,
+    n: usize,
+    faults: Faults,
+    check: impl FnOnce(&Result<flatcut_grbl::SendReport, SendError>),
+) {
+    let dir = tempfile::tempdir().unwrap();
+    let jp = dir.path().join(format!("{name}.journal"));
+    let job = Job::parse(&zigzag(n)).unwrap();
+    let sim = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_faults(faults),
+    );
+    let first = run(&sim, &job, &opts().with_journal(&jp));
+    check(&first);
+    let r1 = sim.stop();
+    match first {
+        Ok(_) => assert_trace_is_job(&job, &r1.trace),
+        Err(e) => {
+            // A clear message, and a journal that lets --resume finish the job.
+            assert!(!e.to_string().is_empty());
+            let st = Journal::read(&jp).unwrap();
+            if std::env::var("SIM_DEBUG").is_ok() {
+                eprintln!("{name}: {e}");
+                let txt = std::fs::read_to_string(&jp).unwrap();
+                let lines: Vec<&str> = txt.lines().collect();
+                eprintln!(
+                    "journal tail: {:?}",
+                    &lines[lines.len().saturating_sub(40)..]
+                );
+                let t: Vec<(u32, &str)> =
+                    r1.trace.iter().map(|s| (s.line, s.text.as_str())).collect();
+                eprintln!("trace tail: {:?}", &t[t.len().saturating_sub(8)..]);
+            }
+            assert!(!st.finished, "{name}: journal says finished after {e}");
+            let sim2 = spawn(SimConfig::default().with_instant_motion(true));
+            let rep = run(&sim2, &job, &opts().with_journal(&jp).with_resume(true))
+                .unwrap_or_else(|e2| panic!("{name}: resume after `{e}` failed: {e2}"));
+            assert_eq!(rep.previously_done, st.done_count());
+            let r2 = sim2.stop();
+            if name == "hangup" {
+                // The hang-up loses the `ok`s in flight: lines the journal could not confirm may
+                // run again, but none is skipped and none journaled as done re-runs.
+                let ran1: BTreeSet<&str> = r1.trace.iter().map(|s| s.text.as_str()).collect();
+                let ran2: BTreeSet<&str> = r2.trace.iter().map(|s| s.text.as_str()).collect();
+                for (i, l) in job.lines.iter().enumerate() {
+                    if l.moves && l.length > 1e-6 {
+                        assert!(
+                            ran1.contains(l.text.as_str()) || ran2.contains(l.text.as_str()),
+                            "line {i} skipped"
+                        );
+                        if st.done[i] {
+                            assert!(
+                                !ran2.contains(l.text.as_str()) || i == 1,
+                                "line {i} journaled done but re-ran"
+                            );
+                        }
+                    }
+                }
+            } else if name == "alarm" {
+                // The line that raised the alarm was interrupted by it: it runs again.
+                let hit: BTreeSet<String> = r1
+                    .trace
+                    .last()
+                    .map(|s| s.text.clone())
+                    .into_iter()
+                    .collect();
+                assert_exactly_once_except(&job, &[&r1.trace, &r2.trace], &hit);
+            } else if name == "drop" || name == "corrupt" {
+                // GRBL's link has no checksum: a damaged byte that still parses runs as
+                // something else and cannot be seen by any sender. Each damaged byte may spoil
+                // one line; beyond those, nothing is skipped or repeated.
+                let damaged = (r1.stats.bytes_dropped_fault + r1.stats.bytes_corrupted) as usize;
+                let want = geometry(&job);
+                let bad = want
+                    .iter()
+                    .filter(|(t, _, to)| {
+                        let hits: Vec<&TraceSegment> = r1
+                            .trace
+                            .iter()
+                            .chain(&r2.trace)
+                            .filter(|s| &s.text == t)
+                            .collect();
+                        hits.len() != 1 || !close(hits[0].to, *to)
+                    })
+                    .count();
+                eprintln!(
+                    "{name}: {damaged} damaged bytes, {bad} job lines not run exactly once as written"
+                );
+                assert!(
+                    bad <= 2 * damaged + 1,
+                    "{bad} bad lines for {damaged} damaged bytes"
+                );
+            } else {
+                assert_exactly_once(&job, &[&r1.trace, &r2.trace]);
+            }
+            assert!(Journal::read(&jp).unwrap().finished);
+        }
+    }
+}
+
+#[test]
+fn fault_error_at_line() {
+    fault_case(
+        "error",
+        300,
+        Faults {
+            error_at_line: Some((120, 33)),
+            ..Faults::default()
+        },
+        |r| {
+            let e = r.as_ref().unwrap_err();
+            assert!(matches!(e, SendError::LineRejected { .. }), "{e}");
+            assert!(
+                e.to_string()
+                    .contains("error:33 (motion command target is invalid)"),
+                "{e}"
+            );
+        },
+    );
+}
+
+#[test]
+fn fault_alarm_at_line() {
+    fault_case(
+        "alarm",
+        300,
+        Faults {
+            alarm_at_line: Some((150, 1)),
+            ..Faults::default()
+        },
+        |r| {
+            let e = r.as_ref().unwrap_err();
+            assert!(matches!(e, SendError::Alarm { code: 1, .. }), "{e}");
+        },
+    );
+}
+
+#[test]
+fn fault_reset_at_line() {
+    fault_case(
+        "reset",
+        300,
+        Faults {
+            reset_at_line: Some(150),
+            ..Faults::default()
+        },
+        |r| {
+            let e = r.as_ref().unwrap_err();
+            assert!(matches!(e, SendError::UnexpectedReset { .. }), "{e}");
+        },
+    );
+}
+
+#[test]
+fn fault_hangup_at_line() {
+    fault_case(
+        "hangup",
+        300,
+        Faults {
+            hangup_at_line: Some(150),
+            ..Faults::default()
+        },
+        |r| {
+            let e = r.as_ref().unwrap_err();
+            assert!(matches!(e, SendError::Transport { .. }), "{e}");
+            assert!(
+                e.to_string().contains("last line known executed: line"),
+                "{e}"
+            );
+        },
+    );
+}
+
+#[test]
+fn fault_response_delay() {
+    fault_case(
+        "delay",
+        100,
+        Faults {
+            response_delay_ms: 5,
+            ..Faults::default()
+        },
+        |r| {
+            assert!(r.is_ok(), "{:?}", r.as_ref().err().map(|e| e.to_string()));
+        },
+    );
+}
+
+#[test]
+fn fault_dropped_bytes() {
+    fault_case(
+        "drop",
+        300,
+        Faults {
+            drop_rate: 0.002,
+            ..Faults::default()
+        },
+        |_| {},
+    );
+}
+
+#[test]
+fn fault_corrupted_bytes() {
+    fault_case(
+        "corrupt",
+        300,
+        Faults {
+            corrupt_rate: 0.002,
+            ..Faults::default()
+        },
+        |_| {},
+    );
+}
+
+#[test]
+fn check_mode_pass_then_cut_with_real_motion() {
+    let job = Job::parse(&zigzag(40)).unwrap();
+    let sim = spawn(SimConfig::default().with_time_scale(50.0));
+    let rep = run(&sim, &job, &opts().with_check(true)).unwrap();
+    assert!(rep.checked);
+    let r = sim.stop();
+    assert_trace_is_job(&job, &r.trace);
+}
+
+#[test]
+fn travel_and_alarm_policy_against_the_simulator() {
+    let job = Job::parse("G0X0Y0\nG1X150Y10F1000\n").unwrap();
+    let sim = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_setting(130, 100.0),
+    );
+    let e = run(&sim, &job, &opts()).unwrap_err();
+    assert!(matches!(e, SendError::OutOfTravel { axis: 'X', .. }), "{e}");
+    assert!(sim.stop().trace.is_empty());
+    // Homing enabled: GRBL starts alarm-locked.
+    let job = Job::parse("G0X1\n").unwrap();
+    let sim = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_setting(22, 1.0),
+    );
+    let e = run(&sim, &job, &opts()).unwrap_err();
+    assert!(matches!(e, SendError::AlarmLocked { .. }), "{e}");
+    run(&sim, &job, &opts().with_unlock(true)).unwrap();
+    assert_eq!(sim.stop().trace.len(), 1);
+}
+
+#[test]
+fn refuses_to_resume_another_job() {
+    let dir = tempfile::tempdir().unwrap();
+    let jp = dir.path().join("j");
+    let job = Job::parse(&zigzag(10)).unwrap();
+    let sim = spawn(SimConfig::default().with_instant_motion(true));
+    run(&sim, &job, &opts().with_journal(&jp)).unwrap();
+    let other = Job::parse(&zigzag(11)).unwrap();
+    let e = run(&sim, &other, &opts().with_journal(&jp).with_resume(true)).unwrap_err();
+    assert!(e.to_string().contains("different job"), "{e}");
+    let _ = Path::new("");
+}
