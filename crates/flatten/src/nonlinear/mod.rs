@@ -9,7 +9,6 @@
 pub mod boundary;
 pub mod init;
 pub mod kernel;
-// minmax pending
 pub mod newton;
 pub mod spd;
 
@@ -41,6 +40,11 @@ pub fn solve(
         Method::Conformal => conformal(mesh, topo, &rest, params)?,
         Method::BoundaryIsometric => boundary::boundary_isometric(mesh, topo, &rest, params)?,
 
+        Method::Minmax => {
+            return Err(FlattenError::Internal(
+                "method minmax (Duncan's δ0) is not available in this build; use isometric".into(),
+            ));
+        }
         m => {
             return Err(FlattenError::Internal(format!(
                 "method {m} is not a nonlinear method"
