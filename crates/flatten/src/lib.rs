@@ -16,6 +16,7 @@ pub mod arap;
 pub mod conformal_boundary;
 pub mod developable;
 pub mod lscm;
+pub mod marks;
 pub mod method;
 pub mod nonlinear;
 pub mod ops;
