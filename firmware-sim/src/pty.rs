@@ -3,13 +3,16 @@
 //!
 //! The thread keeps its own descriptor of the slave end open, so that reads on the master never fail with EIO
 //! when a client closes the port; a later client simply opens the same path again (the device "stays plugged in").
+//! Opening the port resets the board as the DTR line does on an Uno: an inotify watch on the device sees each
+//! client open, stale bytes in the pseudo-terminal are flushed, and the controller restarts with its banner.
 
 use crate::machine::{Grbl, SimEvent};
 use crate::{RxOverflow, SimConfig, SimReport, SimStats, TraceSegment};
 use nix::errno::Errno;
 use nix::fcntl::{FcntlArg, OFlag, fcntl};
 use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
-use nix::sys::termios::{SetArg, cfmakeraw, tcgetattr, tcsetattr};
+use nix::sys::inotify::{AddWatchFlags, InitFlags, Inotify};
+use nix::sys::termios::{FlushArg, SetArg, cfmakeraw, tcflush, tcgetattr, tcsetattr};
 use std::collections::VecDeque;
 use std::io;
 use std::os::fd::{AsFd, OwnedFd};
@@ -38,6 +41,7 @@ struct Shared {
     path: PathBuf,
     links: Vec<PathBuf>,
     replugs: u32,
+    connects: u32,
 }
 
 /// A running simulator on a pseudo-terminal, on its own thread.
@@ -70,12 +74,13 @@ impl PtySim {
             path: path.clone(),
             ..Shared::default()
         }));
-
+        // Watch for client opens before anyone can open the device.
+        let opens = watch_opens(&path);
         let stop = Arc::new(AtomicBool::new(false));
         let (sh, st, cfg) = (shared.clone(), stop.clone(), config.clone());
         let handle = std::thread::Builder::new()
             .name("firmware-sim".into())
-            .spawn(move || run(master, slave, cfg, sh, st))?;
+            .spawn(move || run(master, slave, opens, cfg, sh, st))?;
         Ok(PtySim {
             path,
             shared,
@@ -136,6 +141,11 @@ impl PtySim {
     /// How many times the device came back after a hang-up.
     pub fn replugs(&self) -> u32 {
         lock(&self.shared).replugs
+    }
+
+    /// How many times a client opened the device (each open resets the controller, like DTR on an Uno).
+    pub fn connects(&self) -> u32 {
+        lock(&self.shared).connects
     }
 
     /// Stops the thread, writes the trace files of the configuration and returns trace and counters.
@@ -217,9 +227,18 @@ fn open_pty() -> io::Result<(OwnedFd, OwnedFd, PathBuf)> {
     Ok((master, slave, path))
 }
 
+/// A non-blocking watch for opens of the device node (a client connecting).
+fn watch_opens(path: &Path) -> Option<Inotify> {
+    let ino = Inotify::init(InitFlags::IN_NONBLOCK | InitFlags::IN_CLOEXEC).ok()?;
+    ino.add_watch(path, AddWatchFlags::IN_OPEN).ok()?;
+    Some(ino)
+}
+
 /// Brings the device back on a fresh pseudo-terminal and re-points the links.
-fn replug(shared: &Mutex<Shared>) -> Option<(OwnedFd, OwnedFd)> {
+fn replug(shared: &Mutex<Shared>) -> Option<(OwnedFd, OwnedFd, Option<Inotify>)> {
     let (master, slave, path) = open_pty().ok()?;
+    // Watch before the links point at the new device, so that no client open is missed.
+    let opens = watch_opens(&path);
     let mut sh = lock(shared);
     for l in &sh.links {
         let _ = std::fs::remove_file(l);
@@ -228,12 +247,13 @@ fn replug(shared: &Mutex<Shared>) -> Option<(OwnedFd, OwnedFd)> {
     sh.path = path;
     sh.hung_up = false;
     sh.replugs += 1;
-    Some((master, slave))
+    Some((master, slave, opens))
 }
 
 fn run(
     master: OwnedFd,
     slave: OwnedFd,
+    mut opens: Option<Inotify>,
     config: SimConfig,
     shared: Arc<Mutex<Shared>>,
     stop: Arc<AtomicBool>,
@@ -256,21 +276,37 @@ fn run(
     let mut buf = [0u8; 512];
     let mut pushed_trace = 0;
     let mut unplugged_at: Option<Instant> = None;
+    let mut connected = opens.is_none();
     while !stop.load(Ordering::SeqCst) {
         if let Some(t) = unplugged_at
             && t.elapsed().as_secs_f64() >= REPLUG_DELAY_S
-            && let Some((m, s)) = replug(&shared)
+            && let Some((m, s, o)) = replug(&shared)
         {
             master = Some(m);
             slave = Some(s);
             unplugged_at = None;
             core.power_cycle();
+            opens = o;
+            connected = opens.is_none();
         }
         if let Some(m) = &master {
-            let mut fds = [PollFd::new(m.as_fd(), PollFlags::POLLIN)];
+            let mut fds = vec![PollFd::new(m.as_fd(), PollFlags::POLLIN)];
+            if let Some(ino) = &opens {
+                fds.push(PollFd::new(ino.as_fd(), PollFlags::POLLIN));
+            }
             let _ = poll(&mut fds, PollTimeout::from(POLL_MS));
         } else {
             std::thread::sleep(Duration::from_millis(u64::from(POLL_MS)));
+        }
+        // A client opened the device: reset like the DTR pulse of an Uno, with the stale bytes flushed.
+        if let (Some(ino), Some(s)) = (&opens, &slave)
+            && ino.read_events().is_ok_and(|ev| !ev.is_empty())
+        {
+            let _ = tcflush(s, FlushArg::TCIOFLUSH);
+            txq.clear();
+            core.power_cycle();
+            connected = true;
+            lock(&shared).connects += 1;
         }
         let now = Instant::now();
         let dt = now.duration_since(last).as_secs_f64().min(MAX_TICK_S);
@@ -308,7 +344,8 @@ fn run(
             }
         }
         let out = core.take_output();
-        if master.is_some() {
+        // Until a client connects (and resets the board) nothing is listening: output is lost, as on the wire.
+        if master.is_some() && connected {
             let ready = now + delay;
             txq.extend(out.into_iter().map(|b| (ready, b)));
         }

@@ -123,14 +123,45 @@ fn link_trace_files_and_reopen() {
         "{acc:?}"
     );
     drop(port);
-    // A second client opens the same device; the simulator kept running.
+    // A second client opens the same device: like the DTR pulse of an Uno, the open resets the board, so it
+    // reads one fresh banner (nothing stale) and the position restarts at zero.
     let mut port = open(&link);
+    acc.clear();
+    assert!(
+        read_until(
+            port.as_mut(),
+            &mut acc,
+            "for help]\r\n",
+            Duration::from_secs(3)
+        ),
+        "{acc:?}"
+    );
+    assert_eq!(acc, "\r\nGrbl 1.1h ['$' for help]\r\n");
+    // The reset also forgot the feed rate.
     port.write_all(b"G1 Y10\n").unwrap();
     acc.clear();
+    assert!(
+        read_until(
+            port.as_mut(),
+            &mut acc,
+            "error:22\r\n",
+            Duration::from_secs(3)
+        ),
+        "{acc:?}"
+    );
+    port.write_all(b"G1 Y10 F1000\n").unwrap();
     assert!(
         read_until(port.as_mut(), &mut acc, "ok\r\n", Duration::from_secs(3)),
         "{acc:?}"
     );
+    acc.clear();
+    port.write_all(b"?").unwrap();
+    assert!(
+        read_until(port.as_mut(), &mut acc, ">\r\n", Duration::from_secs(3)),
+        "{acc:?}"
+    );
+    assert!(acc.starts_with("<Idle|MPos:0.000,10.000,0.000|"), "{acc:?}");
+    assert_eq!(sim.connects(), 2);
     drop(port);
     let report = sim.stop();
     assert!(!link.exists(), "the link is removed at stop");
