@@ -622,11 +622,14 @@ impl Grbl {
         } else {
             fmt_float(feed, 0)
         };
-        s.push_str(&format!(
-            "|FS:{},{}",
-            feed_s,
-            fmt_float(self.spindle_speed_out, 0)
-        ));
+        // `spindle_compute_pwm_value`: the override scales S, then $30/$31 clamp it.
+        let rpm = if self.spindle_out == Spindle::Off || self.spindle_stop_ovr {
+            0.0
+        } else {
+            (self.spindle_speed_out * f64::from(self.spindle_ovr) / 100.0)
+                .clamp(self.settings.rpm_min, self.settings.rpm_max)
+        };
+        s.push_str(&format!("|FS:{},{}", feed_s, fmt_float(rpm, 0)));
         let busy = matches!(
             self.state,
             State::Cycle | State::Hold | State::Jog | State::Homing | State::Door
@@ -1171,11 +1174,7 @@ impl Grbl {
                 Action::Spindle(dir, speed) => {
                     if !check {
                         self.spindle_out = dir;
-                        self.spindle_speed_out = if dir == Spindle::Off {
-                            0.0
-                        } else {
-                            speed.clamp(self.settings.rpm_min, self.settings.rpm_max)
-                        };
+                        self.spindle_speed_out = if dir == Spindle::Off { 0.0 } else { speed };
                         self.ovr_counter = 0;
                     }
                 }

@@ -622,3 +622,24 @@ fn invalid_configurations_are_refused_with_a_reason() {
     assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
     assert!(err.to_string().contains("$999=1"), "{err}");
 }
+
+#[test]
+fn status_spindle_speed_and_inch_reports() {
+    let mut g = grbl(SimConfig::default().with_instant_motion(true));
+    send(&mut g, "M3 S800");
+    g.receive(0x9a); // spindle +10 %
+    g.receive(0x9a);
+    g.receive(0x9a); // 130 % of 800 = 1040, clamped to $30 = 1000
+    g.receive(b'?');
+    let s = String::from_utf8(g.take_output()).unwrap();
+    assert!(s.contains("|FS:0,1000|"), "{s}");
+    g.receive(0x99);
+    g.receive(b'?');
+    let s = String::from_utf8(g.take_output()).unwrap();
+    assert!(s.contains("|FS:0,800"), "{s}");
+    assert_eq!(err(&mut g, "$13=1"), "ok");
+    send(&mut g, "G0 X25.4 Y-12.7");
+    g.receive(b'?');
+    let s = String::from_utf8(g.take_output()).unwrap();
+    assert!(s.starts_with("<Idle|MPos:1.0000,-0.5000,0.0000|"), "{s}");
+}
