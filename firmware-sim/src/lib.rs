@@ -244,7 +244,7 @@ pub struct TraceSegment {
     pub tool_on: bool,
     /// S value in effect (laser mode: 0 during G0).
     pub power: f64,
-    /// Simulated start time, s.
+    /// Simulated start time, s (with `instant_motion`, start and end coincide).
     pub t_start: f64,
     /// Simulated end time, s.
     pub t_end: f64,
