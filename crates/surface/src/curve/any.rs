@@ -133,6 +133,20 @@ mod tests {
     use crate::curve::CurveExt;
 
     #[test]
+    fn every_curve_type_is_thread_safe_and_cloneable() {
+        fn check<T: ParamCurve + Send + Sync + Clone + std::fmt::Debug + 'static>() {}
+        check::<Bezier>();
+        check::<RationalBezier>();
+        check::<BSpline>();
+        check::<Nurbs>();
+        check::<Hermite>();
+        check::<HermiteSpline>();
+        check::<CubicSpline>();
+        check::<Polyline>();
+        check::<Curve>();
+    }
+
+    #[test]
     fn keeps_corners_and_searches_every_span() {
         // A zig-zag polyline with 200 vertices: uniform sampling through dyn would cut corners.
         let pts: Vec<DVec3> = (0..200)
