@@ -29,6 +29,9 @@ struct Args {
     /// Write an SVG of what was drawn or cut at exit.
     #[arg(long, value_name = "FILE")]
     trace_svg: Option<PathBuf>,
+    /// Write the counters and simulated time as JSON to this file at exit.
+    #[arg(long, value_name = "FILE")]
+    report: Option<PathBuf>,
     /// Laser mode ($32=1).
     #[arg(long)]
     laser: bool,
@@ -176,6 +179,16 @@ fn main() -> ExitCode {
     }
     let sig = signals.wait();
     let report = sim.stop();
+    if let Some(path) = &args.report {
+        let summary = serde_json::json!({
+            "stats": &report.stats,
+            "sim_time": report.sim_time,
+            "segments": report.trace.len(),
+        });
+        if let Err(e) = std::fs::write(path, format!("{summary:#}\n")) {
+            eprintln!("firmware-sim: cannot write report {}: {e}", path.display());
+        }
+    }
     let s = &report.stats;
     eprintln!(
         "firmware-sim: stopped ({:?}); {} lines, {} ok, {} errors, {} alarms, {} bytes dropped on overflow, {} segments, \

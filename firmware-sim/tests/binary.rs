@@ -9,6 +9,7 @@ fn binary_serves_a_client_and_writes_traces_on_sigterm() {
     let dir = std::env::temp_dir().join(format!("fw-sim-bin-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (jsonl, svg, link) = (dir.join("t.jsonl"), dir.join("t.svg"), dir.join("ttyGRBL"));
+    let report = dir.join("report.json");
     let mut child = Command::new(env!("CARGO_BIN_EXE_firmware-sim"))
         .args([
             "--link",
@@ -25,6 +26,7 @@ fn binary_serves_a_client_and_writes_traces_on_sigterm() {
             "--trace-svg",
             svg.to_str().unwrap(),
         ])
+        .args(["--report", report.to_str().unwrap()])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -76,6 +78,11 @@ fn binary_serves_a_client_and_writes_traces_on_sigterm() {
     assert!(trace.contains(r#""tool_on":true"#) && trace.contains(r#""power":800.0"#));
     assert!(std::fs::read_to_string(&svg).unwrap().contains("<polyline"));
     assert!(!link.exists());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(summary["stats"]["oks"], 3);
+    assert_eq!(summary["stats"]["errors"], 1);
+    assert_eq!(summary["segments"], 2);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
