@@ -13,7 +13,7 @@
 
 use crate::{Domain2, ParamSurface, SurfaceDerivs, SurfaceError};
 use glam::{DVec3, DVec4};
-use std::ops::{AddAssign, Mul};
+use std::ops::{Add, AddAssign, Mul};
 
 /// Highest supported degree (the same limit as OpenCASCADE's `Geom_BSplineSurface::MaxDegree`);
 /// it bounds the stack arrays of the basis evaluation.
@@ -39,6 +39,278 @@ pub struct BSplinePatch {
     weights: Option<Vec<f64>>,
     /// Homogeneous poles `(w x, w y, w z, w)`; filled only for rational patches.
     hpoints: Vec<DVec4>,
+    /// Per-span Bézier patches for degrees ≤ 3 (the fast evaluation path).
+    cache: Option<SpanCache>,
+}
+
+/// Largest number of cached Bézier poles (24–32 bytes each): ~32 MB at most.
+const MAX_CACHED_POLES: usize = 1 << 20;
+
+/// The patch cut into Bézier pieces by knot insertion (Boehm), one block of `(p+1)(q+1)` poles
+/// per span pair (v fastest within a block, blocks ordered u-span-major). Evaluation then needs
+/// a span search and a Bernstein contraction only: the idea of OpenCASCADE's span cache, with
+/// every span precomputed so evaluation stays `&self` and thread-safe.
+#[derive(Clone, Debug, PartialEq)]
+struct SpanCache {
+    breaks_u: Vec<f64>,
+    breaks_v: Vec<f64>,
+    poles: Vec<DVec3>,
+    hpoles: Vec<DVec4>,
+}
+
+/// Inserts `t` once into the curve (`knots`, `pts`) of degree `p` (Boehm's algorithm).
+fn insert_knot<T: Pole>(knots: &mut Vec<f64>, p: usize, pts: &mut Vec<T>, t: f64) {
+    let n = pts.len();
+    // Span k with knots[k] ≤ t < knots[k+1], or the last span with knots[k] < t at the end.
+    let k = if t < knots[n] {
+        find_span(knots, p, n, t)
+    } else {
+        let mut k = n - 1;
+        while knots[k] >= t {
+            k -= 1;
+        }
+        k
+    };
+    let mut q = Vec::with_capacity(n + 1);
+    for i in 0..=n {
+        if i + p <= k {
+            q.push(pts[i]);
+        } else if i <= k {
+            let a = (t - knots[i]) / (knots[i + p] - knots[i]);
+            q.push(pts[i - 1] * (1.0 - a) + pts[i] * a);
+        } else {
+            q.push(pts[i - 1]);
+        }
+    }
+    knots.insert(k + 1, t);
+    *pts = q;
+}
+
+/// Refines a knot vector so that every breakpoint of the domain has multiplicity ≥ p; returns
+/// the insertion sequence and the breakpoints.
+fn bezier_insertions(knots: &[f64], p: usize, count: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut breaks: Vec<f64> = Vec::new();
+    for &k in &knots[p..=count] {
+        if breaks.last() != Some(&k) {
+            breaks.push(k);
+        }
+    }
+    let mut ins = Vec::new();
+    for &x in &breaks {
+        let mult = knots.iter().filter(|&&k| k == x).count();
+        for _ in mult..p {
+            ins.push(x);
+        }
+    }
+    (ins, breaks)
+}
+
+/// Applies the insertions along u (`dir_u`) or v to a v-fastest grid of poles.
+fn refine_grid<T: Pole>(
+    grid: &[T],
+    count_u: usize,
+    count_v: usize,
+    dir_u: bool,
+    knots: &[f64],
+    p: usize,
+    ins: &[f64],
+) -> (Vec<T>, Vec<f64>, usize) {
+    let (lines, len) = if dir_u {
+        (count_v, count_u)
+    } else {
+        (count_u, count_v)
+    };
+    let mut out_lines = Vec::with_capacity(lines);
+    let mut new_knots = knots.to_vec();
+    for l in 0..lines {
+        let mut pts: Vec<T> = (0..len)
+            .map(|k| {
+                if dir_u {
+                    grid[k * count_v + l]
+                } else {
+                    grid[l * count_v + k]
+                }
+            })
+            .collect();
+        let mut kn = knots.to_vec();
+        for &t in ins {
+            insert_knot(&mut kn, p, &mut pts, t);
+        }
+        new_knots = kn;
+        out_lines.push(pts);
+    }
+    let new_len = len + ins.len();
+    let (cu, cv) = if dir_u {
+        (new_len, count_v)
+    } else {
+        (count_u, new_len)
+    };
+    let mut out = vec![T::default(); cu * cv];
+    for (l, pts) in out_lines.iter().enumerate() {
+        for (k, &q) in pts.iter().enumerate() {
+            if dir_u {
+                out[k * cv + l] = q;
+            } else {
+                out[l * cv + k] = q;
+            }
+        }
+    }
+    (out, new_knots, new_len)
+}
+
+/// Bernstein basis of degree `N − 1 ≤ 3` with first and second derivatives.
+#[inline(always)]
+fn bern<const N: usize>(t: f64) -> ([f64; N], [f64; N], [f64; N]) {
+    let mut b = [0.0; N];
+    let mut d = [0.0; N];
+    let mut dd = [0.0; N];
+    let s = 1.0 - t;
+    match N {
+        2 => {
+            b[..2].copy_from_slice(&[s, t]);
+            d[..2].copy_from_slice(&[-1.0, 1.0]);
+        }
+        3 => {
+            b[..3].copy_from_slice(&[s * s, 2.0 * t * s, t * t]);
+            d[..3].copy_from_slice(&[-2.0 * s, 2.0 * (s - t), 2.0 * t]);
+            dd[..3].copy_from_slice(&[2.0, -4.0, 2.0]);
+        }
+        _ => {
+            let (cb, cd) = super::bernstein::cubic_d1(t);
+            let cdd = super::bernstein::cubic_d2(t);
+            let m = N.min(4);
+            b[..m].copy_from_slice(&cb[..m]);
+            d[..m].copy_from_slice(&cd[..m]);
+            dd[..m].copy_from_slice(&cdd[..m]);
+        }
+    }
+    (b, d, dd)
+}
+
+/// Index of the span of sorted breakpoints containing `t` (clamped), local parameter and
+/// reciprocal span length.
+#[inline(always)]
+fn locate(breaks: &[f64], t: f64) -> (usize, f64, f64) {
+    let last = breaks.len() - 2;
+    let i = if t <= breaks[0] {
+        0
+    } else if t >= breaks[last + 1] {
+        last
+    } else {
+        breaks.partition_point(|&b| b <= t) - 1
+    };
+    let inv = 1.0 / (breaks[i + 1] - breaks[i]);
+    (i, (t - breaks[i]) * inv, inv)
+}
+
+impl SpanCache {
+    fn build(s: &BSplinePatch) -> Option<Self> {
+        let (p, q) = (s.degree_u, s.degree_v);
+        if p > 3 || q > 3 {
+            return None;
+        }
+        let (ins_u, breaks_u) = bezier_insertions(&s.knots_u, p, s.count_u);
+        let (ins_v, breaks_v) = bezier_insertions(&s.knots_v, q, s.count_v);
+        let blocks = (breaks_u.len() - 1) * (breaks_v.len() - 1);
+        if blocks * (p + 1) * (q + 1) > MAX_CACHED_POLES {
+            return None;
+        }
+        fn extract<T: Pole>(s: &BSplinePatch, grid: &[T], ins_u: &[f64], ins_v: &[f64]) -> Vec<T> {
+            let (p, q) = (s.degree_u, s.degree_v);
+            let (g1, ku, nu) = refine_grid(grid, s.count_u, s.count_v, true, &s.knots_u, p, ins_u);
+            let (g2, kv, nv) = refine_grid(&g1, nu, s.count_v, false, &s.knots_v, q, ins_v);
+            let spans = |k: &[f64], deg: usize, n: usize| -> Vec<usize> {
+                (deg..n).filter(|&i| k[i] < k[i + 1]).collect()
+            };
+            let mut out = Vec::new();
+            for &su in &spans(&ku, p, nu) {
+                for &sv in &spans(&kv, q, nv) {
+                    for i in su - p..=su {
+                        for j in sv - q..=sv {
+                            out.push(g2[i * nv + j]);
+                        }
+                    }
+                }
+            }
+            out
+        }
+        let (poles, hpoles) = if s.weights.is_some() {
+            (Vec::new(), extract(s, &s.hpoints, &ins_u, &ins_v))
+        } else {
+            (extract(s, &s.points, &ins_u, &ins_v), Vec::new())
+        };
+        Some(Self {
+            breaks_u,
+            breaks_v,
+            poles,
+            hpoles,
+        })
+    }
+
+    /// Local contraction over one Bézier block of degree (P−1, Q−1), scaled to global partials.
+    #[inline(always)]
+    fn eval<T: Pole, const P: usize, const Q: usize, const K: usize>(
+        &self,
+        poles: &[T],
+        u: f64,
+        v: f64,
+        pairs: &[(usize, usize); K],
+    ) -> [T; K] {
+        let (iu, su, inv_u) = locate(&self.breaks_u, u);
+        let (iv, sv, inv_v) = locate(&self.breaks_v, v);
+        let nsv = self.breaks_v.len() - 1;
+        let base = (iu * nsv + iv) * P * Q;
+        let block = &poles[base..base + P * Q];
+        let (bu0, bu1, bu2) = bern::<P>(su);
+        let (bv0, bv1, bv2) = bern::<Q>(sv);
+        let bu = [bu0, bu1, bu2];
+        let bv = [bv0, bv1, bv2];
+        let scale_u = [1.0, inv_u, inv_u * inv_u];
+        let scale_v = [1.0, inv_v, inv_v * inv_v];
+        let mut out = [T::default(); K];
+        for i in 0..P {
+            let row = &block[i * Q..i * Q + Q];
+            let mut rv = [T::default(); 3];
+            for j in 0..Q {
+                rv[0] += row[j] * bv[0][j];
+                if K > 1 {
+                    rv[1] += row[j] * bv[1][j];
+                }
+                if K > 3 {
+                    rv[2] += row[j] * bv[2][j];
+                }
+            }
+            for (o, &(a, b)) in out.iter_mut().zip(pairs.iter()) {
+                *o += rv[b] * bu[a][i];
+            }
+        }
+        for (o, &(a, b)) in out.iter_mut().zip(pairs.iter()) {
+            *o = *o * (scale_u[a] * scale_v[b]);
+        }
+        out
+    }
+
+    fn dispatch<T: Pole, const K: usize>(
+        &self,
+        poles: &[T],
+        p: usize,
+        q: usize,
+        u: f64,
+        v: f64,
+        pairs: &[(usize, usize); K],
+    ) -> [T; K] {
+        match (p, q) {
+            (3, 3) => self.eval::<T, 4, 4, K>(poles, u, v, pairs),
+            (1, 1) => self.eval::<T, 2, 2, K>(poles, u, v, pairs),
+            (1, 2) => self.eval::<T, 2, 3, K>(poles, u, v, pairs),
+            (1, 3) => self.eval::<T, 2, 4, K>(poles, u, v, pairs),
+            (2, 1) => self.eval::<T, 3, 2, K>(poles, u, v, pairs),
+            (2, 2) => self.eval::<T, 3, 3, K>(poles, u, v, pairs),
+            (2, 3) => self.eval::<T, 3, 4, K>(poles, u, v, pairs),
+            (3, 1) => self.eval::<T, 4, 2, K>(poles, u, v, pairs),
+            _ => self.eval::<T, 4, 3, K>(poles, u, v, pairs),
+        }
+    }
 }
 
 fn check_knots(
@@ -214,7 +486,7 @@ fn basis_ders<const N: usize>(
 
 /// Partial sums of a tensor contraction: `out[a][b] = Σ_ij N_u^(a)_i N_v^(b)_j P_ij`
 /// for the derivative orders the caller needs.
-trait Pole: Copy + Default + Mul<f64, Output = Self> + AddAssign {}
+trait Pole: Copy + Default + Mul<f64, Output = Self> + AddAssign + Add<Output = Self> {}
 impl Pole for DVec3 {}
 impl Pole for DVec4 {}
 
@@ -265,7 +537,7 @@ impl BSplinePatch {
                 .map(|(p, &wi)| (*p * wi).extend(wi))
                 .collect();
         }
-        Ok(Self {
+        let mut patch = Self {
             degree_u,
             degree_v,
             knots_u,
@@ -275,7 +547,10 @@ impl BSplinePatch {
             points,
             weights,
             hpoints,
-        })
+            cache: None,
+        };
+        patch.cache = SpanCache::build(&patch);
+        Ok(patch)
     }
 
     /// Degrees `(p, q)`.
@@ -298,6 +573,15 @@ impl BSplinePatch {
     pub fn weights(&self) -> Option<&[f64]> {
         self.weights.as_deref()
     }
+    /// The same patch evaluated by de Boor only (reference for the span cache).
+    #[cfg(test)]
+    fn without_cache(&self) -> Self {
+        Self {
+            cache: None,
+            ..self.clone()
+        }
+    }
+
     /// True for a rational patch.
     pub fn is_rational(&self) -> bool {
         self.weights.is_some()
@@ -346,7 +630,11 @@ impl BSplinePatch {
         pairs: &[(usize, usize); K],
     ) -> [DVec3; K] {
         let pmax = self.degree_u.max(self.degree_v);
+        let (p, q) = (self.degree_u, self.degree_v);
         if self.weights.is_none() {
+            if let Some(c) = &self.cache {
+                return c.dispatch::<DVec3, K>(&c.poles, p, q, u, v, pairs);
+            }
             return if pmax < 4 {
                 self.contract::<DVec3, 4, K>(&self.points, u, v, nd, pairs)
             } else if pmax < 8 {
@@ -355,7 +643,9 @@ impl BSplinePatch {
                 self.contract::<DVec3, { MAX_DEGREE + 1 }, K>(&self.points, u, v, nd, pairs)
             };
         }
-        let h: [DVec4; K] = if pmax < 4 {
+        let h: [DVec4; K] = if let Some(c) = &self.cache {
+            c.dispatch::<DVec4, K>(&c.hpoles, p, q, u, v, pairs)
+        } else if pmax < 4 {
             self.contract::<DVec4, 4, K>(&self.hpoints, u, v, nd, pairs)
         } else if pmax < 8 {
             self.contract::<DVec4, 8, K>(&self.hpoints, u, v, nd, pairs)
@@ -833,6 +1123,65 @@ mod tests {
         let kv = vec![0.0, 0.0, 0.0, 0.5, 1.0, 1.0, 1.0];
         let s = BSplinePatch::new(5, 2, ku, kv, 7, 4, pts, Some(w)).unwrap();
         check_derivs_fd(&s, 1e-5);
+    }
+
+    fn assert_cache_matches(s: &BSplinePatch) {
+        let r = s.without_cache();
+        let d = s.domain();
+        for i in 0..=13 {
+            for j in 0..=11 {
+                let u = d.u.0 + (d.u.1 - d.u.0) * i as f64 / 13.0;
+                let v = d.v.0 + (d.v.1 - d.v.0) * j as f64 / 11.0;
+                let (a, b) = (s.deriv2(u, v), r.deriv2(u, v));
+                let sc = 1.0 + b.p.length() + b.su.length() + b.sv.length();
+                let sc2 = sc + b.suu.length() + b.suv.length() + b.svv.length();
+                assert!(
+                    (a.p - b.p).length() < 1e-12 * sc,
+                    "p at ({u},{v}): {} vs {}",
+                    a.p,
+                    b.p
+                );
+                assert!((a.su - b.su).length() < 1e-11 * sc);
+                assert!((a.sv - b.sv).length() < 1e-11 * sc);
+                assert!((a.suu - b.suu).length() < 1e-10 * sc2);
+                assert!((a.suv - b.suv).length() < 1e-10 * sc2);
+                assert!((a.svv - b.svv).length() < 1e-10 * sc2);
+                let (p1, su1, sv1) = s.deriv1(u, v);
+                assert!((p1 - a.p).length() < 1e-12 * sc && (su1 - a.su).length() < 1e-11 * sc);
+                assert!((sv1 - a.sv).length() < 1e-11 * sc);
+            }
+        }
+    }
+
+    #[test]
+    fn span_cache_equals_de_boor() {
+        assert!(wavy().cache.is_some());
+        assert_cache_matches(&wavy());
+        for s in [
+            BSplinePatch::sphere(DVec3::ONE, 2.0).unwrap(),
+            BSplinePatch::torus(DVec3::ZERO, 3.0, 1.0).unwrap(),
+            BSplinePatch::cone(DVec3::ZERO, 3.0, 1.0, 2.0).unwrap(),
+        ] {
+            assert!(s.cache.is_some());
+            assert_cache_matches(&s);
+        }
+        // Unclamped uniform knots (TV24) and repeated interior knots, mixed degrees.
+        let pts: Vec<DVec3> = (0..30)
+            .map(|k| DVec3::new((k / 5) as f64, (k % 5) as f64, ((k * 7) % 11) as f64 * 0.1))
+            .collect();
+        let ku = vec![0.0, 0.5, 1.0, 2.0, 2.0, 3.0, 4.5, 5.0, 6.0];
+        let kv = vec![0.0, 0.0, 0.0, 0.0, 0.3, 1.0, 1.0, 1.0, 1.0];
+        let s = BSplinePatch::new(2, 3, ku.clone(), kv.clone(), 6, 5, pts.clone(), None).unwrap();
+        assert_cache_matches(&s);
+        let w: Vec<f64> = (0..30).map(|k| 0.5 + (k % 4) as f64 * 0.3).collect();
+        let s = BSplinePatch::new(2, 3, ku, kv, 6, 5, pts, Some(w)).unwrap();
+        assert_cache_matches(&s);
+        let k1 = vec![0.0, 0.0, 0.4, 0.7, 1.0, 1.0];
+        let pts: Vec<DVec3> = (0..16)
+            .map(|k| DVec3::new((k / 4) as f64, (k % 4) as f64, (k % 3) as f64))
+            .collect();
+        let s = BSplinePatch::new(1, 1, k1.clone(), k1, 4, 4, pts, None).unwrap();
+        assert_cache_matches(&s);
     }
 
     proptest! {
