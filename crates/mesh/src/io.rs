@@ -8,7 +8,8 @@
 //!
 //! OBJ texture coordinates (`vt`) are read as a flattening in mm (`TriMesh::flat`): when each
 //! position uses one `vt` throughout the file the mesh keeps its vertices; when a position uses
-//! several (a UV seam), the vertex is split, one copy per distinct `vt`.
+//! several (a UV seam), the vertex is split, one copy per distinct `vt`. When some faces have no
+//! `vt`, texture coordinates are ignored (a partial flattening is no flattening).
 //!
 //! Writers are deterministic (fixed float formatting) and atomic (a temporary file in the same
 //! directory is renamed over the target, so a crash never leaves a half-written pattern).
