@@ -70,6 +70,21 @@ impl Curve {
         }
     }
 
+    /// The same curve traversed backwards (the parameter `t ↦ t0 + t1 − t` on the same domain,
+    /// or on the new chord-length parameter for a polyline): orientation fixing of outlines.
+    pub fn reversed(&self) -> Curve {
+        match self {
+            Curve::Bezier(c) => Curve::Bezier(c.reversed()),
+            Curve::Rational(c) => Curve::Rational(c.reversed()),
+            Curve::BSpline(c) => Curve::BSpline(c.reversed()),
+            Curve::Nurbs(c) => Curve::Nurbs(c.reversed()),
+            Curve::Hermite(c) => Curve::Hermite(c.reversed()),
+            Curve::HermiteSpline(c) => Curve::HermiteSpline(c.reversed()),
+            Curve::Spline(c) => Curve::Spline(c.reversed()),
+            Curve::Polyline(c) => Curve::Polyline(c.reversed()),
+        }
+    }
+
     /// Flattens to `(parameter, point)` pairs within chordal tolerance `tol` (mm); every
     /// breakpoint is a vertex (a polyline returns exactly its vertices).
     pub fn flatten(&self, tol: f64) -> Vec<(f64, DVec3)> {
@@ -131,6 +146,54 @@ from!(
 mod tests {
     use super::*;
     use crate::curve::CurveExt;
+
+    #[test]
+    fn reversal_of_every_type() {
+        let pts = [
+            DVec3::ZERO,
+            DVec3::new(10., 5., 0.),
+            DVec3::new(20., -3., 2.),
+            DVec3::new(30., 4., 0.),
+        ];
+        let curves: Vec<Curve> = vec![
+            Bezier::new(pts.to_vec()).unwrap().into(),
+            RationalBezier::new(&pts, &[1., 2., 0.5, 1.])
+                .unwrap()
+                .into(),
+            BSpline::clamped_uniform(2, pts.to_vec()).unwrap().into(),
+            Nurbs::circle_arc(DVec3::ZERO, DVec3::X, DVec3::Y, 3., 0.5, 5.)
+                .unwrap()
+                .into(),
+            Hermite::new(pts[0], pts[1], pts[2], pts[3]).unwrap().into(),
+            HermiteSpline::through(&pts, false, crate::curve::SpeedRule::Manning)
+                .unwrap()
+                .into(),
+            CubicSpline::interpolate(
+                &pts,
+                crate::curve::SplineEnds::Relaxed,
+                crate::curve::SplineParam::ChordLength,
+            )
+            .unwrap()
+            .into(),
+            Polyline::new(pts.to_vec()).unwrap().into(),
+        ];
+        for c in curves {
+            let r = c.reversed();
+            let (a, b) = c.domain();
+            let (ra, rb) = r.domain();
+            assert!((rb - ra - (b - a)).abs() < 1e-12, "{c:?}");
+            for i in 0..=10 {
+                let s = i as f64 / 10.0;
+                let p = c.eval(a + s * (b - a));
+                let q = r.eval(rb - s * (rb - ra));
+                assert!((p - q).length() < 1e-12, "{c:?} at {s}");
+                if i > 0 && i < 10 {
+                    let (d, e) = (c.deriv(a + s * (b - a), 1), r.deriv(rb - s * (rb - ra), 1));
+                    assert!((d + e).length() < 1e-9 * (1.0 + d.length()), "{c:?} at {s}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn every_curve_type_is_thread_safe_and_cloneable() {

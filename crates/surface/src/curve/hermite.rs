@@ -68,6 +68,16 @@ impl Hermite {
         ])
     }
 
+    /// The same segment traversed backwards (`u ↦ 1 − u`).
+    pub fn reversed(&self) -> Hermite {
+        Hermite {
+            p0: self.p1,
+            t0: -self.t1,
+            p1: self.p0,
+            t1: -self.t0,
+        }
+    }
+
     /// The energy `∫₀¹ |r'(u)|² du` minimised by [`min_energy_cubic`] (exact: the integrand is a
     /// quartic, integrated by 16-point Gauss–Legendre).
     pub fn energy(&self) -> f64 {
@@ -313,6 +323,13 @@ impl HermiteSpline {
             tangents.push(tangents[0]);
         }
         Self::new(&pts, &tangents, rule)
+    }
+
+    /// The same chain traversed backwards (`t ↦ n − t`).
+    pub fn reversed(&self) -> HermiteSpline {
+        HermiteSpline {
+            segments: self.segments.iter().rev().map(Hermite::reversed).collect(),
+        }
     }
 
     /// The segments; segment `i` covers `[i, i + 1]`.

@@ -109,6 +109,13 @@ impl RationalBezier {
         self.hom.iter().map(|h| h.w).collect()
     }
 
+    /// The same curve traversed backwards (`t ↦ 1 − t`).
+    pub fn reversed(&self) -> RationalBezier {
+        RationalBezier {
+            hom: self.hom.iter().rev().copied().collect(),
+        }
+    }
+
     /// The degree.
     pub fn degree(&self) -> usize {
         self.hom.len() - 1

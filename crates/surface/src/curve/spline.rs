@@ -217,6 +217,17 @@ impl CubicSpline {
         &self.tangents
     }
 
+    /// The same curve traversed backwards, on the parameter `u_0 + u_n − u`.
+    pub fn reversed(&self) -> CubicSpline {
+        let (a, b) = (self.params[0], self.params[self.params.len() - 1]);
+        CubicSpline {
+            params: self.params.iter().rev().map(|u| a + b - u).collect(),
+            points: self.points.iter().rev().copied().collect(),
+            tangents: self.tangents.iter().rev().map(|d| -*d).collect(),
+            closed: self.closed,
+        }
+    }
+
     /// Whether the spline is a closed loop.
     pub fn is_closed(&self) -> bool {
         self.closed
