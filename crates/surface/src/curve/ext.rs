@@ -312,7 +312,7 @@ fn dist_to_segment(q: DVec3, a: DVec3, b: DVec3) -> f64 {
 /// [`CurveExt::flatten`] starting from the given sorted breakpoints (knots of piecewise curves,
 /// where derivatives may jump). The deviation of the curve from each chord is estimated from
 /// three interior samples and the parabolic sagitta `h²|r''_⊥|/8` at the midpoint; an interval
-/// whose estimate exceeds [`FLATTEN_SAFETY`]·`tol` is split into `⌈√(err/tol)⌉` equal pieces
+/// whose estimate exceeds 0.8·`tol` (a safety margin) is split into `⌈√(err/tol)⌉` equal pieces
 /// (deviation shrinks quadratically with chord length) and each piece is checked again.
 pub fn flatten_with_breaks<C: ParamCurve + ?Sized>(
     c: &C,
