@@ -644,6 +644,116 @@ mod tests {
     }
 
     #[test]
+    fn tv29_duncan_bicubic_corner_formulas() {
+        // K, H at (0,0) from the net alone (D L1178–L1200) equal the general formulas.
+        for seed in 1..20u64 {
+            let mut x = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+            let mut rnd = move || {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                (x >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            };
+            let pts: Vec<DVec3> = (0..16)
+                .map(|k| {
+                    DVec3::new(
+                        (k / 4) as f64 + 0.4 * rnd(),
+                        (k % 4) as f64 + 0.4 * rnd(),
+                        rnd(),
+                    )
+                })
+                .collect();
+            let b = BezierPatch::new(3, 3, pts).unwrap();
+            let d = |i, j| b.point(i, j);
+            let (a, bb) = (d(1, 0) - d(0, 0), d(0, 1) - d(0, 0));
+            let nh = a.cross(bb).normalize();
+            let n1 = (d(0, 0) - 2.0 * d(1, 0) + d(2, 0)).dot(nh);
+            let n2 = (d(0, 0) - 2.0 * d(0, 1) + d(0, 2)).dot(nh);
+            let n3 = (d(0, 0) - d(0, 1) + d(1, 1) - d(1, 0)).dot(nh);
+            let n4 = a.length_squared() * bb.length_squared() - a.dot(bb).powi(2);
+            let k = (4.0 * n1 * n2 - 9.0 * n3 * n3) / (9.0 * n4);
+            let h = (n2 * a.length_squared() + n1 * bb.length_squared() - 3.0 * n3 * a.dot(bb))
+                / (3.0 * n4);
+            let c = curvature(&b, 0.0, 0.0).unwrap();
+            assert!(
+                (c.gaussian - k).abs() < 1e-12 * (1.0 + k.abs()),
+                "seed {seed}"
+            );
+            assert!((c.mean - h).abs() < 1e-12 * (1.0 + h.abs()), "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn tv27_stereographic_sphere() {
+        // (2u, 2v, u² + v² − 1)/(u² + v² + 1): E = G = L = N = 4/(1+u²+v²)², F = M = 0 (up to
+        // the sign of the normal); every normal curvature is 1.
+        let st = Analytic {
+            dom: Domain2 {
+                u: (-2.0, 2.0),
+                v: (-2.0, 2.0),
+            },
+            f: |u: f64, v: f64| {
+                // Derivatives by automatic-free closed forms of x/w with w = 1 + u² + v².
+                let w = 1.0 + u * u + v * v;
+                let num = DVec3::new(2.0 * u, 2.0 * v, u * u + v * v - 1.0);
+                let (nu, nv) = (DVec3::new(2.0, 0.0, 2.0 * u), DVec3::new(0.0, 2.0, 2.0 * v));
+                let (nuu, nvv) = (DVec3::new(0.0, 0.0, 2.0), DVec3::new(0.0, 0.0, 2.0));
+                let (wu, wv) = (2.0 * u, 2.0 * v);
+                let p = num / w;
+                let su = (nu - p * wu) / w;
+                let sv = (nv - p * wv) / w;
+                SurfaceDerivs {
+                    p,
+                    su,
+                    sv,
+                    suu: (nuu - su * (2.0 * wu) - p * 2.0) / w,
+                    suv: (-(sv * wu) - su * wv) / w,
+                    svv: (nvv - sv * (2.0 * wv) - p * 2.0) / w,
+                }
+            },
+        };
+        for &(u, v) in &[(0.0, 0.0), (0.3, -0.7), (1.5, 0.2)] {
+            let ff = fundamental_forms(&st, u, v).unwrap();
+            let e = 4.0 / (1.0f64 + u * u + v * v).powi(2);
+            assert!((ff.e - e).abs() < 1e-14 && (ff.g - e).abs() < 1e-14 && ff.f.abs() < 1e-14);
+            assert!(
+                (ff.l.abs() - e).abs() < 1e-14
+                    && (ff.n.abs() - e).abs() < 1e-14
+                    && ff.m.abs() < 1e-14
+            );
+            let c = curvature(&st, u, v).unwrap();
+            assert!((c.gaussian - 1.0).abs() < 1e-13 && (c.mean.abs() - 1.0).abs() < 1e-13);
+            let kn = ff.normal_curvature(DVec2::new(0.3, 0.9)).unwrap();
+            assert!((kn.abs() - 1.0).abs() < 1e-13);
+        }
+    }
+
+    #[test]
+    fn principal_directions_diagonalize_the_second_form() {
+        let pts: Vec<DVec3> = (0..16)
+            .map(|k| {
+                DVec3::new(
+                    (k / 4) as f64,
+                    (k % 4) as f64 + 0.2 * (k / 4) as f64,
+                    ((k * 5) % 7) as f64 * 0.3,
+                )
+            })
+            .collect();
+        let b = BezierPatch::new(3, 3, pts).unwrap();
+        for &(u, v) in &[(0.2, 0.3), (0.6, 0.8), (0.45, 0.1)] {
+            let c = curvature(&b, u, v).unwrap();
+            let ff = fundamental_forms(&b, u, v).unwrap();
+            assert!((c.k1 * c.k2 - c.gaussian).abs() < 1e-12 * (1.0 + c.gaussian.abs()));
+            assert!((0.5 * (c.k1 + c.k2) - c.mean).abs() < 1e-12 * (1.0 + c.mean.abs()));
+            assert!((ff.normal_curvature(c.dir1_uv).unwrap() - c.k1).abs() < 1e-11);
+            assert!((ff.normal_curvature(c.dir2_uv).unwrap() - c.k2).abs() < 1e-11);
+            assert!(c.dir1.dot(c.dir2).abs() < 1e-12 && c.dir1.dot(ff.normal).abs() < 1e-12);
+            let (_, su, sv) = b.deriv1(u, v);
+            assert!((su * c.dir1_uv.x + sv * c.dir1_uv.y - c.dir1).length() < 1e-12);
+        }
+    }
+
+    #[test]
     fn christoffel_matches_metric_inverse_form() {
         // Γ^k_ij = g^{kl} (r_ij · r_l): an independent derivation to check E1/E2 on a general patch.
         let pts: Vec<DVec3> = (0..16)

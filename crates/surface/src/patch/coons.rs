@@ -575,6 +575,7 @@ pub(crate) mod tests {
         for &(u, v) in &[(0.3, 0.4), (0.9, 0.1)] {
             assert!((g.eval(u, v) - coons.eval(u, v)).length() < 1e-14);
         }
+        check_derivs_fd(&g, 1e-6);
         // A 3×3 network cut from z = sin(πu)·cos(πv)/2 + u v: Gordon interpolates every curve.
         let f = |u: f64, v: f64| DVec3::new(u, v, 0.5 * (PI * u).sin() * (PI * v).cos() + u * v);
         let ps = [0.0, 0.4, 1.0];

@@ -15,8 +15,35 @@
 //! construction fails with the parameter where it happens.
 
 use crate::{Domain2, ParamCurve, ParamSurface, SurfaceDerivs, SurfaceError};
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use std::sync::Arc;
+
+/// Places the third vertex of a 3D triangle `(p, q, r)` in the plane, given the developed
+/// images `p_bar`, `q_bar` of its first edge (Hartmann §10.3, corrected per ERRATA E17):
+/// `a = (|PQ|² + |PR|² − |QR|²)/(2|PQ|)`, `b = √(|PR|² − a²)`, `R̄ = P̄ + a e1 + b e2` with
+/// `e1 = (Q̄ − P̄)/|Q̄ − P̄|` and `e2` its left normal when `left` is true (right otherwise).
+/// `None` if the edge `PQ` or its image has zero length.
+pub fn unfold_triangle(
+    p_bar: DVec2,
+    q_bar: DVec2,
+    p: DVec3,
+    q: DVec3,
+    r: DVec3,
+    left: bool,
+) -> Option<DVec2> {
+    let pq = p.distance(q);
+    let e = q_bar - p_bar;
+    if !(pq > 0.0 && e.length() > 0.0) {
+        return None;
+    }
+    let (pr2, qr2) = (p.distance_squared(r), q.distance_squared(r));
+    let a = (pq * pq + pr2 - qr2) / (2.0 * pq);
+    // Rounding can make |PR|² − a² slightly negative for degenerate (collinear) triangles.
+    let b = (pr2 - a * a).max(0.0).sqrt();
+    let e1 = e.normalize();
+    let e2 = if left { e1.perp() } else { -e1.perp() };
+    Some(p_bar + e1 * a + e2 * b)
+}
 
 /// Options for [`DevelopableSurface::between_with`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -301,6 +328,48 @@ impl DevelopableSurface {
         Some(self.correct(guess, t).unwrap_or(guess))
     }
 
+    /// Develops (unfolds) the surface into the plane as a triangle strip over `rulings ≥ 2`
+    /// equally spaced rulings (Hartmann §10.3): returns the developed end points
+    /// `[on rail 0, on rail 1]` of each ruling. Every strip triangle keeps its 3D edge lengths;
+    /// for a developable the quads between rulings are planar, so the development is exact up
+    /// to the chordal approximation of the rails. The first ruling lies on the +x axis from the
+    /// origin and the strip unfolds to its left.
+    pub fn develop(&self, rulings: usize) -> Result<Vec<[DVec2; 2]>, SurfaceError> {
+        let rulings = rulings.max(2);
+        let dom = self.domain().u;
+        let pts: Vec<[DVec3; 2]> = (0..rulings)
+            .map(|i| {
+                let t = dom.0 + (dom.1 - dom.0) * i as f64 / (rulings - 1) as f64;
+                [self.eval(t, 0.0), self.eval(t, 1.0)]
+            })
+            .collect();
+        let len0 = pts[0][0].distance(pts[0][1]);
+        let mut out = vec![[DVec2::ZERO, DVec2::new(len0, 0.0)]];
+        let fail = |i: usize| {
+            SurfaceError::Invalid(format!(
+                "developable: ruling {i} has zero length; cannot unfold"
+            ))
+        };
+        // Side of the previous apex relative to the edge we unfold across: the new vertex goes
+        // to the other side so the strip never folds back.
+        let side = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a) >= 0.0;
+        let mut prev_third: Option<DVec2> = None;
+        for i in 1..rulings {
+            let [a0, b0] = out[i - 1];
+            let [p0, q0] = pts[i - 1];
+            let [p1, q1] = pts[i];
+            // Triangle (A_{i−1}, B_{i−1}, A_i).
+            let left = prev_third.is_none_or(|c| !side(a0, b0, c));
+            let a1 = unfold_triangle(a0, b0, p0, q0, p1, left).ok_or_else(|| fail(i - 1))?;
+            // Triangle (A_i, B_{i−1}, B_i), across the diagonal from A_{i−1}.
+            let left = !side(a1, b0, a0);
+            let b1 = unfold_triangle(a1, b0, p1, q0, q1, left).ok_or_else(|| fail(i))?;
+            prev_third = Some(b0);
+            out.push([a1, b1]);
+        }
+        Ok(out)
+    }
+
     /// The stored samples `(t, r(t), r'(t))` of the integrated ruling correspondence.
     pub fn samples(&self) -> &[(f64, f64, f64)] {
         &self.samples
@@ -434,6 +503,61 @@ mod tests {
         let n = d.su.cross(d.sv).normalize();
         assert!(d.suv.dot(n).abs() < 1e-10);
         check_derivs_fd(&s, 1e-6);
+    }
+
+    #[test]
+    fn tv33_triangle_development() {
+        let (p, q, r) = (
+            DVec3::ZERO,
+            DVec3::new(3.0, 0.0, 1.0),
+            DVec3::new(1.0, 2.0, 2.0),
+        );
+        let rb =
+            unfold_triangle(DVec2::ZERO, DVec2::new(10f64.sqrt(), 0.0), p, q, r, true).unwrap();
+        assert!((rb - DVec2::new(1.5811388301, 2.5495097568)).length() < 1e-10);
+        assert!((rb.length() - 3.0).abs() < 1e-14);
+        assert!((rb.distance(DVec2::new(10f64.sqrt(), 0.0)) - 3.0).abs() < 1e-14);
+        assert!(unfold_triangle(DVec2::ZERO, DVec2::ZERO, p, q, r, true).is_none());
+    }
+
+    #[test]
+    fn developing_a_cone_frustum_is_exact() {
+        // Rails r = 1 at z = 0 and r = 2 at z = 1: the apex is at z = −1, each ruling's rail-0
+        // end is the midpoint between the apex and its rail-1 end.
+        let s = DevelopableSurface::between(
+            circle(1.0, 1.0, 0.0, 0.0, 0.0),
+            circle(2.0, 2.0, 0.0, 1.0, 0.0),
+        )
+        .unwrap();
+        let dev = s.develop(25).unwrap();
+        let apex = dev[0][0] * 2.0 - dev[0][1];
+        for (i, [a, b]) in dev.iter().enumerate() {
+            assert!((*a * 2.0 - *b - apex).length() < 1e-12, "ruling {i}");
+            assert!((a.distance(apex) - 2f64.sqrt()).abs() < 1e-12);
+        }
+        // The developed sector angle is the rail length over the slant radius: 1.2 · 1/√2.
+        let ang = (dev[0][0] - apex).angle_to(dev[24][0] - apex).abs();
+        let chord_angle = 24.0 * 2.0 * ((1.2f64 / 48.0).sin() / 2f64.sqrt()).asin();
+        assert!((ang - chord_angle).abs() < 1e-12, "{ang} vs {chord_angle}");
+        // Non-trivial rails: ruling and rail chord lengths are preserved.
+        let s = DevelopableSurface::between(
+            circle(1.0, 1.0, 0.0, 0.0, 0.0),
+            circle(1.5, 1.0, 0.3, 1.0, 0.2),
+        )
+        .unwrap();
+        let dev = s.develop(40).unwrap();
+        let d = s.domain().u;
+        for i in 1..40 {
+            let t0 = d.0 + (d.1 - d.0) * (i - 1) as f64 / 39.0;
+            let t1 = d.0 + (d.1 - d.0) * i as f64 / 39.0;
+            let l3 = s.eval(t0, 1.0).distance(s.eval(t1, 1.0));
+            assert!((dev[i - 1][1].distance(dev[i][1]) - l3).abs() < 1e-12);
+            let r3 = s.eval(t1, 0.0).distance(s.eval(t1, 1.0));
+            assert!((dev[i][0].distance(dev[i][1]) - r3).abs() < 1e-12);
+            // The unused diagonal is preserved too (planar quads) up to the integration error.
+            let diag3 = s.eval(t0, 0.0).distance(s.eval(t1, 1.0));
+            assert!((dev[i - 1][0].distance(dev[i][1]) - diag3).abs() < 1e-9);
+        }
     }
 
     #[test]

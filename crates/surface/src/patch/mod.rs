@@ -19,7 +19,7 @@ pub mod tri;
 pub use bezier::BezierPatch;
 pub use bspline::BSplinePatch;
 pub use coons::{CoonsPatch, GordonSurface, RuledSurface};
-pub use developable::{DevelopableOptions, DevelopableSurface};
+pub use developable::{DevelopableOptions, DevelopableSurface, unfold_triangle};
 pub use hermite::HermitePatch;
 pub use model::{Model, SharedEdge, Side};
 pub use tri::TriBezierPatch;
