@@ -20,6 +20,6 @@ pub use distortion::{FaceDistortion, face_distortion};
 pub use io::{MeshIoError, read_mesh, write_obj};
 pub use seams::{cut_along_seams, seam_from_points};
 pub use stats::MeshStats;
-pub use tessellate::{TessError, tessellate, tessellate_patches};
+pub use tessellate::{TessError, tessellate, tessellate_model, tessellate_patches};
 pub use topology::{Topology, TopologyError, check_disk};
 pub use trimesh::TriMesh;

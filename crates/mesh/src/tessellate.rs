@@ -123,6 +123,17 @@ pub fn tessellate_patches(
     tessellate_with(surfaces, tol, &TessOptions::DEFAULT)
 }
 
+/// Tessellates the patches of a multi-patch model into one crack-free mesh, welding shared
+/// sides within the larger of `tol.weld_mm` and the model's own weld tolerance.
+pub fn tessellate_model(
+    model: &flatcut_surface::patch::Model,
+    tol: &Tolerances,
+) -> Result<TriMesh, TessError> {
+    let refs: Vec<&dyn ParamSurface> = model.patches().iter().map(|p| p.as_ref()).collect();
+    let tol = tol.with_weld_mm(tol.weld_mm.max(model.weld_mm()));
+    tessellate_patches(&refs, &tol)
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Tri {
     v: [u32; 3],
@@ -1115,6 +1126,29 @@ mod tests {
         let topo = Topology::build(&m).unwrap();
         assert_eq!(topo.boundary_loops.len(), 2, "a tube has two rims");
         assert_eq!(topo.component_count, 1);
+    }
+
+    #[test]
+    fn model_of_two_half_cylinders_is_one_tube() {
+        use std::sync::Arc;
+        let a: Arc<dyn ParamSurface> = Arc::new(Cylinder {
+            r: 30.0,
+            dom: Domain2 {
+                u: (0.0, PI),
+                v: (0.0, 80.0),
+            },
+        });
+        let b: Arc<dyn ParamSurface> = Arc::new(Cylinder {
+            r: 30.0,
+            dom: Domain2 {
+                u: (PI, 2.0 * PI),
+                v: (0.0, 80.0),
+            },
+        });
+        let model = flatcut_surface::patch::Model::new(vec![a, b], 1e-6).unwrap();
+        let m = tessellate_model(&model, &Tolerances::DEFAULT.with_chord_mm(0.1)).unwrap();
+        let topo = Topology::build(&m).unwrap();
+        assert_eq!((topo.boundary_loops.len(), topo.component_count), (2, 1));
     }
 
     #[test]
