@@ -705,10 +705,10 @@ impl<'a> Engine<'a> {
             ),
             _ => (Vec::with_capacity(n), Vec::with_capacity(n), Vec::new()),
         };
-        if bins.is_empty() {
-            if let Ok(b) = self.new_bin() {
-                bins.push(b);
-            }
+        if bins.is_empty()
+            && let Ok(b) = self.new_bin()
+        {
+            bins.push(b);
         }
         let max_bins = match self.stock {
             Stock::Roll { .. } => 1,
@@ -724,13 +724,13 @@ impl<'a> Engine<'a> {
                     break;
                 }
             }
-            if placed.is_none() && bins.len() < max_bins {
-                if let Ok(nb) = self.new_bin() {
-                    if let Some((dt, _, _)) = self.best_position(&nb, v, rng) {
-                        bins.push(nb);
-                        placed = Some((bins.len() - 1, dt));
-                    }
-                }
+            if placed.is_none()
+                && bins.len() < max_bins
+                && let Ok(nb) = self.new_bin()
+                && let Some((dt, _, _)) = self.best_position(&nb, v, rng)
+            {
+                bins.push(nb);
+                placed = Some((bins.len() - 1, dt));
             }
             if let Some((b, dt)) = placed {
                 bins[b].place_item(&v.jitem, dt);
@@ -835,7 +835,7 @@ impl<'a> Engine<'a> {
                 });
             }
         }
-        unplaced.sort_by(|a, b| (a.item, a.mirrored, a.copy).cmp(&(b.item, b.mirrored, b.copy)));
+        unplaced.sort_by_key(|a| (a.item, a.mirrored, a.copy));
         NestResult {
             placed,
             unplaced,

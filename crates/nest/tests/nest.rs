@@ -6,6 +6,7 @@ mod common;
 
 use flatcut_geom::DVec2;
 use flatcut_nest::{NestError, NestItem, NestOptions, Rotations, Stock, load_bench_instance, nest};
+use std::f64::consts::{FRAC_PI_2, PI};
 
 fn rect(w: f64, h: f64) -> Vec<DVec2> {
     vec![
@@ -80,7 +81,7 @@ fn sheets_no_overlap_spacing_and_bounds() {
         let allowed: &[f64] = if p.item == 0 {
             &[0.0, std::f64::consts::PI]
         } else {
-            &[0.0, 1.5708, 3.14159, 4.71239]
+            &[0.0, FRAC_PI_2, PI, 3.0 * FRAC_PI_2]
         };
         assert!(
             allowed

@@ -269,7 +269,7 @@ pub struct DxfPolyline {
 /// Reads the `POLYLINE`/`VERTEX` and `LWPOLYLINE` entities of an ASCII DXF.
 pub fn read_polylines(text: &str) -> Result<Vec<DxfPolyline>, PatternError> {
     let lines: Vec<&str> = text.lines().collect();
-    if lines.len() % 2 != 0 {
+    if !lines.len().is_multiple_of(2) {
         return Err(PatternError::Dxf {
             line: lines.len(),
             reason: "odd number of lines (code/value pairs)".into(),

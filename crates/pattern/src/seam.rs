@@ -436,7 +436,7 @@ mod tests {
         /// contains the sew line, never comes closer than w, and reaches at most the mitre limit.
         #[test]
         fn offset_distance_holds(k in 3usize..9, r_in in 20.0f64..60.0, extra in 5.0f64..60.0,
-                                 w in 0.5f64..15.0, phase in 0.0f64..6.28, style in 0usize..3) {
+                                 w in 0.5f64..15.0, phase in 0.0f64..std::f64::consts::TAU, style in 0usize..3) {
             let sew = star(k, r_in, r_in + extra, phase);
             let style = [CornerStyle::Mitred, CornerStyle::Squared, CornerStyle::Reflected][style];
             let r = allowance(&sew, &vec![w; sew.len()], style, DEFAULT_MITRE_LIMIT, 1e-6).unwrap();

@@ -211,7 +211,7 @@ fn layer_from_id(id: &str) -> Option<Layer> {
         _ => {}
     }
     let parts: Vec<&str> = id.rsplitn(3, '-').collect();
-    let what = |w: &str| parts.iter().any(|p| *p == w);
+    let what = |w: &str| parts.contains(&w);
     if id.ends_with("-cut") || what("notch") || what("drill") {
         Some(Layer::Cut)
     } else if id.ends_with("-sew")
@@ -232,13 +232,12 @@ fn piece_prefix(id: &str) -> Option<&str> {
     for key in [
         "-cut", "-sew", "-notch-", "-drill-", "-point-", "-grain", "-label-",
     ] {
-        if let Some(i) = id.rfind(key) {
-            if key.ends_with('-')
+        if let Some(i) = id.rfind(key)
+            && (key.ends_with('-')
                 || i + key.len() == id.len()
-                || id[i + key.len()..].starts_with('-')
-            {
-                return Some(&id[..i]);
-            }
+                || id[i + key.len()..].starts_with('-'))
+        {
+            return Some(&id[..i]);
         }
     }
     None
