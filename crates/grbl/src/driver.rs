@@ -725,6 +725,14 @@ struct Tracker {
     pos_tol: f64,
     /// Highest job index handed to the port in this run.
     last_sent: Option<usize>,
+    /// Lines acknowledged (including earlier runs).
+    acked_count: usize,
+    /// Lines known executed (including earlier runs).
+    done_count: usize,
+    /// Estimated time of the whole job, s.
+    time_total: f64,
+    /// Estimated time of the lines executed in this run, s.
+    time_done_run: f64,
 }
 
 impl Tracker {
@@ -737,8 +745,10 @@ impl Tracker {
             self.motion_after.pop_front();
             if !self.done[i] {
                 self.done[i] = true;
+                self.done_count += 1;
                 self.length_done += job.lines[i].length;
                 self.time_done += job.lines[i].time;
+                self.time_done_run += job.lines[i].time;
             }
             last = Some(last.map_or(i, |l: usize| l.max(i)));
         }
@@ -748,6 +758,9 @@ impl Tracker {
     }
 
     fn ack(&mut self, job: &Job, i: usize, journal: &mut Option<Journal>) {
+        if !self.acked[i] {
+            self.acked_count += 1;
+        }
         self.acked[i] = true;
         let is_motion = job.lines[i].moves && job.lines[i].length > 0.0;
         if is_motion {
@@ -967,6 +980,10 @@ pub fn send_job(
             .unwrap_or_else(|| vec![false; n]),
         pos_tol: position_tolerance(&sess.settings),
         last_sent: None,
+        acked_count: 0,
+        done_count: 0,
+        time_total: job_t.total_time,
+        time_done_run: 0.0,
     };
     let mut previously_done = 0;
     if let Some(st) = &prior {
@@ -976,6 +993,8 @@ pub fn send_job(
                 tracker.acked[i] = true;
                 tracker.length_done += job.lines[i].length;
                 tracker.time_done += job_t.lines[i].time;
+                tracker.acked_count += 1;
+                tracker.done_count += 1;
                 previously_done += 1;
             }
         }
@@ -1065,7 +1084,8 @@ pub fn send_job(
             tracker.last_sent = Some(tracker.last_sent.map_or(i, |l| l.max(i)));
         }
         let mut acked_any = false;
-        for e in evs {
+        let mut batch = evs.into_iter();
+        while let Some(e) = batch.next() {
             match e {
                 Event::Ack(Tag::Job(i)) => {
                     if let Some(j) = journal.as_mut() {
@@ -1115,11 +1135,21 @@ pub fn send_job(
                 }
                 Event::Rejected(_, _) => {}
                 Event::Alarm(code) => {
-                    let err = on_alarm(&mut sess, job_t, code, opts, &mut tracker, &mut journal)?;
+                    let rest: Vec<Event> = batch.collect();
+                    let err = on_alarm(
+                        &mut sess,
+                        job_t,
+                        code,
+                        rest,
+                        opts,
+                        &mut tracker,
+                        &mut journal,
+                    )?;
                     return Err(err);
                 }
                 Event::Reset { lost, .. } => {
-                    let err = on_reset(&mut sess, job_t, lost, &mut tracker, &mut journal)?;
+                    let rest: Vec<Event> = batch.collect();
+                    let err = on_reset(&mut sess, job_t, lost, rest, &mut tracker, &mut journal)?;
                     return Err(err);
                 }
                 Event::Status(st) => {
@@ -1172,14 +1202,24 @@ pub fn send_job(
         if foreign_hold {
             let since = *hold_since.get_or_insert_with(Instant::now);
             if opts.hold_timeout.is_some_and(|t| since.elapsed() >= t) {
-                return Err(stop_unexpected(&mut sess, job, &tracker, &mut journal)?);
+                return Err(stop_unexpected(
+                    &mut sess,
+                    job_t,
+                    &mut tracker,
+                    &mut journal,
+                )?);
             }
         } else {
             hold_since = None;
         }
         if state_now == Some(MachineState::Check) {
             // Lines acknowledged in check mode do not move: never count them as done.
-            return Err(stop_unexpected(&mut sess, job, &tracker, &mut journal)?);
+            return Err(stop_unexpected(
+                &mut sess,
+                job_t,
+                &mut tracker,
+                &mut journal,
+            )?);
         }
         let waiting_on_user = matches!(
             sess.status.as_ref().map(|s| s.state),
@@ -1217,18 +1257,15 @@ pub fn send_job(
             }
         }
         progress.holding = holding;
-        progress.lines_acked = tracker.acked.iter().filter(|a| **a).count();
-        progress.lines_done = tracker.done.iter().filter(|d| **d).count();
-        progress.length_done = tracker.length_done;
-        progress.elapsed = stream_start.elapsed();
-        progress.bytes_written = sess.s.bytes_written() - bytes_before;
-        progress.eta = Some(eta(
-            job_t,
-            &tracker,
-            stream_start.elapsed(),
-            previously_done,
-        ));
         if last_progress.elapsed() >= opts.progress_interval {
+            // Counters are kept incrementally: this loop runs once per answer batch and must
+            // stay O(1) in the job size to keep the link busy.
+            progress.lines_acked = tracker.acked_count;
+            progress.lines_done = tracker.done_count;
+            progress.length_done = tracker.length_done;
+            progress.elapsed = stream_start.elapsed();
+            progress.bytes_written = sess.s.bytes_written() - bytes_before;
+            progress.eta = Some(eta(&tracker, stream_start.elapsed()));
             observer(&progress);
             last_progress = Instant::now();
         }
@@ -1315,29 +1352,29 @@ fn job_uses_unknown_moves(job: &Job) -> bool {
 
 /// ETA: the remaining estimated motion time, scaled by how the machine kept up with the
 /// estimate so far (clamped so one stall cannot make the figure absurd).
-fn eta(job: &Job, tr: &Tracker, elapsed: Duration, _prev: usize) -> Duration {
-    let remaining: f64 = (0..job.len())
-        .filter(|&i| !tr.done[i])
-        .map(|i| job.lines[i].time)
-        .sum::<f64>();
-    let done_now = tr.time_done;
-    let ratio = if done_now > 2.0 {
-        (elapsed.as_secs_f64() / done_now).clamp(0.5, 2.0)
+fn eta(tr: &Tracker, elapsed: Duration) -> Duration {
+    let remaining = (tr.time_total - tr.time_done).max(0.0);
+    let ratio = if tr.time_done_run > 2.0 {
+        (elapsed.as_secs_f64() / tr.time_done_run).clamp(0.5, 2.0)
     } else {
         1.0
     };
-    Duration::from_secs_f64((remaining * ratio).max(0.0))
+    Duration::from_secs_f64(remaining * ratio)
 }
 
 /// Stops because the machine is in a state this sender did not ask for.
 fn stop_unexpected<T: Transport + ?Sized>(
     sess: &mut Session<'_, T>,
     job: &Job,
-    tracker: &Tracker,
+    tracker: &mut Tracker,
     journal: &mut Option<Journal>,
 ) -> Result<SendError, SendError> {
     sess.s.set_feeding(false);
     sess.s.clear_queue();
+    // Where the machine stands tells which acknowledged lines it got through.
+    if let (Some(p), Some(upto)) = (sess.work_position(), tracker.last_sent) {
+        tracker.confirm_by_position(job, p, upto, journal);
+    }
     let state = sess
         .status
         .as_ref()
@@ -1359,6 +1396,7 @@ fn on_alarm<T: Transport + ?Sized>(
     sess: &mut Session<'_, T>,
     job: &Job,
     code: u8,
+    rest: Vec<Event>,
     opts: &SendOptions,
     tracker: &mut Tracker,
     journal: &mut Option<Journal>,
@@ -1371,12 +1409,17 @@ fn on_alarm<T: Transport + ?Sized>(
             alarm_meaning(code).unwrap_or("")
         ));
     }
-    // The `ok` of the line that raised it and `error:9`s for lines behind it may follow.
+    // The `ok` of the line that raised it and `error:9`s for lines behind it may follow (some
+    // may already be in the batch that carried the alarm).
     let settle = Instant::now() + Duration::from_millis(300);
+    let mut first = Some(rest);
     while Instant::now() < settle {
-        let evs = match sess.pump(READ_SLICE) {
-            Ok(e) => e,
-            Err(e) => return Err(transport(e, tracker.last_done(job))),
+        let evs = match first.take() {
+            Some(r) => r,
+            None => match sess.pump(READ_SLICE) {
+                Ok(e) => e,
+                Err(e) => return Err(transport(e, tracker.last_done(job))),
+            },
         };
         for e in evs {
             match e {
@@ -1446,6 +1489,7 @@ fn on_reset<T: Transport + ?Sized>(
     sess: &mut Session<'_, T>,
     job: &Job,
     lost: Vec<Tag>,
+    rest: Vec<Event>,
     tracker: &mut Tracker,
     journal: &mut Option<Journal>,
 ) -> Result<SendError, SendError> {
@@ -1454,23 +1498,31 @@ fn on_reset<T: Transport + ?Sized>(
     if let Some(Tag::Job(i)) = lost.iter().rev().find(|t| matches!(t, Tag::Job(_))) {
         tracker.last_sent = Some(tracker.last_sent.map_or(*i, |l| l.max(*i)));
     }
-    let mut late = Vec::new();
-    let mut quiet_since = Instant::now();
-    let until = Instant::now() + Duration::from_millis(1000);
-    while Instant::now() < until && quiet_since.elapsed() < Duration::from_millis(150) {
+    // A `$G` sentinel written after the banner is parsed after every byte already on the
+    // wire, so every `ok`/`error` before its `[GC:..]` answers a line that ran after the reset.
+    // It bypasses the streamer, whose FIFO no longer holds those lines.
+    let mut late: Vec<crate::response::Response> = rest
+        .into_iter()
+        .filter_map(|e| match e {
+            Event::Unmatched(r) => Some(r),
+            _ => None,
+        })
+        .collect();
+    if let Err(e) = sess.t.write_all(b"$G\n") {
+        return Err(transport(e, tracker.last_done(job)));
+    }
+    let until = Instant::now() + Duration::from_secs(2);
+    let mut sentinel_ok = false;
+    'wait: while Instant::now() < until {
         let evs = match sess.pump(READ_SLICE) {
             Ok(e) => e,
             Err(e) => return Err(transport(e, tracker.last_done(job))),
         };
         for e in evs {
             match e {
-                Event::Unmatched(r) => {
-                    late.push(r);
-                    quiet_since = Instant::now();
-                }
-                Event::Alarm(_) | Event::Message(_) | Event::Other(_) => {
-                    quiet_since = Instant::now();
-                }
+                Event::Unmatched(r) if !sentinel_ok => late.push(r),
+                Event::Feedback(f) if f.starts_with("GC:") => sentinel_ok = true,
+                Event::Unmatched(_) if sentinel_ok => break 'wait,
                 _ => {}
             }
         }

@@ -1,0 +1,81 @@
+//! Throughput benchmark against firmware-sim over a pseudo-terminal.
+//!
+//! 1. Instant motion at 115200 baud: how busy the sender keeps the link (job bytes per second
+//!    of streaming against baud/10; the target is at least 90 %).
+//! 2. Real-time motion on a job of short segments: how often the simulated planner ran dry.
+//!
+//! Run: `cargo run --release -p flatcut-grbl --example throughput [lines] [segments]`.
+
+use flatcut_firmware_sim::{PtySim, SimConfig};
+use flatcut_grbl::{CancelToken, Job, SendOptions, open_port, send_job};
+use std::time::Duration;
+
+fn zigzag(n: usize, dx: f64, dy: f64, feed: f64) -> String {
+    let mut s = String::from("G21 G90\nG0 Z1\nG0 X0 Y0\nG1 Z-0.5 F300\n");
+    for i in 1..=n {
+        s.push_str(&format!(
+            "G1 X{:.3} Y{:.3} F{feed}\n",
+            i as f64 * dx,
+            (i % 2) as f64 * dy
+        ));
+    }
+    s.push_str("G0 Z1\n");
+    s
+}
+
+fn main() {
+    let args: Vec<usize> = std::env::args()
+        .skip(1)
+        .filter_map(|a| a.parse().ok())
+        .collect();
+    let lines = args.first().copied().unwrap_or(5000);
+    let segments = args.get(1).copied().unwrap_or(400);
+    let baud = 115_200u32;
+    let opts = SendOptions::default().with_banner_timeout(Duration::from_millis(500));
+
+    // 1. Link utilisation with instant motion.
+    let job = Job::parse(&zigzag(lines, 0.012, 5.0, 3000.0)).expect("job");
+    let sim = PtySim::spawn(
+        SimConfig::default()
+            .with_baud(baud)
+            .with_instant_motion(true),
+    )
+    .expect("spawn firmware-sim");
+    let mut port = open_port(sim.path().to_str().expect("utf-8 path"), baud).expect("open pty");
+    let rep = send_job(&mut port, &job, &opts, &mut |_| {}, &CancelToken::new()).expect("send");
+    drop(port);
+    let stats = sim.stop().stats;
+    let secs = rep.stream_time.as_secs_f64();
+    let rate = rep.stream_bytes as f64 / secs;
+    let cap = f64::from(baud) / 10.0;
+    println!(
+        "instant motion, {lines} lines, {} bytes in {secs:.2} s",
+        rep.stream_bytes
+    );
+    println!(
+        "  link: {rate:.0} B/s of {cap:.0} B/s = {:.1} % busy (target >= 90 %)",
+        100.0 * rate / cap
+    );
+    println!(
+        "  max bytes in flight {} of {} (device saw max RX fill {}, {} bytes dropped on overflow)",
+        rep.max_in_flight_bytes, rep.rx_size, stats.max_rx_fill, stats.bytes_dropped_overflow
+    );
+
+    // 2. Planner starvation with real motion on short segments.
+    let job = Job::parse(&zigzag(segments, 0.5, 0.5, 1500.0)).expect("job");
+    let sim = PtySim::spawn(SimConfig::default().with_baud(baud)).expect("spawn firmware-sim");
+    let mut port = open_port(sim.path().to_str().expect("utf-8 path"), baud).expect("open pty");
+    let rep = send_job(&mut port, &job, &opts, &mut |_| {}, &CancelToken::new()).expect("send");
+    drop(port);
+    let r = sim.stop();
+    println!(
+        "real motion, {segments} segments of {:.2} mm at F1500: sim time {:.2} s (estimate {:.2} s)",
+        job.total_length / segments as f64,
+        r.sim_time,
+        rep.estimated_time
+    );
+    println!(
+        "  planner starvations: {}, max planner fill {} blocks",
+        r.stats.planner_starvations, r.stats.max_planner_fill
+    );
+}
