@@ -1,6 +1,7 @@
 //! Loader for the ESICUP strip-packing benchmark instances in the jagua-rs JSON format
 //! (`/work/shared/bench/nesting/instances`): `{name, strip_height, items: [{id, demand,
-//! allowed_orientations?, shape: {type: "simple_polygon", data: [[x, y], …]}}]}`.
+//! allowed_orientations?, shape: {type: "simple_polygon", data: [[x, y], …]}}]}`, and the
+//! shoe-part items of the Baldacci `Scarpa.json` leather instance (older PascalCase schema).
 
 use crate::search::{NestError, NestItem, Rotations};
 use flatcut_geom::DVec2;
@@ -95,4 +96,65 @@ pub fn load_bench_instance(json: &str) -> Result<BenchInstance, NestError> {
         strip_height: raw.strip_height,
         items,
     })
+}
+
+#[derive(Deserialize)]
+struct ScarpaShape {
+    #[serde(rename = "Outer")]
+    outer: Vec<Vec<f64>>,
+}
+
+#[derive(Deserialize)]
+struct ScarpaItem {
+    #[serde(rename = "Demand")]
+    demand: usize,
+    #[serde(rename = "Shape")]
+    shape: ScarpaShape,
+}
+
+#[derive(Deserialize)]
+struct ScarpaInstance {
+    #[serde(rename = "Name", default)]
+    name: String,
+    #[serde(rename = "Items")]
+    items: Vec<ScarpaItem>,
+}
+
+/// Shoe parts of the Baldacci `Scarpa.json` instance as mirrored left/right pairs (mm): each
+/// part gets `pairs` copies per side, free rotation (leather has no woven grain). The hides,
+/// defects and quality zones of the instance are not used.
+pub fn load_scarpa_items(json: &str, pairs: usize) -> Result<Vec<NestItem>, NestError> {
+    let raw: ScarpaInstance = serde_json::from_str(json)
+        .map_err(|e| NestError::InvalidInput(format!("Scarpa JSON: {e}")))?;
+    let base = if raw.name.is_empty() {
+        "scarpa".to_string()
+    } else {
+        raw.name.to_lowercase()
+    };
+    Ok(raw
+        .items
+        .into_iter()
+        .enumerate()
+        .filter(|(_, it)| it.demand > 0)
+        .map(|(k, it)| {
+            let mut outline: Vec<DVec2> = it
+                .shape
+                .outer
+                .iter()
+                .filter(|p| p.len() == 2)
+                .map(|p| DVec2::new(p[0], p[1]))
+                .collect();
+            if outline.len() > 1 && outline[0] == outline[outline.len() - 1] {
+                outline.pop();
+            }
+            NestItem {
+                name: format!("{base}-{k}"),
+                outline,
+                quantity: pairs,
+                rotations: Rotations::Free,
+                grain_angle: None,
+                mirrored_pair: true,
+            }
+        })
+        .collect())
 }

@@ -15,8 +15,8 @@
 pub mod instance;
 pub mod search;
 
-pub use instance::{BenchInstance, load_bench_instance};
+pub use instance::{BenchInstance, load_bench_instance, load_scarpa_items};
 pub use search::{
     NestError, NestItem, NestOptions, NestProgress, NestResult, PlacedInstance, Rotations, Stock,
-    Unplaced, nest,
+    Unplaced, nest, placed_pieces,
 };

@@ -848,3 +848,47 @@ impl<'a> Engine<'a> {
         }
     }
 }
+
+impl NestItem {
+    /// A nesting item from a built pattern piece: its cut line, its grain line (when it has
+    /// one, rotations are limited to keep the grain along the roll), `quantity` copies per side.
+    pub fn from_piece(
+        piece: &flatcut_pattern::Piece,
+        quantity: usize,
+        mirrored_pair: bool,
+    ) -> Self {
+        Self {
+            name: piece.name.clone(),
+            outline: piece.cut.clone(),
+            quantity,
+            rotations: Rotations::Half,
+            grain_angle: piece.grain.map(|(a, b)| (b - a).y.atan2((b - a).x)),
+            mirrored_pair,
+        }
+    }
+}
+
+/// The placed instances of sheet `sheet` as pattern placements (for SVG/DXF export), with
+/// instance numbers counted per piece from 1; `pieces[i]` must be the piece of item `i`.
+pub fn placed_pieces<'a>(
+    pieces: &'a [flatcut_pattern::Piece],
+    result: &NestResult,
+    sheet: usize,
+) -> Vec<flatcut_pattern::PlacedPiece<'a>> {
+    let mut counters = vec![0u32; pieces.len()];
+    let mut out = Vec::new();
+    for p in &result.placed {
+        let Some(piece) = pieces.get(p.item) else {
+            continue;
+        };
+        counters[p.item] += 1;
+        if p.sheet == sheet {
+            out.push(flatcut_pattern::PlacedPiece {
+                piece,
+                instance: counters[p.item],
+                placement: p.placement,
+            });
+        }
+    }
+    out
+}

@@ -5,7 +5,10 @@
 mod common;
 
 use flatcut_geom::DVec2;
-use flatcut_nest::{NestError, NestItem, NestOptions, Rotations, Stock, load_bench_instance, nest};
+use flatcut_nest::{
+    NestError, NestItem, NestOptions, Rotations, Stock, load_bench_instance, load_scarpa_items,
+    nest,
+};
 use std::f64::consts::{FRAC_PI_2, PI};
 
 fn rect(w: f64, h: f64) -> Vec<DVec2> {
@@ -236,4 +239,82 @@ fn trousers_beats_or_matches_bottom_left_fill() {
     // zero spacing: touching allowed, overlap not — check area overlap via the independent test
     // with a small tolerance for the engine's f32 coordinates
     within(&polys, f64::INFINITY, inst.strip_height, -1e-2);
+}
+
+#[test]
+fn shoe_set_on_sheets_beats_or_matches_bottom_left_fill() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/bench/nesting/instances/Scarpa.json"
+    );
+    let text =
+        std::fs::read_to_string(path).unwrap_or_else(|e| panic!("shoe set missing at {path}: {e}"));
+    // 4 parts × 2 pairs × left/right = 16 pieces on 600 × 400 mm sheets, 2 mm knife clearance
+    let items = load_scarpa_items(&text, 2).unwrap();
+    assert_eq!(items.len(), 4);
+    let opts = NestOptions {
+        free_rotation_steps: 8,
+        ..NestOptions::default().with_max_iters(12).with_samples(100)
+    };
+    let stock = Stock::Sheets {
+        width: 600.,
+        height: 400.,
+        max_sheets: None,
+    };
+    let r = nest(&items, stock, &opts, &mut |_| {}).unwrap();
+    assert!(r.unplaced.is_empty());
+    assert_eq!(r.placed.len(), 16);
+    assert_eq!(r.placed.iter().filter(|p| p.placement.mirror).count(), 8);
+    assert!(r.utilization >= r.baseline_utilization - 1e-9);
+    let polys = common::placed_polygons(&items, &r);
+    assert!(common::min_gap(&polys) >= 2.0 * 0.99);
+    within(&polys, 600., 400., 0.99);
+    eprintln!(
+        "shoe set: {} sheets, utilization {:.2} % (bottom-left fill {:.2} %)",
+        r.sheets, r.utilization, r.baseline_utilization
+    );
+}
+
+#[test]
+fn pattern_pieces_nest_and_export_to_svg() {
+    use flatcut_pattern::{Piece, PieceInput, PieceOptions, svg};
+    let mut a = PieceInput::new("vamp", l_shape());
+    a.grain = Some((DVec2::new(5., 5.), DVec2::new(5., 45.)));
+    let pieces = vec![
+        Piece::build(&a, &PieceOptions::default()).unwrap(),
+        Piece::build(
+            &PieceInput::new("tongue", rect(30., 60.)),
+            &PieceOptions::default(),
+        )
+        .unwrap(),
+    ];
+    let items = vec![
+        NestItem::from_piece(&pieces[0], 2, true),
+        NestItem::from_piece(&pieces[1], 3, false),
+    ];
+    let opts = NestOptions::default().with_max_iters(5).with_samples(100);
+    let r = nest(
+        &items,
+        Stock::Roll {
+            width: 200.,
+            max_length: None,
+        },
+        &opts,
+        &mut |_| {},
+    )
+    .unwrap();
+    assert_eq!(r.placed.len(), 7);
+    let polys = common::placed_polygons(&items, &r);
+    assert!(common::min_gap(&polys) >= 2.0 * 0.99);
+    // the vamp's grain (drawn along +y) runs along the roll after placement
+    for p in r.placed.iter().filter(|p| p.item == 0) {
+        let d = p.placement.apply(DVec2::Y) - p.placement.apply(DVec2::ZERO);
+        assert!(d.y.abs() < 1e-4, "{d}");
+    }
+    let placed = flatcut_nest::placed_pieces(&pieces, &r, 0);
+    assert_eq!(placed.len(), 7);
+    let text = svg::write_pieces(&placed, Some(DVec2::new(r.length.ceil() + 10.0, 200.)));
+    for id in ["vamp-1-cut", "vamp-4-cut", "tongue-3-cut"] {
+        assert!(text.contains(&format!("id=\"{id}\"")), "{id}");
+    }
 }
