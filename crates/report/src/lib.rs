@@ -1,1 +1,19 @@
-//! placeholder
+//! The distortion report: how much a flattened piece stretches, where, and whether it stays
+//! within the material's limits.
+//!
+//! [`Report::compute`] measures a flattened [`TriMesh`] (3D positions plus a 2D position per
+//! vertex, mm) with Duncan's measures per face (μ1, μ2, δ1, δ2, area ratio, principal
+//! directions), aggregates them over the surface area, estimates Duncan's global distortion δ0
+//! from geodesic distances, and checks seam lengths. [`heatmap_svg`], [`render_png`] and
+//! [`html_report`] draw it; the PNG is rendered from the very SVG so the two cannot disagree.
+//!
+//! **Architecture invariant:** the per-face kernel is `flatcut_mesh::face_distortion`, the same the
+//! flattener uses, so the report and the optimiser can never disagree on a number.
+
+pub mod draw;
+pub mod measure;
+
+pub use draw::{Column, heatmap_svg, histogram_svg, html_report, render_png};
+pub use measure::{
+    BoundarySegment, FaceMeasure, Measure, Region, Report, ReportError, ReportOptions, Stats,
+};

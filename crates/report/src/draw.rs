@@ -1,0 +1,497 @@
+//! Pictures of a report: the flattened piece coloured by a measure (SVG, true millimetres, one
+//! column per input), a histogram, a PNG rendered from the same SVG by resvg, and a
+//! self-contained HTML page.
+//!
+//! Legend and titles are drawn with the pattern crate's single-stroke font as paths, so the SVG,
+//! the PNG and the browser show identical text without any font file.
+
+use flatcut_geom::{Aabb2, DVec2};
+use flatcut_mesh::TriMesh;
+use flatcut_pattern::font;
+use svg::Document;
+use svg::node::element::{Group, Path, Rectangle};
+
+use crate::{Measure, Report, ReportError};
+
+/// One input of a (side-by-side) picture.
+pub struct Column<'a> {
+    pub title: String,
+    pub mesh: &'a TriMesh,
+    pub report: &'a Report,
+}
+
+/// Margin around each column (mm).
+const MARGIN: f64 = 10.0;
+/// Height of titles and legend text (mm).
+const TEXT_H: f64 = 4.0;
+/// Minimum column width so titles and legends fit (mm).
+const MIN_COL_W: f64 = 120.0;
+/// Height of the legend block (mm).
+const LEGEND_H: f64 = 28.0;
+/// Colour given to flipped faces.
+const FLIPPED: &str = "#ff00ff";
+
+fn n(v: f64) -> String {
+    let s = format!("{v:.3}");
+    if s == "-0.000" { "0.000".into() } else { s }
+}
+
+/// A perceptually ordered sequential map (viridis, 9 stops), t in [0, 1].
+fn sequential(t: f64) -> [u8; 3] {
+    const STOPS: [[f64; 3]; 9] = [
+        [68.0, 1.0, 84.0],
+        [72.0, 40.0, 120.0],
+        [62.0, 74.0, 137.0],
+        [49.0, 104.0, 142.0],
+        [38.0, 130.0, 142.0],
+        [31.0, 158.0, 137.0],
+        [53.0, 183.0, 121.0],
+        [109.0, 205.0, 89.0],
+        [253.0, 231.0, 37.0],
+    ];
+    interp(&STOPS, t)
+}
+
+/// A diverging map: blue (negative) – white (0) – red (positive), t in [−1, 1].
+fn diverging(t: f64) -> [u8; 3] {
+    const STOPS: [[f64; 3]; 5] = [
+        [33.0, 102.0, 172.0],
+        [146.0, 197.0, 222.0],
+        [247.0, 247.0, 247.0],
+        [244.0, 165.0, 130.0],
+        [178.0, 24.0, 43.0],
+    ];
+    interp(&STOPS, 0.5 * (t + 1.0))
+}
+
+fn interp(stops: &[[f64; 3]], t: f64) -> [u8; 3] {
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    let x = t * (stops.len() - 1) as f64;
+    let i = (x.floor() as usize).min(stops.len() - 2);
+    let f = x - i as f64;
+    std::array::from_fn(|k| (stops[i][k] * (1.0 - f) + stops[i + 1][k] * f).round() as u8)
+}
+
+fn hex(c: [u8; 3]) -> String {
+    format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2])
+}
+
+/// The colour scale shared by all columns: (lo, hi).
+fn scale(cols: &[Column<'_>], m: Measure) -> (f64, f64) {
+    let hi = cols
+        .iter()
+        .map(|c| {
+            let s = c.report.stats(m);
+            if m.signed() {
+                c.report
+                    .per_face
+                    .iter()
+                    .map(|f| m.of(f).abs())
+                    .filter(|v| v.is_finite())
+                    .fold(0.0, f64::max)
+            } else {
+                s.p99.max(s.mean)
+            }
+        })
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let hi = if hi > 0.0 {
+        hi
+    } else if m.signed() {
+        1.0
+    } else {
+        0.01
+    };
+    if m.signed() { (-hi, hi) } else { (0.0, hi) }
+}
+
+fn colour(m: Measure, v: f64, (lo, hi): (f64, f64)) -> String {
+    if m.signed() {
+        hex(diverging(v / hi))
+    } else {
+        hex(sequential((v - lo) / (hi - lo)))
+    }
+}
+
+fn text_path(text: &str, origin: DVec2, h: f64, colour: &str) -> Path {
+    let mut d = String::new();
+    for stroke in font::text_strokes(text, origin, h, DVec2::X) {
+        for (k, p) in stroke.iter().enumerate() {
+            d.push_str(&format!(
+                "{}{} {} ",
+                if k == 0 { "M" } else { "L" },
+                n(p.x),
+                n(-p.y)
+            ));
+        }
+    }
+    Path::new()
+        .set("d", d.trim_end().to_string())
+        .set("fill", "none")
+        .set("stroke", colour)
+        .set("stroke-width", h * 0.08)
+        .set("stroke-linecap", "round")
+        .set("stroke-linejoin", "round")
+}
+
+/// The heat map of one or more flattened pieces, side by side, at true scale in mm, with a legend
+/// in real units. `glyphs` adds short ticks along the principal stretch direction.
+pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
+    let range = scale(cols, m);
+    let boxes: Vec<Aabb2> = cols
+        .iter()
+        .map(|c| {
+            c.mesh.flat_bbox().unwrap_or(Aabb2 {
+                min: DVec2::ZERO,
+                max: DVec2::ZERO,
+            })
+        })
+        .collect();
+    let col_w: Vec<f64> = boxes
+        .iter()
+        .map(|b| b.width().max(MIN_COL_W) + 2.0 * MARGIN)
+        .collect();
+    let piece_h = boxes.iter().map(|b| b.height()).fold(0.0, f64::max);
+    let title_h = 2.5 * TEXT_H;
+    let width: f64 = col_w.iter().sum();
+    let height = title_h + piece_h + 2.0 * MARGIN + LEGEND_H;
+    let mut doc = Document::new()
+        .set("xmlns", "http://www.w3.org/2000/svg")
+        .set("width", format!("{}mm", n(width)))
+        .set("height", format!("{}mm", n(height)))
+        .set("viewBox", format!("0 0 {} {}", n(width), n(height)));
+    doc = doc.add(
+        Rectangle::new()
+            .set("x", 0)
+            .set("y", 0)
+            .set("width", n(width))
+            .set("height", n(height))
+            .set("fill", "#ffffff"),
+    );
+    let mut x0 = 0.0;
+    for (k, c) in cols.iter().enumerate() {
+        let b = boxes[k];
+        let ox = x0 + MARGIN + (col_w[k] - 2.0 * MARGIN - b.width()) / 2.0 - b.min.x;
+        let top = title_h + MARGIN;
+        // Plane y up → SVG y down: y_svg = top + (b.max.y − y).
+        let map = |p: DVec2| DVec2::new(ox + p.x, top + (b.max.y - p.y));
+        let mut g = Group::new().set("id", format!("piece-{k}"));
+        let flat = c.mesh.flat.as_ref();
+        for (t, tri) in c.mesh.triangles.iter().enumerate() {
+            let Some(flat) = flat else { break };
+            let f = &c.report.per_face[t];
+            let fill = if f.flipped {
+                FLIPPED.to_string()
+            } else {
+                colour(m, m.of(f), range)
+            };
+            let q: Vec<DVec2> = tri.iter().map(|&v| map(flat[v as usize])).collect();
+            g = g.add(
+                Path::new()
+                    .set(
+                        "d",
+                        format!(
+                            "M{} {} L{} {} L{} {} Z",
+                            n(q[0].x),
+                            n(q[0].y),
+                            n(q[1].x),
+                            n(q[1].y),
+                            n(q[2].x),
+                            n(q[2].y)
+                        ),
+                    )
+                    .set("fill", fill.clone())
+                    .set("stroke", fill)
+                    .set("stroke-width", 0.05),
+            );
+        }
+        if glyphs {
+            if let Some(flat) = flat {
+                let spacing = (b.width().max(b.height()) / 30.0).max(1.0);
+                let mut last: Vec<DVec2> = Vec::new();
+                let mut d = String::new();
+                for (t, tri) in c.mesh.triangles.iter().enumerate() {
+                    let cen =
+                        (flat[tri[0] as usize] + flat[tri[1] as usize] + flat[tri[2] as usize])
+                            / 3.0;
+                    if last.iter().any(|p| p.distance(cen) < spacing) {
+                        continue;
+                    }
+                    last.push(cen);
+                    let f = &c.report.per_face[t];
+                    let len = spacing * 0.4 * (1.0 + (f.stretch_pct / 10.0).min(1.0));
+                    let (a, e) = (map(cen - f.dir_max_2d * len), map(cen + f.dir_max_2d * len));
+                    d.push_str(&format!("M{} {} L{} {} ", n(a.x), n(a.y), n(e.x), n(e.y)));
+                }
+                g = g.add(
+                    Path::new()
+                        .set("id", format!("glyphs-{k}"))
+                        .set("d", d.trim_end().to_string())
+                        .set("stroke", "#000000")
+                        .set("stroke-width", 0.3)
+                        .set("fill", "none"),
+                );
+            }
+        }
+        doc = doc.add(g);
+        let title = format!(
+            "{}  MEAN D2 {:.4}  MAX STRETCH {:.1}%",
+            c.title, c.report.delta2_mean, c.report.stretch_max_pct
+        );
+        doc = doc.add(text_path(
+            &title,
+            DVec2::new(x0 + MARGIN, -(1.5 * TEXT_H)),
+            TEXT_H * 0.8,
+            "#000000",
+        ));
+        x0 += col_w[k];
+    }
+    // Legend: a colour bar with five ticks.
+    let ly = title_h + piece_h + 2.0 * MARGIN;
+    let bar_w = (width - 2.0 * MARGIN).min(160.0);
+    let steps = 64;
+    for s in 0..steps {
+        let t = s as f64 / (steps - 1) as f64;
+        let v = range.0 + t * (range.1 - range.0);
+        doc = doc.add(
+            Rectangle::new()
+                .set(
+                    "x",
+                    n(MARGIN + t * bar_w * (steps - 1) as f64 / steps as f64),
+                )
+                .set("y", n(ly))
+                .set("width", n(bar_w / steps as f64 + 0.05))
+                .set("height", 5)
+                .set("fill", colour(m, v, range)),
+        );
+    }
+    for i in 0..=4 {
+        let t = i as f64 / 4.0;
+        let v = range.0 + t * (range.1 - range.0);
+        let label = if m.signed() {
+            format!("{v:+.1}")
+        } else if range.1 < 0.1 {
+            format!("{v:.4}")
+        } else {
+            format!("{v:.3}")
+        };
+        let x = MARGIN + t * bar_w - font::text_width(&label, TEXT_H * 0.7) / 2.0;
+        doc = doc.add(text_path(
+            &label,
+            DVec2::new(x, -(ly + 5.0 + 1.5 * TEXT_H)),
+            TEXT_H * 0.7,
+            "#000000",
+        ));
+    }
+    doc = doc.add(text_path(
+        m.title(),
+        DVec2::new(MARGIN, -(ly + 5.0 + 3.5 * TEXT_H)),
+        TEXT_H * 0.7,
+        "#000000",
+    ));
+    doc.to_string()
+}
+
+/// A histogram of the measure over surface area (fraction of the area per bin), as SVG.
+pub fn histogram_svg(report: &Report, m: Measure, bins: usize) -> String {
+    let bins = bins.max(2);
+    let vals: Vec<(f64, f64)> = report
+        .per_face
+        .iter()
+        .map(|f| (m.of(f), f.area_3d))
+        .filter(|v| v.0.is_finite())
+        .collect();
+    let (lo, hi) = vals
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v.0), b.max(v.0))
+        });
+    let (lo, hi) = if lo.is_finite() && hi > lo {
+        (lo, hi)
+    } else {
+        (0.0, 1.0)
+    };
+    let total: f64 = vals.iter().map(|v| v.1).sum::<f64>().max(f64::MIN_POSITIVE);
+    let mut h = vec![0.0; bins];
+    for (v, w) in &vals {
+        let i = (((v - lo) / (hi - lo)) * bins as f64)
+            .floor()
+            .clamp(0.0, (bins - 1) as f64) as usize;
+        h[i] += w / total;
+    }
+    let (w, ht) = (160.0, 60.0);
+    let top = h.iter().copied().fold(0.0, f64::max).max(1e-12);
+    let mut doc = Document::new()
+        .set("xmlns", "http://www.w3.org/2000/svg")
+        .set("width", format!("{w}mm"))
+        .set("height", format!("{}mm", ht + 12.0))
+        .set("viewBox", format!("0 0 {} {}", w, ht + 12.0));
+    for (i, f) in h.iter().enumerate() {
+        let bh = f / top * (ht - 2.0);
+        doc = doc.add(
+            Rectangle::new()
+                .set("x", n(i as f64 * w / bins as f64))
+                .set("y", n(ht - bh))
+                .set("width", n(w / bins as f64 * 0.9))
+                .set("height", n(bh))
+                .set("fill", "#3b6ea5"),
+        );
+    }
+    let lo_l = format!("{lo:.3}");
+    let hi_l = format!("{hi:.3}");
+    doc = doc.add(text_path(
+        &lo_l,
+        DVec2::new(0.0, -(ht + 8.0)),
+        3.0,
+        "#000000",
+    ));
+    doc = doc.add(text_path(
+        &hi_l,
+        DVec2::new(w - font::text_width(&hi_l, 3.0), -(ht + 8.0)),
+        3.0,
+        "#000000",
+    ));
+    doc.to_string()
+}
+
+/// Pixels per millimetre of the PNG when no width is asked for (≈ 254 dpi).
+pub const DEFAULT_PX_PER_MM: f64 = 10.0;
+
+/// Renders an SVG (ours) to PNG bytes with resvg, `width_px` wide (height in proportion).
+pub fn render_png(svg: &str, width_px: Option<u32>) -> Result<Vec<u8>, ReportError> {
+    use resvg::{tiny_skia, usvg};
+    let tree = usvg::Tree::from_str(svg, &usvg::Options::default())
+        .map_err(|e| ReportError::Render(e.to_string()))?;
+    let size = tree.size();
+    let w = width_px.map_or(
+        size.width() as f64 * DEFAULT_PX_PER_MM / (96.0 / 25.4),
+        |w| w as f64,
+    );
+    let s = w / size.width() as f64;
+    let (pw, ph) = (
+        (size.width() as f64 * s).ceil() as u32,
+        (size.height() as f64 * s).ceil() as u32,
+    );
+    let mut pix = tiny_skia::Pixmap::new(pw.max(1), ph.max(1))
+        .ok_or_else(|| ReportError::Render(format!("cannot allocate {pw}×{ph} pixels")))?;
+    resvg::render(
+        &tree,
+        tiny_skia::Transform::from_scale(s as f32, s as f32),
+        &mut pix.as_mut(),
+    );
+    pix.encode_png()
+        .map_err(|e| ReportError::Render(e.to_string()))
+}
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// A self-contained HTML report: the heat map, one histogram and one table per input, and the
+/// worst regions with their location. No external assets.
+pub fn html_report(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
+    let mut h = String::new();
+    h.push_str("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>flatcut distortion report</title>\n");
+    h.push_str("<style>body{font-family:sans-serif;margin:2em;color:#222}table{border-collapse:collapse}td,th{padding:2px 8px;border-bottom:1px solid #ddd;text-align:right}th{text-align:left}.cols{display:flex;gap:2em;flex-wrap:wrap}.col{flex:1;min-width:20em}.pic svg{width:100%;height:auto;border:1px solid #ccc}.hist svg{width:100%;height:auto}</style></head><body>\n");
+    h.push_str(&format!("<h1>Distortion report</h1>\n<p>Measure shown: <b>{}</b>. Faces coloured by value; magenta = flipped.</p>\n", esc(m.title())));
+    h.push_str(&format!(
+        "<div class=\"pic\" id=\"heatmap\">{}</div>\n<div class=\"cols\">\n",
+        heatmap_svg(cols, m, glyphs)
+    ));
+    for c in cols {
+        let r = c.report;
+        h.push_str(&format!(
+            "<div class=\"col\"><h2>{}</h2>\n<div class=\"hist\">{}</div>\n<table>\n",
+            esc(&c.title),
+            histogram_svg(r, m, 40)
+        ));
+        let rows: Vec<(&str, String)> = vec![
+            ("faces", r.faces.to_string()),
+            ("flipped faces", r.flipped.to_string()),
+            ("area 3D (mm²)", format!("{:.1}", r.area_3d_mm2)),
+            ("area 2D (mm²)", format!("{:.1}", r.area_2d_mm2)),
+            ("δ0 global", format!("{:.5}", r.delta0)),
+            (
+                "δ1 mean / p90 / max",
+                format!(
+                    "{:.5} / {:.5} / {:.5}",
+                    r.delta1_mean, r.delta1_p90, r.delta1_max
+                ),
+            ),
+            (
+                "δ2 mean / p90 / max",
+                format!(
+                    "{:.5} / {:.5} / {:.5}",
+                    r.delta2_mean, r.delta2_p90, r.delta2_max
+                ),
+            ),
+            (
+                "stretch max / p90 (%)",
+                format!("{:.2} / {:.2}", r.stretch_max_pct, r.stretch_p90_pct),
+            ),
+            (
+                "compression max / p90 (%)",
+                format!("{:.2} / {:.2}", r.compress_max_pct, r.compress_p90_pct),
+            ),
+            ("area ratio mean", format!("{:.5}", r.area_mean)),
+            (
+                "boundary length error",
+                format!("{:+.4}%", r.boundary_length_error * 100.0),
+            ),
+        ];
+        for (k, v) in rows {
+            h.push_str(&format!(
+                "<tr><th>{}</th><td>{}</td></tr>\n",
+                esc(k),
+                esc(&v)
+            ));
+        }
+        h.push_str("</table>\n");
+        if !r.boundary_segments.is_empty() {
+            h.push_str("<h3>Seams</h3><table><tr><th>from</th><th>to</th><th>3D mm</th><th>2D mm</th><th>error</th></tr>\n");
+            for s in &r.boundary_segments {
+                h.push_str(&format!(
+                    "<tr><td>{}</td><td>{}</td><td>{:.2}</td><td>{:.2}</td><td>{:+.3}%</td></tr>\n",
+                    s.from_vertex,
+                    s.to_vertex,
+                    s.length_3d_mm,
+                    s.length_2d_mm,
+                    s.relative_error * 100.0
+                ));
+            }
+            h.push_str("</table>\n");
+        }
+        h.push_str("<h3>Worst regions</h3>\n");
+        let worst = worst_regions(c, 5);
+        if worst.is_empty() {
+            h.push_str("<p>No region beyond the limits.</p>\n");
+        } else {
+            h.push_str("<table><tr><th>kind</th><th>worst %</th><th>area mm²</th><th>at 3D (mm)</th><th>at 2D (mm)</th></tr>\n");
+            for r in worst {
+                h.push_str(&format!(
+                    "<tr><td>{}</td><td>{:.2}</td><td>{:.1}</td><td>({:.1}, {:.1}, {:.1})</td><td>({:.1}, {:.1})</td></tr>\n",
+                    r.kind, r.worst_pct, r.area_mm2, r.centroid_3d[0], r.centroid_3d[1], r.centroid_3d[2], r.centroid_2d[0], r.centroid_2d[1]
+                ));
+            }
+            h.push_str("</table>\n");
+        }
+        h.push_str("</div>\n");
+    }
+    h.push_str("</div>\n<p><small>Duncan's measures (1976): μ1, μ2 are the extreme values of ds̄²/ds²; δ1 = log(μ1/μ2); δ2 = (μ1 + 1/μ1 + μ2 + 1/μ2 − 4)/2; δ0 = log(s2/s1) over pairs of points (geodesic vs plane distance).</small></p>\n</body></html>\n");
+    h
+}
+
+/// The limit regions of the report, or, when no limit was asked for, the regions of the 1 % most
+/// stretched or compressed surface.
+fn worst_regions(c: &Column<'_>, k: usize) -> Vec<crate::Region> {
+    let mut v = c.report.regions.clone();
+    v.truncate(k);
+    v
+}

@@ -1,0 +1,599 @@
+//! Per-face measures, area-weighted statistics, δ0 from geodesics, seam lengths and regions.
+
+use std::collections::BTreeMap;
+
+use flatcut_geom::{DVec2, DVec3};
+use flatcut_mesh::{TriMesh, face_distortion};
+use serde::Serialize;
+
+/// Which quantity a picture shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Measure {
+    /// Duncan's conformal distortion δ1 = log(μ1/μ2) (radians-like, dimensionless).
+    Delta1,
+    /// Duncan's isometric distortion δ2.
+    Delta2,
+    /// Signed principal stretch in percent: the larger of stretch (+) and compression (−).
+    Stretch,
+    /// Area change in percent: (σ1σ2 − 1)·100.
+    Area,
+}
+
+impl Measure {
+    pub fn from_name(s: &str) -> Option<Self> {
+        match s {
+            "delta1" => Some(Self::Delta1),
+            "delta2" => Some(Self::Delta2),
+            "stretch" => Some(Self::Stretch),
+            "area" => Some(Self::Area),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Delta1 => "delta1",
+            Self::Delta2 => "delta2",
+            Self::Stretch => "stretch",
+            Self::Area => "area",
+        }
+    }
+
+    /// The legend's title with its unit.
+    pub fn title(self) -> &'static str {
+        match self {
+            Self::Delta1 => "CONFORMAL DISTORTION D1 = LOG(MU1/MU2)",
+            Self::Delta2 => "ISOMETRIC DISTORTION D2",
+            Self::Stretch => "PRINCIPAL STRETCH % (+ STRETCH, - COMPRESSION)",
+            Self::Area => "AREA CHANGE %",
+        }
+    }
+
+    /// True for measures with a sign (drawn with a diverging colour map).
+    pub fn signed(self) -> bool {
+        matches!(self, Self::Stretch | Self::Area)
+    }
+
+    pub fn of(self, f: &FaceMeasure) -> f64 {
+        match self {
+            Self::Delta1 => f.delta1,
+            Self::Delta2 => f.delta2,
+            Self::Stretch => {
+                if f.stretch_pct >= f.compress_pct {
+                    f.stretch_pct
+                } else {
+                    -f.compress_pct
+                }
+            }
+            Self::Area => (f.area_ratio - 1.0) * 100.0,
+        }
+    }
+}
+
+/// One face's distortion, at true scale.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FaceMeasure {
+    pub mu1: f64,
+    pub mu2: f64,
+    pub delta1: f64,
+    pub delta2: f64,
+    /// σ1σ2 with its sign: negative for a flipped face.
+    pub area_ratio: f64,
+    /// (σ1 − 1)·100, at least 0.
+    pub stretch_pct: f64,
+    /// (1 − σ2)·100, at least 0.
+    pub compress_pct: f64,
+    pub flipped: bool,
+    /// Direction of largest stretch in the plane.
+    pub dir_max_2d: DVec2,
+    /// 3D area of the face, mm².
+    pub area_3d: f64,
+}
+
+/// Area-weighted statistics of one quantity.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Stats {
+    pub mean: f64,
+    pub max: f64,
+    pub p50: f64,
+    pub p90: f64,
+    pub p99: f64,
+}
+
+/// Length fidelity of a boundary stretch between two marks (or the whole loop).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BoundarySegment {
+    /// Boundary vertices where the segment starts and ends (equal for a whole loop).
+    pub from_vertex: u32,
+    pub to_vertex: u32,
+    pub length_3d_mm: f64,
+    pub length_2d_mm: f64,
+    /// (2D − 3D) / 3D.
+    pub relative_error: f64,
+}
+
+/// A connected set of faces over a limit.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Region {
+    /// "stretch" or "compress".
+    pub kind: &'static str,
+    pub faces: usize,
+    pub area_mm2: f64,
+    /// The worst value in the region, percent.
+    pub worst_pct: f64,
+    pub centroid_3d: [f64; 3],
+    pub centroid_2d: [f64; 2],
+}
+
+/// What to compute besides the per-face measures.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct ReportOptions {
+    /// Source vertices for δ0 (farthest-point sampled); 0 skips the geodesic estimate.
+    pub delta0_sources: usize,
+    /// Boundary vertices that split the boundary into seam segments (match marks).
+    pub boundary_marks: Vec<u32>,
+    pub limit_stretch_pct: Option<f64>,
+    pub limit_compress_pct: Option<f64>,
+}
+
+impl ReportOptions {
+    pub const DEFAULT_DELTA0_SOURCES: usize = 12;
+
+    pub fn with_limit_stretch_pct(mut self, p: Option<f64>) -> Self {
+        self.limit_stretch_pct = p;
+        self
+    }
+
+    pub fn with_limit_compress_pct(mut self, p: Option<f64>) -> Self {
+        self.limit_compress_pct = p;
+        self
+    }
+
+    pub fn with_boundary_marks(mut self, marks: Vec<u32>) -> Self {
+        self.boundary_marks = marks;
+        self
+    }
+
+    pub fn with_delta0_sources(mut self, n: usize) -> Self {
+        self.delta0_sources = n;
+        self
+    }
+}
+
+impl Default for ReportOptions {
+    fn default() -> Self {
+        Self {
+            delta0_sources: Self::DEFAULT_DELTA0_SOURCES,
+            boundary_marks: Vec::new(),
+            limit_stretch_pct: None,
+            limit_compress_pct: None,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReportError {
+    #[error("{name}: the mesh has no flattening (no `vt` coordinates); flatten it first")]
+    NoFlattening { name: String },
+    #[error("{name}: the flattening has {got} positions for {want} vertices")]
+    FlatCount {
+        name: String,
+        got: usize,
+        want: usize,
+    },
+    #[error("{name}: face {face} is degenerate in 3D (zero area)")]
+    DegenerateFace { name: String, face: usize },
+    #[error("{name}: vertex {vertex} has a non-finite coordinate")]
+    NonFinite { name: String, vertex: usize },
+    #[error("{name}: the mesh has no triangles")]
+    Empty { name: String },
+    #[error("cannot render the picture: {0}")]
+    Render(String),
+}
+
+/// The distortion report of one flattened piece. Field names are the JSON contract.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Report {
+    pub name: String,
+    pub faces: usize,
+    pub flipped: usize,
+    pub area_3d_mm2: f64,
+    pub area_2d_mm2: f64,
+    /// Duncan's global distortion δ0 = log(s2/s1).
+    pub delta0: f64,
+    pub delta0_s1: f64,
+    pub delta0_s2: f64,
+    pub delta0_method: String,
+    pub delta0_pairs: usize,
+    pub delta1_mean: f64,
+    pub delta1_max: f64,
+    pub delta1_p50: f64,
+    pub delta1_p90: f64,
+    pub delta1_p99: f64,
+    pub delta2_mean: f64,
+    pub delta2_max: f64,
+    pub delta2_p50: f64,
+    pub delta2_p90: f64,
+    pub delta2_p99: f64,
+    /// Area-weighted mean of the area ratio σ1σ2 (1 = area kept).
+    pub area_mean: f64,
+    /// Area-weighted mean of |log(σ1σ2)| (metrics.py's "area").
+    pub area_log_mean: f64,
+    pub stretch_max_pct: f64,
+    pub stretch_p90_pct: f64,
+    pub compress_max_pct: f64,
+    pub compress_p90_pct: f64,
+    /// (2D boundary length − 3D boundary length) / 3D, all loops.
+    pub boundary_length_error: f64,
+    pub boundary_segments: Vec<BoundarySegment>,
+    /// Regions beyond the limits asked for (empty when within or when no limit was given).
+    pub regions: Vec<Region>,
+    #[serde(skip)]
+    pub per_face: Vec<FaceMeasure>,
+}
+
+fn weighted_stats(values: &[(f64, f64)]) -> Stats {
+    // values: (value, weight)
+    let total: f64 = values.iter().map(|v| v.1).sum();
+    if values.is_empty() || total <= 0.0 {
+        return Stats::default();
+    }
+    let mean = values.iter().map(|(v, w)| v * w).sum::<f64>() / total;
+    let max = values.iter().map(|v| v.0).fold(f64::NEG_INFINITY, f64::max);
+    let mut sorted: Vec<(f64, f64)> = values.to_vec();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let q = |p: f64| {
+        let target = p * total;
+        let mut acc = 0.0;
+        for (v, w) in &sorted {
+            acc += w;
+            if acc >= target {
+                return *v;
+            }
+        }
+        sorted.last().map_or(0.0, |v| v.0)
+    };
+    Stats {
+        mean,
+        max,
+        p50: q(0.5),
+        p90: q(0.9),
+        p99: q(0.99),
+    }
+}
+
+/// Farthest-point sample of `k` vertices (deterministic: starts at vertex 0's farthest vertex).
+fn farthest_points(mesh: &TriMesh, k: usize) -> Vec<u32> {
+    let n = mesh.positions.len();
+    if n == 0 || k == 0 {
+        return Vec::new();
+    }
+    let mut chosen = Vec::with_capacity(k);
+    let mut dist = vec![f64::INFINITY; n];
+    let mut next = (0..n)
+        .max_by(|&a, &b| {
+            mesh.positions[a]
+                .distance_squared(mesh.positions[0])
+                .total_cmp(&mesh.positions[b].distance_squared(mesh.positions[0]))
+        })
+        .unwrap_or(0);
+    for _ in 0..k.min(n) {
+        chosen.push(next as u32);
+        let p = mesh.positions[next];
+        for (i, q) in mesh.positions.iter().enumerate() {
+            dist[i] = dist[i].min(q.distance_squared(p));
+        }
+        next = (0..n)
+            .max_by(|&a, &b| dist[a].total_cmp(&dist[b]))
+            .unwrap_or(0);
+    }
+    chosen
+}
+
+/// Pairs closer than this fraction of the mesh diameter are left to the per-face (local) term:
+/// over short distances the discrete geodesic error dominates the ratio.
+const DELTA0_MIN_PAIR_FRACTION: f64 = 0.05;
+
+impl Report {
+    /// Measures a flattened mesh (`mesh.flat` must be set).
+    pub fn compute(
+        name: &str,
+        mesh: &TriMesh,
+        opts: &ReportOptions,
+    ) -> Result<Report, ReportError> {
+        let flat = mesh
+            .flat
+            .as_ref()
+            .ok_or_else(|| ReportError::NoFlattening { name: name.into() })?;
+        if flat.len() != mesh.positions.len() {
+            return Err(ReportError::FlatCount {
+                name: name.into(),
+                got: flat.len(),
+                want: mesh.positions.len(),
+            });
+        }
+        if mesh.triangles.is_empty() {
+            return Err(ReportError::Empty { name: name.into() });
+        }
+        for (i, (p, q)) in mesh.positions.iter().zip(flat).enumerate() {
+            if !flatcut_geom::finite3(*p) || !flatcut_geom::finite2(*q) {
+                return Err(ReportError::NonFinite {
+                    name: name.into(),
+                    vertex: i,
+                });
+            }
+        }
+        let mut per_face = Vec::with_capacity(mesh.triangles.len());
+        for t in 0..mesh.triangles.len() {
+            let tri3 = mesh.corners(t);
+            let tri2 = mesh.flat_corners(t).expect("flat checked");
+            let d = face_distortion(tri3, tri2).ok_or_else(|| ReportError::DegenerateFace {
+                name: name.into(),
+                face: t,
+            })?;
+            let flipped = d.flipped();
+            // A flipped or collapsed face is infinitely distorted: never hidden as "undistorted".
+            let (delta1, delta2) = if flipped {
+                (f64::INFINITY, f64::INFINITY)
+            } else {
+                (d.delta1(), d.delta2())
+            };
+            per_face.push(FaceMeasure {
+                mu1: d.mu1(),
+                mu2: d.mu2(),
+                delta1,
+                delta2,
+                area_ratio: d.det,
+                stretch_pct: ((d.sigma1 - 1.0) * 100.0).max(0.0),
+                compress_pct: if flipped {
+                    100.0
+                } else {
+                    ((1.0 - d.sigma2) * 100.0).max(0.0)
+                },
+                flipped,
+                dir_max_2d: d.dir_max_2d,
+                area_3d: mesh.triangle_area(t),
+            });
+        }
+        let flipped = per_face.iter().filter(|f| f.flipped).count();
+        let w = |f: &FaceMeasure, v: f64| (v, f.area_3d);
+        let s1 = weighted_stats(&per_face.iter().map(|f| w(f, f.delta1)).collect::<Vec<_>>());
+        let s2 = weighted_stats(&per_face.iter().map(|f| w(f, f.delta2)).collect::<Vec<_>>());
+        let st = weighted_stats(
+            &per_face
+                .iter()
+                .map(|f| w(f, f.stretch_pct))
+                .collect::<Vec<_>>(),
+        );
+        let co = weighted_stats(
+            &per_face
+                .iter()
+                .map(|f| w(f, f.compress_pct))
+                .collect::<Vec<_>>(),
+        );
+        let area3: f64 = per_face.iter().map(|f| f.area_3d).sum();
+        let area_mean = per_face
+            .iter()
+            .map(|f| f.area_ratio * f.area_3d)
+            .sum::<f64>()
+            / area3;
+        let area_log_mean = per_face
+            .iter()
+            .map(|f| f.area_ratio.abs().ln().abs() * f.area_3d)
+            .sum::<f64>()
+            / area3;
+
+        let (delta0, ds1, ds2, pairs) = delta0(mesh, flat, &per_face, opts.delta0_sources);
+        let (boundary_length_error, boundary_segments) = boundary(mesh, flat, &opts.boundary_marks);
+        let mut regions = Vec::new();
+        if let Some(lim) = opts.limit_stretch_pct {
+            regions.extend(over_limit(mesh, flat, &per_face, "stretch", |f| {
+                (f.stretch_pct > lim).then_some(f.stretch_pct)
+            }));
+        }
+        if let Some(lim) = opts.limit_compress_pct {
+            regions.extend(over_limit(mesh, flat, &per_face, "compress", |f| {
+                (f.compress_pct > lim).then_some(f.compress_pct)
+            }));
+        }
+        Ok(Report {
+            name: name.into(),
+            faces: per_face.len(),
+            flipped,
+            area_3d_mm2: area3,
+            area_2d_mm2: mesh.flat_area().unwrap_or(0.0),
+            delta0,
+            delta0_s1: ds1,
+            delta0_s2: ds2,
+            delta0_method: format!(
+                "geodesic distances (label-correcting fast marching) from {} farthest-point sources to every vertex, plus every face's principal stretches",
+                opts.delta0_sources.min(mesh.positions.len())
+            ),
+            delta0_pairs: pairs,
+            delta1_mean: s1.mean,
+            delta1_max: s1.max,
+            delta1_p50: s1.p50,
+            delta1_p90: s1.p90,
+            delta1_p99: s1.p99,
+            delta2_mean: s2.mean,
+            delta2_max: s2.max,
+            delta2_p50: s2.p50,
+            delta2_p90: s2.p90,
+            delta2_p99: s2.p99,
+            area_mean,
+            area_log_mean,
+            stretch_max_pct: st.max,
+            stretch_p90_pct: st.p90,
+            compress_max_pct: co.max,
+            compress_p90_pct: co.p90,
+            boundary_length_error,
+            boundary_segments,
+            regions,
+            per_face,
+        })
+    }
+
+    /// True when no region exceeds the limits asked for and no face is flipped.
+    pub fn within_limits(&self) -> bool {
+        self.regions.is_empty() && self.flipped == 0
+    }
+
+    /// Area-weighted statistics of a measure.
+    pub fn stats(&self, m: Measure) -> Stats {
+        weighted_stats(
+            &self
+                .per_face
+                .iter()
+                .map(|f| (m.of(f), f.area_3d))
+                .collect::<Vec<_>>(),
+        )
+    }
+}
+
+/// δ0 = log(s2/s1): s over sampled pairs (geodesic on the surface vs straight in the plane) and,
+/// in the limit of short pairs, every face's principal stretches σ1, σ2 (exact for the
+/// polyhedral surface: within a flat face geodesics are straight).
+fn delta0(
+    mesh: &TriMesh,
+    flat: &[DVec2],
+    faces: &[FaceMeasure],
+    sources: usize,
+) -> (f64, f64, f64, usize) {
+    let mut s1 = f64::INFINITY;
+    let mut s2: f64 = 0.0;
+    for f in faces {
+        if f.flipped {
+            return (f64::INFINITY, 0.0, f.mu1.sqrt(), 0);
+        }
+        s1 = s1.min(f.mu2.sqrt());
+        s2 = s2.max(f.mu1.sqrt());
+    }
+    let diam = mesh.bbox().diagonal();
+    let mut pairs = 0;
+    for src in farthest_points(mesh, sources) {
+        let d = flatcut_mesh::geodesic::distances_from(mesh, src);
+        for (v, &g) in d.iter().enumerate() {
+            if g.is_finite() && g > DELTA0_MIN_PAIR_FRACTION * diam {
+                let e = flat[v].distance(flat[src as usize]);
+                let r = e / g;
+                s1 = s1.min(r);
+                s2 = s2.max(r);
+                pairs += 1;
+            }
+        }
+    }
+    ((s2 / s1).ln(), s1, s2, pairs)
+}
+
+/// Boundary loops (ordered) of the mesh.
+fn boundary_loops(mesh: &TriMesh) -> Vec<Vec<u32>> {
+    flatcut_mesh::Topology::build(mesh)
+        .map(|t| t.boundary_loops)
+        .unwrap_or_default()
+}
+
+fn boundary(mesh: &TriMesh, flat: &[DVec2], marks: &[u32]) -> (f64, Vec<BoundarySegment>) {
+    let loops = boundary_loops(mesh);
+    let (mut l3, mut l2) = (0.0, 0.0);
+    let mut segs = Vec::new();
+    for lp in &loops {
+        let n = lp.len();
+        let len3 = |a: u32, b: u32| mesh.positions[a as usize].distance(mesh.positions[b as usize]);
+        let len2 = |a: u32, b: u32| flat[a as usize].distance(flat[b as usize]);
+        for k in 0..n {
+            l3 += len3(lp[k], lp[(k + 1) % n]);
+            l2 += len2(lp[k], lp[(k + 1) % n]);
+        }
+        let cuts: Vec<usize> = (0..n).filter(|&k| marks.contains(&lp[k])).collect();
+        if cuts.is_empty() {
+            continue;
+        }
+        for (c, &start) in cuts.iter().enumerate() {
+            let end = cuts[(c + 1) % cuts.len()];
+            let (mut a3, mut a2) = (0.0, 0.0);
+            let mut k = start;
+            loop {
+                let j = (k + 1) % n;
+                a3 += len3(lp[k], lp[j]);
+                a2 += len2(lp[k], lp[j]);
+                k = j;
+                if k == end {
+                    break;
+                }
+            }
+            segs.push(BoundarySegment {
+                from_vertex: lp[start],
+                to_vertex: lp[end],
+                length_3d_mm: a3,
+                length_2d_mm: a2,
+                relative_error: (a2 - a3) / a3,
+            });
+        }
+    }
+    (if l3 > 0.0 { (l2 - l3) / l3 } else { 0.0 }, segs)
+}
+
+fn over_limit(
+    mesh: &TriMesh,
+    flat: &[DVec2],
+    faces: &[FaceMeasure],
+    kind: &'static str,
+    over: impl Fn(&FaceMeasure) -> Option<f64>,
+) -> Vec<Region> {
+    let bad: Vec<bool> = faces.iter().map(|f| over(f).is_some()).collect();
+    // Edge adjacency among the bad faces.
+    let mut edge_faces: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        if !bad[t] {
+            continue;
+        }
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            edge_faces.entry((a.min(b), a.max(b))).or_default().push(t);
+        }
+    }
+    let mut label = vec![usize::MAX; faces.len()];
+    let mut regions = Vec::new();
+    for seed in 0..faces.len() {
+        if !bad[seed] || label[seed] != usize::MAX {
+            continue;
+        }
+        let id = regions.len();
+        let mut stack = vec![seed];
+        label[seed] = id;
+        let (mut count, mut area, mut worst) = (0usize, 0.0, 0.0f64);
+        let (mut c3, mut c2) = (DVec3::ZERO, DVec2::ZERO);
+        while let Some(t) = stack.pop() {
+            count += 1;
+            let a = faces[t].area_3d;
+            area += a;
+            worst = worst.max(over(&faces[t]).unwrap_or(0.0));
+            let [p, q, r] = mesh.corners(t);
+            c3 += (p + q + r) / 3.0 * a;
+            let tri = mesh.triangles[t];
+            c2 += (flat[tri[0] as usize] + flat[tri[1] as usize] + flat[tri[2] as usize]) / 3.0 * a;
+            for k in 0..3 {
+                let (x, y) = (tri[k], tri[(k + 1) % 3]);
+                for &u in &edge_faces[&(x.min(y), x.max(y))] {
+                    if label[u] == usize::MAX {
+                        label[u] = id;
+                        stack.push(u);
+                    }
+                }
+            }
+        }
+        regions.push(Region {
+            kind,
+            faces: count,
+            area_mm2: area,
+            worst_pct: worst,
+            centroid_3d: (c3 / area).to_array(),
+            centroid_2d: (c2 / area).to_array(),
+        });
+    }
+    regions.sort_by(|a, b| b.worst_pct.total_cmp(&a.worst_pct));
+    regions
+}
