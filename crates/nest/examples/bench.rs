@@ -1,5 +1,5 @@
 //! Runs the nester on a benchmark instance and prints one JSON line:
-//! `cargo run --release -p flatcut-nest --example bench -- INSTANCE.json SECONDS [SEED]`.
+//! `cargo run --release -p flatcut-nest --example bench -- INSTANCE.json SECONDS [SEED [SAMPLES]]`.
 
 use flatcut_nest::{NestOptions, Stock, load_bench_instance, nest};
 use std::time::Duration;
@@ -17,6 +17,11 @@ fn main() {
         .with_spacing(0.0)
         .with_seed(seed)
         .with_max_iters(usize::MAX)
+        .with_samples(
+            args.get(4)
+                .and_then(|s| s.parse().ok())
+                .unwrap_or(NestOptions::DEFAULT_SAMPLES),
+        )
         .with_time_limit(Some(Duration::from_secs_f64(secs)));
     let mut last = 0.0;
     let r = nest(
