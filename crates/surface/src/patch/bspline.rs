@@ -52,8 +52,8 @@ const MAX_CACHED_POLES: usize = 1 << 20;
 /// every span precomputed so evaluation stays `&self` and thread-safe.
 #[derive(Clone, Debug, PartialEq)]
 struct SpanCache {
-    breaks_u: Vec<f64>,
-    breaks_v: Vec<f64>,
+    breaks_u: Breaks,
+    breaks_v: Breaks,
     poles: Vec<DVec3>,
     hpoles: Vec<DVec4>,
 }
@@ -187,20 +187,46 @@ fn bern<const N: usize>(t: f64) -> ([f64; N], [f64; N], [f64; N]) {
     (b, d, dd)
 }
 
-/// Index of the span of sorted breakpoints containing `t` (clamped), local parameter and
-/// reciprocal span length.
-#[inline(always)]
-fn locate(breaks: &[f64], t: f64) -> (usize, f64, f64) {
-    let last = breaks.len() - 2;
-    let i = if t <= breaks[0] {
-        0
-    } else if t >= breaks[last + 1] {
-        last
-    } else {
-        breaks.partition_point(|&b| b <= t) - 1
-    };
-    let inv = 1.0 / (breaks[i + 1] - breaks[i]);
-    (i, (t - breaks[i]) * inv, inv)
+/// Sorted breakpoints of one direction with reciprocal span lengths, for O(1) span lookup.
+#[derive(Clone, Debug, PartialEq)]
+struct Breaks {
+    at: Vec<f64>,
+    inv_len: Vec<f64>,
+    /// `spans / (last − first)`: the index guess for uniform knots.
+    guess_scale: f64,
+}
+
+impl Breaks {
+    fn new(at: Vec<f64>) -> Self {
+        let inv_len = at.windows(2).map(|w| 1.0 / (w[1] - w[0])).collect();
+        let guess_scale = (at.len() - 1) as f64 / (at[at.len() - 1] - at[0]);
+        Self {
+            at,
+            inv_len,
+            guess_scale,
+        }
+    }
+
+    /// Index of the span containing `t` (clamped), local parameter and reciprocal span length.
+    /// Guesses the span as if the knots were uniform, then walks to the right one.
+    #[inline(always)]
+    fn locate(&self, t: f64) -> (usize, f64, f64) {
+        let b = &self.at;
+        let last = b.len() - 2;
+        let mut i = (((t - b[0]) * self.guess_scale) as usize).min(last);
+        while i > 0 && t < b[i] {
+            i -= 1;
+        }
+        while i < last && t >= b[i + 1] {
+            i += 1;
+        }
+        let inv = self.inv_len[i];
+        (i, (t - b[i]) * inv, inv)
+    }
+
+    fn spans(&self) -> usize {
+        self.at.len() - 1
+    }
 }
 
 impl SpanCache {
@@ -240,8 +266,8 @@ impl SpanCache {
             (extract(s, &s.points, &ins_u, &ins_v), Vec::new())
         };
         Some(Self {
-            breaks_u,
-            breaks_v,
+            breaks_u: Breaks::new(breaks_u),
+            breaks_v: Breaks::new(breaks_v),
             poles,
             hpoles,
         })
@@ -256,9 +282,9 @@ impl SpanCache {
         v: f64,
         pairs: &[(usize, usize); K],
     ) -> [T; K] {
-        let (iu, su, inv_u) = locate(&self.breaks_u, u);
-        let (iv, sv, inv_v) = locate(&self.breaks_v, v);
-        let nsv = self.breaks_v.len() - 1;
+        let (iu, su, inv_u) = self.breaks_u.locate(u);
+        let (iv, sv, inv_v) = self.breaks_v.locate(v);
+        let nsv = self.breaks_v.spans();
         let base = (iu * nsv + iv) * P * Q;
         let block = &poles[base..base + P * Q];
         let (bu0, bu1, bu2) = bern::<P>(su);
@@ -288,6 +314,31 @@ impl SpanCache {
             *o = *o * (scale_u[a] * scale_v[b]);
         }
         out
+    }
+
+    /// Point and first partials of a non-rational bicubic block, written out like
+    /// [`super::BezierPatch`]'s fast path.
+    #[inline(always)]
+    fn bicubic_d1(&self, u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
+        let (iu, su, inv_u) = self.breaks_u.locate(u);
+        let (iv, sv, inv_v) = self.breaks_v.locate(v);
+        let nsv = self.breaks_v.spans();
+        let base = (iu * nsv + iv) * 16;
+        let p = &self.poles[base..base + 16];
+        let (bu, du) = super::bernstein::cubic_d1(su);
+        let (bv, dv) = super::bernstein::cubic_d1(sv);
+        let mut s = DVec3::ZERO;
+        let mut s_u = DVec3::ZERO;
+        let mut s_v = DVec3::ZERO;
+        for i in 0..4 {
+            let r = &p[4 * i..4 * i + 4];
+            let row = r[0] * bv[0] + r[1] * bv[1] + r[2] * bv[2] + r[3] * bv[3];
+            let rowv = r[0] * dv[0] + r[1] * dv[1] + r[2] * dv[2] + r[3] * dv[3];
+            s += row * bu[i];
+            s_u += row * du[i];
+            s_v += rowv * bu[i];
+        }
+        (s, s_u * inv_u, s_v * inv_v)
     }
 
     fn dispatch<T: Pole, const K: usize>(
@@ -633,6 +684,15 @@ impl BSplinePatch {
         let (p, q) = (self.degree_u, self.degree_v);
         if self.weights.is_none() {
             if let Some(c) = &self.cache {
+                if K == 3 && p == 3 && q == 3 {
+                    // The tessellation hot path: straight-line bicubic point + first partials.
+                    let (pt, su, sv) = c.bicubic_d1(u, v);
+                    let mut out = [DVec3::ZERO; K];
+                    out[0] = pt;
+                    out[1] = su;
+                    out[2] = sv;
+                    return out;
+                }
                 return c.dispatch::<DVec3, K>(&c.poles, p, q, u, v, pairs);
             }
             return if pmax < 4 {
