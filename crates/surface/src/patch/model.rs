@@ -340,13 +340,13 @@ mod tests {
     #[test]
     fn triangle_next_to_quad_and_near_misses() {
         let a = quad([DVec3::ZERO, DVec3::Y, DVec3::X, DVec3::new(1.0, 1.0, 0.0)]);
-        // Triangle with its V0 side = the quad's U0 side reversed (from (0,1) to (0,0)).
+        // Triangle with vertices w = (−1, ½), u = (0, 0), v = (0, 1): its W0 side (u-vertex to
+        // v-vertex) is the quad's U0 side, in the same direction.
         let t: Arc<dyn ParamSurface> = Arc::new(
             TriBezierPatch::new(1, vec![DVec3::new(-1.0, 0.5, 0.0), DVec3::ZERO, DVec3::Y])
                 .unwrap(),
         );
         let m = Model::new(vec![a.clone(), t], 1e-9).unwrap();
-        // The triangle's U0 side runs from w-vertex (-1,.5) to v-vertex (0,1); its W0 from (0,0) to (0,1).
         assert_eq!(m.edges().len(), 1, "{:?}", m.edges());
         let e = m.edges()[0];
         assert_eq!(
