@@ -1280,7 +1280,8 @@ pub fn send_job(
         return Err(err);
     }
     let final_position = sess.work_position();
-    if opts.verify_end_position && !job_uses_unknown_moves(job) {
+    // Only a run that moved the machine can be checked against the job's end point.
+    if opts.verify_end_position && lines_sent > 0 && !job_uses_unknown_moves(job) {
         if let Some(p) = final_position {
             let e = add(job.end_state.position, [0.0; 3]);
             if dist(p, e) > POSITION_TOL_MM * 10.0 {
@@ -1529,10 +1530,16 @@ fn on_reset<T: Transport + ?Sized>(
     }
     let m = late.len().min(lost.len());
     let mut ran_after_reset = 0;
-    for (tag, r) in lost[lost.len() - m..].iter().zip(&late[late.len() - m..]) {
+    for (k, (tag, r)) in lost[lost.len() - m..]
+        .iter()
+        .zip(&late[late.len() - m..])
+        .enumerate()
+    {
         if let (Tag::Job(i), crate::response::Response::Ok) = (tag, r) {
             ran_after_reset += 1;
-            if same_after_reset(job, *i) {
+            // The first of them may be the tail of a line the reset cut in half (GRBL then ran
+            // only a fragment): never count it, so it is re-sent whole.
+            if k > 0 && same_after_reset(job, *i) {
                 if let Some(j) = journal.as_mut() {
                     j.ack(*i);
                 }
