@@ -575,4 +575,39 @@ mod tests {
             assert!(d <= 0.01 + 1e-9, "deviation {d}");
         }
     }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(32))]
+        /// Ellipses with a flattened "D" side (a corner pair), densely sampled: every input point
+        /// lies within the tolerance of the fitted path, and the fit is far sparser than the input.
+        #[test]
+        fn fit_stays_within_tolerance(a in 20.0f64..120.0, b in 10.0f64..80.0, n in 60usize..300,
+                                      cut in 0.0f64..0.9, tol in 0.02f64..0.3) {
+            let xcut = a * (1.0 - cut);
+            let p: Vec<DVec2> = (0..n)
+                .map(|i| {
+                    let q = DVec2::new(a * (i as f64 / n as f64 * 2.0 * PI).cos(), b * (i as f64 / n as f64 * 2.0 * PI).sin());
+                    DVec2::new(q.x.min(xcut), q.y)
+                })
+                .collect();
+            let p = poly::dedup_closed(&p, 1e-9);
+            let c = find_corners(&p, &[], DEFAULT_CORNER_DEG);
+            let segs = fit_closed(&p, &c, tol);
+            let flat = flatten_closed(&segs, tol * 0.05);
+            for q in &p {
+                let d = poly::dist_to_closed(&flat, *q);
+                proptest::prop_assert!(d <= tol * 1.05 + 1e-9, "point {q} off by {d}");
+            }
+            proptest::prop_assert!(segs.len() < p.len(), "{} segments for {} points", segs.len(), p.len());
+            if n >= 150 && tol >= 0.05 {
+                // dense input and a workshop tolerance: the facets are gone
+                proptest::prop_assert!(segs.len() * 3 <= p.len(), "{} segments for {} points", segs.len(), p.len());
+            }
+            // consecutive segments join
+            for k in 0..segs.len() {
+                let next = segs[(k + 1) % segs.len()];
+                proptest::prop_assert!(segs[k].end().distance(next.start()) < 1e-9);
+            }
+        }
+    }
 }
