@@ -1172,10 +1172,8 @@ pub fn send_job(
                 _ => {}
             }
         }
-        if acked_any {
-            if let Some(j) = journal.as_mut() {
-                j.sync()?;
-            }
+        if acked_any && let Some(j) = journal.as_mut() {
+            j.sync()?;
         }
         // Lost bytes: the controller sits idle while lines are unanswered.
         if sess.s.in_flight() > 0
@@ -1281,21 +1279,23 @@ pub fn send_job(
     }
     let final_position = sess.work_position();
     // Only a run that moved the machine can be checked against the job's end point.
-    if opts.verify_end_position && lines_sent > 0 && !job_uses_unknown_moves(job) {
-        if let Some(p) = final_position {
-            let e = add(job.end_state.position, [0.0; 3]);
-            if dist(p, e) > POSITION_TOL_MM * 10.0 {
-                if let Some(j) = journal.as_mut() {
-                    j.note(&format!(
-                        "end position {p:?} differs from the job's end {e:?}"
-                    ));
-                    j.sync()?;
-                }
-                return Err(SendError::PositionMismatch {
-                    expected: e,
-                    actual: p,
-                });
+    if opts.verify_end_position
+        && lines_sent > 0
+        && !job_uses_unknown_moves(job)
+        && let Some(p) = final_position
+    {
+        let e = add(job.end_state.position, [0.0; 3]);
+        if dist(p, e) > POSITION_TOL_MM * 10.0 {
+            if let Some(j) = journal.as_mut() {
+                j.note(&format!(
+                    "end position {p:?} differs from the job's end {e:?}"
+                ));
+                j.sync()?;
             }
+            return Err(SendError::PositionMismatch {
+                expected: e,
+                actual: p,
+            });
         }
     }
     if let Some(j) = journal.as_mut() {
@@ -1448,10 +1448,10 @@ fn on_alarm<T: Transport + ?Sized>(
         sess.s.realtime(0x18);
         let _ = sess.wait_banner(opts.banner_timeout);
     }
-    if let Ok(Some(_)) = sess.query_status(Duration::from_millis(500)) {
-        if let (Some(p), Some(upto)) = (sess.work_position(), tracker.last_sent) {
-            tracker.confirm_by_position(job, p, upto, journal);
-        }
+    if let Ok(Some(_)) = sess.query_status(Duration::from_millis(500))
+        && let (Some(p), Some(upto)) = (sess.work_position(), tracker.last_sent)
+    {
+        tracker.confirm_by_position(job, p, upto, journal);
     }
     if let Some(j) = journal.as_mut() {
         j.sync()?;

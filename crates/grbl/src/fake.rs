@@ -144,11 +144,11 @@ impl FakeGrbl {
         if self.swallow_at == Some(n) {
             return;
         }
-        if let Some((at, code)) = self.error_at {
-            if at == n {
-                self.say(&format!("error:{code}"));
-                return;
-            }
+        if let Some((at, code)) = self.error_at
+            && at == n
+        {
+            self.say(&format!("error:{code}"));
+            return;
         }
         if line.is_empty() {
             self.say("ok");
@@ -208,11 +208,11 @@ impl FakeGrbl {
         }
         self.execute(&line, n);
         self.say("ok");
-        if let Some((at, code)) = self.alarm_at {
-            if at == n {
-                self.alarm = true;
-                self.say(&format!("ALARM:{code}"));
-            }
+        if let Some((at, code)) = self.alarm_at
+            && at == n
+        {
+            self.alarm = true;
+            self.say(&format!("ALARM:{code}"));
         }
     }
 

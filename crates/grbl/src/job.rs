@@ -463,10 +463,8 @@ impl Job {
                     'J' => ijk[1] = Some(v),
                     'K' => ijk[2] = Some(v),
                     'R' => r_word = Some(v),
-                    'L' => {
-                        if non_modal == Some(10.0) && (v == 2.0 || v == 20.0) {
-                            kind = LineKind::EepromWrite;
-                        }
+                    'L' if non_modal == Some(10.0) && (v == 2.0 || v == 20.0) => {
+                        kind = LineKind::EepromWrite;
                     }
                     _ => {}
                 }
@@ -1050,7 +1048,7 @@ mod tests {
         assert_eq!(l[5].kind, LineKind::EepromWrite);
         assert_eq!(l[6].kind, LineKind::EepromWrite);
         assert_eq!(job.safe_z, Some(5.0));
-        assert!(l[1].tool_on == false && !l[4].tool_on);
+        assert!(!l[1].tool_on && !l[4].tool_on);
     }
 
     #[test]

@@ -222,20 +222,20 @@ pub fn parse_response(line: &str) -> Response {
     if line == "ok" {
         return Response::Ok;
     }
-    if let Some(n) = line.strip_prefix("error:") {
-        if let Ok(code) = n.trim().parse() {
-            return Response::Error(code);
-        }
+    if let Some(n) = line.strip_prefix("error:")
+        && let Ok(code) = n.trim().parse()
+    {
+        return Response::Error(code);
     }
-    if let Some(n) = line.strip_prefix("ALARM:") {
-        if let Ok(code) = n.trim().parse() {
-            return Response::Alarm(code);
-        }
+    if let Some(n) = line.strip_prefix("ALARM:")
+        && let Ok(code) = n.trim().parse()
+    {
+        return Response::Alarm(code);
     }
-    if let Some(body) = line.strip_prefix('<').and_then(|b| b.strip_suffix('>')) {
-        if let Some(r) = parse_status(body) {
-            return Response::Status(r);
-        }
+    if let Some(body) = line.strip_prefix('<').and_then(|b| b.strip_suffix('>'))
+        && let Some(r) = parse_status(body)
+    {
+        return Response::Status(r);
     }
     if let Some(rest) = line.strip_prefix("Grbl ") {
         let version = rest.split_whitespace().next().unwrap_or("").to_string();
@@ -247,14 +247,14 @@ pub fn parse_response(line: &str) -> Response {
         }
         if let Some(o) = body.strip_prefix("OPT:") {
             let parts: Vec<&str> = o.split(',').collect();
-            if parts.len() >= 3 {
-                if let (Ok(blocks), Ok(rx)) = (parts[1].parse(), parts[2].parse()) {
-                    return Response::Options {
-                        codes: parts[0].to_string(),
-                        blocks,
-                        rx,
-                    };
-                }
+            if parts.len() >= 3
+                && let (Ok(blocks), Ok(rx)) = (parts[1].parse(), parts[2].parse())
+            {
+                return Response::Options {
+                    codes: parts[0].to_string(),
+                    blocks,
+                    rx,
+                };
             }
         }
         if let Some(v) = body.strip_prefix("VER:") {
@@ -265,12 +265,11 @@ pub fn parse_response(line: &str) -> Response {
         }
         return Response::Feedback(body.to_string());
     }
-    if let Some(rest) = line.strip_prefix('$') {
-        if let Some((n, v)) = rest.split_once('=') {
-            if let (Ok(n), Ok(v)) = (n.parse(), v.trim().parse()) {
-                return Response::Setting(n, v);
-            }
-        }
+    if let Some(rest) = line.strip_prefix('$')
+        && let Some((n, v)) = rest.split_once('=')
+        && let (Ok(n), Ok(v)) = (n.parse(), v.trim().parse())
+    {
+        return Response::Setting(n, v);
     }
     if let Some(rest) = line.strip_prefix('>') {
         return Response::StartupLine(rest.to_string());
