@@ -443,3 +443,31 @@ fn arap_honours_pins() {
     }
     assert_eq!(score(&mesh, &f.uv).flips, 0);
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(12))]
+
+    /// Moving and scaling the surface rigidly in 3D changes nothing but the scale of the
+    /// pattern: the distortion of every method is invariant, the area follows the scale².
+    #[test]
+    fn methods_are_invariant_under_3d_similarities(
+        ax in -1.0f64..1.0, ay in -1.0f64..1.0, az in 0.1f64..1.0,
+        angle in 0.0f64..6.28, scale in 0.2f64..5.0,
+        tx in -100.0f64..100.0, ty in -100.0f64..100.0,
+    ) {
+        let base = testmesh::spherical_cap(50.0, 1.1, 6);
+        let rot = flatcut_geom::DMat3::from_axis_angle(DVec3::new(ax, ay, az).normalize(), angle);
+        let mut moved = base.clone();
+        for p in &mut moved.positions {
+            *p = rot * *p * scale + DVec3::new(tx, ty, 7.0);
+        }
+        for m in [Method::Lscm, Method::Arap, Method::ConformalBoundary] {
+            let a = score(&base, &run(&base, m).uv);
+            let fb = run(&moved, m);
+            let b = score(&moved, &fb.uv);
+            proptest::prop_assert!((a.conf - b.conf).abs() < 1e-7, "{m}: {} vs {}", a.conf, b.conf);
+            proptest::prop_assert!((a.delta2_mean - b.delta2_mean).abs() < 1e-7);
+            proptest::prop_assert_eq!(b.flips, 0);
+        }
+    }
+}
