@@ -28,7 +28,7 @@ pub fn lscm(mesh: &TriMesh, topo: &Topology, pins: &[Pin]) -> Result<Flattening,
         let d = (mesh.positions[b as usize] - mesh.positions[a as usize]).length();
         vec![(a, DVec2::ZERO), (b, DVec2::new(d, 0.0))]
     };
-    let mut uv = solve_pinned(mesh, &hard)?;
+    let mut uv = solve_pinned(mesh, topo, &hard)?;
     if pins.len() < 2 {
         let a2 = uv_area(&mesh.triangles, &uv);
         if a2.is_nan() || a2 <= 0.0 || a2.is_infinite() {
@@ -64,7 +64,14 @@ pub fn lscm(mesh: &TriMesh, topo: &Topology, pins: &[Pin]) -> Result<Flattening,
 
 /// The LSCM minimizer with the vertices of `hard` held at their positions (at least two
 /// distinct vertices). Vertices used by no triangle are put at the origin.
-pub fn solve_pinned(mesh: &TriMesh, hard: &[(u32, DVec2)]) -> Result<Vec<DVec2>, FlattenError> {
+///
+/// The area term is assembled from the boundary loops only (the interior edges' contributions
+/// cancel exactly), which keeps the x–y coupling off the interior and halves the matrix.
+pub fn solve_pinned(
+    mesh: &TriMesh,
+    topo: &Topology,
+    hard: &[(u32, DVec2)],
+) -> Result<Vec<DVec2>, FlattenError> {
     let n = mesh.positions.len();
     let mut fixed = vec![false; 2 * n];
     let mut x = vec![0.0; 2 * n];
@@ -81,7 +88,7 @@ pub fn solve_pinned(mesh: &TriMesh, hard: &[(u32, DVec2)]) -> Result<Vec<DVec2>,
         x[2 * v as usize + 1] = p.y;
     }
     let cot = corner_cotans(&mesh.positions, &mesh.triangles);
-    let mut q = QuadraticBuilder::new(&fixed, 30 * mesh.triangles.len());
+    let mut q = QuadraticBuilder::new(&fixed, 18 * mesh.triangles.len());
     for (tri, c) in mesh.triangles.iter().zip(&cot) {
         for k in 0..3 {
             let (a, b) = (tri[(k + 1) % 3] as usize, tri[(k + 2) % 3] as usize);
@@ -89,7 +96,12 @@ pub fn solve_pinned(mesh: &TriMesh, hard: &[(u32, DVec2)]) -> Result<Vec<DVec2>,
             let w = 0.5 * c[k];
             q.add_edge(2 * a, 2 * b, w);
             q.add_edge(2 * a + 1, 2 * b + 1, w);
-            // Minus the signed area ½ (x_a y_b − x_b y_a) of the directed edge a → b.
+        }
+    }
+    for lp in &topo.boundary_loops {
+        for i in 0..lp.len() {
+            let (a, b) = (lp[i] as usize, lp[(i + 1) % lp.len()] as usize);
+            // Minus the signed area ½ (x_a y_b − x_b y_a) of the boundary edge a → b.
             q.add(2 * a, 2 * b + 1, -0.5);
             q.add(2 * b, 2 * a + 1, 0.5);
         }
