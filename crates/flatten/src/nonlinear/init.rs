@@ -16,6 +16,31 @@ pub fn tutte(mesh: &TriMesh, topo: &Topology) -> Result<Vec<DVec2>, FlattenError
     Ok(uv)
 }
 
+/// The least-squares conformal map (part of [`crate::lscm`], two free pins) scaled to the 3D
+/// area, if it is flip-free; otherwise [`tutte`]. On curved patches LSCM is far closer to the
+/// isometric optimum than Tutte (its only distortion is the area scale), so projected Newton
+/// needs several times fewer iterations from it; LSCM is not guaranteed flip-free, hence the
+/// check and the fallback.
+pub fn lscm_or_tutte(mesh: &TriMesh, topo: &Topology) -> Result<Vec<DVec2>, FlattenError> {
+    if let Ok(f) = crate::lscm::lscm(mesh, topo, &[]) {
+        let mut uv = f.uv;
+        let total: f64 = (0..mesh.triangles.len())
+            .map(|t| signed_area(mesh, &uv, t))
+            .sum();
+        if total < 0.0 {
+            // A mirrored solution is as good: reflect it.
+            uv.iter_mut().for_each(|p| p.x = -p.x);
+        }
+        if uv.iter().all(|p| p.is_finite())
+            && (0..mesh.triangles.len()).all(|t| signed_area(mesh, &uv, t) > 0.0)
+        {
+            scale_to_area(mesh, &mut uv);
+            return Ok(uv);
+        }
+    }
+    tutte(mesh, topo)
+}
+
 /// Signed area of the 2D image of triangle `t`.
 pub fn signed_area(mesh: &TriMesh, uv: &[DVec2], t: usize) -> f64 {
     let [a, b, c] = mesh.triangles[t];

@@ -1,7 +1,8 @@
 //! The nonlinear, flip-free methods: isometric (δ2), conformal (δ1), min-max (δ0) and
 //! boundary-isometric (Duncan's f1), with material stretch limits.
 //!
-//! All of them start from a flip-free map (Tutte, [`init`]) and keep every iterate flip-free
+//! All of them start from a flip-free map (LSCM when it is flip-free for isometric, else Tutte,
+//! [`init`]) and keep every iterate flip-free
 //! with a line search bounded by the first inversion ([`newton`]). Results are at true scale in
 //! mm: isometric and boundary-isometric fix the scale by their energies; conformal is scaled to
 //! the 3D area (the only free parameter of a conformal map's scale).
@@ -9,6 +10,7 @@
 pub mod boundary;
 pub mod init;
 pub mod kernel;
+pub mod minmax;
 pub mod newton;
 pub mod spd;
 
@@ -40,11 +42,7 @@ pub fn solve(
         Method::Conformal => conformal(mesh, topo, &rest, params)?,
         Method::BoundaryIsometric => boundary::boundary_isometric(mesh, topo, &rest, params)?,
 
-        Method::Minmax => {
-            return Err(FlattenError::Internal(
-                "method minmax (Duncan's δ0) is not available in this build; use isometric".into(),
-            ));
-        }
+        Method::Minmax => minmax::minmax(mesh, topo, &rest, params)?,
         m => {
             return Err(FlattenError::Internal(format!(
                 "method {m} is not a nonlinear method"
@@ -84,7 +82,7 @@ fn isometric(
     params: &FlattenParams,
 ) -> Result<Flattening, FlattenError> {
     let n = mesh.positions.len();
-    let x0 = init::tutte(mesh, topo)?;
+    let x0 = init::lscm_or_tutte(mesh, topo)?;
     let run = newton_solve(rest, n, SymDirichlet, &x0, params, Method::Isometric)?;
     let mut info = FlattenInfo {
         iterations: run.iterations,
