@@ -220,6 +220,7 @@ fn hull_plate_is_the_conic_development_of_its_chines() {
     let integral = num::integrate(|t| dbez(t).cross(bez(t) - apex).length(), 0.0, 1.0, 1e-9);
     let want = (k - 1.0f64).abs() * (1.0 + k) / 2.0 * integral;
     let m = mesh("hull", p);
+    eprintln!("hull plate area {:.0} mm² (analytic {want:.0})", m.area());
     assert_area("hull", m.area(), want);
     assert!(max_scaled_k("hull", p) < DEVELOPABLE_MAX);
     assert_disk("hull", &m);
@@ -256,6 +257,7 @@ fn helmet_is_doubly_curved_and_darts_keep_it_a_disk() {
         * std::f64::consts::PI
         * (((a * b).powf(q) + (a * c).powf(q) + (b * c).powf(q)) / 3.0).powf(1.0 / q);
     let area = cap.area();
+    eprintln!("helmet cap area {area:.0} mm², half-ellipsoid {half_ellipsoid:.0} mm²");
     assert!(
         area > std::f64::consts::PI * a * b && area < 1.02 * half_ellipsoid,
         "area {area} vs half-ellipsoid {half_ellipsoid}"
