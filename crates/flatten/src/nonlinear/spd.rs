@@ -1,17 +1,15 @@
-//! A symmetric positive-definite sparse system with a fixed pattern: faer's supernodal/simplicial
-//! sparse Cholesky (AMD ordering) whose symbolic factorisation is computed once and reused for
-//! every Newton step, run sequentially (`Par::Seq`: faster on small machines and bit-for-bit
-//! deterministic, see crates.md §3).
+//! A symmetric positive-definite sparse system with a fixed pattern for the Newton steps: the
+//! values live in CSC order (upper triangle, rows ≤ column) so that the per-triangle Hessians are
+//! scattered straight into precomputed slots, and the factorisation is the crate's one sparse
+//! Cholesky, [`crate::sparse::SpdSolver`] (faer, AMD ordering, symbolic factorisation computed
+//! once and reused for every step, sequential `Par::Seq`: faster on small machines and
+//! bit-for-bit deterministic, crates.md §3).
 //!
-//! Only the upper triangle is stored (CSC, rows ≤ column).
+//! The pattern is handed to [`crate::sparse::SymPattern`] as one triplet per stored entry in slot
+//! order, so `values` is exactly the triplet value array that [`crate::sparse::SpdSolver::factor`]
+//! expects: no duplicate summing, no per-step assembly beyond the scatter.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{
-    LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
-};
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Par, Side};
+use crate::sparse::{SpdSolver, SymPattern, SymTriplets};
 
 /// A fixed-pattern SPD matrix and its reusable symbolic Cholesky factorisation.
 pub struct SpdSystem {
@@ -22,10 +20,7 @@ pub struct SpdSystem {
     pub values: Vec<f64>,
     /// Slot of each diagonal entry.
     diag: Vec<usize>,
-    symbolic: SymbolicCholesky<usize>,
-    l_values: Vec<f64>,
-    factor_buf: MemBuffer,
-    solve_buf: MemBuffer,
+    solver: SpdSolver,
 }
 
 impl SpdSystem {
@@ -43,9 +38,11 @@ impl SpdSystem {
         entries.dedup();
         let mut col_ptr = vec![0usize; n + 1];
         let mut row_idx = Vec::with_capacity(entries.len());
+        let mut triplets = SymTriplets::with_capacity(n, entries.len());
         for &(r, c) in &entries {
             col_ptr[c + 1] += 1;
             row_idx.push(r);
+            triplets.add(r, c, 0.0);
         }
         for c in 0..n {
             col_ptr[c + 1] += col_ptr[c];
@@ -53,19 +50,8 @@ impl SpdSystem {
         let diag = (0..n)
             .map(|c| col_ptr[c + 1] - 1) // rows sorted, the diagonal is last in its column
             .collect();
-        let sym = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
-        let symbolic = factorize_symbolic_cholesky(
-            sym,
-            Side::Upper,
-            SymmetricOrdering::Amd,
-            Default::default(),
-        )
-        .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
-        let l_values = vec![0.0; symbolic.len_val()];
-        let factor_buf = MemBuffer::new(
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
-        );
-        let solve_buf = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+        let pattern = SymPattern::new(&triplets, "newton").map_err(|e| e.to_string())?;
+        let solver = SpdSolver::new(pattern, "newton").map_err(|e| e.to_string())?;
         let nnz = row_idx.len();
         Ok(Self {
             n,
@@ -73,10 +59,7 @@ impl SpdSystem {
             row_idx,
             values: vec![0.0; nnz],
             diag,
-            symbolic,
-            l_values,
-            factor_buf,
-            solve_buf,
+            solver,
         })
     }
 
@@ -105,30 +88,10 @@ impl SpdSystem {
     /// Factorises the current values (numeric phase only) and solves A x = b in place.
     /// Returns an error if the matrix is not numerically positive definite.
     pub fn factor_solve(&mut self, b: &mut [f64]) -> Result<(), String> {
-        let sym = SymbolicSparseColMatRef::new_checked(
-            self.n,
-            self.n,
-            &self.col_ptr,
-            None,
-            &self.row_idx,
-        );
-        let mat = SparseColMatRef::new(sym, &self.values);
-        let llt = self
-            .symbolic
-            .factorize_numeric_llt::<f64>(
-                &mut self.l_values,
-                mat,
-                Side::Upper,
-                LltRegularization::default(),
-                Par::Seq,
-                MemStack::new(&mut self.factor_buf),
-                Default::default(),
-            )
-            .map_err(|e| format!("{e:?}"))?;
-        let llt: LltRef<'_, usize, f64> = llt;
-        let rhs = MatMut::from_column_major_slice_mut(b, self.n, 1);
-        llt.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.solve_buf));
-        Ok(())
+        self.solver
+            .factor(&self.values)
+            .map_err(|e| e.to_string())?;
+        self.solver.solve_in_place(b).map_err(|e| e.to_string())
     }
 }
 
