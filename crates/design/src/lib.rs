@@ -353,6 +353,10 @@ impl PieceGeometry {
     pub fn tessellate(&self, tol: &Tolerances) -> Result<TriMesh, TessError> {
         match self {
             PieceGeometry::Mesh(m) => Ok(m.clone()),
+            PieceGeometry::Patches(p) if p.len() == 1 && is_developable(p[0].as_ref()) => {
+                // Ruling-aligned grid: the polyhedral surface is exactly developable too.
+                flatcut_mesh::grid::tessellate_grid(p[0].as_ref(), tol)
+            }
             PieceGeometry::Patches(p) => {
                 let refs: Vec<&dyn ParamSurface> = p.iter().map(|s| s.as_ref()).collect();
                 let mut m = tessellate_patches(&refs, tol)?;
@@ -363,6 +367,18 @@ impl PieceGeometry {
             }
         }
     }
+}
+
+/// A single rectangular patch whose sampled Gaussian curvature is below this (scaled by its
+/// size squared) is tessellated on a grid along its parameter lines.
+const DEVELOPABLE_SCALED_K: f64 = 1e-9;
+/// Samples per side for that test.
+const DEVELOPABLE_SAMPLES: usize = 16;
+
+fn is_developable(s: &dyn ParamSurface) -> bool {
+    s.domain_kind() == flatcut_surface::DomainKind::Rectangle
+        && flatcut_surface::diffgeom::developability(s, DEVELOPABLE_SAMPLES).max_scaled_k
+            < DEVELOPABLE_SCALED_K
 }
 
 fn line_col(src: &str, offset: usize) -> (usize, usize) {

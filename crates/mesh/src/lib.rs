@@ -8,6 +8,7 @@
 
 pub mod distortion;
 pub mod geodesic;
+pub mod grid;
 pub mod io;
 pub mod seams;
 pub mod stats;
