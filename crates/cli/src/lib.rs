@@ -8,7 +8,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-mod cmd;
+pub mod cmd;
 
 /// flatcut — from 3D designs to flat cutting patterns, and on to the cutter.
 #[derive(Debug, Parser)]
@@ -22,9 +22,27 @@ pub struct Cli {
 pub enum Command {
     /// Describe a design or mesh file: pieces, area, bounding box, curvature, developability.
     Inspect(cmd::inspect::Args),
+    /// Flatten a design or mesh to the plane; writes an OBJ with the 2D map as `vt` (mm).
+    Flatten(cmd::flatten::Args),
+    /// Distortion report of flattened OBJs (or of a design, flattened first): JSON, SVG, PNG, HTML.
+    Report(cmd::report::Args),
+    /// Pattern piece(s) from a design or flattened OBJ: SVG in true mm, optional DXF.
+    Pattern(cmd::pattern::Args),
+    /// Nest pattern pieces on sheets or a roll.
+    Nest(cmd::nest::Args),
+    /// G-code for a pen plotter, drag knife or laser from a pattern SVG, design or flattened OBJ.
+    Gcode(cmd::gcode::Args),
+    /// List serial ports.
+    Ports(cmd::ports::Args),
+    /// Stream a G-code job to a GRBL controller (default: the embedded simulator).
+    Send(cmd::send::Args),
+    /// Run the simulated GRBL controller on a pseudo-terminal.
+    Sim(cmd::sim::Args),
+    /// The whole job: design → flatten → report → pattern → nest → G-code → send.
+    Run(cmd::run::Args),
 }
 
-/// Exit codes: 0 success, 1 error, 2 usage error (clap), 3 a material or distortion limit was exceeded.
+/// Exit code when a material or distortion limit is exceeded.
 pub const EXIT_LIMIT: u8 = 3;
 
 /// Runs the command line with the process arguments.
@@ -46,5 +64,14 @@ pub fn main() -> ExitCode {
 pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Inspect(a) => cmd::inspect::run(a),
+        Command::Flatten(a) => cmd::flatten::run(a),
+        Command::Report(a) => cmd::report::run(a),
+        Command::Pattern(a) => cmd::pattern::run(a),
+        Command::Nest(a) => cmd::nest::run(a),
+        Command::Gcode(a) => cmd::gcode::run(a),
+        Command::Ports(a) => cmd::ports::run(a),
+        Command::Send(a) => cmd::send::run(a),
+        Command::Sim(a) => cmd::sim::run(a),
+        Command::Run(a) => cmd::run::run(a),
     }
 }

@@ -78,7 +78,10 @@ pub fn inspect_file(path: &Path, tol: &Tolerances) -> Result<InspectReport, Desi
         let mesh = def.mesh(base, tol)?;
         pieces.push(summarise(&def.name, def.quantity, &geom, &mesh));
     }
-    Ok(InspectReport { source: design.source.clone(), pieces })
+    Ok(InspectReport {
+        source: design.source.clone(),
+        pieces,
+    })
 }
 
 fn bbox_arr(b: &Aabb3) -> [[f64; 3]; 2] {
@@ -93,15 +96,26 @@ pub fn summarise(name: &str, quantity: u32, geom: &PieceGeometry, mesh: &TriMesh
             let worst_defect = max_interior_angle_defect(mesh);
             let (kmin, kmax) = stats.gaussian_range.unwrap_or((0.0, 0.0));
             let (hmin, hmax) = stats.mean_range.unwrap_or((0.0, 0.0));
-            let kmean = if stats.area > 0.0 { stats.total_angle_defect / stats.area } else { 0.0 };
+            let kmean = if stats.area > 0.0 {
+                stats.total_angle_defect / stats.area
+            } else {
+                0.0
+            };
             PieceSummary {
                 name: name.to_string(),
                 kind: "mesh",
                 quantity,
                 area_mm2: stats.area,
                 bbox_mm: bbox_arr(&stats.bbox),
-                gaussian_curvature: Range3 { min: kmin, max: kmax, mean: kmean },
-                mean_curvature: Range2 { min: hmin, max: hmax },
+                gaussian_curvature: Range3 {
+                    min: kmin,
+                    max: kmax,
+                    mean: kmean,
+                },
+                mean_curvature: Range2 {
+                    min: hmin,
+                    max: hmax,
+                },
                 developable: worst_defect < DEVELOPABLE_ANGLE_DEFECT,
                 developability_measure: worst_defect,
                 patches: 0,
@@ -113,14 +127,20 @@ pub fn summarise(name: &str, quantity: u32, geom: &PieceGeometry, mesh: &TriMesh
         }
         PieceGeometry::Patches(patches) => {
             let (mut area, mut total_k) = (0.0, 0.0);
-            let (mut kmin, mut kmax, mut hmin, mut hmax) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+            let (mut kmin, mut kmax, mut hmin, mut hmax) = (
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+            );
             let mut worst_scaled: f64 = 0.0;
             let mut bbox = Aabb3::EMPTY;
             for p in patches {
                 let (a, k) = integrate_area_and_curvature(p.as_ref());
                 area += a;
                 total_k += k;
-                worst_scaled = worst_scaled.max(diffgeom::developability(p.as_ref(), SAMPLES_PER_SIDE).max_scaled_k);
+                worst_scaled = worst_scaled
+                    .max(diffgeom::developability(p.as_ref(), SAMPLES_PER_SIDE).max_scaled_k);
                 for_each_sample(p.as_ref(), SAMPLES_PER_SIDE, |pt, ff| {
                     bbox.add(pt);
                     if let Some(ff) = ff {
@@ -141,8 +161,15 @@ pub fn summarise(name: &str, quantity: u32, geom: &PieceGeometry, mesh: &TriMesh
                 quantity,
                 area_mm2: area,
                 bbox_mm: bbox_arr(&bbox),
-                gaussian_curvature: Range3 { min: fin(kmin), max: fin(kmax), mean: if area > 0.0 { total_k / area } else { 0.0 } },
-                mean_curvature: Range2 { min: fin(hmin), max: fin(hmax) },
+                gaussian_curvature: Range3 {
+                    min: fin(kmin),
+                    max: fin(kmax),
+                    mean: if area > 0.0 { total_k / area } else { 0.0 },
+                },
+                mean_curvature: Range2 {
+                    min: fin(hmin),
+                    max: fin(hmax),
+                },
                 developable: worst_scaled < DEVELOPABLE_SCALED_K,
                 developability_measure: worst_scaled,
                 patches: patches.len(),
@@ -176,7 +203,11 @@ fn max_interior_angle_defect(mesh: &TriMesh) -> f64 {
 
 /// Visits an (n+1)×(n+1) grid of the patch's domain (the lower-left triangle for triangular
 /// patches) with the point and the fundamental forms (None where the parametrisation is singular).
-fn for_each_sample(s: &dyn ParamSurface, n: usize, mut f: impl FnMut(DVec3, Option<FundamentalForms>)) {
+fn for_each_sample(
+    s: &dyn ParamSurface,
+    n: usize,
+    mut f: impl FnMut(DVec3, Option<FundamentalForms>),
+) {
     let d = s.domain();
     let tri = s.domain_kind() == DomainKind::Triangle;
     for i in 0..=n {
@@ -190,8 +221,16 @@ fn for_each_sample(s: &dyn ParamSurface, n: usize, mut f: impl FnMut(DVec3, Opti
             // Near a degenerate point (a pole, a collapsed edge) the forms exist numerically but
             // the curvature is meaningless: skip samples whose area element is tiny relative to
             // |r_u||r_v|.
-            let regular = dd.su.cross(dd.sv).length_squared() > SINGULAR_RATIO * dd.su.length_squared() * dd.sv.length_squared();
-            f(dd.p, if regular { FundamentalForms::from_derivs(&dd) } else { None });
+            let regular = dd.su.cross(dd.sv).length_squared()
+                > SINGULAR_RATIO * dd.su.length_squared() * dd.sv.length_squared();
+            f(
+                dd.p,
+                if regular {
+                    FundamentalForms::from_derivs(&dd)
+                } else {
+                    None
+                },
+            );
         }
     }
 }
@@ -200,13 +239,20 @@ fn for_each_sample(s: &dyn ParamSurface, n: usize, mut f: impl FnMut(DVec3, Opti
 fn integrate_area_and_curvature(s: &dyn ParamSurface) -> (f64, f64) {
     let d = s.domain();
     let tri = s.domain_kind() == DomainKind::Triangle;
-    let (du, dv) = ((d.u.1 - d.u.0) / QUAD_CELLS as f64, (d.v.1 - d.v.0) / QUAD_CELLS as f64);
+    let (du, dv) = (
+        (d.u.1 - d.u.0) / QUAD_CELLS as f64,
+        (d.v.1 - d.v.0) / QUAD_CELLS as f64,
+    );
     let (mut area, mut curv) = (0.0, 0.0);
     for i in 0..QUAD_CELLS {
         for j in 0..QUAD_CELLS {
             let (u0, v0) = (d.u.0 + i as f64 * du, d.v.0 + j as f64 * dv);
             let cell = |g: &mut dyn FnMut(f64, f64) -> f64| {
-                flatcut_geom::num::gauss16(|u| flatcut_geom::num::gauss16(|v| g(u, v), v0, v0 + dv), u0, u0 + du)
+                flatcut_geom::num::gauss16(
+                    |u| flatcut_geom::num::gauss16(|v| g(u, v), v0, v0 + dv),
+                    u0,
+                    u0 + du,
+                )
             };
             if tri {
                 // Map the cell of the unit square onto the triangle by the Duffy transform
@@ -219,7 +265,9 @@ fn integrate_area_and_curvature(s: &dyn ParamSurface) -> (f64, f64) {
                 curv += cell(&mut |a, b| {
                     let (u, v) = (a, (1.0 - a) * b);
                     let dd = s.deriv2(u, v);
-                    FundamentalForms::from_derivs(&dd).map_or(0.0, |ff| ff.gaussian()) * dd.su.cross(dd.sv).length() * (1.0 - a)
+                    FundamentalForms::from_derivs(&dd).map_or(0.0, |ff| ff.gaussian())
+                        * dd.su.cross(dd.sv).length()
+                        * (1.0 - a)
                 });
             } else {
                 area += cell(&mut |u, v| {
@@ -228,7 +276,8 @@ fn integrate_area_and_curvature(s: &dyn ParamSurface) -> (f64, f64) {
                 });
                 curv += cell(&mut |u, v| {
                     let dd = s.deriv2(u, v);
-                    FundamentalForms::from_derivs(&dd).map_or(0.0, |ff| ff.gaussian()) * dd.su.cross(dd.sv).length()
+                    FundamentalForms::from_derivs(&dd).map_or(0.0, |ff| ff.gaussian())
+                        * dd.su.cross(dd.sv).length()
                 });
             }
         }
@@ -244,13 +293,23 @@ impl std::fmt::Display for InspectReport {
             writeln!(f)?;
             writeln!(f, "piece {} ({}, quantity {})", p.name, p.kind, p.quantity)?;
             writeln!(f, "  area              {:.3} mm²", p.area_mm2)?;
-            writeln!(f, "  bounding box      {:.3} × {:.3} × {:.3} mm", hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2])?;
+            writeln!(
+                f,
+                "  bounding box      {:.3} × {:.3} × {:.3} mm",
+                hi[0] - lo[0],
+                hi[1] - lo[1],
+                hi[2] - lo[2]
+            )?;
             writeln!(
                 f,
                 "  Gaussian K        {:.4e} .. {:.4e} 1/mm² (area mean {:.4e})",
                 p.gaussian_curvature.min, p.gaussian_curvature.max, p.gaussian_curvature.mean
             )?;
-            writeln!(f, "  mean H            {:.4e} .. {:.4e} 1/mm", p.mean_curvature.min, p.mean_curvature.max)?;
+            writeln!(
+                f,
+                "  mean H            {:.4e} .. {:.4e} 1/mm",
+                p.mean_curvature.min, p.mean_curvature.max
+            )?;
             writeln!(
                 f,
                 "  developable       {} (measure {:.2e})",
@@ -260,9 +319,17 @@ impl std::fmt::Display for InspectReport {
             if p.patches > 0 {
                 writeln!(f, "  patches           {}", p.patches)?;
             }
-            writeln!(f, "  mesh              {} vertices, {} triangles", p.vertices, p.triangles)?;
+            writeln!(
+                f,
+                "  mesh              {} vertices, {} triangles",
+                p.vertices, p.triangles
+            )?;
             match p.boundary_loops {
-                Some(n) => writeln!(f, "  boundary          {n} loop(s), {:.3} mm", p.boundary_length_mm)?,
+                Some(n) => writeln!(
+                    f,
+                    "  boundary          {n} loop(s), {:.3} mm",
+                    p.boundary_length_mm
+                )?,
                 None => writeln!(f, "  boundary          invalid topology")?,
             }
         }

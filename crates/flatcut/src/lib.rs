@@ -6,6 +6,7 @@
 //! [`pipeline`].
 
 pub mod inspect;
+pub mod pipeline;
 
 pub use flatcut_design as design;
 pub use flatcut_flatten as flatten;

@@ -19,9 +19,14 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
-    anyhow::ensure!(a.chord.is_finite() && a.chord > 0.0, "--chord must be a positive length in mm, got {}", a.chord);
+    anyhow::ensure!(
+        a.chord.is_finite() && a.chord > 0.0,
+        "--chord must be a positive length in mm, got {}",
+        a.chord
+    );
     let tol = Tolerances::DEFAULT.with_chord_mm(a.chord);
-    let report = flatcut::inspect::inspect_file(&a.file, &tol).with_context(|| format!("cannot inspect {}", a.file.display()))?;
+    let report = flatcut::inspect::inspect_file(&a.file, &tol)
+        .with_context(|| format!("cannot inspect {}", a.file.display()))?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {

@@ -1,0 +1,309 @@
+//! What several commands share: loading designs or flattened meshes as pattern pieces, laying
+//! pieces out in a row, parsing sizes, writing files whole.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+use flatcut::design::PieceDef;
+use flatcut::flatten::{FlattenParams, Method};
+use flatcut::geom::{DVec2, Tolerances};
+use flatcut::mesh::TriMesh;
+use flatcut::pattern::{CornerStyle, NotchStyle, Piece, PieceOptions, PlacedPiece, Placement};
+use flatcut::pipeline::{self, FlatPiece, PieceContext};
+use flatcut::report::Report;
+
+/// Flattening options shared by the commands that flatten.
+#[derive(Debug, Clone, clap::Args)]
+pub struct FlattenArgs {
+    /// Flattening method: isometric, conformal, lscm, conformal-boundary, arap, developable, minmax, boundary-isometric.
+    #[arg(long, default_value = "isometric", value_parser = parse_method)]
+    pub method: Method,
+    /// Largest allowed stretch in percent (principal stretch).
+    #[arg(long, value_name = "P")]
+    pub max_stretch: Option<f64>,
+    /// Largest allowed compression in percent (leather: 0).
+    #[arg(long, value_name = "P")]
+    pub max_compress: Option<f64>,
+    /// Chordal tolerance of the tessellation in mm.
+    #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_name = "MM")]
+    pub chord: f64,
+    /// Iteration cap of the nonlinear methods.
+    #[arg(long, default_value_t = FlattenParams::DEFAULT_MAX_ITERS)]
+    pub max_iters: usize,
+}
+
+pub fn parse_method(s: &str) -> Result<Method, String> {
+    Method::from_name(s).ok_or_else(|| {
+        format!(
+            "unknown method '{s}'; one of: {}",
+            Method::ALL
+                .iter()
+                .map(|m| m.name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    })
+}
+
+impl FlattenArgs {
+    pub fn params(&self) -> anyhow::Result<FlattenParams> {
+        for (name, v) in [
+            ("--max-stretch", self.max_stretch),
+            ("--max-compress", self.max_compress),
+        ] {
+            if let Some(v) = v {
+                anyhow::ensure!(
+                    v.is_finite() && (0.0..100.0).contains(&v),
+                    "{name} must be a percentage in [0, 100), got {v}"
+                );
+            }
+        }
+        Ok(FlattenParams::new(self.method)
+            .with_max_stretch_pct(self.max_stretch)
+            .with_max_compress_pct(self.max_compress)
+            .with_max_iters(self.max_iters))
+    }
+
+    pub fn tolerances(&self) -> anyhow::Result<Tolerances> {
+        anyhow::ensure!(
+            self.chord.is_finite() && self.chord > 0.0,
+            "--chord must be a positive length in mm, got {}",
+            self.chord
+        );
+        Ok(Tolerances::DEFAULT.with_chord_mm(self.chord))
+    }
+}
+
+/// Options of pattern pieces shared by `pattern`, `nest`, `gcode` and `run`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PieceArgs {
+    /// Seam allowance in mm where the design gives none.
+    #[arg(long, value_name = "MM")]
+    pub seam: Option<f64>,
+    /// Corner style of the allowance: mitred, squared or reflected.
+    #[arg(long, default_value = "mitred", value_parser = parse_corner)]
+    pub corner: CornerStyle,
+    /// Notch shape: slit or v.
+    #[arg(long, default_value = "slit", value_parser = parse_notch)]
+    pub notch: NotchStyle,
+}
+
+fn parse_corner(s: &str) -> Result<CornerStyle, String> {
+    match s {
+        "mitred" | "mitered" => Ok(CornerStyle::Mitred),
+        "squared" => Ok(CornerStyle::Squared),
+        "reflected" => Ok(CornerStyle::Reflected),
+        _ => Err(format!(
+            "unknown corner style '{s}'; one of mitred, squared, reflected"
+        )),
+    }
+}
+
+fn parse_notch(s: &str) -> Result<NotchStyle, String> {
+    match s {
+        "slit" => Ok(NotchStyle::Slit),
+        "v" | "V" => Ok(NotchStyle::V),
+        _ => Err(format!("unknown notch style '{s}'; one of slit, v")),
+    }
+}
+
+impl PieceArgs {
+    pub fn options(&self) -> anyhow::Result<PieceOptions> {
+        let mut o = PieceOptions::DEFAULT.with_notch_style(self.notch);
+        if let Some(s) = self.seam {
+            anyhow::ensure!(
+                s.is_finite() && s >= 0.0,
+                "--seam must be a width in mm >= 0, got {s}"
+            );
+            o = o.with_default_seam(s);
+        }
+        Ok(o)
+    }
+}
+
+/// True when the path names a flattened mesh rather than a design.
+pub fn is_mesh(path: &Path) -> bool {
+    flatcut::mesh::io::is_mesh_path(path)
+}
+
+/// A flattened piece ready for the pattern: its mesh (with `flat`), its design entry when it
+/// came from a design, and its distortion report.
+pub struct Flat {
+    pub name: String,
+    pub def: Option<PieceDef>,
+    pub mesh: TriMesh,
+    pub report: Report,
+    pub quantity: u32,
+}
+
+/// Loads a flattened OBJ (with `vt`) as it is, or flattens every piece of a design.
+pub fn load_flat(
+    path: &Path,
+    fa: &FlattenArgs,
+    limits: (Option<f64>, Option<f64>),
+    verbose: bool,
+) -> anyhow::Result<Vec<Flat>> {
+    let name_of = |p: &Path| {
+        p.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "piece".into())
+    };
+    if is_mesh(path) {
+        let mesh = flatcut::mesh::read_mesh(path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        if mesh.flat.is_some() {
+            let name = name_of(path);
+            let report = pipeline::report_piece(&name, &mesh, &[], limits.0, limits.1)?;
+            return Ok(vec![Flat {
+                name,
+                def: None,
+                mesh,
+                report,
+                quantity: 1,
+            }]);
+        }
+    }
+    let params = fa.params()?;
+    let tol = fa.tolerances()?;
+    let t0 = std::time::Instant::now();
+    let (_, pieces) = pipeline::flatten_design(path, &tol, &params, &mut |name, k, n| {
+        if verbose {
+            eprintln!(
+                "flattening piece {}/{} '{}' ({})",
+                k + 1,
+                n,
+                name,
+                params.method
+            );
+        }
+    })
+    .with_context(|| format!("cannot flatten {}", path.display()))?;
+    let mut out = Vec::new();
+    for FlatPiece { def, mesh, info } in pieces {
+        for w in &info.warnings {
+            eprintln!("warning: piece '{}': {w}", def.name);
+        }
+        let boundary = pipeline::flat_boundary(&def.name, &mesh)
+            .map(|b| b.1)
+            .unwrap_or_default();
+        let marks = pipeline::notch_vertices(&def, &mesh, &boundary);
+        let report = pipeline::report_piece(&def.name, &mesh, &marks, limits.0, limits.1)?;
+        if verbose {
+            eprintln!(
+                "  {} faces, {} iterations, mean δ2 {:.5}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
+                report.faces,
+                info.iterations,
+                report.delta2_mean,
+                report.stretch_max_pct,
+                report.compress_max_pct,
+                t0.elapsed().as_secs_f64()
+            );
+        }
+        out.push(Flat {
+            name: def.name.clone(),
+            quantity: def.quantity,
+            def: Some(def),
+            mesh,
+            report,
+        });
+    }
+    Ok(out)
+}
+
+/// Builds the pattern piece of each flattened piece.
+pub fn build_pieces(flats: &[Flat], pa: &PieceArgs) -> anyhow::Result<Vec<Piece>> {
+    let opts = pa.options()?;
+    flats
+        .iter()
+        .map(|f| {
+            let ctx = PieceContext {
+                def: f.def.as_ref(),
+                report: Some(&f.report),
+                seam_mm: pa.seam,
+                size: String::new(),
+                corner: pa.corner,
+            };
+            pipeline::piece_from_flat(&f.name, &f.mesh, &ctx, &opts)
+                .with_context(|| format!("piece '{}'", f.name))
+        })
+        .collect()
+}
+
+/// Gap between pieces laid out in a row (mm).
+pub const ROW_GAP_MM: f64 = 10.0;
+
+/// Places pieces left to right with their lowest points on y = 0, one instance each.
+pub fn row_layout(pieces: &[Piece]) -> Vec<PlacedPiece<'_>> {
+    let mut x = 0.0;
+    pieces
+        .iter()
+        .map(|p| {
+            let b = p.bbox();
+            let pl = Placement {
+                rotation: 0.0,
+                mirror: false,
+                translation: DVec2::new(x - b.min.x, -b.min.y),
+            };
+            x += b.width() + ROW_GAP_MM;
+            PlacedPiece {
+                piece: p,
+                instance: 1,
+                placement: pl,
+            }
+        })
+        .collect()
+}
+
+/// Parses `WxH` in mm (e.g. `600x400`).
+pub fn parse_size(s: &str) -> Result<(f64, f64), String> {
+    let (w, h) = s
+        .split_once(['x', 'X', '×'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT in mm, e.g. 600x400, got '{s}'"))?;
+    let w: f64 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad width '{w}' in '{s}'"))?;
+    let h: f64 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad height '{h}' in '{s}'"))?;
+    if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
+        return Err(format!("sheet size must be positive, got '{s}'"));
+    }
+    Ok((w, h))
+}
+
+/// Writes a file whole or not at all, naming it in errors.
+pub fn write(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    flatcut::pattern::write_atomic(path, bytes)
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// `dir/stem-suffix.ext` next to `path`.
+pub fn sibling(path: &Path, suffix: &str) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = path
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    path.with_file_name(format!("{stem}-{suffix}{ext}"))
+}
+
+/// A name usable in a file name.
+pub fn file_safe(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,93 @@
+//! `flatcut flatten FILE --method M -o flat.obj [--report report.json]`: one OBJ per piece with
+//! the input's 3D vertices (`v`), one UV per vertex in mm (`vt`) and `f a/a b/b c/c`.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use super::common::{self, FlattenArgs};
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// A design (.toml, .json) or a mesh (.obj, .stl, .ply) with disk topology.
+    pub file: PathBuf,
+    /// Output OBJ. With several pieces: `<stem>-<piece>.obj` beside it.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also write the distortion report (JSON).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    #[command(flatten)]
+    pub flatten: FlattenArgs,
+}
+
+pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    // A mesh that already carries `vt` is flattened again from its 3D shape.
+    let flats = if common::is_mesh(&a.file) {
+        let mut mesh = flatcut::mesh::read_mesh(&a.file).map_err(anyhow::Error::from)?;
+        mesh.flat = None;
+        let name = a
+            .file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "mesh".into());
+        let params = a.flatten.params()?;
+        eprintln!(
+            "flattening '{name}' ({} faces) with {}",
+            mesh.triangles.len(),
+            params.method
+        );
+        let t0 = std::time::Instant::now();
+        let f = flatcut::flatten::flatten(&mesh, &params)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?;
+        for w in &f.info.warnings {
+            eprintln!("warning: {w}");
+        }
+        mesh.flat = Some(f.uv);
+        let report = flatcut::pipeline::report_piece(&name, &mesh, &[], None, None)?;
+        eprintln!(
+            "  {} iterations, mean δ2 {:.6}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
+            f.info.iterations,
+            report.delta2_mean,
+            report.stretch_max_pct,
+            report.compress_max_pct,
+            t0.elapsed().as_secs_f64()
+        );
+        vec![common::Flat {
+            name,
+            def: None,
+            mesh,
+            report,
+            quantity: 1,
+        }]
+    } else {
+        common::load_flat(&a.file, &a.flatten, (None, None), true)?
+    };
+    let several = flats.len() > 1;
+    let mut reports = Vec::new();
+    for f in &flats {
+        let out = if several {
+            common::sibling(&a.output, &common::file_safe(&f.name))
+        } else {
+            a.output.clone()
+        };
+        common::write(&out, flatcut::mesh::io::obj_string(&f.mesh).as_bytes())?;
+        println!(
+            "{}: {} vertices, {} faces, mean δ2 {:.6} -> {}",
+            f.name,
+            f.mesh.positions.len(),
+            f.report.faces,
+            f.report.delta2_mean,
+            out.display()
+        );
+        reports.push(&f.report);
+    }
+    if let Some(path) = &a.report {
+        let json = if several {
+            serde_json::to_string_pretty(&reports)?
+        } else {
+            serde_json::to_string_pretty(reports[0])?
+        };
+        common::write(path, json.as_bytes())?;
+    }
+    Ok(ExitCode::SUCCESS)
+}

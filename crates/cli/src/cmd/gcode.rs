@@ -1,0 +1,115 @@
+//! `flatcut gcode FILE --profile pen|knife|laser|PATH.toml -o job.gcode [--frame]`: G-code for a
+//! GRBL controller from a pattern SVG, a design or a flattened OBJ.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context as _;
+use flatcut::gcode::{GcodeOptions, Profile};
+use flatcut::pattern::Drawing;
+
+use super::common::{self, FlattenArgs, PieceArgs};
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// A pattern or layout SVG (mm), a design, or a flattened OBJ.
+    pub file: PathBuf,
+    /// pen, knife, laser, or a path to a machine profile (.toml).
+    #[arg(long, default_value = "pen")]
+    pub profile: String,
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also write `<stem>-frame.gcode`: the bounding box traced with the tool off.
+    #[arg(long)]
+    pub frame: bool,
+    /// Keep the drawing's order (no travel optimisation).
+    #[arg(long)]
+    pub no_reorder: bool,
+    /// Lines only (no G2/G3 arcs).
+    #[arg(long)]
+    pub no_arcs: bool,
+    #[command(flatten)]
+    pub piece: PieceArgs,
+    #[command(flatten)]
+    pub flatten: FlattenArgs,
+}
+
+/// Chordal tolerance used when reading SVGs (mm).
+const SVG_CHORD_MM: f64 = 0.02;
+
+pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    let profile = Profile::resolve(&a.profile)?;
+    let drawing = load_drawing(&a.file, &a.piece, &a.flatten)?;
+    let mut opts = GcodeOptions::default();
+    opts.reorder = !a.no_reorder;
+    opts.arcs = !a.no_arcs;
+    opts.title = format!(
+        "flatcut {}",
+        a.file
+            .file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    );
+    let plan = flatcut::gcode::plan(&drawing, &profile, &opts)
+        .with_context(|| format!("cannot plan {}", a.file.display()))?;
+    common::write(&a.output, plan.to_gcode().as_bytes())?;
+    let s = plan.summary();
+    println!("{} lines, {} paths", s.lines, s.paths);
+    println!(
+        "cut length {:.1} mm, travel {:.1} mm, estimated time {}",
+        s.cut_length_mm,
+        s.travel_length_mm,
+        hms(s.est_time_s)
+    );
+    println!("wrote {}", a.output.display());
+    if a.frame {
+        let f = common::sibling(&a.output, "frame");
+        common::write(
+            &f,
+            flatcut::gcode::frame_job(plan.bbox(), &profile).as_bytes(),
+        )?;
+        println!("wrote {} (bounding box, tool off)", f.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The drawing of an SVG, or of the pieces of a design / flattened OBJ laid out in a row.
+pub fn load_drawing(
+    path: &std::path::Path,
+    pa: &PieceArgs,
+    fa: &FlattenArgs,
+) -> anyhow::Result<Drawing> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
+    {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        return Ok(flatcut::pattern::svg::read_svg(
+            &text,
+            &path.display().to_string(),
+            SVG_CHORD_MM,
+        )?);
+    }
+    let flats = common::load_flat(path, fa, (None, None), true)?;
+    let pieces = common::build_pieces(&flats, pa)?;
+    let mut d = Drawing::default();
+    for (k, p) in common::row_layout(&pieces).iter().enumerate() {
+        let mut pd = p.to_drawing();
+        for s in &mut pd.strokes {
+            s.piece = Some(k as u32);
+        }
+        d.strokes.extend(pd.strokes);
+    }
+    Ok(d)
+}
+
+/// Seconds as `1h 02m 03s` / `2m 03s` / `4.2 s`.
+pub fn hms(s: f64) -> String {
+    let t = s.round() as u64;
+    match t {
+        0..60 => format!("{s:.1} s"),
+        60..3600 => format!("{}m {:02}s", t / 60, t % 60),
+        _ => format!("{}h {:02}m {:02}s", t / 3600, (t % 3600) / 60, t % 60),
+    }
+}

@@ -1,0 +1,184 @@
+//! `flatcut nest PIECES… --sheet 600x400 [--roll 1400] --spacing 2 -o layout.svg [--dxf layout.dxf]`:
+//! places pattern pieces (pattern SVGs, designs or flattened OBJs) on sheets or a roll.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::Context as _;
+use flatcut::geom::DVec2;
+use flatcut::nest::{NestOptions, Stock};
+use flatcut::pattern::dxf::DxfLayers;
+use flatcut::pipeline::{self, NestGroup};
+
+use super::common::{self, FlattenArgs, PieceArgs};
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Pattern SVGs (from `flatcut pattern`), designs or flattened OBJs.
+    #[arg(required = true)]
+    pub pieces: Vec<PathBuf>,
+    /// Sheet size in mm, WIDTHxHEIGHT.
+    #[arg(long, value_parser = common::parse_size)]
+    pub sheet: Option<(f64, f64)>,
+    /// Nest on a roll of this width (mm) instead of sheets; the length is minimised.
+    #[arg(long, value_name = "WIDTH")]
+    pub roll: Option<f64>,
+    /// Gap between pieces (kerf), mm.
+    #[arg(long, default_value_t = NestOptions::DEFAULT_SPACING)]
+    pub spacing: f64,
+    /// Copies of each input piece (designs use their own quantities).
+    #[arg(long, default_value_t = 1)]
+    pub quantity: usize,
+    /// Also nest the mirror image of each piece (left and right shoe).
+    #[arg(long)]
+    pub mirrored_pairs: bool,
+    /// Output SVG; further sheets go to `<stem>-2.svg`, …
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[arg(long)]
+    pub dxf: Option<PathBuf>,
+    /// Seed of the search (same seed and budget → same layout).
+    #[arg(long, default_value_t = NestOptions::DEFAULT_SEED)]
+    pub seed: u64,
+    /// Local-search iterations.
+    #[arg(long, default_value_t = NestOptions::DEFAULT_MAX_ITERS)]
+    pub iters: usize,
+    /// Time budget in seconds (results then depend on the machine's speed).
+    #[arg(long)]
+    pub time: Option<f64>,
+    #[command(flatten)]
+    pub piece: PieceArgs,
+    #[command(flatten)]
+    pub flatten: FlattenArgs,
+}
+
+/// Chordal tolerance used when reading pattern SVGs (mm).
+const SVG_CHORD_MM: f64 = 0.05;
+
+pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    let stock = match (a.sheet, a.roll) {
+        (_, Some(w)) => {
+            anyhow::ensure!(
+                w.is_finite() && w > 0.0,
+                "--roll must be a positive width in mm"
+            );
+            Stock::Roll {
+                width: w,
+                max_length: None,
+            }
+        }
+        (Some((w, h)), None) => Stock::Sheets {
+            width: w,
+            height: h,
+            max_sheets: None,
+        },
+        (None, None) => anyhow::bail!("give --sheet WIDTHxHEIGHT or --roll WIDTH"),
+    };
+    anyhow::ensure!(
+        a.spacing.is_finite() && a.spacing >= 0.0,
+        "--spacing must be >= 0 mm"
+    );
+    let mut groups = Vec::new();
+    for f in &a.pieces {
+        if f.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg")) {
+            let text = std::fs::read_to_string(f)
+                .with_context(|| format!("cannot read {}", f.display()))?;
+            let d = flatcut::pattern::svg::read_svg(&text, &f.display().to_string(), SVG_CHORD_MM)?;
+            let gs = NestGroup::from_drawing(&f.display().to_string(), &d);
+            anyhow::ensure!(
+                !gs.is_empty(),
+                "{}: no closed cut contour found (nothing to nest)",
+                f.display()
+            );
+            for mut g in gs {
+                g.quantity = a.quantity;
+                g.mirrored_pair = a.mirrored_pairs;
+                groups.push(g);
+            }
+        } else {
+            let flats = common::load_flat(f, &a.flatten, (None, None), true)?;
+            let pieces = common::build_pieces(&flats, &a.piece)?;
+            for (p, fl) in pieces.iter().zip(&flats) {
+                let q = if fl.def.is_some() {
+                    fl.quantity as usize * a.quantity
+                } else {
+                    a.quantity
+                };
+                groups.push(NestGroup::from_piece(p, q, a.mirrored_pairs));
+            }
+        }
+    }
+    let opts = NestOptions::DEFAULT
+        .with_spacing(a.spacing)
+        .with_seed(a.seed)
+        .with_max_iters(a.iters)
+        .with_time_limit(a.time.map(Duration::from_secs_f64));
+    let bar = indicatif::ProgressBar::new(a.iters as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("nesting {bar:30} {pos}/{len} {msg}")
+            .expect("valid template"),
+    );
+    let layout = pipeline::nest_groups(&groups, stock, &opts, &mut |p| {
+        bar.set_position(p.iteration as u64);
+        bar.set_message(format!(
+            "utilization {:.1}%, {} sheet(s), length {:.0} mm",
+            p.utilization, p.sheets, p.length
+        ));
+    })?;
+    bar.finish_and_clear();
+    let sheet_size = match stock {
+        Stock::Sheets { width, height, .. } => DVec2::new(width, height),
+        Stock::Roll { width, .. } => DVec2::new(layout.result.length.max(1.0), width),
+    };
+    for (k, d) in layout.sheets.iter().enumerate() {
+        let path = if k == 0 {
+            a.output.clone()
+        } else {
+            common::sibling(&a.output, &(k + 1).to_string())
+        };
+        common::write(
+            &path,
+            flatcut::pattern::svg::write_drawing(d, Some(sheet_size)).as_bytes(),
+        )?;
+        if let Some(dxf) = &a.dxf {
+            let p = if k == 0 {
+                dxf.clone()
+            } else {
+                common::sibling(dxf, &(k + 1).to_string())
+            };
+            common::write(
+                &p,
+                flatcut::pattern::dxf::write_drawing(d, DxfLayers::Aama).as_bytes(),
+            )?;
+        }
+    }
+    let r = &layout.result;
+    println!(
+        "placed {} of {} pieces",
+        r.placed.len(),
+        r.placed.len() + r.unplaced.len()
+    );
+    match stock {
+        Stock::Roll { width, .. } => println!("roll {width:.0} mm wide: length {:.1} mm", r.length),
+        Stock::Sheets { .. } => println!("sheets used: {}", r.sheets),
+    }
+    println!(
+        "utilization {:.2}% (bottom-left fill baseline {:.2}%), {} iterations",
+        r.utilization, r.baseline_utilization, r.iterations
+    );
+    for u in &r.unplaced {
+        eprintln!(
+            "unplaced: {} copy {}{}: {}",
+            u.name,
+            u.copy,
+            if u.mirrored { " (mirrored)" } else { "" },
+            u.reason
+        );
+    }
+    Ok(if r.unplaced.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}

@@ -1,0 +1,170 @@
+//! `flatcut report FLAT.obj [more.obj…] [--json] [--svg] [--png] [--html] [--measure]
+//! [--limit-stretch P] [--limit-compress P]`: Duncan's distortion measures of flattened pieces
+//! (a design is flattened first), with pictures; exits 3 when a limit is exceeded.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use flatcut::report::{Column, Measure};
+
+use super::common::{self, FlattenArgs};
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Flattened OBJs (with `vt`), or designs (flattened first with --method).
+    #[arg(required = true)]
+    pub files: Vec<PathBuf>,
+    /// Write the figures as JSON (one object; an array for several inputs).
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Heat map as SVG (true mm, one column per input).
+    #[arg(long)]
+    pub svg: Option<PathBuf>,
+    /// Heat map as PNG, rendered from the same SVG.
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Self-contained HTML report.
+    #[arg(long)]
+    pub html: Option<PathBuf>,
+    /// What the pictures show: delta1, delta2, stretch or area.
+    #[arg(long, default_value = "stretch", value_parser = parse_measure)]
+    pub measure: Measure,
+    /// Draw short ticks along the principal stretch directions.
+    #[arg(long)]
+    pub glyphs: bool,
+    /// Exit with code 3 and list the regions stretched more than P percent.
+    #[arg(long, value_name = "P")]
+    pub limit_stretch: Option<f64>,
+    /// Exit with code 3 and list the regions compressed more than P percent.
+    #[arg(long, value_name = "P")]
+    pub limit_compress: Option<f64>,
+    #[command(flatten)]
+    pub flatten: FlattenArgs,
+}
+
+fn parse_measure(s: &str) -> Result<Measure, String> {
+    Measure::from_name(s)
+        .ok_or_else(|| format!("unknown measure '{s}'; one of delta1, delta2, stretch, area"))
+}
+
+pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    for (name, v) in [
+        ("--limit-stretch", a.limit_stretch),
+        ("--limit-compress", a.limit_compress),
+    ] {
+        if let Some(v) = v {
+            anyhow::ensure!(
+                v.is_finite() && v >= 0.0,
+                "{name} must be a percentage >= 0, got {v}"
+            );
+        }
+    }
+    let mut flats = Vec::new();
+    for f in &a.files {
+        for mut flat in
+            common::load_flat(f, &a.flatten, (a.limit_stretch, a.limit_compress), false)?
+        {
+            if a.files.len() > 1 {
+                flat.name = format!("{} ({})", flat.name, f.display());
+            }
+            flats.push(flat);
+        }
+    }
+    for f in &flats {
+        let r = &f.report;
+        println!("{}", f.name);
+        println!(
+            "  faces {}   flipped {}   area 3D {:.1} mm²   area 2D {:.1} mm²",
+            r.faces, r.flipped, r.area_3d_mm2, r.area_2d_mm2
+        );
+        println!("  δ0 {:.5} ({} pairs)", r.delta0, r.delta0_pairs);
+        println!(
+            "  δ1 mean {:.5}  p90 {:.5}  max {:.5}",
+            r.delta1_mean, r.delta1_p90, r.delta1_max
+        );
+        println!(
+            "  δ2 mean {:.5}  p90 {:.5}  max {:.5}",
+            r.delta2_mean, r.delta2_p90, r.delta2_max
+        );
+        println!(
+            "  stretch max {:.2}%  compression max {:.2}%  area ratio mean {:.5}",
+            r.stretch_max_pct, r.compress_max_pct, r.area_mean
+        );
+        println!(
+            "  boundary length error {:+.4}%",
+            r.boundary_length_error * 100.0
+        );
+        for s in &r.boundary_segments {
+            println!(
+                "    seam {}→{}: 3D {:.2} mm, 2D {:.2} mm ({:+.3}%)",
+                s.from_vertex,
+                s.to_vertex,
+                s.length_3d_mm,
+                s.length_2d_mm,
+                s.relative_error * 100.0
+            );
+        }
+    }
+    let reports: Vec<_> = flats.iter().map(|f| &f.report).collect();
+    if let Some(p) = &a.json {
+        let json = if reports.len() == 1 {
+            serde_json::to_string_pretty(reports[0])?
+        } else {
+            serde_json::to_string_pretty(&reports)?
+        };
+        common::write(p, json.as_bytes())?;
+    }
+    let cols: Vec<Column<'_>> = flats
+        .iter()
+        .map(|f| Column {
+            title: f.name.to_uppercase(),
+            mesh: &f.mesh,
+            report: &f.report,
+        })
+        .collect();
+    if a.svg.is_some() || a.png.is_some() {
+        let svg = flatcut::report::heatmap_svg(&cols, a.measure, a.glyphs);
+        if let Some(p) = &a.svg {
+            common::write(p, svg.as_bytes())?;
+        }
+        if let Some(p) = &a.png {
+            common::write(p, &flatcut::report::render_png(&svg, None)?)?;
+        }
+    }
+    if let Some(p) = &a.html {
+        common::write(
+            p,
+            flatcut::report::html_report(&cols, a.measure, a.glyphs).as_bytes(),
+        )?;
+    }
+    let mut over = false;
+    for f in &flats {
+        if f.report.flipped > 0 {
+            eprintln!(
+                "{}: {} flipped faces (the pattern folds over itself)",
+                f.name, f.report.flipped
+            );
+            over = true;
+        }
+        for r in &f.report.regions {
+            over = true;
+            eprintln!(
+                "{}: {} {:.2}% over {:.1} mm² at 3D ({:.1}, {:.1}, {:.1}) / 2D ({:.1}, {:.1})",
+                f.name,
+                r.kind,
+                r.worst_pct,
+                r.area_mm2,
+                r.centroid_3d[0],
+                r.centroid_3d[1],
+                r.centroid_3d[2],
+                r.centroid_2d[0],
+                r.centroid_2d[1]
+            );
+        }
+    }
+    if over && (a.limit_stretch.is_some() || a.limit_compress.is_some()) {
+        eprintln!("material limits exceeded");
+        return Ok(ExitCode::from(crate::EXIT_LIMIT));
+    }
+    Ok(ExitCode::SUCCESS)
+}

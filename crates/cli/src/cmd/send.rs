@@ -1,0 +1,77 @@
+//! `flatcut send JOB.gcode`: streams a G-code job to a GRBL controller, or to the embedded
+//! simulator when no `--port` is given, and prints what happened.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use super::device::{StreamArgs, StreamOutcome, stream_file};
+
+/// Arguments of `flatcut send`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The G-code job.
+    #[arg(value_name = "JOB.gcode")]
+    pub job: PathBuf,
+    #[command(flatten)]
+    pub stream: StreamArgs,
+}
+
+/// Runs `flatcut send`.
+pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    let out = stream_file(&a.job, &a.stream)?;
+    println!("{}", summary(&out));
+    Ok(ExitCode::SUCCESS)
+}
+
+/// A few lines saying what the send did: lines, time, bytes, link use, final state.
+pub fn summary(out: &StreamOutcome) -> String {
+    let r = &out.report;
+    let mut s = format!(
+        "sent {} line(s){}{} to GRBL {} in {:.1} s (streaming {:.1} s, estimated motion {:.1} s)",
+        r.lines_sent,
+        if r.preamble_lines > 0 {
+            format!(" + {} resume preamble line(s)", r.preamble_lines)
+        } else {
+            String::new()
+        },
+        if r.previously_done > 0 {
+            format!(" ({} done in earlier runs)", r.previously_done)
+        } else {
+            String::new()
+        },
+        r.version,
+        r.total_time.as_secs_f64(),
+        r.stream_time.as_secs_f64(),
+        r.estimated_time,
+    );
+    s.push_str(&format!(
+        "\n{} bytes, link utilisation {:.0}% at {} baud, at most {} of {} RX bytes in flight, {} planner blocks",
+        r.stream_bytes,
+        100.0 * out.link_utilisation(),
+        out.baud,
+        r.max_in_flight_bytes,
+        r.rx_size,
+        r.planner_blocks,
+    ));
+    if r.checked {
+        s.push_str("\ncheck mode ($C) pass: every line accepted before cutting");
+    }
+    match r.final_position {
+        Some([x, y, z]) => s.push_str(&format!(
+            "\nstate: idle, job complete at work position X{x:.3} Y{y:.3} Z{z:.3}"
+        )),
+        None => s.push_str("\nstate: idle, job complete"),
+    }
+    if let (Some(st), Some(trace)) = (&out.sim_stats, &out.sim_trace) {
+        s.push_str(&format!(
+            "\nsimulator: {} motion segment(s), {:.1} s simulated, {} line(s) received, {} error(s), {} byte(s) lost to RX overflow",
+            trace.len(),
+            out.sim_time.unwrap_or(0.0),
+            st.lines_received,
+            st.errors,
+            st.bytes_dropped_overflow,
+        ));
+    }
+    s.push_str(&format!("\njournal: {}", out.journal.display()));
+    s
+}

@@ -1,0 +1,422 @@
+//! The pipeline stages that need more than one crate: flatten the pieces of a design, turn a
+//! flattened mesh into a 2D pattern piece (boundary → sew line, 3D marks and grain → 2D), and
+//! nest drawings on sheets or a roll.
+
+use std::path::Path;
+
+use flatcut_design::{Design, DesignError, MarkKind as DesignMark, PieceDef};
+use flatcut_flatten::{FlattenError, FlattenInfo, FlattenParams};
+use flatcut_geom::{DVec2, DVec3, Tolerances};
+use flatcut_mesh::TriMesh;
+use flatcut_nest::{NestError, NestItem, NestOptions, NestProgress, NestResult, Rotations, Stock};
+use flatcut_pattern::{
+    Drawing, LabelInfo, Mark, MarkKind, PatternError, Piece, PieceInput, PieceOptions, Placement,
+};
+use flatcut_report::{Report, ReportError};
+
+/// Why a pipeline stage failed; every variant names the piece or file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PipelineError {
+    #[error(transparent)]
+    Design(#[from] DesignError),
+    #[error("piece '{piece}': {source}")]
+    Flatten { piece: String, source: FlattenError },
+    #[error("piece '{piece}': {source}")]
+    Report { piece: String, source: ReportError },
+    #[error(transparent)]
+    Pattern(#[from] PatternError),
+    #[error(transparent)]
+    Nest(#[from] NestError),
+    #[error(transparent)]
+    Gcode(#[from] flatcut_gcode::GcodeError),
+    #[error(transparent)]
+    Mesh(#[from] flatcut_mesh::MeshIoError),
+    #[error("piece '{piece}': {reason}")]
+    Piece { piece: String, reason: String },
+}
+
+/// A piece of a design, cut along its seams and flattened: `mesh.flat` holds the 2D position of
+/// every vertex (mm, true scale).
+#[derive(Clone, Debug)]
+pub struct FlatPiece {
+    pub def: PieceDef,
+    pub mesh: TriMesh,
+    pub info: FlattenInfo,
+}
+
+/// Loads a design (or a mesh file) and flattens every piece; `progress(piece, index, count)` is
+/// called before each piece.
+pub fn flatten_design(
+    path: &Path,
+    tol: &Tolerances,
+    params: &FlattenParams,
+    progress: &mut dyn FnMut(&str, usize, usize),
+) -> Result<(Design, Vec<FlatPiece>), PipelineError> {
+    let design = Design::load(path)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let mut out = Vec::new();
+    for (k, def) in design.pieces.iter().enumerate() {
+        progress(&def.name, k, design.pieces.len());
+        let mesh = def.mesh(base, tol)?;
+        out.push(flatten_piece(def.clone(), mesh, params)?);
+    }
+    Ok((design, out))
+}
+
+/// Flattens one piece's mesh.
+pub fn flatten_piece(
+    def: PieceDef,
+    mut mesh: TriMesh,
+    params: &FlattenParams,
+) -> Result<FlatPiece, PipelineError> {
+    let f = flatcut_flatten::flatten(&mesh, params).map_err(|source| PipelineError::Flatten {
+        piece: def.name.clone(),
+        source,
+    })?;
+    mesh.flat = Some(f.uv);
+    Ok(FlatPiece {
+        def,
+        mesh,
+        info: f.info,
+    })
+}
+
+/// The distortion report of a flattened piece, with its notch marks splitting the boundary into
+/// seam segments.
+pub fn report_piece(
+    name: &str,
+    mesh: &TriMesh,
+    marks: &[u32],
+    limit_stretch: Option<f64>,
+    limit_compress: Option<f64>,
+) -> Result<Report, PipelineError> {
+    let opts = flatcut_report::ReportOptions::default()
+        .with_boundary_marks(marks.to_vec())
+        .with_limit_stretch_pct(limit_stretch)
+        .with_limit_compress_pct(limit_compress);
+    Report::compute(name, mesh, &opts).map_err(|source| PipelineError::Report {
+        piece: name.to_string(),
+        source,
+    })
+}
+
+/// The flattened boundary of a piece as a closed CCW polyline (first point not repeated) with the
+/// mesh vertex of each polyline point.
+pub fn flat_boundary(name: &str, mesh: &TriMesh) -> Result<(Vec<DVec2>, Vec<u32>), PipelineError> {
+    let flat = mesh.flat.as_ref().ok_or_else(|| PipelineError::Piece {
+        piece: name.into(),
+        reason: "the mesh has no flattening".into(),
+    })?;
+    let topo = flatcut_mesh::Topology::build(mesh).map_err(|e| PipelineError::Piece {
+        piece: name.into(),
+        reason: e.to_string(),
+    })?;
+    let lp = match topo.boundary_loops.len() {
+        1 => topo.boundary_loops[0].clone(),
+        0 => {
+            return Err(PipelineError::Piece {
+                piece: name.into(),
+                reason: "the flattened mesh has no boundary".into(),
+            });
+        }
+        n => {
+            // The outer loop is the one with the largest enclosed area in the plane; holes are
+            // not carried into the pattern as cut-outs here.
+            let area = |lp: &Vec<u32>| {
+                signed_area(&lp.iter().map(|&v| flat[v as usize]).collect::<Vec<_>>()).abs()
+            };
+            let best = topo
+                .boundary_loops
+                .iter()
+                .max_by(|a, b| area(a).total_cmp(&area(b)))
+                .cloned()
+                .unwrap_or_default();
+            let _ = n;
+            best
+        }
+    };
+    let mut pts: Vec<DVec2> = lp.iter().map(|&v| flat[v as usize]).collect();
+    let mut ids = lp;
+    if signed_area(&pts) < 0.0 {
+        pts.reverse();
+        ids.reverse();
+    }
+    Ok((pts, ids))
+}
+
+fn signed_area(p: &[DVec2]) -> f64 {
+    (0..p.len())
+        .map(|i| p[i].perp_dot(p[(i + 1) % p.len()]))
+        .sum::<f64>()
+        * 0.5
+}
+
+/// The 3D positions of a piece's notch marks, as mesh boundary vertices (nearest).
+pub fn notch_vertices(def: &PieceDef, mesh: &TriMesh, boundary: &[u32]) -> Vec<u32> {
+    let mut out = Vec::new();
+    for m in def.marks.iter().filter(|m| m.kind == DesignMark::Notch) {
+        for p in &m.points {
+            let p = DVec3::from_array(*p);
+            if let Some(&v) = boundary.iter().min_by(|&&a, &&b| {
+                mesh.positions[a as usize]
+                    .distance(p)
+                    .total_cmp(&mesh.positions[b as usize].distance(p))
+            }) {
+                out.push(v);
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// What a pattern piece is built with beyond the flattened mesh.
+#[derive(Clone, Debug, Default)]
+pub struct PieceContext<'a> {
+    pub def: Option<&'a PieceDef>,
+    pub report: Option<&'a Report>,
+    /// Seam allowance (mm) when the design gives none.
+    pub seam_mm: Option<f64>,
+    pub size: String,
+    pub corner: flatcut_pattern::CornerStyle,
+}
+
+/// Builds the pattern piece of a flattened mesh: the flattened boundary is the sew line, notch
+/// marks sit on their nearest boundary vertex, drill/reference points and the grain line are
+/// carried through the map, and the label carries the distortion summary.
+pub fn piece_from_flat(
+    name: &str,
+    mesh: &TriMesh,
+    ctx: &PieceContext<'_>,
+    opts: &PieceOptions,
+) -> Result<Piece, PipelineError> {
+    let (outline, ids) = flat_boundary(name, mesh)?;
+    let flat = mesh.flat.as_ref().expect("checked by flat_boundary");
+    let mut input = PieceInput::new(name, outline);
+    input.corner_style = ctx.corner;
+    let mut opts = *opts;
+    if let Some(def) = ctx.def {
+        for mark in &def.marks {
+            let pts: Vec<DVec3> = mark.points.iter().map(|p| DVec3::from_array(*p)).collect();
+            match mark.kind {
+                DesignMark::Notch => {
+                    for p in &pts {
+                        let k = (0..ids.len())
+                            .min_by(|&a, &b| {
+                                mesh.positions[ids[a] as usize]
+                                    .distance(*p)
+                                    .total_cmp(&mesh.positions[ids[b] as usize].distance(*p))
+                            })
+                            .unwrap_or(0);
+                        input.marks.push(Mark {
+                            kind: MarkKind::Notch,
+                            pos: input.outline[k],
+                            boundary_index: Some(k),
+                        });
+                    }
+                }
+                DesignMark::Point | DesignMark::Line => {
+                    let kind = if mark.kind == DesignMark::Point {
+                        MarkKind::Drill
+                    } else {
+                        MarkKind::Point
+                    };
+                    for (q, p) in flatcut_flatten::marks::to_plane(mesh, flat, &pts)
+                        .into_iter()
+                        .zip(&pts)
+                    {
+                        let q = q.ok_or_else(|| PipelineError::Piece {
+                            piece: name.into(),
+                            reason: format!(
+                                "mark '{}': point ({:.2}, {:.2}, {:.2}) is not on the surface",
+                                mark.name, p.x, p.y, p.z
+                            ),
+                        })?;
+                        input.marks.push(Mark {
+                            kind,
+                            pos: q,
+                            boundary_index: None,
+                        });
+                    }
+                }
+            }
+        }
+        if let Some([a, b]) = def.grain {
+            let q = flatcut_flatten::marks::to_plane(
+                mesh,
+                flat,
+                &[DVec3::from_array(a), DVec3::from_array(b)],
+            );
+            match (q[0], q[1]) {
+                (Some(a), Some(b)) => input.grain = Some((a, b)),
+                _ => {
+                    return Err(PipelineError::Piece {
+                        piece: name.into(),
+                        reason: "the grain line's points are not on the surface".into(),
+                    });
+                }
+            }
+        }
+        if let Some(w) = def.seam_allowance_mm {
+            opts = opts.with_default_seam(w);
+        }
+        input.label = LabelInfo {
+            name: name.into(),
+            size: ctx.size.clone(),
+            material: def.material.clone().unwrap_or_default(),
+            quantity: def.quantity,
+            distortion: None,
+        };
+    }
+    if ctx.def.and_then(|d| d.seam_allowance_mm).is_none() {
+        if let Some(w) = ctx.seam_mm {
+            opts = opts.with_default_seam(w);
+        }
+    }
+    if let Some(r) = ctx.report {
+        input.label.distortion = Some(format!(
+            "STRETCH {:.1}% COMPRESS {:.1}% D2 {:.4}",
+            r.stretch_max_pct, r.compress_max_pct, r.delta2_mean
+        ));
+    }
+    Ok(Piece::build(&input, &opts)?)
+}
+
+/// A rigid group of strokes nested as one item: a pattern piece's drawing in its own frame.
+#[derive(Clone, Debug)]
+pub struct NestGroup {
+    pub name: String,
+    pub drawing: Drawing,
+    /// The outline that must not overlap (the cut line), CCW.
+    pub outline: Vec<DVec2>,
+    pub quantity: usize,
+    pub mirrored_pair: bool,
+    pub grain_angle: Option<f64>,
+}
+
+impl NestGroup {
+    /// The group of a built piece.
+    pub fn from_piece(piece: &Piece, quantity: usize, mirrored_pair: bool) -> Self {
+        let item = NestItem::from_piece(piece, quantity, mirrored_pair);
+        Self {
+            name: piece.name.clone(),
+            drawing: piece.to_drawing(1),
+            outline: item.outline,
+            quantity,
+            mirrored_pair,
+            grain_angle: item.grain_angle,
+        }
+    }
+
+    /// The pieces of a drawing read from an SVG: one group per outer cut contour with the strokes
+    /// that belong to it.
+    pub fn from_drawing(name: &str, d: &Drawing) -> Vec<Self> {
+        let mut groups: Vec<Self> = Vec::new();
+        let mut by_piece: std::collections::BTreeMap<u32, Vec<usize>> = Default::default();
+        for (i, s) in d.strokes.iter().enumerate() {
+            by_piece
+                .entry(s.piece.unwrap_or(u32::MAX))
+                .or_default()
+                .push(i);
+        }
+        for (p, idx) in by_piece {
+            let Some(outer) = idx
+                .iter()
+                .map(|&i| &d.strokes[i])
+                .find(|s| s.outer && s.closed)
+            else {
+                continue;
+            };
+            let mut outline = outer.points.clone();
+            if signed_area(&outline) < 0.0 {
+                outline.reverse();
+            }
+            let gname = outer
+                .id
+                .strip_suffix("-cut")
+                .unwrap_or(&outer.id)
+                .to_string();
+            let gname = if gname.is_empty() {
+                format!("{name}-{p}")
+            } else {
+                gname
+            };
+            groups.push(Self {
+                name: gname,
+                drawing: Drawing {
+                    strokes: idx.iter().map(|&i| d.strokes[i].clone()).collect(),
+                },
+                outline,
+                quantity: 1,
+                mirrored_pair: false,
+                grain_angle: None,
+            });
+        }
+        groups
+    }
+}
+
+/// A nested layout: one drawing per sheet (sheet coordinates, mm) and the nesting figures.
+pub struct Layout {
+    pub sheets: Vec<Drawing>,
+    pub result: NestResult,
+    pub stock: Stock,
+}
+
+/// Nests the groups on the stock and places their drawings.
+pub fn nest_groups(
+    groups: &[NestGroup],
+    stock: Stock,
+    opts: &NestOptions,
+    progress: &mut dyn FnMut(&NestProgress),
+) -> Result<Layout, PipelineError> {
+    let items: Vec<NestItem> = groups
+        .iter()
+        .map(|g| {
+            let mut it = NestItem::new(g.name.clone(), g.outline.clone(), g.quantity);
+            it.mirrored_pair = g.mirrored_pair;
+            it.grain_angle = g.grain_angle;
+            it.rotations = if g.grain_angle.is_some() {
+                Rotations::Half
+            } else {
+                Rotations::Quarter
+            };
+            it
+        })
+        .collect();
+    let result = flatcut_nest::nest(&items, stock, opts, progress)?;
+    let mut sheets = vec![Drawing::default(); result.sheets.max(1)];
+    let mut counters = vec![0u32; groups.len()];
+    for p in &result.placed {
+        counters[p.item] += 1;
+        let g = &groups[p.item];
+        let d = place(&g.drawing, &p.placement, counters[p.item], p.item as u32);
+        if let Some(sheet) = sheets.get_mut(p.sheet) {
+            sheet.strokes.extend(d.strokes);
+        }
+    }
+    Ok(Layout {
+        sheets,
+        result,
+        stock,
+    })
+}
+
+fn place(d: &Drawing, pl: &Placement, instance: u32, item: u32) -> Drawing {
+    let mut out = d.clone();
+    for s in &mut out.strokes {
+        for p in &mut s.points {
+            *p = pl.apply(*p);
+        }
+        if pl.mirror && s.closed && s.points.len() > 1 {
+            s.points[1..].reverse();
+        }
+        // Unique piece numbers per placed instance so the G-code writer keeps holes before their
+        // outer contour per instance.
+        s.piece = Some(item * 10_000 + instance);
+        s.id = format!("{}#{}", s.id, instance);
+    }
+    out
+}
