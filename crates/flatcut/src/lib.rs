@@ -7,6 +7,7 @@
 
 pub mod inspect;
 pub mod pipeline;
+pub mod project;
 
 pub use flatcut_design as design;
 pub use flatcut_flatten as flatten;

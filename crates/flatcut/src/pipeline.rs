@@ -244,17 +244,25 @@ pub fn piece_from_flat(
             }
         }
         if let Some([a, b]) = def.grain {
-            let q = flatcut_flatten::marks::to_plane(
-                mesh,
-                flat,
-                &[DVec3::from_array(a), DVec3::from_array(b)],
-            );
-            match (q[0], q[1]) {
-                (Some(a), Some(b)) => input.grain = Some((a, b)),
+            // A grain line is a direction drawn near the surface: points off the surface are
+            // carried by their nearest vertex rather than refused.
+            let (a, b) = (DVec3::from_array(a), DVec3::from_array(b));
+            let q = flatcut_flatten::marks::to_plane(mesh, flat, &[a, b]);
+            let near = |p: DVec3| {
+                (0..mesh.positions.len())
+                    .min_by(|&x, &y| {
+                        mesh.positions[x]
+                            .distance(p)
+                            .total_cmp(&mesh.positions[y].distance(p))
+                    })
+                    .map(|v| flat[v])
+            };
+            match (q[0].or_else(|| near(a)), q[1].or_else(|| near(b))) {
+                (Some(a), Some(b)) if a.distance(b) > 0.0 => input.grain = Some((a, b)),
                 _ => {
                     return Err(PipelineError::Piece {
                         piece: name.into(),
-                        reason: "the grain line's points are not on the surface".into(),
+                        reason: "the grain line's two points map to the same place".into(),
                     });
                 }
             }

@@ -99,11 +99,15 @@ fn isometric(
                 "material limits must allow the identity (σ ≤ {s_max}, σ ≥ {s_min})"
             )));
         }
+        // A finite-stiffness penalty settles slightly beyond its bounds: aim inside the limits
+        // by LIMIT_MARGIN of their width so the result meets the limits themselves.
+        let aim_max = 1.0 + (s_max - 1.0) * (1.0 - LIMIT_MARGIN);
+        let aim_min = 1.0 - (1.0 - s_min) * (1.0 - LIMIT_MARGIN);
         for k in LIMIT_STIFFNESS {
             let e = WithLimits {
                 inner: SymDirichlet,
-                s_max,
-                s_min,
+                s_max: aim_max,
+                s_min: aim_min,
                 k,
             };
             let r = newton_solve(rest, n, e, &x, params, Method::Isometric)?;
@@ -116,6 +120,9 @@ fn isometric(
     }
     Ok(Flattening { uv: x, info })
 }
+
+/// Fraction of a material limit's width kept as a margin by the penalty (see `isometric`).
+const LIMIT_MARGIN: f64 = 0.1;
 
 /// Duncan's conformal distortion δ1 via the MIPS energy, scaled to the 3D area.
 fn conformal(

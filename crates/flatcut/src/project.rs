@@ -1,0 +1,192 @@
+//! The project file of `flatcut run`: which design, which material and its limits, the sheet or
+//! roll, the machine profile and the device. TOML, unknown keys rejected.
+//!
+//! ```toml
+//! name = "lampshade"
+//! design = "design.toml"        # relative to the project file
+//! method = "developable"        # flattening method (default isometric)
+//! seam_mm = 10.0                # allowance where the design gives none
+//! [material]
+//! name = "parchment"
+//! max_stretch_pct = 2.0
+//! max_compress_pct = 0.0
+//! [sheet]
+//! width_mm = 600.0              # sheets of width × height, or
+//! height_mm = 400.0
+//! # roll_width_mm = 1400.0      # a roll of this width
+//! spacing_mm = 2.0
+//! [machine]
+//! profile = "pen"               # pen | knife | laser | path to a profile .toml
+//! [device]
+//! # port = "/dev/ttyUSB0"       # absent: the embedded simulator
+//! baud = 115200
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    pub name: String,
+    #[serde(default)]
+    pub max_stretch_pct: Option<f64>,
+    #[serde(default)]
+    pub max_compress_pct: Option<f64>,
+}
+
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sheet {
+    #[serde(default)]
+    pub width_mm: Option<f64>,
+    #[serde(default)]
+    pub height_mm: Option<f64>,
+    #[serde(default)]
+    pub roll_width_mm: Option<f64>,
+    #[serde(default = "Sheet::default_spacing")]
+    pub spacing_mm: f64,
+}
+
+impl Sheet {
+    fn default_spacing() -> f64 {
+        2.0
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Machine {
+    pub profile: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Device {
+    #[serde(default)]
+    pub port: Option<String>,
+    #[serde(default)]
+    pub baud: Option<u32>,
+}
+
+/// A `flatcut run` project.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Project {
+    pub name: String,
+    /// The design file, relative to the project file.
+    pub design: PathBuf,
+    #[serde(default)]
+    pub method: Option<String>,
+    #[serde(default)]
+    pub seam_mm: Option<f64>,
+    pub material: Material,
+    pub sheet: Sheet,
+    pub machine: Machine,
+    #[serde(default)]
+    pub device: Device,
+    /// The project file's directory (set at load time).
+    #[serde(skip)]
+    pub dir: PathBuf,
+}
+
+/// A project file that cannot be used.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ProjectError {
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("{path}:{line}:{col}: {message}")]
+    Syntax {
+        path: String,
+        line: usize,
+        col: usize,
+        message: String,
+    },
+    #[error("{path}: {message}")]
+    Invalid { path: String, message: String },
+}
+
+impl Project {
+    pub fn load(path: &Path) -> Result<Self, ProjectError> {
+        let p = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| ProjectError::Io {
+            path: p.clone(),
+            source,
+        })?;
+        let mut proj: Project = toml::from_str(&text).map_err(|e| {
+            let (line, col) = e.span().map_or((0, 0), |s| {
+                let before = &text[..s.start.min(text.len())];
+                (
+                    before.matches('\n').count() + 1,
+                    before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1,
+                )
+            });
+            ProjectError::Syntax {
+                path: p.clone(),
+                line,
+                col,
+                message: e.message().to_string(),
+            }
+        })?;
+        proj.dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        proj.validate()
+            .map_err(|message| ProjectError::Invalid { path: p, message })?;
+        Ok(proj)
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        let pos = |v: Option<f64>| v.is_none_or(|v| v.is_finite() && v > 0.0);
+        match (
+            self.sheet.width_mm,
+            self.sheet.height_mm,
+            self.sheet.roll_width_mm,
+        ) {
+            (Some(_), Some(_), None) | (None, None, Some(_)) => {}
+            _ => return Err("[sheet] needs width_mm and height_mm, or roll_width_mm".into()),
+        }
+        if !(pos(self.sheet.width_mm) && pos(self.sheet.height_mm) && pos(self.sheet.roll_width_mm))
+        {
+            return Err("[sheet] sizes must be positive".into());
+        }
+        if !(self.sheet.spacing_mm.is_finite() && self.sheet.spacing_mm >= 0.0) {
+            return Err("[sheet] spacing_mm must be >= 0".into());
+        }
+        for (k, v) in [
+            ("max_stretch_pct", self.material.max_stretch_pct),
+            ("max_compress_pct", self.material.max_compress_pct),
+        ] {
+            if v.is_some_and(|v| !(v.is_finite() && (0.0..100.0).contains(&v))) {
+                return Err(format!("[material] {k} must be a percentage in [0, 100)"));
+            }
+        }
+        if self.seam_mm.is_some_and(|v| !(v.is_finite() && v >= 0.0)) {
+            return Err("seam_mm must be >= 0".into());
+        }
+        if let Some(m) = &self.method {
+            if flatcut_flatten::Method::from_name(m).is_none() {
+                return Err(format!("unknown method '{m}'"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The design file's path.
+    pub fn design_path(&self) -> PathBuf {
+        self.dir.join(&self.design)
+    }
+
+    /// The machine profile's name or path (a path is relative to the project file).
+    pub fn profile_spec(&self) -> String {
+        let p = &self.machine.profile;
+        if p.ends_with(".toml") {
+            self.dir.join(p).display().to_string()
+        } else {
+            p.clone()
+        }
+    }
+}
