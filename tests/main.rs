@@ -1,4 +1,5 @@
 //! End-to-end tests of flatcut: one test binary with a module tree (architecture rules, the
 //! command line, the pipeline against the simulated controller).
 
+mod stream;
 mod tidy;

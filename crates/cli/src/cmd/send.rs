@@ -23,6 +23,16 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// Parses a whole `flatcut ...` command line (argument 0 is the program name), for scripts and
+/// tests that drive the command line in process without depending on clap themselves.
+pub fn parse_command_line<I, T>(argv: I) -> Result<crate::Cli, clap::Error>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    <crate::Cli as clap::Parser>::try_parse_from(argv)
+}
+
 /// A few lines saying what the send did: lines, time, bytes, link use, final state.
 pub fn summary(out: &StreamOutcome) -> String {
     let r = &out.report;

@@ -1,0 +1,389 @@
+//! Streaming end to end through the command line's device layer: a pattern-like job goes to the
+//! embedded simulator (no `--port`), every motion runs once in order, `--check` runs a `$C` pass,
+//! and injected faults (an `error:N`, a hang-up) stop the job with a message naming the line and
+//! leave a journal from which `--resume` completes it.
+
+use flatcut_cli::Command;
+use flatcut_cli::cmd::device::{StreamArgs, StreamOutcome, stream_file};
+use flatcut_cli::cmd::send::parse_command_line;
+use flatcut_firmware_sim::TraceSegment;
+use flatcut_grbl::{Job, Journal};
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+/// Position tolerance, mm: the simulator moves in whole steps (0.004 mm at 250 steps/mm) and the
+/// job's coordinates lie on that grid, so agreement is exact up to float formatting.
+const TOL: f64 = 1e-3;
+/// Step of the simulated machine (250 steps/mm), mm.
+const STEP: f64 = 0.004;
+
+fn on_grid(v: f64) -> f64 {
+    (v / STEP).round() * STEP
+}
+
+/// A pen-plotter job like the G-code writer's: `pieces` closed 48-gons at different places, each
+/// drawn pen down (Z-0.5) after a rapid to its start, pen up (Z2) between pieces. Every drawing
+/// line has a unique text.
+fn pattern_job(pieces: usize) -> String {
+    const SIDES: usize = 48;
+    let mut s = String::from("G21 G90 G17\nG0 Z2\n");
+    for k in 0..pieces {
+        let (cx, cy) = (20.0 + 45.0 * k as f64, 30.0 + 7.0 * k as f64);
+        let r = 12.0 + 1.5 * k as f64;
+        let pts: Vec<(f64, f64)> = (0..SIDES)
+            .map(|i| {
+                let a = std::f64::consts::TAU * i as f64 / SIDES as f64;
+                (on_grid(cx + r * a.cos()), on_grid(cy + r * a.sin()))
+            })
+            .collect();
+        s.push_str(&format!("G0 X{:.3} Y{:.3}\n", pts[0].0, pts[0].1));
+        s.push_str(&format!("G1 Z-0.5 F{}\n", 300 + k));
+        for (i, p) in pts.iter().enumerate().skip(1) {
+            if i == 1 {
+                s.push_str(&format!("G1 X{:.3} Y{:.3} F{}\n", p.0, p.1, 2400 + k));
+            } else {
+                s.push_str(&format!("G1 X{:.3} Y{:.3}\n", p.0, p.1));
+            }
+        }
+        s.push_str(&format!("G1 X{:.3} Y{:.3}\n", pts[0].0, pts[0].1));
+        s.push_str("G0 Z2\n");
+    }
+    s.push_str("G0 X0 Y0\nM2\n");
+    s
+}
+
+struct Case {
+    _dir: tempfile::TempDir,
+    job_path: PathBuf,
+    journal: PathBuf,
+    job: Job,
+    root: PathBuf,
+}
+
+fn case(pieces: usize) -> Case {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().to_path_buf();
+    let text = pattern_job(pieces);
+    let job_path = root.join("job.gcode");
+    std::fs::write(&job_path, &text).unwrap();
+    Case {
+        journal: root.join("job.journal"),
+        job: Job::parse(&text).unwrap(),
+        job_path,
+        root,
+        _dir: dir,
+    }
+}
+
+fn args(c: &Case) -> StreamArgs {
+    StreamArgs::default()
+        .with_sim_instant(true)
+        .with_quiet(true)
+        .with_journal(&c.journal)
+}
+
+fn close(a: [f64; 3], b: [f64; 3]) -> bool {
+    (0..3).all(|k| (a[k] - b[k]).abs() <= TOL)
+}
+
+/// Expected motion of the job: (text, from, to) of every line that moves.
+fn geometry(job: &Job) -> Vec<(String, [f64; 3], [f64; 3])> {
+    let mut out = Vec::new();
+    for (i, l) in job.lines.iter().enumerate() {
+        if l.moves && l.length > 1e-6 {
+            let to = job
+                .lines
+                .get(i + 1)
+                .map(|n| n.before.position)
+                .unwrap_or(job.end_state.position);
+            out.push((l.text.clone(), l.before.position, to));
+        }
+    }
+    out
+}
+
+fn moving(trace: &[TraceSegment]) -> Vec<&TraceSegment> {
+    trace.iter().filter(|s| !close(s.from, s.to)).collect()
+}
+
+fn trace_of(out: &StreamOutcome) -> &[TraceSegment] {
+    out.sim_trace
+        .as_deref()
+        .expect("the embedded simulator's trace")
+}
+
+fn read_trace(path: &Path) -> Vec<TraceSegment> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+/// Every job motion with a unique text ran exactly once over all runs, ending where the job says
+/// (lines also written by a resume preamble, or repeated in the job, are skipped).
+fn assert_exactly_once(job: &Job, traces: &[&[TraceSegment]]) {
+    let preamble: BTreeSet<String> = (1..job.len())
+        .flat_map(|k| job.resume_preamble(k))
+        .collect();
+    let mut checked = 0;
+    for (text, _, to) in geometry(job) {
+        if preamble.contains(&text) || job.lines.iter().filter(|l| l.text == text).count() != 1 {
+            continue;
+        }
+        let hits: Vec<&TraceSegment> = traces
+            .iter()
+            .flat_map(|t| t.iter())
+            .filter(|s| s.text == text)
+            .collect();
+        assert_eq!(hits.len(), 1, "`{text}` ran {} times", hits.len());
+        assert!(
+            close(hits[0].to, to),
+            "`{text}` ended at {:?}, want {to:?}",
+            hits[0].to
+        );
+        checked += 1;
+    }
+    assert!(
+        checked > job.len() / 2,
+        "only {checked} lines were checkable"
+    );
+}
+
+#[test]
+fn streams_to_the_embedded_simulator_every_motion_once_in_order() {
+    let c = case(6);
+    let svg = c.root.join("drawn.svg");
+    let jsonl = c.root.join("trace.jsonl");
+    let out = stream_file(
+        &c.job_path,
+        &args(&c).with_sim_svg(&svg).with_sim_trace(&jsonl),
+    )
+    .unwrap();
+    assert_eq!(out.report.lines_sent, c.job.len());
+    assert!(!out.report.checked);
+    let want = geometry(&c.job);
+    let got = moving(trace_of(&out));
+    assert_eq!(got.len(), want.len(), "motion segment count");
+    for (k, (w, g)) in want.iter().zip(&got).enumerate() {
+        assert_eq!(g.text, w.0, "segment {k}");
+        assert!(
+            close(g.from, w.1) && close(g.to, w.2),
+            "segment {k}: {g:?} vs {w:?}"
+        );
+    }
+    // Pen down exactly on the drawing lines: 6 pieces × 48 sides.
+    assert_eq!(got.iter().filter(|s| s.tool_on).count(), 6 * 48);
+    let end = out.report.final_position.expect("final position");
+    assert!(close(end, c.job.end_state.position), "{end:?}");
+    let stats = out.sim_stats.as_ref().unwrap();
+    assert_eq!(stats.errors, 0);
+    assert_eq!(stats.bytes_dropped_overflow, 0);
+    assert!(stats.max_rx_fill <= 128);
+    // Evidence files: the SVG of what was drawn and the trace, identical to the one returned.
+    let svg_text = std::fs::read_to_string(&svg).unwrap();
+    assert!(svg_text.contains("<svg"), "{svg_text:.200}");
+    // (serde_json's default float parsing is not always correctly rounded: compare to 1 µm.)
+    let from_file = read_trace(&jsonl);
+    assert_eq!(from_file.len(), trace_of(&out).len());
+    for (a, b) in from_file.iter().zip(trace_of(&out)) {
+        assert!(
+            a.text == b.text && close(a.from, b.from) && close(a.to, b.to),
+            "{a:?} vs {b:?}"
+        );
+    }
+    let j = Journal::read(&c.journal).unwrap();
+    assert!(j.finished);
+    assert_eq!(j.done_count(), c.job.len());
+    let summary = flatcut_cli::cmd::send::summary(&out);
+    assert!(
+        summary.contains(&format!("sent {} line(s)", c.job.len())),
+        "{summary}"
+    );
+}
+
+#[test]
+fn command_line_send_with_check_pass() {
+    let c = case(2);
+    let svg = c.root.join("drawn.svg");
+    let cli = parse_command_line([
+        "flatcut",
+        "send",
+        c.job_path.to_str().unwrap(),
+        "--sim-instant",
+        "--quiet",
+        "--check",
+        "--journal",
+        c.journal.to_str().unwrap(),
+        "--sim-svg",
+        svg.to_str().unwrap(),
+    ])
+    .unwrap();
+    let code = flatcut_cli::run(cli).unwrap();
+    assert_eq!(
+        format!("{code:?}"),
+        format!("{:?}", std::process::ExitCode::SUCCESS)
+    );
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
+    assert!(Journal::read(&c.journal).unwrap().finished);
+
+    // The same through the library entry, to see the report: a check pass ran, then the cut.
+    let out = stream_file(&c.job_path, &args(&c).with_check(true)).unwrap();
+    assert!(out.report.checked);
+    assert_eq!(moving(trace_of(&out)).len(), geometry(&c.job).len());
+}
+
+#[test]
+fn check_pass_refuses_a_bad_job_before_anything_moves() {
+    let c = case(1);
+    // G2 without I/J/R: GRBL rejects it (error:26, no axis words... or missing offsets).
+    let bad = format!("{}G2 X10 Y10\n", pattern_job(1));
+    let bad_path = c.root.join("bad.gcode");
+    std::fs::write(&bad_path, bad).unwrap();
+    let e = stream_file(&bad_path, &args(&c).with_check(true)).unwrap_err();
+    let msg = format!("{e:#}");
+    assert!(msg.contains("check mode found 1 rejected line"), "{msg}");
+    assert!(msg.contains("`G2X10Y10`"), "{msg}");
+}
+
+#[test]
+fn injected_error_names_the_line_and_resume_completes() {
+    let c = case(6);
+    let t1 = c.root.join("run1.jsonl");
+    let mut a = args(&c).with_sim_trace(&t1);
+    a.sim_error_at = Some("150:33".into());
+    let e = stream_file(&c.job_path, &a).unwrap_err();
+    let msg = format!("{e:#}");
+    assert!(
+        msg.contains("error:33 (motion command target is invalid)"),
+        "{msg}"
+    );
+    assert!(msg.contains("--resume"), "{msg}");
+    assert!(msg.contains("last line known executed"), "{msg}");
+    // The message names the rejected line by file line number and text; it is a job line that
+    // did not run in this first run.
+    let text = msg.split('`').nth(1).expect("a quoted line");
+    let line = c
+        .job
+        .lines
+        .iter()
+        .find(|l| l.text == text)
+        .unwrap_or_else(|| panic!("`{text}` is not a job line: {msg}"));
+    assert!(
+        msg.contains(&format!("line {} (`{text}`)", line.source_line)),
+        "{msg}"
+    );
+    let run1 = read_trace(&t1);
+    assert!(
+        !run1.iter().any(|s| s.text == text),
+        "`{text}` ran although rejected"
+    );
+    let st = Journal::read(&c.journal).unwrap();
+    assert!(!st.finished);
+    assert!(st.done_count() > 0 && st.done_count() < c.job.len());
+
+    let out = stream_file(&c.job_path, &args(&c).with_resume(true)).unwrap();
+    assert_eq!(out.report.previously_done, st.done_count());
+    assert!(out.report.preamble_lines > 0);
+    assert!(
+        trace_of(&out).iter().any(|s| s.text == text),
+        "`{text}` not re-sent"
+    );
+    assert_exactly_once(&c.job, &[&run1, trace_of(&out)]);
+    assert!(Journal::read(&c.journal).unwrap().finished);
+}
+
+#[test]
+fn hangup_reports_the_last_executed_line_and_resume_completes() {
+    let c = case(5);
+    let t1 = c.root.join("run1.jsonl");
+    let mut a = args(&c).with_sim_trace(&t1);
+    a.sim_hangup_at = Some(180);
+    let e = stream_file(&c.job_path, &a).unwrap_err();
+    let msg = format!("{e:#}");
+    assert!(msg.contains("last line known executed: line "), "{msg}");
+    assert!(msg.contains("--resume"), "{msg}");
+    let run1 = read_trace(&t1);
+    let st = Journal::read(&c.journal).unwrap();
+    assert!(!st.finished);
+
+    let out = stream_file(&c.job_path, &args(&c).with_resume(true)).unwrap();
+    let run2 = trace_of(&out);
+    // A hang-up loses the `ok`s in flight, so lines the journal could not confirm may run again;
+    // none is skipped, and none journaled as done runs again.
+    let ran1: BTreeSet<&str> = run1.iter().map(|s| s.text.as_str()).collect();
+    let ran2: BTreeSet<&str> = run2.iter().map(|s| s.text.as_str()).collect();
+    let preamble: BTreeSet<String> = (1..c.job.len())
+        .flat_map(|k| c.job.resume_preamble(k))
+        .collect();
+    for (i, l) in c.job.lines.iter().enumerate() {
+        if !(l.moves && l.length > 1e-6) {
+            continue;
+        }
+        assert!(
+            ran1.contains(l.text.as_str()) || ran2.contains(l.text.as_str()),
+            "line {i} `{}` skipped",
+            l.text
+        );
+        let unique = c.job.lines.iter().filter(|m| m.text == l.text).count() == 1;
+        if st.done[i] && unique && !preamble.contains(&l.text) {
+            assert!(
+                !ran2.contains(l.text.as_str()),
+                "line {i} journaled done but re-ran"
+            );
+        }
+    }
+    assert!(Journal::read(&c.journal).unwrap().finished);
+}
+
+#[test]
+fn stream_arguments_defaults_hidden_faults_and_bad_port() {
+    let cli = parse_command_line(["flatcut", "send", "job.gcode"]).unwrap();
+    let Command::Send(a) = cli.command else {
+        panic!("not a send")
+    };
+    assert_eq!(a.stream, StreamArgs::default());
+    assert_eq!(a.stream.sim_speed, 50.0);
+    assert_eq!(a.stream.baud, 115_200);
+    assert_eq!(
+        a.stream.journal_path("job.gcode"),
+        PathBuf::from("job.gcode.journal")
+    );
+    let cli = parse_command_line([
+        "flatcut",
+        "send",
+        "job.gcode",
+        "--sim-error-at",
+        "12:33",
+        "--sim-hangup-at",
+        "40",
+    ])
+    .unwrap();
+    let Command::Send(a) = cli.command else {
+        panic!("not a send")
+    };
+    assert_eq!(a.stream.sim_error_at.as_deref(), Some("12:33"));
+    assert_eq!(a.stream.sim_hangup_at, Some(40));
+    let help = parse_command_line(["flatcut", "send", "--help"])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        help.contains("--unlock") && help.contains("--resume"),
+        "{help}"
+    );
+    assert!(
+        !help.contains("--sim-error-at"),
+        "fault flags are hidden: {help}"
+    );
+
+    let c = case(1);
+    let e = stream_file(&c.job_path, &args(&c).with_port("/nonexistent/ttyUSB9")).unwrap_err();
+    assert!(
+        format!("{e:#}").contains("cannot open the serial port /nonexistent/ttyUSB9"),
+        "{e:#}"
+    );
+    let mut a = args(&c);
+    a.sim_error_at = Some("0".into());
+    let e = stream_file(&c.job_path, &a).unwrap_err();
+    assert!(format!("{e:#}").contains("--sim-error-at 0"), "{e:#}");
+}
