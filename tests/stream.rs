@@ -4,10 +4,10 @@
 //! leave a journal from which `--resume` completes it.
 
 use flatcut_cli::Command;
-use flatcut_cli::cmd::device::{StreamArgs, StreamOutcome, stream_file};
+use flatcut_cli::cmd::device::{StreamArgs, StreamOutcome, stream_file, stream_file_with_control};
 use flatcut_cli::cmd::send::parse_command_line;
 use flatcut_firmware_sim::TraceSegment;
-use flatcut_grbl::{Job, Journal};
+use flatcut_grbl::{Control, Job, Journal};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
@@ -123,12 +123,19 @@ fn read_trace(path: &Path) -> Vec<TraceSegment> {
 /// Every job motion with a unique text ran exactly once over all runs, ending where the job says
 /// (lines also written by a resume preamble, or repeated in the job, are skipped).
 fn assert_exactly_once(job: &Job, traces: &[&[TraceSegment]]) {
+    assert_exactly_once_except(job, traces, &BTreeSet::new());
+}
+
+fn assert_exactly_once_except(job: &Job, traces: &[&[TraceSegment]], except: &BTreeSet<String>) {
     let preamble: BTreeSet<String> = (1..job.len())
         .flat_map(|k| job.resume_preamble(k))
         .collect();
     let mut checked = 0;
     for (text, _, to) in geometry(job) {
-        if preamble.contains(&text) || job.lines.iter().filter(|l| l.text == text).count() != 1 {
+        if preamble.contains(&text)
+            || except.contains(&text)
+            || job.lines.iter().filter(|l| l.text == text).count() != 1
+        {
             continue;
         }
         let hits: Vec<&TraceSegment> = traces
@@ -290,6 +297,42 @@ fn injected_error_names_the_line_and_resume_completes() {
         "`{text}` not re-sent"
     );
     assert_exactly_once(&c.job, &[&run1, trace_of(&out)]);
+    assert!(Journal::read(&c.journal).unwrap().finished);
+}
+
+#[test]
+fn hold_then_abort_stops_with_a_soft_reset_and_resume_completes() {
+    let c = case(4);
+    let t1 = c.root.join("run1.jsonl");
+    // Real motion (5x real time) so the job is still running when the operator steps in.
+    let mut a = args(&c).with_sim_trace(&t1).with_sim_speed(5.0);
+    a.sim_instant = false;
+    let control = Control::new();
+    let operator = {
+        let control = control.clone();
+        std::thread::spawn(move || {
+            std::thread::sleep(std::time::Duration::from_millis(1200));
+            control.hold();
+            std::thread::sleep(std::time::Duration::from_millis(300));
+            control.abort();
+        })
+    };
+    let e = stream_file_with_control(&c.job_path, &a, &control).unwrap_err();
+    operator.join().unwrap();
+    let msg = format!("{e:#}");
+    assert!(msg.contains("aborted: soft reset sent, tool off"), "{msg}");
+    assert!(msg.contains("--resume"), "{msg}");
+    let run1 = read_trace(&t1);
+    assert!(!run1.is_empty(), "nothing ran before the abort");
+    let st = Journal::read(&c.journal).unwrap();
+    assert!(!st.finished);
+    assert!(st.done_count() < c.job.len());
+
+    let out = stream_file(&c.job_path, &args(&c).with_resume(true)).unwrap();
+    assert_eq!(out.report.previously_done, st.done_count());
+    // The line the abort cut short runs again whole; every other motion runs exactly once.
+    let cut_short: BTreeSet<String> = run1.last().map(|s| s.text.clone()).into_iter().collect();
+    assert_exactly_once_except(&c.job, &[&run1, trace_of(&out)], &cut_short);
     assert!(Journal::read(&c.journal).unwrap().finished);
 }
 

@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, bail};
 use flatcut_firmware_sim::{Faults, PtySim, SimConfig, SimStats, TraceSegment};
 use flatcut_grbl::driver::Phase;
-use flatcut_grbl::{CancelToken, Job, Progress, SendError, SendOptions, SendReport};
+use flatcut_grbl::{CancelToken, Control, Job, Progress, SendError, SendOptions, SendReport};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// GRBL 1.1's default baud rate (`config.h`).
@@ -212,14 +212,34 @@ impl StreamOutcome {
 
 /// Streams the G-code file at `job_path`; see [`stream_text`].
 pub fn stream_file(job_path: &Path, args: &StreamArgs) -> anyhow::Result<StreamOutcome> {
+    stream_file_with_control(job_path, args, &Control::new())
+}
+
+/// [`stream_file`] steered through `control` as well; see [`stream_text_with_control`].
+pub fn stream_file_with_control(
+    job_path: &Path,
+    args: &StreamArgs,
+    control: &Control,
+) -> anyhow::Result<StreamOutcome> {
     let text = std::fs::read_to_string(job_path)
         .with_context(|| format!("cannot read the job {}", job_path.display()))?;
-    stream_text(&text, &job_path.display().to_string(), args)
+    stream_text_with_control(&text, &job_path.display().to_string(), args, control)
 }
 
 /// Streams the G-code `job` (called `name` in messages and in the default journal path
 /// `<name>.journal`) to `--port`, or to the embedded simulator when no port is given.
 pub fn stream_text(job: &str, name: &str, args: &StreamArgs) -> anyhow::Result<StreamOutcome> {
+    stream_text_with_control(job, name, args, &Control::new())
+}
+
+/// [`stream_text`] steered through `control` as well as by Ctrl-C: a caller (a GUI, a test, a
+/// supervising script) can hold, resume or abort the job from another thread.
+pub fn stream_text_with_control(
+    job: &str,
+    name: &str,
+    args: &StreamArgs,
+    control: &Control,
+) -> anyhow::Result<StreamOutcome> {
     let job = Job::parse(job).with_context(|| format!("cannot prepare the job {name}"))?;
     if job.is_empty() {
         bail!("the job {name} has no line to send");
@@ -256,7 +276,7 @@ pub fn stream_text(job: &str, name: &str, args: &StreamArgs) -> anyhow::Result<S
     };
 
     let opened = flatcut_grbl::open_port(&port_path, args.baud).map(|mut t| {
-        let r = run_send(&mut t, &job, &opts, args);
+        let r = run_send(&mut t, &job, &opts, args, control);
         drop(t);
         r
     });
@@ -395,8 +415,8 @@ fn run_send(
     job: &Job,
     opts: &SendOptions,
     args: &StreamArgs,
+    cancel: &Control,
 ) -> Result<SendReport, SendError> {
-    let cancel = CancelToken::new();
     let interactive = std::io::stderr().is_terminal() && !args.quiet;
     let bar = if interactive {
         ProgressBar::with_draw_target(Some(job.len() as u64), ProgressDrawTarget::stderr())
@@ -447,7 +467,7 @@ fn run_send(
             );
         }
     };
-    let result = flatcut_grbl::send_job(transport, job, opts, &mut observer, &cancel);
+    let result = flatcut_grbl::send_job(transport, job, opts, &mut observer, cancel);
     bar.finish_and_clear();
     if let Ok(i) = interrupts {
         i.done();
@@ -498,8 +518,10 @@ enum Ev {
 }
 
 /// The process-wide Ctrl-C handler (the `ctrlc` crate allows one per process) forwards to the
-/// stream or simulator currently registered; with none registered, Ctrl-C exits (code 130).
-static SINK: Mutex<Option<Sender<Ev>>> = Mutex::new(None);
+/// most recently registered stream or simulator still running; with none, Ctrl-C exits (130).
+static SINK: Mutex<Vec<(u64, Sender<Ev>)>> = Mutex::new(Vec::new());
+/// Registration ids, so a finishing stream unregisters itself and nobody else.
+static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 static HANDLER: OnceLock<Result<(), String>> = OnceLock::new();
 
 fn install_handler() -> Result<(), String> {
@@ -507,8 +529,8 @@ fn install_handler() -> Result<(), String> {
         .get_or_init(|| {
             ctrlc::set_handler(|| {
                 let sink = SINK.lock().unwrap_or_else(|p| p.into_inner());
-                match sink.as_ref() {
-                    Some(tx) if tx.send(Ev::Interrupt).is_ok() => {}
+                match sink.last() {
+                    Some((_, tx)) if tx.send(Ev::Interrupt).is_ok() => {}
                     _ => std::process::exit(130),
                 }
             })
@@ -519,6 +541,7 @@ fn install_handler() -> Result<(), String> {
 
 /// A registration with the Ctrl-C handler; unregisters on drop.
 struct Interrupts {
+    id: u64,
     tx: Sender<Ev>,
     rx: Mutex<Option<Receiver<Ev>>>,
 }
@@ -527,8 +550,12 @@ impl Interrupts {
     fn register() -> anyhow::Result<Interrupts> {
         install_handler().map_err(|e| anyhow::anyhow!("cannot install the Ctrl-C handler: {e}"))?;
         let (tx, rx) = channel();
-        *SINK.lock().unwrap_or_else(|p| p.into_inner()) = Some(tx.clone());
+        let id = NEXT_ID.fetch_add(1, Ordering::Relaxed);
+        SINK.lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .push((id, tx.clone()));
         Ok(Interrupts {
+            id,
             tx,
             rx: Mutex::new(Some(rx)),
         })
@@ -549,7 +576,9 @@ impl Interrupts {
 
 impl Drop for Interrupts {
     fn drop(&mut self) {
-        *SINK.lock().unwrap_or_else(|p| p.into_inner()) = None;
+        SINK.lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .retain(|(id, _)| *id != self.id);
     }
 }
 
