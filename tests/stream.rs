@@ -4,10 +4,12 @@
 //! leave a journal from which `--resume` completes it.
 
 use flatcut_cli::Command;
-use flatcut_cli::cmd::device::{StreamArgs, StreamOutcome, stream_file, stream_file_with_control};
+use flatcut_cli::cmd::device::{
+    StreamArgs, StreamError, StreamOutcome, stream_file, stream_file_with_control,
+};
 use flatcut_cli::cmd::send::parse_command_line;
 use flatcut_firmware_sim::TraceSegment;
-use flatcut_grbl::{Control, Job, Journal};
+use flatcut_grbl::{Control, Job, Journal, SendError};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 

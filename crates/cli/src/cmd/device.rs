@@ -377,6 +377,34 @@ fn write_sim_files(trace: &[TraceSegment], args: &StreamArgs) -> anyhow::Result<
     Ok(())
 }
 
+/// A send that stopped: the sender's error, and what to do next. Its message is the whole story
+/// (the sender's message names the line, the code's meaning and the last line executed), so it
+/// reports no separate source; [`StreamError::send_error`] gives the typed error.
+#[derive(Debug)]
+pub struct StreamError {
+    error: SendError,
+    hint: Option<String>,
+}
+
+impl StreamError {
+    /// The sender's typed error.
+    pub fn send_error(&self) -> &SendError {
+        &self.error
+    }
+}
+
+impl std::fmt::Display for StreamError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.error)?;
+        if let Some(h) = &self.hint {
+            write!(f, "\n{h}")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for StreamError {}
+
 /// Turns a send error into a message that says what to do next.
 fn explain(e: SendError, name: &str, args: &StreamArgs, journal: &Path) -> anyhow::Error {
     let resumable = matches!(
@@ -390,8 +418,7 @@ fn explain(e: SendError, name: &str, args: &StreamArgs, journal: &Path) -> anyho
             | SendError::Aborted { .. }
             | SendError::UnexpectedState { .. }
     );
-    let mut msg = e.to_string();
-    if resumable {
+    let hint = resumable.then(|| {
         let port = match &args.port {
             Some(p) => format!(" --port {p}"),
             None => String::new(),
@@ -400,13 +427,13 @@ fn explain(e: SendError, name: &str, args: &StreamArgs, journal: &Path) -> anyho
             Some(p) => format!(" --journal {}", p.display()),
             None => String::new(),
         };
-        msg.push_str(&format!(
-            ".\nThe journal {} records what ran; after fixing the cause, continue after the last \
+        format!(
+            "The journal {} records what ran; after fixing the cause, continue after the last \
              completed line with: flatcut send {name}{port}{journal_flag} --resume",
             journal.display()
-        ));
-    }
-    anyhow::Error::new(e).context(msg)
+        )
+    });
+    anyhow::Error::new(StreamError { error: e, hint })
 }
 
 /// Runs `send_job` with the progress display and the Ctrl-C policy.
@@ -444,6 +471,13 @@ fn run_send(
         eprintln!("warning: Ctrl-C will not pause the job: {e}");
     }
 
+    // The sender estimates machine time; the embedded simulator runs it `sim_speed` times faster
+    // (and instant motion has no duration worth showing).
+    let eta_scale = match (args.uses_sim(), args.sim_instant) {
+        (false, _) => Some(1.0),
+        (true, false) => Some(1.0 / args.sim_speed),
+        (true, true) => None,
+    };
     let mut last_plain = Instant::now();
     let plain = !interactive && !args.quiet;
     let mut observer = |p: &Progress| {
@@ -453,7 +487,7 @@ fn run_send(
         if interactive {
             bar.set_prefix(phase_name(p.phase));
             bar.set_position(p.lines_acked as u64);
-            bar.set_message(status_text(p));
+            bar.set_message(status_text(p, eta_scale));
         } else if plain
             && (last_plain.elapsed() >= PLAIN_PROGRESS_INTERVAL || p.phase == Phase::Done)
         {
@@ -463,7 +497,7 @@ fn run_send(
                 phase_name(p.phase),
                 p.lines_acked,
                 p.lines_total,
-                status_text(p)
+                status_text(p, eta_scale)
             );
         }
     };
@@ -489,10 +523,11 @@ fn phase_name(p: Phase) -> &'static str {
 }
 
 /// "12.3% of path · ETA 1:05 · Run · X10.000 Y5.000 Z-0.500".
-fn status_text(p: &Progress) -> String {
+/// `eta_scale` converts the sender's machine-time ETA to wall-clock time (`None`: no ETA).
+fn status_text(p: &Progress, eta_scale: Option<f64>) -> String {
     let mut s = format!("{:5.1}% of path", 100.0 * p.fraction());
-    if let Some(eta) = p.eta {
-        let t = eta.as_secs();
+    if let (Some(eta), Some(k)) = (p.eta, eta_scale) {
+        let t = (eta.as_secs_f64() * k).round() as u64;
         s.push_str(&format!(" · ETA {}:{:02}", t / 60, t % 60));
     }
     if let Some(st) = &p.state {
