@@ -23,6 +23,9 @@ pub struct Args {
     /// Heat map as PNG, rendered from the same SVG.
     #[arg(long)]
     pub png: Option<PathBuf>,
+    /// Width of the PNG in pixels (default: 10 pixels per mm).
+    #[arg(long)]
+    pub png_width: Option<u32>,
     /// Self-contained HTML report.
     #[arg(long)]
     pub html: Option<PathBuf>,
@@ -128,7 +131,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             common::write(p, svg.as_bytes())?;
         }
         if let Some(p) = &a.png {
-            common::write(p, &flatcut::report::render_png(&svg, None)?)?;
+            common::write(p, &flatcut::report::render_png(&svg, a.png_width)?)?;
         }
     }
     if let Some(p) = &a.html {
