@@ -12,15 +12,22 @@ fn root() -> PathBuf {
 /// Package name → set of its normal (non-dev) dependency names, for every workspace member.
 fn workspace_deps() -> BTreeMap<String, Vec<String>> {
     let mut out = BTreeMap::new();
-    let mut dirs: Vec<PathBuf> =
-        std::fs::read_dir(root().join("crates")).unwrap().map(|e| e.unwrap().path()).filter(|p| p.join("Cargo.toml").exists()).collect();
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(root().join("crates"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.join("Cargo.toml").exists())
+        .collect();
     dirs.push(root().join("firmware-sim"));
     dirs.sort();
     for d in dirs {
         let text = std::fs::read_to_string(d.join("Cargo.toml")).unwrap();
         let v: toml::Value = toml::from_str(&text).unwrap();
         let name = v["package"]["name"].as_str().unwrap().to_string();
-        let deps = v.get("dependencies").and_then(|d| d.as_table()).map(|t| t.keys().cloned().collect()).unwrap_or_default();
+        let deps = v
+            .get("dependencies")
+            .and_then(|d| d.as_table())
+            .map(|t| t.keys().cloned().collect())
+            .unwrap_or_default();
         out.insert(name, deps);
     }
     out
@@ -45,21 +52,40 @@ fn closure(graph: &BTreeMap<String, Vec<String>>, name: &str) -> Vec<String> {
 #[test]
 fn simulator_is_independent_of_every_workspace_crate() {
     let g = workspace_deps();
-    assert_eq!(closure(&g, "flatcut-firmware-sim"), Vec::<String>::new(), "firmware-sim must share no code with the sender or the G-code writer");
+    assert_eq!(
+        closure(&g, "flatcut-firmware-sim"),
+        Vec::<String>::new(),
+        "firmware-sim must share no code with the sender or the G-code writer"
+    );
 }
 
 #[test]
 fn sender_is_independent_of_the_gcode_writer_and_geometry() {
     let g = workspace_deps();
-    assert_eq!(closure(&g, "flatcut-grbl"), Vec::<String>::new(), "flatcut-grbl streams any file: no workspace dependency");
+    assert_eq!(
+        closure(&g, "flatcut-grbl"),
+        Vec::<String>::new(),
+        "flatcut-grbl streams any file: no workspace dependency"
+    );
 }
 
 #[test]
 fn two_dimensional_crates_know_nothing_of_surfaces() {
     let g = workspace_deps();
     for krate in ["flatcut-pattern", "flatcut-nest", "flatcut-gcode"] {
-        for forbidden in ["flatcut-surface", "flatcut-mesh", "flatcut-flatten", "flatcut-design", "flatcut-report", "flatcut-grbl", "flatcut-firmware-sim"] {
-            assert!(!closure(&g, krate).contains(&forbidden.to_string()), "{krate} must not depend on {forbidden}");
+        for forbidden in [
+            "flatcut-surface",
+            "flatcut-mesh",
+            "flatcut-flatten",
+            "flatcut-design",
+            "flatcut-report",
+            "flatcut-grbl",
+            "flatcut-firmware-sim",
+        ] {
+            assert!(
+                !closure(&g, krate).contains(&forbidden.to_string()),
+                "{krate} must not depend on {forbidden}"
+            );
         }
     }
 }
@@ -68,7 +94,10 @@ fn two_dimensional_crates_know_nothing_of_surfaces() {
 fn only_the_binary_uses_anyhow() {
     for (name, deps) in workspace_deps() {
         if name != "flatcut-cli" {
-            assert!(!deps.contains(&"anyhow".to_string()), "{name}: libraries return typed errors, anyhow is for the binary only");
+            assert!(
+                !deps.contains(&"anyhow".to_string()),
+                "{name}: libraries return typed errors, anyhow is for the binary only"
+            );
         }
     }
 }
@@ -101,5 +130,8 @@ fn every_source_file_opens_with_a_module_doc() {
             !text.trim_start().starts_with("//!")
         })
         .collect();
-    assert!(missing.is_empty(), "files without a //! module doc: {missing:?}");
+    assert!(
+        missing.is_empty(),
+        "files without a //! module doc: {missing:?}"
+    );
 }

@@ -42,12 +42,7 @@ fn write_obj(mesh: &TriMesh, uv: &[DVec2]) -> String {
         s += &format!("vt {} {}\n", q.x, q.y);
     }
     for t in &mesh.triangles {
-        s += &format!(
-            "f {0}/{0} {1}/{1} {2}/{2}\n",
-            t[0] + 1,
-            t[1] + 1,
-            t[2] + 1
-        );
+        s += &format!("f {0}/{0} {1}/{1} {2}/{2}\n", t[0] + 1, t[1] + 1, t[2] + 1);
     }
     s
 }
