@@ -28,6 +28,8 @@ pub const DEFAULT_SIM_SPEED: f64 = 50.0;
 /// Interval of the plain progress lines printed when stderr is not a terminal (CI logs): often
 /// enough to show life, rare enough not to flood a log.
 pub const PLAIN_PROGRESS_INTERVAL: Duration = Duration::from_secs(3);
+/// Resolution of the progress bar (it shows the fraction of the path length executed).
+const BAR_STEPS: u64 = 1000;
 /// Extra travel given to the embedded simulator beyond the job's extent, mm, so a job that
 /// exactly fills the bed is not refused for rounding.
 const SIM_TRAVEL_MARGIN_MM: f64 = 10.0;
@@ -446,12 +448,13 @@ fn run_send(
 ) -> Result<SendReport, SendError> {
     let interactive = std::io::stderr().is_terminal() && !args.quiet;
     let bar = if interactive {
-        ProgressBar::with_draw_target(Some(job.len() as u64), ProgressDrawTarget::stderr())
+        ProgressBar::with_draw_target(Some(BAR_STEPS), ProgressDrawTarget::stderr())
     } else {
         ProgressBar::hidden()
     };
     let style = ProgressStyle::with_template(
-        "{prefix:>10} [{elapsed_precise}] {wide_bar} line {pos}/{len} {msg}",
+        // Two lines, so the status fits an 80-column terminal without wrapping.
+        "{prefix} [{elapsed_precise}] {wide_bar}\n{wide_msg}",
     )
     .unwrap_or_else(|_| ProgressStyle::default_bar());
     bar.set_style(style);
@@ -485,8 +488,14 @@ fn run_send(
             return;
         }
         if interactive {
-            bar.set_prefix(phase_name(p.phase));
-            bar.set_position(p.lines_acked as u64);
+            // The bar fills with the path length executed; the line count is what GRBL took.
+            bar.set_prefix(format!(
+                "{:>10} line {}/{}",
+                phase_name(p.phase),
+                p.lines_acked,
+                p.lines_total
+            ));
+            bar.set_position((p.fraction() * BAR_STEPS as f64).round() as u64);
             bar.set_message(status_text(p, eta_scale));
         } else if plain
             && (last_plain.elapsed() >= PLAIN_PROGRESS_INTERVAL || p.phase == Phase::Done)
