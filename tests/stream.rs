@@ -267,6 +267,12 @@ fn injected_error_names_the_line_and_resume_completes() {
         msg.contains("error:33 (motion command target is invalid)"),
         "{msg}"
     );
+    assert_eq!(msg.matches("error:33").count(), 1, "said once: {msg}");
+    let typed = e.downcast_ref::<StreamError>().expect("a StreamError");
+    assert!(
+        matches!(typed.send_error(), SendError::LineRejected { error, .. } if error.code == 33),
+        "{typed:?}"
+    );
     assert!(msg.contains("--resume"), "{msg}");
     assert!(msg.contains("last line known executed"), "{msg}");
     // The message names the rejected line by file line number and text; it is a job line that
