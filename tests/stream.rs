@@ -388,6 +388,53 @@ fn hangup_reports_the_last_executed_line_and_resume_completes() {
 }
 
 #[test]
+fn alarm_mid_job_is_explained_and_resume_completes() {
+    let c = case(3);
+    let t1 = c.root.join("run1.jsonl");
+    let mut a = args(&c).with_sim_trace(&t1);
+    a.sim_alarm_at = Some("90:1".into());
+    let e = stream_file(&c.job_path, &a).unwrap_err();
+    let msg = format!("{e:#}");
+    assert!(msg.contains("ALARM:1"), "{msg}");
+    assert!(msg.contains("hard limit"), "{msg}");
+    assert!(
+        msg.to_lowercase().contains("last line known executed"),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("--unlock"),
+        "a locked controller needs it: {msg}"
+    );
+    assert!(msg.contains("--resume"), "{msg}");
+    let run1 = read_trace(&t1);
+    assert!(!Journal::read(&c.journal).unwrap().finished);
+    let out = stream_file(&c.job_path, &args(&c).with_resume(true)).unwrap();
+    // The line the alarm interrupted runs again; every other motion exactly once.
+    let hit: BTreeSet<String> = run1.last().map(|s| s.text.clone()).into_iter().collect();
+    assert_exactly_once_except(&c.job, &[&run1, trace_of(&out)], &hit);
+    assert!(Journal::read(&c.journal).unwrap().finished);
+}
+
+#[test]
+fn explicit_port_streams_to_an_external_controller() {
+    // A simulator started outside the command (as `flatcut sim` does) is a real port to `send`.
+    let c = case(2);
+    let sim = flatcut_firmware_sim::PtySim::spawn(
+        flatcut_firmware_sim::SimConfig::default().with_instant_motion(true),
+    )
+    .unwrap();
+    let port = sim.path().to_str().unwrap().to_string();
+    let out = stream_file(&c.job_path, &args(&c).with_port(&port)).unwrap();
+    assert!(out.sim_trace.is_none() && out.sim_stats.is_none());
+    assert_eq!(out.report.lines_sent, c.job.len());
+    let u = out.link_utilisation();
+    assert!(u > 0.0 && u <= 1.0, "{u}");
+    let report = sim.stop();
+    let got = moving(&report.trace);
+    assert_eq!(got.len(), geometry(&c.job).len());
+}
+
+#[test]
 fn stream_arguments_defaults_hidden_faults_and_bad_port() {
     let cli = parse_command_line(["flatcut", "send", "job.gcode"]).unwrap();
     let Command::Send(a) = cli.command else {
