@@ -434,6 +434,89 @@ fn explicit_port_streams_to_an_external_controller() {
     assert_eq!(got.len(), geometry(&c.job).len());
 }
 
+/// A laser job written by flatcut's own G-code writer (arcs fitted, laser on only while cutting)
+/// streamed to the embedded simulator in laser mode: everything cut lies on the drawn circle and
+/// the cut length is its circumference.
+#[test]
+fn laser_job_from_the_gcode_writer_cuts_the_drawn_circle() {
+    use flatcut::gcode::{GcodeOptions, Profile, plan};
+    use flatcut::geom::DVec2;
+    use flatcut::pattern::drawing::{Drawing, Layer, Stroke};
+    /// Fitting tolerance of the writer plus one machine step, mm.
+    const ON_CIRCLE_MM: f64 = 0.06;
+    let (centre, r) = (DVec2::new(60.0, 45.0), 30.0);
+    let circle: Vec<DVec2> = (0..720)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / 720.0;
+            centre + r * DVec2::new(a.cos(), a.sin())
+        })
+        .collect();
+    let drawing = Drawing {
+        strokes: vec![Stroke {
+            layer: Layer::Cut,
+            points: circle,
+            closed: true,
+            piece: Some(0),
+            outer: true,
+            id: "disc".into(),
+        }],
+    };
+    let profile = Profile::laser();
+    let gcode = plan(&drawing, &profile, &GcodeOptions::default())
+        .unwrap()
+        .to_gcode();
+    let c = case(1);
+    let path = c.root.join("disc.gcode");
+    std::fs::write(&path, &gcode).unwrap();
+    let mut a = args(&c);
+    a.sim_laser = true;
+    let out = stream_file(&path, &a).unwrap();
+    let m = profile.to_machine(centre);
+    let mc = [m.x, m.y];
+    let cut: Vec<&TraceSegment> = trace_of(&out).iter().filter(|s| s.tool_on).collect();
+    assert!(!cut.is_empty(), "nothing was cut:\n{gcode}");
+    assert!(
+        cut.iter().any(|s| s.arc_center.is_some()),
+        "the writer fits arcs to a dense circle"
+    );
+    let mut length = 0.0;
+    for s in &cut {
+        for p in [s.from, s.to] {
+            let d = ((p[0] - mc[0]).powi(2) + (p[1] - mc[1]).powi(2)).sqrt();
+            assert!(
+                (d - r).abs() <= ON_CIRCLE_MM,
+                "{s:?} is {d} mm from the centre"
+            );
+        }
+        length += match s.arc_center {
+            Some(ac) => {
+                let a0 = (s.from[1] - ac[1]).atan2(s.from[0] - ac[0]);
+                let a1 = (s.to[1] - ac[1]).atan2(s.to[0] - ac[0]);
+                let mut sweep = if s.motion == "G2" { a0 - a1 } else { a1 - a0 };
+                if sweep <= 0.0 {
+                    sweep += std::f64::consts::TAU;
+                }
+                sweep * ((s.from[0] - ac[0]).powi(2) + (s.from[1] - ac[1]).powi(2)).sqrt()
+            }
+            None => ((s.to[0] - s.from[0]).powi(2) + (s.to[1] - s.from[1]).powi(2)).sqrt(),
+        };
+    }
+    // The laser profile cuts in several passes.
+    let passes = profile.layer(Layer::Cut).passes;
+    assert!(passes >= 1);
+    let want = std::f64::consts::TAU * r * f64::from(passes);
+    assert!(
+        (length - want).abs() / want < 2e-3,
+        "cut {length} mm, circle × {passes} passes {want} mm"
+    );
+    assert!(
+        trace_of(&out)
+            .iter()
+            .filter(|s| s.motion == "G0")
+            .all(|s| !s.tool_on)
+    );
+}
+
 #[test]
 fn stream_arguments_defaults_hidden_faults_and_bad_port() {
     let cli = parse_command_line(["flatcut", "send", "job.gcode"]).unwrap();
