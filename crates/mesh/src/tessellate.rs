@@ -490,10 +490,19 @@ impl Builder<'_> {
             .filter(|&v| self.on_boundary[v as usize])
             .collect();
         let pts: Vec<DVec3> = bverts.iter().map(|&v| self.pos[v as usize]).collect();
-        let (_, remap) = crate::weld::weld_points(&pts, weld);
+        let (reps, remap) = crate::weld::weld_points(&pts, weld);
+        // `remap` numbers clusters, not input points: a cluster stands for its first member.
+        // (Indexing `bverts` by the cluster number welded a third patch's corners to unrelated
+        // vertices of the second, and the closure then chased those vertices without end.)
+        let mut first = vec![u32::MAX; reps.len()];
+        for (i, &r) in remap.iter().enumerate() {
+            if first[r as usize] == u32::MAX {
+                first[r as usize] = bverts[i];
+            }
+        }
         let mut rep: Vec<u32> = (0..self.pos.len() as u32).collect();
         for (i, &r) in remap.iter().enumerate() {
-            let (v, target) = (bverts[i], bverts[r as usize]);
+            let (v, target) = (bverts[i], first[r as usize]);
             if self.home[v as usize].0 != self.home[target as usize].0 {
                 rep[v as usize] = target;
             }
@@ -1198,6 +1207,75 @@ mod tests {
         let exact = 4.0 * PI * 2500.0;
         assert!((m.area() - exact).abs() / exact < 5e-3);
         assert_eq!(topo.boundary_loops.len(), 1);
+    }
+
+    /// Rim patch `k` (0..4) of Newell's teapot in mm: patch 0 rotated by k quarter turns.
+    fn teapot_rim(k: usize) -> flatcut_surface::patch::BezierPatch {
+        const RIM: [[f64; 3]; 16] = [
+            [1.4, 0.0, 2.4],
+            [1.4, -0.784, 2.4],
+            [0.784, -1.4, 2.4],
+            [0.0, -1.4, 2.4],
+            [1.3375, 0.0, 2.53125],
+            [1.3375, -0.749, 2.53125],
+            [0.749, -1.3375, 2.53125],
+            [0.0, -1.3375, 2.53125],
+            [1.4375, 0.0, 2.53125],
+            [1.4375, -0.805, 2.53125],
+            [0.805, -1.4375, 2.53125],
+            [0.0, -1.4375, 2.53125],
+            [1.5, 0.0, 2.4],
+            [1.5, -0.84, 2.4],
+            [0.84, -1.5, 2.4],
+            [0.0, -1.5, 2.4],
+        ];
+        let pts = RIM
+            .iter()
+            .map(|&[x, y, z]| {
+                let (mut x, mut y) = (x, y);
+                for _ in 0..k {
+                    (x, y) = (y, -x);
+                }
+                DVec3::new(x, y, z) * 25.4
+            })
+            .collect();
+        flatcut_surface::patch::BezierPatch::new(3, 3, pts).unwrap()
+    }
+
+    #[test]
+    fn ring_of_four_patches_is_one_annulus() {
+        // Three or more patches meeting corner to corner: the corner weld must pick the vertex
+        // of the cluster, not the cluster's number (which once sent the closure into an endless
+        // chase and this ring past 2 000 000 vertices).
+        let rim: Vec<_> = (0..4).map(teapot_rim).collect();
+        let surfs: Vec<&dyn ParamSurface> = rim.iter().map(|s| s as &dyn ParamSurface).collect();
+        let tol = Tolerances::DEFAULT.with_chord_mm(0.1);
+        let opts = TessOptions::DEFAULT.with_max_vertices(50_000);
+        let m = tessellate_with(&surfs, &tol, &opts).unwrap();
+        let topo = Topology::build(&m).unwrap();
+        assert_eq!(topo.component_count, 1);
+        assert_eq!(
+            topo.boundary_loops.len(),
+            2,
+            "inner and outer edge of the rim"
+        );
+        // Each loop is a whole circle (radius 1.4 in and 1.5 in, to the Bézier arc error of the
+        // data): no crack runs along a side.
+        let mut radii: Vec<f64> = topo
+            .boundary_loops
+            .iter()
+            .map(|lp| {
+                let r = lp
+                    .iter()
+                    .map(|&v| m.positions[v as usize].truncate().length());
+                let (lo, hi) = r.fold((f64::MAX, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
+                assert!(hi - lo < 0.5, "loop radius spread {lo}..{hi}");
+                hi
+            })
+            .collect();
+        radii.sort_by(f64::total_cmp);
+        assert!((radii[0] - 1.4 * 25.4).abs() < 0.5 && (radii[1] - 1.5 * 25.4).abs() < 0.5);
+        assert!(mesh_to_surface(&m, &surfs, 3) <= 0.1);
     }
 
     #[test]
