@@ -30,6 +30,14 @@ const MIN_COL_W: f64 = 120.0;
 const LEGEND_H: f64 = 28.0;
 /// Colour given to flipped faces.
 const FLIPPED: &str = "#ff00ff";
+/// Drawing width (mm) up to which titles and legend keep their nominal size. A wider drawing is
+/// shown shrunk to the page (the HTML report fits it to the page width), so its annotations grow
+/// in proportion: two 400 mm pieces side by side keep the legend as readable as one shoe piece.
+const ANNOTATION_REF_W: f64 = 320.0;
+/// Length of the legend's colour bar at nominal size (mm).
+const LEGEND_BAR_W: f64 = 160.0;
+/// Height of the legend's colour bar at nominal size (mm).
+const LEGEND_BAR_H: f64 = 5.0;
 
 fn n(v: f64) -> String {
     let s = format!("{v:.3}");
@@ -151,14 +159,21 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
             })
         })
         .collect();
-    let col_w: Vec<f64> = boxes
+    // Annotation scale: 1 for drawings up to ANNOTATION_REF_W wide, in proportion beyond.
+    let nominal_w: f64 = boxes
         .iter()
         .map(|b| b.width().max(MIN_COL_W) + 2.0 * MARGIN)
+        .sum();
+    let u = (nominal_w / ANNOTATION_REF_W).max(1.0);
+    let (margin, text_h) = (MARGIN * u, TEXT_H * u);
+    let col_w: Vec<f64> = boxes
+        .iter()
+        .map(|b| b.width().max(MIN_COL_W * u) + 2.0 * margin)
         .collect();
     let piece_h = boxes.iter().map(|b| b.height()).fold(0.0, f64::max);
-    let title_h = 2.5 * TEXT_H;
+    let title_h = 2.5 * text_h;
     let width: f64 = col_w.iter().sum();
-    let height = title_h + piece_h + 2.0 * MARGIN + LEGEND_H;
+    let height = title_h + piece_h + 2.0 * margin + LEGEND_H * u;
     let mut doc = Document::new()
         .set("xmlns", "http://www.w3.org/2000/svg")
         .set("width", format!("{}mm", n(width)))
@@ -175,8 +190,8 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
     let mut x0 = 0.0;
     for (k, c) in cols.iter().enumerate() {
         let b = boxes[k];
-        let ox = x0 + MARGIN + (col_w[k] - 2.0 * MARGIN - b.width()) / 2.0 - b.min.x;
-        let top = title_h + MARGIN;
+        let ox = x0 + margin + (col_w[k] - 2.0 * margin - b.width()) / 2.0 - b.min.x;
+        let top = title_h + margin;
         // Plane y up → SVG y down: y_svg = top + (b.max.y − y).
         let map = |p: DVec2| DVec2::new(ox + p.x, top + (b.max.y - p.y));
         let mut g = Group::new().set("id", format!("piece-{k}"));
@@ -209,50 +224,52 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
                     .set("stroke-width", 0.05),
             );
         }
-        if glyphs {
-            if let Some(flat) = flat {
-                let spacing = (b.width().max(b.height()) / 30.0).max(1.0);
-                let mut last: Vec<DVec2> = Vec::new();
-                let mut d = String::new();
-                for (t, tri) in c.mesh.triangles.iter().enumerate() {
-                    let cen =
-                        (flat[tri[0] as usize] + flat[tri[1] as usize] + flat[tri[2] as usize])
-                            / 3.0;
-                    if last.iter().any(|p| p.distance(cen) < spacing) {
-                        continue;
-                    }
-                    last.push(cen);
-                    let f = &c.report.per_face[t];
-                    let len = spacing * 0.4 * (1.0 + (f.stretch_pct / 10.0).min(1.0));
-                    let (a, e) = (map(cen - f.dir_max_2d * len), map(cen + f.dir_max_2d * len));
-                    d.push_str(&format!("M{} {} L{} {} ", n(a.x), n(a.y), n(e.x), n(e.y)));
+        if glyphs && let Some(flat) = flat {
+            let spacing = (b.width().max(b.height()) / 30.0).max(1.0);
+            let mut last: Vec<DVec2> = Vec::new();
+            let mut d = String::new();
+            for (t, tri) in c.mesh.triangles.iter().enumerate() {
+                let cen =
+                    (flat[tri[0] as usize] + flat[tri[1] as usize] + flat[tri[2] as usize]) / 3.0;
+                if last.iter().any(|p| p.distance(cen) < spacing) {
+                    continue;
                 }
-                g = g.add(
-                    Path::new()
-                        .set("id", format!("glyphs-{k}"))
-                        .set("d", d.trim_end().to_string())
-                        .set("stroke", "#000000")
-                        .set("stroke-width", 0.3)
-                        .set("fill", "none"),
-                );
+                last.push(cen);
+                let f = &c.report.per_face[t];
+                let len = spacing * 0.4 * (1.0 + (f.stretch_pct / 10.0).min(1.0));
+                let (a, e) = (map(cen - f.dir_max_2d * len), map(cen + f.dir_max_2d * len));
+                d.push_str(&format!("M{} {} L{} {} ", n(a.x), n(a.y), n(e.x), n(e.y)));
             }
+            g = g.add(
+                Path::new()
+                    .set("id", format!("glyphs-{k}"))
+                    .set("d", d.trim_end().to_string())
+                    .set("stroke", "#000000")
+                    .set("stroke-width", 0.3 * u)
+                    .set("fill", "none"),
+            );
         }
         doc = doc.add(g);
         let title = format!(
             "{}  MEAN D2 {:.4}  MAX STRETCH {:.1}%",
             c.title, c.report.delta2_mean, c.report.stretch_max_pct
         );
+        // Shrunk to its column when long (file names), so it never runs into its neighbour.
+        let room = col_w[k] - 2.0 * margin;
+        let th = text_h * 0.8;
+        let th = th * (room / font::text_width(&title, th)).min(1.0);
         doc = doc.add(text_path(
             &title,
-            DVec2::new(x0 + MARGIN, -(1.5 * TEXT_H)),
-            TEXT_H * 0.8,
+            DVec2::new(x0 + margin, -(1.5 * text_h)),
+            th,
             "#000000",
         ));
         x0 += col_w[k];
     }
     // Legend: a colour bar with five ticks.
-    let ly = title_h + piece_h + 2.0 * MARGIN;
-    let bar_w = (width - 2.0 * MARGIN).min(160.0);
+    let ly = title_h + piece_h + 2.0 * margin;
+    let bar_w = (width - 2.0 * margin).min(LEGEND_BAR_W * u);
+    let bar_h = LEGEND_BAR_H * u;
     let steps = 64;
     for s in 0..steps {
         let t = s as f64 / (steps - 1) as f64;
@@ -261,11 +278,11 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
             Rectangle::new()
                 .set(
                     "x",
-                    n(MARGIN + t * bar_w * (steps - 1) as f64 / steps as f64),
+                    n(margin + t * bar_w * (steps - 1) as f64 / steps as f64),
                 )
                 .set("y", n(ly))
-                .set("width", n(bar_w / steps as f64 + 0.05))
-                .set("height", 5)
+                .set("width", n(bar_w / steps as f64 + 0.05 * u))
+                .set("height", n(bar_h))
                 .set("fill", colour(m, v, range)),
         );
     }
@@ -279,18 +296,18 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
         } else {
             format!("{v:.3}")
         };
-        let x = MARGIN + t * bar_w - font::text_width(&label, TEXT_H * 0.7) / 2.0;
+        let x = margin + t * bar_w - font::text_width(&label, text_h * 0.7) / 2.0;
         doc = doc.add(text_path(
             &label,
-            DVec2::new(x, -(ly + 5.0 + 1.5 * TEXT_H)),
-            TEXT_H * 0.7,
+            DVec2::new(x, -(ly + bar_h + 1.5 * text_h)),
+            text_h * 0.7,
             "#000000",
         ));
     }
     doc = doc.add(text_path(
         m.title(),
-        DVec2::new(MARGIN, -(ly + 5.0 + 3.5 * TEXT_H)),
-        TEXT_H * 0.7,
+        DVec2::new(margin, -(ly + bar_h + 3.5 * text_h)),
+        text_h * 0.7,
         "#000000",
     ));
     doc.to_string()
@@ -494,4 +511,110 @@ fn worst_regions(c: &Column<'_>, k: usize) -> Vec<crate::Region> {
     let mut v = c.report.regions.clone();
     v.truncate(k);
     v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ReportOptions;
+    use flatcut_geom::DVec3;
+
+    /// A flat square piece of side `s` mm mapped to itself.
+    fn square(s: f64) -> TriMesh {
+        let p = [(0.0, 0.0), (s, 0.0), (s, s), (0.0, s), (0.5 * s, 0.5 * s)]
+            .map(|(x, y)| DVec3::new(x, y, 0.0))
+            .to_vec();
+        let mut m = TriMesh::new(p, vec![[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]);
+        m.flat = Some(m.positions.iter().map(|p| p.truncate()).collect());
+        m
+    }
+
+    /// The text paths of the SVG (stroke font: round caps), each as its list of points, and the
+    /// viewBox width.
+    fn text_paths(svg: &str) -> (Vec<Vec<DVec2>>, f64) {
+        let w: f64 = svg
+            .split("viewBox=\"0 0 ")
+            .nth(1)
+            .unwrap()
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        let paths = svg
+            .split("<path ")
+            .skip(1)
+            .filter(|p| p.contains("stroke-linecap"))
+            .map(|p| {
+                let d = p.split("d=\"").nth(1).unwrap().split('"').next().unwrap();
+                let v: Vec<f64> = d
+                    .split_whitespace()
+                    .map(|t| t.trim_start_matches(['M', 'L']).parse().unwrap())
+                    .collect();
+                v.chunks(2).map(|c| DVec2::new(c[0], c[1])).collect()
+            })
+            .collect();
+        (paths, w)
+    }
+
+    fn text_height(p: &[DVec2]) -> f64 {
+        let (lo, hi) = p
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| {
+                (a.min(q.y), b.max(q.y))
+            });
+        hi - lo
+    }
+
+    #[test]
+    fn annotations_grow_with_a_wide_drawing_and_titles_stay_in_their_column() {
+        let (small, big) = (square(100.0), square(800.0));
+        let opts = ReportOptions::default();
+        let (rs, rb) = (
+            Report::compute("s", &small, &opts).unwrap(),
+            Report::compute("b", &big, &opts).unwrap(),
+        );
+        let col = |title: &str, mesh, report| Column {
+            title: title.into(),
+            mesh,
+            report,
+        };
+        let narrow = heatmap_svg(&[col("S", &small, &rs)], Measure::Stretch, false);
+        let long = "A VERY LONG TITLE NAMING /SOME/DEEP/DIRECTORY/PIECE_WITH_DARTS.OBJ";
+        let wide = heatmap_svg(
+            &[col(long, &big, &rb), col(long, &big, &rb)],
+            Measure::Stretch,
+            false,
+        );
+        let (pn, wn) = text_paths(&narrow);
+        let (pw, ww) = text_paths(&wide);
+        // Legend labels: the last path is the measure's name, drawn at 0.7 × TEXT_H (× scale).
+        let hn = text_height(pn.last().unwrap());
+        let hw = text_height(pw.last().unwrap());
+        assert!(
+            wn < ANNOTATION_REF_W && ww > 4.0 * ANNOTATION_REF_W,
+            "{wn} {ww}"
+        );
+        assert!(hn <= 0.7 * TEXT_H + 1e-9, "nominal legend text {hn}");
+        // The wide drawing's annotations grow by its nominal width over the reference width, so
+        // shrunk to the same page they read about as large (within the grown margins).
+        let u = 2.0 * (800.0 + 2.0 * MARGIN) / ANNOTATION_REF_W;
+        assert!(
+            (hw / hn - u).abs() < 1e-3 * u,
+            "legend text {hw} mm vs {hn} mm"
+        );
+        assert!(
+            hw / ww >= 0.9 * hn / ANNOTATION_REF_W,
+            "legend text {hw} mm on {ww} mm"
+        );
+        // The two titles each stay inside their own column (half the width, minus the margin).
+        let xmax = |p: &[DVec2]| p.iter().map(|q| q.x).fold(f64::NEG_INFINITY, f64::max);
+        let xmin = |p: &[DVec2]| p.iter().map(|q| q.x).fold(f64::INFINITY, f64::min);
+        assert!(
+            xmax(&pw[0]) <= 0.5 * ww + 1e-6,
+            "title 0 ends at {}",
+            xmax(&pw[0])
+        );
+        assert!(xmin(&pw[1]) >= 0.5 * ww - 1e-6 && xmax(&pw[1]) <= ww + 1e-6);
+    }
 }
