@@ -386,3 +386,35 @@ fn teapot_has_32_bicubic_patches_sharing_exact_edges() {
 /// Boundary curves repeated exactly by a neighbour in the data set (measured: rim, body and
 /// bottom rings and their side joins, handle and spout halves, lid and knob rings).
 const TEAPOT_SHARED_EDGES: usize = 52;
+
+#[test]
+fn teapot_pot_tessellates_crack_free() {
+    // Rim, body and bottom: 16 patches, four of them meeting at the bottom centre on collapsed
+    // sides. Welded it is one cup (one component, one boundary: the rim's inner edge at radius
+    // 1.4 in).
+    let d = load("teapot", "body.toml");
+    let p = &d.pieces[0];
+    let refs = patches("teapot", p);
+    let surfs: Vec<&dyn flatcut_surface::ParamSurface> = refs.iter().map(|s| s.as_ref()).collect();
+    let whole = flatcut_mesh::tessellate_patches(&surfs, &tol()).unwrap();
+    let topo = flatcut_mesh::Topology::build(&whole).unwrap();
+    assert_eq!(topo.component_count, 1, "one cup");
+    assert_eq!(
+        topo.boundary_loops.len(),
+        1,
+        "only the rim's inner edge is open"
+    );
+    let lp = &topo.boundary_loops[0];
+    for &v in lp {
+        let q = whole.positions[v as usize];
+        assert!(
+            (q.z - 2.4 * 25.4).abs() < 1e-6,
+            "boundary vertex off the rim: {q}"
+        );
+    }
+    assert!(
+        whole.vertex_count() < 100_000,
+        "{} vertices",
+        whole.vertex_count()
+    );
+}

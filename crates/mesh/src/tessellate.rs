@@ -53,6 +53,21 @@ const EXTENT_SAMPLES: usize = 16;
 /// further: the deviation of such a triangle is below round-off of a sane surface, and this stops
 /// refinement at parametric singularities.
 const MIN_EDGE_OVER_CHORD: f64 = 1e-3;
+/// Triangles whose longest edge is below this multiple of the weld tolerance are not split
+/// either: the output collapses edges up to the weld tolerance, and a split this close to it would
+/// leave edges that collapse into non-manifold fans (at the poles of collapsed patch sides).
+const MIN_EDGE_OVER_WELD: f64 = 4.0;
+/// |su × sv| below this fraction of max(|su|², |sv|²) is a degenerate point (a pole): the
+/// cross product is then rounding noise (≈ 1e-16 relative at the teapot's lid and bottom
+/// centres), far below this, while a genuine normal near the pole is ≳ 1e-6 relative.
+const DEGENERATE_NORMAL_REL: f64 = 1e-10;
+/// Parameter step (fraction of the domain) of the probes that tell which sides of two patches
+/// leave a shared pole in the same direction.
+const PROBE_STEP: f64 = 1.0 / 64.0;
+/// Two probes match when closer than this fraction of their distance from the pole: equal for
+/// a side both patches parameterise alike, near for different speeds; the next grid line of the
+/// initial grid leaves the pole ≥ 11° away (≈ 0.2 relative), well outside.
+const PROBE_MATCH_REL: f64 = 0.05;
 /// Parameter tolerance of the projection of a shared vertex onto another patch's boundary edge.
 const PROJECT_T_TOL: f64 = 1e-13;
 
@@ -159,6 +174,8 @@ struct Builder<'a> {
     work: Vec<u32>,
     opts: TessOptions,
     chord: f64,
+    /// Weld tolerance: edges this short are collapsed in the output.
+    weld: f64,
 }
 
 fn key(a: u32, b: u32) -> (u32, u32) {
@@ -482,6 +499,30 @@ impl Builder<'_> {
         Ok(())
     }
 
+    /// Points a short step from vertex `v` along each parameter direction into its patch's
+    /// domain, leaving out steps that stay within `weld` of it (along a collapsed side).
+    fn side_probes(&self, v: u32, weld: f64) -> Vec<DVec3> {
+        let (patch, uv) = self.home[v as usize];
+        let s = self.surfs[patch as usize];
+        let d = s.domain();
+        let mut out = Vec::new();
+        for (axis, (lo, hi)) in [(0, d.u), (1, d.v)] {
+            let step = (hi - lo) * PROBE_STEP;
+            let x = if axis == 0 { uv.x } else { uv.y };
+            let x = if x + step <= hi { x + step } else { x - step };
+            let q = if axis == 0 {
+                DVec2::new(x, uv.y)
+            } else {
+                DVec2::new(uv.x, x)
+            };
+            let p = eval_at(s, q);
+            if p.distance(self.pos[v as usize]) > weld {
+                out.push(p);
+            }
+        }
+        out
+    }
+
     /// Welds initial boundary vertices of different patches and splits boundary edges at foreign
     /// boundary vertices lying on them, until the patches meet edge to edge.
     fn conform_patches(&mut self, weld: f64) -> Result<(), TessError> {
@@ -494,21 +535,58 @@ impl Builder<'_> {
         // `remap` numbers clusters, not input points: a cluster stands for its first member.
         // (Indexing `bverts` by the cluster number welded a third patch's corners to unrelated
         // vertices of the second, and the closure then chased those vertices without end.)
-        let mut first = vec![u32::MAX; reps.len()];
+        let mut members: Vec<Vec<u32>> = vec![Vec::new(); reps.len()];
         for (i, &r) in remap.iter().enumerate() {
-            if first[r as usize] == u32::MAX {
-                first[r as usize] = bverts[i];
-            }
+            members[r as usize].push(bverts[i]);
         }
         let mut rep: Vec<u32> = (0..self.pos.len() as u32).collect();
-        for (i, &r) in remap.iter().enumerate() {
-            let (v, target) = (bverts[i], first[r as usize]);
-            if self.home[v as usize].0 != self.home[target as usize].0 {
-                rep[v as usize] = target;
+        for m in &members {
+            let patch = |v: u32| self.home[v as usize].0;
+            let pole = m
+                .iter()
+                .enumerate()
+                .any(|(j, &v)| m[..j].iter().any(|&w| patch(w) == patch(v)));
+            if !pole {
+                for &v in &m[1..] {
+                    rep[v as usize] = m[0];
+                }
+                continue;
+            }
+            // Several vertices of one patch at one point: a collapsed side (the teapot's lid top
+            // and bottom centre). Pair each with the vertex of another patch whose side leaves
+            // the point in the same direction, one to one, so shared sides keep one vertex and
+            // no triangle gets two corners welded together.
+            let probes: Vec<Vec<DVec3>> = m.iter().map(|&v| self.side_probes(v, weld)).collect();
+            let mut claimed: Vec<(u32, u32)> = Vec::new();
+            for (j, &v) in m.iter().enumerate() {
+                let mut best: Option<(f64, u32)> = None;
+                for (i, &w) in m[..j].iter().enumerate() {
+                    let target = rep[w as usize];
+                    if patch(w) == patch(v) || claimed.contains(&(patch(v), target)) {
+                        continue;
+                    }
+                    for a in &probes[j] {
+                        for b in &probes[i] {
+                            let reach = a.distance(self.pos[v as usize]);
+                            let d = a.distance(*b);
+                            if d <= PROBE_MATCH_REL * reach && best.is_none_or(|(bd, _)| d < bd) {
+                                best = Some((d, target));
+                            }
+                        }
+                    }
+                }
+                if let Some((_, target)) = best {
+                    rep[v as usize] = target;
+                    claimed.push((patch(v), target));
+                }
             }
         }
-        for t in &mut self.tris {
-            t.v = t.v.map(|v| rep[v as usize]);
+        for t in 0..self.tris.len() {
+            let v = self.tris[t].v.map(|v| rep[v as usize]);
+            self.tris[t].v = v;
+            if v[0] == v[1] || v[1] == v[2] || v[2] == v[0] {
+                self.tris[t].alive = false;
+            }
         }
         self.reindex();
         // 2. Split boundary edges at foreign boundary vertices (T-junctions), repeatedly.
@@ -582,7 +660,7 @@ impl Builder<'_> {
         let longest = (0..3)
             .map(|k| p[k].distance(p[(k + 1) % 3]))
             .fold(0.0, f64::max);
-        if longest < MIN_EDGE_OVER_CHORD * self.chord {
+        if longest < (MIN_EDGE_OVER_CHORD * self.chord).max(MIN_EDGE_OVER_WELD * self.weld) {
             return Ok(false);
         }
         let s = self.surfs[tri.patch as usize];
@@ -599,9 +677,17 @@ impl Builder<'_> {
             return Ok(true);
         }
         // Normal turn between the corners and the centroid.
+        // At a collapsed side (a pole) one tangent vanishes and su × sv is round-off whose
+        // direction is arbitrary: such a point has no normal to compare, only the chordal test.
         let normal = |uv: DVec2| {
             let (_, su, sv) = s.deriv1(uv.x, uv.y);
-            su.cross(sv).try_normalize()
+            let n = su.cross(sv);
+            let scale = su.length_squared().max(sv.length_squared());
+            if n.length() <= DEGENERATE_NORMAL_REL * scale {
+                None
+            } else {
+                n.try_normalize()
+            }
         };
         let nc = normal(uc);
         if let Some(nc) = nc {
@@ -681,6 +767,7 @@ pub fn tessellate_with(
         work: Vec::new(),
         opts: *opts,
         chord: tol.chord_mm,
+        weld: tol.weld_mm,
     };
     for p in 0..surfaces.len() as u32 {
         b.init_patch(p)?;
