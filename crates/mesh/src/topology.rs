@@ -101,61 +101,113 @@ pub struct Topology {
 impl Topology {
     /// Builds the adjacency. Fails on bad indices, repeated vertices, non-manifold edges and
     /// inconsistent orientation (the conditions under which boundary loops are undefined).
+    ///
+    /// The edges are found by sorting the `3F` half-edges by their undirected key (flat
+    /// vectors, no tree insertions); the map of [`Topology::edges`] is then bulk-built from the
+    /// sorted run. Errors are the ones a triangle-by-triangle scan meets first.
     pub fn build(mesh: &TriMesh) -> Result<Self, TopologyError> {
         let n = mesh.positions.len();
-        let mut edges: BTreeMap<(u32, u32), EdgeInfo> = BTreeMap::new();
-        let mut counts: BTreeMap<(u32, u32), usize> = BTreeMap::new();
+        let nt = mesh.triangles.len();
+        // The first triangle with a bad index or a repeated vertex: triangles before it are
+        // scanned for edge conflicts, which a sequential scan would report first.
+        let mut bad: Option<(usize, TopologyError)> = None;
         for (t, tri) in mesh.triangles.iter().enumerate() {
-            for &v in tri {
-                if v as usize >= n {
-                    return Err(TopologyError::BadIndex {
+            if let Some(&v) = tri.iter().find(|&&v| v as usize >= n) {
+                bad = Some((
+                    t,
+                    TopologyError::BadIndex {
                         triangle: t,
                         vertex: v,
                         count: n,
-                    });
-                }
+                    },
+                ));
+                break;
             }
-            for k in 0..3 {
-                if tri[k] == tri[(k + 1) % 3] {
-                    return Err(TopologyError::RepeatedVertex {
+            if let Some(k) = (0..3).find(|&k| tri[k] == tri[(k + 1) % 3]) {
+                bad = Some((
+                    t,
+                    TopologyError::RepeatedVertex {
                         triangle: t,
                         vertex: tri[k],
-                    });
-                }
+                    },
+                ));
+                break;
             }
+        }
+        let scanned = bad.as_ref().map_or(nt, |b| b.0);
+        // Half-edges as (undirected key, occurrence 3t + k); sorted, each key's occurrences
+        // stay in scan order.
+        let mut half: Vec<(u64, u32)> = Vec::with_capacity(3 * scanned);
+        for (t, tri) in mesh.triangles[..scanned].iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                let key = (a.min(b), a.max(b));
-                *counts.entry(key).or_insert(0) += 1;
-                let e = edges.entry(key).or_insert(EdgeInfo {
-                    fwd: None,
-                    rev: None,
-                });
-                let slot = if a < b { &mut e.fwd } else { &mut e.rev };
-                if let Some(prev) = *slot {
-                    if counts[&key] > 2 {
-                        return Err(TopologyError::NonManifoldEdge {
-                            a: key.0,
-                            b: key.1,
-                            count: counts[&key],
-                        });
-                    }
-                    return Err(TopologyError::InconsistentOrientation {
-                        a,
-                        b,
-                        t0: prev as usize,
-                        t1: t,
-                    });
-                }
-                *slot = Some(t as u32);
+                let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
+                half.push((key, (3 * t + k) as u32));
             }
         }
-        if let Some((&(a, b), &count)) = counts.iter().find(|(_, c)| **c > 2) {
-            return Err(TopologyError::NonManifoldEdge { a, b, count });
+        half.sort_unstable();
+        let dir_of = |occ: u32| {
+            let (t, k) = (occ as usize / 3, occ as usize % 3);
+            let tri = mesh.triangles[t];
+            (tri[k], tri[(k + 1) % 3], t as u32)
+        };
+        let mut edge_list: Vec<((u32, u32), EdgeInfo)> = Vec::with_capacity(half.len() / 2 + 1);
+        // The earliest conflicting occurrence (a half-edge whose side is already taken).
+        let mut conflict: Option<(u32, TopologyError)> = None;
+        let mut i = 0;
+        while i < half.len() {
+            let key = half[i].0;
+            let mut j = i;
+            let mut e = EdgeInfo {
+                fwd: None,
+                rev: None,
+            };
+            while j < half.len() && half[j].0 == key {
+                let (a, b, t) = dir_of(half[j].1);
+                let slot = if a < b { &mut e.fwd } else { &mut e.rev };
+                if let Some(prev) = *slot {
+                    let occ = half[j].1;
+                    if conflict.as_ref().is_none_or(|c| occ < c.0) {
+                        let count = j - i + 1;
+                        let err = if count > 2 {
+                            TopologyError::NonManifoldEdge {
+                                a: (key >> 32) as u32,
+                                b: key as u32,
+                                count,
+                            }
+                        } else {
+                            TopologyError::InconsistentOrientation {
+                                a,
+                                b,
+                                t0: prev as usize,
+                                t1: t as usize,
+                            }
+                        };
+                        conflict = Some((occ, err));
+                    }
+                    // Later occurrences of this edge come after the conflict in scan order.
+                    while j < half.len() && half[j].0 == key {
+                        j += 1;
+                    }
+                    break;
+                }
+                *slot = Some(t);
+                j += 1;
+            }
+            edge_list.push((((key >> 32) as u32, key as u32), e));
+            i = j;
         }
+        if let Some((_, err)) = conflict {
+            return Err(err);
+        }
+        if let Some((_, err)) = bad {
+            return Err(err);
+        }
+        drop(half);
 
-        // Components by union-find over shared edges.
-        let mut parent: Vec<u32> = (0..mesh.triangles.len() as u32).collect();
+        // Components by union-find over shared edges. The root of a set is always its smallest
+        // triangle, so the labels do not depend on the union order.
+        let mut parent: Vec<u32> = (0..nt as u32).collect();
         fn find(p: &mut [u32], mut x: u32) -> u32 {
             while p[x as usize] != x {
                 p[x as usize] = p[p[x as usize] as usize];
@@ -163,75 +215,82 @@ impl Topology {
             }
             x
         }
-        for e in edges.values() {
+        fn union(p: &mut [u32], a: u32, b: u32) {
+            let (ra, rb) = (find(p, a), find(p, b));
+            if ra != rb {
+                p[ra.max(rb) as usize] = ra.min(rb);
+            }
+        }
+        for (_, e) in &edge_list {
             if let (Some(a), Some(b)) = (e.fwd, e.rev) {
-                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-                if ra != rb {
-                    parent[ra.max(rb) as usize] = ra.min(rb);
-                }
+                union(&mut parent, a, b);
             }
         }
         // Triangles sharing only a vertex are also connected.
-        let mut first_tri_of_vertex: Vec<Option<u32>> = vec![None; n];
+        let mut first_tri_of_vertex: Vec<u32> = vec![u32::MAX; n];
         for (t, tri) in mesh.triangles.iter().enumerate() {
             for &v in tri {
                 match first_tri_of_vertex[v as usize] {
-                    None => first_tri_of_vertex[v as usize] = Some(t as u32),
-                    Some(o) => {
-                        let (ra, rb) = (find(&mut parent, o), find(&mut parent, t as u32));
-                        if ra != rb {
-                            parent[ra.max(rb) as usize] = ra.min(rb);
-                        }
-                    }
+                    u32::MAX => first_tri_of_vertex[v as usize] = t as u32,
+                    o => union(&mut parent, o, t as u32),
                 }
             }
         }
-        let mut label: BTreeMap<u32, u32> = BTreeMap::new();
-        let mut component_of_triangle = Vec::with_capacity(mesh.triangles.len());
-        for t in 0..mesh.triangles.len() as u32 {
-            let r = find(&mut parent, t);
-            let next = label.len() as u32;
-            component_of_triangle.push(*label.entry(r).or_insert(next));
+        let mut label: Vec<u32> = vec![u32::MAX; nt];
+        let mut component_count = 0usize;
+        let mut component_of_triangle = Vec::with_capacity(nt);
+        for t in 0..nt as u32 {
+            let r = find(&mut parent, t) as usize;
+            if label[r] == u32::MAX {
+                label[r] = component_count as u32;
+                component_count += 1;
+            }
+            component_of_triangle.push(label[r]);
         }
 
-        // Boundary loops: directed boundary half-edges a->b (as in their triangle).
-        let mut next_of: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
-        for (&(lo, hi), e) in &edges {
-            match (e.fwd, e.rev) {
-                (Some(_), None) => next_of.entry(lo).or_default().push(hi),
-                (None, Some(_)) => next_of.entry(hi).or_default().push(lo),
-                _ => {}
-            }
-        }
+        // Boundary loops: directed boundary half-edges a->b (as in their triangle), grouped by
+        // their tail vertex in edge order (a stable sort keeps that order within a vertex).
+        let mut bnd: Vec<(u32, u32)> = edge_list
+            .iter()
+            .filter_map(|&((lo, hi), e)| match (e.fwd, e.rev) {
+                (Some(_), None) => Some((lo, hi)),
+                (None, Some(_)) => Some((hi, lo)),
+                _ => None,
+            })
+            .collect();
+        bnd.sort_by_key(|&(a, _)| a);
+        let mut used = vec![false; bnd.len()];
+        let outs = |v: u32| {
+            let s = bnd.partition_point(|&(a, _)| a < v);
+            let e = bnd.partition_point(|&(a, _)| a <= v);
+            s..e
+        };
         let mut boundary_loops = Vec::new();
-        let mut used: BTreeMap<(u32, u32), bool> = BTreeMap::new();
-        for (&start, outs) in &next_of {
-            for &first in outs {
-                if used.contains_key(&(start, first)) {
-                    continue;
-                }
-                let mut lp = vec![start];
-                used.insert((start, first), true);
-                let mut cur = first;
-                let mut guard = 0usize;
-                while cur != start && guard <= edges.len() {
-                    lp.push(cur);
-                    let nexts = next_of.get(&cur).cloned().unwrap_or_default();
-                    let Some(&nx) = nexts.iter().find(|&&x| !used.contains_key(&(cur, x))) else {
-                        break;
-                    };
-                    used.insert((cur, nx), true);
-                    cur = nx;
-                    guard += 1;
-                }
-                boundary_loops.push(lp);
+        for h in 0..bnd.len() {
+            if used[h] {
+                continue;
             }
+            let (start, first) = bnd[h];
+            let mut lp = vec![start];
+            used[h] = true;
+            let mut cur = first;
+            let mut guard = 0usize;
+            while cur != start && guard <= edge_list.len() {
+                lp.push(cur);
+                let Some(nx) = outs(cur).find(|&g| !used[g]) else {
+                    break;
+                };
+                used[nx] = true;
+                cur = bnd[nx].1;
+                guard += 1;
+            }
+            boundary_loops.push(lp);
         }
         Ok(Self {
-            edges,
+            edges: edge_list.into_iter().collect(),
             boundary_loops,
             component_of_triangle,
-            component_count: label.len(),
+            component_count,
         })
     }
 
@@ -255,18 +314,39 @@ pub fn check_disk(mesh: &TriMesh) -> Result<Topology, TopologyError> {
         return Err(TopologyError::NonFinite { vertex: v });
     }
     let topo = Topology::build(mesh)?;
-    let mut seen: BTreeMap<[u32; 3], usize> = BTreeMap::new();
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        let mut key = *tri;
-        key.sort_unstable();
-        if let Some(&first) = seen.get(&key) {
-            return Err(TopologyError::DuplicateTriangle { first, second: t });
+    // Duplicate triangles: sort the vertex-sorted keys; the first duplicate in scan order is
+    // the smallest second occurrence, reported with the first occurrence of its key.
+    let mut keys: Vec<([u32; 3], u32)> = mesh
+        .triangles
+        .iter()
+        .enumerate()
+        .map(|(t, tri)| {
+            let mut key = *tri;
+            key.sort_unstable();
+            (key, t as u32)
+        })
+        .collect();
+    keys.sort_unstable();
+    let mut duplicate: Option<(usize, usize)> = None;
+    for group in keys.chunk_by(|x, y| x.0 == y.0) {
+        if let [first, second, ..] = group
+            && duplicate.is_none_or(|d| (second.1 as usize) < d.1)
+        {
+            duplicate = Some((first.1 as usize, second.1 as usize));
         }
-        seen.insert(key, t);
+    }
+    let first_zero_area = (0..mesh.triangles.len()).find(|&t| {
         let [a, b, c] = mesh.corners(t);
         let scale = (b - a).length().max((c - a).length()).max((c - b).length());
         // Relative area test: a sliver whose area is below round-off of its edge lengths.
-        if (b - a).cross(c - a).length() <= 1e-14 * scale * scale {
+        (b - a).cross(c - a).length() <= 1e-14 * scale * scale
+    });
+    match (duplicate, first_zero_area) {
+        (Some((first, second)), z) if z.is_none_or(|z| second <= z) => {
+            return Err(TopologyError::DuplicateTriangle { first, second });
+        }
+        (_, Some(t)) => {
+            let tri = mesh.triangles[t];
             return Err(TopologyError::ZeroArea {
                 triangle: t,
                 a: tri[0],
@@ -274,6 +354,7 @@ pub fn check_disk(mesh: &TriMesh) -> Result<Topology, TopologyError> {
                 c: tri[2],
             });
         }
+        _ => {}
     }
     if topo.component_count > 1 {
         return Err(TopologyError::SeveralComponents {
@@ -281,14 +362,17 @@ pub fn check_disk(mesh: &TriMesh) -> Result<Topology, TopologyError> {
         });
     }
     // Non-manifold vertex: a vertex on more than one boundary passage.
-    let mut boundary_visits: BTreeMap<u32, usize> = BTreeMap::new();
+    let mut boundary_visits = vec![0usize; mesh.positions.len()];
     for lp in &topo.boundary_loops {
         for &v in lp {
-            *boundary_visits.entry(v).or_insert(0) += 1;
+            boundary_visits[v as usize] += 1;
         }
     }
-    if let Some((&v, &k)) = boundary_visits.iter().find(|(_, k)| **k > 1) {
-        return Err(TopologyError::NonManifoldVertex { vertex: v, fans: k });
+    if let Some((v, &k)) = boundary_visits.iter().enumerate().find(|(_, k)| **k > 1) {
+        return Err(TopologyError::NonManifoldVertex {
+            vertex: v as u32,
+            fans: k,
+        });
     }
     match topo.boundary_loops.len() {
         0 => return Err(TopologyError::NoBoundary),
@@ -378,6 +462,55 @@ mod tests {
         assert_eq!(
             check_disk(&m).unwrap_err(),
             TopologyError::SeveralComponents { count: 2 }
+        );
+    }
+
+    #[test]
+    fn first_error_in_scan_order_is_reported() {
+        // A triangle and its reverse: consistent edges, a duplicate.
+        let mut m = grid(1);
+        m.triangles = vec![[0, 1, 3], [0, 3, 1]];
+        assert_eq!(
+            check_disk(&m).unwrap_err(),
+            TopologyError::DuplicateTriangle {
+                first: 0,
+                second: 1
+            }
+        );
+        // Reversing a grid triangle puts a third triangle on its interior edge 0-4.
+        let mut m = grid(2);
+        let [a, b, c] = m.triangles[0];
+        m.triangles.push([a, c, b]);
+        assert_eq!(
+            check_disk(&m).unwrap_err(),
+            TopologyError::NonManifoldEdge {
+                a: 0,
+                b: 4,
+                count: 3
+            }
+        );
+        // Triangle 8 reuses edge 0->1 of triangle 0 in the same direction; triangle 9 has a bad
+        // index, met later in the scan.
+        let mut m = grid(2);
+        m.triangles.push([0, 1, 7]);
+        m.triangles.push([0, 1, 99]);
+        assert_eq!(
+            Topology::build(&m).unwrap_err(),
+            TopologyError::InconsistentOrientation {
+                a: 0,
+                b: 1,
+                t0: 0,
+                t1: 8
+            }
+        );
+        let mut m = grid(2);
+        m.triangles.push([0, 0, 1]);
+        assert_eq!(
+            Topology::build(&m).unwrap_err(),
+            TopologyError::RepeatedVertex {
+                triangle: 8,
+                vertex: 0
+            }
         );
     }
 }
