@@ -12,7 +12,7 @@
 use std::time::Instant;
 
 use flatcut_flatten::{FlattenParams, Method, flatten, testmesh};
-use flatcut_geom::{DVec2, DVec3};
+use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh, face_distortion};
 
 /// Boundary-length tolerance on an exactly developable mesh: f1's own target is 1e-10
@@ -28,41 +28,17 @@ const DELTA2_SLACK: f64 = 1e-9;
 const CAP_DELTA2_FACTOR: f64 = 10.0;
 
 fn read_obj(text: &str) -> TriMesh {
-    let mut pos = Vec::new();
-    let mut tris = Vec::new();
-    for line in text.lines() {
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("v") => {
-                let c: Vec<f64> = it.take(3).map(|s| s.parse().unwrap()).collect();
-                pos.push(DVec3::new(c[0], c[1], c[2]));
-            }
-            Some("f") => {
-                let v: Vec<u32> = it
-                    .map(|s| s.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
-                    .collect();
-                for k in 1..v.len() - 1 {
-                    tris.push([v[0], v[k], v[k + 1]]);
-                }
-            }
-            _ => {}
-        }
-    }
-    TriMesh::new(pos, tris)
+    // The mesh crate's reader (line:column errors); bench meshes carry no `vt`.
+    let mut m = flatcut_mesh::io::parse_obj(text, std::path::Path::new("bench.obj"))
+        .expect("bench mesh parses");
+    m.flat = None;
+    m
 }
 
 fn write_obj(mesh: &TriMesh, uv: &[DVec2]) -> String {
-    let mut s = String::new();
-    for p in &mesh.positions {
-        s += &format!("v {} {} {}\n", p.x, p.y, p.z);
-    }
-    for q in uv {
-        s += &format!("vt {} {}\n", q.x, q.y);
-    }
-    for t in &mesh.triangles {
-        s += &format!("f {0}/{0} {1}/{1} {2}/{2}\n", t[0] + 1, t[1] + 1, t[2] + 1);
-    }
-    s
+    let mut m = mesh.clone();
+    m.flat = Some(uv.to_vec());
+    flatcut_mesh::io::obj_string(&m)
 }
 
 /// Scores of one flattening, at true scale (no area normalisation: both methods fix the scale

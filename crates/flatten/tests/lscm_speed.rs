@@ -10,38 +10,15 @@ use std::time::Instant;
 use flatcut_flatten::ops::{corner_cotans, used_mask};
 use flatcut_flatten::sparse::{SpdSolver, SymPattern, SymTriplets};
 use flatcut_flatten::{FlattenParams, Method, flatten, lscm, testmesh};
-use flatcut_geom::{DVec2, DVec3};
+use flatcut_geom::DVec2;
 use flatcut_mesh::{TriMesh, check_disk};
 
 fn read_obj(text: &str) -> TriMesh {
-    let mut pos = Vec::new();
-    let mut tris = Vec::new();
-    for line in text.lines() {
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("v") => {
-                let c: Vec<f64> = it.take(3).map(|s| s.parse().expect("number")).collect();
-                pos.push(DVec3::new(c[0], c[1], c[2]));
-            }
-            Some("f") => {
-                let v: Vec<u32> = it
-                    .map(|s| {
-                        s.split('/')
-                            .next()
-                            .unwrap_or("")
-                            .parse::<u32>()
-                            .expect("index")
-                            - 1
-                    })
-                    .collect();
-                for k in 1..v.len() - 1 {
-                    tris.push([v[0], v[k], v[k + 1]]);
-                }
-            }
-            _ => {}
-        }
-    }
-    TriMesh::new(pos, tris)
+    // The mesh crate's reader (line:column errors); bench meshes carry no `vt`.
+    let mut m = flatcut_mesh::io::parse_obj(text, std::path::Path::new("bench.obj"))
+        .expect("bench mesh parses");
+    m.flat = None;
+    m
 }
 
 /// Solves the LSCM system phase by phase (the same energy as `lscm::solve_pinned`), printing
