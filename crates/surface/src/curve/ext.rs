@@ -73,35 +73,9 @@ pub trait CurveExt: ParamCurve {
         if s >= total {
             return b;
         }
-        let (mut lo, mut hi) = (a, b);
-        let mut t = a + (b - a) * (s / total);
-        let mut cur = self.arclen_range(a, t, piece_acc);
-        for _ in 0..100 {
-            let err = cur - s;
-            if err.abs() <= accuracy {
-                break;
-            }
-            if err > 0.0 {
-                hi = t;
-            } else {
-                lo = t;
-            }
-            let speed = self.deriv(t, 1).length();
-            let mut next = if speed > 0.0 {
-                t - err / speed
-            } else {
-                f64::NAN
-            };
-            if !(next > lo && next < hi) {
-                next = 0.5 * (lo + hi);
-            }
-            cur += self.arclen_range(t, next, piece_acc);
-            t = next;
-            if hi - lo <= f64::EPSILON * (b - a).abs().max(1.0) {
-                break;
-            }
-        }
-        t
+        let t = a + (b - a) * (s / total);
+        let cur = self.arclen_range(a, t, piece_acc);
+        seek_arclen(self, s, (t, cur), (a, b), accuracy).0
     }
 
     /// The parameters at the given arc lengths from the domain start (sorted ascending, clamped
@@ -110,36 +84,10 @@ pub trait CurveExt: ParamCurve {
     /// consecutive targets.
     fn params_at_arclens(&self, lengths: &[f64], accuracy: f64) -> Vec<f64> {
         let (a, b) = self.domain();
-        let piece_acc = accuracy / 16.0;
         let mut out = Vec::with_capacity(lengths.len());
         let (mut t, mut cur) = (a, 0.0);
         for &s in lengths {
-            let (mut lo, mut hi) = (t, b);
-            for _ in 0..100 {
-                let err = cur - s;
-                if err.abs() <= accuracy {
-                    break;
-                }
-                if err > 0.0 {
-                    hi = t;
-                } else {
-                    lo = t;
-                }
-                if hi - lo <= f64::EPSILON * (b - a).abs().max(1.0) {
-                    break;
-                }
-                let speed = self.deriv(t, 1).length();
-                let mut next = if speed > 0.0 {
-                    t - err / speed
-                } else {
-                    f64::NAN
-                };
-                if !(next > lo && next < hi) {
-                    next = 0.5 * (lo + hi);
-                }
-                cur += self.arclen_range(t, next, piece_acc);
-                t = next;
-            }
+            (t, cur) = seek_arclen(self, s, (t, cur), (t, b), accuracy);
             out.push(t);
         }
         out
@@ -690,4 +638,45 @@ mod tests {
             "non-positive tolerance falls back to the default"
         );
     }
+}
+
+/// Safeguarded Newton search for the parameter where the arc length from the domain start is
+/// `s`, starting at `t` (whose arc length is `cur`) inside the bracket `(lo, hi)`: Newton steps on
+/// `s(t) − s`, bisection whenever a step leaves the bracket. Returns the parameter and its arc
+/// length. Shared by `inv_arclen` and `params_at_arclens`.
+fn seek_arclen<C: ParamCurve + ?Sized>(
+    c: &C,
+    s: f64,
+    (mut t, mut cur): (f64, f64),
+    (mut lo, mut hi): (f64, f64),
+    accuracy: f64,
+) -> (f64, f64) {
+    let (a, b) = c.domain();
+    let piece_acc = accuracy / 16.0;
+    for _ in 0..100 {
+        let err = cur - s;
+        if err.abs() <= accuracy {
+            break;
+        }
+        if err > 0.0 {
+            hi = t;
+        } else {
+            lo = t;
+        }
+        if hi - lo <= f64::EPSILON * (b - a).abs().max(1.0) {
+            break;
+        }
+        let speed = c.deriv(t, 1).length();
+        let mut next = if speed > 0.0 {
+            t - err / speed
+        } else {
+            f64::NAN
+        };
+        if !(next > lo && next < hi) {
+            next = 0.5 * (lo + hi);
+        }
+        cur += integrate(|x| c.deriv(x, 1).length(), t, next, piece_acc);
+        t = next;
+    }
+    (t, cur)
 }
