@@ -488,8 +488,9 @@ impl<'a> Engine<'a> {
                     .import_item(&ext, variants.len())
                     .map_err(|e| bad(format!("rejected by the engine: {e}")))?;
                 let bb = flatcut_geom::Aabb2::from_points(outline.iter().copied());
-                total_extent += (bb.max - bb.min).max_element() * it.quantity as f64
-                    + opts.spacing * it.quantity as f64;
+                // the bounding-box diagonal bounds the piece's extent in every rotation, so a
+                // roll this long holds all pieces side by side whatever angles the search picks
+                total_extent += ((bb.max - bb.min).length() + opts.spacing) * it.quantity as f64;
                 let vi = variants.len();
                 variants.push(Variant {
                     item: k,

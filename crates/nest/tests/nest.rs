@@ -318,3 +318,32 @@ fn pattern_pieces_nest_and_export_to_svg() {
         assert!(text.contains(&format!("id=\"{id}\"")), "{id}");
     }
 }
+
+/// A square piece whose grain runs diagonally must turn 45° on a roll: its length along the
+/// roll is then the square's diagonal, longer than either side, and the roll must still take it
+/// (a roll working length sized by the bounding box's longer side refused it).
+#[test]
+fn grain_turned_piece_fits_a_roll() {
+    let items = vec![NestItem {
+        grain_angle: Some(std::f64::consts::FRAC_PI_4),
+        ..NestItem::new("panel", rect(500., 500.), 1)
+    }];
+    let r = nest(
+        &items,
+        Stock::Roll {
+            width: 914.,
+            max_length: None,
+        },
+        &NestOptions::default().with_max_iters(4).with_samples(40),
+        &mut |_| {},
+    )
+    .expect("a 500 mm square turned 45° (707 mm across) fits a 914 mm roll");
+    assert!(r.unplaced.is_empty());
+    // the diagonal plus at most the default spacing
+    let diag = 500.0 * std::f64::consts::SQRT_2;
+    assert!(
+        r.length > diag - 1.0 && r.length < diag + 5.0,
+        "used length {}",
+        r.length
+    );
+}
