@@ -485,10 +485,15 @@ pub fn html_report(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
             }
             h.push_str("</table>\n");
         }
-        h.push_str("<h3>Worst regions</h3>\n");
+        let over = !c.report.regions.is_empty();
+        h.push_str(if over {
+            "<h3>Regions beyond the limits</h3>\n"
+        } else {
+            "<h3>Worst regions (1 % of the area most stretched or compressed)</h3>\n"
+        });
         let worst = worst_regions(c, 5);
         if worst.is_empty() {
-            h.push_str("<p>No region beyond the limits.</p>\n");
+            h.push_str("<p>No measurable distortion anywhere.</p>\n");
         } else {
             h.push_str("<table><tr><th>kind</th><th>worst %</th><th>area mm²</th><th>at 3D (mm)</th><th>at 2D (mm)</th></tr>\n");
             for r in worst {
@@ -505,10 +510,14 @@ pub fn html_report(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
     h
 }
 
-/// The limit regions of the report, or, when no limit was asked for, the regions of the 1 % most
-/// stretched or compressed surface.
+/// The regions beyond the limits, or, when there are none, the hot spots: the regions of the
+/// 1 % most stretched or compressed surface.
 fn worst_regions(c: &Column<'_>, k: usize) -> Vec<crate::Region> {
-    let mut v = c.report.regions.clone();
+    let mut v = if c.report.regions.is_empty() {
+        c.report.hot_spots.clone()
+    } else {
+        c.report.regions.clone()
+    };
     v.truncate(k);
     v
 }

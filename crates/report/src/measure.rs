@@ -231,8 +231,39 @@ pub struct Report {
     pub boundary_segments: Vec<BoundarySegment>,
     /// Regions beyond the limits asked for (empty when within or when no limit was given).
     pub regions: Vec<Region>,
+    /// Where the distortion concentrates, limits or not: the connected regions of the 1 % of
+    /// the surface area most stretched and the 1 % most compressed, worst first (at most
+    /// [`MAX_HOT_SPOTS`]); empty for a map without measurable distortion.
+    pub hot_spots: Vec<Region>,
     #[serde(skip)]
     pub per_face: Vec<FaceMeasure>,
+}
+
+/// Most hot spots a report lists (the long tail of one-face regions says nothing more).
+pub const MAX_HOT_SPOTS: usize = 10;
+/// Stretch or compression below this (percent) is not a hot spot: well under what any
+/// material or cutting process resolves (0.01 % is 0.1 mm over a metre).
+const NEGLIGIBLE_PCT: f64 = 0.01;
+
+/// The connected regions at or beyond the 99th area percentile of stretch and of compression.
+fn hot_spots(
+    mesh: &TriMesh,
+    flat: &[DVec2],
+    faces: &[FaceMeasure],
+    stretch_p99: f64,
+    compress_p99: f64,
+) -> Vec<Region> {
+    let s = stretch_p99.max(NEGLIGIBLE_PCT);
+    let c = compress_p99.max(NEGLIGIBLE_PCT);
+    let mut v = over_limit(mesh, flat, faces, "stretch", |f| {
+        (f.stretch_pct >= s).then_some(f.stretch_pct)
+    });
+    v.extend(over_limit(mesh, flat, faces, "compress", |f| {
+        (f.compress_pct >= c).then_some(f.compress_pct)
+    }));
+    v.sort_by(|a, b| b.worst_pct.total_cmp(&a.worst_pct));
+    v.truncate(MAX_HOT_SPOTS);
+    v
 }
 
 fn weighted_stats(values: &[(f64, f64)]) -> Stats {
@@ -399,6 +430,7 @@ impl Report {
                 (f.compress_pct > lim).then_some(f.compress_pct)
             }));
         }
+        let hot_spots = hot_spots(mesh, flat, &per_face, st.p99, co.p99);
         Ok(Report {
             name: name.into(),
             faces: per_face.len(),
@@ -432,6 +464,7 @@ impl Report {
             boundary_length_error,
             boundary_segments,
             regions,
+            hot_spots,
             per_face,
         })
     }

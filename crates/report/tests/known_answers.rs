@@ -199,6 +199,36 @@ fn limits_list_the_regions_beyond_them_with_location() {
 }
 
 #[test]
+fn hot_spots_show_where_the_distortion_concentrates_without_limits() {
+    // x' = x + k x²: the stretch grows to the right; on each column of cells the secant slope
+    // is 1 + k (x_i + x_{i+1}), so the last column (x 95..100) is the 1 % worst at 19.5 %.
+    let k = 0.001;
+    let m = with_map(grid(20, 100.0), |p| DVec2::new(p.x + k * p.x * p.x, p.y));
+    let r = Report::compute("graded", &m, &ReportOptions::default()).unwrap();
+    assert!(r.regions.is_empty() && r.within_limits(), "no limit asked");
+    assert_eq!(r.hot_spots.len(), 1, "{:?}", r.hot_spots);
+    let h = &r.hot_spots[0];
+    assert_eq!(h.kind, "stretch");
+    assert!((h.worst_pct - 19.5).abs() < 1e-9, "{}", h.worst_pct);
+    assert!((h.area_mm2 - 500.0).abs() < 1e-9);
+    assert!((h.centroid_3d[0] - 97.5).abs() < 1e-9 && (h.centroid_3d[1] - 50.0).abs() < 1e-9);
+    let col = Column {
+        title: "graded".into(),
+        mesh: &m,
+        report: &r,
+    };
+    let html = html_report(&[col], Measure::Stretch, false);
+    assert!(
+        html.contains("Worst regions") && html.contains("19.50"),
+        "HTML lists the hot spot"
+    );
+    // an isometry has none
+    let id = with_map(grid(8, 100.0), |p| DVec2::new(p.x, p.y));
+    let r = Report::compute("flat", &id, &ReportOptions::default()).unwrap();
+    assert!(r.hot_spots.is_empty());
+}
+
+#[test]
 fn json_has_the_stable_keys() {
     let m = with_map(grid(4, 10.0), |p| DVec2::new(p.x, p.y));
     let r = Report::compute("k", &m, &ReportOptions::default()).unwrap();
