@@ -6,13 +6,26 @@
 //! augmented Lagrangian on the boundary lengths (c_e = (|e|² − L²)/L² = 0), each inner problem
 //! solved by the flip-free projected Newton of [`super::newton`], multipliers updated
 //! λ ← λ + w c and the weight raised ×10 while the violation does not shrink fast enough.
-//! Where the lengths cannot all be kept without a fold, the line search stops at the fold and
-//! the closest flip-free map is returned with a warning naming the worst edges.
+//!
+//! The interior energy is Duncan's with a collapse guard ([`GuardedGreen`]): below σ = 1/√3 the
+//! Green–Lagrange term turns concave and bounded ((0 − 1)² per direction), so a growing boundary
+//! weight would otherwise squeeze a few triangles flat instead of compressing many. The guard is
+//! zero wherever every stretch stays above 1/√3, so feasible pieces (developables, caps up to
+//! ~1.4 rad) get Duncan's f1 unchanged.
+//!
+//! Infeasibility: where the boundary cannot be kept without a fold (hemisphere, saddle, toe),
+//! the lengths cannot be met by any non-degenerate interior. The guard is infinite at
+//! σ = [`DEGENERATE_STRETCH`] (a triangle crushed to a fifth of its size), so as the weight grows
+//! the solve tends to the flip-free map with the smallest boundary violation among those whose
+//! stretches all stay above it. The weight stops growing when a tenfold raise gains less than
+//! [`STALL_GAIN`] of the violation while the guard is active (some σ below 1/√3): the
+//! multipliers are fighting the interior, not round-off. The best iterate (smallest largest
+//! relative boundary error) is returned with a warning naming the worst edges.
 
 use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
-use super::kernel::{GreenStrain, RestTri, SymDirichlet};
+use super::kernel::{GREEN_CONCAVE_BELOW, GuardedGreen, RestTri, SymDirichlet, svd2};
 use super::newton::{EdgeTerms, MapProblem, run};
 use super::{ABS_DECREMENT_PER_AREA, mean_density, newton_solve, total_area};
 use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
@@ -20,14 +33,30 @@ use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
 /// Target relative boundary-length error.
 pub const BOUNDARY_REL_TOLERANCE: f64 = 1e-10;
 /// Outer augmented-Lagrangian iterations.
-const MAX_OUTER: usize = 12;
+const MAX_OUTER: usize = 14;
 /// Initial penalty weight (relative to the strain density).
 const INITIAL_WEIGHT: f64 = 10.0;
 /// Weight growth when the violation shrank by less than [`REQUIRED_SHRINK`].
 const WEIGHT_GROWTH: f64 = 10.0;
+/// Factor by which one outer iteration must shrink the violation to count as progress.
 const REQUIRED_SHRINK: f64 = 0.25;
 /// Relative length error above which an edge is reported as not kept.
 const REPORT_REL_ERROR: f64 = 1e-6;
+/// Guard stiffness k of [`GuardedGreen`]: k ≥ 2/3 keeps the guarded term convex below the
+/// floor (2k/f² = 6k against the Green term's −4); 1 leaves a margin.
+const GUARD_STIFFNESS: f64 = 1.0;
+/// Principal stretch below which a triangle counts as crushed: a fifth of its 3D size (δ2 ≥ 12
+/// there), no longer a faithful piece of the pattern.
+pub const DEGENERATE_STRETCH: f64 = 0.2;
+/// Where the isometric start itself compresses below [`DEGENERATE_STRETCH`], the guard's collapse
+/// stretch is set to this fraction of the start's smallest stretch.
+const START_COLLAPSE_FRACTION: f64 = 0.5;
+/// Relative gain in the violation below which an outer step counts as stalled. The gains of a
+/// stalled solve shrink geometrically (×0.4–0.5 per tenfold weight on the deep-cap test), so
+/// once one tenfold weight gains under 1 %, all further ones together gain about as much again.
+const STALL_GAIN: f64 = 0.01;
+/// Edges named in the infeasibility warning.
+const WORST_EDGES_REPORTED: usize = 3;
 
 /// Largest relative boundary-length error |ℓ − L|/L and its edge.
 pub fn max_boundary_error(edges: &[(usize, usize, f64)], x: &[DVec2]) -> (f64, usize) {
@@ -53,6 +82,28 @@ pub fn boundary_edges(mesh: &TriMesh, topo: &Topology) -> Vec<(usize, usize, f64
     out
 }
 
+/// Smallest principal stretch σ2 over the triangles and its triangle (σ2 ≤ 0 for an inverted
+/// one).
+pub fn min_stretch(rest: &[RestTri], x: &[DVec2]) -> (f64, usize) {
+    let mut worst = (f64::INFINITY, 0);
+    for (t, r) in rest.iter().enumerate() {
+        let s = svd2(r.jacobian(x)).s2;
+        if s < worst.0 {
+            worst = (s, t);
+        }
+    }
+    worst
+}
+
+/// Why the outer loop stopped short of the tolerance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Stop {
+    /// The violation stalled against the active guard.
+    Stalled,
+    /// An outer step crushed triangle `t` to stretch `s`; the previous iterate was kept.
+    Crushed { t: usize, s: f64 },
+}
+
 /// Duncan's f1.
 pub fn boundary_isometric(
     mesh: &TriMesh,
@@ -72,22 +123,38 @@ pub fn boundary_isometric(
         edges: edges.clone(),
         weight: INITIAL_WEIGHT,
     };
+    // The guard's collapse stretch: DEGENERATE_STRETCH, or below the start's own smallest
+    // stretch so the start is admissible.
+    let start_min = min_stretch(rest, &x).0;
+    let energy = GuardedGreen {
+        floor: GREEN_CONCAVE_BELOW,
+        collapse: DEGENERATE_STRETCH.min(START_COLLAPSE_FRACTION * start_min),
+        k: GUARD_STIFFNESS,
+    };
     let abs = ABS_DECREMENT_PER_AREA * total_area(rest);
     let mut viol = max_boundary_error(&edges, &x).0;
+    // The closest non-degenerate map so far: (largest relative boundary error, map).
+    let mut best = (viol, x.clone());
+    let mut stop = None;
     for _ in 0..MAX_OUTER {
         if viol <= BOUNDARY_REL_TOLERANCE {
             break;
         }
-        let problem =
-            MapProblem::new(rest, n, GreenStrain, Some(terms.clone())).map_err(|reason| {
-                FlattenError::Solver {
-                    stage: "boundary-isometric",
-                    reason,
-                }
-            })?;
+        let problem = MapProblem::new(rest, n, energy, Some(terms.clone())).map_err(|reason| {
+            FlattenError::Solver {
+                stage: "boundary-isometric",
+                reason,
+            }
+        })?;
         let (r, p) = run(problem, &x, params.max_iters, params.rel_tolerance, abs)
             .map_err(|reason| FlattenError::NoConvergence { method, reason })?;
         iterations += r.iterations;
+        let (s_min, t_min) = min_stretch(rest, &r.x);
+        // The guard keeps every stretch above its collapse stretch; this only catches round-off.
+        if !(s_min > energy.collapse) {
+            stop = Some(Stop::Crushed { t: t_min, s: s_min });
+            break;
+        }
         x = r.x;
         let Some(t) = p.edges else { break };
         terms = t;
@@ -95,35 +162,74 @@ pub fn boundary_isometric(
             terms.lambda[k] += terms.weight * terms.constraint(k, &x);
         }
         let v = max_boundary_error(&edges, &x).0;
+        if v < best.0 {
+            best = (v, x.clone());
+        }
         if v > REQUIRED_SHRINK * viol {
+            if s_min < GREEN_CONCAVE_BELOW && v > (1.0 - STALL_GAIN) * viol {
+                stop = Some(Stop::Stalled);
+                break;
+            }
             terms.weight *= WEIGHT_GROWTH;
         }
         viol = v;
     }
+    let (viol, x) = best;
     let mut warnings = Vec::new();
     if viol > REPORT_REL_ERROR {
-        let mut errs: Vec<(f64, usize)> = edges
-            .iter()
-            .enumerate()
-            .map(|(k, &(a, b, l))| (((x[b] - x[a]).length() - l).abs() / l, k))
-            .collect();
-        errs.sort_by(|p, q| q.0.total_cmp(&p.0).then(p.1.cmp(&q.1)));
-        let worst: Vec<String> = errs
-            .iter()
-            .take(3)
-            .map(|&(r, k)| format!("{}–{} ({:.2e})", edges[k].0, edges[k].1, r))
-            .collect();
-        warnings.push(format!(
-            "boundary lengths cannot all be kept without a fold: largest relative length error {viol:.2e}; worst edges {}",
-            worst.join(", ")
-        ));
+        warnings.push(infeasible_warning(mesh, rest, &edges, &x, viol, stop));
     }
     Ok(Flattening {
         info: FlattenInfo {
             iterations,
-            final_energy: mean_density(rest, &x, &GreenStrain),
+            final_energy: mean_density(rest, &x, &energy),
             warnings,
         },
         uv: x,
     })
+}
+
+/// The warning for boundary lengths that were not kept: the largest error, the worst edges with
+/// their vertices, 3D midpoints and relative errors, and why the solver stopped.
+fn infeasible_warning(
+    mesh: &TriMesh,
+    rest: &[RestTri],
+    edges: &[(usize, usize, f64)],
+    x: &[DVec2],
+    viol: f64,
+    stop: Option<Stop>,
+) -> String {
+    let mut errs: Vec<(f64, usize)> = edges
+        .iter()
+        .enumerate()
+        .map(|(k, &(a, b, l))| (((x[b] - x[a]).length() - l).abs() / l, k))
+        .collect();
+    errs.sort_by(|p, q| q.0.total_cmp(&p.0).then(p.1.cmp(&q.1)));
+    let worst: Vec<String> = errs
+        .iter()
+        .take(WORST_EDGES_REPORTED)
+        .map(|&(r, k)| {
+            let (a, b, l) = edges[k];
+            let m = 0.5 * (mesh.positions[a] + mesh.positions[b]);
+            let l2 = (x[b] - x[a]).length();
+            format!(
+                "{a}–{b} near ({:.2}, {:.2}, {:.2}): {l:.3} mm in 3D, {l2:.3} mm flat ({:.2e})",
+                m.x, m.y, m.z, r
+            )
+        })
+        .collect();
+    let (s_min, _) = min_stretch(rest, x);
+    let why = match stop {
+        Some(Stop::Stalled) => {
+            format!("keeping them would crush the interior (smallest stretch already {s_min:.3})")
+        }
+        Some(Stop::Crushed { t, s }) => format!(
+            "keeping them crushed triangle {t} to stretch {s:.2e}; returned the last map with every stretch ≥ {DEGENERATE_STRETCH}"
+        ),
+        None => "the solver ran out of outer iterations".to_string(),
+    };
+    format!(
+        "boundary lengths cannot all be kept without a fold: {why}; returned the closest flip-free map, largest relative length error {viol:.2e}; worst edges {}",
+        worst.join(", ")
+    )
 }

@@ -227,6 +227,89 @@ impl IsoEnergy for GreenStrain {
     }
 }
 
+/// Principal stretch below which Duncan's Green–Lagrange term (σ² − 1)² turns concave in σ
+/// (its second derivative 12σ² − 4 vanishes at σ = 1/√3): below it, squeezing one triangle
+/// further costs less per unit of compression than spreading it, so a solver that must shorten
+/// the interior collapses a few triangles instead of compressing many.
+pub const GREEN_CONCAVE_BELOW: f64 = 0.577_350_269_189_625_8;
+
+/// Duncan's Green–Lagrange deviation with a collapse guard: [`GreenStrain`] plus
+/// k·((f − c)/(σ − c) − 1)² on each principal stretch σ below the floor f (zero above it, C¹
+/// at f, +∞ as σ → c). With f = [`GREEN_CONCAVE_BELOW`] and k ≥ 2/3 the guarded term is convex
+/// in each σ below f (the guard's second derivative is at least 2k/(f − c)² ≥ 6k there, the
+/// Green term's at least −4), so compression spreads instead of localising, and no stretch can
+/// reach c: the smallest admissible stretch. Maps whose stretches all stay above f are scored
+/// exactly as by Duncan's energy.
+#[derive(Clone, Copy, Debug)]
+pub struct GuardedGreen {
+    /// Stretch floor f below which the guard acts.
+    pub floor: f64,
+    /// Stretch c < f at which the guard becomes infinite (0 for a plain anti-collapse barrier).
+    pub collapse: f64,
+    /// Guard stiffness k (dimensionless, relative to the Green–Lagrange density).
+    pub k: f64,
+}
+
+impl GuardedGreen {
+    fn b(&self, s: f64) -> f64 {
+        if s >= self.floor {
+            return 0.0;
+        }
+        let u = (self.floor - self.collapse) / (s - self.collapse) - 1.0;
+        self.k * u * u
+    }
+    fn db(&self, s: f64) -> f64 {
+        if s >= self.floor {
+            return 0.0;
+        }
+        let (w, d) = (self.floor - self.collapse, s - self.collapse);
+        let u = w / d - 1.0;
+        -2.0 * self.k * u * w / (d * d)
+    }
+    fn d2b(&self, s: f64) -> f64 {
+        if s >= self.floor {
+            return 0.0;
+        }
+        let (w, d) = (self.floor - self.collapse, s - self.collapse);
+        let u = w / d - 1.0;
+        let du = -w / (d * d);
+        2.0 * self.k * (du * du + u * 2.0 * w / (d * d * d))
+    }
+}
+
+impl IsoEnergy for GuardedGreen {
+    fn psi(&self, s1: f64, s2: f64) -> f64 {
+        if !(s2 > self.collapse) || !(s2 > 0.0) {
+            return f64::INFINITY;
+        }
+        GreenStrain.psi(s1, s2) + self.b(s1) + self.b(s2)
+    }
+    fn grad(&self, s1: f64, s2: f64) -> [f64; 2] {
+        let g = GreenStrain.grad(s1, s2);
+        [g[0] + self.db(s1), g[1] + self.db(s2)]
+    }
+    fn hess(&self, s1: f64, s2: f64) -> [[f64; 2]; 2] {
+        let mut h = GreenStrain.hess(s1, s2);
+        h[0][0] += self.d2b(s1);
+        h[1][1] += self.d2b(s2);
+        h
+    }
+    fn twist(&self, s1: f64, s2: f64) -> f64 {
+        let extra = if (s1 - s2).abs() <= TWIST_LIMIT_GAP * (s1.abs() + s2.abs()) {
+            self.d2b(s1)
+        } else {
+            (self.db(s1) - self.db(s2)) / (s1 - s2)
+        };
+        GreenStrain.twist(s1, s2) + extra
+    }
+    fn flip(&self, s1: f64, s2: f64) -> f64 {
+        GreenStrain.flip(s1, s2) + (self.db(s1) + self.db(s2)) / (s1 + s2)
+    }
+    fn is_barrier(&self) -> bool {
+        true
+    }
+}
+
 /// Material limits as a one-sided quadratic penalty on each principal stretch:
 /// k·(σ − s_max)₊² + k·(s_min − σ)₊², added to an inner energy.
 #[derive(Clone, Copy, Debug)]
@@ -513,6 +596,46 @@ mod tests {
     #[test]
     fn green_strain_derivatives_match_finite_differences() {
         check_fd(&GreenStrain);
+    }
+
+    #[test]
+    fn guarded_green_derivatives_match_finite_differences() {
+        // Floor above the test map's stretches (≈ 1.1–1.4), so the guard is active in both
+        // directions and its derivatives are checked too.
+        check_fd(&GuardedGreen {
+            floor: 1.6,
+            collapse: 0.0,
+            k: 1.0,
+        });
+        check_fd(&GuardedGreen {
+            floor: 1.6,
+            collapse: 0.5,
+            k: 1.0,
+        });
+        check_fd(&GuardedGreen {
+            floor: GREEN_CONCAVE_BELOW,
+            collapse: 0.2,
+            k: 1.0,
+        });
+    }
+
+    #[test]
+    fn guarded_green_is_green_above_the_floor_and_a_barrier_below() {
+        let c = 0.2;
+        let g = GuardedGreen {
+            floor: GREEN_CONCAVE_BELOW,
+            collapse: c,
+            k: 1.0,
+        };
+        assert_eq!(g.psi(1.2, 0.8), GreenStrain.psi(1.2, 0.8));
+        assert!(g.psi(1.0, c + 1e-3) > 1e4);
+        assert!(g.psi(1.0, c).is_infinite());
+        assert!(g.psi(1.0, 0.1).is_infinite());
+        // Convex in σ2 below the floor: the second derivative stays positive down to c.
+        for i in 1..100 {
+            let s = c + (GREEN_CONCAVE_BELOW - c) * i as f64 / 100.0;
+            assert!(g.hess(1.0, s)[1][1] > 0.0, "σ2 = {s}");
+        }
     }
 
     #[test]
