@@ -97,18 +97,22 @@ fn score(mesh: &TriMesh, topo: &Topology, uv: &[DVec2], seconds: f64) -> Score {
 }
 
 /// Flattens `mesh` with `method` and scores it; also returns the map and the warnings.
-fn run(mesh: &TriMesh, topo: &Topology, method: Method) -> (Score, Vec<DVec2>, Vec<String>) {
+fn run(mesh: &TriMesh, topo: &Topology, method: Method) -> (Score, usize, Vec<String>) {
     let t0 = Instant::now();
     let f = flatten(mesh, &FlattenParams::new(method)).unwrap();
     let dt = t0.elapsed().as_secs_f64();
-    (score(mesh, topo, &f.uv, dt), f.uv, f.info.warnings)
+    (
+        score(mesh, topo, &f.uv, dt),
+        f.info.iterations,
+        f.info.warnings,
+    )
 }
 
-const HEADER: &str = "| mesh | faces | iso mean δ2 | iso σ1 max | iso bnd err | iso s | f1 mean δ2 | f1 σ1 max | f1 σ2 min | f1 bnd err | f1 s | δ2 ratio | flips iso/f1 |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|";
+const HEADER: &str = "| mesh | faces | iso mean δ2 | iso σ1 max | iso bnd err | iso s | f1 mean δ2 | f1 σ1 max | f1 σ2 min | f1 bnd err | f1 s | δ2 ratio | flips iso/f1 | f1 Newton steps |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
 
-fn row(name: &str, faces: usize, iso: &Score, f1: &Score) -> String {
+fn row(name: &str, faces: usize, iso: &Score, f1: &Score, steps: usize) -> String {
     format!(
-        "| {name} | {faces} | {:.3e} | {:.4} | {:.1e} | {:.2} | {:.3e} | {:.4} | {:.4} | {:.1e} | {:.2} | {} | {}/{} |",
+        "| {name} | {faces} | {:.3e} | {:.4} | {:.1e} | {:.2} | {:.3e} | {:.4} | {:.4} | {:.1e} | {:.2} | {} | {}/{} | {steps} |",
         iso.mean_delta2,
         iso.max_stretch,
         iso.boundary_rel,
@@ -170,12 +174,13 @@ fn boundary_isometric_against_isometric() {
                 continue;
             }
         };
+        let steps = f1.info.iterations;
         let (f1, uv, warnings) = (
             score(&mesh, &topo, &f1.uv, t0.elapsed().as_secs_f64()),
             f1.uv,
             f1.info.warnings,
         );
-        println!("{}", row(&name, mesh.triangles.len(), &iso, &f1));
+        println!("{}", row(&name, mesh.triangles.len(), &iso, &f1, steps));
         for w in warnings {
             notes.push(format!("{name}: {w}"));
         }
@@ -197,8 +202,8 @@ fn generated_comparison() {
     for (name, mesh) in [("cap", &cap), ("cylinder", &cyl)] {
         let topo = Topology::build(mesh).unwrap();
         let (iso, _, _) = run(mesh, &topo, Method::Isometric);
-        let (f1, _, _) = run(mesh, &topo, Method::BoundaryIsometric);
-        println!("{}", row(name, mesh.triangles.len(), &iso, &f1));
+        let (f1, steps, _) = run(mesh, &topo, Method::BoundaryIsometric);
+        println!("{}", row(name, mesh.triangles.len(), &iso, &f1, steps));
         assert_eq!((iso.flips, f1.flips), (0, 0), "{name}: flipped triangles");
         assert!(
             f1.mean_delta2 >= iso.mean_delta2 - DELTA2_SLACK,

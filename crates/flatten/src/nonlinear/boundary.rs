@@ -128,11 +128,6 @@ pub fn boundary_isometric(
     let mut iterations = iso.iterations;
     let mut x = iso.x;
     let edges = boundary_edges(mesh, topo);
-    let mut terms = EdgeTerms {
-        lambda: vec![0.0; edges.len()],
-        edges: edges.clone(),
-        weight: INITIAL_WEIGHT,
-    };
     // The guard's collapse stretch: DEGENERATE_STRETCH, or below the start's own smallest
     // stretch so the start is admissible.
     let start_min = min_stretch(rest, &x).0;
@@ -141,6 +136,19 @@ pub fn boundary_isometric(
         collapse: DEGENERATE_STRETCH.min(START_COLLAPSE_FRACTION * start_min),
         k: GUARD_STIFFNESS,
     };
+    let terms = EdgeTerms {
+        lambda: vec![0.0; edges.len()],
+        edges: edges.clone(),
+        weight: INITIAL_WEIGHT,
+    };
+    // One problem (and one symbolic factorisation) for every outer iteration: only the
+    // multipliers and the weight change between them.
+    let mut problem = Some(
+        MapProblem::new(rest, n, energy, Some(terms)).map_err(|reason| FlattenError::Solver {
+            stage: "boundary-isometric",
+            reason,
+        })?,
+    );
     let abs = ABS_DECREMENT_PER_AREA * total_area(rest);
     let mut viol = max_boundary_error(&edges, &x).0;
     // The closest non-degenerate map so far: (largest relative boundary error, map).
@@ -150,12 +158,7 @@ pub fn boundary_isometric(
         if viol <= BOUNDARY_REL_TOLERANCE {
             break;
         }
-        let problem = MapProblem::new(rest, n, energy, Some(terms.clone())).map_err(|reason| {
-            FlattenError::Solver {
-                stage: "boundary-isometric",
-                reason,
-            }
-        })?;
+        let Some(pb) = problem.take() else { break };
         // Inexact inner solves while the boundary is far off (the multipliers will move the
         // target anyway), tight ones near the end so the multiplier updates see round-off only.
         let iters = if viol > INEXACT_ABOVE {
@@ -164,7 +167,7 @@ pub fn boundary_isometric(
             params.max_iters
         };
         let rel = params.rel_tolerance * INNER_REL_TIGHTENING;
-        let (r, p) = run(problem, &x, iters, rel, abs)
+        let (r, mut p) = run(pb, &x, iters, rel, abs)
             .map_err(|reason| FlattenError::NoConvergence { method, reason })?;
         iterations += r.iterations;
         let (s_min, t_min) = min_stretch(rest, &r.x);
@@ -174,8 +177,9 @@ pub fn boundary_isometric(
             break;
         }
         x = r.x;
-        let Some(t) = p.edges else { break };
-        terms = t;
+        let Some(terms) = p.edges.as_mut() else {
+            break;
+        };
         for k in 0..terms.edges.len() {
             terms.lambda[k] += terms.weight * terms.constraint(k, &x);
         }
@@ -192,6 +196,7 @@ pub fn boundary_isometric(
             terms.weight *= WEIGHT_GROWTH;
         }
         viol = v;
+        problem = Some(p);
     }
     let (viol, x) = best;
     let mut warnings = Vec::new();
