@@ -26,6 +26,14 @@
 //! different speeds. Within one patch, vertices are never welded (a closed cylinder stays cut at
 //! its parameter seam, which is where a flattening needs it cut anyway).
 //!
+//! Poles: a domain side that collapses to one point (the teapot's lid top and bottom centre, a
+//! sphere's poles) is one vertex from the start, the half-cells at it are dropped, and every
+//! edge from it is split on the meridian of its other end, so the pole is an ordinary fan
+//! vertex and no zero-area triangle is ever made there. Across patches, coincident boundary
+//! vertices are welded only where a side of one patch leaves the point along a side of the
+//! other: patches that merely touch at a point (the teapot's handle on the body) stay separate
+//! manifold components.
+//!
 //! Hand-written rather than `spade`: a constrained Delaunay refinement works in the parameter
 //! plane, where the metric of the surface is lost; bisection in the surface metric is what keeps
 //! 3D triangles well shaped on strongly anisotropic parameterisations.
@@ -62,12 +70,14 @@ const MIN_EDGE_OVER_WELD: f64 = 4.0;
 /// centres), far below this, while a genuine normal near the pole is ≳ 1e-6 relative.
 const DEGENERATE_NORMAL_REL: f64 = 1e-10;
 /// Parameter step (fraction of the domain) of the probes that tell which sides of two patches
-/// leave a shared pole in the same direction.
+/// leave a shared point in the same direction.
 const PROBE_STEP: f64 = 1.0 / 64.0;
-/// Two probes match when closer than this fraction of their distance from the pole: equal for
-/// a side both patches parameterise alike, near for different speeds; the next grid line of the
-/// initial grid leaves the pole ≥ 11° away (≈ 0.2 relative), well outside.
-const PROBE_MATCH_REL: f64 = 0.05;
+/// Two probes match when their directions from the shared point differ by less than this
+/// (cosine of 5°). A side both patches share leaves in the same direction whatever the speeds
+/// of the two parameterisations (the chord over one probe step of a side turning 90° across
+/// the patch is within 1° of the tangent), while distinct sides meeting at a corner are as far
+/// apart as the corner's angle, and a corner of 5° is a degenerate patch.
+const PROBE_MATCH_COS: f64 = 0.996_194_698_091_745_5;
 /// Parameter tolerance of the projection of a shared vertex onto another patch's boundary edge.
 const PROJECT_T_TOL: f64 = 1e-13;
 
@@ -149,6 +159,18 @@ pub fn tessellate_model(
     tessellate_patches(&refs, &tol)
 }
 
+/// A short step from a boundary vertex along a side of its patch.
+#[derive(Clone, Copy, Debug)]
+struct Probe {
+    /// Unit direction from the vertex to the step's point.
+    dir: DVec3,
+    point: DVec3,
+    patch: u32,
+    /// Parameters of the vertex and of the step's point.
+    from: DVec2,
+    to: DVec2,
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Tri {
     v: [u32; 3],
@@ -176,6 +198,9 @@ struct Builder<'a> {
     chord: f64,
     /// Weld tolerance: edges this short are collapsed in the output.
     weld: f64,
+    /// Per patch, which domain sides are collapsed to a point (a pole), in the order
+    /// u = lo, u = hi, v = lo, v = hi.
+    collapsed: Vec<[bool; 4]>,
 }
 
 fn key(a: u32, b: u32) -> (u32, u32) {
@@ -193,6 +218,73 @@ fn domain_ok(s: &dyn ParamSurface) -> bool {
 }
 
 impl Builder<'_> {
+    /// Which sides of the patch's domain collapse to one point within the weld tolerance: the
+    /// side is sampled at [`EXTENT_SAMPLES`] + 1 points. Triangular domains are not checked
+    /// (none of the supported triangular patches has a collapsed side).
+    fn find_collapsed_sides(&self, patch: u32) -> Result<[bool; 4], TessError> {
+        let s = self.surfs[patch as usize];
+        if s.domain_kind() != DomainKind::Rectangle {
+            return Ok([false; 4]);
+        }
+        let d = s.domain();
+        let mut out = [false; 4];
+        for (side, flag) in out.iter_mut().enumerate() {
+            let at = |t: f64| match side {
+                0 => DVec2::new(d.u.0, d.v.0 + (d.v.1 - d.v.0) * t),
+                1 => DVec2::new(d.u.1, d.v.0 + (d.v.1 - d.v.0) * t),
+                2 => DVec2::new(d.u.0 + (d.u.1 - d.u.0) * t, d.v.0),
+                _ => DVec2::new(d.u.0 + (d.u.1 - d.u.0) * t, d.v.1),
+            };
+            let first = self.eval(patch, at(0.0))?;
+            let mut spread: f64 = 0.0;
+            for i in 1..=EXTENT_SAMPLES {
+                let p = self.eval(patch, at(i as f64 / EXTENT_SAMPLES as f64))?;
+                spread = spread.max(p.distance(first));
+            }
+            *flag = spread <= self.weld;
+        }
+        Ok(out)
+    }
+
+    /// The parameters of a corner at `uv` as seen from the other end `other` of an edge. On a
+    /// collapsed side (a pole) the coordinate along the side is arbitrary: every value names the
+    /// same point. The pole's parameters towards `other` are the ones on the iso-line through
+    /// `other` (the meridian), so every edge from the pole is a meridian in the parameter plane
+    /// and its splits land on the meridian whichever triangle makes them.
+    fn toward(&self, patch: u32, uv: DVec2, other: DVec2) -> DVec2 {
+        let c = self.collapsed[patch as usize];
+        let d = self.surfs[patch as usize].domain();
+        if c[0] && uv.x == d.u.0 && other.x != d.u.0 {
+            DVec2::new(d.u.0, other.y)
+        } else if c[1] && uv.x == d.u.1 && other.x != d.u.1 {
+            DVec2::new(d.u.1, other.y)
+        } else if c[2] && uv.y == d.v.0 && other.y != d.v.0 {
+            DVec2::new(other.x, d.v.0)
+        } else if c[3] && uv.y == d.v.1 && other.y != d.v.1 {
+            DVec2::new(other.x, d.v.1)
+        } else {
+            uv
+        }
+    }
+
+    /// Parameters of the two ends of edge a–b, each pole end moved onto the other end's
+    /// meridian (see [`Self::toward`]).
+    fn edge_uvs(&self, patch: u32, ua: DVec2, ub: DVec2) -> (DVec2, DVec2) {
+        let ua2 = self.toward(patch, ua, ub);
+        (ua2, self.toward(patch, ub, ua2))
+    }
+
+    /// The parameters of a triangle's corners with each pole corner moved onto the mean
+    /// meridian of the two other corners (so the centroid lies inside the wedge of the fan).
+    fn corner_uvs(&self, patch: u32, uv: [DVec2; 3]) -> [DVec2; 3] {
+        let mut out = uv;
+        for k in 0..3 {
+            let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+            out[k] = self.toward(patch, uv[k], 0.5 * (uv[i] + uv[j]));
+        }
+        out
+    }
+
     fn eval(&self, patch: u32, uv: DVec2) -> Result<DVec3, TessError> {
         let p = self.surfs[patch as usize].eval(uv.x, uv.y);
         if flatcut_geom::finite3(p) {
@@ -271,6 +363,8 @@ impl Builder<'_> {
                     }
                 };
                 let (nu, nv) = (cells(lu), cells(lv));
+                let collapsed = self.collapsed[patch as usize];
+                let mut pole_id: [Option<u32>; 4] = [None; 4];
                 let mut ids = Vec::with_capacity((nu + 1) * (nv + 1));
                 let mut uvs = Vec::with_capacity((nu + 1) * (nv + 1));
                 for j in 0..=nv {
@@ -288,7 +382,22 @@ impl Builder<'_> {
                         let uv = DVec2::new(u, v);
                         let p = self.eval(patch, uv)?;
                         let b = i == 0 || j == 0 || i == nu || j == nv;
-                        ids.push(self.add_vertex(p, patch, uv, b)?);
+                        // All grid points of a collapsed side are one vertex (the pole): the
+                        // fan around it then has no zero-area triangles to fold over later.
+                        let on_sides = [i == 0, i == nu, j == 0, j == nv];
+                        let pole = (0..4)
+                            .filter(|&k| collapsed[k] && on_sides[k])
+                            .find_map(|k| pole_id[k]);
+                        let v = match pole {
+                            Some(v) => v,
+                            None => self.add_vertex(p, patch, uv, b)?,
+                        };
+                        for k in 0..4 {
+                            if collapsed[k] && on_sides[k] {
+                                pole_id[k] = Some(v);
+                            }
+                        }
+                        ids.push(v);
                         uvs.push(uv);
                     }
                 }
@@ -303,8 +412,13 @@ impl Builder<'_> {
                             [[a, b, e], [b, c, e]]
                         };
                         for q in quads {
+                            let v = q.map(|k| ids[k]);
+                            if v[0] == v[1] || v[1] == v[2] || v[2] == v[0] {
+                                // Half of a cell at a pole: a segment, not a triangle.
+                                continue;
+                            }
                             self.tris.push(Tri {
-                                v: q.map(|k| ids[k]),
+                                v,
                                 uv: q.map(|k| uvs[k]),
                                 patch,
                                 alive: true,
@@ -388,7 +502,8 @@ impl Builder<'_> {
     fn bisect(&mut self, t: usize, k: usize) -> Result<(), TessError> {
         let tri = self.tris[t];
         let (a, b, c) = (tri.v[k], tri.v[(k + 1) % 3], tri.v[(k + 2) % 3]);
-        let (ua, ub, uc) = (tri.uv[k], tri.uv[(k + 1) % 3], tri.uv[(k + 2) % 3]);
+        let (ua, ub) = self.edge_uvs(tri.patch, tri.uv[k], tri.uv[(k + 1) % 3]);
+        let uc = tri.uv[(k + 2) % 3];
         let (m, um) = match self.split.get(&key(a, b)).copied() {
             Some((m, creator)) if creator == tri.patch && self.home[m as usize].0 == tri.patch => {
                 (m, 0.5 * (ua + ub))
@@ -499,25 +614,61 @@ impl Builder<'_> {
         Ok(())
     }
 
-    /// Points a short step from vertex `v` along each parameter direction into its patch's
-    /// domain, leaving out steps that stay within `weld` of it (along a collapsed side).
-    fn side_probes(&self, v: u32, weld: f64) -> Vec<DVec3> {
+    /// Unit directions from vertex `v` to points a short step along every side of its patch's domain that passes
+    /// through it, both ways: from its own parameters and from every domain corner at the same
+    /// point (a pole stands for a whole side, so both its end corners' sides leave it). Steps
+    /// that stay within `weld` of the vertex (along a collapsed side) are left out.
+    fn side_probes(&self, v: u32, weld: f64) -> Vec<Probe> {
         let (patch, uv) = self.home[v as usize];
         let s = self.surfs[patch as usize];
         let d = s.domain();
+        let here = self.pos[v as usize];
+        let mut starts = vec![uv];
+        if s.domain_kind() == DomainKind::Rectangle {
+            for c in [
+                DVec2::new(d.u.0, d.v.0),
+                DVec2::new(d.u.1, d.v.0),
+                DVec2::new(d.u.0, d.v.1),
+                DVec2::new(d.u.1, d.v.1),
+            ] {
+                if c != uv && eval_at(s, c).distance(here) <= weld {
+                    starts.push(c);
+                }
+            }
+        }
         let mut out = Vec::new();
-        for (axis, (lo, hi)) in [(0, d.u), (1, d.v)] {
-            let step = (hi - lo) * PROBE_STEP;
-            let x = if axis == 0 { uv.x } else { uv.y };
-            let x = if x + step <= hi { x + step } else { x - step };
-            let q = if axis == 0 {
-                DVec2::new(x, uv.y)
-            } else {
-                DVec2::new(uv.x, x)
-            };
-            let p = eval_at(s, q);
-            if p.distance(self.pos[v as usize]) > weld {
-                out.push(p);
+        for q in starts {
+            for (axis, (lo, hi)) in [(0, d.u), (1, d.v)] {
+                // Only along a side: the other coordinate sits on its bound.
+                let (x, other, (olo, ohi)) = if axis == 0 {
+                    (q.x, q.y, d.v)
+                } else {
+                    (q.y, q.x, d.u)
+                };
+                if other != olo && other != ohi {
+                    continue;
+                }
+                let step = (hi - lo) * PROBE_STEP;
+                for x in [x + step, x - step] {
+                    if x < lo || x > hi {
+                        continue;
+                    }
+                    let r = if axis == 0 {
+                        DVec2::new(x, q.y)
+                    } else {
+                        DVec2::new(q.x, x)
+                    };
+                    let p = eval_at(s, r);
+                    if p.distance(here) > weld {
+                        out.push(Probe {
+                            dir: (p - here).normalize(),
+                            point: p,
+                            patch,
+                            from: q,
+                            to: r,
+                        });
+                    }
+                }
             }
         }
         out
@@ -539,46 +690,54 @@ impl Builder<'_> {
         for (i, &r) in remap.iter().enumerate() {
             members[r as usize].push(bverts[i]);
         }
+        // Within a cluster, weld only vertices whose patches share a side there (a side of one
+        // leaves the point in the same direction as a side of the other), and never two
+        // vertices of one patch: patches that merely touch at a point (the teapot's handle
+        // ends on a body corner) stay apart, so every vertex keeps one fan, and a closed
+        // patch's parameter seam stays open.
         let mut rep: Vec<u32> = (0..self.pos.len() as u32).collect();
         for m in &members {
-            let patch = |v: u32| self.home[v as usize].0;
-            let pole = m
-                .iter()
-                .enumerate()
-                .any(|(j, &v)| m[..j].iter().any(|&w| patch(w) == patch(v)));
-            if !pole {
-                for &v in &m[1..] {
-                    rep[v as usize] = m[0];
-                }
+            if m.len() < 2 {
                 continue;
             }
-            // Several vertices of one patch at one point: a collapsed side (the teapot's lid top
-            // and bottom centre). Pair each with the vertex of another patch whose side leaves
-            // the point in the same direction, one to one, so shared sides keep one vertex and
-            // no triangle gets two corners welded together.
-            let probes: Vec<Vec<DVec3>> = m.iter().map(|&v| self.side_probes(v, weld)).collect();
-            let mut claimed: Vec<(u32, u32)> = Vec::new();
-            for (j, &v) in m.iter().enumerate() {
-                let mut best: Option<(f64, u32)> = None;
-                for (i, &w) in m[..j].iter().enumerate() {
-                    let target = rep[w as usize];
-                    if patch(w) == patch(v) || claimed.contains(&(patch(v), target)) {
+            let patch = |v: u32| self.home[v as usize].0;
+            let probes: Vec<Vec<Probe>> = m.iter().map(|&v| self.side_probes(v, weld)).collect();
+            // Classes by index into `m`, with the patches each holds.
+            let mut class: Vec<usize> = (0..m.len()).collect();
+            let mut patches: Vec<Vec<u32>> = m.iter().map(|&v| vec![patch(v)]).collect();
+            for j in 1..m.len() {
+                for i in 0..j {
+                    let (ci, cj) = (class[i], class[j]);
+                    if ci == cj || patches[ci].iter().any(|p| patches[cj].contains(p)) {
                         continue;
                     }
-                    for a in &probes[j] {
-                        for b in &probes[i] {
-                            let reach = a.distance(self.pos[v as usize]);
-                            let d = a.distance(*b);
-                            if d <= PROBE_MATCH_REL * reach && best.is_none_or(|(bd, _)| d < bd) {
-                                best = Some((d, target));
+                    // Same direction, and the nearer of the two probe points lies on the other's
+                    // stretch of side (a side of another patch merely tangent there, like the
+                    // handle's end on the body's ring, leaves it at second order). Checking
+                    // within one step keeps the projection on a monotone arc.
+                    let on_side = |a: &Probe, b: &Probe| {
+                        let uv = self.project_on_edge(b.patch, b.from, b.to, a.point);
+                        eval_at(self.surfs[b.patch as usize], uv).distance(a.point) <= weld
+                    };
+                    let linked = probes[j].iter().any(|a| {
+                        probes[i].iter().any(|b| {
+                            a.dir.dot(b.dir) >= PROBE_MATCH_COS && (on_side(a, b) || on_side(b, a))
+                        })
+                    });
+                    if linked {
+                        let (keep, gone) = (ci.min(cj), ci.max(cj));
+                        for c in class.iter_mut() {
+                            if *c == gone {
+                                *c = keep;
                             }
                         }
+                        let moved = std::mem::take(&mut patches[gone]);
+                        patches[keep].extend(moved);
                     }
                 }
-                if let Some((_, target)) = best {
-                    rep[v as usize] = target;
-                    claimed.push((patch(v), target));
-                }
+            }
+            for (k, &v) in m.iter().enumerate() {
+                rep[v as usize] = m[class[k]];
             }
         }
         for t in 0..self.tris.len() {
@@ -604,8 +763,9 @@ impl Builder<'_> {
                 let tri = self.tris[t];
                 for k in 0..3 {
                     let (a, b) = (tri.v[k], tri.v[(k + 1) % 3]);
-                    if !self.on_domain_boundary(tri.patch, tri.uv[k])
-                        || !self.on_domain_boundary(tri.patch, tri.uv[(k + 1) % 3])
+                    let (ua, ub) = self.edge_uvs(tri.patch, tri.uv[k], tri.uv[(k + 1) % 3]);
+                    if !self.on_domain_boundary(tri.patch, ua)
+                        || !self.on_domain_boundary(tri.patch, ub)
                         || self.split.contains_key(&key(a, b))
                     {
                         continue;
@@ -630,8 +790,7 @@ impl Builder<'_> {
                         if (pa + ab * s).distance(pc) > 0.5 * len2.sqrt() {
                             continue;
                         }
-                        let um =
-                            self.project_on_edge(tri.patch, tri.uv[k], tri.uv[(k + 1) % 3], pc);
+                        let um = self.project_on_edge(tri.patch, ua, ub, pc);
                         if eval_at(self.surfs[tri.patch as usize], um).distance(pc) <= weld {
                             let score = (s - 0.5).abs();
                             if best.is_none_or(|(bs, _)| score < bs) {
@@ -666,11 +825,12 @@ impl Builder<'_> {
         let s = self.surfs[tri.patch as usize];
         let mut dev: f64 = 0.0;
         for k in 0..3 {
-            let uv = 0.5 * (tri.uv[k] + tri.uv[(k + 1) % 3]);
-            let q = self.eval(tri.patch, uv)?;
+            let (ua, ub) = self.edge_uvs(tri.patch, tri.uv[k], tri.uv[(k + 1) % 3]);
+            let q = self.eval(tri.patch, 0.5 * (ua + ub))?;
             dev = dev.max(q.distance(0.5 * (p[k] + p[(k + 1) % 3])));
         }
-        let uc = (tri.uv[0] + tri.uv[1] + tri.uv[2]) / 3.0;
+        let cuv = self.corner_uvs(tri.patch, tri.uv);
+        let uc = (cuv[0] + cuv[1] + cuv[2]) / 3.0;
         let qc = self.eval(tri.patch, uc)?;
         let dev = (4.0 / 3.0 * dev).max(qc.distance((p[0] + p[1] + p[2]) / 3.0));
         if dev > self.chord {
@@ -768,8 +928,11 @@ pub fn tessellate_with(
         opts: *opts,
         chord: tol.chord_mm,
         weld: tol.weld_mm,
+        collapsed: Vec::new(),
     };
     for p in 0..surfaces.len() as u32 {
+        let c = b.find_collapsed_sides(p)?;
+        b.collapsed.push(c);
         b.init_patch(p)?;
     }
     b.reindex();
