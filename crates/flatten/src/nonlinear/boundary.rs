@@ -243,17 +243,26 @@ fn infeasible_warning(
         })
         .collect();
     let (s_min, _) = min_stretch(rest, x);
-    let why = match stop {
-        Some(Stop::Stalled) => {
-            format!("keeping them would crush the interior (smallest stretch already {s_min:.3})")
-        }
-        Some(Stop::Crushed { t, s }) => format!(
-            "keeping them crushed triangle {t} to stretch {s:.2e}; returned the last map with every stretch ≥ {DEGENERATE_STRETCH}"
+    let (head, why) = match stop {
+        Some(Stop::Stalled) => (
+            "boundary lengths cannot all be kept without a fold",
+            format!(
+                "keeping them would crush the interior (smallest stretch already {s_min:.3}, limit {DEGENERATE_STRETCH})"
+            ),
         ),
-        None => "the solver ran out of outer iterations".to_string(),
+        Some(Stop::Crushed { t, s }) => (
+            "boundary lengths cannot all be kept without a fold",
+            format!(
+                "keeping them crushed triangle {t} to stretch {s:.2e}; kept the last map with every stretch above it"
+            ),
+        ),
+        None => (
+            "boundary lengths not all kept",
+            format!("the solver stopped after {MAX_OUTER} outer iterations, still converging"),
+        ),
     };
     format!(
-        "boundary lengths cannot all be kept without a fold: {why}; returned the closest flip-free map, largest relative length error {viol:.2e}; worst edges {}",
+        "{head}: {why}; returned the closest flip-free map, largest relative length error {viol:.2e}; worst edges {}",
         worst.join(", ")
     )
 }
