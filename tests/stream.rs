@@ -358,9 +358,35 @@ fn hangup_reports_the_last_executed_line_and_resume_completes() {
     let st = Journal::read(&c.journal).unwrap();
     assert!(!st.finished);
 
-    let out = stream_file(&c.job_path, &args(&c).with_resume(true)).unwrap();
+    // The embedded simulator comes back as a fresh controller (power-up banner, position zero):
+    // nothing can tell which of the queued lines ran, so a plain resume refuses to guess, names
+    // the lines in doubt and says how to choose.
+    let e = stream_file(&c.job_path, &args(&c).with_resume(true)).unwrap_err();
+    let msg = format!("{e:#}");
+    let se = e.downcast_ref::<StreamError>().expect("a send error");
+    let SendError::ResumeUncertain { from, to, .. } = se.send_error() else {
+        panic!("{msg}")
+    };
+    assert_eq!(Some(from.index), st.unconfirmed.first().copied(), "{msg}");
+    assert!(
+        msg.contains(&format!(
+            "Lines {} to {} may or may not have run",
+            from.source_line, to.source_line
+        )),
+        "{msg}"
+    );
+    assert!(
+        msg.contains(&format!("--resume-from {}", from.source_line)),
+        "{msg}"
+    );
+    let out = stream_file(
+        &c.job_path,
+        &args(&c).with_resume_from(Some(from.source_line)),
+    )
+    .unwrap();
+    assert_eq!(out.report.previously_done, from.index);
     let run2 = trace_of(&out);
-    // A hang-up loses the `ok`s in flight, so lines the journal could not confirm may run again;
+    // Resuming from the first line in doubt: lines the journal could not confirm may run again;
     // none is skipped, and none journaled as done runs again.
     let ran1: BTreeSet<&str> = run1.iter().map(|s| s.text.as_str()).collect();
     let ran2: BTreeSet<&str> = run2.iter().map(|s| s.text.as_str()).collect();
@@ -567,4 +593,86 @@ fn stream_arguments_defaults_hidden_faults_and_bad_port() {
     a.sim_error_at = Some("0".into());
     let e = stream_file(&c.job_path, &a).unwrap_err();
     assert!(format!("{e:#}").contains("--sim-error-at 0"), "{e:#}");
+}
+
+/// Environment variable naming the working directory of [`sigterm_child_process`].
+const SIGTERM_CHILD_ENV: &str = "FLATCUT_SIGTERM_CHILD_DIR";
+
+/// The sending half of [`sigterm_aborts_safely_and_names_the_last_line`], run in a child
+/// process (a signal to this test binary would reach every test running in it). Without the
+/// variable set it is the parent's run and does nothing.
+#[test]
+fn sigterm_child_process() {
+    let Some(dir) = std::env::var_os(SIGTERM_CHILD_ENV) else {
+        return;
+    };
+    let dir = PathBuf::from(dir);
+    let job = dir.join("job.gcode");
+    std::fs::write(&job, pattern_job(6)).unwrap();
+    let a = StreamArgs::default()
+        .with_sim_speed(2.0)
+        .with_quiet(true)
+        .with_journal(dir.join("job.journal"));
+    let e = stream_file(&job, &a).expect_err("the job was stopped by SIGTERM");
+    eprintln!("CHILD-ERROR: {e:#}");
+    let se = e.downcast_ref::<StreamError>().expect("a send error");
+    assert!(
+        matches!(se.send_error(), SendError::Aborted { .. }),
+        "{e:#}"
+    );
+}
+
+/// SIGTERM during `flatcut send` takes the abort path: feed hold, soft reset, tool off, journal
+/// flushed, and a message naming the last line executed.
+#[test]
+fn sigterm_aborts_safely_and_names_the_last_line() {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().unwrap();
+    let mut child = Command::new(std::env::current_exe().unwrap())
+        .args([
+            "stream::sigterm_child_process",
+            "--exact",
+            "--nocapture",
+            "--test-threads=1",
+        ])
+        .env(SIGTERM_CHILD_ENV, dir.path())
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let journal = dir.path().join("job.journal");
+    let t0 = Instant::now();
+    let streaming = loop {
+        let acks = std::fs::read_to_string(&journal)
+            .map(|t| t.lines().filter(|l| l.starts_with("A ")).count())
+            .unwrap_or(0);
+        if acks >= 20 {
+            break true;
+        }
+        if t0.elapsed() > Duration::from_secs(30) {
+            break false;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let killed = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(streaming, "the child never streamed: {stderr}");
+    assert!(out.status.success(), "child failed: {stderr}");
+    assert!(
+        stderr.contains(
+            "CHILD-ERROR: aborted: soft reset sent, tool off. Last line known executed: line "
+        ),
+        "{stderr}"
+    );
+    let text = std::fs::read_to_string(&journal).unwrap();
+    assert!(text.contains("N aborted by the user"), "{text}");
+    let st = Journal::read(&journal).unwrap();
+    assert!(!st.finished && st.done_count() > 0);
 }

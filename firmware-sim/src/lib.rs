@@ -87,7 +87,8 @@ pub struct Faults {
     pub alarm_at_line: Option<(u32, u8)>,
     /// Spontaneous soft reset (banner again) when the n-th line arrives.
     pub reset_at_line: Option<u32>,
-    /// Close the device (port hang-up) when the n-th line arrives.
+    /// Close the device (port hang-up) right after the n-th line arrives (that line and the bytes already in
+    /// the RX ring still run).
     pub hangup_at_line: Option<u32>,
 }
 

@@ -681,9 +681,14 @@ impl Grbl {
 
     // ----- reset and alarms ------------------------------------------------------------------------------------
 
+    /// Whether a reset now aborts motion (`mc_reset`): a cycle, jog or homing, or a hold still braking. A hold that
+    /// has come to rest clears `STEP_CONTROL_EXECUTE_HOLD` (`protocol_exec_rt_system`), so resetting it loses no
+    /// step and raises no alarm.
     fn moving(&self) -> bool {
         matches!(self.state, State::Cycle | State::Jog | State::Homing)
-            || (matches!(self.state, State::Hold | State::Door) && !self.planner.blocks.is_empty())
+            || (matches!(self.state, State::Hold | State::Door)
+                && !self.planner.blocks.is_empty()
+                && !self.hold_complete)
     }
 
     /// Soft reset (0x18, `$C` off, `$RST`, faults): `mc_reset` then the re-initialisation of `main.c`.
@@ -1012,9 +1017,10 @@ impl Grbl {
             self.soft_reset();
             return;
         }
+        // The line arrived whole, so it runs; the link drops right after it (bytes still in the RX ring run too,
+        // as on a controller whose USB adapter vanished).
         if self.faults.hangup_at_line == Some(n) {
             self.events.push(SimEvent::Hangup);
-            return;
         }
         if let Some((at, code)) = self.faults.error_at_line
             && at == n

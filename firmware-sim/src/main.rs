@@ -65,6 +65,10 @@ struct Args {
     /// Seed of the fault-injection generator.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Opening the port does not reset the controller (a board with DTR auto-reset disabled): it keeps its
+    /// position and keeps running through a hang-up and a reconnect.
+    #[arg(long)]
+    no_dtr_reset: bool,
 }
 
 fn line_code(arg: &str, default_code: u8, what: &str) -> Result<(u32, u8), String> {
@@ -161,7 +165,7 @@ fn main() -> ExitCode {
         eprintln!("firmware-sim: cannot block signals: {e}");
         return ExitCode::FAILURE;
     }
-    let sim = match PtySim::spawn(cfg) {
+    let sim = match PtySim::spawn_with_dtr_reset(cfg, !args.no_dtr_reset) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("firmware-sim: cannot create the pseudo-terminal: {e}");

@@ -66,6 +66,14 @@ impl PtySim {
     /// Creates the pseudo-terminal pair and starts the simulator thread. The banner is already waiting when a
     /// client opens [`PtySim::path`].
     pub fn spawn(config: SimConfig) -> io::Result<PtySim> {
+        PtySim::spawn_with_dtr_reset(config, true)
+    }
+
+    /// [`PtySim::spawn`], choosing whether opening the port resets the controller. `true` is an Uno, whose DTR
+    /// pulse resets the board on every open (and a hang-up power-cycles it). `false` is a board with auto-reset
+    /// disabled and its own supply: the controller keeps running its planner through a hang-up and a reconnect,
+    /// and keeps its position, so a sender that reconnects finds it where the job left it.
+    pub fn spawn_with_dtr_reset(config: SimConfig, dtr_reset: bool) -> io::Result<PtySim> {
         config
             .validate()
             .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e.to_string()))?;
@@ -80,7 +88,7 @@ impl PtySim {
         let (sh, st, cfg) = (shared.clone(), stop.clone(), config.clone());
         let handle = std::thread::Builder::new()
             .name("firmware-sim".into())
-            .spawn(move || run(master, slave, opens, cfg, sh, st))?;
+            .spawn(move || run(master, slave, opens, cfg, dtr_reset, sh, st))?;
         Ok(PtySim {
             path,
             shared,
@@ -255,6 +263,7 @@ fn run(
     slave: OwnedFd,
     mut opens: Option<Inotify>,
     config: SimConfig,
+    dtr_reset: bool,
     shared: Arc<Mutex<Shared>>,
     stop: Arc<AtomicBool>,
 ) {
@@ -285,7 +294,9 @@ fn run(
             master = Some(m);
             slave = Some(s);
             unplugged_at = None;
-            core.power_cycle();
+            if dtr_reset {
+                core.power_cycle();
+            }
             opens = o;
             connected = opens.is_none();
         }
@@ -302,9 +313,11 @@ fn run(
         if let (Some(ino), Some(s)) = (&opens, &slave)
             && ino.read_events().is_ok_and(|ev| !ev.is_empty())
         {
-            let _ = tcflush(s, FlushArg::TCIOFLUSH);
-            txq.clear();
-            core.power_cycle();
+            if dtr_reset {
+                let _ = tcflush(s, FlushArg::TCIOFLUSH);
+                txq.clear();
+                core.power_cycle();
+            }
             connected = true;
             lock(&shared).connects += 1;
         }

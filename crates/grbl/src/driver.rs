@@ -30,8 +30,18 @@ const SEGMENT_BUFFER: usize = 6;
 const DEFAULT_PLANNER_BLOCKS: usize = 15;
 /// Position match tolerance, mm: reports carry 3 decimals and a step is 0.004 mm at 250 steps/mm.
 const POSITION_TOL_MM: f64 = 0.01;
+/// `ALARM:3`: reset while in motion; GRBL's position may be off by the steps lost stopping.
+const ABORT_CYCLE_ALARM: u8 = 3;
 /// Longest single read wait, so control requests and polls stay responsive.
 const READ_SLICE: Duration = Duration::from_millis(20);
+/// Longest gap between two fsyncs of the journal while streaming. Every batch of records is
+/// written to the OS at once (it survives the sender being killed); only the flush to the disk
+/// is spaced out, because an fsync takes milliseconds to tens of milliseconds and the link must
+/// not wait for it (at 115200 baud the 128-byte RX buffer drains in 11 ms).
+const JOURNAL_FSYNC_INTERVAL: Duration = Duration::from_millis(250);
+/// How long a controller found moving when the sender connects may take to finish the motion it
+/// has queued (15 planner blocks) before the sender gives up waiting for it.
+const DRAIN_ON_CONNECT_LIMIT: Duration = Duration::from_secs(600);
 
 /// A reference to one job line, for messages.
 #[derive(Debug, Clone, PartialEq)]
@@ -240,6 +250,27 @@ pub enum SendError {
     /// `resume` was asked without a journal path.
     #[error("resume needs a journal path")]
     NoJournal,
+    /// Resuming would have to guess which lines ran: the operator must choose.
+    #[error(
+        "cannot tell where to resume: {reason}. Lines {} to {} may or may not have run; look at the work and resume explicitly from the first line to cut (--resume-from LINE, a line number of the file)",
+        from.source_line, to.source_line
+    )]
+    ResumeUncertain {
+        /// First line in doubt.
+        from: LineRef,
+        /// Last line in doubt.
+        to: LineRef,
+        /// Why the journal and the machine cannot settle it.
+        reason: String,
+    },
+    /// `resume_from` names no line of the job.
+    #[error("--resume-from: the job has {lines} lines to send; index {index} is not one of them")]
+    ResumeFromOutOfRange {
+        /// Index asked.
+        index: usize,
+        /// Lines in the job.
+        lines: usize,
+    },
 }
 
 fn axis_index(c: char) -> usize {
@@ -282,6 +313,9 @@ pub struct SendOptions {
     /// Give up when the machine sits in a feed hold or door state that this sender did not
     /// request for this long (`None`: wait for the operator indefinitely, as after `M0`).
     pub hold_timeout: Option<Duration>,
+    /// With `resume`: the operator's choice of the first job line (0-based index) to run; every
+    /// line before it counts as done. Needed when the journal and the machine cannot tell.
+    pub resume_from: Option<usize>,
 }
 
 impl SendOptions {
@@ -297,6 +331,15 @@ impl SendOptions {
     pub const DEFAULT_SILENCE_TIMEOUT: Duration = Duration::from_secs(10);
     /// Default observer interval: 20 updates a second is smooth for a progress bar.
     pub const DEFAULT_PROGRESS_INTERVAL: Duration = Duration::from_millis(50);
+
+    /// Sets [`SendOptions::resume_from`] (and `resume`).
+    pub fn with_resume_from(mut self, index: Option<usize>) -> Self {
+        self.resume_from = index;
+        if index.is_some() {
+            self.resume = true;
+        }
+        self
+    }
 
     /// Sets [`SendOptions::hold_timeout`].
     pub fn with_hold_timeout(mut self, d: Option<Duration>) -> Self {
@@ -389,6 +432,7 @@ impl Default for SendOptions {
             verify_end_position: true,
             progress_interval: SendOptions::DEFAULT_PROGRESS_INTERVAL,
             hold_timeout: None,
+            resume_from: None,
         }
     }
 }
@@ -789,7 +833,8 @@ impl Tracker {
 
     /// Confirms by the reported position `pos`: the first line sent in this run (up to index
     /// `upto`, acknowledged or not) whose path contains `pos` is where the machine stopped;
-    /// every acknowledged line before it is done, and it too if `pos` is its end point.
+    /// every acknowledged line before it is done, and it too if `pos` is its end point. A stop
+    /// inside a line is journaled (`P`) so that a resume completes that line from there.
     fn confirm_by_position(
         &mut self,
         job: &Job,
@@ -800,26 +845,20 @@ impl Tracker {
         let Some(&first) = self.unconfirmed.front() else {
             return;
         };
-        for i in first..=upto.min(job.len().saturating_sub(1)) {
-            let l = &job.lines[i];
-            if self.prior_done[i] || !l.moves {
-                continue;
-            }
-            let a = add(l.before.position, l.before.g92);
-            let after = job
-                .lines
-                .get(i + 1)
-                .map(|n| &n.before)
-                .unwrap_or(&job.end_state);
-            let b = add(after.position, after.g92);
-            if dist(pos, b) <= self.pos_tol {
-                self.confirm_below(job, i + 1, journal);
-                return;
-            }
-            if seg_dist(pos, a, b) <= self.pos_tol {
-                self.confirm_below(job, i, journal);
-                return;
-            }
+        let upto = upto.min(job.len().saturating_sub(1)).max(first);
+        let prior = &self.prior_done;
+        let places = places_on_path(job, pos, first..=upto, self.pos_tol, |i| prior[i]);
+        // Ambiguous (the path passes here twice): the earliest place confirms least.
+        let Some(&(cut, partial)) = places.first() else {
+            return;
+        };
+        self.confirm_below(job, cut, journal);
+        if cut < job.len()
+            && let Some(j) = journal.as_mut()
+        {
+            // The lines from `cut` on did not run (the stop flushed GRBL's planner): the resume
+            // continues line `cut` from where the machine stands.
+            j.partial(cut, partial.unwrap_or(pos));
         }
     }
 
@@ -908,13 +947,19 @@ pub fn send_job(
     observer(&progress);
 
     // --- Handshake: banner (or soft reset), $I, $$, status, alarm policy, travel.
-    let mut got = if opts.reset_on_connect {
-        false
-    } else {
-        sess.wait_banner(opts.banner_timeout)
-            .map_err(|e| transport(e, None))?
-    };
+    // A banner that comes by itself means the controller just restarted (power-up, or the DTR
+    // pulse of opening the port): its planner and position are gone.
+    let restarted = !opts.reset_on_connect
+        && sess
+            .wait_banner(opts.banner_timeout)
+            .map_err(|e| transport(e, None))?;
+    let mut got = restarted;
     if !got {
+        if !opts.reset_on_connect {
+            // A controller that kept running while the host was away may still be draining its
+            // planner: a reset now would stop it mid-move (ALARM:3, position lost).
+            wait_until_still(&mut sess, opts).map_err(|e| transport(e, None))?;
+        }
         sess.s.realtime(0x18);
         got = sess
             .wait_banner(opts.banner_timeout)
@@ -942,6 +987,57 @@ pub fn send_job(
         sess.alarm_lock = false;
         sess.query_status(opts.command_timeout)
             .map_err(|e| transport(e, None))?;
+    }
+    // --- Settle what the interrupted run left in doubt, from the journal and the machine.
+    // Trust the reported position only if the controller did not restart and is not in alarm
+    // (a reset in motion, ALARM:3, loses steps).
+    let trusted = !restarted && !sess.alarm_lock;
+    let mut prior = prior;
+    let mut resume_at: Option<(usize, [f64; 3], bool)> = None;
+    if let Some(st) = prior.as_mut() {
+        let here = if trusted { sess.work_position() } else { None };
+        let tol = position_tolerance(&sess.settings);
+        let rx = sess.s.rx_size();
+        if let Some(r) = resolve_resume(job, st, opts.resume_from, here, rx, tol, restarted)? {
+            if let Some(j) = journal.as_mut() {
+                j.resolved(r.from, r.cut);
+                if let Some((k, p)) = r.partial {
+                    j.partial(k, p);
+                }
+                j.sync()?;
+            }
+            for i in r.from..r.cut {
+                st.done[i] = true;
+            }
+            for d in st.done.iter_mut().skip(r.cut) {
+                *d = false;
+            }
+            st.partial = r.partial;
+        }
+        if let Some((k, _)) = st.partial
+            && job.lines[k].before.incremental
+        {
+            return Err(SendError::ResumeUncertain {
+                from: line_ref(job, k),
+                to: line_ref(job, k),
+                reason: format!(
+                    "the job stopped part-way through line {}, a relative (G91) move, which cannot be completed from the middle",
+                    job.lines[k].source_line
+                ),
+            });
+        }
+        // Where the first line to send starts (or where the stopped line was left): a machine
+        // found standing there needs no travel, so nothing moves twice.
+        if let Some(i0) = st.done.iter().position(|d| !d) {
+            let at = match st.partial {
+                Some((k, p)) if k == i0 => p,
+                _ => job.start_of(i0),
+            };
+            let there = here.is_some_and(|h| dist(h, at) <= tol);
+            if i0 > 0 || st.partial.is_some() || there {
+                resume_at = Some((i0, at, !there));
+            }
+        }
     }
     let limits = MachineLimits::from_settings(&sess.settings);
     if opts.check_travel {
@@ -1009,8 +1105,12 @@ pub fn send_job(
         }
         // A run that does not start at the top of the file needs the machine put back into
         // the state the job had there.
-        let first = if i > 0 {
-            for p in job.resume_preamble(i) {
+        let first = if i > 0 || resume_at.is_some() {
+            let pre = match resume_at.take() {
+                Some((k, at, travel)) if k == i => job.resume_preamble_from(i, at, travel),
+                _ => job.resume_preamble(i),
+            };
+            for p in pre {
                 sess.s.push(
                     Tag::Preamble(preamble_texts.len() as u32),
                     p.clone(),
@@ -1050,6 +1150,7 @@ pub fn send_job(
     let mut stream_end = None;
     let mut end_status_seq = 0;
     let mut hold_since: Option<Instant> = None;
+    let mut last_fsync = Instant::now();
     loop {
         // Control requests.
         let c = cancel.take();
@@ -1172,8 +1273,23 @@ pub fn send_job(
                 _ => {}
             }
         }
+        // Refill GRBL's RX buffer at once: the answers just read made room, and the link idles
+        // until the next line is written.
+        if let Err(e) = sess.write() {
+            let last = tracker.last_done(job);
+            if let Some(j) = journal.as_mut() {
+                j.note(&format!("transport failure: {e}"));
+                j.sync()?;
+            }
+            return Err(transport(e, last));
+        }
         if acked_any && let Some(j) = journal.as_mut() {
-            j.sync()?;
+            if last_fsync.elapsed() >= JOURNAL_FSYNC_INTERVAL {
+                j.sync()?;
+                last_fsync = Instant::now();
+            } else {
+                j.flush()?;
+            }
         }
         // Lost bytes: the controller sits idle while lines are unanswered.
         if sess.s.in_flight() > 0
@@ -1326,6 +1442,228 @@ pub fn send_job(
     })
 }
 
+/// Waits while the controller reports motion (`Run`, `Jog`, `Home`, a hold still braking): the
+/// planner it kept running while no host was connected must finish before anything resets it.
+fn wait_until_still<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    opts: &SendOptions,
+) -> Result<(), TransportError> {
+    let until = Instant::now() + DRAIN_ON_CONNECT_LIMIT;
+    while Instant::now() < until {
+        match sess.query_status(Duration::from_millis(500))? {
+            Some(st)
+                if matches!(
+                    st.state,
+                    MachineState::Run
+                        | MachineState::Jog
+                        | MachineState::Home
+                        | MachineState::Hold { complete: false }
+                ) =>
+            {
+                let next = Instant::now() + opts.status_interval;
+                while Instant::now() < next {
+                    sess.pump(READ_SLICE)?;
+                }
+            }
+            _ => return Ok(()),
+        }
+    }
+    Ok(())
+}
+
+/// How a resume settles the lines an interrupted run left in doubt.
+#[derive(Debug, Clone, PartialEq)]
+struct Resolution {
+    /// First line settled.
+    from: usize,
+    /// Lines `from..cut` executed; none from `cut` on.
+    cut: usize,
+    /// Line `cut` was stopped part-way, at this work position.
+    partial: Option<(usize, [f64; 3])>,
+}
+
+/// Where on line `i`'s path the work position `p` lies: `Some(true)` at its end, `Some(false)`
+/// strictly inside it (not at its start), `None` off it. Arcs are tested against their chords,
+/// which is where GRBL moves.
+fn locate_on_line(job: &Job, i: usize, p: [f64; 3], tol: f64) -> Option<bool> {
+    let l = &job.lines[i];
+    if !l.moves || l.length <= 0.0 {
+        return None;
+    }
+    let (a, b) = (job.start_of(i), job.end_of(i));
+    if dist(p, b) <= tol {
+        return Some(true);
+    }
+    if dist(p, a) <= tol {
+        return None;
+    }
+    let on = if l.arc.len() >= 2 {
+        l.arc.windows(2).any(|w| seg_dist(p, w[0], w[1]) <= tol)
+    } else {
+        seg_dist(p, a, b) <= tol
+    };
+    on.then_some(false)
+}
+
+/// The places in the job, among lines `range` (skipping those `skip` says), where the machine
+/// standing at work position `p` may be: `(cut, partial)` = every line before `cut` has run, and
+/// `partial` = line `cut` was stopped part-way at `p`. Candidates that touch (consecutive lines
+/// meeting at a vertex `p` lies within tolerance of, or endpoints separated only by lines that
+/// do not move) are one place in the job: for a stop inside a line the later line wins (finishing
+/// it from `p` leaves out at most the tolerance of the earlier one, and repeats nothing); for an
+/// endpoint the earlier one (the non-moving lines are sent again, which only re-applies modal
+/// state). More than one group means the path passes `p` more than once.
+fn places_on_path(
+    job: &Job,
+    p: [f64; 3],
+    range: std::ops::RangeInclusive<usize>,
+    tol: f64,
+    skip: impl Fn(usize) -> bool,
+) -> Vec<(usize, Option<[f64; 3]>)> {
+    let first = *range.start();
+    let mut cuts: Vec<(usize, Option<[f64; 3]>)> = Vec::new();
+    let mut matched: Vec<usize> = Vec::new();
+    if dist(p, job.start_of(first)) <= tol {
+        cuts.push((first, None));
+    }
+    for i in range {
+        if skip(i) {
+            continue;
+        }
+        match locate_on_line(job, i, p, tol) {
+            Some(true) => cuts.push((i + 1, None)),
+            Some(false) => cuts.push((i, Some(p))),
+            None => continue,
+        }
+        matched.push(i);
+    }
+    let mut groups: Vec<Vec<(usize, Option<[f64; 3]>)>> = Vec::new();
+    for c in cuts {
+        let touches = groups.last().and_then(|g| g.last()).is_some_and(|last| {
+            (last.0..c.0).all(|l| {
+                let line = &job.lines[l];
+                !line.moves || line.length <= 0.0 || matched.contains(&l)
+            })
+        });
+        match groups.last_mut() {
+            Some(g) if touches => g.push(c),
+            _ => groups.push(vec![c]),
+        }
+    }
+    groups
+        .into_iter()
+        .filter_map(|g| {
+            if g.iter().any(|c| c.1.is_some()) {
+                g.last().copied()
+            } else {
+                g.first().copied()
+            }
+        })
+        .collect()
+}
+
+/// Settles a resume (see [`Resolution`]): the operator's `--resume-from`; or the machine's
+/// position `here` (only when it is trustworthy) matched against the job's own geometry over the
+/// window of lines that may have run after the journal lost track (acknowledged but not
+/// confirmed, plus what fitted in the `rx`-byte RX buffer behind them). `None`: the journal
+/// already says exactly what ran.
+fn resolve_resume(
+    job: &Job,
+    st: &JournalState,
+    resume_from: Option<usize>,
+    here: Option<[f64; 3]>,
+    rx: usize,
+    tol: f64,
+    restarted: bool,
+) -> Result<Option<Resolution>, SendError> {
+    let n = job.len();
+    if let Some(k) = resume_from {
+        if k >= n {
+            return Err(SendError::ResumeFromOutOfRange { index: k, lines: n });
+        }
+        return Ok(Some(Resolution {
+            from: 0,
+            cut: k,
+            partial: None,
+        }));
+    }
+    let doubt = |a: usize, b: usize, reason: String| SendError::ResumeUncertain {
+        from: line_ref(job, a),
+        to: line_ref(job, b.min(n - 1)),
+        reason,
+    };
+    if let Some((a, b)) = st.uncertain {
+        return Err(doubt(
+            a,
+            b,
+            "the controller was reset while moving (ALARM:3), so the position it reported is not where the tool is".into(),
+        ));
+    }
+    let (Some(&first), Some(&last_acked)) = (st.unconfirmed.first(), st.unconfirmed.last()) else {
+        return Ok(None);
+    };
+    // Lines sent after the last acknowledged one: at most what the RX buffer held.
+    let mut upper = last_acked;
+    let mut bytes = 0;
+    while upper + 1 < n {
+        bytes += job.lines[upper + 1].text.len() + 1;
+        if bytes > rx {
+            break;
+        }
+        upper += 1;
+    }
+    let Some(p) = here else {
+        let why = if restarted {
+            "the controller restarted when the port was opened (or lost power), so its planner and position are gone"
+        } else {
+            "the controller is in alarm or gave no position, so its position is not trustworthy"
+        };
+        return Err(doubt(
+            first,
+            upper,
+            format!("the link dropped with lines queued, and {why}"),
+        ));
+    };
+    if let Some(i) =
+        (first..=upper).find(|&i| job.lines[i].moves && job.lines[i].before.incremental)
+    {
+        return Err(doubt(
+            first,
+            upper,
+            format!(
+                "line {} is a relative (G91) move, so a position cannot tell which of these lines ran",
+                job.lines[i].source_line
+            ),
+        ));
+    }
+    let groups = places_on_path(job, p, first..=upper, tol, |_| false);
+    let fmt = |p: [f64; 3]| format!("X{:.3} Y{:.3} Z{:.3}", p[0], p[1], p[2]);
+    match groups.as_slice() {
+        [(cut, partial)] => Ok(Some(Resolution {
+            from: first,
+            cut: *cut,
+            partial: partial.map(|q| (*cut, q)),
+        })),
+        [] => Err(doubt(
+            first,
+            upper,
+            format!(
+                "the machine stands at {} (work), which is on none of these lines",
+                fmt(p)
+            ),
+        )),
+        _ => Err(doubt(
+            first,
+            upper,
+            format!(
+                "the path passes the machine's position {} (work) {} times among these lines",
+                fmt(p),
+                groups.len()
+            ),
+        )),
+    }
+}
+
 /// Half a step on the coarsest axis plus the 3-decimal rounding of status reports: how far a
 /// reported position may sit from a programmed point that was reached.
 fn position_tolerance(settings: &BTreeMap<u16, f64>) -> f64 {
@@ -1448,7 +1786,15 @@ fn on_alarm<T: Transport + ?Sized>(
         sess.s.realtime(0x18);
         let _ = sess.wait_banner(opts.banner_timeout);
     }
-    if let Ok(Some(_)) = sess.query_status(Duration::from_millis(500))
+    if code == ABORT_CYCLE_ALARM {
+        // A reset in motion: steps were lost, so the reported position says nothing about which
+        // queued lines ran. Name the range in doubt instead of guessing.
+        if let (Some(&a), Some(b)) = (tracker.unconfirmed.front(), tracker.last_sent)
+            && let Some(j) = journal.as_mut()
+        {
+            j.uncertain(a, b.max(a));
+        }
+    } else if let Ok(Some(_)) = sess.query_status(Duration::from_millis(500))
         && let (Some(p), Some(upto)) = (sess.work_position(), tracker.last_sent)
     {
         tracker.confirm_by_position(job, p, upto, journal);

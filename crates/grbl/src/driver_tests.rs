@@ -106,7 +106,9 @@ fn soft_reset_when_no_banner_arrives() {
     let job = Job::parse("G0X1\n").unwrap();
     let mut dev = FakeGrbl::new(false);
     send_job(&mut dev, &job, &fast(), &mut |_| {}, &CancelToken::new()).unwrap();
-    assert_eq!(dev.realtime_log.first(), Some(&0x18));
+    // It first asks whether the controller is moving (a reset then would lose position).
+    assert_eq!(dev.realtime_log.first(), Some(&b'?'));
+    assert_eq!(dev.realtime_log.iter().find(|&&b| b != b'?'), Some(&0x18));
     assert_eq!(dev.received[..2], ["$I".to_string(), "$$".to_string()]);
 }
 
@@ -330,11 +332,28 @@ fn hang_up_reports_last_executed_line_and_resume_skips_nothing() {
     let ran = job_indices(&job, &dev.executed);
     assert!(ran.contains(&last.index));
     let st = Journal::read(&jp).unwrap();
+    // The controller restarted (banner on connect): which queued lines ran before is unknown,
+    // so resuming needs the operator's choice and names the lines in doubt.
+    let mut dev2 = FakeGrbl::new(true);
+    let err = send_job(
+        &mut dev2,
+        &job,
+        &fast().with_journal(&jp).with_resume(true),
+        &mut |_| {},
+        &CancelToken::new(),
+    )
+    .unwrap_err();
+    let SendError::ResumeUncertain { from, to, .. } = &err else {
+        panic!("{err}")
+    };
+    assert_eq!(Some(from.index), st.unconfirmed.first().copied(), "{err}");
+    assert!(to.index >= *st.unconfirmed.last().unwrap());
+    assert!(dev2.executed.is_empty());
     let mut dev2 = FakeGrbl::new(true);
     send_job(
         &mut dev2,
         &job,
-        &fast().with_journal(&jp).with_resume(true),
+        &fast().with_journal(&jp).with_resume_from(Some(from.index)),
         &mut |_| {},
         &CancelToken::new(),
     )
@@ -443,4 +462,85 @@ fn resume_needs_a_journal() {
     )
     .unwrap_err();
     assert!(matches!(err, SendError::NoJournal));
+}
+
+fn state_with_unconfirmed(job: &Job, unconfirmed: Vec<usize>) -> JournalState {
+    let n = job.len();
+    let mut done = vec![false; n];
+    for d in done.iter_mut().take(unconfirmed[0]) {
+        *d = true;
+    }
+    JournalState {
+        hash: job.hash,
+        lines: n,
+        done,
+        rejected: vec![None; n],
+        runs: 1,
+        finished: false,
+        last_acked: unconfirmed.last().copied(),
+        notes: Vec::new(),
+        unconfirmed,
+        partial: None,
+        uncertain: None,
+    }
+}
+
+#[test]
+fn resume_position_settles_the_window_or_names_it() {
+    // A square drawn twice round: (10,0) is reached at the end of lines 1 and 5.
+    let job = Job::parse("G0X0Y0\nG1X10F600\nY10\nX0\nY0\nX10\n").unwrap();
+    let st = state_with_unconfirmed(&job, vec![1, 2, 3]);
+    let tol = 0.003;
+    let settle = |p: [f64; 3]| resolve_resume(&job, &st, None, Some(p), 128, tol, false);
+    // Inside line 3 (X0 from (10,10)): lines 1 and 2 ran, line 3 finishes from there.
+    let r = settle([4.0, 10.0, 0.0]).unwrap().unwrap();
+    assert_eq!(
+        r,
+        Resolution {
+            from: 1,
+            cut: 3,
+            partial: Some((3, [4.0, 10.0, 0.0]))
+        }
+    );
+    // At the end of line 2 (within a step): lines 1 and 2 ran.
+    let r = settle([10.0, 10.001, 0.0]).unwrap().unwrap();
+    assert_eq!((r.cut, r.partial), (3, None));
+    // (10,0) is the end of line 1 and of line 5, both in the window (everything fits in
+    // 128 bytes): the sender will not guess.
+    let e = settle([10.0, 0.0, 0.0]).unwrap_err();
+    assert!(matches!(e, SendError::ResumeUncertain { .. }), "{e}");
+    assert!(e.to_string().contains("2 times"), "{e}");
+    assert!(e.to_string().contains("--resume-from"), "{e}");
+    // Off the path altogether.
+    let e = settle([3.0, 3.0, 0.0]).unwrap_err();
+    assert!(e.to_string().contains("on none of these lines"), "{e}");
+    // A controller that restarted cannot be asked.
+    let e = resolve_resume(&job, &st, None, None, 128, tol, true).unwrap_err();
+    assert!(e.to_string().contains("restarted"), "{e}");
+    // The operator's choice wins and is checked.
+    let r = resolve_resume(&job, &st, Some(4), None, 128, tol, true)
+        .unwrap()
+        .unwrap();
+    assert_eq!((r.from, r.cut), (0, 4));
+    assert!(matches!(
+        resolve_resume(&job, &st, Some(99), None, 128, tol, true),
+        Err(SendError::ResumeFromOutOfRange { .. })
+    ));
+}
+
+#[test]
+fn a_stop_at_a_sharp_vertex_finishes_the_later_line_and_g91_is_refused() {
+    // A narrow V: near (2,4) both legs lie within a step of the stop position.
+    let job = Job::parse("G0X0Y0\nG1X0.2Y4F600\nX0.4Y0\nX0.6Y4\n").unwrap();
+    let st = state_with_unconfirmed(&job, vec![1, 2]);
+    let p = [0.2, 3.964, 0.0];
+    let r = resolve_resume(&job, &st, None, Some(p), 128, 0.0031, false)
+        .unwrap()
+        .unwrap();
+    assert_eq!(r.partial, Some((2, p)), "{r:?}");
+    // Relative moves: a position cannot say which line ran.
+    let rel = Job::parse("G91\nG1X1F600\nX1\nX1\n").unwrap();
+    let st = state_with_unconfirmed(&rel, vec![1, 2]);
+    let e = resolve_resume(&rel, &st, None, Some([2.0, 0.0, 0.0]), 128, 0.003, false).unwrap_err();
+    assert!(e.to_string().contains("relative (G91)"), "{e}");
 }

@@ -181,6 +181,10 @@ pub struct JobLine {
     pub tool_on: bool,
     /// Modal state before the line.
     pub before: ModalState,
+    /// For an arc: its chord points as GRBL splits it, start and end included (G92-free work
+    /// coordinates, mm); empty for anything else.
+    #[serde(default)]
+    pub arc: Vec<[f64; 3]>,
 }
 
 /// Machine limits used by the motion-time estimate (GRBL settings `$110-$112`, `$120-$122`,
@@ -392,6 +396,7 @@ impl Job {
                     time: 0.0,
                     tool_on: false,
                     before,
+                    arc: Vec::new(),
                 });
                 continue;
             }
@@ -492,6 +497,7 @@ impl Job {
             }
             let has_axis = axis.iter().any(Option::is_some);
             let mut length = 0.0;
+            let mut arc = Vec::new();
             let mut moves = false;
             let start = st.position;
             let to_mm = |v: f64| v * scale;
@@ -548,6 +554,7 @@ impl Job {
                                 for p in &pts {
                                     include(&mut lo, &mut hi, add(*p, st.g92));
                                 }
+                                arc = pts.iter().map(|p| add(*p, st.g92)).collect();
                             }
                             _ => length = dist(start, target),
                         }
@@ -578,6 +585,7 @@ impl Job {
                 time: 0.0,
                 tool_on,
                 before,
+                arc,
             });
         }
         if lines.is_empty() {
@@ -728,10 +736,37 @@ impl Job {
     /// the position, back down, tool state, coolant, feed, feed mode, distance mode and units
     /// restored. The lines are stripped and at most 79 characters.
     pub fn resume_preamble(&self, next: usize) -> Vec<String> {
-        let st = match self.lines.get(next) {
+        let st = self.state_before(next);
+        self.resume_preamble_from(next, add(st.position, st.g92), true)
+    }
+
+    /// The modal state before line `index` (the end state past the last line).
+    pub fn state_before(&self, index: usize) -> &ModalState {
+        match self.lines.get(index) {
             Some(l) => &l.before,
             None => &self.end_state,
-        };
+        }
+    }
+
+    /// The work position (G92-free, mm) where line `index` ends.
+    pub fn end_of(&self, index: usize) -> [f64; 3] {
+        let st = self.state_before(index + 1);
+        add(st.position, st.g92)
+    }
+
+    /// The work position (G92-free, mm) where line `index` starts.
+    pub fn start_of(&self, index: usize) -> [f64; 3] {
+        let st = self.state_before(index);
+        add(st.position, st.g92)
+    }
+
+    /// [`Job::resume_preamble`] for a machine to be put at `at` (G92-free work coordinates, mm)
+    /// rather than at the start of line `next`: the point where a stopped run left line `next`
+    /// part-way, so that re-sending it (in G90) completes it without repeating the part done.
+    /// With `travel` false the machine is known to stand at `at` already and the preamble only
+    /// restores the modal state (no tool lift, no travel).
+    pub fn resume_preamble_from(&self, next: usize, at: [f64; 3], travel: bool) -> Vec<String> {
+        let st = self.state_before(next);
         let f = |v: f64| fmt_num(v);
         let mut out = vec![
             "G21G90G94".to_string(),
@@ -742,11 +777,13 @@ impl Job {
             out.push("G92.1".into());
         }
         // Absolute target in the G92-free frame.
-        let p = add(st.position, st.g92);
-        if let Some(z) = self.safe_z {
-            out.push(format!("G0Z{}", f(z)));
+        let p = at;
+        if travel {
+            if let Some(z) = self.safe_z {
+                out.push(format!("G0Z{}", f(z)));
+            }
+            out.push(format!("G0X{}Y{}", f(p[0]), f(p[1])));
         }
-        out.push(format!("G0X{}Y{}", f(p[0]), f(p[1])));
         match st.spindle {
             Spindle::Off => out.push(format!("S{}", f(st.speed))),
             Spindle::Cw => out.push(format!("M3S{}", f(st.speed))),
@@ -758,7 +795,7 @@ impl Job {
         if st.flood {
             out.push("M8".into());
         }
-        if self.safe_z.is_some() {
+        if self.safe_z.is_some() && travel {
             if st.feed > 0.0 && !st.inverse_time {
                 out.push(format!("G1Z{}F{}", f(p[2]), f(st.feed)));
             } else {
@@ -766,11 +803,12 @@ impl Job {
             }
         }
         if self.uses_g92 {
+            // The offset that makes `at` read as the job's own coordinates there.
             out.push(format!(
                 "G92X{}Y{}Z{}",
-                f(st.position[0]),
-                f(st.position[1]),
-                f(st.position[2])
+                f(p[0] - st.g92[0]),
+                f(p[1] - st.g92[1]),
+                f(p[2] - st.g92[2])
             ));
         }
         if st.feed > 0.0 && !st.inverse_time {

@@ -11,13 +11,21 @@
 //! X <index>               every line acknowledged in this run with index <= <index> has executed
 //! U <index>               lines of this run with index >= <index> are not known executed after
 //!                         all (the machine was found somewhere else: a line was corrupted)
+//! P <index> <x> <y> <z>   the run stopped part-way through line <index>, at this work position
+//!                         (mm, G92-free); acknowledged lines of this run from <index> on did not run
+//! Q <from> <to>           lines <from>..=<to> may or may not have run: the controller lost its
+//!                         position (reset in motion); resuming needs an explicit choice
+//! K <from> <to>           resolved when resuming: lines <from>..<to> (exclusive) have executed,
+//!                         none from <to> on has; earlier unconfirmed acknowledgements are settled
 //! N <text>                a note (why the run stopped)
 //! D                       the job completed
 //! ```
 //! An `ok` means GRBL queued the line, not that it moved: a reset or hang-up discards the
 //! planner. So a line counts as done only if it was acknowledged *and* covered by a later
 //! `X` of the same run (the driver writes `X` when the machine reports `Idle` with nothing in
-//! flight, and when GRBL's planner capacity proves older lines finished).
+//! flight, and when GRBL's planner capacity proves older lines finished). Acknowledgements a run
+//! could not confirm (a hang-up) stay [`JournalState::unconfirmed`] until a resume settles them
+//! with `K` from where the machine is found.
 
 use crate::job::Job;
 use std::fs::{File, OpenOptions};
@@ -87,6 +95,12 @@ pub struct JournalState {
     pub last_acked: Option<usize>,
     /// Notes, in order.
     pub notes: Vec<String>,
+    /// Acknowledged lines no run could confirm as executed or not (a hang-up), in order.
+    pub unconfirmed: Vec<usize>,
+    /// The line a run stopped part-way through, and the work position (mm, G92-free) it stopped at.
+    pub partial: Option<(usize, [f64; 3])>,
+    /// Lines that may or may not have run because the controller lost its position.
+    pub uncertain: Option<(usize, usize)>,
 }
 
 impl JournalState {
@@ -113,6 +127,8 @@ pub struct Journal {
     path: PathBuf,
     file: File,
     buf: String,
+    /// Records written to the OS since the last fsync.
+    dirty: bool,
 }
 
 fn io_err(path: &Path) -> impl Fn(std::io::Error) -> JournalError + '_ {
@@ -131,6 +147,7 @@ impl Journal {
             path: path.to_path_buf(),
             file,
             buf: String::new(),
+            dirty: false,
         };
         j.buf.push_str(&format!(
             "{MAGIC} {VERSION} {:016x} {}\nR 1\n",
@@ -166,6 +183,7 @@ impl Journal {
             path: path.to_path_buf(),
             file,
             buf: String::new(),
+            dirty: false,
         };
         j.buf.push_str(&format!("R {}\n", state.runs + 1));
         j.sync()?;
@@ -206,11 +224,21 @@ impl Journal {
             finished: false,
             last_acked: None,
             notes: Vec::new(),
+            unconfirmed: Vec::new(),
+            partial: None,
+            uncertain: None,
         };
         // Acks of the current run not yet confirmed, kept sorted by arrival (= index order
         // within a run except across resume gaps).
         let mut pending: Vec<usize> = Vec::new();
         let mut confirmed: Vec<usize> = Vec::new();
+        // Unconfirmed acknowledgements of earlier runs, waiting for a `K`.
+        let mut carried: Vec<usize> = Vec::new();
+        let coord = |n: usize, s: Option<&str>| -> Result<f64, JournalError> {
+            s.and_then(|s| s.parse::<f64>().ok())
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| bad(n, "missing or bad coordinate"))
+        };
         let index = |n: usize, s: Option<&str>| -> Result<usize, JournalError> {
             let i: usize = s
                 .and_then(|s| s.parse().ok())
@@ -232,7 +260,7 @@ impl Journal {
                 "" | "#" => {}
                 "R" => {
                     st.runs += 1;
-                    pending.clear();
+                    carried.append(&mut pending);
                     confirmed.clear();
                 }
                 "A" => {
@@ -273,10 +301,54 @@ impl Journal {
                         }
                     });
                 }
+                "P" => {
+                    let mut w = rest.unwrap_or("").split_whitespace();
+                    let k = index(n, w.next())?;
+                    let p = [
+                        coord(n, w.next())?,
+                        coord(n, w.next())?,
+                        coord(n, w.next())?,
+                    ];
+                    pending.retain(|&i| i < k);
+                    st.partial = Some((k, p));
+                }
+                "Q" | "K" => {
+                    let mut w = rest.unwrap_or("").split_whitespace();
+                    let a = index(n, w.next())?;
+                    let b: usize = w
+                        .next()
+                        .and_then(|s| s.parse().ok())
+                        .filter(|&b| b <= lines)
+                        .ok_or_else(|| bad(n, "missing or bad range end"))?;
+                    if kind == "Q" {
+                        pending.clear();
+                        st.uncertain = Some((a, b));
+                    } else {
+                        for (i, d) in st.done.iter_mut().enumerate() {
+                            if i >= b {
+                                *d = false;
+                            } else if i >= a {
+                                *d = true;
+                            }
+                        }
+                        carried.clear();
+                        pending.clear();
+                        st.uncertain = None;
+                        st.partial = None;
+                    }
+                }
                 "N" => st.notes.push(rest.unwrap_or("").to_string()),
                 "D" => st.finished = true,
                 _ => return Err(bad(n, &format!("unknown record '{kind}'"))),
             }
+        }
+        carried.append(&mut pending);
+        carried.retain(|&i| !st.done[i]);
+        carried.sort_unstable();
+        carried.dedup();
+        st.unconfirmed = carried;
+        if st.partial.is_some_and(|(k, _)| st.done[k]) {
+            st.partial = None;
         }
         Ok(st)
     }
@@ -306,6 +378,23 @@ impl Journal {
         self.buf.push_str(&format!("U {index}\n"));
     }
 
+    /// Records that the run stopped part-way through line `index`, at work position `pos` (mm,
+    /// G92-free).
+    pub fn partial(&mut self, index: usize, pos: [f64; 3]) {
+        self.buf
+            .push_str(&format!("P {index} {} {} {}\n", pos[0], pos[1], pos[2]));
+    }
+
+    /// Records that lines `from..=to` may or may not have run (the controller lost its position).
+    pub fn uncertain(&mut self, from: usize, to: usize) {
+        self.buf.push_str(&format!("Q {from} {to}\n"));
+    }
+
+    /// Records the resolution of a resume: lines `from..to` executed, none from `to` on.
+    pub fn resolved(&mut self, from: usize, to: usize) {
+        self.buf.push_str(&format!("K {from} {to}\n"));
+    }
+
     /// Records a note (single line).
     pub fn note(&mut self, text: &str) {
         let t = text.replace(['\n', '\r'], " ");
@@ -317,8 +406,9 @@ impl Journal {
         self.buf.push_str("D\n");
     }
 
-    /// Writes buffered records and fsyncs them (called once per batch of acknowledgements).
-    pub fn sync(&mut self) -> Result<(), JournalError> {
+    /// Writes buffered records to the OS without waiting for the disk: they survive the sender
+    /// being killed, not a power cut (see [`Journal::sync`]).
+    pub fn flush(&mut self) -> Result<(), JournalError> {
         if self.buf.is_empty() {
             return Ok(());
         }
@@ -326,8 +416,20 @@ impl Journal {
         self.file
             .write_all(self.buf.as_bytes())
             .map_err(io_err(&path))?;
-        self.file.sync_data().map_err(io_err(&path))?;
         self.buf.clear();
+        self.dirty = true;
+        Ok(())
+    }
+
+    /// Writes buffered records and fsyncs them (called once per batch of acknowledgements).
+    pub fn sync(&mut self) -> Result<(), JournalError> {
+        if self.buf.is_empty() && !self.dirty {
+            return Ok(());
+        }
+        self.flush()?;
+        let path = self.path.clone();
+        self.file.sync_data().map_err(io_err(&path))?;
+        self.dirty = false;
         Ok(())
     }
 }
@@ -385,6 +487,64 @@ mod tests {
         assert_eq!(st.remaining(), vec![3, 4]);
         assert_eq!(st.done, vec![true, true, true, false, false]);
         assert_eq!(st.runs, 2);
+    }
+
+    #[test]
+    fn unconfirmed_acks_survive_runs_until_a_resume_settles_them() {
+        let job = Job::parse("G1X1F100\nG1X2\nG1X3\nG1X4\nG1X5\nG1X6\n").unwrap();
+        let p = tmp("settle.journal");
+        {
+            let mut j = Journal::create(&p, &job).unwrap();
+            j.ack(0);
+            j.executed_through(0);
+            j.ack(1);
+            j.ack(2);
+            j.note("hang-up");
+            j.sync().unwrap();
+        }
+        // A resume that fails before settling anything keeps the doubt for the next one.
+        drop(Journal::resume(&p, &job).unwrap());
+        let st = Journal::read(&p).unwrap();
+        assert_eq!(st.unconfirmed, vec![1, 2]);
+        assert_eq!(st.done, vec![true, false, false, false, false, false]);
+        {
+            let (mut j, _) = Journal::resume(&p, &job).unwrap();
+            // The machine was found part-way through line 3.
+            j.resolved(1, 3);
+            j.partial(3, [3.5, 0.0, 0.0]);
+            j.ack(3);
+            j.ack(4);
+            j.sync().unwrap();
+        }
+        let st = Journal::read(&p).unwrap();
+        assert_eq!(st.done, vec![true, true, true, false, false, false]);
+        assert_eq!(st.partial, Some((3, [3.5, 0.0, 0.0])));
+        assert_eq!(st.unconfirmed, vec![3, 4]);
+        {
+            let (mut j, _) = Journal::resume(&p, &job).unwrap();
+            // A reset in motion: lines 3..=5 in doubt.
+            j.uncertain(3, 5);
+            j.sync().unwrap();
+        }
+        let st = Journal::read(&p).unwrap();
+        assert_eq!(st.uncertain, Some((3, 5)));
+        {
+            let (mut j, _) = Journal::resume(&p, &job).unwrap();
+            // The operator resumes from line 4: 0..4 done, the rest not.
+            j.resolved(0, 4);
+            j.sync().unwrap();
+        }
+        let st = Journal::read(&p).unwrap();
+        assert_eq!(st.done, vec![true, true, true, true, false, false]);
+        assert_eq!((st.uncertain, st.partial), (None, None));
+        assert!(st.unconfirmed.is_empty());
+        let mut text = std::fs::read_to_string(&p).unwrap();
+        text.push_str("P 2 1.0 nan 0\n");
+        std::fs::write(&p, text).unwrap();
+        assert!(matches!(
+            Journal::read(&p),
+            Err(JournalError::Malformed { .. })
+        ));
     }
 
     #[test]

@@ -60,6 +60,12 @@ pub struct StreamArgs {
     /// (needs the journal of the interrupted run).
     #[arg(long)]
     pub resume: bool,
+    /// With --resume: run from this line of the file on, counting every line before it as done.
+    /// Needed when the journal and the controller cannot tell which queued lines ran (a reset
+    /// in motion, a controller that restarted after a hang-up); the refusal names the lines in
+    /// doubt.
+    #[arg(long, value_name = "LINE")]
+    pub resume_from: Option<usize>,
     /// Journal of acknowledged and executed lines (default: `<job>.journal`).
     #[arg(long, value_name = "PATH")]
     pub journal: Option<PathBuf>,
@@ -103,6 +109,7 @@ impl Default for StreamArgs {
             unlock: false,
             check: false,
             resume: false,
+            resume_from: None,
             journal: None,
             sim_speed: DEFAULT_SIM_SPEED,
             sim_instant: false,
@@ -137,6 +144,14 @@ impl StreamArgs {
     /// Sets [`StreamArgs::resume`].
     pub fn with_resume(mut self, on: bool) -> Self {
         self.resume = on;
+        self
+    }
+    /// Sets [`StreamArgs::resume_from`] (a 1-based line number of the file; implies resume).
+    pub fn with_resume_from(mut self, line: Option<usize>) -> Self {
+        self.resume_from = line;
+        if line.is_some() {
+            self.resume = true;
+        }
         self
     }
     /// Sets [`StreamArgs::unlock`].
@@ -247,10 +262,23 @@ pub fn stream_text_with_control(
         bail!("the job {name} has no line to send");
     }
     let journal = args.journal_path(name);
+    // `--resume-from LINE` names a line of the file; the sender counts streamable lines.
+    let resume_from = match args.resume_from {
+        Some(line) => Some(
+            job.lines
+                .iter()
+                .position(|l| l.source_line >= line)
+                .with_context(|| {
+                    format!("--resume-from {line}: the job {name} has nothing to send from line {line} on")
+                })?,
+        ),
+        None => None,
+    };
     let opts = SendOptions::default()
         .with_unlock(args.unlock)
         .with_check(args.check)
-        .with_resume(args.resume)
+        .with_resume(args.resume || resume_from.is_some())
+        .with_resume_from(resume_from)
         .with_journal(&journal);
 
     let sim = if args.uses_sim() {
@@ -420,6 +448,20 @@ fn explain(e: SendError, name: &str, args: &StreamArgs, journal: &Path) -> anyho
             | SendError::Aborted { .. }
             | SendError::UnexpectedState { .. }
     );
+    if let SendError::ResumeUncertain { from, .. } = &e {
+        let port = match &args.port {
+            Some(p) => format!(" --port {p}"),
+            None => String::new(),
+        };
+        let hint = format!(
+            "For example, if line {} never started: flatcut send {name}{port} --resume-from {}",
+            from.source_line, from.source_line
+        );
+        return anyhow::Error::new(StreamError {
+            error: e,
+            hint: Some(hint),
+        });
+    }
     let hint = resumable.then(|| {
         let port = match &args.port {
             Some(p) => format!(" --port {p}"),
@@ -434,6 +476,12 @@ fn explain(e: SendError, name: &str, args: &StreamArgs, journal: &Path) -> anyho
              completed line with: flatcut send {name}{port}{journal_flag} --resume",
             journal.display()
         );
+        if let SendError::Alarm { code: 3, .. } = &e {
+            h.push_str(
+                " (the reset in motion lost the position: the resume will ask for --resume-from \
+                 LINE after the machine is homed or its origin set again)",
+            );
+        }
         if let SendError::Alarm { code, .. } = &e
             && flatcut_grbl::codes::alarm_is_critical(*code)
         {
@@ -572,6 +620,10 @@ enum Ev {
 
 /// The process-wide Ctrl-C handler (the `ctrlc` crate allows one per process) forwards to the
 /// most recently registered stream or simulator still running; with none, Ctrl-C exits (130).
+/// With ctrlc's `termination` feature SIGTERM and SIGHUP come through the same handler (it does
+/// not say which signal it was): a service manager stopping `flatcut send`, or a closed
+/// terminal, gets the feed hold and then the abort (stdin is not a terminal, or reading the
+/// answer fails), never a controller left running with a dead sender.
 static SINK: Mutex<Vec<(u64, Sender<Ev>)>> = Mutex::new(Vec::new());
 /// Registration ids, so a finishing stream unregisters itself and nobody else.
 static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
@@ -647,8 +699,10 @@ pub(crate) fn wait_for_interrupt() -> anyhow::Result<()> {
     }
 }
 
-/// Ctrl-C policy: the first Ctrl-C holds the feed and asks "[r]esume or [a]bort?" on the
-/// terminal (abort at once when stdin is not a terminal); a second Ctrl-C while asking aborts.
+/// Ctrl-C policy (SIGTERM and SIGHUP alike): the first one holds the feed and asks "[r]esume or
+/// [a]bort?" on the terminal (abort at once when stdin is not a terminal); a second one while
+/// asking aborts. Abort = feed hold, soft reset, tool off, journal flushed, and a message naming
+/// the last line executed.
 fn prompt_loop(
     rx: Receiver<Ev>,
     answers: Sender<Ev>,
