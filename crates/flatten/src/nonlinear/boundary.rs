@@ -170,6 +170,8 @@ pub fn boundary_isometric(
         let (r, mut p) = run(pb, &x, iters, rel, abs)
             .map_err(|reason| FlattenError::NoConvergence { method, reason })?;
         iterations += r.iterations;
+        // A stall only proves anything after an inner solve that converged.
+        let converged = r.iterations < iters;
         let (s_min, t_min) = min_stretch(rest, &r.x);
         // The guard keeps every stretch above its collapse stretch; this only catches round-off.
         if !(s_min > energy.collapse) {
@@ -188,7 +190,10 @@ pub fn boundary_isometric(
             best = (v, x.clone());
         }
         if v > REQUIRED_SHRINK * viol {
-            if v > REPORT_REL_ERROR && s_min < GREEN_CONCAVE_BELOW && v > (1.0 - STALL_GAIN) * viol
+            if converged
+                && v > REPORT_REL_ERROR
+                && s_min < GREEN_CONCAVE_BELOW
+                && v > (1.0 - STALL_GAIN) * viol
             {
                 stop = Some(Stop::Stalled);
                 break;
