@@ -183,9 +183,13 @@ pub struct PieceContext<'a> {
     pub corner: flatcut_pattern::CornerStyle,
 }
 
+/// Longest step (mm) between samples of a stitch or placement line carried into the plane:
+/// fine enough that the drawn line follows the map's bending within a pen width.
+const LINE_STEP_MM: f64 = 1.0;
+
 /// Builds the pattern piece of a flattened mesh: the flattened boundary is the sew line, notch
-/// marks sit on their nearest boundary vertex, drill/reference points and the grain line are
-/// carried through the map, and the label carries the distortion summary.
+/// marks sit on their nearest boundary vertex, drill/reference points, stitch lines and the grain
+/// line are carried through the map, and the label carries the distortion summary.
 pub fn piece_from_flat(
     name: &str,
     mesh: &TriMesh,
@@ -217,7 +221,25 @@ pub fn piece_from_flat(
                         });
                     }
                 }
+                DesignMark::Line if pts.len() >= 2 => {
+                    // Stitch and placement lines follow the surface: each 3D segment is
+                    // subdivided and every sample carried by its nearest surface point, so the
+                    // flat line bends as the map does.
+                    let q =
+                        flatcut_flatten::marks::polyline_to_plane(mesh, flat, &pts, LINE_STEP_MM);
+                    let line: Option<Vec<DVec2>> = q.into_iter().collect();
+                    let line = line.ok_or_else(|| PipelineError::Piece {
+                        piece: name.into(),
+                        reason: format!(
+                            "mark '{}': the line leaves the surface (a point is farther than {:.0} % of the part size from it)",
+                            mark.name,
+                            flatcut_flatten::marks::MAX_OFFSET_REL * 100.0
+                        ),
+                    })?;
+                    input.lines.push(line);
+                }
                 DesignMark::Point | DesignMark::Line => {
+                    // a one-point "line" is a reference point
                     let kind = if mark.kind == DesignMark::Point {
                         MarkKind::Drill
                     } else {

@@ -26,6 +26,13 @@ const LEAF_SIZE: usize = 4;
 /// flattening `uv` (one 2D position per mesh vertex). `None` for a non-finite point, a point
 /// too far from the surface, or a `uv` whose length does not match the mesh.
 pub fn to_plane(mesh: &TriMesh, uv: &[DVec2], points: &[DVec3]) -> Vec<Option<DVec2>> {
+    let pts: Vec<(DVec3, bool)> = points.iter().map(|&p| (p, true)).collect();
+    carry(mesh, uv, &pts)
+}
+
+/// Carries each point by its nearest surface point; points flagged `true` must lie within
+/// [`MAX_OFFSET_REL`] of the surface, the others are projected however far they are.
+fn carry(mesh: &TriMesh, uv: &[DVec2], points: &[(DVec3, bool)]) -> Vec<Option<DVec2>> {
     if uv.len() != mesh.positions.len() || mesh.triangles.is_empty() {
         return vec![None; points.len()];
     }
@@ -33,12 +40,12 @@ pub fn to_plane(mesh: &TriMesh, uv: &[DVec2], points: &[DVec3]) -> Vec<Option<DV
     let limit = MAX_OFFSET_REL * mesh.bbox().diagonal();
     points
         .iter()
-        .map(|&p| {
+        .map(|&(p, checked)| {
             if !flatcut_geom::finite3(p) {
                 return None;
             }
             let (t, b, d) = bvh.nearest(&mesh.positions, &mesh.triangles, p)?;
-            if d > limit {
+            if checked && d > limit {
                 return None;
             }
             let tri = mesh.triangles[t];
@@ -47,9 +54,12 @@ pub fn to_plane(mesh: &TriMesh, uv: &[DVec2], points: &[DVec3]) -> Vec<Option<DV
         .collect()
 }
 
-/// Carries a 3D polyline into the plane, first subdividing each segment so that no piece is
-/// longer than `max_step` mm (the image of a straight 3D segment is curved in the plane).
-/// Points that cannot be carried (see [`to_plane`]) are `None`.
+/// Carries a 3D polyline drawn on the surface into the plane, first subdividing each segment
+/// so that no piece is longer than `max_step` mm (the image of a straight 3D segment is
+/// curved in the plane). The given points must lie on the surface as for [`to_plane`]; the
+/// samples between them lie on the straight chord, which cuts through a curved surface, and
+/// are carried by their nearest surface point (the chord projected onto the surface, as CAD's
+/// "project curve" does). Points that cannot be carried are `None`.
 pub fn polyline_to_plane(
     mesh: &TriMesh,
     uv: &[DVec2],
@@ -67,12 +77,12 @@ pub fn polyline_to_plane(
                 1
             };
             for j in 1..k {
-                dense.push(q.lerp(p, j as f64 / k as f64));
+                dense.push((q.lerp(p, j as f64 / k as f64), false));
             }
         }
-        dense.push(p);
+        dense.push((p, true));
     }
-    to_plane(mesh, uv, &dense)
+    carry(mesh, uv, &dense)
 }
 
 /// Carries 2D points of the flattening `uv` back onto the surface. `None` for a non-finite
@@ -350,6 +360,36 @@ mod tests {
                 .fold(f64::INFINITY, f64::min);
             assert!((d - brute).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn a_chord_across_a_curved_surface_is_projected_onto_it() {
+        // Quarter cylinder, radius 50: the chord between the ends of the quarter circle at
+        // height 50 sags 14.6 mm below the surface (far beyond MAX_OFFSET_REL), yet projected
+        // onto the surface it is that circle, which develops into a straight line as long as
+        // the facets' polygon.
+        let (r, nu) = (50.0, 64);
+        let mesh = testmesh::cylinder_patch(r, std::f64::consts::FRAC_PI_2, 100.0, nu, 8);
+        let f = flatten(&mesh, &FlattenParams::new(Method::Developable)).unwrap();
+        let (a, b) = (DVec3::new(r, 0.0, 50.0), DVec3::new(0.0, r, 50.0));
+        let line: Vec<DVec2> = polyline_to_plane(&mesh, &f.uv, &[a, b], 1.0)
+            .into_iter()
+            .map(|q| q.expect("every sample is carried"))
+            .collect();
+        let len: f64 = line.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+        let arc = nu as f64 * 2.0 * r * (std::f64::consts::FRAC_PI_4 / nu as f64).sin();
+        assert!((len - arc).abs() < 1e-6, "{len} vs {arc}");
+        let d = (line[line.len() - 1] - line[0]).normalize();
+        for q in &line {
+            assert!(
+                (*q - line[0]).perp_dot(d).abs() < 1e-9,
+                "straight in the plane"
+            );
+        }
+        // a given point off the surface is still refused
+        let off = DVec3::new(0.0, r + 5.0, 50.0);
+        let q = polyline_to_plane(&mesh, &f.uv, &[a, off], 1.0);
+        assert!(q[0].is_some() && q.last().unwrap().is_none());
     }
 
     #[test]

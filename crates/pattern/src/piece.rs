@@ -58,6 +58,10 @@ pub struct PieceInput {
     /// Sew line, closed (first point not repeated), counter-clockwise, mm.
     pub outline: Vec<DVec2>,
     pub marks: Vec<Mark>,
+    /// Drawn internal lines (stitch lines, placement lines, dart legs), open polylines in the
+    /// flat frame (mm), each of at least two points.
+    #[serde(default)]
+    pub lines: Vec<Vec<DVec2>>,
     /// Grain line as two points in the flat frame (direction carried through the map).
     pub grain: Option<(DVec2, DVec2)>,
     /// Seam width per seam segment (see the module doc); empty = the default width everywhere,
@@ -80,6 +84,7 @@ impl PieceInput {
             name,
             outline,
             marks: Vec::new(),
+            lines: Vec::new(),
             grain: None,
             seam_widths: Vec::new(),
             corner_style: CornerStyle::default(),
@@ -201,12 +206,27 @@ pub struct Piece {
     pub drills: Vec<(DVec2, f64)>,
     /// Reference points (drawn crosses).
     pub points: Vec<DVec2>,
+    /// Internal lines (stitch and placement lines), drawn, open.
+    pub lines: Vec<Vec<DVec2>>,
     /// Grain line end points.
     pub grain: Option<(DVec2, DVec2)>,
     pub label: LabelInfo,
     /// Label text strokes (open polylines).
     pub label_strokes: Vec<Vec<DVec2>>,
     chord_tol: f64,
+}
+
+/// Drops the points of an open polyline that lie within `tol` of the simplified line
+/// (Ramer–Douglas–Peucker, geo's implementation): lines carried through a map arrive sampled
+/// every millimetre, and a straight ruling needs only its ends.
+fn simplify_line(l: &[DVec2], tol: f64) -> Vec<DVec2> {
+    use geo::Simplify;
+    let ls: geo::LineString<f64> = l.iter().map(|p| geo::Coord { x: p.x, y: p.y }).collect();
+    ls.simplify(tol)
+        .0
+        .iter()
+        .map(|c| DVec2::new(c.x, c.y))
+        .collect()
 }
 
 fn sanitize(name: &str) -> String {
@@ -477,6 +497,32 @@ impl Piece {
                 MarkKind::Point => points.push(m.pos),
             }
         }
+        let mut lines = Vec::with_capacity(input.lines.len());
+        for (k, l) in input.lines.iter().enumerate() {
+            if l.iter().any(|p| !flatcut_geom::finite2(*p)) {
+                return Err(nonfinite(&format!("internal line {}", k + 1)));
+            }
+            let mut l = l.clone();
+            l.dedup_by(|a, b| a.distance(*b) < weld);
+            if l.len() < 2 {
+                return Err(inv(format!(
+                    "internal line {} has fewer than two distinct points",
+                    k + 1
+                )));
+            }
+            if let Some(p) = l.iter().find(|p| {
+                !poly::contains(&cut, **p)
+                    && poly::nearest_on_closed(&cut, **p).2.distance(**p) > weld
+            }) {
+                return Err(inv(format!(
+                    "internal line {} leaves the piece at ({:.2}, {:.2})",
+                    k + 1,
+                    p.x,
+                    p.y
+                )));
+            }
+            lines.push(simplify_line(&l, opts.chord_tol));
+        }
         if let Some((a, b)) = input.grain {
             if !(flatcut_geom::finite2(a) && flatcut_geom::finite2(b)) {
                 return Err(nonfinite("grain line"));
@@ -494,6 +540,7 @@ impl Piece {
             notches,
             drills,
             points,
+            lines,
             grain: input.grain,
             label: input.label.clone(),
             label_strokes: Vec::new(),
@@ -667,6 +714,15 @@ impl Piece {
                 format!("point-{}-b", k + 1),
             ));
         }
+        for (k, l) in self.lines.iter().enumerate() {
+            s.push(mk(
+                Layer::Draw,
+                l.clone(),
+                false,
+                false,
+                format!("line-{}", k + 1),
+            ));
+        }
         if let Some((a, b)) = self.grain {
             let d = (b - a).normalize();
             let nrm = DVec2::new(-d.y, d.x);
@@ -775,6 +831,67 @@ mod tests {
                 (0..per_side).map(move |j| c[k].lerp(c[(k + 1) % 4], j as f64 / per_side as f64))
             })
             .collect()
+    }
+
+    #[test]
+    fn stitch_lines_are_drawn_as_polylines_and_checked() {
+        let mut input = PieceInput::new("quarter", rect(200., 100., 20));
+        let stitch = vec![
+            DVec2::new(10., 10.),
+            DVec2::new(100., 12.),
+            DVec2::new(100., 12.), // repeated point: dropped
+            DVec2::new(190., 10.),
+        ];
+        input.lines.push(stitch);
+        let p = Piece::build(&input, &PieceOptions::default()).unwrap();
+        assert_eq!(
+            p.lines,
+            vec![vec![
+                DVec2::new(10., 10.),
+                DVec2::new(100., 12.),
+                DVec2::new(190., 10.)
+            ]]
+        );
+        let d = p.to_drawing(1);
+        let line: Vec<_> = d
+            .strokes
+            .iter()
+            .filter(|s| s.id == "quarter-1-line-1")
+            .collect();
+        assert_eq!(line.len(), 1);
+        assert_eq!(line[0].layer, Layer::Draw);
+        assert!(!line[0].closed && line[0].points.len() == 3);
+        // a straight line sampled densely keeps only its ends
+        let mut straight = input.clone();
+        straight.lines[0] = (0..=50)
+            .map(|k| DVec2::new(10. + 3.0 * k as f64, 50.))
+            .collect();
+        let q = Piece::build(&straight, &PieceOptions::default()).unwrap();
+        assert_eq!(
+            q.lines[0],
+            vec![DVec2::new(10., 50.), DVec2::new(160., 50.)]
+        );
+        // within the allowance is fine (a topstitch on the seam); beyond the cut line is not
+        input.lines[0].push(DVec2::new(205., 10.));
+        assert!(Piece::build(&input, &PieceOptions::default()).is_ok());
+        input.lines[0].push(DVec2::new(260., 10.));
+        let e = Piece::build(&input, &PieceOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("quarter") && e.contains("internal line 1 leaves the piece"),
+            "{e}"
+        );
+        input.lines[0] = vec![DVec2::new(10., 10.), DVec2::new(f64::NAN, 1.)];
+        let e = Piece::build(&input, &PieceOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("internal line 1"), "{e}");
+        input.lines[0] = vec![DVec2::new(10., 10.)];
+        let e = Piece::build(&input, &PieceOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("fewer than two"), "{e}");
     }
 
     #[test]
