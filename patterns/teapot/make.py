@@ -80,9 +80,15 @@ def main():
         + "# All 32 patches as one piece: a welding and tessellation stress test, not a pattern.\n"
         + piece("teapot", groups, patches, verts)
     )
-    # The pot without handle and spout: rim, body and bottom. A seam from the rim down a side to
-    # the bottom centre opens it into a disk.
-    seam = 'seams = [[[0, -1.5, 2.4], [0, -2.0, 1.35], [0, -2.0, 0.9], [0, -1.5, 0.15], [0, -0.75, 0.0], [0, 0, 0]]]\n'
+    # The pot without handle and spout: rim, body and bottom. Its only boundary is the rim's
+    # inner edge (radius 1.4), so the seam must start there: a slit from an interior point (the
+    # rim's outer edge, radius 1.5) leaves a second boundary loop. It climbs over the rolled lip
+    # (the rim's side curve at t = 1/2 is (0, -1.403125, 2.4984375)), runs down the side and
+    # ends at the bottom centre, which cutting leaves an ordinary vertex of the one disk.
+    seam = (
+        "seams = [[[0, -1.4, 2.4], [0, -1.403125, 2.4984375], [0, -1.5, 2.4], [0, -2.0, 1.35], "
+        "[0, -2.0, 0.9], [0, -1.5, 0.15], [0, -0.75, 0.0], [0, 0, 0]]]\n"
+    )
     body_extra = 'material = "tinplate"\n' + seam
     (HERE / "body.toml").write_text(
         HEADER
