@@ -35,8 +35,11 @@ fn main() {
     let baud = 115_200u32;
     let opts = SendOptions::default().with_banner_timeout(Duration::from_millis(500));
 
-    // 1. Link utilisation with instant motion, `runs` times (another build may share the CPU).
+    // 1. Link utilisation with instant motion, `runs` times (another build may share the CPU),
+    // journaling every acknowledged line as `flatcut send` does.
     let job = Job::parse(&zigzag(lines, 0.012, 5.0, 3000.0)).expect("job");
+    let journal = std::env::temp_dir().join(format!("throughput-{}.journal", std::process::id()));
+    let journaled = opts.clone().with_journal(&journal);
     let cap = f64::from(baud) / 10.0;
     let mut busy = Vec::new();
     for run in 1..=runs {
@@ -47,7 +50,14 @@ fn main() {
         )
         .expect("spawn firmware-sim");
         let mut port = open_port(sim.path().to_str().expect("utf-8 path"), baud).expect("open pty");
-        let rep = send_job(&mut port, &job, &opts, &mut |_| {}, &CancelToken::new()).expect("send");
+        let rep = send_job(
+            &mut port,
+            &job,
+            &journaled,
+            &mut |_| {},
+            &CancelToken::new(),
+        )
+        .expect("send");
         drop(port);
         let stats = sim.stop().stats;
         let secs = rep.stream_time.as_secs_f64();
@@ -66,6 +76,7 @@ fn main() {
     let min = busy.iter().copied().fold(f64::INFINITY, f64::min);
     let mean = busy.iter().sum::<f64>() / busy.len() as f64;
     println!("link busy over {runs} runs: min {min:.1} %, mean {mean:.1} % (target >= 90 %)");
+    let _ = std::fs::remove_file(&journal);
     if segments == 0 {
         return;
     }

@@ -35,9 +35,10 @@ const ABORT_CYCLE_ALARM: u8 = 3;
 /// Longest single read wait, so control requests and polls stay responsive.
 const READ_SLICE: Duration = Duration::from_millis(20);
 /// Longest gap between two fsyncs of the journal while streaming. Every batch of records is
-/// written to the OS at once (it survives the sender being killed); only the flush to the disk
-/// is spaced out, because an fsync takes milliseconds to tens of milliseconds and the link must
-/// not wait for it (at 115200 baud the 128-byte RX buffer drains in 11 ms).
+/// written to the OS at once (it survives the sender being killed); the flush to the disk runs
+/// on a background thread at most this often, because an fsync takes milliseconds to tens of
+/// milliseconds and the link must not wait for it (at 115200 baud the 128-byte RX buffer
+/// drains in 11 ms). Every stop syncs in the foreground.
 const JOURNAL_FSYNC_INTERVAL: Duration = Duration::from_millis(250);
 /// How long a controller found moving when the sender connects may take to finish the motion it
 /// has queued (15 planner blocks) before the sender gives up waiting for it.
@@ -1285,7 +1286,7 @@ pub fn send_job(
         }
         if acked_any && let Some(j) = journal.as_mut() {
             if last_fsync.elapsed() >= JOURNAL_FSYNC_INTERVAL {
-                j.sync()?;
+                j.sync_in_background()?;
                 last_fsync = Instant::now();
             } else {
                 j.flush()?;

@@ -445,3 +445,40 @@ fn refuses_to_resume_another_job() {
     assert!(e.to_string().contains("different job"), "{e}");
     let _ = Path::new("");
 }
+
+/// The time estimate against the simulated planner on virtual time (lines fed as GRBL's RX
+/// buffer frees, so the planner stays full): short diagonal zig-zags, whose junction speed
+/// depends on the acceleration along the junction vector, and long straight strokes.
+#[test]
+fn estimate_matches_the_simulated_machine() {
+    use flatcut_firmware_sim::Grbl;
+    for (name, dx, dy, feed, n, within) in [
+        ("0.5 mm 90° zig-zag at F1500", 0.5, 0.5, 1500.0, 400, 0.002),
+        ("5 mm strokes at F3000", 0.012, 5.0, 3000.0, 200, 0.002),
+    ] {
+        let mut text = String::from("G21 G90\n");
+        for i in 1..=n {
+            text.push_str(&format!(
+                "G1 X{:.3} Y{:.3} F{feed}\n",
+                i as f64 * dx,
+                (i % 2) as f64 * dy
+            ));
+        }
+        let job = Job::parse(&text).unwrap();
+        let mut g = Grbl::new(&SimConfig::default());
+        for l in &job.lines {
+            while g.rx_free() < l.text.len() + 1 {
+                g.tick(0.001);
+            }
+            g.receive_all(format!("{}\n", l.text).as_bytes());
+        }
+        g.run_until_idle(3600.0);
+        let sim = g.clock();
+        let est = job.total_time;
+        assert!(
+            (est - sim).abs() <= within * sim,
+            "{name}: estimate {est:.2} s, simulated {sim:.2} s"
+        );
+        eprintln!("{name}: estimate {est:.3} s, simulated {sim:.3} s");
+    }
+}
