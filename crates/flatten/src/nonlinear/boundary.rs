@@ -11,17 +11,19 @@
 //! Green–Lagrange term turns concave and bounded ((0 − 1)² per direction), so a growing boundary
 //! weight would otherwise squeeze a few triangles flat instead of compressing many. The guard is
 //! zero wherever every stretch stays above 1/√3, so feasible pieces (developables, caps up to
-//! ~1.4 rad) get Duncan's f1 unchanged.
+//! ~1.4 rad) get Duncan's f1 unchanged; with it the hemisphere, saddle and toe of the bench keep
+//! their boundaries to 1e-10 without a fold (Green's term alone collapsed triangles there).
 //!
-//! Infeasibility: where the boundary cannot be kept without a fold (hemisphere, saddle, toe),
-//! the lengths cannot be met by any non-degenerate interior. The guard is infinite at
+//! Infeasibility: where the rim is far too short for the interior (a cap deeper than a
+//! hemisphere), the lengths cannot be met by any non-degenerate interior. The guard is infinite at
 //! σ = [`DEGENERATE_STRETCH`] (a triangle crushed to a fifth of its size), so as the weight grows
 //! the solve tends to the flip-free map with the smallest boundary violation among those whose
 //! stretches all stay above it. The weight stops growing when a tenfold raise gains less than
-//! [`STALL_GAIN`] of the violation while the guard is active (some σ below 1/√3): the
-//! multipliers are fighting the interior, not round-off (below [`REPORT_REL_ERROR`] a stall is
-//! taken as inner-solve precision, and the weight keeps growing). The best iterate (smallest largest
-//! relative boundary error) is returned with a warning naming the worst edges.
+//! [`STALL_GAIN`] of the violation after a converged inner solve while the guard is active (some
+//! σ below 1/√3): the multipliers are fighting the interior, not round-off (below
+//! [`REPORT_REL_ERROR`] a stall is taken as inner-solve precision, and the weight keeps growing).
+//! The best iterate (smallest largest relative boundary error) is returned with a warning naming
+//! the worst edges.
 
 use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
@@ -52,8 +54,9 @@ const INEXACT_INNER_ITERS: usize = 30;
 const INNER_REL_TIGHTENING: f64 = 1e-4;
 /// Relative length error above which an edge is reported as not kept.
 const REPORT_REL_ERROR: f64 = 1e-6;
-/// Guard stiffness k of [`GuardedGreen`]: k ≥ 2/3 keeps the guarded term convex below the
-/// floor (2k/f² = 6k against the Green term's −4); 1 leaves a margin.
+/// Guard stiffness k of [`GuardedGreen`]: the guard's second derivative below the floor is at
+/// least 2k/(f − c)² ≈ 14k (c = [`DEGENERATE_STRETCH`]) against the Green term's −4, so k = 1
+/// keeps the guarded term convex with a wide margin.
 const GUARD_STIFFNESS: f64 = 1.0;
 /// Principal stretch below which a triangle counts as crushed: a fifth of its 3D size (δ2 ≥ 12
 /// there), no longer a faithful piece of the pattern.
