@@ -3,15 +3,13 @@
 //! saddle), and the flip-free fallback with named worst edges where the boundary is far too
 //! short for the interior (a cap deeper than a hemisphere).
 
-use flatcut_flatten::nonlinear::boundary::DEGENERATE_STRETCH;
+use flatcut_flatten::nonlinear::boundary::{DEGENERATE_STRETCH, REPORT_REL_ERROR};
 use flatcut_flatten::{FlattenParams, Flattening, Method, flatten, testmesh};
 use flatcut_geom::DVec2;
 use flatcut_mesh::{TriMesh, check_disk, face_distortion};
 
 /// Boundary tolerance on an exactly developable mesh (f1 aims at 1e-10; a decade of slack).
 const DEVELOPABLE_BOUNDARY_REL: f64 = 1e-9;
-/// Relative length error above which f1 reports an edge as not kept (its `REPORT_REL_ERROR`).
-const REPORTED_REL: f64 = 1e-6;
 /// Largest mean δ2 accepted from a fallback: a triangle compressed to [`DEGENERATE_STRETCH`] = 0.2
 /// in both directions has δ2 = (2·0.2² + 2·0.2⁻²)/2 − 2 = 23.04, and f1 never stretches much;
 /// a collapsed interior gives 1e20 and more.
@@ -90,7 +88,7 @@ fn hemisphere_and_saddle_keep_the_boundary_without_collapse() {
         let (e, _) = boundary_error(&mesh, &f.uv);
         let (d2, smin, flips) = interior(&mesh, &f.uv);
         assert_eq!(flips, 0, "{name}");
-        assert!(e <= REPORTED_REL, "{name}: boundary error {e:e}");
+        assert!(e <= REPORT_REL_ERROR, "{name}: boundary error {e:e}");
         assert!(f.info.warnings.is_empty(), "{name}: {:?}", f.info.warnings);
         assert!(smin >= DEGENERATE_STRETCH, "{name}: σ2 down to {smin}");
         let iso = flatten(&mesh, &FlattenParams::new(Method::Isometric)).unwrap();
@@ -133,7 +131,7 @@ fn deep_cap_falls_back_to_a_flip_free_map_naming_the_worst_edges() {
     assert_eq!(flips, 0);
     assert!(smin >= DEGENERATE_STRETCH, "σ2 down to {smin}");
     assert!(d2 < FALLBACK_DELTA2_BOUND, "mean δ2 {d2:e}");
-    assert!(e > REPORTED_REL, "the rim cannot be kept, yet error {e:e}");
+    assert!(e > REPORT_REL_ERROR, "the rim cannot be kept, yet error {e:e}");
     assert_eq!(f.info.warnings.len(), 1, "{:?}", f.info.warnings);
     let w = &f.info.warnings[0];
     println!("deep cap: mean δ2 {d2:.3}, σ2 min {smin:.3}, boundary error {e:.3e}\n{w}");

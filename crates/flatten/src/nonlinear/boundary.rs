@@ -53,7 +53,7 @@ const INEXACT_INNER_ITERS: usize = 30;
 /// it resolves them (the violation then stalls near 1e-8 on the 20k toe).
 const INNER_REL_TIGHTENING: f64 = 1e-4;
 /// Relative length error above which an edge is reported as not kept.
-const REPORT_REL_ERROR: f64 = 1e-6;
+pub const REPORT_REL_ERROR: f64 = 1e-6;
 /// Guard stiffness k of [`GuardedGreen`]: the guard's second derivative below the floor is at
 /// least 2k/(f − c)² ≈ 14k (c = [`DEGENERATE_STRETCH`]) against the Green term's −4, so k = 1
 /// keeps the guarded term convex with a wide margin.
@@ -67,7 +67,7 @@ const START_COLLAPSE_FRACTION: f64 = 0.5;
 /// Relative gain in the violation below which an outer step counts as stalled. The gains of a
 /// stalled solve shrink geometrically (×0.4–0.5 per tenfold weight on the deep-cap test), so
 /// once one tenfold weight gains under 1 %, all further ones together gain about as much again.
-const STALL_GAIN: f64 = 0.01;
+pub const STALL_GAIN: f64 = 0.01;
 /// Edges named in the infeasibility warning.
 const WORST_EDGES_REPORTED: usize = 3;
 
