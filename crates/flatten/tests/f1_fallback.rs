@@ -131,7 +131,10 @@ fn deep_cap_falls_back_to_a_flip_free_map_naming_the_worst_edges() {
     assert_eq!(flips, 0);
     assert!(smin >= DEGENERATE_STRETCH, "σ2 down to {smin}");
     assert!(d2 < FALLBACK_DELTA2_BOUND, "mean δ2 {d2:e}");
-    assert!(e > REPORT_REL_ERROR, "the rim cannot be kept, yet error {e:e}");
+    assert!(
+        e > REPORT_REL_ERROR,
+        "the rim cannot be kept, yet error {e:e}"
+    );
     assert_eq!(f.info.warnings.len(), 1, "{:?}", f.info.warnings);
     let w = &f.info.warnings[0];
     println!("deep cap: mean δ2 {d2:.3}, σ2 min {smin:.3}, boundary error {e:.3e}\n{w}");
