@@ -90,18 +90,7 @@ fn close(a: [f64; 3], b: [f64; 3]) -> bool {
 
 /// Expected motion of the job: (text, from, to) of every line that moves.
 fn geometry(job: &Job) -> Vec<(String, [f64; 3], [f64; 3])> {
-    let mut out = Vec::new();
-    for (i, l) in job.lines.iter().enumerate() {
-        if l.moves && l.length > 1e-6 {
-            let to = job
-                .lines
-                .get(i + 1)
-                .map(|n| n.before.position)
-                .unwrap_or(job.end_state.position);
-            out.push((l.text.clone(), l.before.position, to));
-        }
-    }
-    out
+    job.motions()
 }
 
 fn moving(trace: &[TraceSegment]) -> Vec<&TraceSegment> {

@@ -754,6 +754,16 @@ impl Job {
         add(st.position, st.g92)
     }
 
+    /// What the job moves, in order: `(text, start, end)` (G92-free work coordinates, mm) of
+    /// every line whose motion has length. The reference that a machine's executed trace is
+    /// checked against.
+    pub fn motions(&self) -> Vec<(String, [f64; 3], [f64; 3])> {
+        (0..self.len())
+            .filter(|&i| self.lines[i].moves && self.lines[i].length > ZERO_LENGTH_MM)
+            .map(|i| (self.lines[i].text.clone(), self.start_of(i), self.end_of(i)))
+            .collect()
+    }
+
     /// The work position (G92-free, mm) where line `index` starts.
     pub fn start_of(&self, index: usize) -> [f64; 3] {
         let st = self.state_before(index);

@@ -62,10 +62,7 @@ fn send(
 
 /// The job's motions: (text, from, to) in work = machine coordinates (no offsets in use).
 fn geometry(job: &Job) -> Vec<(String, [f64; 3], [f64; 3])> {
-    (0..job.len())
-        .filter(|&i| job.lines[i].moves && job.lines[i].length > 1e-6)
-        .map(|i| (job.lines[i].text.clone(), job.start_of(i), job.end_of(i)))
-        .collect()
+    job.motions()
 }
 
 /// Moving segments, with a line stopped part-way and completed later (same text, the second
