@@ -233,7 +233,9 @@ fn for_each_sample(
 
 fn singular(d: &flatcut_surface::SurfaceDerivs) -> bool {
     let scale = d.su.length_squared().max(d.sv.length_squared());
-    !(d.su.cross(d.sv).length() > SINGULAR_REL * scale)
+    let area = d.su.cross(d.sv).length();
+    // NaN (a non-finite derivative) counts as singular too.
+    area.is_nan() || area <= SINGULAR_REL * scale
 }
 
 /// The fundamental forms at (u, v); at a singular point (a pole) their limit, evaluated a

@@ -422,3 +422,46 @@ fn whole_teapot_is_manifold_crack_free_and_within_tolerance() {
     assert!(d2 <= CHORD_MM, "mesh->surface {d2}");
     assert!(checked * 10 > m.triangles.len() * 9);
 }
+
+#[test]
+fn pot_cut_along_its_seam_is_one_disk() {
+    // The seam of patterns/teapot/body.toml (data units): from the rim's inner edge (the pot's
+    // only boundary) over the lip and down the side to the bottom centre.
+    const SEAM: [[f64; 3]; 8] = [
+        [0.0, -1.4, 2.4],
+        [0.0, -1.403125, 2.4984375],
+        [0.0, -1.5, 2.4],
+        [0.0, -2.0, 1.35],
+        [0.0, -2.0, 0.9],
+        [0.0, -1.5, 0.15],
+        [0.0, -0.75, 0.0],
+        [0.0, 0.0, 0.0],
+    ];
+    let patches = teapot();
+    let pot: Vec<BezierPatch> = (0..12).chain(28..32).map(|p| patches[p].clone()).collect();
+    let m = mesh_of(&pot);
+    let topo = flatcut_mesh::check_disk(&m).unwrap();
+    assert_eq!(
+        topo.boundary_loops.len(),
+        1,
+        "uncut, the pot is already a disk"
+    );
+    let pts: Vec<DVec3> = SEAM
+        .iter()
+        .map(|&[x, y, z]| DVec3::new(x, y, z) * MM_PER_UNIT)
+        .collect();
+    let seam = flatcut_mesh::seam_from_points(&m, &pts).unwrap();
+    // The seam runs from the boundary to the bottom centre.
+    assert!(topo.boundary_loops[0].contains(&seam[0]));
+    assert!(m.positions[*seam.last().unwrap() as usize].length() < 1e-9);
+    let cut = flatcut_mesh::cut_along_seams(&m, std::slice::from_ref(&seam)).unwrap();
+    let topo = flatcut_mesh::check_disk(&cut).unwrap();
+    assert_eq!(topo.boundary_loops.len(), 1);
+    // Every seam vertex but the bottom centre (the slit's end) is doubled.
+    assert_eq!(cut.vertex_count(), m.vertex_count() + seam.len() - 1);
+    // A seam from an interior point (the old one started on the rim's outer edge) cuts a slit:
+    // a second boundary loop.
+    let slit = flatcut_mesh::seam_from_points(&m, &pts[2..]).unwrap();
+    let cut = flatcut_mesh::cut_along_seams(&m, &[slit]).unwrap();
+    assert_eq!(Topology::build(&cut).unwrap().boundary_loops.len(), 2);
+}
