@@ -367,6 +367,7 @@ fn whole_teapot_is_manifold_crack_free_and_within_tolerance() {
     let t0 = std::time::Instant::now();
     let m = mesh_of(&patches);
     let secs = t0.elapsed().as_secs_f64();
+    assert_eq!(m, mesh_of(&patches), "same input, same mesh");
     let topo = check_manifold(&m);
     // Pot (rim, body, bottom), lid, handle and spout: the handle and spout pierce the body
     // untrimmed and the lid leaves a gap to the rim, so the four parts share no edge.
