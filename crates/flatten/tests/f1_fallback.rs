@@ -38,7 +38,7 @@ fn interior(mesh: &TriMesh, uv: &[DVec2]) -> (f64, f64, usize) {
     for t in 0..mesh.triangles.len() {
         let q = mesh.triangles[t].map(|v| uv[v as usize]);
         let d = face_distortion(mesh.corners(t), q).unwrap();
-        if d.flipped() || !(d.det > 0.0) {
+        if d.flipped() || d.det.is_nan() || d.det <= 0.0 {
             flips += 1;
             continue;
         }

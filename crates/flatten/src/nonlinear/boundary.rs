@@ -177,7 +177,7 @@ pub fn boundary_isometric(
         let converged = r.iterations < iters;
         let (s_min, t_min) = min_stretch(rest, &r.x);
         // The guard keeps every stretch above its collapse stretch; this only catches round-off.
-        if !(s_min > energy.collapse) {
+        if s_min.is_nan() || s_min <= energy.collapse {
             stop = Some(Stop::Crushed { t: t_min, s: s_min });
             break;
         }

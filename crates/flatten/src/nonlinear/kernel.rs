@@ -279,7 +279,7 @@ impl GuardedGreen {
 
 impl IsoEnergy for GuardedGreen {
     fn psi(&self, s1: f64, s2: f64) -> f64 {
-        if !(s2 > self.collapse) || !(s2 > 0.0) {
+        if s2.is_nan() || s2 <= self.collapse.max(0.0) {
             return f64::INFINITY;
         }
         GreenStrain.psi(s1, s2) + self.b(s1) + self.b(s2)
