@@ -618,7 +618,7 @@ fn sigterm_aborts_safely_and_names_the_last_line() {
     use std::process::{Command, Stdio};
     use std::time::{Duration, Instant};
     let dir = tempfile::tempdir().unwrap();
-    let mut child = Command::new(std::env::current_exe().unwrap())
+    let child = Command::new(std::env::current_exe().unwrap())
         .args([
             "stream::sigterm_child_process",
             "--exact",

@@ -362,6 +362,9 @@ impl<E: IsoEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
             return Ok((state.param(xf).cost(e0), None));
         }
         self.last_decrease = e0 - en;
+        // argmin's key-value record is a HashMap inside argmin; only observers read it, never
+        // the iterates, so its order cannot reach any output.
+        #[allow(clippy::disallowed_types)]
         let kv = argmin::kv!("step" => t; "tmax" => tmax; "decrement" => self.last_decrement;);
         Ok((state.param(to_flat(&xn)).cost(en), Some(kv)))
     }

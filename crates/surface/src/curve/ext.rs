@@ -354,6 +354,47 @@ fn flatten_rec<C: ParamCurve + ?Sized>(
     }
 }
 
+/// Safeguarded Newton search for the parameter where the arc length from the domain start is
+/// `s`, starting at `t` (whose arc length is `cur`) inside the bracket `(lo, hi)`: Newton steps on
+/// `s(t) − s`, bisection whenever a step leaves the bracket. Returns the parameter and its arc
+/// length. Shared by `inv_arclen` and `params_at_arclens`.
+fn seek_arclen<C: ParamCurve + ?Sized>(
+    c: &C,
+    s: f64,
+    (mut t, mut cur): (f64, f64),
+    (mut lo, mut hi): (f64, f64),
+    accuracy: f64,
+) -> (f64, f64) {
+    let (a, b) = c.domain();
+    let piece_acc = accuracy / 16.0;
+    for _ in 0..100 {
+        let err = cur - s;
+        if err.abs() <= accuracy {
+            break;
+        }
+        if err > 0.0 {
+            hi = t;
+        } else {
+            lo = t;
+        }
+        if hi - lo <= f64::EPSILON * (b - a).abs().max(1.0) {
+            break;
+        }
+        let speed = c.deriv(t, 1).length();
+        let mut next = if speed > 0.0 {
+            t - err / speed
+        } else {
+            f64::NAN
+        };
+        if !(next > lo && next < hi) {
+            next = 0.5 * (lo + hi);
+        }
+        cur += integrate(|x| c.deriv(x, 1).length(), t, next, piece_acc);
+        t = next;
+    }
+    (t, cur)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -655,45 +696,4 @@ mod tests {
             "non-positive tolerance falls back to the default"
         );
     }
-}
-
-/// Safeguarded Newton search for the parameter where the arc length from the domain start is
-/// `s`, starting at `t` (whose arc length is `cur`) inside the bracket `(lo, hi)`: Newton steps on
-/// `s(t) − s`, bisection whenever a step leaves the bracket. Returns the parameter and its arc
-/// length. Shared by `inv_arclen` and `params_at_arclens`.
-fn seek_arclen<C: ParamCurve + ?Sized>(
-    c: &C,
-    s: f64,
-    (mut t, mut cur): (f64, f64),
-    (mut lo, mut hi): (f64, f64),
-    accuracy: f64,
-) -> (f64, f64) {
-    let (a, b) = c.domain();
-    let piece_acc = accuracy / 16.0;
-    for _ in 0..100 {
-        let err = cur - s;
-        if err.abs() <= accuracy {
-            break;
-        }
-        if err > 0.0 {
-            hi = t;
-        } else {
-            lo = t;
-        }
-        if hi - lo <= f64::EPSILON * (b - a).abs().max(1.0) {
-            break;
-        }
-        let speed = c.deriv(t, 1).length();
-        let mut next = if speed > 0.0 {
-            t - err / speed
-        } else {
-            f64::NAN
-        };
-        if !(next > lo && next < hi) {
-            next = 0.5 * (lo + hi);
-        }
-        cur += integrate(|x| c.deriv(x, 1).length(), t, next, piece_acc);
-        t = next;
-    }
-    (t, cur)
 }
