@@ -741,6 +741,15 @@ impl<'a, T: Transport + ?Sized> Session<'a, T> {
     }
 }
 
+/// Stops a run: records why in the journal, makes the journal durable, and returns `err`.
+fn stop_noted<T>(journal: &mut Option<Journal>, why: &str, err: SendError) -> Result<T, SendError> {
+    if let Some(j) = journal.as_mut() {
+        j.note(why);
+        j.sync()?;
+    }
+    Err(err)
+}
+
 fn transport(source: TransportError, last_done: Option<LineRef>) -> SendError {
     SendError::Transport { source, last_done }
 }
@@ -1174,12 +1183,8 @@ pub fn send_job(
         let evs = match sess.pump(READ_SLICE) {
             Ok(e) => e,
             Err(e) => {
-                let last = tracker.last_done(job);
-                if let Some(j) = journal.as_mut() {
-                    j.note(&format!("transport failure: {e}"));
-                    j.sync()?;
-                }
-                return Err(transport(e, last));
+                let why = format!("transport failure: {e}");
+                return stop_noted(&mut journal, &why, transport(e, tracker.last_done(job)));
             }
         };
         if let Some(Tag::Job(i)) = sess.s.last_sent() {
@@ -1277,12 +1282,8 @@ pub fn send_job(
         // Refill GRBL's RX buffer at once: the answers just read made room, and the link idles
         // until the next line is written.
         if let Err(e) = sess.write() {
-            let last = tracker.last_done(job);
-            if let Some(j) = journal.as_mut() {
-                j.note(&format!("transport failure: {e}"));
-                j.sync()?;
-            }
-            return Err(transport(e, last));
+            let why = format!("transport failure: {e}");
+            return stop_noted(&mut journal, &why, transport(e, tracker.last_done(job)));
         }
         if acked_any && let Some(j) = journal.as_mut() {
             if last_fsync.elapsed() >= JOURNAL_FSYNC_INTERVAL {
@@ -1298,16 +1299,14 @@ pub fn send_job(
             && last_response.elapsed() >= opts.idle_ack_timeout
         {
             let n_in = sess.s.in_flight();
-            if let Some(j) = journal.as_mut() {
-                j.note(&format!(
-                    "{n_in} line(s) unanswered while idle: link lost bytes"
-                ));
-                j.sync()?;
-            }
-            return Err(SendError::LostAck {
-                in_flight: n_in,
-                last_done: tracker.last_done(job),
-            });
+            return stop_noted(
+                &mut journal,
+                &format!("{n_in} line(s) unanswered while idle: link lost bytes"),
+                SendError::LostAck {
+                    in_flight: n_in,
+                    last_done: tracker.last_done(job),
+                },
+            );
         }
         let state_now = sess.status.as_ref().map(|s| s.state);
         let foreign_hold = matches!(
@@ -1341,15 +1340,14 @@ pub fn send_job(
             Some(MachineState::Hold { .. }) | Some(MachineState::Door(_))
         );
         if sess.last_rx.elapsed() >= opts.silence_timeout && !waiting_on_user {
-            let waited = sess.last_rx.elapsed();
-            if let Some(j) = journal.as_mut() {
-                j.note("controller silent");
-                j.sync()?;
-            }
-            return Err(SendError::DeviceSilent {
-                waited,
-                last_done: tracker.last_done(job),
-            });
+            return stop_noted(
+                &mut journal,
+                "controller silent",
+                SendError::DeviceSilent {
+                    waited: sess.last_rx.elapsed(),
+                    last_done: tracker.last_done(job),
+                },
+            );
         }
         // Stream complete or stopped on an error: wait for the planner to drain.
         if sess.s.queued() == 0 && sess.s.in_flight() == 0 {
@@ -1403,16 +1401,14 @@ pub fn send_job(
     {
         let e = add(job.end_state.position, [0.0; 3]);
         if dist(p, e) > POSITION_TOL_MM * 10.0 {
-            if let Some(j) = journal.as_mut() {
-                j.note(&format!(
-                    "end position {p:?} differs from the job's end {e:?}"
-                ));
-                j.sync()?;
-            }
-            return Err(SendError::PositionMismatch {
-                expected: e,
-                actual: p,
-            });
+            return stop_noted(
+                &mut journal,
+                &format!("end position {p:?} differs from the job's end {e:?}"),
+                SendError::PositionMismatch {
+                    expected: e,
+                    actual: p,
+                },
+            );
         }
     }
     if let Some(j) = journal.as_mut() {
