@@ -178,7 +178,7 @@ pub fn plan(drawing: &Drawing, profile: &Profile, opts: &GcodeOptions) -> Result
         }
         strokes.push(S {
             layer: s.layer,
-            outer: s.outer,
+            outer: s.is_outer(),
             closed,
             id: s.id.clone(),
             pts,
