@@ -14,6 +14,7 @@
 
 pub mod codes;
 pub mod driver;
+pub mod hpgl;
 #[cfg(test)]
 mod fake;
 pub mod job;

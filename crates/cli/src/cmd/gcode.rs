@@ -39,6 +39,11 @@ const SVG_CHORD_MM: f64 = 0.02;
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let profile = Profile::resolve(&a.profile)?;
+    anyhow::ensure!(
+        profile.hpgl.is_none(),
+        "profile {} drives an HP-GL device: use `flatcut hpgl`",
+        profile.name
+    );
     let drawing = load_drawing(&a.file, &a.piece, &a.flatten)?;
     let mut opts = GcodeOptions::default();
     opts.reorder = !a.no_reorder;
