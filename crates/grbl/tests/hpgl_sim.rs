@@ -29,7 +29,7 @@ fn job(n: usize) -> (String, Vec<([i64; 2], [i64; 2])>) {
 fn device(buffer_query: bool) -> PlotterConfig {
     PlotterConfig {
         buffer: 512,
-        xoff_free: 160,
+        xoff_free: 192,
         xon_free: 384,
         // slower than the 38400-baud link: the buffer fills and XOFF must hold the sender
         byte_time_s: 5e-4,

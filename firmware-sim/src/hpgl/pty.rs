@@ -21,6 +21,9 @@ use crate::pty::{Pace, open_pty};
 const POLL_MS: u8 = 1;
 /// Longest real-time step fed to the device in one go, s.
 const MAX_TICK_S: f64 = 0.05;
+/// Receive credit kept across a late wake-up, s of line time: a UART receives at the line rate
+/// however late its reader runs, so the device must not fall behind the sender on average.
+const RX_CREDIT_S: f64 = 0.05;
 
 #[derive(Debug, Default)]
 struct Shared {
@@ -126,10 +129,7 @@ fn run(
 ) {
     let mut dev = Plotter::new(config);
     let bps = f64::from(baud) / 10.0;
-    let mut rx = Pace {
-        rate: bps,
-        credit: 0.0,
-    };
+    let mut rx_credit = 0.0f64;
     let mut tx = Pace {
         rate: bps,
         credit: 0.0,
@@ -143,13 +143,13 @@ fn run(
         let now = Instant::now();
         let dt = now.duration_since(last).as_secs_f64().min(MAX_TICK_S);
         last = now;
-        rx.add(dt);
+        rx_credit = (rx_credit + dt * bps).min(bps * RX_CREDIT_S);
         tx.add(dt);
-        let n = rx.available().min(buf.len());
+        let n = (rx_credit.max(0.0) as usize).min(buf.len());
         if n > 0 {
             match nix::unistd::read(&master, &mut buf[..n]) {
                 Ok(k) => {
-                    rx.take(k);
+                    rx_credit -= k as f64;
                     dev.receive(&buf[..k]);
                 }
                 Err(Errno::EAGAIN) | Err(Errno::EIO) | Err(Errno::EINTR) | Err(_) => {}
