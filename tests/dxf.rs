@@ -67,7 +67,12 @@ fn ezdxf_check(py: &str, file: &Path, resave: Option<&Path>) -> serde_json::Valu
 fn read(path: &Path) -> Drawing {
     let text = std::fs::read_to_string(path).unwrap();
     let r = read_dxf(&text, 0.01).unwrap();
-    assert!(r.warnings.is_empty(), "{}: {:?}", path.display(), r.warnings);
+    assert!(
+        r.warnings.is_empty(),
+        "{}: {:?}",
+        path.display(),
+        r.warnings
+    );
     r.drawing
 }
 
@@ -76,7 +81,10 @@ fn max_deviation(a: &Drawing, b: &Drawing) -> f64 {
     assert_eq!(a.strokes.len(), b.strokes.len());
     let mut worst = 0.0f64;
     for (s, t) in a.strokes.iter().zip(&b.strokes) {
-        assert_eq!((s.kind, s.layer, s.closed, s.piece), (t.kind, t.layer, t.closed, t.piece));
+        assert_eq!(
+            (s.kind, s.layer, s.closed, s.piece),
+            (t.kind, t.layer, t.closed, t.piece)
+        );
         assert_eq!(s.points.len(), t.points.len(), "{}", s.id);
         for (p, q) in s.points.iter().zip(&t.points) {
             worst = worst.max(p.distance(*q));
@@ -88,7 +96,11 @@ fn max_deviation(a: &Drawing, b: &Drawing) -> f64 {
 
 fn lampshade_outputs() -> (tempfile::TempDir, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
-    run_project("patterns/lampshade/project.toml", dir.path(), &["--no-send"]);
+    run_project(
+        "patterns/lampshade/project.toml",
+        dir.path(),
+        &["--no-send"],
+    );
     let p = dir.path().to_path_buf();
     (dir, p)
 }
@@ -142,7 +154,13 @@ fn nest_and_gcode_take_the_aama_dxf() {
     let info = &d.pieces[0];
     assert_eq!(info.label.name, "shade");
     assert!(info.grain.is_some());
-    assert_eq!(d.strokes.iter().filter(|s| s.kind == StrokeKind::Boundary).count(), 1);
+    assert_eq!(
+        d.strokes
+            .iter()
+            .filter(|s| s.kind == StrokeKind::Boundary)
+            .count(),
+        1
+    );
     let layout = out.join("from-dxf.svg");
     let layout_dxf = out.join("from-dxf.dxf");
     run_cli(&[
@@ -164,7 +182,12 @@ fn nest_and_gcode_take_the_aama_dxf() {
     assert_eq!(nested.strokes.iter().filter(|s| s.is_outer()).count(), 2);
     // notches and drill holes travel with the piece
     let per_piece = |k| d.strokes.iter().filter(|s| s.kind == k).count();
-    for k in [StrokeKind::Notch, StrokeKind::Drill, StrokeKind::Sew, StrokeKind::Grain] {
+    for k in [
+        StrokeKind::Notch,
+        StrokeKind::Drill,
+        StrokeKind::Sew,
+        StrokeKind::Grain,
+    ] {
         assert_eq!(
             nested.strokes.iter().filter(|s| s.kind == k).count(),
             2 * per_piece(k),
@@ -175,7 +198,10 @@ fn nest_and_gcode_take_the_aama_dxf() {
     // The bundled knife with a table large enough for the 594 mm shade.
     let knife = std::fs::read_to_string(root().join("crates/gcode/profiles/knife.toml"))
         .unwrap()
-        .replace("work_area_mm = [600.0, 400.0]", "work_area_mm = [1200.0, 900.0]");
+        .replace(
+            "work_area_mm = [600.0, 400.0]",
+            "work_area_mm = [1200.0, 900.0]",
+        );
     let profile = out.join("big-knife.toml");
     std::fs::write(&profile, knife).unwrap();
     run_cli(&[
@@ -186,5 +212,9 @@ fn nest_and_gcode_take_the_aama_dxf() {
         "-o",
         job.to_str().unwrap(),
     ]);
-    assert!(std::fs::read_to_string(&job).unwrap().contains("shade-cut-1"));
+    assert!(
+        std::fs::read_to_string(&job)
+            .unwrap()
+            .contains("shade-cut-1")
+    );
 }

@@ -19,7 +19,10 @@ use crate::pipeline::{root, run_cli};
 fn bench_drawing(dir: &Path) -> Option<std::path::PathBuf> {
     let gen_script = root().join("../shared/bench/plotter/generate_drawing.py");
     if !gen_script.exists() {
-        eprintln!("SKIPPED: {} not found (../shared beside the repository)", gen_script.display());
+        eprintln!(
+            "SKIPPED: {} not found (../shared beside the repository)",
+            gen_script.display()
+        );
         return None;
     }
     let py = python_with("math")?;
@@ -53,7 +56,10 @@ fn bench_drawing_as_hpgl_agrees_with_ezhpgl_and_the_plotter_traces_it() {
     // pen-hpgl with a table for the 400 × 300 mm drawing
     let profile = std::fs::read_to_string(root().join("crates/gcode/profiles/pen-hpgl.toml"))
         .unwrap()
-        .replace("work_area_mm = [400.0, 270.0]", "work_area_mm = [420.0, 320.0]");
+        .replace(
+            "work_area_mm = [400.0, 270.0]",
+            "work_area_mm = [420.0, 320.0]",
+        );
     let prof = dir.path().join("pen-a3.toml");
     std::fs::write(&prof, profile).unwrap();
     let plt = dir.path().join("drawing.plt");
@@ -78,7 +84,11 @@ fn bench_drawing_as_hpgl_agrees_with_ezhpgl_and_the_plotter_traces_it() {
             .arg(&plt)
             .output()
             .unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         let mut theirs = Vec::new();
         for pl in v["polylines"].as_array().unwrap() {
@@ -109,9 +119,14 @@ fn bench_drawing_as_hpgl_agrees_with_ezhpgl_and_the_plotter_traces_it() {
     let sim = HpglPtySim::spawn(PlotterConfig::default(), baud, 50.0).unwrap();
     let mut port = flatcut_grbl::open_port(&sim.path().display().to_string(), baud).unwrap();
     let opts = HpglStreamOptions::new(HpglFlow::XonXoff, true, baud);
-    let report =
-        stream_hpgl(&mut port, text.as_bytes(), &opts, &AtomicBool::new(false), &mut |_| {})
-            .unwrap();
+    let report = stream_hpgl(
+        &mut port,
+        text.as_bytes(),
+        &opts,
+        &AtomicBool::new(false),
+        &mut |_| {},
+    )
+    .unwrap();
     assert!(sim.wait_idle(Duration::from_secs(120)));
     let (trace, st) = sim.stop();
     assert_eq!(st.bytes_lost, 0);
@@ -156,9 +171,23 @@ fn bench_drawing_as_hpgl_agrees_with_ezhpgl_and_the_plotter_traces_it() {
         report.queries,
         st.xoff_sent
     );
-    assert!(worst < 0.05, "the plotter drew {worst} mm away from the drawing");
+    assert!(
+        worst < 0.05,
+        "the plotter drew {worst} mm away from the drawing"
+    );
     // The command line streams too (embedded plotter).
     let small = dir.path().join("small.plt");
-    std::fs::write(&small, "IN;SP1;PU400,400;PD800,400,800,800,400,800,400,400;PU0,0;SP0;\n").unwrap();
-    run_cli(&["send", small.to_str().unwrap(), "--protocol", "hpgl", "--profile", "pen-hpgl"]);
+    std::fs::write(
+        &small,
+        "IN;SP1;PU400,400;PD800,400,800,800,400,800,400,400;PU0,0;SP0;\n",
+    )
+    .unwrap();
+    run_cli(&[
+        "send",
+        small.to_str().unwrap(),
+        "--protocol",
+        "hpgl",
+        "--profile",
+        "pen-hpgl",
+    ]);
 }

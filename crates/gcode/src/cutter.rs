@@ -44,7 +44,11 @@ pub fn kerf_offset(loop_pts: &[DVec2], outer: bool, dist: f64) -> Vec<DVec2> {
     let side = scrap_left(loop_pts, outer);
     (0..n)
         .map(|i| {
-            let (a, b, c) = (loop_pts[(i + n - 1) % n], loop_pts[i], loop_pts[(i + 1) % n]);
+            let (a, b, c) = (
+                loop_pts[(i + n - 1) % n],
+                loop_pts[i],
+                loop_pts[(i + 1) % n],
+            );
             let n0 = left_normal((b - a).normalize_or_zero());
             let n1 = left_normal((c - b).normalize_or_zero());
             let bis = (n0 + n1).normalize_or_zero();
@@ -146,7 +150,11 @@ pub fn with_leads(
     match cfg.kind {
         LeadKind::Line => {
             let n = (left_normal(first) + left_normal(last)).normalize_or_zero();
-            let n = if n == DVec2::ZERO { left_normal(first) } else { n };
+            let n = if n == DVec2::ZERO {
+                left_normal(first)
+            } else {
+                n
+            };
             out.push(run[0] + n * side * r);
             out.extend_from_slice(run);
             out.push(run[k - 1] + n * side * r);
@@ -217,17 +225,27 @@ mod tests {
         let mut run = lp.clone();
         run.push(run[0]);
         for kind in [LeadKind::Line, LeadKind::Arc] {
-            let cfg = LeadConfig { kind, length_mm: 3.0 };
+            let cfg = LeadConfig {
+                kind,
+                length_mm: 3.0,
+            };
             let out = with_leads(&run, &lp, true, &cfg, 0.0);
             for p in [out[0], *out.last().unwrap()] {
                 let inside = p.x > 0.0 && p.x < 40.0 && p.y > 0.0 && p.y < 20.0;
                 assert!(!inside, "{kind:?}: lead at {p} inside the part");
-                let to_edge = p.y.abs().min((p.y - 20.0).abs()).min(p.x.abs()).min((p.x - 40.0).abs());
+                let to_edge =
+                    p.y.abs()
+                        .min((p.y - 20.0).abs())
+                        .min(p.x.abs())
+                        .min((p.x - 40.0).abs());
                 assert!(to_edge > 2.0 || p.y < -2.0, "{kind:?}: {p}");
             }
             let hole = with_leads(&run, &lp, false, &cfg, 0.0);
             let p = hole[0];
-            assert!(p.x > 0.0 && p.x < 40.0 && p.y > 0.0 && p.y < 20.0, "{kind:?}: {p}");
+            assert!(
+                p.x > 0.0 && p.x < 40.0 && p.y > 0.0 && p.y < 20.0,
+                "{kind:?}: {p}"
+            );
         }
     }
 }

@@ -26,7 +26,9 @@ pub const MAX_PAIRS_PER_COMMAND: usize = 16;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum HpglError {
-    #[error("profile {profile} has no [hpgl] section: it drives a GRBL controller (use `flatcut gcode`)")]
+    #[error(
+        "profile {profile} has no [hpgl] section: it drives a GRBL controller (use `flatcut gcode`)"
+    )]
     NotHpgl { profile: String },
     #[error("profile {profile}: a laser is not an HP-GL device")]
     Laser { profile: String },
@@ -183,11 +185,17 @@ mod tests {
         }]);
         let mut opts = GcodeOptions::default();
         opts.reorder = false;
-        let text = plan(&d, &Profile::pen_hpgl(), &opts).unwrap().to_hpgl().unwrap();
+        let text = plan(&d, &Profile::pen_hpgl(), &opts)
+            .unwrap()
+            .to_hpgl()
+            .unwrap();
         assert!(text.starts_with("IN;\nSP1;\nVS38.1;\n"), "{}", &text[..40]);
         assert!(text.ends_with("PU0,0;\nSP0;\n"));
         let last = to_units(*pts.last().unwrap());
-        assert!(text.contains(&format!("{},{};", last.0, last.1)), "ends at {last:?}");
+        assert!(
+            text.contains(&format!("{},{};", last.0, last.1)),
+            "ends at {last:?}"
+        );
         assert_eq!(last, (((10.0 + 20.2) * 40.0_f64).round() as i64, 400));
         for c in text.split(';') {
             assert!(c.len() < 220, "command of {} bytes", c.len());
@@ -203,7 +211,10 @@ mod tests {
         let plan = plan(&d, &Profile::vinyl(), &GcodeOptions::default()).unwrap();
         let ids: Vec<&str> = plan.paths.iter().map(|p| p.id.as_str()).collect();
         assert_eq!(ids, ["sq", "sq", "weed-border"]);
-        assert!(plan.paths[0].length() < plan.paths[1].length(), "hole before outline");
+        assert!(
+            plan.paths[0].length() < plan.paths[1].length(),
+            "hole before outline"
+        );
         let text = plan.to_hpgl().unwrap();
         assert!(text.contains("FS80;") && text.contains("VS20;"));
         assert!(Profile::knife().hpgl.is_none());

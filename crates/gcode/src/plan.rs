@@ -484,7 +484,8 @@ mod tests {
     fn no_repeated_or_sub_resolution_moves() {
         let mut pts = Vec::new();
         for k in 0..90 {
-            let c = DVec2::new(100.0, 100.0) + 40.0 * DVec2::from_angle(k as f64 * 4f64.to_radians());
+            let c =
+                DVec2::new(100.0, 100.0) + 40.0 * DVec2::from_angle(k as f64 * 4f64.to_radians());
             pts.push(c);
             pts.push(c + DVec2::new(0.0003, -0.0002));
             pts.push(c + DVec2::new(-0.0002, 0.0004));
@@ -518,7 +519,11 @@ mod tests {
             };
             let res = resolution(&profile);
             for w in moves.windows(2) {
-                assert!(pos(w[0]).distance(pos(w[1])) >= res * 0.999, "{}: {w:?}", profile.name);
+                assert!(
+                    pos(w[0]).distance(pos(w[1])) >= res * 0.999,
+                    "{}: {w:?}",
+                    profile.name
+                );
             }
         }
     }

@@ -275,7 +275,9 @@ pub enum ProfileError {
         value: String,
         reason: &'static str,
     },
-    #[error("unknown profile '{0}': use pen, knife, laser, vinyl, pen-hpgl or a path to a .toml file")]
+    #[error(
+        "unknown profile '{0}': use pen, knife, laser, vinyl, pen-hpgl or a path to a .toml file"
+    )]
     Unknown(String),
 }
 
@@ -407,7 +409,10 @@ impl Profile {
             return Err(self.invalid("lead.length_mm", l.length_mm, "must be in (0, 50]"));
         }
         if let Some(h) = &self.hpgl {
-            for (key, v) in [("hpgl.velocity_cm_s", h.velocity_cm_s), ("hpgl.force", h.force)] {
+            for (key, v) in [
+                ("hpgl.velocity_cm_s", h.velocity_cm_s),
+                ("hpgl.force", h.force),
+            ] {
                 if let Some(v) = v
                     && !(v.is_finite() && v > 0.0 && v < 10_000.0)
                 {
@@ -502,7 +507,11 @@ impl Profile {
             if let Some(t) = &l.tabs
                 && !(t.count <= 64 && t.width_mm.is_finite() && t.width_mm > 0.0)
             {
-                return Err(self.invalid("layers.*.tabs", t.width_mm, "count <= 64 and width_mm > 0"));
+                return Err(self.invalid(
+                    "layers.*.tabs",
+                    t.width_mm,
+                    "count <= 64 and width_mm > 0",
+                ));
             }
             if l.passes == 0 || l.passes > 50 {
                 return Err(self.invalid("layers.*.passes", l.passes as f64, "must be 1..=50"));

@@ -14,9 +14,9 @@
 
 pub mod codes;
 pub mod driver;
-pub mod hpgl;
 #[cfg(test)]
 mod fake;
+pub mod hpgl;
 pub mod job;
 pub mod journal;
 pub mod response;

@@ -14,10 +14,21 @@ fn job(n: usize) -> (String, Vec<([i64; 2], [i64; 2])>) {
     let mut segs = Vec::new();
     for k in 0..n {
         let (x, y) = (400 + 37 * (k as i64 % 40), 400 + 53 * (k as i64 / 40));
-        let c = [[x, y], [x + 400, y], [x + 400, y + 300], [x, y + 300], [x, y]];
+        let c = [
+            [x, y],
+            [x + 400, y],
+            [x + 400, y + 300],
+            [x, y + 300],
+            [x, y],
+        ];
         s.push_str(&format!("PU{},{};\nPD", x, y));
         for (i, p) in c[1..].iter().enumerate() {
-            s.push_str(&format!("{}{},{}", if i == 0 { "" } else { "," }, p[0], p[1]));
+            s.push_str(&format!(
+                "{}{},{}",
+                if i == 0 { "" } else { "," },
+                p[0],
+                p[1]
+            ));
             segs.push((c[i], *p));
         }
         s.push_str(";\n");
@@ -72,7 +83,10 @@ fn run(buffer_query: bool) {
         assert_eq!(report.device_buffer, Some(512));
         assert!(report.queries > 10);
     } else {
-        assert!(st.xoff_sent > 0 && report.xoff_received == st.xoff_sent, "XOFF used");
+        assert!(
+            st.xoff_sent > 0 && report.xoff_received == st.xoff_sent,
+            "XOFF used"
+        );
     }
     assert_eq!(report.bytes_sent, text.len());
     // Every pen-down move, once, in order (trace in mm, 40 units per mm).

@@ -64,10 +64,18 @@ pub fn embedded_plotter(buffer_query: bool) -> PlotterConfig {
 
 /// Streams an HP-GL job as the profile says, to `port` or to the embedded plotter (whose pen
 /// trace is written as SVG to `trace` when given).
-pub fn send(job: &Path, profile: &str, port: Option<&str>, trace: Option<&Path>) -> anyhow::Result<ExitCode> {
+pub fn send(
+    job: &Path,
+    profile: &str,
+    port: Option<&str>,
+    trace: Option<&Path>,
+) -> anyhow::Result<ExitCode> {
     let profile = Profile::resolve(profile)?;
     let h = profile.hpgl.clone().with_context(|| {
-        format!("profile {} has no [hpgl] section: use vinyl, pen-hpgl or a profile with one", profile.name)
+        format!(
+            "profile {} has no [hpgl] section: use vinyl, pen-hpgl or a profile with one",
+            profile.name
+        )
     })?;
     let bytes = std::fs::read(job).with_context(|| format!("cannot read {}", job.display()))?;
     let flow = match h.flow_control {
@@ -77,7 +85,11 @@ pub fn send(job: &Path, profile: &str, port: Option<&str>, trace: Option<&Path>)
     let opts = HpglStreamOptions::new(flow, h.buffer_query, h.baud);
     let sim = match port {
         Some(_) => None,
-        None => Some(HpglPtySim::spawn(embedded_plotter(h.buffer_query), h.baud, 20.0)?),
+        None => Some(HpglPtySim::spawn(
+            embedded_plotter(h.buffer_query),
+            h.baud,
+            20.0,
+        )?),
     };
     let path = match (&sim, port) {
         (Some(s), _) => s.path().display().to_string(),
@@ -98,7 +110,11 @@ pub fn send(job: &Path, profile: &str, port: Option<&str>, trace: Option<&Path>)
     );
     let report = stream_hpgl(&mut t, &bytes, &opts, &abort, &mut |p| {
         bar.set_position(p.sent as u64);
-        bar.set_message(if p.held { "(device buffer full: XOFF)" } else { "" });
+        bar.set_message(if p.held {
+            "(device buffer full: XOFF)"
+        } else {
+            ""
+        });
     })
     .with_context(|| format!("streaming {} to {path}", job.display()))?;
     bar.finish_and_clear();
@@ -127,7 +143,11 @@ pub fn send(job: &Path, profile: &str, port: Option<&str>, trace: Option<&Path>)
         if let Some(p) = trace {
             common::write(p, flatcut_firmware_sim::hpgl::trace_svg(&tr).as_bytes())?;
         }
-        anyhow::ensure!(st.bytes_lost == 0, "the plotter lost {} bytes", st.bytes_lost);
+        anyhow::ensure!(
+            st.bytes_lost == 0,
+            "the plotter lost {} bytes",
+            st.bytes_lost
+        );
     }
     Ok(ExitCode::SUCCESS)
 }

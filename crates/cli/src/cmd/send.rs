@@ -26,7 +26,12 @@ pub struct Args {
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     if a.protocol == "hpgl" {
         let s = &a.stream;
-        return super::hpgl::send(&a.job, &a.profile, s.port.as_deref(), s.sim_trace.as_deref());
+        return super::hpgl::send(
+            &a.job,
+            &a.profile,
+            s.port.as_deref(),
+            s.sim_trace.as_deref(),
+        );
     }
     let out = stream_file(&a.job, &a.stream)?;
     print_stdout(&summary(&out))?;

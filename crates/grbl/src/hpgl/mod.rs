@@ -99,7 +99,9 @@ pub enum HpglError {
     Stalled(Duration, usize, usize),
     #[error("the device did not answer the buffer query ESC.{0} within {1:?}")]
     NoAnswer(char, Duration),
-    #[error("aborted after {0} of {1} bytes: the device was told to drop its buffer (ESC.K) and lift the tool")]
+    #[error(
+        "aborted after {0} of {1} bytes: the device was told to drop its buffer (ESC.K) and lift the tool"
+    )]
     Aborted(usize, usize),
 }
 
@@ -139,7 +141,9 @@ impl<T: Transport> Link<'_, T> {
         let t0 = Instant::now();
         loop {
             if let Some(end) = self.answer.iter().position(|b| *b == b'\r' || *b == b'\n') {
-                let text = String::from_utf8_lossy(&self.answer[..end]).trim().to_string();
+                let text = String::from_utf8_lossy(&self.answer[..end])
+                    .trim()
+                    .to_string();
                 self.answer.drain(..=end);
                 if let Ok(v) = text.parse::<usize>() {
                     return Ok(v);
@@ -228,7 +232,10 @@ pub fn stream_hpgl<T: Transport>(
             link.poll(Duration::from_millis(2))?;
             continue;
         }
-        let n = (credit as usize).min(chunk).min(job.len() - sent).min(allowance);
+        let n = (credit as usize)
+            .min(chunk)
+            .min(job.len() - sent)
+            .min(allowance);
         link.t.write_all(&job[sent..sent + n])?;
         credit -= n as f64;
         sent += n;
