@@ -201,7 +201,8 @@ fn nest_and_gcode_take_the_aama_dxf() {
         .replace(
             "work_area_mm = [600.0, 400.0]",
             "work_area_mm = [1200.0, 900.0]",
-        );
+        )
+        .replace("offset_mm = [0.0, 0.0]", "offset_mm = [10.0, 10.0]");
     let profile = out.join("big-knife.toml");
     std::fs::write(&profile, knife).unwrap();
     run_cli(&[
