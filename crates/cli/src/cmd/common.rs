@@ -205,6 +205,32 @@ pub fn parse_size(s: &str) -> Result<(f64, f64), String> {
     Ok((w, h))
 }
 
+/// True when the path names a 2D pattern file (SVG or DXF) rather than a design or mesh.
+pub fn is_pattern_file(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg") || e.eq_ignore_ascii_case("dxf"))
+}
+
+/// Reads a pattern SVG or DXF (AAMA or plain) as a drawing in mm, curves flattened within
+/// `chord_mm`; the reader's warnings are printed.
+pub fn read_pattern_file(path: &Path, chord_mm: f64) -> anyhow::Result<flatcut::pattern::Drawing> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let name = path.display().to_string();
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("dxf"))
+    {
+        let import = flatcut::pattern::dxf_read::read_dxf(&text, chord_mm)
+            .with_context(|| format!("cannot read {name}"))?;
+        for w in &import.warnings {
+            eprintln!("warning: {name}: {w}");
+        }
+        return Ok(import.drawing);
+    }
+    Ok(flatcut::pattern::svg::read_svg(&text, &name, chord_mm)?)
+}
+
 /// Writes a file whole or not at all, naming it in errors.
 pub fn write(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
