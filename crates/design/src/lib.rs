@@ -35,7 +35,9 @@ mod units;
 pub use build::PieceGeometry;
 pub use error::DesignError;
 pub use load::Design;
-pub use schema::{Blend, CurveDef, MarkDef, MarkKind, P3, PieceDef, SeamDef, SurfaceDef, Units};
+pub use schema::{
+    Blend, CurveDef, DartsDef, MarkDef, MarkKind, P3, PieceDef, SeamDef, SurfaceDef, Units,
+};
 
 #[cfg(test)]
 mod tests;

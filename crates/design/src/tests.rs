@@ -258,3 +258,18 @@ fn seams_in_uv_cut_a_closed_cylinder_open_along_a_generator() {
     flatcut_mesh::check_disk(&cut).unwrap();
     assert!((cut.area() - plain.area()).abs() < 1e-9 * plain.area());
 }
+
+#[test]
+fn darts_and_no_cut_regions_are_read_and_scaled() {
+    let text = "units = \"cm\"\n[[piece]]\nname = \"cap\"\ndarts = \"auto\"\nno_cut = [[[0, 0, 1], [1, 0, 1], [0, 1, 1]]]\n[piece.surface]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n";
+    let d = Design::from_toml_str(text, "t.toml").unwrap();
+    let p = &d.pieces[0];
+    assert_eq!(p.darts, Some(crate::DartsDef::Auto));
+    assert_eq!(p.no_cut[0][1], [10.0, 0.0, 10.0]);
+    let bad = text.replace("darts = \"auto\"", "darts = \"sometimes\"");
+    let e = Design::from_toml_str(&bad, "t.toml").unwrap_err().to_string();
+    assert!(e.contains("sometimes"), "{e}");
+    let short = text.replace("[[[0, 0, 1], [1, 0, 1], [0, 1, 1]]]", "[[[0, 0, 1], [1, 0, 1]]]");
+    let e = Design::from_toml_str(&short, "t.toml").unwrap_err().to_string();
+    assert!(e.contains("no_cut region 0") && e.contains("at least 3"), "{e}");
+}
