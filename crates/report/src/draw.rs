@@ -485,6 +485,17 @@ pub fn html_report(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
             }
             h.push_str("</table>\n");
         }
+        if !r.darts.is_empty() {
+            h.push_str("<h3>Darts</h3><table><tr><th>mouth 3D (mm)</th><th>point 3D (mm)</th><th>length mm</th><th>legs 2D mm</th><th>opening mm</th></tr>\n");
+            for d in &r.darts {
+                h.push_str(&format!(
+                    "<tr><td>({:.1}, {:.1}, {:.1})</td><td>({:.1}, {:.1}, {:.1})</td><td>{:.1}</td><td>{:.2} / {:.2}</td><td>{:.1}</td></tr>\n",
+                    d.start_3d[0], d.start_3d[1], d.start_3d[2], d.apex_3d[0], d.apex_3d[1], d.apex_3d[2],
+                    d.length_3d_mm, d.leg_2d_mm[0], d.leg_2d_mm[1], d.opening_mm
+                ));
+            }
+            h.push_str("</table>\n");
+        }
         let over = !c.report.regions.is_empty();
         h.push_str(if over {
             "<h3>Regions beyond the limits</h3>\n"

@@ -235,6 +235,9 @@ pub struct Report {
     /// the surface area most stretched and the 1 % most compressed, worst first (at most
     /// [`MAX_HOT_SPOTS`]); empty for a map without measurable distortion.
     pub hot_spots: Vec<Region>,
+    /// The darts cut into the piece to meet the limits (absent when there are none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub darts: Vec<crate::DartReport>,
     #[serde(skip)]
     pub per_face: Vec<FaceMeasure>,
 }
@@ -465,6 +468,7 @@ impl Report {
             boundary_segments,
             regions,
             hot_spots,
+            darts: Vec::new(),
             per_face,
         })
     }
