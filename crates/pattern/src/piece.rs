@@ -58,10 +58,14 @@ pub struct PieceInput {
     /// Sew line, closed (first point not repeated), counter-clockwise, mm.
     pub outline: Vec<DVec2>,
     pub marks: Vec<Mark>,
-    /// Drawn internal lines (stitch lines, placement lines, dart legs), open polylines in the
-    /// flat frame (mm), each of at least two points.
+    /// Drawn internal lines (stitch lines, placement lines), open polylines in the flat frame
+    /// (mm), each of at least two points.
     #[serde(default)]
     pub lines: Vec<Vec<DVec2>>,
+    /// Sew lines inside the piece: the legs of a folded dart, mouth to point to mouth, open
+    /// polylines (mm).
+    #[serde(default)]
+    pub sew_lines: Vec<Vec<DVec2>>,
     /// Grain line as two points in the flat frame (direction carried through the map).
     pub grain: Option<(DVec2, DVec2)>,
     /// Seam width per seam segment (see the module doc); empty = the default width everywhere,
@@ -85,6 +89,7 @@ impl PieceInput {
             outline,
             marks: Vec::new(),
             lines: Vec::new(),
+            sew_lines: Vec::new(),
             grain: None,
             seam_widths: Vec::new(),
             corner_style: CornerStyle::default(),
@@ -208,6 +213,8 @@ pub struct Piece {
     pub points: Vec<DVec2>,
     /// Internal lines (stitch and placement lines), drawn, open.
     pub lines: Vec<Vec<DVec2>>,
+    /// Sew lines inside the piece (dart legs), drawn, open.
+    pub sew_lines: Vec<Vec<DVec2>>,
     /// Grain line end points.
     pub grain: Option<(DVec2, DVec2)>,
     pub label: LabelInfo,
@@ -523,6 +530,18 @@ impl Piece {
             }
             lines.push(simplify_line(&l, opts.chord_tol));
         }
+        let mut sew_lines = Vec::with_capacity(input.sew_lines.len());
+        for (k, l) in input.sew_lines.iter().enumerate() {
+            let mut l = l.clone();
+            l.dedup_by(|a, b| a.distance(*b) < weld);
+            if l.len() < 2 || l.iter().any(|p| !flatcut_geom::finite2(*p)) {
+                return Err(inv(format!(
+                    "inner sew line {} has fewer than two distinct finite points",
+                    k + 1
+                )));
+            }
+            sew_lines.push(simplify_line(&l, opts.chord_tol));
+        }
         if let Some((a, b)) = input.grain {
             if !(flatcut_geom::finite2(a) && flatcut_geom::finite2(b)) {
                 return Err(nonfinite("grain line"));
@@ -541,6 +560,7 @@ impl Piece {
             drills,
             points,
             lines,
+            sew_lines,
             grain: input.grain,
             label: input.label.clone(),
             label_strokes: Vec::new(),
@@ -708,6 +728,14 @@ impl Piece {
             true,
             "sew".into(),
         ));
+        for (k, l) in self.sew_lines.iter().enumerate() {
+            s.push(mk(
+                StrokeKind::Sew,
+                l.clone(),
+                false,
+                format!("dart-{}-sew", k + 1),
+            ));
+        }
         for (k, p) in self.points.iter().enumerate() {
             const CROSS: f64 = 1.5; // half-size of a point cross (mm)
             s.push(mk(
