@@ -205,6 +205,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
     ));
     // 3–5. Attempts: down from k0 while they hold, else up until one does.
     let mut outcomes: Vec<Outcome> = Vec::new();
+    let mut unplaced: Vec<String> = Vec::new();
     let mut try_k = |k: usize, attempts: &mut Vec<Attempt>| -> Result<bool, DartError> {
         match piece.attempt(k) {
             Ok(o) => {
@@ -220,6 +221,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             }
             Err(DartError::Placement(reason)) => {
                 debug(&format!("k = {k}: {reason}"));
+                unplaced.push(format!("{k} darts: {reason}"));
                 Ok(false)
             }
             Err(e) => Err(e),
@@ -229,6 +231,14 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
     if try_k(k, &mut attempts)? {
         while k > 1 && try_k(k - 1, &mut attempts)? {
             k -= 1;
+        }
+    } else if attempts.len() == 1 {
+        // k0 darts could not even be placed: fewer might.
+        while k > 1 {
+            k -= 1;
+            if try_k(k, &mut attempts)? {
+                break;
+            }
         }
     } else {
         while k < k_cap {
@@ -282,7 +292,14 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             darts: 0,
             excess: held.excess,
             at: worst_at,
-            reason: format!("no set of up to {k_cap} darts brought every face within the limits"),
+            reason: if outcomes.is_empty() {
+                format!(
+                    "no darts could be placed ({})",
+                    unplaced.last().map_or("", String::as_str)
+                )
+            } else {
+                format!("no set of up to {k_cap} darts brought every face within the limits")
+            },
         },
     })
 }
