@@ -10,6 +10,7 @@ use flatcut_geom::Tolerances;
 use flatcut_mesh::TriMesh;
 use flatcut_report::Report;
 
+use crate::darting::{self, DartSettings};
 use crate::pipeline::{self, FlatPiece, PipelineError};
 
 /// A flattened piece ready for the pattern: its mesh (with `flat`), its design entry when it came
@@ -23,13 +24,17 @@ pub struct Flat {
     pub quantity: u32,
     /// Absent when the map was read from a file rather than computed.
     pub info: Option<FlattenInfo>,
+    /// The darts cut into the piece to meet its limits.
+    pub darts: Vec<flatcut_darts::Dart>,
 }
 
-/// Stretch and compression limits in percent, checked by the report.
+/// Stretch and compression limits in percent, checked by the report, and whether darts may be
+/// cut to meet the flattening's limits (`None`: only where the design's piece asks for them).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Limits {
     pub stretch_pct: Option<f64>,
     pub compress_pct: Option<f64>,
+    pub darts: Option<DartSettings>,
 }
 
 /// Reads a mesh file; when it already carries a flat map (`vt`), returns it as one reported piece
@@ -52,6 +57,7 @@ pub fn read_flat_mesh(path: &Path, limits: Limits) -> Result<Option<Flat>, Pipel
         report,
         quantity: 1,
         info: None,
+        darts: Vec::new(),
     }))
 }
 
@@ -64,21 +70,22 @@ pub fn flatten_and_report(
     limits: Limits,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Vec<Flat>, PipelineError> {
-    let (_, pieces) = pipeline::flatten_design(path, tol, params, progress)?;
+    let (_, pieces) = pipeline::flatten_design(path, tol, params, limits.darts.as_ref(), progress)?;
     pieces
         .into_iter()
-        .map(|FlatPiece { def, mesh, info }| {
+        .map(|FlatPiece { def, mesh, info, darts }| {
             let boundary = pipeline::flat_boundary(&def.name, &mesh)
                 .map(|b| b.1)
                 .unwrap_or_default();
             let marks = pipeline::notch_vertices(&def, &mesh, &boundary);
-            let report = pipeline::report_piece(
+            let mut report = pipeline::report_piece(
                 &def.name,
                 &mesh,
                 &marks,
                 limits.stretch_pct,
                 limits.compress_pct,
             )?;
+            report.darts = darting::dart_reports(&darts);
             Ok(Flat {
                 name: def.name.clone(),
                 quantity: def.quantity,
@@ -86,6 +93,7 @@ pub fn flatten_and_report(
                 mesh,
                 report,
                 info: Some(info),
+                darts,
             })
         })
         .collect()

@@ -33,6 +33,7 @@ pub fn build_pieces(flats: &[Flat], s: &PieceSettings) -> Result<Vec<Piece>, Pip
             let ctx = PieceContext {
                 def: f.def.as_ref(),
                 report: Some(&f.report),
+                darts: &f.darts,
                 seam_mm: s.seam_mm,
                 size: String::new(),
                 corner: s.corner,

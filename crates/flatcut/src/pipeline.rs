@@ -14,6 +14,8 @@ use flatcut_pattern::{
 };
 use flatcut_report::{Report, ReportError};
 
+use crate::darting::{self, DartSettings};
+
 /// Why a pipeline stage failed; every variant names the piece or file.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -34,6 +36,11 @@ pub enum PipelineError {
     Mesh(#[from] flatcut_mesh::MeshIoError),
     #[error("piece '{piece}': {reason}")]
     Piece { piece: String, reason: String },
+    #[error("piece '{piece}': {source}")]
+    Darts {
+        piece: String,
+        source: flatcut_darts::DartError,
+    },
 }
 
 /// A piece of a design, cut along its seams and flattened: `mesh.flat` holds the 2D position of
@@ -43,6 +50,8 @@ pub struct FlatPiece {
     pub def: PieceDef,
     pub mesh: TriMesh,
     pub info: FlattenInfo,
+    /// The darts cut into the piece to meet its limits (`mesh` is then cut along them).
+    pub darts: Vec<flatcut_darts::Dart>,
 }
 
 /// Loads a design (or a mesh file) and flattens every piece; `progress(piece, index, count)` is
@@ -51,6 +60,7 @@ pub fn flatten_design(
     path: &Path,
     tol: &Tolerances,
     params: &FlattenParams,
+    darts: Option<&DartSettings>,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<(Design, Vec<FlatPiece>), PipelineError> {
     let design = Design::load(path)?;
@@ -59,26 +69,38 @@ pub fn flatten_design(
     for (k, def) in design.pieces.iter().enumerate() {
         progress(&def.name, k, design.pieces.len());
         let mesh = def.mesh(base, tol)?;
-        out.push(flatten_piece(def.clone(), mesh, params)?);
+        out.push(flatten_piece(def.clone(), mesh, params, darts)?);
     }
     Ok((design, out))
 }
 
-/// Flattens one piece's mesh.
+/// Flattens one piece's mesh; where it exceeds its limits and darts are wanted
+/// ([`darting::wanted`]), the piece is darted and flattened with the limits held.
 pub fn flatten_piece(
     def: PieceDef,
-    mut mesh: TriMesh,
+    mesh: TriMesh,
     params: &FlattenParams,
+    darts: Option<&DartSettings>,
 ) -> Result<FlatPiece, PipelineError> {
     let f = flatcut_flatten::flatten(&mesh, params).map_err(|source| PipelineError::Flatten {
         piece: def.name.clone(),
         source,
     })?;
-    mesh.flat = Some(f.uv);
+    let settings = darting::wanted(Some(&def), darts).then(|| darts.copied().unwrap_or_default());
+    let (mesh, info, darts) = darting::finish(
+        &def.name,
+        Some(&def),
+        mesh,
+        f.uv,
+        f.info,
+        params,
+        settings.as_ref(),
+    )?;
     Ok(FlatPiece {
         def,
         mesh,
-        info: f.info,
+        info,
+        darts,
     })
 }
 
@@ -177,6 +199,9 @@ pub fn notch_vertices(def: &PieceDef, mesh: &TriMesh, boundary: &[u32]) -> Vec<u
 pub struct PieceContext<'a> {
     pub def: Option<&'a PieceDef>,
     pub report: Option<&'a Report>,
+    /// The piece's darts: their mouths get notches, their points drill marks and a fold arrow
+    /// says which way each is pressed.
+    pub darts: &'a [flatcut_darts::Dart],
     /// Seam allowance (mm) when the design gives none.
     pub seam_mm: Option<f64>,
     pub size: String,
@@ -197,6 +222,7 @@ pub fn piece_from_flat(
     opts: &PieceOptions,
 ) -> Result<Piece, PipelineError> {
     let (outline, ids) = flat_boundary(name, mesh)?;
+    let (outline, ids) = bridge_darts(outline, ids, ctx.darts);
     let flat = mesh.flat.as_ref().expect("checked by flat_boundary");
     let mut input = PieceInput::new(name, outline);
     input.corner_style = ctx.corner;
@@ -300,6 +326,9 @@ pub fn piece_from_flat(
             distortion: None,
         };
     }
+    for d in ctx.darts {
+        dart_marks(&mut input, d, &ids, flat);
+    }
     if ctx.def.and_then(|d| d.seam_allowance_mm).is_none() {
         if let Some(w) = ctx.seam_mm {
             opts = opts.with_default_seam(w);
@@ -312,6 +341,105 @@ pub fn piece_from_flat(
         ));
     }
     Ok(Piece::build(&input, &opts)?)
+}
+
+/// Where a dart's fold arrow sits: this fraction of the way from the mouth to the point (at
+/// most [`FOLD_ARROW_DEPTH_MM`] in), reaching this fraction of the way to the first leg.
+const FOLD_ARROW_DEPTH: f64 = 0.25;
+const FOLD_ARROW_DEPTH_MM: f64 = 15.0;
+const FOLD_ARROW_REACH: f64 = 0.8;
+/// Half-width of the fold arrow's head relative to its length.
+const FOLD_HEAD: f64 = 0.3;
+
+/// The outline with every dart closed across its mouth: a folded dart's wedge stays in the
+/// piece (its legs are sewn, its intake folded), so the sew line runs straight from mouth to
+/// mouth and the legs are drawn inside.
+fn bridge_darts(
+    outline: Vec<DVec2>,
+    ids: Vec<u32>,
+    darts: &[flatcut_darts::Dart],
+) -> (Vec<DVec2>, Vec<u32>) {
+    let n = ids.len();
+    let mut drop = vec![false; n];
+    for d in darts {
+        let at = |v: u32| ids.iter().position(|&i| i == v);
+        let apex = *d.legs.sides[0].last().unwrap_or(&d.legs.sides[0][0]);
+        let (Some(i0), Some(i1), Some(ia)) =
+            (at(d.legs.sides[0][0]), at(d.legs.sides[1][0]), at(apex))
+        else {
+            continue;
+        };
+        // The stretch between the mouths that holds the point.
+        let ahead = |from: usize, to: usize| (to + n - from) % n;
+        let (from, to) = if ahead(i0, ia) < ahead(i0, i1) {
+            (i0, i1)
+        } else {
+            (i1, i0)
+        };
+        let mut k = (from + 1) % n;
+        while k != to {
+            drop[k] = true;
+            k = (k + 1) % n;
+        }
+    }
+    outline
+        .into_iter()
+        .zip(ids)
+        .zip(&drop)
+        .filter(|(_, d)| !**d)
+        .map(|(p, _)| p)
+        .unzip()
+}
+
+/// The point a fraction `f` along a polyline's length.
+fn along(line: &[DVec2], f: f64) -> DVec2 {
+    let total: f64 = line.windows(2).map(|w| w[0].distance(w[1])).sum();
+    let mut left = f.clamp(0.0, 1.0) * total;
+    for w in line.windows(2) {
+        let l = w[0].distance(w[1]);
+        if left <= l && l > 0.0 {
+            return w[0].lerp(w[1], left / l);
+        }
+        left -= l;
+    }
+    line.last().copied().unwrap_or(DVec2::ZERO)
+}
+
+/// A folded dart on the pattern: its legs as a sew line inside the piece (mouth, point, mouth),
+/// a notch at each leg's mouth, the drill mark short of its point, and the fold arrow inside
+/// the wedge pointing to the leg the intake is pressed towards (its first leg).
+fn dart_marks(input: &mut PieceInput, d: &flatcut_darts::Dart, ids: &[u32], flat: &[DVec2]) {
+    let legs = d.leg_polylines(flat);
+    let mut sew = legs[0].clone();
+    sew.extend(legs[1].iter().rev().skip(1));
+    input.sew_lines.push(sew);
+    for v in [d.legs.sides[0][0], d.legs.sides[1][0]] {
+        if let Some(k) = ids.iter().position(|&i| i == v) {
+            input.marks.push(Mark {
+                kind: MarkKind::Notch,
+                pos: input.outline[k],
+                boundary_index: Some(k),
+            });
+        }
+    }
+    input.marks.push(Mark {
+        kind: MarkKind::Drill,
+        pos: d.drill_2d,
+        boundary_index: None,
+    });
+    let depth = (FOLD_ARROW_DEPTH * d.leg_2d_mm[0]).min(FOLD_ARROW_DEPTH_MM);
+    let f = depth / d.leg_2d_mm[0].max(f64::MIN_POSITIVE);
+    let (q0, q1) = (along(&legs[0], f), along(&legs[1], f));
+    let c = 0.5 * (q0 + q1);
+    let len = FOLD_ARROW_REACH * c.distance(q0);
+    if len > 0.0 {
+        let dir = (q0 - c).normalize_or_zero();
+        let tip = c + dir * len;
+        let side = dir.perp() * (FOLD_HEAD * len);
+        let back = tip - dir * (FOLD_HEAD * len);
+        input.lines.push(vec![c, tip]);
+        input.lines.push(vec![back + side, tip, back - side]);
+    }
 }
 
 /// A rigid group of strokes nested as one item: a pattern piece's drawing in its own frame.
