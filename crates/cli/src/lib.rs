@@ -57,7 +57,16 @@ pub fn main() -> ExitCode {
             for cause in e.chain().skip(1) {
                 eprintln!("  caused by: {cause}");
             }
-            ExitCode::FAILURE
+            // Limits that no dart could meet are a limit exceeded, not a failure to run.
+            let out_of_limits = e.chain().any(|c| {
+                c.downcast_ref::<flatcut::pipeline::PipelineError>()
+                    .is_some_and(flatcut::darting::is_out_of_limits)
+            });
+            if out_of_limits {
+                ExitCode::from(EXIT_LIMIT)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
 }

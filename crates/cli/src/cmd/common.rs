@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
+use flatcut::darting::DartSettings;
 use flatcut::flat::Limits;
 use flatcut::flatten::{FlattenParams, Method};
 use flatcut::geom::Tolerances;
@@ -28,6 +29,33 @@ pub struct FlattenArgs {
     /// Iteration cap of the nonlinear methods.
     #[arg(long, default_value_t = FlattenParams::DEFAULT_MAX_ITERS)]
     pub max_iters: usize,
+    /// `auto`: cut darts where a piece exceeds --max-stretch/--max-compress (the fewest darts
+    /// that bring every face within them), then flatten with the limits held.
+    #[arg(long, value_name = "MODE", value_parser = parse_darts)]
+    pub darts: Option<DartMode>,
+    /// Most darts in one piece.
+    #[arg(long, value_name = "N", default_value_t = DartSettings::default().max_darts)]
+    pub max_darts: usize,
+    /// Least distance between two darts (mm).
+    #[arg(long, value_name = "MM", default_value_t = DartSettings::default().min_spacing_mm)]
+    pub dart_min_spacing: f64,
+    /// How far short of its point a dart's drill mark sits (mm).
+    #[arg(long, value_name = "MM", default_value_t = DartSettings::default().drill_offset_mm)]
+    pub dart_drill: f64,
+}
+
+/// `--darts`: when darts are cut.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DartMode {
+    /// Where a piece exceeds its limits.
+    Auto,
+}
+
+fn parse_darts(s: &str) -> Result<DartMode, String> {
+    match s {
+        "auto" => Ok(DartMode::Auto),
+        _ => Err(format!("unknown dart mode '{s}'; the mode is auto")),
+    }
 }
 
 pub fn parse_method(s: &str) -> Result<Method, String> {
@@ -60,6 +88,31 @@ impl FlattenArgs {
             .with_max_stretch_pct(self.max_stretch)
             .with_max_compress_pct(self.max_compress)
             .with_max_iters(self.max_iters))
+    }
+
+    /// The dart settings when darts are asked for on the command line.
+    pub fn darts(&self) -> anyhow::Result<Option<DartSettings>> {
+        if self.darts != Some(DartMode::Auto) {
+            return Ok(None);
+        }
+        anyhow::ensure!(
+            self.max_stretch.is_some() || self.max_compress.is_some(),
+            "--darts auto needs --max-stretch and/or --max-compress: the limits the darts are for"
+        );
+        for (name, v) in [
+            ("--dart-min-spacing", self.dart_min_spacing),
+            ("--dart-drill", self.dart_drill),
+        ] {
+            anyhow::ensure!(
+                v.is_finite() && v >= 0.0,
+                "{name} must be a length in mm >= 0, got {v}"
+            );
+        }
+        Ok(Some(DartSettings {
+            max_darts: self.max_darts,
+            min_spacing_mm: self.dart_min_spacing,
+            drill_offset_mm: self.dart_drill,
+        }))
     }
 
     pub fn tolerances(&self) -> anyhow::Result<Tolerances> {
@@ -140,6 +193,7 @@ pub fn load_flat(
     let limits = Limits {
         stretch_pct: limits.0,
         compress_pct: limits.1,
+        darts: fa.darts()?,
     };
     let t0 = std::time::Instant::now();
     let flats = flatcut::flat::load_flat(path, &tol, &params, limits, &mut |name, k, n| {
