@@ -347,3 +347,43 @@ fn grain_turned_piece_fits_a_roll() {
         r.length
     );
 }
+
+#[test]
+fn stock_beyond_what_the_engine_resolves_and_too_many_copies_are_refused() {
+    let square = vec![
+        DVec2::ZERO,
+        DVec2::new(10.0, 0.0),
+        DVec2::new(10.0, 10.0),
+        DVec2::new(0.0, 10.0),
+    ];
+    let items = [NestItem::new("sq", square.clone(), 2)];
+    for stock in [
+        Stock::Sheets {
+            width: 1e9,
+            height: 1e9,
+            max_sheets: None,
+        },
+        Stock::Roll {
+            width: 1e308,
+            max_length: None,
+        },
+    ] {
+        let e = nest(&items, stock, &NestOptions::DEFAULT, &mut |_| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("larger than the 1e5 mm"), "{e}");
+    }
+    let many = [NestItem::new("sq", square, 1_000_000)];
+    let e = nest(
+        &many,
+        Stock::Roll {
+            width: 1000.0,
+            max_length: None,
+        },
+        &NestOptions::DEFAULT,
+        &mut |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("1000000 piece copies"), "{e}");
+}

@@ -22,5 +22,6 @@ pub use fit::PathSeg;
 pub use io::write_atomic;
 pub use piece::{
     LabelInfo, Mark, MarkKind, NotchStyle, Piece, PieceInput, PieceOptions, PlacedPiece, Placement,
+    safe_name,
 };
 pub use seam::CornerStyle;

@@ -12,6 +12,8 @@ use flatcut::pattern::{CornerStyle, NotchStyle, Piece, PieceOptions, PlacedPiece
 use flatcut::pipeline::{self, FlatPiece, PieceContext};
 use flatcut::report::Report;
 
+use crate::values;
+
 /// Flattening options shared by the commands that flatten.
 #[derive(Debug, Clone, clap::Args)]
 pub struct FlattenArgs {
@@ -19,16 +21,16 @@ pub struct FlattenArgs {
     #[arg(long, default_value = "isometric", value_parser = parse_method)]
     pub method: Method,
     /// Largest allowed stretch in percent (principal stretch).
-    #[arg(long, value_name = "P")]
+    #[arg(long, value_name = "P", value_parser = values::material_percent)]
     pub max_stretch: Option<f64>,
     /// Largest allowed compression in percent (leather: 0).
-    #[arg(long, value_name = "P")]
+    #[arg(long, value_name = "P", value_parser = values::material_percent)]
     pub max_compress: Option<f64>,
     /// Chordal tolerance of the tessellation in mm.
-    #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_name = "MM")]
+    #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_name = "MM", value_parser = values::positive_mm)]
     pub chord: f64,
     /// Iteration cap of the nonlinear methods.
-    #[arg(long, default_value_t = FlattenParams::DEFAULT_MAX_ITERS)]
+    #[arg(long, default_value_t = FlattenParams::DEFAULT_MAX_ITERS, value_parser = values::iterations)]
     pub max_iters: usize,
 }
 
@@ -78,7 +80,7 @@ impl FlattenArgs {
 #[derive(Debug, Clone, clap::Args)]
 pub struct PieceArgs {
     /// Seam allowance in mm where the design gives none.
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = values::nonneg_mm)]
     pub seam: Option<f64>,
     /// Corner style of the allowance: mitred, squared or reflected.
     #[arg(long, default_value = "mitred", value_parser = parse_corner)]
@@ -254,32 +256,12 @@ pub fn row_layout(pieces: &[Piece]) -> Vec<PlacedPiece<'_>> {
         .collect()
 }
 
-/// Parses `WxH` in mm (e.g. `600x400`).
-pub fn parse_size(s: &str) -> Result<(f64, f64), String> {
-    let (w, h) = s
-        .split_once(['x', 'X', '×'])
-        .ok_or_else(|| format!("expected WIDTHxHEIGHT in mm, e.g. 600x400, got '{s}'"))?;
-    let w: f64 = w
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad width '{w}' in '{s}'"))?;
-    let h: f64 = h
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad height '{h}' in '{s}'"))?;
-    if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
-        return Err(format!("sheet size must be positive, got '{s}'"));
-    }
-    Ok((w, h))
-}
-
-/// Writes a file whole or not at all, naming it in errors.
+/// Writes one file whole or not at all, naming it in errors (a set of one: see
+/// [`OutputSet`](crate::output::OutputSet) for a command's several outputs).
 pub fn write(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    }
-    flatcut::pattern::write_atomic(path, bytes)
-        .with_context(|| format!("cannot write {}", path.display()))
+    let mut set = crate::output::OutputSet::new();
+    set.add(path, bytes)?;
+    set.commit().map(drop)
 }
 
 /// `dir/stem-suffix.ext` next to `path`.
@@ -295,15 +277,7 @@ pub fn sibling(path: &Path, suffix: &str) -> PathBuf {
     path.with_file_name(format!("{stem}-{suffix}{ext}"))
 }
 
-/// A name usable in a file name.
+/// A name usable in a file name (the same rule as the pattern's element ids).
 pub fn file_safe(name: &str) -> String {
-    name.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
+    flatcut::pattern::safe_name(name)
 }

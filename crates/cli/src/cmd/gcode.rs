@@ -9,6 +9,7 @@ use flatcut::gcode::{GcodeOptions, Profile};
 use flatcut::pattern::Drawing;
 
 use super::common::{self, FlattenArgs, PieceArgs};
+use crate::output::OutputSet;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -17,7 +18,8 @@ pub struct Args {
     /// pen, knife, laser, or a path to a machine profile (.toml).
     #[arg(long, default_value = "pen")]
     pub profile: String,
-    #[arg(short, long)]
+    /// The G-code job to write (GRBL dialect, mm); `flatcut send` streams it.
+    #[arg(short, long, value_name = "JOB.gcode")]
     pub output: PathBuf,
     /// Also write `<stem>-frame.gcode`: the bounding box traced with the tool off.
     #[arg(long)]
@@ -52,23 +54,27 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     );
     let plan = flatcut::gcode::plan(&drawing, &profile, &opts)
         .with_context(|| format!("cannot plan {}", a.file.display()))?;
-    common::write(&a.output, plan.to_gcode().as_bytes())?;
+    let mut out = OutputSet::new();
+    out.add(&a.output, plan.to_gcode().as_bytes())?;
+    let frame = common::sibling(&a.output, "frame");
+    if a.frame {
+        out.add(
+            &frame,
+            flatcut::gcode::frame_job(plan.bbox(), &profile).as_bytes(),
+        )?;
+    }
+    out.commit()?;
     let s = plan.summary();
-    println!("{} lines, {} paths", s.lines, s.paths);
-    println!(
+    crate::outln!("{} lines, {} paths", s.lines, s.paths);
+    crate::outln!(
         "cut length {:.1} mm, travel {:.1} mm, estimated time {}",
         s.cut_length_mm,
         s.travel_length_mm,
         hms(s.est_time_s)
     );
-    println!("wrote {}", a.output.display());
+    crate::outln!("wrote {}", a.output.display());
     if a.frame {
-        let f = common::sibling(&a.output, "frame");
-        common::write(
-            &f,
-            flatcut::gcode::frame_job(plan.bbox(), &profile).as_bytes(),
-        )?;
-        println!("wrote {} (bounding box, tool off)", f.display());
+        crate::outln!("wrote {} (bounding box, tool off)", frame.display());
     }
     Ok(ExitCode::SUCCESS)
 }

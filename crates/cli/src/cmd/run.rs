@@ -36,7 +36,7 @@ pub struct Args {
     #[arg(long)]
     pub force: bool,
     /// Nesting iterations.
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = 60, value_parser = crate::values::iterations)]
     pub nest_iters: usize,
     #[command(flatten)]
     pub stream: StreamArgs,
