@@ -370,6 +370,19 @@ impl NestGroup {
         }
     }
 
+    /// The pieces of an imported SVG: [`NestGroup::from_drawing`], with the quantity and grain
+    /// that flatcut wrote on each piece's cut line (one copy, free quarter turns otherwise).
+    pub fn from_import(name: &str, import: &flatcut_pattern::svg::SvgImport) -> Vec<Self> {
+        let mut groups = Self::from_drawing(name, &import.drawing);
+        for g in &mut groups {
+            if let Some(m) = import.pieces.get(&g.name) {
+                g.quantity = m.quantity as usize;
+                g.grain_angle = m.grain_angle;
+            }
+        }
+        groups
+    }
+
     /// The pieces of a drawing read from an SVG: one group per outer cut contour with the strokes
     /// that belong to it.
     pub fn from_drawing(name: &str, d: &Drawing) -> Vec<Self> {

@@ -5,6 +5,7 @@
 //! **Architecture invariant:** this crate is 2D only. It cannot name a surface or a mesh type
 //! (the crate graph enforces it); the facade turns a flattened boundary into a piece.
 
+pub mod colours;
 pub mod drawing;
 pub mod dxf;
 pub mod error;
@@ -16,6 +17,7 @@ pub mod poly;
 pub mod seam;
 pub mod svg;
 
+pub use colours::{ColourJob, ColourTable};
 pub use drawing::{Drawing, Layer, Stroke};
 pub use error::PatternError;
 pub use fit::PathSeg;

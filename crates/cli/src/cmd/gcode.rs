@@ -41,7 +41,7 @@ const SVG_CHORD_MM: f64 = 0.02;
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let profile = Profile::resolve(&a.profile)?;
-    let drawing = load_drawing(&a.file, &a.piece, &a.flatten)?;
+    let drawing = load_drawing(&a.file, &a.piece, &a.flatten, &profile.colour_table()?)?;
     let mut opts = GcodeOptions::default();
     opts.reorder = !a.no_reorder;
     opts.arcs = !a.no_arcs;
@@ -84,6 +84,7 @@ pub fn load_drawing(
     path: &std::path::Path,
     pa: &PieceArgs,
     fa: &FlattenArgs,
+    colours: &flatcut::pattern::ColourTable,
 ) -> anyhow::Result<Drawing> {
     if path
         .extension()
@@ -91,11 +92,16 @@ pub fn load_drawing(
     {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("cannot read {}", path.display()))?;
-        return Ok(flatcut::pattern::svg::read_svg(
+        let import = flatcut::pattern::svg::read_svg(
             &text,
             &path.display().to_string(),
             SVG_CHORD_MM,
-        )?);
+            colours,
+        )?;
+        for w in &import.warnings {
+            eprintln!("warning: {}: {w}", path.display());
+        }
+        return Ok(import.drawing);
     }
     let flats = common::load_flat(path, fa, (None, None), true)?;
     let pieces = common::build_pieces(&flats, pa)?;

@@ -78,15 +78,23 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         if f.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg")) {
             let text = std::fs::read_to_string(f)
                 .with_context(|| format!("cannot read {}", f.display()))?;
-            let d = flatcut::pattern::svg::read_svg(&text, &f.display().to_string(), SVG_CHORD_MM)?;
-            let gs = NestGroup::from_drawing(&f.display().to_string(), &d);
+            let import = flatcut::pattern::svg::read_svg(
+                &text,
+                &f.display().to_string(),
+                SVG_CHORD_MM,
+                &flatcut::pattern::ColourTable::default(),
+            )?;
+            for w in &import.warnings {
+                eprintln!("warning: {}: {w}", f.display());
+            }
+            let gs = NestGroup::from_import(&f.display().to_string(), &import);
             anyhow::ensure!(
                 !gs.is_empty(),
                 "{}: no closed cut contour found (nothing to nest)",
                 f.display()
             );
             for mut g in gs {
-                g.quantity = a.quantity;
+                g.quantity = g.quantity.saturating_mul(a.quantity);
                 g.mirrored_pair = a.mirrored_pairs;
                 groups.push(g);
             }
