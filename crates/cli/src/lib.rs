@@ -50,10 +50,14 @@ pub const EXIT_LIMIT: u8 = 3;
 
 /// Runs the command line with the process arguments.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
-    match run(cli) {
+    exit_code(run(Cli::parse()))
+}
+
+/// The process's exit code for a command's result, printing an error; a closed standard
+/// output (the reader of `… | head` has gone) is a normal end.
+pub fn exit_code(result: anyhow::Result<ExitCode>) -> ExitCode {
+    match result {
         Ok(code) => code,
-        // The reader of our output has gone (`… | head`): a normal end.
         Err(e) if stdout::is_closed(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprint!("{}", error_report(&e));
