@@ -19,12 +19,56 @@ fn root() -> PathBuf {
 
 /// Tokens a mutation splices in: extreme and malformed numbers, and the syntax of the formats.
 const TOKENS: &[&str] = &[
-    "1e308", "-1e308", "1e9", "nan", "NaN", "inf", "-inf", "4294967296", "18446744073709551616",
-    "-1", "0", "-0", "1e-320", "3", "%", "100%", "\"", "'", "[", "]", "{", "}", "<", ">", "=", ",",
-    "\n", " ", "#", "/", "//", "-", "e", ".", "\u{0}", "é", "v 1e308 0 0\n", "f 1 2 99999\n",
-    "f -5 1 2\n", "vt 1e30 0\n", "element vertex 4000000000\n", "counts = [4294967296, 2]\n",
-    "degree = [4294967295, 1]\n", "type = \"bspline\"\n", "<text>A</text>", "<image href=\"x.png\"/>",
-    "width=\"100%\"", "stroke=\"#00ff00\"", "fill=\"red\"", "transform=\"scale(1e30)\"",
+    "1e308",
+    "-1e308",
+    "1e9",
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "4294967296",
+    "18446744073709551616",
+    "-1",
+    "0",
+    "-0",
+    "1e-320",
+    "3",
+    "%",
+    "100%",
+    "\"",
+    "'",
+    "[",
+    "]",
+    "{",
+    "}",
+    "<",
+    ">",
+    "=",
+    ",",
+    "\n",
+    " ",
+    "#",
+    "/",
+    "//",
+    "-",
+    "e",
+    ".",
+    "\u{0}",
+    "é",
+    "v 1e308 0 0\n",
+    "f 1 2 99999\n",
+    "f -5 1 2\n",
+    "vt 1e30 0\n",
+    "element vertex 4000000000\n",
+    "counts = [4294967296, 2]\n",
+    "degree = [4294967295, 1]\n",
+    "type = \"bspline\"\n",
+    "<text>A</text>",
+    "<image href=\"x.png\"/>",
+    "width=\"100%\"",
+    "stroke=\"#00ff00\"",
+    "fill=\"red\"",
+    "transform=\"scale(1e30)\"",
 ];
 
 /// One mutation of a byte string.
@@ -42,8 +86,11 @@ fn mutation() -> impl Strategy<Value = Mutation> {
     prop_oneof![
         (at.clone(), 0u8..8).prop_map(|(at, bit)| Mutation::Flip { at, bit }),
         (at.clone(), 1usize..40).prop_map(|(at, len)| Mutation::Delete { at, len }),
-        (at.clone(), 1usize..80, 0.0..1.0f64)
-            .prop_map(|(at, len, to)| Mutation::Duplicate { at, len, to }),
+        (at.clone(), 1usize..80, 0.0..1.0f64).prop_map(|(at, len, to)| Mutation::Duplicate {
+            at,
+            len,
+            to
+        }),
         (at, 0..TOKENS.len()).prop_map(|(at, token)| Mutation::Insert { at, token }),
         (0usize..200, 0..TOKENS.len())
             .prop_map(|(nth, token)| Mutation::ReplaceNumber { nth, token }),
@@ -156,11 +203,12 @@ fn fuzz_design_loader_toml_and_json() {
 fn check_mesh(m: Result<flatcut::mesh::TriMesh, flatcut::mesh::MeshIoError>) {
     let Ok(m) = m else { return };
     assert!(m.positions.iter().all(|p| limits::in_range3(*p)));
-    assert!(m
-        .triangles
-        .iter()
-        .flatten()
-        .all(|&i| (i as usize) < m.positions.len()));
+    assert!(
+        m.triangles
+            .iter()
+            .flatten()
+            .all(|&i| (i as usize) < m.positions.len())
+    );
     if let Some(f) = &m.flat {
         assert!(f.iter().all(|q| limits::in_range2(*q)));
     }

@@ -46,8 +46,26 @@ fn item06_bspline_counts_are_refused_before_any_allocation() {
 fn item06_png_width_and_quantity_are_capped() {
     for args in [
         &["report", "x.obj", "--png", "x.png", "--png-width", "100000"][..],
-        &["nest", "x.svg", "--sheet", "600x400", "-o", "l.svg", "--quantity", "4294967296"],
-        &["nest", "x.svg", "--sheet", "600x400", "-o", "l.svg", "--quantity", "0"],
+        &[
+            "nest",
+            "x.svg",
+            "--sheet",
+            "600x400",
+            "-o",
+            "l.svg",
+            "--quantity",
+            "4294967296",
+        ],
+        &[
+            "nest",
+            "x.svg",
+            "--sheet",
+            "600x400",
+            "-o",
+            "l.svg",
+            "--quantity",
+            "0",
+        ],
     ] {
         let e = err(args);
         assert!(e.contains("invalid value"), "{args:?}: {e}");
@@ -57,16 +75,44 @@ fn item06_png_width_and_quantity_are_capped() {
 #[test]
 fn item07_numbers_at_the_command_line_are_refused_by_the_parser() {
     for (args, flag) in [
-        (&["nest", "x.svg", "--sheet", "1e308x1e308", "-o", "l.svg"][..], "--sheet"),
-        (&["nest", "x.svg", "--sheet", "600x400", "--time=-1", "-o", "l.svg"], "--time"),
-        (&["nest", "x.svg", "--sheet", "600x400", "--time", "NaN", "-o", "l.svg"], "--time"),
+        (
+            &["nest", "x.svg", "--sheet", "1e308x1e308", "-o", "l.svg"][..],
+            "--sheet",
+        ),
+        (
+            &[
+                "nest",
+                "x.svg",
+                "--sheet",
+                "600x400",
+                "--time=-1",
+                "-o",
+                "l.svg",
+            ],
+            "--time",
+        ),
+        (
+            &[
+                "nest", "x.svg", "--sheet", "600x400", "--time", "NaN", "-o", "l.svg",
+            ],
+            "--time",
+        ),
         (&["nest", "x.svg", "--roll", "inf", "-o", "l.svg"], "--roll"),
-        (&["flatten", "x.toml", "-o", "f.obj", "--max-stretch", "NaN"], "--max-stretch"),
-        (&["pattern", "x.toml", "-o", "p.svg", "--seam", "-3"], "--seam"),
+        (
+            &["flatten", "x.toml", "-o", "f.obj", "--max-stretch", "NaN"],
+            "--max-stretch",
+        ),
+        (
+            &["pattern", "x.toml", "-o", "p.svg", "--seam", "-3"],
+            "--seam",
+        ),
         (&["inspect", "x.toml", "--chord", "0"], "--chord"),
     ] {
         let e = err(args);
-        assert!(e.contains("invalid value") && e.contains(flag), "{args:?}: {e}");
+        assert!(
+            e.contains("invalid value") && e.contains(flag),
+            "{args:?}: {e}"
+        );
     }
 }
 
@@ -91,11 +137,36 @@ fn item08_huge_sheets_are_refused_at_the_boundary() {
     // Within the coordinate range, beyond what the nester resolves: refused at its entry.
     let d = tempfile::tempdir().unwrap();
     let svg = d.path().join("p.svg");
-    run(&["pattern", p(&root().join("patterns/lampshade/design.toml")), "-o", p(&svg)]).unwrap();
-    let e = err(&["nest", p(&svg), "--sheet", "200000x200000", "-o", p(&d.path().join("l.svg"))]);
-    assert!(e.contains("larger than the 1e5 mm the nester accepts"), "{e}");
-    let e = err(&["run", p(&corpus("huge-sheet/project.toml")), "--no-send", "-o", p(d.path())]);
-    assert!(e.contains("[sheet] sizes must be positive and at most 1e6 mm"), "{e}");
+    run(&[
+        "pattern",
+        p(&root().join("patterns/lampshade/design.toml")),
+        "-o",
+        p(&svg),
+    ])
+    .unwrap();
+    let e = err(&[
+        "nest",
+        p(&svg),
+        "--sheet",
+        "200000x200000",
+        "-o",
+        p(&d.path().join("l.svg")),
+    ]);
+    assert!(
+        e.contains("larger than the 1e5 mm the nester accepts"),
+        "{e}"
+    );
+    let e = err(&[
+        "run",
+        p(&corpus("huge-sheet/project.toml")),
+        "--no-send",
+        "-o",
+        p(d.path()),
+    ]);
+    assert!(
+        e.contains("[sheet] sizes must be positive and at most 1e6 mm"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -143,17 +214,51 @@ fn item10_outputs_are_written_all_or_nothing() {
     // Flatten: the OBJ is not kept when the report cannot be written.
     let obj = d.path().join("flat.obj");
     let rep = d.path().join("blocked/r.json");
-    err(&["flatten", p(&design), "--method", "developable", "-o", p(&obj), "--report", p(&rep)]);
+    err(&[
+        "flatten",
+        p(&design),
+        "--method",
+        "developable",
+        "-o",
+        p(&obj),
+        "--report",
+        p(&rep),
+    ]);
     assert_eq!(names(d.path()), ["blocked"]);
     // Report: the JSON is not kept when the PNG cannot be written.
-    run(&["flatten", p(&design), "--method", "developable", "-o", p(&obj)]).unwrap();
+    run(&[
+        "flatten",
+        p(&design),
+        "--method",
+        "developable",
+        "-o",
+        p(&obj),
+    ])
+    .unwrap();
     let json = d.path().join("r.json");
-    err(&["report", p(&obj), "--json", p(&json), "--png", p(&d.path().join("blocked/h.png"))]);
+    err(&[
+        "report",
+        p(&obj),
+        "--json",
+        p(&json),
+        "--png",
+        p(&d.path().join("blocked/h.png")),
+    ]);
     assert_eq!(names(d.path()), ["blocked", "flat.obj"]);
     // And when everything can be written, everything is.
-    run(&["pattern", p(&design), "-o", p(&svg), "--dxf", p(&d.path().join("pattern.dxf"))])
-        .unwrap();
-    assert_eq!(names(d.path()), ["blocked", "flat.obj", "pattern.dxf", "pattern.svg"]);
+    run(&[
+        "pattern",
+        p(&design),
+        "-o",
+        p(&svg),
+        "--dxf",
+        p(&d.path().join("pattern.dxf")),
+    ])
+    .unwrap();
+    assert_eq!(
+        names(d.path()),
+        ["blocked", "flat.obj", "pattern.dxf", "pattern.svg"]
+    );
 }
 
 #[test]
@@ -186,15 +291,29 @@ fn import(name: &str) -> Result<flatcut::pattern::svg::SvgImport, String> {
 #[test]
 fn item14_svg_colours_text_fills_and_sizes_are_mapped_or_named() {
     let e = import("width-percent.svg").unwrap_err();
-    assert!(e.contains("width-percent.svg") && e.contains("percentage"), "{e}");
+    assert!(
+        e.contains("width-percent.svg") && e.contains("percentage"),
+        "{e}"
+    );
     let r = import("no-size.svg").unwrap();
-    assert!(r.warnings.iter().any(|w| w.contains("read as CSS px")), "{:?}", r.warnings);
+    assert!(
+        r.warnings.iter().any(|w| w.contains("read as CSS px")),
+        "{:?}",
+        r.warnings
+    );
     let r = import("colours-text-fill.svg").unwrap();
     use flatcut::pattern::Layer;
     let count = |l| r.drawing.strokes.iter().filter(|s| s.layer == l).count();
-    assert_eq!((count(Layer::Cut), count(Layer::Draw), count(Layer::Engrave)), (1, 1, 1));
+    assert_eq!(
+        (count(Layer::Cut), count(Layer::Draw), count(Layer::Engrave)),
+        (1, 1, 1)
+    );
     let w = r.warnings.join("\n");
-    for said in ["LightBurn layer 03", "<text>", "filled shape(s) without a stroke"] {
+    for said in [
+        "LightBurn layer 03",
+        "<text>",
+        "filled shape(s) without a stroke",
+    ] {
         assert!(w.contains(said), "{said}: {w}");
     }
 }
@@ -203,7 +322,13 @@ fn item14_svg_colours_text_fills_and_sizes_are_mapped_or_named() {
 fn item16_nesting_from_pattern_svgs_keeps_grain_and_quantity() {
     let d = tempfile::tempdir().unwrap();
     let svg = d.path().join("shoe.svg");
-    run(&["pattern", p(&root().join("patterns/shoe/design.toml")), "-o", p(&svg)]).unwrap();
+    run(&[
+        "pattern",
+        p(&root().join("patterns/shoe/design.toml")),
+        "-o",
+        p(&svg),
+    ])
+    .unwrap();
     let text = std::fs::read_to_string(&svg).unwrap();
     let import = flatcut::pattern::svg::read_svg(
         &text,

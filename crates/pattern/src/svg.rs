@@ -21,7 +21,7 @@
 //! physical size and is refused, as is any coordinate beyond the sane range.
 
 use crate::colours::ColourTable;
-use crate::drawing::{Drawing, Layer, Stroke};
+use crate::drawing::{Drawing, Layer, PieceInfo, Stroke, StrokeKind};
 use crate::fit::PathSeg;
 use crate::piece::PlacedPiece;
 use crate::{PatternError, poly};
@@ -254,6 +254,24 @@ fn layer_from_id(id: &str) -> Option<Layer> {
     }
 }
 
+/// The kind of one of our elements, read back from the id the writer gave it (an SVG has no
+/// other place for it); other SVGs' strokes are internal lines or inner cuts until the piece
+/// search below finds their outer contours.
+fn kind_from_id(id: &str, layer: Layer) -> StrokeKind {
+    let parts: Vec<&str> = id.rsplitn(3, '-').collect();
+    let what = |w: &str| parts.contains(&w);
+    match layer {
+        Layer::Cut if id.ends_with("-cut") => StrokeKind::Boundary,
+        Layer::Cut if what("notch") => StrokeKind::Notch,
+        Layer::Cut if what("drill") => StrokeKind::Drill,
+        Layer::Cut => StrokeKind::InnerCut,
+        Layer::Draw if id.ends_with("-sew") => StrokeKind::Sew,
+        Layer::Draw if id.contains("-grain") => StrokeKind::Grain,
+        Layer::Draw => StrokeKind::Internal,
+        Layer::Engrave => StrokeKind::Text,
+    }
+}
+
 /// Piece prefix of one of our element ids (`vamp-1-notch-2` → `vamp-1`).
 fn piece_prefix(id: &str) -> Option<&str> {
     for key in [
@@ -477,14 +495,14 @@ impl Walk<'_> {
             } else {
                 format!("{id}-{k}")
             };
-            let outer = lay == Layer::Cut && id.ends_with("-cut");
+            let kind = kind_from_id(&id, lay);
             self.out.push((
                 Stroke {
                     layer: lay,
                     points: pts,
                     closed,
                     piece: None,
-                    outer,
+                    kind,
                     id: sid,
                 },
                 prefix.clone(),
@@ -494,21 +512,18 @@ impl Walk<'_> {
     }
 }
 
-/// What the import knows about one of flatcut's pieces from the metadata on its cut line.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PieceMeta {
-    /// Copies to cut.
-    pub quantity: u32,
-    /// Grain direction in the drawing's frame (radians counter-clockwise from +x, y up).
-    pub grain_angle: Option<f64>,
+/// What flatcut wrote on a piece's cut line: copies to cut, and the grain direction in the
+/// drawing's frame (radians counter-clockwise from +x, y up).
+struct PieceMeta {
+    quantity: u32,
+    grain_angle: Option<f64>,
 }
 
-/// An imported SVG: the drawing, the metadata of flatcut's pieces (by id prefix, `vamp-1`), and
-/// what was dropped or assumed, one sentence each.
+/// An imported SVG: the drawing (with the quantity and grain of flatcut's pieces in
+/// [`Drawing::pieces`]) and what was dropped or assumed, one sentence each.
 #[derive(Clone, Debug, Default)]
 pub struct SvgImport {
     pub drawing: Drawing,
-    pub pieces: std::collections::BTreeMap<String, PieceMeta>,
     pub warnings: Vec<String>,
 }
 
@@ -555,7 +570,11 @@ fn piece_meta(n: usvg::roxmltree::Node) -> Result<Option<(String, PieceMeta)>, S
 
 /// What the raw document says before usvg resolves it: refusals (percent sizes), warnings
 /// (px assumed), the number of `<text>` elements and flatcut's piece metadata.
-fn scan_document(text: &str, import: &mut SvgImport) -> Result<usize, String> {
+fn scan_document(
+    text: &str,
+    import: &mut SvgImport,
+    metas: &mut std::collections::BTreeMap<String, PieceMeta>,
+) -> Result<usize, String> {
     let doc = usvg::roxmltree::Document::parse(text).map_err(|e| e.to_string())?;
     let root = doc.root_element();
     let mut missing = Vec::new();
@@ -583,7 +602,7 @@ fn scan_document(text: &str, import: &mut SvgImport) -> Result<usize, String> {
             texts += 1;
         }
         if let Some((prefix, meta)) = piece_meta(n)? {
-            import.pieces.insert(prefix, meta);
+            metas.insert(prefix, meta);
         }
     }
     Ok(texts)
@@ -611,7 +630,8 @@ pub fn read_svg(
         )));
     }
     let mut import = SvgImport::default();
-    let texts = scan_document(text, &mut import).map_err(err)?;
+    let mut metas = std::collections::BTreeMap::new();
+    let texts = scan_document(text, &mut import, &mut metas).map_err(err)?;
     let tree =
         usvg::Tree::from_str(text, &usvg::Options::default()).map_err(|e| err(e.to_string()))?;
     let h_mm = tree.size().height() as f64 / PX_PER_MM;
@@ -656,7 +676,7 @@ pub fn read_svg(
             .filter(|&i| !closed_cut.iter().any(|&j| j != i && inside(i, j)))
             .collect();
         for (k, &i) in outers.iter().enumerate() {
-            strokes[i].outer = true;
+            strokes[i].kind = StrokeKind::Boundary;
             strokes[i].piece = Some(k as u32);
         }
         for i in 0..strokes.len() {
@@ -672,7 +692,23 @@ pub fn read_svg(
             }
         }
     }
-    import.drawing = Drawing { strokes };
+    // The quantity and grain flatcut wrote, for each of its pieces found.
+    let pieces = prefixes
+        .iter()
+        .enumerate()
+        .filter_map(|(k, p)| {
+            let m = metas.get(p)?;
+            Some(PieceInfo {
+                piece: k as u32,
+                label: crate::LabelInfo {
+                    quantity: m.quantity,
+                    ..Default::default()
+                },
+                grain: m.grain_angle.map(|a| (DVec2::ZERO, DVec2::from_angle(a))),
+            })
+        })
+        .collect();
+    import.drawing = Drawing { strokes, pieces };
     Ok(import)
 }
 
@@ -761,7 +797,7 @@ mod tests {
             .unwrap()
             .drawing;
         let cut = d.strokes.iter().find(|s| s.id == "vamp-2-cut").unwrap();
-        assert!(cut.outer && cut.layer == Layer::Cut && cut.piece == Some(0));
+        assert!(cut.is_outer() && cut.layer == Layer::Cut && cut.piece == Some(0));
         let expect: Vec<DVec2> = p.cut.iter().map(|q| pl.apply(*q)).collect();
         let l0: f64 = (0..expect.len())
             .map(|i| expect[i].distance(expect[(i + 1) % expect.len()]))
@@ -792,7 +828,7 @@ mod tests {
             .unwrap()
             .drawing;
         assert_eq!(d.strokes.len(), 2);
-        let outer = d.strokes.iter().find(|s| s.outer).unwrap();
+        let outer = d.strokes.iter().find(|s| s.is_outer()).unwrap();
         // 100 user units = 1 in = 25.4 mm
         assert!(
             (outer.length() - 2.0 * (25.4 + 12.7)).abs() < 1e-3,
@@ -804,7 +840,7 @@ mod tests {
             (bb.min.x - 25.4).abs() < 1e-3 && (bb.max.y - (50.8 - 12.7)).abs() < 1e-3,
             "{bb:?}"
         );
-        let hole = d.strokes.iter().find(|s| !s.outer).unwrap();
+        let hole = d.strokes.iter().find(|s| !s.is_outer()).unwrap();
         assert_eq!(hole.piece, Some(0));
         // a polygon inscribed within 0.01 mm chordal error is at most ~2·0.01/r shorter
         let c = 2.0 * std::f64::consts::PI * 2.54;
@@ -925,10 +961,11 @@ mod tests {
             None,
         );
         let r = import(&s).unwrap();
-        let m = &r.pieces["vamp-1"];
-        assert_eq!(m.quantity, 2);
+        let m = r.drawing.piece_info(0).unwrap();
+        assert_eq!(m.label.quantity, 2);
         // the sample's grain runs along +x; placed a quarter turn, it runs along +y
-        assert!((m.grain_angle.unwrap() - std::f64::consts::FRAC_PI_2).abs() < 1e-4);
+        let (a, b) = m.grain.unwrap();
+        assert!(((b - a).y.atan2((b - a).x) - std::f64::consts::FRAC_PI_2).abs() < 1e-4);
         assert!(r.warnings.is_empty(), "{:?}", r.warnings);
     }
 }

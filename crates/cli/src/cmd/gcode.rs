@@ -13,7 +13,7 @@ use crate::output::OutputSet;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// A pattern or layout SVG (mm), a design, or a flattened OBJ.
+    /// A pattern or layout SVG (mm) or DXF (AAMA or plain), a design, or a flattened OBJ.
     pub file: PathBuf,
     /// pen, knife, laser, or a path to a machine profile (.toml).
     #[arg(long, default_value = "pen")]
@@ -36,11 +36,16 @@ pub struct Args {
     pub flatten: FlattenArgs,
 }
 
-/// Chordal tolerance used when reading SVGs (mm).
+/// Chordal tolerance used when reading SVGs and DXFs (mm).
 const SVG_CHORD_MM: f64 = 0.02;
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let profile = Profile::resolve(&a.profile)?;
+    anyhow::ensure!(
+        profile.hpgl.is_none(),
+        "profile {} drives an HP-GL device: use `flatcut hpgl`",
+        profile.name
+    );
     let drawing = load_drawing(&a.file, &a.piece, &a.flatten, &profile.colour_table()?)?;
     let mut opts = GcodeOptions::default();
     opts.reorder = !a.no_reorder;
@@ -79,29 +84,15 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The drawing of an SVG, or of the pieces of a design / flattened OBJ laid out in a row.
+/// The drawing of an SVG or DXF, or of the pieces of a design / flattened OBJ laid out in a row.
 pub fn load_drawing(
     path: &std::path::Path,
     pa: &PieceArgs,
     fa: &FlattenArgs,
     colours: &flatcut::pattern::ColourTable,
 ) -> anyhow::Result<Drawing> {
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
-    {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
-        let import = flatcut::pattern::svg::read_svg(
-            &text,
-            &path.display().to_string(),
-            SVG_CHORD_MM,
-            colours,
-        )?;
-        for w in &import.warnings {
-            eprintln!("warning: {}: {w}", path.display());
-        }
-        return Ok(import.drawing);
+    if common::is_pattern_file(path) {
+        return common::read_pattern_file(path, SVG_CHORD_MM, colours);
     }
     let flats = common::load_flat(path, fa, (None, None), true)?;
     let pieces = common::build_pieces(&flats, pa)?;

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
-use anyhow::Context as _;
 use flatcut::geom::DVec2;
 use flatcut::nest::{NestOptions, Stock};
 use flatcut::pattern::dxf::DxfLayers;
@@ -17,7 +16,7 @@ use crate::values;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Pattern SVGs (from `flatcut pattern`), designs or flattened OBJs.
+    /// Pattern SVGs or DXFs (AAMA or plain CAD files), designs or flattened OBJs.
     #[arg(required = true)]
     pub pieces: Vec<PathBuf>,
     /// Sheet size in mm, WIDTHxHEIGHT.
@@ -29,8 +28,8 @@ pub struct Args {
     /// Gap between pieces (kerf), mm.
     #[arg(long, default_value_t = NestOptions::DEFAULT_SPACING, value_parser = values::nonneg_mm)]
     pub spacing: f64,
-    /// Copies of each input piece (a design's quantities are multiplied by it; a pattern SVG
-    /// from `flatcut pattern` carries its pieces' quantities).
+    /// Copies of each input piece, times the piece's own quantity (a design's, a pattern SVG's
+    /// `data-flatcut-quantity`, or a DXF's `Quantity:`).
     #[arg(long, default_value_t = 1, value_parser = values::quantity)]
     pub quantity: usize,
     /// Also nest the mirror image of each piece (left and right shoe).
@@ -57,7 +56,7 @@ pub struct Args {
     pub flatten: FlattenArgs,
 }
 
-/// Chordal tolerance used when reading pattern SVGs (mm).
+/// Chordal tolerance used when reading pattern SVGs and DXFs (mm).
 const SVG_CHORD_MM: f64 = 0.05;
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
@@ -75,19 +74,13 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     };
     let mut groups = Vec::new();
     for f in &a.pieces {
-        if f.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg")) {
-            let text = std::fs::read_to_string(f)
-                .with_context(|| format!("cannot read {}", f.display()))?;
-            let import = flatcut::pattern::svg::read_svg(
-                &text,
-                &f.display().to_string(),
+        if common::is_pattern_file(f) {
+            let d = common::read_pattern_file(
+                f,
                 SVG_CHORD_MM,
                 &flatcut::pattern::ColourTable::default(),
             )?;
-            for w in &import.warnings {
-                eprintln!("warning: {}: {w}", f.display());
-            }
-            let gs = NestGroup::from_import(&f.display().to_string(), &import);
+            let gs = NestGroup::from_drawing(&f.display().to_string(), &d);
             anyhow::ensure!(
                 !gs.is_empty(),
                 "{}: no closed cut contour found (nothing to nest)",
