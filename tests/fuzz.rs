@@ -193,7 +193,7 @@ fn check_design(text: &str, json: bool) {
 #[test]
 fn fuzz_design_loader_toml_and_json() {
     let seeds = design_seeds();
-    proptest!(config(0xDE51_6E00, 400), |(k in 0..seeds.len(), muts in prop::collection::vec(mutation(), 1..6))| {
+    proptest!(config(0xDE51_6E00, 3000), |(k in 0..seeds.len(), muts in prop::collection::vec(mutation(), 1..6))| {
         let (name, bytes) = &seeds[k];
         let text = String::from_utf8_lossy(&apply(bytes, &muts)).into_owned();
         check_design(&text, name.ends_with(".json"));
@@ -221,7 +221,7 @@ fn fuzz_mesh_readers_obj_stl_ply() {
     all.extend(seeds(&dir, "stl"));
     all.extend(seeds(&dir, "ply"));
     all.extend(seeds(&root().join("crates/design/examples"), "obj"));
-    proptest!(config(0x3E5A_0B1E, 600), |(k in 0..all.len(), muts in prop::collection::vec(mutation(), 1..6))| {
+    proptest!(config(0x3E5A_0B1E, 4000), |(k in 0..all.len(), muts in prop::collection::vec(mutation(), 1..6))| {
         let (name, bytes) = &all[k];
         let b = apply(bytes, &muts);
         let p = Path::new(name);
@@ -240,7 +240,7 @@ fn fuzz_svg_reader() {
     let mut all = seeds(&root().join("tests/fuzz_seeds"), "svg");
     all.extend(seeds(&root().join("patterns/golden/lampshade"), "svg"));
     let table = ColourTable::default();
-    proptest!(config(0x5A6_12EA, 300), |(k in 0..all.len(), muts in prop::collection::vec(mutation(), 1..6))| {
+    proptest!(config(0x5A6_12EA, 1500), |(k in 0..all.len(), muts in prop::collection::vec(mutation(), 1..6))| {
         let (_, bytes) = &all[k];
         let text = String::from_utf8_lossy(&apply(bytes, &muts)).into_owned();
         if let Ok(r) = flatcut::pattern::svg::read_svg(&text, "fuzz.svg", 0.05, &table) {

@@ -102,10 +102,7 @@ fn item07_numbers_at_the_command_line_are_refused_by_the_parser() {
             &["flatten", "x.toml", "-o", "f.obj", "--max-stretch", "NaN"],
             "--max-stretch",
         ),
-        (
-            &["pattern", "x.toml", "-o", "p.svg", "--seam", "-3"],
-            "--seam",
-        ),
+        (&["pattern", "x.toml", "-o", "p.svg", "--seam=-3"], "--seam"),
         (&["inspect", "x.toml", "--chord", "0"], "--chord"),
     ] {
         let e = err(args);
@@ -337,7 +334,7 @@ fn item16_nesting_from_pattern_svgs_keeps_grain_and_quantity() {
         &flatcut::pattern::ColourTable::default(),
     )
     .unwrap();
-    let groups = flatcut::pipeline::NestGroup::from_import("shoe.svg", &import);
+    let groups = flatcut::pipeline::NestGroup::from_drawing("shoe.svg", &import.drawing);
     let design = flatcut::design::Design::load(&root().join("patterns/shoe/design.toml")).unwrap();
     assert_eq!(groups.len(), design.pieces.len());
     for (g, def) in groups.iter().zip(&design.pieces) {
