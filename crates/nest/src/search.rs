@@ -309,7 +309,7 @@ pub fn nest(
     opts: &NestOptions,
     progress: &mut dyn FnMut(&NestProgress),
 ) -> Result<NestResult, NestError> {
-    check_input_size(items, stock)?;
+    check_input_size(items, stock, opts.spacing)?;
     let eng = Engine::new(items, stock, opts)?;
     let start = Instant::now();
     let mut rng = Rng(opts.seed ^ 0x5EED_F1A7_C0DE_0001);
@@ -385,7 +385,7 @@ pub const MAX_INSTANCES: usize = 10_000;
 
 /// Input checks at the public entry: a stock the engine can resolve, and a bounded number of
 /// instances, before anything is allocated for them.
-fn check_input_size(items: &[NestItem], stock: Stock) -> Result<(), NestError> {
+fn check_input_size(items: &[NestItem], stock: Stock, spacing: f64) -> Result<(), NestError> {
     let sides: Vec<f64> = match stock {
         Stock::Roll { width, max_length } => std::iter::once(width).chain(max_length).collect(),
         Stock::Sheets { width, height, .. } => vec![width, height],
@@ -393,6 +393,15 @@ fn check_input_size(items: &[NestItem], stock: Stock) -> Result<(), NestError> {
     if sides.iter().any(|s| !(s.is_finite() && *s <= MAX_STOCK_MM)) {
         return Err(NestError::InvalidInput(format!(
             "the {} is larger than the {MAX_STOCK_MM:e} mm the nester accepts",
+            stock.describe()
+        )));
+    }
+    // The engine shrinks the stock by the spacing; a spacing of half its width leaves nothing
+    // (the engine's own words were "Offset resulted in an empty polygon").
+    let narrowest = sides.iter().copied().fold(f64::INFINITY, f64::min);
+    if 2.0 * spacing >= narrowest {
+        return Err(NestError::InvalidInput(format!(
+            "a spacing of {spacing} mm from the edges leaves no room on the {}",
             stock.describe()
         )));
     }

@@ -387,3 +387,29 @@ fn stock_beyond_what_the_engine_resolves_and_too_many_copies_are_refused() {
     .to_string();
     assert!(e.contains("1000000 piece copies"), "{e}");
 }
+
+#[test]
+fn a_spacing_that_leaves_no_room_on_the_stock_is_named() {
+    let square = vec![
+        DVec2::ZERO,
+        DVec2::new(10.0, 0.0),
+        DVec2::new(10.0, 10.0),
+        DVec2::new(0.0, 10.0),
+    ];
+    let e = nest(
+        &[NestItem::new("sq", square, 1)],
+        Stock::Sheets {
+            width: 100.0,
+            height: 40.0,
+            max_sheets: None,
+        },
+        &NestOptions::DEFAULT.with_spacing(20.0),
+        &mut |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("spacing of 20 mm from the edges leaves no room"),
+        "{e}"
+    );
+}

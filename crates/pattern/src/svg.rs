@@ -418,6 +418,8 @@ impl Dropped {
 
 /// The tree walk of an import: strokes with their piece prefix, and what was dropped.
 struct Walk<'a> {
+    /// Paths seen, to name those without an id (`svg-path-3`) in later messages.
+    paths: usize,
     tol: f64,
     h: f64,
     table: &'a ColourTable,
@@ -477,18 +479,18 @@ impl Walk<'_> {
         if !p.is_visible() {
             return Ok(());
         }
-        let id = p.id().to_string();
+        self.paths += 1;
+        let id = if p.id().is_empty() {
+            format!("svg-path-{}", self.paths)
+        } else {
+            p.id().to_string()
+        };
         let Some(lay) = self.layer(p, layer.or_else(|| layer_from_id(&id))) else {
             return Ok(());
         };
         let prefix = piece_prefix(&id).map(str::to_string);
-        let parts = flatten_usvg_path(p, self.tol, self.h).map_err(|e| {
-            if id.is_empty() {
-                format!("a path without id: {e}")
-            } else {
-                format!("element '{id}': {e}")
-            }
-        })?;
+        let parts =
+            flatten_usvg_path(p, self.tol, self.h).map_err(|e| format!("element '{id}': {e}"))?;
         for (k, (pts, closed)) in parts.into_iter().enumerate() {
             let sid = if k == 0 {
                 id.clone()
@@ -636,6 +638,7 @@ pub fn read_svg(
         usvg::Tree::from_str(text, &usvg::Options::default()).map_err(|e| err(e.to_string()))?;
     let h_mm = tree.size().height() as f64 / PX_PER_MM;
     let mut walk = Walk {
+        paths: 0,
         tol: chord_tol,
         h: h_mm,
         table,
@@ -941,6 +944,11 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("element 'far'") && e.contains("beyond"), "{e}");
+        // a path without id is named by its place in the document
+        let e = import(r##"<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="10mm" viewBox="0 0 10 10"><path d="M0 0 L1 1" stroke="red"/><path d="M0 0 L1e12 5" stroke="red"/></svg>"##)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("element 'svg-path-2'"), "{e}");
     }
 
     #[test]
