@@ -99,43 +99,35 @@ pub fn sheet_size(s: &str) -> Result<(f64, f64), String> {
     Ok((w, h))
 }
 
-/// Copies of a piece: 1 to `MAX_QUANTITY`.
-pub fn quantity(s: &str) -> Result<usize, String> {
+/// A whole number in `range`, or `what` the range is.
+fn whole(s: &str, range: std::ops::RangeInclusive<u64>, what: &str) -> Result<u64, String> {
     let v: u64 = s
         .trim()
         .parse()
         .map_err(|_| format!("'{s}' is not a whole number"))?;
-    if (1..=u64::from(MAX_QUANTITY)).contains(&v) {
-        Ok(v as usize)
+    if range.contains(&v) {
+        Ok(v)
     } else {
-        Err(format!("{v} copies: give 1 to {MAX_QUANTITY}"))
+        Err(format!("{v}: {what}"))
     }
+}
+
+/// Copies of a piece: 1 to `MAX_QUANTITY`.
+pub fn quantity(s: &str) -> Result<usize, String> {
+    let copies = format!("give 1 to {MAX_QUANTITY} copies");
+    whole(s, 1..=u64::from(MAX_QUANTITY), &copies).map(|v| v as usize)
 }
 
 /// Width of a rendered PNG: 1 to `MAX_PNG_WIDTH` pixels.
 pub fn png_width(s: &str) -> Result<u32, String> {
-    let v: u64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}' is not a whole number of pixels"))?;
-    if (1..=u64::from(MAX_PNG_WIDTH)).contains(&v) {
-        Ok(v as u32)
-    } else {
-        Err(format!("{v} px: give 1 to {MAX_PNG_WIDTH} pixels"))
-    }
+    let px = format!("give 1 to {MAX_PNG_WIDTH} pixels");
+    whole(s, 1..=u64::from(MAX_PNG_WIDTH), &px).map(|v| v as u32)
 }
 
 /// An iteration count: 0 to `MAX_ITERS`.
 pub fn iterations(s: &str) -> Result<usize, String> {
-    let v: u64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}' is not a whole number"))?;
-    if v <= MAX_ITERS as u64 {
-        Ok(v as usize)
-    } else {
-        Err(format!("{v} iterations: give at most {MAX_ITERS}"))
-    }
+    let most = format!("give at most {MAX_ITERS} iterations");
+    whole(s, 0..=MAX_ITERS as u64, &most).map(|v| v as usize)
 }
 
 #[cfg(test)]

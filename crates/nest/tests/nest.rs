@@ -348,14 +348,19 @@ fn grain_turned_piece_fits_a_roll() {
     );
 }
 
-#[test]
-fn stock_beyond_what_the_engine_resolves_and_too_many_copies_are_refused() {
-    let square = vec![
+/// A 10 mm square.
+fn square10() -> Vec<DVec2> {
+    vec![
         DVec2::ZERO,
         DVec2::new(10.0, 0.0),
         DVec2::new(10.0, 10.0),
         DVec2::new(0.0, 10.0),
-    ];
+    ]
+}
+
+#[test]
+fn stock_beyond_what_the_engine_resolves_and_too_many_copies_are_refused() {
+    let square = square10();
     let items = [NestItem::new("sq", square.clone(), 2)];
     for stock in [
         Stock::Sheets {
@@ -390,14 +395,8 @@ fn stock_beyond_what_the_engine_resolves_and_too_many_copies_are_refused() {
 
 #[test]
 fn a_spacing_that_leaves_no_room_on_the_stock_is_named() {
-    let square = vec![
-        DVec2::ZERO,
-        DVec2::new(10.0, 0.0),
-        DVec2::new(10.0, 10.0),
-        DVec2::new(0.0, 10.0),
-    ];
     let e = nest(
-        &[NestItem::new("sq", square, 1)],
+        &[NestItem::new("sq", square10(), 1)],
         Stock::Sheets {
             width: 100.0,
             height: 40.0,
