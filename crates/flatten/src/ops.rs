@@ -111,13 +111,10 @@ pub fn uv_area(triangles: &[[u32; 3]], uv: &[DVec2]) -> f64 {
 /// definite. Solving gives `Q_ff x_f = b_f − Q_fc x_c`.
 #[derive(Debug)]
 pub struct Reduced {
-    /// Free-unknown index of each dof (`usize::MAX` for a fixed dof).
-    free_index: Vec<usize>,
     /// Dof of each free unknown.
     free: Vec<u32>,
     /// `(free row, fixed dof, Q entry)`: couplings moved to the right-hand side.
     coupling: Vec<(usize, u32, f64)>,
-    triplets: SymTriplets,
     solver: SpdSolver,
 }
 
@@ -176,26 +173,14 @@ impl QuadraticBuilder {
         }
         let solver = SpdSolver::from_triplets(&self.triplets, stage)?;
         Ok(Reduced {
-            free_index: self.free_index,
             free: self.free,
             coupling: self.coupling,
-            triplets: self.triplets,
             solver,
         })
     }
 }
 
 impl Reduced {
-    /// Number of free unknowns.
-    pub fn free_count(&self) -> usize {
-        self.free.len()
-    }
-
-    /// True when dof `i` is a free unknown.
-    pub fn is_free(&self, i: usize) -> bool {
-        self.free_index[i] != usize::MAX
-    }
-
     /// Minimizes for several fields at once: `values[c]` holds the values of field `c` at the
     /// fixed dofs (free entries are overwritten with the solution); `source[c]`, when given, is
     /// the linear term `b` (read at free dofs).
@@ -225,11 +210,6 @@ impl Reduced {
             }
         }
         Ok(())
-    }
-
-    /// The triplets of `Q_ff`, in assembly order.
-    pub fn triplets(&self) -> &SymTriplets {
-        &self.triplets
     }
 }
 

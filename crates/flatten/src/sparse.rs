@@ -40,6 +40,7 @@ pub struct SymTriplets {
 
 impl SymTriplets {
     /// An empty `n × n` symmetric matrix.
+    #[cfg(test)]
     pub fn new(n: usize) -> Self {
         Self {
             n,
@@ -57,19 +58,9 @@ impl SymTriplets {
         }
     }
 
-    /// The dimension `n`.
-    pub fn dim(&self) -> usize {
-        self.n
-    }
-
     /// Number of triplets (before duplicates are summed).
     pub fn len(&self) -> usize {
         self.vals.len()
-    }
-
-    /// True when no triplet was added.
-    pub fn is_empty(&self) -> bool {
-        self.vals.is_empty()
     }
 
     /// Adds `v` at `(i, j)` and, implicitly, at `(j, i)` (an off-diagonal call therefore adds
@@ -88,13 +79,9 @@ impl SymTriplets {
     }
 
     /// Mutable values, to refill a matrix of the same pattern.
+    #[cfg(test)]
     pub fn values_mut(&mut self) -> &mut [f64] {
         &mut self.vals
-    }
-
-    /// Forgets the values but keeps the positions (all values set to zero).
-    pub fn zero_values(&mut self) {
-        self.vals.iter_mut().for_each(|v| *v = 0.0);
     }
 }
 
@@ -131,11 +118,6 @@ impl SymPattern {
         })
     }
 
-    /// The dimension `n`.
-    pub fn dim(&self) -> usize {
-        self.n
-    }
-
     /// The lower-triangular matrix with these triplet `values` (same order as they were added).
     pub fn matrix(
         &self,
@@ -160,6 +142,7 @@ impl SymPattern {
 
 /// `y = A x` for the symmetric matrix whose lower triangle is `lower` (as built by
 /// [`SymPattern::matrix`]).
+#[cfg(test)]
 pub fn sym_mul(lower: &SparseColMat<usize, f64>, x: &[f64], y: &mut [f64]) {
     y.iter_mut().for_each(|v| *v = 0.0);
     let a = lower.as_ref();
@@ -224,6 +207,7 @@ impl SpdSolver {
     }
 
     /// The pattern this solver was built for.
+    #[cfg(test)]
     pub fn pattern(&self) -> &SymPattern {
         &self.pattern
     }

@@ -64,7 +64,8 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         max_stretch: proj.material.max_stretch_pct,
         max_compress: proj.material.max_compress_pct,
         chord: flatcut::geom::Tolerances::DEFAULT_CHORD_MM * 4.0,
-        max_iters: flatcut::flatten::FlattenParams::DEFAULT_MAX_ITERS,
+        max_iters: None,
+        flatten_time: None,
     };
     // Material limits are reported by the report stage; the flattening honours them where it can.
     let limits = (

@@ -63,6 +63,43 @@ impl SpdSystem {
         })
     }
 
+    /// The pattern of 2×2 blocks over `n_vertices` vertices (dofs 2v, 2v + 1): one block for
+    /// each vertex pair in `pairs` (any order, duplicates allowed, (a, b) and (b, a) the same).
+    pub fn from_vertex_pairs(
+        n_vertices: usize,
+        mut pairs: Vec<(u32, u32)>,
+    ) -> Result<Self, String> {
+        for p in pairs.iter_mut() {
+            if p.0 > p.1 {
+                *p = (p.1, p.0);
+            }
+        }
+        // By column vertex, then row vertex: the CSC order of the upper triangle.
+        pairs.sort_unstable_by_key(|&(a, b)| (b, a));
+        pairs.dedup();
+        let mut entries = Vec::with_capacity(4 * pairs.len());
+        let mut start = 0;
+        while start < pairs.len() {
+            let col = pairs[start].1;
+            let mut end = start;
+            while end < pairs.len() && pairs[end].1 == col {
+                end += 1;
+            }
+            let (c0, c1) = (2 * col as usize, 2 * col as usize + 1);
+            for cj in [c0, c1] {
+                for &(a, _) in &pairs[start..end] {
+                    for r in [2 * a as usize, 2 * a as usize + 1] {
+                        if r <= cj {
+                            entries.push((r, cj));
+                        }
+                    }
+                }
+            }
+            start = end;
+        }
+        Self::new(2 * n_vertices, entries)
+    }
+
     /// Dimension.
     pub fn n(&self) -> usize {
         self.n
