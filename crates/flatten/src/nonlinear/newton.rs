@@ -39,6 +39,9 @@ const REG_REL: f64 = 1e-9;
 /// every partial sum, and therefore every bit of the result, is the same with any number of
 /// threads.
 const BLOCK: usize = 4096;
+/// Fewest triangles one parallel task evaluates: below it the threads' hand-over costs more than
+/// the work (on a 2k-face patch two threads were slower than one).
+const MIN_PER_TASK: usize = 1024;
 /// Relative energy decrease of a full step below which the next step tries the unprojected
 /// Hessian (the tail of the solve, where it is positive definite on the whole mesh although
 /// single triangles are not).
@@ -224,6 +227,7 @@ impl<'a, E: IsoEnergy> MapProblem<'a, E> {
             let hi = ((b + 1) * BLOCK).min(rest.len());
             rest[lo..hi]
                 .par_iter()
+                .with_min_len(MIN_PER_TASK)
                 .map(|r| tri_eval_projected(energy, r, x, Some(proj)))
                 .collect()
         };
