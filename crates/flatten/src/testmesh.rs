@@ -162,28 +162,6 @@ fn grid_triangles(nu: usize, nv: usize) -> Vec<[u32; 3]> {
     t
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use flatcut_mesh::check_disk;
-
-    #[test]
-    fn test_surfaces_are_disks() {
-        let cap = spherical_cap(100.0, 1.0, 8);
-        assert_eq!(cap.triangle_count(), 6 * 8 * 8);
-        for m in [
-            cap,
-            cylinder_patch(50.0, 2.0, 60.0, 6, 4),
-            cone_patch(0.5, 20.0, 80.0, 2.5, 6, 4),
-            saddle(80.0, 5),
-            jittered_plane(50.0, 6).0,
-        ] {
-            let topo = check_disk(&m).unwrap();
-            assert_eq!(topo.boundary_loops.len(), 1);
-        }
-    }
-}
-
 /// `mesh` with slivers: every `every`-th interior edge (in the order of first appearance, one
 /// per triangle pair at most) is split at a point a fraction `t` of its length from one end, so
 /// each split leaves two triangles whose smallest angle is a fraction of a degree — the shape of
@@ -225,4 +203,26 @@ pub fn slivered(mesh: &TriMesh, every: usize, t: f64) -> TriMesh {
         }
     }
     TriMesh::new(pos, tris)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flatcut_mesh::check_disk;
+
+    #[test]
+    fn test_surfaces_are_disks() {
+        let cap = spherical_cap(100.0, 1.0, 8);
+        assert_eq!(cap.triangle_count(), 6 * 8 * 8);
+        for m in [
+            cap,
+            cylinder_patch(50.0, 2.0, 60.0, 6, 4),
+            cone_patch(0.5, 20.0, 80.0, 2.5, 6, 4),
+            saddle(80.0, 5),
+            jittered_plane(50.0, 6).0,
+        ] {
+            let topo = check_disk(&m).unwrap();
+            assert_eq!(topo.boundary_loops.len(), 1);
+        }
+    }
 }

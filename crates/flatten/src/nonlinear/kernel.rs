@@ -52,7 +52,7 @@ pub fn rest_frames(mesh: &TriMesh) -> Result<Vec<RestTri>, usize> {
         let (loc, _, _) = local_frame(c[0], c[1], c[2]).ok_or(t)?;
         let dm = DMat2::from_cols(loc[1] - loc[0], loc[2] - loc[0]);
         let det = dm.determinant();
-        if !(det > 0.0) || !det.is_finite() {
+        if !det.is_finite() || det <= 0.0 {
             return Err(t);
         }
         let dm_inv = dm.inverse();
@@ -137,7 +137,7 @@ pub struct SymDirichlet;
 
 impl IsoEnergy for SymDirichlet {
     fn psi(&self, s1: f64, s2: f64) -> f64 {
-        if !(s2 > 0.0) {
+        if s2.is_nan() || s2 <= 0.0 {
             return f64::INFINITY;
         }
         0.5 * (s1 * s1 + 1.0 / (s1 * s1) + s2 * s2 + 1.0 / (s2 * s2) - 4.0)
@@ -171,7 +171,7 @@ pub struct Mips;
 
 impl IsoEnergy for Mips {
     fn psi(&self, s1: f64, s2: f64) -> f64 {
-        if !(s2 > 0.0) {
+        if s2.is_nan() || s2 <= 0.0 {
             return f64::INFINITY;
         }
         s1 / s2 + s2 / s1 - 2.0
@@ -400,7 +400,7 @@ pub enum Projection {
 pub fn tri_energy<E: IsoEnergy>(e: &E, r: &RestTri, x: &[DVec2]) -> f64 {
     let f = r.jacobian(x);
     let det = f.determinant();
-    if !(det > 0.0) && e.is_barrier() {
+    if (det.is_nan() || det <= 0.0) && e.is_barrier() {
         return f64::INFINITY;
     }
     let s = svd2(f);

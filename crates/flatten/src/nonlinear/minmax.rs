@@ -128,7 +128,7 @@ pub fn measure(rest: &[RestTri], uv: &[DVec2], pairs: &PairSet) -> Delta0 {
     let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
     for r in rest {
         let f = r.jacobian(uv);
-        if !(f.determinant() > 0.0) {
+        if f.determinant().is_nan() || f.determinant() <= 0.0 {
             return Delta0 {
                 delta0: f64::INFINITY,
                 s_min: 0.0,
@@ -172,7 +172,7 @@ impl Surrogate<'_> {
         let mut svds = Vec::with_capacity(if grad.is_some() { nf } else { 0 });
         for r in self.rest {
             let f = r.jacobian(x);
-            if !(f.determinant() > 0.0) {
+            if f.determinant().is_nan() || f.determinant() <= 0.0 {
                 return f64::INFINITY;
             }
             let s = svd2(f);
@@ -292,11 +292,11 @@ fn lbfgs_stage(
             }
         }
         let mut gd = dot(&g, &d);
-        if !(gd < 0.0) {
+        if gd.is_nan() || gd >= 0.0 {
             hist.clear();
             d = g.iter().map(|v| -*v).collect();
             gd = dot(&g, &d);
-            if !(gd < 0.0) {
+            if gd.is_nan() || gd >= 0.0 {
                 break;
             }
         }

@@ -134,7 +134,7 @@ pub(crate) fn isometric(
     let s_min = params.max_compress_pct.map(|p| 1.0 - p / 100.0);
     if s_max.is_some() || s_min.is_some() {
         let (s_max, s_min) = (s_max.unwrap_or(f64::INFINITY), s_min.unwrap_or(0.0));
-        if !(s_max >= 1.0) || !(s_min <= 1.0) {
+        if s_max.is_nan() || s_max < 1.0 || s_min.is_nan() || s_min > 1.0 {
             return Err(FlattenError::Internal(format!(
                 "material limits must allow the identity (σ ≤ {s_max}, σ ≥ {s_min})"
             )));
@@ -273,7 +273,10 @@ fn check_flip_free(mesh: &TriMesh, uv: &[DVec2], method: Method) -> Result<(), F
             reason: format!("vertex {v} has a non-finite position"),
         });
     }
-    if let Some(t) = (0..mesh.triangles.len()).find(|&t| !(init::signed_area(mesh, uv, t) > 0.0)) {
+    if let Some(t) = (0..mesh.triangles.len()).find(|&t| {
+        let a = init::signed_area(mesh, uv, t);
+        a.is_nan() || a <= 0.0
+    }) {
         return Err(FlattenError::NoConvergence {
             method,
             reason: format!("triangle {t} is inverted in the result"),

@@ -115,10 +115,8 @@ fn slots_for(sys: &SpdSystem, dofs: &[usize]) -> Vec<u32> {
             let (r, c) = (dofs[p], dofs[q]);
             // Each unordered pair is added once, from its upper-triangle (row ≤ col) side; the
             // dofs of one element are distinct, so r == c only on the diagonal.
-            if r <= c {
-                if let Some(s) = sys.slot(r, c) {
-                    out[p * k + q] = s as u32;
-                }
+            if let Some(s) = sys.slot(r, c).filter(|_| r <= c) {
+                out[p * k + q] = s as u32;
             }
         }
     }
@@ -437,7 +435,7 @@ impl<E: IsoEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
             }
             None => (Vec::new(), 0.0),
         };
-        if dir.is_empty() || !(gd < 0.0) {
+        if dir.is_empty() || gd.is_nan() || gd >= 0.0 {
             // Fall back to steepest descent (should not happen with a PSD Hessian).
             dir = g.iter().map(|v| -v).collect();
             gd = -g.iter().map(|v| v * v).sum::<f64>();
