@@ -44,8 +44,8 @@ def last_json(text):
 
 
 def score(bench, path):
+    """The bench's metrics of an OBJ with `v`, `vt` and `f a/a b/b c/c` (flatcut's output)."""
     sys.path.insert(0, bench)
-    from make_meshes import read_obj  # noqa: E402
     from metrics import distortion_metrics  # noqa: E402
 
     V, UV, F, FT = [], [], [], []
@@ -59,7 +59,6 @@ def score(bench, path):
                 c = [tok.split("/") for tok in line.split()[1:4]]
                 F.append([int(a[0]) - 1 for a in c])
                 FT.append([int(a[1]) - 1 if len(a) > 1 and a[1] else int(a[0]) - 1 for a in c])
-    del read_obj
     m = distortion_metrics(np.array(V), np.array(F), np.array(UV), np.array(FT), check_overlap=False)
     return m
 
