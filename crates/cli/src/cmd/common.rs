@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use flatcut::flat::Limits;
-use flatcut::flatten::{FlattenParams, FlattenProgress, Method};
+use flatcut::flatten::{FlattenHooks, FlattenParams, FlattenProgress, Method};
 use flatcut::geom::Tolerances;
 use flatcut::pattern::{CornerStyle, NotchStyle, Piece, PieceOptions};
 use flatcut::pieces::PieceSettings;
@@ -39,23 +39,25 @@ pub struct FlattenArgs {
 /// (indicatif hides it when stderr is not a terminal). Returns the params with the hook and the
 /// bar, to be cleared when the flattening returns.
 pub fn with_progress_bar(params: FlattenParams) -> (FlattenParams, indicatif::ProgressBar) {
-    let bar = indicatif::ProgressBar::new(params.max_iters as u64);
+    let (hooks, bar) = progress_hooks(params.hooks.clone(), params.max_iters);
+    (params.with_hooks(hooks), bar)
+}
+
+/// `hooks` with a progress callback drawing a bar (initially of `len` steps) on stderr.
+pub fn progress_hooks(hooks: FlattenHooks, len: usize) -> (FlattenHooks, indicatif::ProgressBar) {
+    let bar = indicatif::ProgressBar::new(len as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{prefix} {bar:30} {pos}/{len} {msg} {elapsed}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let shown = bar.clone();
-    let hooks =
-        params
-            .hooks
-            .clone()
-            .with_progress(std::sync::Arc::new(move |p: &FlattenProgress| {
-                shown.set_prefix(p.stage);
-                shown.set_length(p.max_iterations as u64);
-                shown.set_position(p.iteration as u64);
-                shown.set_message(format!("energy {:.6e}", p.energy));
-            }));
-    (params.with_hooks(hooks), bar)
+    let hooks = hooks.with_progress(std::sync::Arc::new(move |p: &FlattenProgress| {
+        shown.set_prefix(p.stage);
+        shown.set_length(p.max_iterations as u64);
+        shown.set_position(p.iteration as u64);
+        shown.set_message(format!("energy {:.6e}", p.energy));
+    }));
+    (hooks, bar)
 }
 
 pub fn parse_method(s: &str) -> Result<Method, String> {

@@ -47,10 +47,17 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(common::file_safe(&proj.name)));
-    let opts = RunOptions::DEFAULT.with_nest_iters(a.nest_iters);
+    let mut opts = RunOptions::default().with_nest_iters(a.nest_iters);
+    let flatten_bar = (!a.stream.quiet).then(|| {
+        let (hooks, bar) = common::progress_hooks(opts.flatten_hooks.clone(), 1);
+        opts = opts.clone().with_flatten_hooks(hooks);
+        bar
+    });
     let mut log = StageLog::new(a.stream.quiet);
-    let outputs = flatcut::run::run_project(&proj, &opts, &mut log)?;
+    log.bar = flatten_bar;
+    let outputs = flatcut::run::run_project(&proj, &opts, &mut log);
     log.finish_bar();
+    let outputs = outputs?;
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     // All of the run's files land together or not at all (the simulator's traces come later).
     let mut set = crate::output::OutputSet::new();
@@ -239,7 +246,6 @@ impl Observer for StageLog {
     fn event(&mut self, e: &Event<'_>) {
         match *e {
             Event::Started { stage, detail } => {
-                self.finish_bar();
                 if !self.quiet {
                     let sep = if detail.is_empty() { "" } else { ": " };
                     let sep = if stage == Stage::Flatten { " " } else { sep };
@@ -257,7 +263,11 @@ impl Observer for StageLog {
                 total,
                 what,
             } if !self.quiet => {
-                eprintln!("flattening piece {}/{} '{}'", done + 1, total, what);
+                let line = format!("flattening piece {}/{} '{}'", done + 1, total, what);
+                match &self.bar {
+                    Some(b) => b.suspend(|| eprintln!("{line}")),
+                    None => eprintln!("{line}"),
+                }
             }
             Event::Progress {
                 stage: Stage::Nest,
