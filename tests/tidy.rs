@@ -64,9 +64,34 @@ fn sender_is_independent_of_the_gcode_writer_and_geometry() {
     let g = workspace_deps();
     assert_eq!(
         closure(&g, "flatcut-grbl"),
-        Vec::<String>::new(),
-        "flatcut-grbl streams any file: no workspace dependency"
+        vec!["flatcut-motion".to_string()],
+        "flatcut-grbl streams any file: no workspace dependency but the motion model"
     );
+}
+
+#[test]
+fn the_motion_model_stands_alone_and_is_the_only_one() {
+    let g = workspace_deps();
+    assert_eq!(
+        closure(&g, "flatcut-motion"),
+        Vec::<String>::new(),
+        "flatcut-motion depends on no workspace crate"
+    );
+    for user in ["flatcut-gcode", "flatcut-grbl"] {
+        assert!(
+            g[user].contains(&"flatcut-motion".to_string()),
+            "{user} times jobs with flatcut-motion"
+        );
+    }
+    // No IO in the model: it is physics, not plumbing.
+    let mut files = Vec::new();
+    rust_files(&root().join("crates/motion/src"), &mut files);
+    for f in files {
+        let text = std::fs::read_to_string(&f).unwrap();
+        for io in ["std::fs", "std::io", "std::net", "std::process"] {
+            assert!(!text.contains(io), "{}: uses {io}", f.display());
+        }
+    }
 }
 
 #[test]

@@ -6,6 +6,7 @@
 //! needs exactly GRBL's view of a line (its stripping rules, the 79-character limit, its modal
 //! groups and arc segmentation), not a general G-code AST.
 
+use flatcut_motion::{Estimator, Feed, Limits, arc_chords};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use thiserror::Error;
@@ -17,9 +18,6 @@ const MM_PER_INCH: f64 = 25.4;
 /// Below this length a motion is treated as zero-length (GRBL drops moves of zero steps; at the
 /// default 250 steps/mm one step is 0.004 mm, so this is well under a step).
 const ZERO_LENGTH_MM: f64 = 1e-9;
-/// Direction cosine above which two consecutive moves count as straight (GRBL `planner.c` uses
-/// the same 0.999999 threshold before applying the junction-deviation formula).
-const STRAIGHT_JUNCTION_COS: f64 = 0.999999;
 
 /// Errors found while preparing a job.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -187,18 +185,13 @@ pub struct JobLine {
     pub arc: Vec<[f64; 3]>,
 }
 
-/// Machine limits used by the motion-time estimate (GRBL settings `$110-$112`, `$120-$122`,
-/// `$11`, `$12`, `$32`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// What the sender needs to know of a controller's settings: the motion model's limits
+/// (`$100-$102`, `$110-$112`, `$120-$122`, `$11`, `$12`) for the estimate, and `$32`, `$130-$132`,
+/// `$22` for the checks before a job runs.
+#[derive(Debug, Clone, PartialEq)]
 pub struct MachineLimits {
-    /// Max rate per axis, mm/min (`$110-$112`); also the G0 speed.
-    pub max_rate: [f64; 3],
-    /// Acceleration per axis, mm/s² (`$120-$122`).
-    pub accel: [f64; 3],
-    /// Junction deviation, mm (`$11`).
-    pub junction_deviation: f64,
-    /// Arc tolerance, mm (`$12`).
-    pub arc_tolerance: f64,
+    /// Steps/mm, max rates, accelerations, junction deviation and arc tolerance.
+    pub motion: Limits,
     /// Laser mode (`$32`): spindle changes do not stop the planner.
     pub laser_mode: bool,
     /// Max travel per axis, mm (`$130-$132`).
@@ -208,13 +201,10 @@ pub struct MachineLimits {
 }
 
 impl MachineLimits {
-    /// GRBL 1.1h defaults (`defaults.h`, DEFAULTS_GENERIC): 500 mm/min, 10 mm/s², 0.01 mm,
-    /// 0.002 mm, laser mode off, 200 mm travel, homing off.
+    /// GRBL 1.1h defaults (`defaults.h`, DEFAULTS_GENERIC): [`Limits::GRBL_DEFAULT`], laser mode
+    /// off, 200 mm travel, homing off.
     pub const DEFAULT: MachineLimits = MachineLimits {
-        max_rate: [500.0; 3],
-        accel: [10.0; 3],
-        junction_deviation: 0.01,
-        arc_tolerance: 0.002,
+        motion: Limits::GRBL_DEFAULT,
         laser_mode: false,
         max_travel: [200.0; 3],
         homing: false,
@@ -230,13 +220,15 @@ impl MachineLimits {
                 .filter(|v| v.is_finite())
                 .unwrap_or(d)
         };
+        let m = &mut l.motion;
         for a in 0..3 {
-            l.max_rate[a] = get(110 + a as u16, l.max_rate[a]);
-            l.accel[a] = get(120 + a as u16, l.accel[a]);
+            m.steps_per_mm[a] = get(100 + a as u16, m.steps_per_mm[a]);
+            m.max_rate[a] = get(110 + a as u16, m.max_rate[a]);
+            m.accel[a] = get(120 + a as u16, m.accel[a]);
             l.max_travel[a] = get(130 + a as u16, l.max_travel[a]);
         }
-        l.junction_deviation = get(11, l.junction_deviation);
-        l.arc_tolerance = get(12, l.arc_tolerance);
+        m.junction_deviation = get(11, m.junction_deviation);
+        m.arc_tolerance = get(12, m.arc_tolerance);
         l.laser_mode = get(32, 0.0) != 0.0;
         l.homing = get(22, 0.0) != 0.0;
         l
@@ -326,29 +318,6 @@ fn words(text: &str) -> Result<Vec<(char, f64)>, char> {
         out.push((letter, v));
     }
     Ok(out)
-}
-
-/// A straight piece of motion for the planner model.
-struct Block {
-    line: usize,
-    len: f64,
-    unit: [f64; 3],
-    /// Nominal speed, mm/s.
-    v_nom: f64,
-    /// Acceleration along the move, mm/s².
-    accel: f64,
-    /// The planner is synced (emptied) before this block.
-    sync_before: bool,
-}
-
-fn axis_limited(value: f64, unit: [f64; 3], per_axis: [f64; 3]) -> f64 {
-    let mut v = value;
-    for a in 0..3 {
-        if unit[a].abs() > 1e-12 {
-            v = v.min(per_axis[a] / unit[a].abs());
-        }
-    }
-    v
 }
 
 impl Job {
@@ -546,7 +515,7 @@ impl Job {
                                     target,
                                     ijk.map(|o| o.map(to_mm)),
                                     r_word.map(to_mm),
-                                    limits.arc_tolerance,
+                                    limits.motion.arc_tolerance,
                                 );
                                 for w in pts.windows(2) {
                                     length += dist(w[0], w[1]);
@@ -620,9 +589,7 @@ impl Job {
     /// model like GRBL's (junction deviation, trapezoidal profiles, arcs split into chords by the
     /// arc tolerance, syncs on dwells/spindle changes/program pauses), plus `G4` dwell times.
     pub fn retime(&mut self, limits: &MachineLimits) {
-        let mut blocks: Vec<Block> = Vec::new();
-        let mut dwell = vec![0.0; self.lines.len()];
-        let mut sync_next = true;
+        let mut est = Estimator::new(&limits.motion);
         for (i, line) in self.lines.iter().enumerate() {
             let before = &line.before;
             let after = self
@@ -637,18 +604,16 @@ impl Job {
             };
             let has_m = |n: i64| ws.iter().any(|w| w.0 == 'M' && w.1.round() as i64 == n);
             if line.kind != LineKind::Gcode || has_m(0) || has_m(1) || has_m(2) || has_m(30) {
-                sync_next = true;
+                est.sync();
             }
             if has_g(40) {
-                if let Some(p) = ws.iter().find(|w| w.0 == 'P') {
-                    dwell[i] = p.1.max(0.0);
-                }
-                sync_next = true;
+                let p = ws.iter().find(|w| w.0 == 'P').map_or(0.0, |p| p.1.max(0.0));
+                est.dwell(i, p);
             }
             let spindle_change = before.spindle != after.spindle
                 || (before.speed != after.speed && !limits.laser_mode);
             if spindle_change && !limits.laser_mode {
-                sync_next = true;
+                est.sync();
             }
             if !line.moves {
                 continue;
@@ -680,53 +645,26 @@ impl Job {
                         after.position,
                         ijk,
                         r,
-                        limits.arc_tolerance,
+                        limits.motion.arc_tolerance,
                     )
                 }
                 _ => vec![before.position, after.position],
             };
-            let rapid = after.motion == MotionMode::Rapid;
-            for w in pts.windows(2) {
-                let len = dist(w[0], w[1]);
-                if len <= ZERO_LENGTH_MM {
-                    continue;
+            let feed = if after.motion == MotionMode::Rapid {
+                Feed::Rapid
+            } else if after.inverse_time {
+                Feed::InverseTime {
+                    f: after.feed,
+                    line_length: line.length,
                 }
-                let unit = [
-                    (w[1][0] - w[0][0]) / len,
-                    (w[1][1] - w[0][1]) / len,
-                    (w[1][2] - w[0][2]) / len,
-                ];
-                let rate_cap = axis_limited(f64::INFINITY, unit, limits.max_rate) / 60.0;
-                let v_nom = if rapid {
-                    rate_cap
-                } else if after.inverse_time && after.feed > 0.0 {
-                    (line.length * after.feed / 60.0).min(rate_cap)
-                } else if after.feed > 0.0 {
-                    (after.feed / 60.0).min(rate_cap)
-                } else {
-                    rate_cap
-                };
-                let accel = axis_limited(f64::INFINITY, unit, limits.accel);
-                blocks.push(Block {
-                    line: i,
-                    len,
-                    unit,
-                    v_nom,
-                    accel,
-                    sync_before: sync_next,
-                });
-                sync_next = false;
-            }
+            } else {
+                Feed::PerMinute(after.feed)
+            };
+            est.polyline(i, &pts, feed);
         }
-        let times = plan_times(&blocks, limits.junction_deviation, limits.accel);
-        for l in &mut self.lines {
-            l.time = 0.0;
-        }
-        for (b, t) in blocks.iter().zip(times) {
-            self.lines[b.line].time += t;
-        }
-        for (l, d) in self.lines.iter_mut().zip(dwell) {
-            l.time += d;
+        let times = est.per_tag(self.lines.len());
+        for (l, t) in self.lines.iter_mut().zip(times) {
+            l.time = t;
         }
         self.total_time = self.lines.iter().map(|l| l.time).sum();
     }
@@ -940,132 +878,14 @@ fn arc_points(
     } else {
         (sx + ijk[a0].unwrap_or(0.0), sy + ijk[a1].unwrap_or(0.0))
     };
-    let r = ((sx - cx).powi(2) + (sy - cy).powi(2)).sqrt();
-    if r <= ZERO_LENGTH_MM || !r.is_finite() {
-        return vec![start, target];
-    }
-    let ang_s = (sy - cy).atan2(sx - cx);
-    let ang_t = (ty - cy).atan2(tx - cx);
-    let mut sweep = ang_t - ang_s;
-    // GRBL's ARC_ANGULAR_TRAVEL_EPSILON: a full circle when start == target.
-    const FULL_CIRCLE_EPS: f64 = 5e-7;
-    if cw {
-        if sweep >= -FULL_CIRCLE_EPS {
-            sweep -= std::f64::consts::TAU;
-        }
-    } else if sweep <= FULL_CIRCLE_EPS {
-        sweep += std::f64::consts::TAU;
-    }
-    let tol = tol.max(1e-6).min(r);
-    let n = ((sweep.abs() * r) / (tol * (2.0 * r - tol)).sqrt())
-        .floor()
-        .max(1.0) as usize;
-    let n = n.min(100_000);
-    let mut pts = Vec::with_capacity(n + 1);
-    for k in 0..=n {
-        let s = k as f64 / n as f64;
-        let mut p = start;
-        if k == n {
-            pts.push(target);
-            break;
-        }
-        let a = ang_s + sweep * s;
-        p[a0] = cx + r * a.cos();
-        p[a1] = cy + r * a.sin();
-        p[lin] = start[lin] + (target[lin] - start[lin]) * s;
-        pts.push(p);
-    }
-    pts
-}
-
-/// Block times from a look-ahead plan: junction speeds by GRBL's junction-deviation rule, a
-/// backward pass (able to stop at the end of every planned sequence) and a forward pass
-/// (reachable from the previous exit), then trapezoid/triangle profile times.
-/// Per-block times of GRBL's planner (`planner.c`). The junction acceleration is the axis-limited
-/// acceleration along the junction vector (the difference of the two unit vectors), as
-/// `plan_buffer_line` computes it, not the smaller of the two blocks' accelerations: on a 90°
-/// zig-zag of diagonal moves the latter is √2 too high and made the estimate about 3 % short.
-fn plan_times(blocks: &[Block], junction_deviation: f64, axis_accel: [f64; 3]) -> Vec<f64> {
-    let n = blocks.len();
-    let mut max_entry = vec![0.0f64; n];
-    for i in 0..n {
-        if i == 0 || blocks[i].sync_before {
-            continue;
-        }
-        let (p, c) = (&blocks[i - 1], &blocks[i]);
-        let cos = -(p.unit[0] * c.unit[0] + p.unit[1] * c.unit[1] + p.unit[2] * c.unit[2]);
-        let v_lim = p.v_nom.min(c.v_nom);
-        let v = if cos > STRAIGHT_JUNCTION_COS {
-            0.0
-        } else if cos < -STRAIGHT_JUNCTION_COS {
-            v_lim
-        } else {
-            let sin_half = (0.5 * (1.0 - cos)).sqrt();
-            let jv = [
-                c.unit[0] - p.unit[0],
-                c.unit[1] - p.unit[1],
-                c.unit[2] - p.unit[2],
-            ];
-            let jl = (jv[0] * jv[0] + jv[1] * jv[1] + jv[2] * jv[2]).sqrt();
-            let a = if jl > 0.0 {
-                axis_limited(
-                    f64::INFINITY,
-                    [jv[0] / jl, jv[1] / jl, jv[2] / jl],
-                    axis_accel,
-                )
-            } else {
-                p.accel.min(c.accel)
-            };
-            (a * junction_deviation * sin_half / (1.0 - sin_half)).sqrt()
-        };
-        max_entry[i] = v.min(v_lim);
-    }
-    let mut entry = max_entry.clone();
-    // Backward: entry[i] limited by decelerating to entry[i+1] over block i.
-    let mut next_entry = 0.0;
-    for i in (0..n).rev() {
-        let b = &blocks[i];
-        entry[i] = entry[i].min((next_entry * next_entry + 2.0 * b.accel * b.len).sqrt());
-        next_entry = entry[i];
-    }
-    // Forward: entry[i+1] limited by accelerating from entry[i] over block i.
-    for i in 0..n {
-        let b = &blocks[i];
-        let reach = (entry[i] * entry[i] + 2.0 * b.accel * b.len).sqrt();
-        if i + 1 < n {
-            entry[i + 1] = entry[i + 1].min(reach);
-        }
-    }
-    (0..n)
-        .map(|i| {
-            let b = &blocks[i];
-            let vi = entry[i];
-            let vf = if i + 1 < n { entry[i + 1] } else { 0.0 };
-            trapezoid_time(b.len, vi, vf, b.v_nom, b.accel)
-        })
-        .collect()
-}
-
-/// Time to travel `len` starting at `vi`, ending at `vf`, cruising at most at `vmax`, with
-/// acceleration `a` (all mm, mm/s, mm/s²).
-pub fn trapezoid_time(len: f64, vi: f64, vf: f64, vmax: f64, a: f64) -> f64 {
-    if len <= 0.0 || vmax <= 0.0 || a <= 0.0 {
-        return 0.0;
-    }
-    let da = ((vmax * vmax - vi * vi) / (2.0 * a)).max(0.0);
-    let dd = ((vmax * vmax - vf * vf) / (2.0 * a)).max(0.0);
-    if da + dd <= len {
-        (vmax - vi).max(0.0) / a + (vmax - vf).max(0.0) / a + (len - da - dd) / vmax
-    } else {
-        let vp = ((2.0 * a * len + vi * vi + vf * vf) / 2.0).sqrt().min(vmax);
-        (vp - vi).max(0.0) / a + (vp - vf).max(0.0) / a
-    }
+    arc_chords(start, target, [cx, cy], (a0, a1, lin), cw, tol)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+    use flatcut_motion::trapezoid_time;
 
     #[test]
     fn stripping_follows_grbl_preparser() {
@@ -1155,7 +975,10 @@ mod tests {
         );
         // Feeds are capped by $110-$112; lift the cap so F600 (10 mm/s) is what runs.
         let fast = MachineLimits {
-            max_rate: [6000.0; 3],
+            motion: Limits {
+                max_rate: [6000.0; 3],
+                ..Limits::GRBL_DEFAULT
+            },
             ..MachineLimits::DEFAULT
         };
         let parse = |t: &str| Job::parse_with(t, &fast).unwrap();
@@ -1262,8 +1085,8 @@ mod tests {
         s.insert(132, 30.0);
         s.insert(32, 1.0);
         let l = MachineLimits::from_settings(&s);
-        assert_eq!(l.max_rate, [3000.0, 500.0, 500.0]);
-        assert_eq!(l.accel, [10.0, 50.0, 10.0]);
+        assert_eq!(l.motion.max_rate, [3000.0, 500.0, 500.0]);
+        assert_eq!(l.motion.accel, [10.0, 50.0, 10.0]);
         assert_eq!(l.max_travel, [200.0, 200.0, 30.0]);
         assert!(l.laser_mode && !l.homing);
         let mut job = Job::parse("G0X60\n").unwrap();
