@@ -1,0 +1,96 @@
+//! The embedded simulator as the device: its configuration from the flags (and a bed as large as
+//! the job), fault injection, and the evidence files it leaves (trace, SVG).
+
+use anyhow::Context;
+use flatcut_firmware_sim::{Faults, SimConfig, TraceSegment};
+use flatcut_grbl::Job;
+
+use super::StreamArgs;
+
+/// Extra travel given to the embedded simulator beyond the job's extent, mm, so a job that
+/// exactly fills the bed is not refused for rounding.
+const SIM_TRAVEL_MARGIN_MM: f64 = 10.0;
+/// Default GRBL error code injected by `--sim-error-at N` (20: unsupported command).
+const DEFAULT_INJECTED_ERROR: u8 = 20;
+/// Default GRBL alarm code injected by `--sim-alarm-at N` (1: hard limit).
+const DEFAULT_INJECTED_ALARM: u8 = 1;
+
+/// Parses `N[:CODE]` (a 1-based line number and an optional GRBL code).
+pub(crate) fn line_code(arg: &str, default_code: u8, flag: &str) -> anyhow::Result<(u32, u8)> {
+    let (n, c) = match arg.split_once(':') {
+        Some((n, c)) => (n, Some(c)),
+        None => (arg, None),
+    };
+    let n: u32 = n
+        .trim()
+        .parse()
+        .ok()
+        .filter(|&n| n > 0)
+        .with_context(|| format!("{flag} {arg}: the line number must be a positive integer"))?;
+    let c: u8 = match c {
+        Some(c) => c
+            .trim()
+            .parse()
+            .with_context(|| format!("{flag} {arg}: the code must be 0..255"))?,
+        None => default_code,
+    };
+    Ok((n, c))
+}
+
+/// The embedded simulator's configuration: the flags, plus a bed (`$130-$132`) at least as large
+/// as the job so a big nest is not refused by the travel check of a machine that does not exist.
+pub(super) fn sim_config(job: &Job, args: &StreamArgs) -> anyhow::Result<SimConfig> {
+    let mut cfg = SimConfig::default()
+        .with_baud(args.baud)
+        .with_time_scale(args.sim_speed)
+        .with_instant_motion(args.sim_instant)
+        .with_faults(Faults {
+            error_at_line: args
+                .sim_error_at
+                .as_deref()
+                .map(|a| line_code(a, DEFAULT_INJECTED_ERROR, "--sim-error-at"))
+                .transpose()?,
+            alarm_at_line: args
+                .sim_alarm_at
+                .as_deref()
+                .map(|a| line_code(a, DEFAULT_INJECTED_ALARM, "--sim-alarm-at"))
+                .transpose()?,
+            hangup_at_line: args.sim_hangup_at,
+            reset_at_line: args.sim_reset_at,
+            ..Faults::default()
+        });
+    if args.sim_laser {
+        cfg = cfg.with_setting(32, 1.0);
+    }
+    if let Some((lo, hi)) = job.extent {
+        let default_travel = flatcut_firmware_sim::Settings::default().max_travel;
+        for a in 0..3 {
+            let size = hi[a] - lo[a];
+            if size.is_finite() && size > default_travel[a] {
+                cfg = cfg.with_setting(130 + a as u16, (size + SIM_TRAVEL_MARGIN_MM).ceil());
+            }
+        }
+    }
+    cfg.validate()
+        .context("the embedded simulator's options are invalid")?;
+    Ok(cfg)
+}
+
+/// Writes the embedded simulator's trace (JSON lines) and SVG where asked. Written here rather
+/// than by the simulator so that a failure is an error of the command, not a warning.
+pub(super) fn write_sim_files(trace: &[TraceSegment], args: &StreamArgs) -> anyhow::Result<()> {
+    if let Some(p) = &args.sim_trace {
+        let mut s = String::new();
+        for seg in trace {
+            s.push_str(&serde_json::to_string(seg)?);
+            s.push('\n');
+        }
+        std::fs::write(p, s)
+            .with_context(|| format!("cannot write the simulator trace {}", p.display()))?;
+    }
+    if let Some(p) = &args.sim_svg {
+        std::fs::write(p, flatcut_firmware_sim::trace_svg(trace))
+            .with_context(|| format!("cannot write the simulator SVG {}", p.display()))?;
+    }
+    Ok(())
+}
