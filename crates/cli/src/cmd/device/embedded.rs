@@ -2,7 +2,9 @@
 //! the job), fault injection, and the evidence files it leaves (trace, SVG).
 
 use anyhow::Context;
-use flatcut_firmware_sim::{Faults, SimConfig, TraceSegment};
+use flatcut_firmware_sim::{
+    DEFAULT_INJECTED_ALARM, DEFAULT_INJECTED_ERROR, Faults, SimConfig, TraceSegment, line_code,
+};
 use flatcut_grbl::Job;
 
 use super::StreamArgs;
@@ -10,32 +12,6 @@ use super::StreamArgs;
 /// Extra travel given to the embedded simulator beyond the job's extent, mm, so a job that
 /// exactly fills the bed is not refused for rounding.
 const SIM_TRAVEL_MARGIN_MM: f64 = 10.0;
-/// Default GRBL error code injected by `--sim-error-at N` (20: unsupported command).
-const DEFAULT_INJECTED_ERROR: u8 = 20;
-/// Default GRBL alarm code injected by `--sim-alarm-at N` (1: hard limit).
-const DEFAULT_INJECTED_ALARM: u8 = 1;
-
-/// Parses `N[:CODE]` (a 1-based line number and an optional GRBL code).
-pub(crate) fn line_code(arg: &str, default_code: u8, flag: &str) -> anyhow::Result<(u32, u8)> {
-    let (n, c) = match arg.split_once(':') {
-        Some((n, c)) => (n, Some(c)),
-        None => (arg, None),
-    };
-    let n: u32 = n
-        .trim()
-        .parse()
-        .ok()
-        .filter(|&n| n > 0)
-        .with_context(|| format!("{flag} {arg}: the line number must be a positive integer"))?;
-    let c: u8 = match c {
-        Some(c) => c
-            .trim()
-            .parse()
-            .with_context(|| format!("{flag} {arg}: the code must be 0..255"))?,
-        None => default_code,
-    };
-    Ok((n, c))
-}
 
 /// The embedded simulator's configuration: the flags, plus a bed (`$130-$132`) at least as large
 /// as the job so a big nest is not refused by the travel check of a machine that does not exist.
@@ -85,11 +61,11 @@ pub(super) fn write_sim_files(trace: &[TraceSegment], args: &StreamArgs) -> anyh
             s.push_str(&serde_json::to_string(seg)?);
             s.push('\n');
         }
-        std::fs::write(p, s)
+        crate::cmd::common::write(p, s.as_bytes())
             .with_context(|| format!("cannot write the simulator trace {}", p.display()))?;
     }
     if let Some(p) = &args.sim_svg {
-        std::fs::write(p, flatcut_firmware_sim::trace_svg(trace))
+        crate::cmd::common::write(p, flatcut_firmware_sim::trace_svg(trace).as_bytes())
             .with_context(|| format!("cannot write the simulator SVG {}", p.display()))?;
     }
     Ok(())

@@ -26,7 +26,6 @@ mod signals;
 
 pub use args::{DEFAULT_BAUD, DEFAULT_SIM_SPEED, StreamArgs};
 pub use display::PLAIN_PROGRESS_INTERVAL;
-pub(crate) use embedded::line_code;
 pub use explain::StreamError;
 pub(crate) use signals::wait_for_interrupt;
 

@@ -45,19 +45,6 @@ fn status_line_shows_path_fraction_eta_state_and_position() {
 }
 
 #[test]
-fn fault_line_and_code_parsing() {
-    assert_eq!(line_code("12", 20, "--x").unwrap(), (12, 20));
-    assert_eq!(line_code("12:33", 20, "--x").unwrap(), (12, 33));
-    for bad in ["0", "-3", "x", "12:300", "12:"] {
-        let e = line_code(bad, 20, "--sim-error-at").unwrap_err();
-        assert!(
-            e.to_string().contains(&format!("--sim-error-at {bad}")),
-            "{e}"
-        );
-    }
-}
-
-#[test]
 fn journal_path_and_sim_bed() {
     let a = StreamArgs::default();
     assert_eq!(
