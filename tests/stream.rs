@@ -10,49 +10,10 @@ use flatcut_cli::cmd::device::{
 use flatcut_cli::cmd::send::parse_command_line;
 use flatcut_firmware_sim::TraceSegment;
 use flatcut_grbl::{Control, Job, Journal, SendError};
+use flatcut_testkit::jobs::pattern_job;
+use flatcut_testkit::trace::{self, close, moving, read_trace};
 use std::collections::BTreeSet;
-use std::path::{Path, PathBuf};
-
-/// Position tolerance, mm: the simulator moves in whole steps (0.004 mm at 250 steps/mm) and the
-/// job's coordinates lie on that grid, so agreement is exact up to float formatting.
-const TOL: f64 = 1e-3;
-/// Step of the simulated machine (250 steps/mm), mm.
-const STEP: f64 = 0.004;
-
-fn on_grid(v: f64) -> f64 {
-    (v / STEP).round() * STEP
-}
-
-/// A pen-plotter job like the G-code writer's: `pieces` closed 48-gons at different places, each
-/// drawn pen down (Z-0.5) after a rapid to its start, pen up (Z2) between pieces. Every drawing
-/// line has a unique text.
-fn pattern_job(pieces: usize) -> String {
-    const SIDES: usize = 48;
-    let mut s = String::from("G21 G90 G17\nG0 Z2\n");
-    for k in 0..pieces {
-        let (cx, cy) = (20.0 + 45.0 * k as f64, 30.0 + 7.0 * k as f64);
-        let r = 12.0 + 1.5 * k as f64;
-        let pts: Vec<(f64, f64)> = (0..SIDES)
-            .map(|i| {
-                let a = std::f64::consts::TAU * i as f64 / SIDES as f64;
-                (on_grid(cx + r * a.cos()), on_grid(cy + r * a.sin()))
-            })
-            .collect();
-        s.push_str(&format!("G0 X{:.3} Y{:.3}\n", pts[0].0, pts[0].1));
-        s.push_str(&format!("G1 Z-0.5 F{}\n", 300 + k));
-        for (i, p) in pts.iter().enumerate().skip(1) {
-            if i == 1 {
-                s.push_str(&format!("G1 X{:.3} Y{:.3} F{}\n", p.0, p.1, 2400 + k));
-            } else {
-                s.push_str(&format!("G1 X{:.3} Y{:.3}\n", p.0, p.1));
-            }
-        }
-        s.push_str(&format!("G1 X{:.3} Y{:.3}\n", pts[0].0, pts[0].1));
-        s.push_str("G0 Z2\n");
-    }
-    s.push_str("G0 X0 Y0\nM2\n");
-    s
-}
+use std::path::PathBuf;
 
 struct Case {
     _dir: tempfile::TempDir,
@@ -84,64 +45,20 @@ fn args(c: &Case) -> StreamArgs {
         .with_journal(&c.journal)
 }
 
-fn close(a: [f64; 3], b: [f64; 3]) -> bool {
-    (0..3).all(|k| (a[k] - b[k]).abs() <= TOL)
-}
-
-/// Expected motion of the job: (text, from, to) of every line that moves.
-fn geometry(job: &Job) -> Vec<(String, [f64; 3], [f64; 3])> {
-    job.motions()
-}
-
-fn moving(trace: &[TraceSegment]) -> Vec<&TraceSegment> {
-    trace.iter().filter(|s| !close(s.from, s.to)).collect()
-}
-
 fn trace_of(out: &StreamOutcome) -> &[TraceSegment] {
     out.sim_trace
         .as_deref()
         .expect("the embedded simulator's trace")
 }
 
-fn read_trace(path: &Path) -> Vec<TraceSegment> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
-}
-
-/// Every job motion with a unique text ran exactly once over all runs, ending where the job says
-/// (lines also written by a resume preamble, or repeated in the job, are skipped).
+/// Every job motion with a unique text ran exactly once over all runs (and most lines are
+/// checkable).
 fn assert_exactly_once(job: &Job, traces: &[&[TraceSegment]]) {
     assert_exactly_once_except(job, traces, &BTreeSet::new());
 }
 
 fn assert_exactly_once_except(job: &Job, traces: &[&[TraceSegment]], except: &BTreeSet<String>) {
-    let preamble: BTreeSet<String> = (1..job.len())
-        .flat_map(|k| job.resume_preamble(k))
-        .collect();
-    let mut checked = 0;
-    for (text, _, to) in geometry(job) {
-        if preamble.contains(&text)
-            || except.contains(&text)
-            || job.lines.iter().filter(|l| l.text == text).count() != 1
-        {
-            continue;
-        }
-        let hits: Vec<&TraceSegment> = traces
-            .iter()
-            .flat_map(|t| t.iter())
-            .filter(|s| s.text == text)
-            .collect();
-        assert_eq!(hits.len(), 1, "`{text}` ran {} times", hits.len());
-        assert!(
-            close(hits[0].to, to),
-            "`{text}` ended at {:?}, want {to:?}",
-            hits[0].to
-        );
-        checked += 1;
-    }
+    let checked = trace::assert_exactly_once_except(job, traces, except);
     assert!(
         checked > job.len() / 2,
         "only {checked} lines were checkable"
@@ -160,7 +77,7 @@ fn streams_to_the_embedded_simulator_every_motion_once_in_order() {
     .unwrap();
     assert_eq!(out.report.lines_sent, c.job.len());
     assert!(!out.report.checked);
-    let want = geometry(&c.job);
+    let want = c.job.motions();
     let got = moving(trace_of(&out));
     assert_eq!(got.len(), want.len(), "motion segment count");
     for (k, (w, g)) in want.iter().zip(&got).enumerate() {
@@ -228,7 +145,7 @@ fn command_line_send_with_check_pass() {
     // The same through the library entry, to see the report: a check pass ran, then the cut.
     let out = stream_file(&c.job_path, &args(&c).with_check(true)).unwrap();
     assert!(out.report.checked);
-    assert_eq!(moving(trace_of(&out)).len(), geometry(&c.job).len());
+    assert_eq!(moving(trace_of(&out)).len(), c.job.motions().len());
 }
 
 #[test]
@@ -446,7 +363,7 @@ fn explicit_port_streams_to_an_external_controller() {
     assert!(u > 0.0 && u <= 1.0, "{u}");
     let report = sim.stop();
     let got = moving(&report.trace);
-    assert_eq!(got.len(), geometry(&c.job).len());
+    assert_eq!(got.len(), c.job.motions().len());
 }
 
 /// A laser job written by flatcut's own G-code writer (arcs fitted, laser on only while cutting)

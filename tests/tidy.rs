@@ -115,6 +115,57 @@ fn two_dimensional_crates_know_nothing_of_surfaces() {
     }
 }
 
+/// Package name → names in its `[dev-dependencies]`.
+fn workspace_dev_deps() -> BTreeMap<String, Vec<String>> {
+    let mut out = BTreeMap::new();
+    let mut manifests: Vec<PathBuf> = std::fs::read_dir(root().join("crates"))
+        .unwrap()
+        .map(|e| e.unwrap().path().join("Cargo.toml"))
+        .filter(|p| p.exists())
+        .collect();
+    manifests.push(root().join("firmware-sim/Cargo.toml"));
+    manifests.push(root().join("Cargo.toml"));
+    for m in manifests {
+        let v: toml::Value = toml::from_str(&std::fs::read_to_string(&m).unwrap()).unwrap();
+        let name = v["package"]["name"].as_str().unwrap().to_string();
+        let deps = v
+            .get("dev-dependencies")
+            .and_then(|d| d.as_table())
+            .map(|t| t.keys().cloned().collect())
+            .unwrap_or_default();
+        out.insert(name, deps);
+    }
+    out
+}
+
+#[test]
+fn the_testkit_is_only_ever_a_dev_dependency() {
+    let g = workspace_deps();
+    for (name, deps) in &g {
+        assert!(
+            !deps.contains(&"flatcut-testkit".to_string()),
+            "{name}: flatcut-testkit is test code, a dev-dependency only"
+        );
+    }
+    let dev = workspace_dev_deps();
+    assert!(
+        dev.values()
+            .any(|d| d.contains(&"flatcut-testkit".to_string())),
+        "the shared fixtures are used"
+    );
+    // Being dev-only, the testkit is the one library besides the CLI (which embeds the
+    // simulator as a device) allowed to depend on the simulator.
+    let users: Vec<&String> = g
+        .iter()
+        .filter(|(_, d)| d.contains(&"flatcut-firmware-sim".to_string()))
+        .map(|(n, _)| n)
+        .collect();
+    assert_eq!(users, ["flatcut-cli", "flatcut-testkit"]);
+    let manifest = std::fs::read_to_string(root().join("crates/testkit/Cargo.toml")).unwrap();
+    let v: toml::Value = toml::from_str(&manifest).unwrap();
+    assert_eq!(v["package"]["publish"].as_bool(), Some(false));
+}
+
 #[test]
 fn only_the_binary_uses_anyhow() {
     for (name, deps) in workspace_deps() {

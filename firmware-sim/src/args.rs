@@ -262,7 +262,10 @@ mod tests {
             (vec!["--set", "130"], "--set 130: expected N=VALUE"),
             (vec!["--error-at", "0"], "--error-at 0: the line number"),
             (vec!["--alarm-at", "2:300"], "--alarm-at 2:300: the code"),
-            (vec!["--drop-rate", "2"], "--drop-rate 2: must be a probability"),
+            (
+                vec!["--drop-rate", "2"],
+                "--drop-rate 2: must be a probability",
+            ),
             (vec!["--speed", "0"], "time_scale must be positive"),
         ] {
             let cli = Cli::parse_from(std::iter::once("x").chain(flags));

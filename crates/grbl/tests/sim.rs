@@ -1,26 +1,20 @@
 //! The sender against firmware-sim over a real pseudo-terminal: complete streaming, every
 //! fault-injection mode, resume from the journal.
 
-use flatcut_firmware_sim::{Faults, PtySim, SimConfig, TraceSegment};
+use flatcut_firmware_sim::{Faults, SimConfig, TraceSegment};
 use flatcut_grbl::driver::Phase;
 use flatcut_grbl::{CancelToken, Job, Journal, SendError, SendOptions, open_port, send_job};
+use flatcut_testkit::jobs;
+use flatcut_testkit::pty::{send as run, spawn};
+use flatcut_testkit::trace::{
+    assert_exactly_once, assert_exactly_once_except, assert_trace_is_job, close,
+};
 use std::collections::BTreeSet;
-use std::path::Path;
 use std::time::Duration;
 
-/// A pen-plotter job of `n` zig-zag strokes with unique line texts.
+/// A pen-plotter job of `n` zig-zag strokes with unique line texts, X on the step grid.
 fn zigzag(n: usize) -> String {
-    let mut s = String::from("G21 G90\nG0 Z2\nG0 X0 Y0\nG1 Z-0.5 F300\n");
-    for i in 1..=n {
-        // X on the 250 steps/mm grid (3 steps apart), so positions are exact in steps.
-        s.push_str(&format!(
-            "G1 X{:.3} Y{} F3000\n",
-            i as f64 * 0.012,
-            (i % 2) * 5
-        ));
-    }
-    s.push_str("G0 Z1.5\n");
-    s
+    jobs::zigzag(n, 0.012, 5.0, 3000.0)
 }
 
 fn opts() -> SendOptions {
@@ -29,75 +23,6 @@ fn opts() -> SendOptions {
         .with_idle_ack_timeout(Duration::from_millis(1500))
         .with_silence_timeout(Duration::from_secs(5))
         .with_hold_timeout(Some(Duration::from_secs(2)))
-}
-
-fn spawn(cfg: SimConfig) -> PtySim {
-    PtySim::spawn(cfg).expect("spawn firmware-sim")
-}
-
-fn run(sim: &PtySim, job: &Job, o: &SendOptions) -> Result<flatcut_grbl::SendReport, SendError> {
-    let mut port = open_port(sim.path().to_str().unwrap(), 115_200).expect("open pty");
-    send_job(&mut port, job, o, &mut |_| {}, &CancelToken::new())
-}
-
-const TOL: f64 = 1e-3;
-
-fn close(a: [f64; 3], b: [f64; 3]) -> bool {
-    (0..3).all(|k| (a[k] - b[k]).abs() <= TOL)
-}
-
-/// Expected motion of the job: (text, from, to) of every line that moves.
-fn geometry(job: &Job) -> Vec<(String, [f64; 3], [f64; 3])> {
-    job.motions()
-}
-
-fn moving(trace: &[TraceSegment]) -> Vec<&TraceSegment> {
-    trace.iter().filter(|s| !close(s.from, s.to)).collect()
-}
-
-fn assert_trace_is_job(job: &Job, trace: &[TraceSegment]) {
-    let want = geometry(job);
-    let got = moving(trace);
-    assert_eq!(got.len(), want.len(), "segment count");
-    for (k, (w, g)) in want.iter().zip(&got).enumerate() {
-        assert_eq!(g.text, w.0, "segment {k}");
-        assert!(
-            close(g.from, w.1) && close(g.to, w.2),
-            "segment {k}: {g:?} vs {w:?}"
-        );
-    }
-}
-
-/// Every job motion with a unique text (not also written by a resume preamble) ran exactly once
-/// over the traces of all runs, at the right place.
-fn assert_exactly_once(job: &Job, traces: &[&[TraceSegment]]) {
-    assert_exactly_once_except(job, traces, &BTreeSet::new());
-}
-
-fn assert_exactly_once_except(job: &Job, traces: &[&[TraceSegment]], except: &BTreeSet<String>) {
-    let preamble: BTreeSet<String> = (1..job.len())
-        .flat_map(|k| job.resume_preamble(k))
-        .collect();
-    for (text, from, to) in geometry(job) {
-        if preamble.contains(&text)
-            || except.contains(&text)
-            || job.lines.iter().filter(|l| l.text == text).count() != 1
-        {
-            continue;
-        }
-        let hits: Vec<&TraceSegment> = traces
-            .iter()
-            .flat_map(|t| t.iter())
-            .filter(|s| s.text == text)
-            .collect();
-        assert_eq!(hits.len(), 1, "`{text}` ran {} times", hits.len());
-        assert!(
-            close(hits[0].to, to),
-            "`{text}` ended at {:?}, want {to:?}",
-            hits[0].to
-        );
-        let _ = from;
-    }
 }
 
 #[test]
@@ -218,7 +143,7 @@ fn fault_case(
                 // The line the reset cut may have run as a fragment; it is re-sent whole, so at
                 // most that one line runs twice, and none is skipped.
                 let mut twice = 0;
-                for (text, _, to) in geometry(&job) {
+                for (text, _, to) in job.motions() {
                     let hits: Vec<&TraceSegment> = r1
                         .trace
                         .iter()
@@ -246,7 +171,7 @@ fn fault_case(
                 // something else and cannot be seen by any sender. Each damaged byte may spoil
                 // one line; beyond those, nothing is skipped or repeated.
                 let damaged = (r1.stats.bytes_dropped_fault + r1.stats.bytes_corrupted) as usize;
-                let want = geometry(&job);
+                let want = job.motions();
                 let bad: Vec<&String> = want
                     .iter()
                     .filter(|(t, _, to)| {
@@ -432,7 +357,6 @@ fn refuses_to_resume_another_job() {
     let other = Job::parse(&zigzag(11)).unwrap();
     let e = run(&sim, &other, &opts().with_journal(&jp).with_resume(true)).unwrap_err();
     assert!(e.to_string().contains("different job"), "{e}");
-    let _ = Path::new("");
 }
 
 /// The time estimate against the simulated planner on virtual time (lines fed as GRBL's RX
