@@ -42,6 +42,7 @@
 mod args;
 mod files;
 mod gcode;
+pub mod hpgl;
 mod machine;
 mod planner;
 mod pty;
