@@ -48,6 +48,10 @@ pub struct StreamArgs {
     /// Laser mode in the embedded simulator (`$32=1`).
     #[arg(long)]
     pub sim_laser: bool,
+    /// A `$N=VALUE` setting of the embedded simulator at start, e.g. `--sim-set 110=5000`
+    /// (repeatable; `flatcut run` sets the machine profile's rates, accelerations and travel).
+    #[arg(long = "sim-set", value_name = "N=VALUE")]
+    pub sim_set: Vec<String>,
     /// Write every motion the embedded simulator executed as JSON lines.
     #[arg(long, value_name = "PATH")]
     pub sim_trace: Option<PathBuf>,
@@ -84,6 +88,7 @@ impl Default for StreamArgs {
             sim_speed: DEFAULT_SIM_SPEED,
             sim_instant: false,
             sim_laser: false,
+            sim_set: Vec::new(),
             sim_trace: None,
             sim_svg: None,
             quiet: false,

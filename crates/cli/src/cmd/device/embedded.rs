@@ -3,7 +3,8 @@
 
 use anyhow::Context;
 use flatcut_firmware_sim::{
-    DEFAULT_INJECTED_ALARM, DEFAULT_INJECTED_ERROR, Faults, SimConfig, TraceSegment, line_code,
+    DEFAULT_INJECTED_ALARM, DEFAULT_INJECTED_ERROR, Faults, SimArgs, SimConfig, TraceSegment,
+    line_code,
 };
 use flatcut_grbl::Job;
 
@@ -35,14 +36,20 @@ pub(super) fn sim_config(job: &Job, args: &StreamArgs) -> anyhow::Result<SimConf
             reset_at_line: args.sim_reset_at,
             ..Faults::default()
         });
-    if args.sim_laser {
-        cfg = cfg.with_setting(32, 1.0);
-    }
+    let flags = SimArgs {
+        laser: args.sim_laser,
+        set: args.sim_set.clone(),
+        ..SimArgs::default()
+    };
+    cfg.settings = flags
+        .settings()
+        .map_err(|e| anyhow::anyhow!("{}", e.to_string().replacen("--set", "--sim-set", 1)))?;
     if let Some((lo, hi)) = job.extent {
         let default_travel = flatcut_firmware_sim::Settings::default().max_travel;
         for a in 0..3 {
             let size = hi[a] - lo[a];
-            if size.is_finite() && size > default_travel[a] {
+            let set = cfg.settings.iter().any(|s| s.0 == 130 + a as u16);
+            if size.is_finite() && size > default_travel[a] && !set {
                 cfg = cfg.with_setting(130 + a as u16, (size + SIM_TRAVEL_MARGIN_MM).ceil());
             }
         }

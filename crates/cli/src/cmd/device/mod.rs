@@ -22,6 +22,7 @@ mod args;
 mod display;
 mod embedded;
 mod explain;
+pub mod select;
 mod signals;
 
 pub use args::{DEFAULT_BAUD, DEFAULT_SIM_SPEED, StreamArgs};
@@ -48,6 +49,8 @@ pub struct StreamOutcome {
     pub journal: PathBuf,
     /// Baud rate of the link, for utilisation figures.
     pub baud: u32,
+    /// Which device ran the job (the port and its baud rate, or the simulator).
+    pub device: String,
 }
 
 impl StreamOutcome {
@@ -158,6 +161,7 @@ pub fn stream_text_with_control(
         sim_trace: sim_report.map(|r| r.trace),
         journal,
         baud: args.baud,
+        device: select::describe(args),
     })
 }
 
