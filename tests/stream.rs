@@ -13,7 +13,7 @@ use flatcut_grbl::{Control, Job, Journal, SendError};
 use flatcut_testkit::jobs::pattern_job;
 use flatcut_testkit::trace::{self, close, moving, read_trace};
 use std::collections::BTreeSet;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 struct Case {
     _dir: tempfile::TempDir,
@@ -579,4 +579,69 @@ fn sigterm_aborts_safely_and_names_the_last_line() {
     assert!(text.contains("N aborted by the user"), "{text}");
     let st = Journal::read(&journal).unwrap();
     assert!(!st.finished && st.done_count() > 0);
+}
+
+/// Writes the lampshade project into `dir` with `device` as its `[device]` section.
+fn lampshade_project(dir: &Path, device: &str) -> PathBuf {
+    let src = crate::pipeline::root().join("patterns/lampshade");
+    let text = format!(
+        "name = \"lampshade\"\ndesign = \"{}\"\nmethod = \"developable\"\nseam_mm = 10.0\n\
+         [material]\nname = \"parchment\"\n[sheet]\nwidth_mm = 1189.0\nheight_mm = 841.0\n\
+         spacing_mm = 5.0\n[machine]\nprofile = \"{}\"\n{device}",
+        src.join("design.toml").display(),
+        src.join("plotter-a0.toml").display(),
+    );
+    let p = dir.join("project.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// Issue 14, item 1: `flatcut run` streams to the project's `[device]`, refuses a port that is
+/// not there (instead of quietly using the simulator), and refuses a baud rate of 0.
+#[test]
+fn run_uses_the_projects_device() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = flatcut_firmware_sim::PtySim::spawn(
+        flatcut_firmware_sim::SimConfig::default()
+            .with_instant_motion(true)
+            .with_setting(130, 1200.0)
+            .with_setting(131, 1000.0),
+    )
+    .unwrap();
+    let dev = format!(
+        "[device]\nport = \"{}\"\nbaud = 115200\n",
+        sim.path().display()
+    );
+    let project = lampshade_project(dir.path(), &dev);
+    let out = dir.path().join("out");
+    let run = |project: &Path| {
+        let cli = parse_command_line([
+            "flatcut",
+            "run",
+            project.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .unwrap();
+        flatcut_cli::run(cli)
+    };
+    run(&project).expect("the run streams to the project's port");
+    let report = sim.stop();
+    let job = Job::parse(&std::fs::read_to_string(out.join("job-1.gcode")).unwrap()).unwrap();
+    assert_eq!(
+        moving(&report.trace).len(),
+        job.motions().len(),
+        "the project's controller received the job"
+    );
+
+    let nope = lampshade_project(dir.path(), "[device]\nport = \"/dev/ttyNOPE\"\n");
+    let e = run(&nope).expect_err("a missing port fails the run");
+    assert!(
+        format!("{e:#}").contains("cannot open the serial port /dev/ttyNOPE"),
+        "{e:#}"
+    );
+    let zero = lampshade_project(dir.path(), "[device]\nbaud = 0\n");
+    let e = run(&zero).expect_err("baud = 0 is refused");
+    assert!(format!("{e:#}").contains("[device] baud = 0"), "{e:#}");
 }

@@ -88,8 +88,14 @@ mod tests {
         ] {
             let s = for_project(&sim, &knife, &cli);
             assert!(s.uses_sim());
-            for want in ["110=5000", "111=5000", "120=400", "121=400", "130=600", "131=400"] {
-                assert!(s.sim_set.iter().any(|x| x == want), "{want}: {:?}", s.sim_set);
+            for want in [
+                "110=5000", "111=5000", "120=400", "121=400", "130=600", "131=400",
+            ] {
+                assert!(
+                    s.sim_set.iter().any(|x| x == want),
+                    "{want}: {:?}",
+                    s.sim_set
+                );
             }
             assert!(describe(&s).contains("machine profile"));
         }
