@@ -187,11 +187,14 @@ fn reset_in_motion_requires_an_explicit_resume_point() {
     );
     assert_eq!(sim.trace().len(), run1.len(), "nothing moved");
 
-    // The operator saw line k cut short: resume from it.
+    // The operator saw line k cut short, and that the machine stands where it did: resume
+    // from it (the reset in motion lost the position, so the origin needs the operator's word).
     let rep = send(
         sim.path(),
         &b.job,
-        &o.clone().with_resume_from(Some(k)),
+        &o.clone()
+            .with_resume_from(Some(k))
+            .with_origin_confirmed(true),
         &CancelToken::new(),
         None,
     )

@@ -97,7 +97,7 @@ pub enum SendError {
         reason: String,
     },
     /// The job does not fit the machine travel (`$130-$132`).
-    #[error("the job's {axis} extent {lo:.3}..{hi:.3} mm ({size:.3} mm in machine coordinates {mlo:.3}..{mhi:.3}) exceeds the machine travel of {travel:.3} mm ($13{n})", n = axis_index(*axis))]
+    #[error("{}", travel_message(*axis, *lo, *hi, *size, *mlo, *mhi, *travel))]
     OutOfTravel {
         /// Axis letter.
         axis: char,
@@ -211,6 +211,39 @@ pub enum SendError {
         /// Last line known executed.
         last_done: Option<LineRef>,
     },
+    /// The job declares that it needs laser mode, and the controller has `$32=0`.
+    #[error(
+        "the job is a laser job (its header says it needs $32=1) but the controller has $32=0: in spindle mode the laser stays on during rapids and stops at every power change. Set $32=1 on the controller, or pass --force"
+    )]
+    LaserModeOff,
+    /// The job paused itself (`M0`) with nobody to resume it: the run was aborted.
+    #[error(
+        "the job paused itself at {line} (M0) and --on-pause abort (the default without a terminal) aborted the run: soft reset sent, tool off. Last line known executed: {}",
+        opt_line(last_done)
+    )]
+    PausedByJob {
+        /// The pausing line.
+        line: LineRef,
+        /// Last line known executed.
+        last_done: Option<LineRef>,
+    },
+    /// The controller restarted or lost its position since the journal was written, it does
+    /// not home, and nobody confirmed the work origin.
+    #[error(
+        "cannot resume: {why}, so the machine position is not known. Home the machine, or set its work origin back where it was, then resume with --origin-confirmed"
+    )]
+    PositionUnknown {
+        /// Why the position is lost.
+        why: String,
+    },
+    /// A stop whose tool-off sequence could not be confirmed.
+    #[error(
+        "{cause}. WARNING: the tool-off sequence (M5 M9) could not be confirmed with $G: check that the spindle, laser and air are off"
+    )]
+    ToolOffUnconfirmed {
+        /// Why the run stopped.
+        cause: Box<SendError>,
+    },
     /// `resume` was asked without a journal path.
     #[error("resume needs a journal path")]
     NoJournal,
@@ -235,6 +268,31 @@ pub enum SendError {
         /// Lines in the job.
         lines: usize,
     },
+}
+
+/// Why a job does not fit, in the coordinates where it fails: its length against the travel,
+/// or, with homing and soft limits (GRBL then allows machine coordinates −travel..0 only), its
+/// machine-coordinate range against that space.
+fn travel_message(
+    axis: char,
+    lo: f64,
+    hi: f64,
+    size: f64,
+    mlo: f64,
+    mhi: f64,
+    travel: f64,
+) -> String {
+    let n = axis_index(axis);
+    if size > travel {
+        format!(
+            "the job's {axis} extent {lo:.3}..{hi:.3} mm is {size:.3} mm long, more than the machine travel of {travel:.3} mm ($13{n})"
+        )
+    } else {
+        format!(
+            "the job's {axis} extent {lo:.3}..{hi:.3} mm (work) lies at {mlo:.3}..{mhi:.3} mm in machine coordinates, outside {:.3}..0.000 mm, the machine space soft limits allow ($20=1 with homing, $13{n}={travel:.3}): set the work origin (G10 L20 or G92) so that the job lies inside it",
+            -travel
+        )
+    }
 }
 
 fn axis_index(c: char) -> usize {

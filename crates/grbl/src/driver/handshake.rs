@@ -12,6 +12,9 @@ pub(super) struct Link {
     /// A banner came by itself: the controller just restarted (power-up, or the DTR pulse of
     /// opening the port), so its planner and position are gone.
     pub restarted: bool,
+    /// The controller was alarm-locked and this sender unlocked it with `$X` (no homing): its
+    /// position is whatever it was when the alarm struck.
+    pub unlocked: bool,
 }
 
 /// Connects: waits for the power-up banner (or, with `reset_on_connect` or when none comes,
@@ -58,6 +61,13 @@ pub(super) fn connect<T: Transport + ?Sized>(
         sess.alarm_lock = false;
         sess.query_status(opts.command_timeout)
             .map_err(|e| transport(e, None))?;
+        return Ok(Link {
+            restarted,
+            unlocked: true,
+        });
     }
-    Ok(Link { restarted })
+    Ok(Link {
+        restarted,
+        unlocked: false,
+    })
 }

@@ -29,7 +29,7 @@ mod tracker;
 
 pub use control::{CancelToken, Control};
 pub use error::{LineError, LineRef, SendError};
-pub use options::SendOptions;
+pub use options::{PausePolicy, SendOptions};
 pub use progress::{Phase, Progress, SendReport};
 
 use crate::job::{Job, MachineLimits};
@@ -90,8 +90,11 @@ pub fn send_job(
     observer(&progress);
 
     let link = handshake::connect(&mut sess, opts)?;
-    let plan = resume::settle(&mut sess, job, opts, prior, link.restarted, &mut journal)?;
     let limits = MachineLimits::from_settings(&sess.settings);
+    if job.needs_laser_mode && !limits.laser_mode && !opts.force_laser {
+        return Err(SendError::LaserModeOff);
+    }
+    let plan = resume::settle(&mut sess, job, opts, prior, link, &mut journal)?;
     if opts.check_travel {
         check_travel(job, &limits, &sess.settings, sess.wco)?;
     }
@@ -137,6 +140,7 @@ pub fn send_job(
         final_position,
         estimated_time: job_t.total_time,
         checked: opts.check,
+        notices: plan.notice.into_iter().collect(),
     })
 }
 

@@ -38,6 +38,29 @@ pub struct SendOptions {
     /// With `resume`: the operator's choice of the first job line (0-based index) to run; every
     /// line before it counts as done. Needed when the journal and the machine cannot tell.
     pub resume_from: Option<usize>,
+    /// What to do when the job pauses itself (`M0`): GRBL holds the feed and waits for cycle
+    /// start.
+    pub on_pause: PausePolicy,
+    /// The operator confirmed that the work origin is where it was when the journal was
+    /// written; needed to resume on a controller that restarted or lost its position and does
+    /// not home (`$22=0`).
+    pub origin_confirmed: bool,
+    /// Stream a job that declares it needs laser mode (`$32=1`) to a controller with `$32=0`.
+    pub force_laser: bool,
+}
+
+/// What to do when the job pauses itself with `M0` (GRBL 1.1h ignores `M1`, and `M2`/`M30` end
+/// the program without pausing).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PausePolicy {
+    /// Abort the run (feed hold, soft reset, tool off): nobody is there to decide.
+    #[default]
+    Abort,
+    /// Resume at once (cycle start).
+    Resume,
+    /// Wait for the operator's resume or abort through the [`super::CancelToken`]; the progress
+    /// reports the pause ([`super::Progress::paused_at`]).
+    Wait,
 }
 
 impl SendOptions {
@@ -60,6 +83,24 @@ impl SendOptions {
         if index.is_some() {
             self.resume = true;
         }
+        self
+    }
+
+    /// Sets [`SendOptions::on_pause`].
+    pub fn with_on_pause(mut self, p: PausePolicy) -> Self {
+        self.on_pause = p;
+        self
+    }
+
+    /// Sets [`SendOptions::origin_confirmed`].
+    pub fn with_origin_confirmed(mut self, on: bool) -> Self {
+        self.origin_confirmed = on;
+        self
+    }
+
+    /// Sets [`SendOptions::force_laser`].
+    pub fn with_force_laser(mut self, on: bool) -> Self {
+        self.force_laser = on;
         self
     }
 
@@ -155,6 +196,9 @@ impl Default for SendOptions {
             progress_interval: SendOptions::DEFAULT_PROGRESS_INTERVAL,
             hold_timeout: None,
             resume_from: None,
+            on_pause: PausePolicy::Abort,
+            origin_confirmed: false,
+            force_laser: false,
         }
     }
 }

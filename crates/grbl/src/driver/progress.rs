@@ -51,6 +51,9 @@ pub struct Progress {
     pub bytes_written: u64,
     /// Whether a feed hold is in effect.
     pub holding: bool,
+    /// The job paused itself (`M0`) at this line and waits for the operator (resume or abort
+    /// through the [`super::CancelToken`]).
+    pub paused_at: Option<LineRef>,
 }
 
 impl Progress {
@@ -70,6 +73,7 @@ impl Progress {
             elapsed: Duration::ZERO,
             bytes_written: 0,
             holding: false,
+            paused_at: None,
         }
     }
 
@@ -125,6 +129,8 @@ pub struct SendReport {
     pub estimated_time: f64,
     /// Whether a `$C` pass ran first.
     pub checked: bool,
+    /// What the sender did on its own and why (homing before a resume, say).
+    pub notices: Vec<String>,
 }
 
 /// ETA: the remaining estimated motion time, scaled by how the machine kept up with the

@@ -3,6 +3,7 @@
 
 use super::SendOptions;
 use super::error::SendError;
+use super::handshake::Link;
 use super::session::Session;
 use super::tracker::{dist, line_ref, seg_dist};
 use crate::job::Job;
@@ -18,7 +19,13 @@ pub(super) struct ResumePlan {
     /// The first line to send, the work position to put the machine at for it, and whether
     /// the machine must travel there (it may already stand there).
     pub resume_at: Option<(usize, [f64; 3], bool)>,
+    /// How the machine position was re-established, and why.
+    pub notice: Option<String>,
 }
+
+/// Longest wait for a homing cycle's `ok`: at GRBL's default seek rate (500 mm/min) searching
+/// 1.5× a 1 m travel on each axis takes about 3 minutes.
+const HOMING_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(300);
 
 /// Settles what the interrupted run left in doubt, from the journal `prior` and the machine:
 /// its reported position is trusted only if the controller did not restart and is not in
@@ -28,13 +35,14 @@ pub(super) fn settle<T: Transport + ?Sized>(
     job: &Job,
     opts: &SendOptions,
     prior: Option<JournalState>,
-    restarted: bool,
+    link: Link,
     journal: &mut Option<Journal>,
 ) -> Result<ResumePlan, SendError> {
     let Some(mut st) = prior else {
         return Ok(ResumePlan::default());
     };
-    let trusted = !restarted && !sess.alarm_lock;
+    let restarted = link.restarted;
+    let trusted = !restarted && !link.unlocked && !sess.alarm_lock;
     let here = if trusted { sess.work_position() } else { None };
     let tol = position_tolerance(&sess.settings);
     let rx = sess.s.rx_size();
@@ -54,6 +62,7 @@ pub(super) fn settle<T: Transport + ?Sized>(
         }
         st.partial = r.partial;
     }
+    let notice = reestablish_position(sess, &st, link, opts)?;
     if let Some((k, _)) = st.partial
         && job.lines[k].before.incremental
     {
@@ -82,7 +91,53 @@ pub(super) fn settle<T: Transport + ?Sized>(
     Ok(ResumePlan {
         prior_done: Some(st.done),
         resume_at,
+        notice,
     })
+}
+
+/// Why the machine position cannot be trusted since the journal was written, if it cannot:
+/// the controller restarted (a banner at connect: power-up or the DTR reset of opening the
+/// port), was unlocked with `$X` without homing, or reset or alarmed during the interrupted run.
+fn position_lost(st: &JournalState, link: Link) -> Option<String> {
+    if link.restarted {
+        return Some("the controller restarted when the port was opened (or lost power)".into());
+    }
+    if link.unlocked {
+        return Some("the controller was in alarm and was unlocked with $X, not homed".into());
+    }
+    st.notes
+        .iter()
+        .find(|n| n.starts_with("ALARM:") || n.starts_with("unexpected reset"))
+        .map(|n| format!("the interrupted run stopped on \"{n}\""))
+}
+
+/// A resume on a controller whose position is lost first re-establishes it: homing (`$H`)
+/// where the machine homes (`$22=1`), else the operator's confirmation that the work origin is
+/// where it was. Returns what was done and why, for the report.
+fn reestablish_position<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    st: &JournalState,
+    link: Link,
+    opts: &SendOptions,
+) -> Result<Option<String>, SendError> {
+    let started = st.done.iter().any(|d| *d) || st.partial.is_some() || opts.resume_from.is_some();
+    let Some(why) = position_lost(st, link).filter(|_| started) else {
+        return Ok(None);
+    };
+    if sess.settings.get(&22).is_some_and(|v| *v != 0.0) {
+        sess.command_ok("$H", HOMING_TIMEOUT)?;
+        sess.alarm_lock = false;
+        let _ = sess.query_status(opts.command_timeout);
+        return Ok(Some(format!(
+            "homed the machine ($H) before resuming: {why}"
+        )));
+    }
+    if opts.origin_confirmed {
+        return Ok(Some(format!(
+            "resuming on the operator's word that the work origin is where it was: {why}"
+        )));
+    }
+    Err(SendError::PositionUnknown { why })
 }
 
 /// How a resume settles the lines an interrupted run left in doubt.

@@ -27,6 +27,8 @@ pub(super) struct Session<'a, T: Transport + ?Sized> {
     pub(super) setup_seq: u32,
     /// Banners seen so far.
     pub(super) resets: u64,
+    /// The last `[GC:...]` parser state (`$G`).
+    pub(super) last_gc: Option<String>,
 }
 
 impl<'a, T: Transport + ?Sized> Session<'a, T> {
@@ -47,6 +49,7 @@ impl<'a, T: Transport + ?Sized> Session<'a, T> {
             alarm_lock: false,
             setup_seq: 0,
             resets: 0,
+            last_gc: None,
         }
     }
 
@@ -90,6 +93,7 @@ impl<'a, T: Transport + ?Sized> Session<'a, T> {
                     self.messages.push(m.clone());
                 }
                 Event::Alarm(_) => self.alarm_lock = true,
+                Event::Feedback(f) if f.starts_with("GC:") => self.last_gc = Some(f.clone()),
                 Event::Reset { version, .. } => {
                     self.resets += 1;
                     self.version = version.clone();

@@ -10,7 +10,7 @@ use crate::job::Job;
 use crate::journal::Journal;
 use crate::response::MachineState;
 use crate::response::Response;
-use crate::streamer::{Event, SendMode, Tag};
+use crate::streamer::{Event, Tag};
 use crate::transport::{Transport, TransportError};
 use std::time::{Duration, Instant};
 
@@ -208,12 +208,15 @@ pub(super) fn on_reset<T: Transport + ?Sized>(
     })
 }
 
-pub(super) fn abort<T: Transport + ?Sized>(
+/// Stops the machine without losing its position: feed hold, wait until it stands, locate it
+/// on the path, then a soft reset (no `ALARM:3` after a completed hold) that empties GRBL's
+/// buffers and switches spindle and coolant off.
+pub(super) fn stop_with_reset<T: Transport + ?Sized>(
     sess: &mut Session<'_, T>,
     job: &Job,
     tracker: &mut Tracker,
     journal: &mut Option<Journal>,
-) -> Result<SendError, SendError> {
+) -> Result<(), SendError> {
     // Feed hold first so the reset does not lose position (reset in motion = ALARM:3).
     sess.s.set_feeding(false);
     sess.s.clear_queue();
@@ -244,23 +247,28 @@ pub(super) fn abort<T: Transport + ?Sized>(
     sess.s.forget_in_flight();
     sess.s.realtime(0x18);
     let _ = sess.wait_banner(Duration::from_secs(3));
-    // After the reset GRBL's spindle/laser is off (M5); say so explicitly if it accepts lines.
-    sess.s.set_feeding(true);
-    sess.s
-        .push(Tag::Setup(u32::MAX), "M5", SendMode::SendResponse);
-    let until = Instant::now() + Duration::from_millis(500);
-    while Instant::now() < until && sess.s.in_flight() + sess.s.queued() > 0 {
-        if sess.pump(READ_SLICE).is_err() {
-            break;
-        }
-    }
     if let Some(j) = journal.as_mut() {
-        j.note("aborted by the user (feed hold, soft reset, M5)");
+        j.note("stopped: feed hold, soft reset");
         j.sync()?;
     }
-    Ok(SendError::Aborted {
+    Ok(())
+}
+
+/// The operator's abort: feed hold, soft reset, tool off (confirmed by `$G`).
+pub(super) fn abort<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    job: &Job,
+    tracker: &mut Tracker,
+    journal: &mut Option<Journal>,
+) -> Result<SendError, SendError> {
+    stop_with_reset(sess, job, tracker, journal)?;
+    if let Some(j) = journal.as_mut() {
+        j.note("aborted by the user (feed hold, soft reset, tool off)");
+    }
+    let err = SendError::Aborted {
         last_done: tracker.last_done(job),
-    })
+    };
+    Ok(with_tool_off(sess, journal, err))
 }
 
 /// The `ok`/`error` answers that arrived after an unexpected banner (some may already be in
@@ -292,4 +300,67 @@ fn answers_after_reset<T: Transport + ?Sized>(
         }
     }
     Ok(late)
+}
+
+/// GRBL's parser-state words that mean the tool is off: spindle/laser (`M5`) and coolant or air
+/// assist (`M9`).
+const TOOL_OFF_WORDS: [&str; 2] = ["M5", "M9"];
+
+/// Turns the tool off after a stop and confirms it with `$G`: `M5` and `M9`, and `S0` in laser
+/// mode (so a later `M3` cannot relight the laser at the old power); a controller in alarm
+/// refuses G-code, but its reset already switched everything off, which `$G` shows. True when
+/// the parser state reads `M5 M9` (and `S0` in laser mode) afterwards.
+pub(super) fn tool_off<T: Transport + ?Sized>(sess: &mut Session<'_, T>) -> bool {
+    let laser = sess.settings.get(&32).is_some_and(|v| *v != 0.0);
+    let wait = Duration::from_secs(3);
+    sess.s.set_feeding(true);
+    if !sess.alarm_lock {
+        let words: &[&str] = if laser {
+            &["M5", "S0", "M9"]
+        } else {
+            &["M5", "M9"]
+        };
+        for w in words {
+            if !matches!(sess.command(w, wait), Ok(Ok(()))) {
+                return false;
+            }
+        }
+    }
+    sess.last_gc = None;
+    if !matches!(sess.command("$G", wait), Ok(Ok(()))) {
+        return false;
+    }
+    let Some(gc) = sess.last_gc.clone() else {
+        return false;
+    };
+    let has = |w: &str| {
+        gc.split_whitespace()
+            .any(|x| x.trim_start_matches("GC:") == w)
+    };
+    TOOL_OFF_WORDS.iter().all(|w| has(w)) && (!laser || has("S0"))
+}
+
+/// `err`, or — when the tool-off sequence after the stop could not be confirmed — `err` with
+/// that warning.
+pub(super) fn with_tool_off<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    journal: &mut Option<Journal>,
+    err: SendError,
+) -> SendError {
+    let ok = tool_off(sess);
+    if let Some(j) = journal.as_mut() {
+        j.note(if ok {
+            "tool off (M5 M9), confirmed by $G"
+        } else {
+            "tool off NOT confirmed by $G"
+        });
+        let _ = j.sync();
+    }
+    if ok {
+        err
+    } else {
+        SendError::ToolOffUnconfirmed {
+            cause: Box::new(err),
+        }
+    }
 }

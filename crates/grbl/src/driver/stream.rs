@@ -7,9 +7,11 @@ use super::check::job_uses_unknown_moves;
 use super::error::{LineError, SendError};
 use super::progress::{Phase, Progress, eta};
 use super::session::{Session, stop_noted, transport};
-use super::stops::{abort, on_alarm, on_reset, stop_unexpected};
+use super::stops::{abort, on_alarm, on_reset, stop_unexpected, stop_with_reset, with_tool_off};
 use super::tracker::{Tracker, add, dist, line_ref};
-use super::{CancelToken, JOURNAL_FSYNC_INTERVAL, POSITION_TOL_MM, READ_SLICE, SendOptions};
+use super::{
+    CancelToken, JOURNAL_FSYNC_INTERVAL, POSITION_TOL_MM, PausePolicy, READ_SLICE, SendOptions,
+};
 use crate::job::{Job, LineKind};
 use crate::journal::Journal;
 use crate::response::MachineState;
@@ -106,7 +108,15 @@ pub(super) struct Stream<'s, 'a, T: Transport + ?Sized> {
     end_status_seq: u64,
     hold_since: Option<Instant>,
     last_fsync: Instant,
+    /// The `G4` that proves the planner empty was answered.
+    synced: bool,
+    /// The job line whose `M0` holds the machine, and whether it was resumed already.
+    paused: Option<(usize, bool)>,
 }
+
+/// Tag of the `G4 P0.01` the sender appends to find out that the planner is empty: GRBL answers
+/// a dwell only after every queued motion has finished (`mc_dwell` syncs the buffer first).
+const SYNC_TAG: Tag = Tag::Setup(u32::MAX - 1);
 
 impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
     /// A loop over the lines queued in `sess` (with `preamble` the texts of `Tag::Preamble`s).
@@ -139,6 +149,8 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
             end_status_seq: 0,
             hold_since: None,
             last_fsync: now,
+            synced: false,
+            paused: None,
         }
     }
 
@@ -169,7 +181,10 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
             if acked {
                 self.journal_batch()?;
             }
-            self.check_health()?;
+            self.check_health(progress)?;
+            if self.paused.is_some_and(|p| p.1) {
+                progress.paused_at = None;
+            }
             if self.drained(progress) {
                 break;
             }
@@ -183,7 +198,7 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
             if let Some(j) = self.journal.as_mut() {
                 j.sync()?;
             }
-            return Err(err);
+            return Err(with_tool_off(self.sess, self.journal, err));
         }
         Ok(Streamed {
             bytes: self.sess.s.bytes_written() - self.bytes_before,
@@ -204,6 +219,8 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
         if c.resume && self.holding {
             self.sess.s.realtime(b'~');
             self.holding = false;
+        } else if c.resume && self.paused.is_some_and(|p| !p.1) {
+            self.resume_pause();
         }
         if self.last_poll.elapsed() >= self.opts.status_interval {
             self.sess.s.realtime(b'?');
@@ -226,6 +243,7 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
         let mut batch = evs.into_iter();
         while let Some(e) = batch.next() {
             match e {
+                Event::Ack(SYNC_TAG) | Event::Rejected(SYNC_TAG, _) => self.synced = true,
                 Event::Ack(tag) => {
                     self.answered();
                     if let Tag::Job(i) = tag {
@@ -277,6 +295,48 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
             }
         }
         Ok(acked_any)
+    }
+
+    /// The job line whose `M0` holds the machine: the oldest line in flight (GRBL keeps an
+    /// `M0`'s `ok` until cycle start).
+    fn pausing_line(&self) -> Option<usize> {
+        match self.sess.s.in_flight_tags().first() {
+            Some(Tag::Job(i)) if self.job.pauses(*i) => Some(*i),
+            _ => None,
+        }
+    }
+
+    /// The job paused itself (`M0`): resume, abort or wait, as the options say.
+    fn program_pause(&mut self, line: usize, progress: &mut Progress) -> Result<(), SendError> {
+        if self.paused.is_some_and(|p| p.0 == line) {
+            return Ok(());
+        }
+        self.paused = Some((line, false));
+        if let Some(j) = self.journal.as_mut() {
+            let n = self.job.lines[line].source_line;
+            j.note(&format!("paused by the job at line {n} (M0)"));
+        }
+        match self.opts.on_pause {
+            PausePolicy::Resume => self.resume_pause(),
+            PausePolicy::Wait => progress.paused_at = Some(line_ref(self.job, line)),
+            PausePolicy::Abort => {
+                stop_with_reset(self.sess, self.job, self.tracker, self.journal)?;
+                let err = SendError::PausedByJob {
+                    line: line_ref(self.job, line),
+                    last_done: self.tracker.last_done(self.job),
+                };
+                return Err(with_tool_off(self.sess, self.journal, err));
+            }
+        }
+        Ok(())
+    }
+
+    /// Cycle start after the job's own pause.
+    fn resume_pause(&mut self) {
+        self.sess.s.realtime(b'~');
+        if let Some(p) = self.paused.as_mut() {
+            p.1 = true;
+        }
     }
 
     fn answered(&mut self) {
@@ -332,7 +392,7 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
 
     /// Stops when bytes were lost on the link, the machine sits in a hold or check mode this
     /// sender did not ask for, or the controller went silent.
-    fn check_health(&mut self) -> Result<(), SendError> {
+    fn check_health(&mut self, progress: &mut Progress) -> Result<(), SendError> {
         let in_flight = self.sess.s.in_flight();
         if in_flight > 0
             && self.idle_since_response >= 2
@@ -352,6 +412,12 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
             state,
             Some(MachineState::Hold { .. }) | Some(MachineState::Door(_))
         );
+        if held
+            && !self.holding
+            && let Some(line) = self.pausing_line()
+        {
+            return self.program_pause(line, progress);
+        }
         if held && !self.holding {
             let since = *self.hold_since.get_or_insert_with(Instant::now);
             if self.opts.hold_timeout.is_some_and(|t| since.elapsed() >= t) {
@@ -395,8 +461,20 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
         }
         if self.stream_end.is_none() {
             self.stream_end = Some(self.start.elapsed());
-            self.end_status_seq = self.sess.status_seq;
             progress.phase = Phase::Finishing;
+            // A status report alone may say Idle before GRBL's auto cycle start has begun the
+            // last queued moves: finish only after a dwell's answer proves the planner empty.
+            self.sess.s.set_feeding(true);
+            self.sess
+                .s
+                .push(SYNC_TAG, "G4P0.01", SendMode::SendResponse);
+            return false;
+        }
+        if !self.synced {
+            return false;
+        }
+        if self.end_status_seq == 0 {
+            self.end_status_seq = self.sess.status_seq.max(1);
             self.sess.s.realtime(b'?');
             self.last_poll = Instant::now();
         }
@@ -448,14 +526,16 @@ pub(super) fn finish<T: Transport + ?Sized>(
     {
         let e = add(job.end_state.position, [0.0; 3]);
         if dist(p, e) > POSITION_TOL_MM * 10.0 {
-            return stop_noted(
-                journal,
-                &format!("end position {p:?} differs from the job's end {e:?}"),
-                SendError::PositionMismatch {
-                    expected: e,
-                    actual: p,
-                },
-            );
+            let err = SendError::PositionMismatch {
+                expected: e,
+                actual: p,
+            };
+            let why = format!("end position {p:?} differs from the job's end {e:?}");
+            let err = match stop_noted::<()>(journal, &why, err) {
+                Err(e) => e,
+                Ok(()) => unreachable!("stop_noted always stops"),
+            };
+            return Err(with_tool_off(sess, journal, err));
         }
     }
     if let Some(j) = journal.as_mut() {

@@ -179,8 +179,10 @@ impl Tracker {
     }
 
     pub(super) fn last_done(&self, job: &Job) -> Option<LineRef> {
-        let n = self.done.iter().take_while(|d| **d).count();
-        n.checked_sub(1).map(|i| line_ref(job, i))
+        // The last line executed, exactly: after a rejected line, the lines GRBL already held
+        // behind it ran too (the rejected one did not; its error names it).
+        let i = self.done.iter().rposition(|d| *d)?;
+        Some(line_ref(job, i))
     }
 }
 

@@ -131,6 +131,10 @@ pub struct Job {
     pub safe_z: Option<f64>,
     /// State after the last line.
     pub end_state: ModalState,
+    /// A comment declares that the job needs laser mode (`$32=1`), as flatcut's laser header
+    /// does.
+    #[serde(default)]
+    pub needs_laser_mode: bool,
 }
 
 /// FNV-1a, 64 bit: a stable, dependency-free content hash (not cryptographic; it guards
@@ -192,6 +196,38 @@ impl Job {
             .filter(|&i| self.lines[i].moves && self.lines[i].length > ZERO_LENGTH_MM)
             .map(|i| (self.lines[i].text.clone(), self.start_of(i), self.end_of(i)))
             .collect()
+    }
+
+    /// Whether line `index` pauses the program (`M0`): GRBL holds the feed there and keeps
+    /// the line's `ok` until cycle start.
+    pub fn pauses(&self, index: usize) -> bool {
+        self.lines.get(index).is_some_and(|l| {
+            l.kind == LineKind::Gcode
+                && parse::words(&l.text).is_ok_and(|ws| ws.iter().any(|w| w.0 == 'M' && w.1 == 0.0))
+        })
+    }
+
+    /// The feed (mm/min) at which the job plunges the tool (a `G1` that only lowers Z) last
+    /// before line `next`, else first after it; `None` if it never does.
+    pub fn plunge_feed(&self, next: usize) -> Option<f64> {
+        let plunge = |i: usize| {
+            let l = &self.lines[i];
+            let (a, b) = (self.start_of(i), self.end_of(i));
+            let after = self.state_before(i + 1);
+            (l.moves
+                && after.motion == MotionMode::Linear
+                && !after.inverse_time
+                && b[2] < a[2]
+                && a[0] == b[0]
+                && a[1] == b[1]
+                && after.feed > 0.0)
+                .then_some(after.feed)
+        };
+        let next = next.min(self.len());
+        (0..next)
+            .rev()
+            .find_map(plunge)
+            .or_else(|| (next..self.len()).find_map(plunge))
     }
 
     /// The work position (G92-free, mm) where line `index` starts.

@@ -88,6 +88,7 @@ pub(super) struct Interpreter {
     z_moves: bool,
     max_z: f64,
     arc_tolerance: f64,
+    needs_laser_mode: bool,
 }
 
 impl Interpreter {
@@ -102,12 +103,17 @@ impl Interpreter {
             z_moves: false,
             max_z: f64::NEG_INFINITY,
             arc_tolerance,
+            needs_laser_mode: false,
         }
     }
 
     /// Reads raw line `source_line` (1-based) of the file.
     pub(super) fn line(&mut self, source_line: usize, raw: &str) -> Result<(), JobError> {
         let t = strip_line(raw);
+        // A comment saying `$32=1` (flatcut's laser header: "laser: needs $32=1").
+        if raw.contains("$32=1") && !t.contains("$32=1") {
+            self.needs_laser_mode = true;
+        }
         if t.is_empty() {
             return Ok(());
         }
@@ -375,6 +381,7 @@ impl Interpreter {
             uses_g92: self.uses_g92,
             safe_z: self.z_moves.then_some(self.max_z),
             end_state: self.st,
+            needs_laser_mode: self.needs_laser_mode,
         };
         job.retime(limits);
         Ok(job)

@@ -52,7 +52,10 @@ impl Job {
         }
         if self.safe_z.is_some() && travel {
             if st.feed > 0.0 && !st.inverse_time {
-                out.push(format!("G1Z{}F{}", f(p[2]), f(st.feed)));
+                // Down at the job's own plunge feed (its cutting feed would ram the tool in);
+                // the cutting feed is restored below.
+                let feed = self.plunge_feed(next).unwrap_or(st.feed);
+                out.push(format!("G1Z{}F{}", f(p[2]), f(feed)));
             } else {
                 out.push(format!("G0Z{}", f(p[2])));
             }

@@ -228,3 +228,45 @@ fn hash_identifies_content() {
     assert_eq!(fmt_num(12.5), "12.5");
     assert_eq!(fmt_num(3.0), "3");
 }
+
+/// Issue 14, item 5: a resume plunges at the job's own plunge feed, not its cutting feed, and
+/// restores the cutting feed after.
+#[test]
+fn resume_plunges_at_the_jobs_plunge_feed() {
+    let job = Job::parse(
+        "G21 G90\nG0 Z3\nG0 X10 Y10\nG1 Z-1 F300\nG1 X20 F1500\nG1 Y20\nG0 Z3\nG0 X40\nG1 Z-1 F250\nG1 X50 F1500\n",
+    )
+    .unwrap();
+    let at = |i: usize| job.resume_preamble(i);
+    let plunge = |pre: &[String]| {
+        pre.iter()
+            .find(|l| l.starts_with("G1Z-1"))
+            .cloned()
+            .unwrap_or_default()
+    };
+    // Resuming at `G1 Y20`: the plunge before it was at F300.
+    assert_eq!(plunge(&at(5)), "G1Z-1F300");
+    assert_eq!(at(5).last().map(String::as_str), Some("G1"));
+    assert!(at(5).iter().any(|l| l == "F1500"), "{:?}", at(5));
+    // At `G1 X50`: the latest plunge, F250.
+    assert_eq!(plunge(&at(9)), "G1Z-1F250");
+    assert_eq!(job.plunge_feed(1), Some(300.0));
+    assert_eq!(Job::parse("G1 X1 F100\n").unwrap().plunge_feed(0), None);
+}
+
+/// flatcut's laser header declares laser mode; nothing else does.
+#[test]
+fn a_laser_header_declares_laser_mode() {
+    let laser = Job::parse("(profile laser - laser: needs $32=1)\nG21 G90\nM4 S0\nG1 X1 F600\n");
+    assert!(laser.unwrap().needs_laser_mode);
+    assert!(
+        !Job::parse("G21 G90\nM3 S1000\nG1 X1 F600\n")
+            .unwrap()
+            .needs_laser_mode
+    );
+    let pause = Job::parse("G1 X1 F600\nM0\nM00\nM1\nG1 X2\n").unwrap();
+    assert_eq!(
+        (0..5).map(|i| pause.pauses(i)).collect::<Vec<_>>(),
+        [false, true, true, false, false]
+    );
+}
