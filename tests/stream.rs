@@ -203,7 +203,11 @@ fn injected_error_names_the_line_and_resume_completes() {
     assert!(!st.finished);
     assert!(st.done_count() > 0 && st.done_count() < c.job.len());
 
-    let out = stream_file(&c.job_path, &args(&c).with_resume(true)).unwrap();
+    let out = stream_file(
+        &c.job_path,
+        &args(&c).with_resume(true).with_origin_confirmed(true),
+    )
+    .unwrap();
     assert_eq!(out.report.previously_done, st.done_count());
     assert!(out.report.preamble_lines > 0);
     assert!(
@@ -242,7 +246,11 @@ fn hold_then_abort_stops_with_a_soft_reset_and_resume_completes() {
     assert!(!st.finished);
     assert!(st.done_count() < c.job.len());
 
-    let out = stream_file(&c.job_path, &args(&c).with_resume(true)).unwrap();
+    let out = stream_file(
+        &c.job_path,
+        &args(&c).with_resume(true).with_origin_confirmed(true),
+    )
+    .unwrap();
     assert_eq!(out.report.previously_done, st.done_count());
     // The line the abort cut short runs again whole; every other motion runs exactly once.
     let cut_short: BTreeSet<String> = run1.last().map(|s| s.text.clone()).into_iter().collect();
@@ -267,7 +275,11 @@ fn hangup_reports_the_last_executed_line_and_resume_completes() {
     // The embedded simulator comes back as a fresh controller (power-up banner, position zero):
     // nothing can tell which of the queued lines ran, so a plain resume refuses to guess, names
     // the lines in doubt and says how to choose.
-    let e = stream_file(&c.job_path, &args(&c).with_resume(true)).unwrap_err();
+    let e = stream_file(
+        &c.job_path,
+        &args(&c).with_resume(true).with_origin_confirmed(true),
+    )
+    .unwrap_err();
     let msg = format!("{e:#}");
     let se = e.downcast_ref::<StreamError>().expect("a send error");
     let SendError::ResumeUncertain { from, to, .. } = se.send_error() else {
@@ -287,7 +299,9 @@ fn hangup_reports_the_last_executed_line_and_resume_completes() {
     );
     let out = stream_file(
         &c.job_path,
-        &args(&c).with_resume_from(Some(from.source_line)),
+        &args(&c)
+            .with_resume_from(Some(from.source_line))
+            .with_origin_confirmed(true),
     )
     .unwrap();
     assert_eq!(out.report.previously_done, from.index);
@@ -340,7 +354,11 @@ fn alarm_mid_job_is_explained_and_resume_completes() {
     assert!(msg.contains("--resume"), "{msg}");
     let run1 = read_trace(&t1);
     assert!(!Journal::read(&c.journal).unwrap().finished);
-    let out = stream_file(&c.job_path, &args(&c).with_resume(true)).unwrap();
+    let out = stream_file(
+        &c.job_path,
+        &args(&c).with_resume(true).with_origin_confirmed(true),
+    )
+    .unwrap();
     // The line the alarm interrupted runs again; every other motion exactly once.
     let hit: BTreeSet<String> = run1.last().map(|s| s.text.clone()).into_iter().collect();
     assert_exactly_once_except(&c.job, &[&run1, trace_of(&out)], &hit);

@@ -403,3 +403,143 @@ fn estimate_matches_the_simulated_machine() {
         eprintln!("{name}: estimate {est:.3} s, simulated {sim:.3} s");
     }
 }
+
+/// Issue 14, item 5: with homing and soft limits GRBL allows machine coordinates −travel..0
+/// only; the refusal says so in machine coordinates.
+#[test]
+fn travel_refusal_explains_machine_coordinates() {
+    let job = Job::parse("G0X0Y0\nG1X95Y10F1000\n").unwrap();
+    let sim = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_setting(22, 1.0)
+            .with_setting(20, 1.0)
+            .with_setting(130, 800.0),
+    );
+    let e = run(&sim, &job, &opts().with_unlock(true)).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        matches!(e, SendError::OutOfTravel { axis: 'X', .. }),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("0.000..95.000 mm in machine coordinates")
+            && msg.contains("outside -800.000..0.000 mm"),
+        "{msg}"
+    );
+    assert!(sim.stop().trace.is_empty());
+}
+
+/// Issue 14, item 3: a job that pauses itself (M0) is aborted by default when nobody can
+/// answer (tool off, the line named), and runs through with `PausePolicy::Resume`.
+#[test]
+fn program_pause_aborts_without_an_operator_and_resumes_when_asked() {
+    let text = "G21 G90\nG1 X1 F3000\nM0\nG1 X2\nG1 X3\n";
+    let job = Job::parse(text).unwrap();
+    let sim = spawn(SimConfig::default().with_instant_motion(true));
+    let e = run(&sim, &job, &opts()).unwrap_err();
+    assert!(
+        matches!(&e, SendError::PausedByJob { line, .. } if line.source_line == 3),
+        "{e}"
+    );
+    assert!(e.to_string().contains("tool off"), "{e}");
+    let o = opts().with_on_pause(flatcut_grbl::PausePolicy::Resume);
+    run(&sim, &job, &o).expect("resumed after the pause");
+    let trace = sim.stop().trace;
+    assert_eq!(trace.iter().filter(|s| s.text == "G1X3").count(), 1);
+    assert!(!trace.iter().any(|s| s.text == "G1X2" && s.line < 5));
+}
+
+/// Issue 14, item 5: a laser job (M3 keeps the laser on while stopped) stopped by a rejected
+/// line ends with M5 S0 M9, confirmed by `$G`.
+#[test]
+fn error_stop_turns_the_laser_off_and_confirms_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let jp = dir.path().join("laser.journal");
+    let mut text = String::from("G21 G90\nM8\nG1 F600\nM3 S500\n");
+    for i in 1..=40 {
+        text.push_str(&format!("G1 X{} Y{}\n", i, i % 2));
+    }
+    let job = Job::parse(&text).unwrap();
+    let sim = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_setting(32, 1.0)
+            .with_faults(Faults {
+                error_at_line: Some((30, 33)),
+                ..Faults::default()
+            }),
+    );
+    let e = run(&sim, &job, &opts().with_journal(&jp)).unwrap_err();
+    assert!(matches!(e, SendError::LineRejected { .. }), "{e}");
+    let notes = Journal::read(&jp).unwrap().notes;
+    assert!(
+        notes
+            .iter()
+            .any(|n| n == "tool off (M5 M9), confirmed by $G"),
+        "{notes:?}"
+    );
+    sim.stop();
+}
+
+/// Issue 14, item 5: a job whose header says it needs laser mode is refused on a controller
+/// with `$32=0` before anything moves, unless forced.
+#[test]
+fn laser_job_is_refused_when_laser_mode_is_off() {
+    let job =
+        Job::parse("(profile laser - laser: needs $32=1)\nG21 G90\nM4 S0\nG1 X5 F600 S300\nM5\n")
+            .unwrap();
+    let sim = spawn(SimConfig::default().with_instant_motion(true));
+    let e = run(&sim, &job, &opts()).unwrap_err();
+    assert!(matches!(e, SendError::LaserModeOff), "{e}");
+    run(&sim, &job, &opts().with_force_laser(true)).unwrap();
+    assert_eq!(sim.stop().trace.len(), 1);
+}
+
+/// Issue 14, item 2: a resume on a controller that restarted (the DTR reset of opening the
+/// port) re-establishes the position first: homing where the machine homes, else only on the
+/// operator's word; never the remaining lines at once.
+#[test]
+fn resume_after_a_controller_restart_homes_or_needs_the_operators_word() {
+    let dir = tempfile::tempdir().unwrap();
+    let jp = dir.path().join("j.journal");
+    let job = Job::parse(&zigzag(120)).unwrap();
+    let faults = Faults {
+        error_at_line: Some((60, 33)),
+        ..Faults::default()
+    };
+    let first = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_faults(faults),
+    );
+    run(&first, &job, &opts().with_journal(&jp)).unwrap_err();
+    first.stop();
+    let resume = opts().with_journal(&jp).with_resume(true);
+    // A fresh controller that does not home: refused, with the reason.
+    let plain = spawn(SimConfig::default().with_instant_motion(true));
+    let e = run(&plain, &job, &resume).unwrap_err();
+    assert!(
+        matches!(&e, SendError::PositionUnknown { why } if why.contains("restarted")),
+        "{e}"
+    );
+    assert!(plain.stop().trace.is_empty(), "nothing moved");
+    // A fresh controller that homes ($22=1, alarm-locked at power-up): homed, then resumed.
+    let homing = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_setting(22, 1.0)
+            .with_setting(23, 3.0),
+    );
+    let rep = run(&homing, &job, &resume).expect("homed and resumed");
+    assert!(
+        rep.notices
+            .iter()
+            .any(|n| n.starts_with("homed the machine ($H)")),
+        "{:?}",
+        rep.notices
+    );
+    let trace = homing.stop().trace;
+    assert_eq!(trace.first().map(|s| s.motion.as_str()), Some("HOME"));
+    assert!(Journal::read(&jp).unwrap().finished);
+}

@@ -56,7 +56,8 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         common::write(&out.join(&f.name), &f.bytes)?;
     }
     // The project's [device] is the device (a --port on the command line wins).
-    let stream = device::select::for_project(&proj.device, &outputs.profile, &a.stream);
+    let mut stream = device::select::for_project(&proj.device, &outputs.profile, &a.stream);
+    stream.force_laser = a.force;
     let a = Args { stream, ..a };
     let (stream_lines, exit) = send_stage(&a, &outputs, &out, &mut log)?;
     print_summary(&outputs, &stream_lines, &out, t0);

@@ -54,6 +54,14 @@ pub(super) fn connect<T: Transport + ?Sized>(
             .find(|m| m.contains("unlock") || m.contains("Reset"))
             .cloned()
             .unwrap_or_else(|| "state Alarm".into());
+        // A resume on a machine that homes re-establishes its position with `$H` itself.
+        let homes = sess.settings.get(&22).is_some_and(|v| *v != 0.0);
+        if opts.resume && homes && !opts.unlock {
+            return Ok(Link {
+                restarted: true,
+                unlocked: false,
+            });
+        }
         if !opts.unlock {
             return Err(SendError::AlarmLocked { reason });
         }

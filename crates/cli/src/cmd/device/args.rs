@@ -36,6 +36,18 @@ pub struct StreamArgs {
     /// doubt.
     #[arg(long, value_name = "LINE")]
     pub resume_from: Option<usize>,
+    /// With --resume: the operator confirms that the work origin is where it was when the job
+    /// stopped; needed on a controller that restarted or lost its position and does not home
+    /// (one that homes, `$22=1`, is homed with `$H` instead).
+    #[arg(long)]
+    pub origin_confirmed: bool,
+    /// When the job pauses itself (M0): abort, resume, or wait for the operator. Default: ask
+    /// on a terminal, abort without one.
+    #[arg(long, value_enum, value_name = "POLICY")]
+    pub on_pause: Option<OnPause>,
+    /// Stream a laser job (its header says it needs `$32=1`) to a controller with `$32=0`.
+    #[arg(skip)]
+    pub force_laser: bool,
     /// Journal of acknowledged and executed lines (default: `<job>.journal`).
     #[arg(long, value_name = "PATH")]
     pub journal: Option<PathBuf>,
@@ -84,6 +96,9 @@ impl Default for StreamArgs {
             check: false,
             resume: false,
             resume_from: None,
+            origin_confirmed: false,
+            on_pause: None,
+            force_laser: false,
             journal: None,
             sim_speed: DEFAULT_SIM_SPEED,
             sim_instant: false,
@@ -129,6 +144,11 @@ impl StreamArgs {
         }
         self
     }
+    /// Sets [`StreamArgs::origin_confirmed`].
+    pub fn with_origin_confirmed(mut self, on: bool) -> Self {
+        self.origin_confirmed = on;
+        self
+    }
     /// Sets [`StreamArgs::unlock`].
     pub fn with_unlock(mut self, on: bool) -> Self {
         self.unlock = on;
@@ -171,5 +191,33 @@ impl StreamArgs {
     /// Whether the job goes to the embedded simulator.
     pub fn uses_sim(&self) -> bool {
         self.port.is_none()
+    }
+}
+
+/// `--on-pause`: what to do when the job pauses itself (M0).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum OnPause {
+    /// Abort: feed hold, soft reset, tool off.
+    Abort,
+    /// Resume at once (cycle start).
+    Resume,
+    /// Wait for the operator (Ctrl-C then resume or abort, or a prompt on a terminal).
+    Wait,
+}
+
+impl StreamArgs {
+    /// The pause policy: `--on-pause`, else wait and ask on a terminal, abort without one.
+    pub fn pause_policy(&self) -> flatcut_grbl::PausePolicy {
+        use flatcut_grbl::PausePolicy;
+        use std::io::IsTerminal;
+        match self.on_pause {
+            Some(OnPause::Abort) => PausePolicy::Abort,
+            Some(OnPause::Resume) => PausePolicy::Resume,
+            Some(OnPause::Wait) => PausePolicy::Wait,
+            None if std::io::stdin().is_terminal() && std::io::stderr().is_terminal() => {
+                PausePolicy::Wait
+            }
+            None => PausePolicy::Abort,
+        }
     }
 }

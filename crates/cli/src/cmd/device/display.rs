@@ -1,7 +1,7 @@
 //! The progress display of a send: a bar and a status line on a terminal, plain lines every few
 //! seconds in a log, nothing with `--quiet`; and the observer that feeds it.
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -11,7 +11,7 @@ use flatcut_grbl::{Control, Job, Progress, SendError, SendOptions, SendReport};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::StreamArgs;
-use super::signals::{Interrupts, prompt_loop};
+use super::signals::{Ev, Interrupts, prompt_loop};
 
 /// Interval of the plain progress lines printed when stderr is not a terminal (CI logs): often
 /// enough to show life, rare enough not to flood a log.
@@ -40,7 +40,7 @@ pub(super) fn run_send(
     .unwrap_or_else(|_| ProgressStyle::default_bar());
     bar.set_style(style);
     let prompting = Arc::new(AtomicBool::new(false));
-    let interrupts = Interrupts::register();
+    let interrupts = Interrupts::register(Some(cancel.clone()));
     let prompter = interrupts.as_ref().ok().map(|i| {
         let rx = i.take_receiver();
         let answers = i.tx.clone();
@@ -64,7 +64,16 @@ pub(super) fn run_send(
     };
     let mut last_plain = Instant::now();
     let plain = !interactive && !args.quiet;
+    let pause_tx = interrupts.as_ref().ok().map(|i| i.tx.clone());
+    let mut asked_pause: Option<usize> = None;
     let mut observer = |p: &Progress| {
+        // The job paused itself and waits for the operator: ask once per pause.
+        if let (Some(line), Some(tx)) = (&p.paused_at, &pause_tx)
+            && asked_pause != Some(line.index)
+        {
+            asked_pause = Some(line.index);
+            let _ = tx.send(Ev::Pause(line.to_string()));
+        }
         if prompting.load(Ordering::Relaxed) {
             return;
         }
@@ -82,7 +91,9 @@ pub(super) fn run_send(
             && (last_plain.elapsed() >= PLAIN_PROGRESS_INTERVAL || p.phase == Phase::Done)
         {
             last_plain = Instant::now();
-            eprintln!(
+            // A log that cannot be written is no reason to stop a machine mid-job.
+            let _ = writeln!(
+                std::io::stderr(),
                 "{}: line {}/{} {}",
                 phase_name(p.phase),
                 p.lines_acked,

@@ -25,7 +25,7 @@ mod explain;
 pub mod select;
 mod signals;
 
-pub use args::{DEFAULT_BAUD, DEFAULT_SIM_SPEED, StreamArgs};
+pub use args::{DEFAULT_BAUD, DEFAULT_SIM_SPEED, OnPause, StreamArgs};
 pub use display::PLAIN_PROGRESS_INTERVAL;
 pub use explain::StreamError;
 pub(crate) use signals::wait_for_interrupt;
@@ -116,7 +116,10 @@ pub fn stream_text_with_control(
         .with_check(args.check)
         .with_resume(args.resume || resume_from.is_some())
         .with_resume_from(resume_from)
-        .with_journal(&journal);
+        .with_journal(&journal)
+        .with_origin_confirmed(args.origin_confirmed)
+        .with_on_pause(args.pause_policy())
+        .with_force_laser(args.force_laser);
 
     let sim = if args.uses_sim() {
         let cfg = sim_config(&job, args)?;

@@ -15,6 +15,8 @@ pub(super) enum Ev {
     Interrupt,
     /// A line typed at the "[r]esume or [a]bort?" prompt (`None`: stdin closed).
     Answer(Option<String>),
+    /// The job paused itself (`M0`) at this line; the operator decides.
+    Pause(String),
     /// The send is over.
     Done,
 }
@@ -25,7 +27,7 @@ pub(super) enum Ev {
 /// not say which signal it was): a service manager stopping `flatcut send`, or a closed
 /// terminal, gets the feed hold and then the abort (stdin is not a terminal, or reading the
 /// answer fails), never a controller left running with a dead sender.
-static SINK: Mutex<Vec<(u64, Sender<Ev>)>> = Mutex::new(Vec::new());
+static SINK: Mutex<Vec<(u64, Sender<Ev>, Option<CancelToken>)>> = Mutex::new(Vec::new());
 /// Registration ids, so a finishing stream unregisters itself and nobody else.
 static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 static HANDLER: OnceLock<Result<(), String>> = OnceLock::new();
@@ -36,7 +38,10 @@ fn install_handler() -> Result<(), String> {
             ctrlc::set_handler(|| {
                 let sink = SINK.lock().unwrap_or_else(|p| p.into_inner());
                 match sink.last() {
-                    Some((_, tx)) if tx.send(Ev::Interrupt).is_ok() => {}
+                    Some((_, tx, _)) if tx.send(Ev::Interrupt).is_ok() => {}
+                    // A send whose prompt thread is gone still stops safely: the streaming
+                    // thread aborts (feed hold, soft reset, tool off) and returns.
+                    Some((_, _, Some(cancel))) => cancel.abort(),
                     _ => std::process::exit(130),
                 }
             })
@@ -53,13 +58,15 @@ pub(super) struct Interrupts {
 }
 
 impl Interrupts {
-    pub(super) fn register() -> anyhow::Result<Interrupts> {
+    /// Registers a receiver of Ctrl-C (SIGTERM, SIGHUP); `cancel` is aborted directly when
+    /// nothing listens any more.
+    pub(super) fn register(cancel: Option<CancelToken>) -> anyhow::Result<Interrupts> {
         install_handler().map_err(|e| anyhow::anyhow!("cannot install the Ctrl-C handler: {e}"))?;
         let (tx, rx) = channel();
         let id = NEXT_ID.fetch_add(1, Ordering::Relaxed);
         SINK.lock()
             .unwrap_or_else(|p| p.into_inner())
-            .push((id, tx.clone()));
+            .push((id, tx.clone(), cancel));
         Ok(Interrupts {
             id,
             tx,
@@ -84,13 +91,13 @@ impl Drop for Interrupts {
     fn drop(&mut self) {
         SINK.lock()
             .unwrap_or_else(|p| p.into_inner())
-            .retain(|(id, _)| *id != self.id);
+            .retain(|(id, _, _)| *id != self.id);
     }
 }
 
 /// Blocks until Ctrl-C (for `flatcut sim`). Errors if no handler can be installed.
 pub(crate) fn wait_for_interrupt() -> anyhow::Result<()> {
-    let i = Interrupts::register()?;
+    let i = Interrupts::register(None)?;
     let rx = i.take_receiver();
     loop {
         match rx.recv() {
@@ -99,6 +106,9 @@ pub(crate) fn wait_for_interrupt() -> anyhow::Result<()> {
         }
     }
 }
+
+/// The question after a feed hold.
+const HOLD_QUESTION: &str = "\nfeed hold: [r]esume or [a]bort (soft reset, tool off)? ";
 
 /// Ctrl-C policy (SIGTERM and SIGHUP alike): the first one holds the feed and asks "[r]esume or
 /// [a]bort?" on the terminal (abort at once when stdin is not a terminal); a second one while
@@ -112,9 +122,15 @@ pub(super) fn prompt_loop(
     interactive: bool,
     prompting: Arc<AtomicBool>,
 ) {
-    let ask = || {
-        eprint!("\nfeed hold: [r]esume or [a]bort (soft reset, tool off)? ");
-        let _ = std::io::stderr().flush();
+    // Writes to a terminal that may be gone (SIGHUP): a failed write must not end this thread,
+    // which is what turns the next answer or signal into an abort.
+    let say = |text: &str| {
+        let mut e = std::io::stderr();
+        let _ = e.write_all(text.as_bytes());
+        let _ = e.flush();
+    };
+    let ask = |question: &str| {
+        say(question);
         // The stdin read blocks, so it runs on its own thread and answers through the channel.
         let tx = answers.clone();
         std::thread::spawn(move || {
@@ -137,7 +153,7 @@ pub(super) fn prompt_loop(
         match ev {
             Ev::Done => return,
             Ev::Interrupt if asking || cancel.is_aborted() => {
-                eprintln!("\naborting: soft reset, tool off");
+                say("\naborting: soft reset, tool off\n");
                 cancel.abort();
                 asking = false;
                 restore(&bar);
@@ -145,31 +161,40 @@ pub(super) fn prompt_loop(
             Ev::Interrupt => {
                 cancel.hold();
                 if !std::io::stdin().is_terminal() {
-                    eprintln!("\ninterrupted: feed hold, then abort (stdin is not a terminal)");
+                    say("\ninterrupted: feed hold, then abort (stdin is not a terminal)\n");
                     cancel.abort();
                     continue;
                 }
                 prompting.store(true, Ordering::Relaxed);
                 bar.set_draw_target(ProgressDrawTarget::hidden());
                 asking = true;
-                ask();
+                ask(HOLD_QUESTION);
             }
+            Ev::Pause(line) if !asking => {
+                prompting.store(true, Ordering::Relaxed);
+                bar.set_draw_target(ProgressDrawTarget::hidden());
+                asking = true;
+                ask(&format!(
+                    "\npaused by the job at {line}: [r]esume or [a]bort (soft reset, tool off)? "
+                ));
+            }
+            Ev::Pause(_) => {}
             Ev::Answer(a) if asking => {
                 match a.as_deref().map(|s| s.trim().to_ascii_lowercase()) {
                     Some(s) if s == "r" || s == "resume" => {
-                        eprintln!("resuming (cycle start)");
+                        say("resuming (cycle start)\n");
                         cancel.resume();
                     }
                     Some(s) if s == "a" || s == "abort" => {
-                        eprintln!("aborting: soft reset, tool off");
+                        say("aborting: soft reset, tool off\n");
                         cancel.abort();
                     }
                     None => {
-                        eprintln!("stdin closed: aborting");
+                        say("stdin closed: aborting\n");
                         cancel.abort();
                     }
                     Some(_) => {
-                        ask();
+                        ask("[r]esume or [a]bort? ");
                         continue;
                     }
                 }

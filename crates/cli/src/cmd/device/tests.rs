@@ -22,6 +22,7 @@ fn progress() -> Progress {
         elapsed: Duration::from_secs(3),
         bytes_written: 1234,
         holding: false,
+        paused_at: None,
     }
 }
 
