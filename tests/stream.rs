@@ -548,6 +548,17 @@ fn sigterm_child_process() {
 /// flushed, and a message naming the last line executed.
 #[test]
 fn sigterm_aborts_safely_and_names_the_last_line() {
+    signal_aborts_with_the_tool_off("-TERM");
+}
+
+/// Issue 14, item 5: closing the terminal (SIGHUP) aborts as SIGTERM does, and the tool-off is
+/// confirmed.
+#[test]
+fn sighup_aborts_with_the_tool_off() {
+    signal_aborts_with_the_tool_off("-HUP");
+}
+
+fn signal_aborts_with_the_tool_off(signal: &str) {
     use std::process::{Command, Stdio};
     use std::time::{Duration, Instant};
     let dir = tempfile::tempdir().unwrap();
@@ -579,7 +590,7 @@ fn sigterm_aborts_safely_and_names_the_last_line() {
         std::thread::sleep(Duration::from_millis(20));
     };
     let killed = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
+        .args([signal, &child.id().to_string()])
         .status()
         .unwrap();
     assert!(killed.success());
@@ -595,6 +606,10 @@ fn sigterm_aborts_safely_and_names_the_last_line() {
     );
     let text = std::fs::read_to_string(&journal).unwrap();
     assert!(text.contains("N aborted by the user"), "{text}");
+    assert!(
+        text.contains("N tool off (M5 M9), confirmed by $G"),
+        "{text}"
+    );
     let st = Journal::read(&journal).unwrap();
     assert!(!st.finished && st.done_count() > 0);
 }

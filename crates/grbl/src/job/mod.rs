@@ -69,6 +69,20 @@ pub enum JobError {
         /// Stripped text.
         text: String,
     },
+    /// A character GRBL would not see as written: its serial interrupt takes `?`, `!` and `~`
+    /// out of the stream as realtime commands (a feed hold in the middle of a line!) and drops
+    /// bytes over 0x7F, so the line it parsed would not be the line in the file.
+    #[error(
+        "line {line}: character {ch:?} outside a comment, which GRBL would not receive as written: {text}"
+    )]
+    BadCharacter {
+        /// 1-based line number in the file.
+        line: usize,
+        /// The character.
+        ch: char,
+        /// Stripped text.
+        text: String,
+    },
     /// The file holds no line to send.
     #[error("the job has no G-code lines")]
     Empty,

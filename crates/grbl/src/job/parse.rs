@@ -117,6 +117,16 @@ impl Interpreter {
         if t.is_empty() {
             return Ok(());
         }
+        if let Some(ch) = t
+            .chars()
+            .find(|c| !c.is_ascii() || matches!(c, '?' | '!' | '~'))
+        {
+            return Err(JobError::BadCharacter {
+                line: source_line,
+                ch,
+                text: t,
+            });
+        }
         if t.len() > MAX_LINE_CHARS {
             return Err(JobError::LineTooLong {
                 line: source_line,
