@@ -201,7 +201,6 @@ impl SimArgs {
                 .transpose()?,
             reset_at_line: self.reset_at,
             hangup_at_line: self.hangup_at,
-            ..Faults::default()
         })
     }
 
