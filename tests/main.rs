@@ -2,7 +2,9 @@
 //! command line, the pipeline against the simulated controller).
 
 mod dxf;
+mod fuzz;
 mod hpgl;
 mod pipeline;
+mod regressions;
 mod stream;
 mod tidy;

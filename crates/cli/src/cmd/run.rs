@@ -34,7 +34,7 @@ pub struct Args {
     #[arg(long)]
     pub force: bool,
     /// Nesting iterations.
-    #[arg(long, default_value_t = RunOptions::DEFAULT_NEST_ITERS)]
+    #[arg(long, default_value_t = RunOptions::DEFAULT_NEST_ITERS, value_parser = crate::values::iterations)]
     pub nest_iters: usize,
     #[command(flatten)]
     pub stream: StreamArgs,

@@ -28,7 +28,7 @@ mod signals;
 pub use args::{DEFAULT_BAUD, DEFAULT_SIM_SPEED, OnPause, StreamArgs};
 pub use display::PLAIN_PROGRESS_INTERVAL;
 pub use explain::StreamError;
-pub(crate) use signals::wait_for_interrupt;
+pub(crate) use signals::{install_signal_cleanup, wait_for_interrupt};
 
 use display::run_send;
 use embedded::{sim_config, write_sim_files};
