@@ -1,7 +1,6 @@
 //! The first feasible layout: pieces largest first, each at the feasible sample of best
 //! left-bottom score (sampled over the container, then refined), as sparrow builds its start.
 
-use crate::budget::Budget;
 use crate::evaluate::{Eval, FillEval};
 use crate::problem::Problem;
 use crate::search::{SampleConfig, project_turn, search};
@@ -83,21 +82,4 @@ fn right_of_everything(prob: &Problem, st: &State, inst: usize) -> Option<DTrans
         }
     }
     None
-}
-
-/// Places `order` into `st` one by one; returns the instances that did not fit.
-pub(crate) fn fill(
-    prob: &Problem,
-    st: &mut State,
-    order: &[usize],
-    budget: &Budget,
-    rng: &mut Xoshiro256PlusPlus,
-) -> Vec<usize> {
-    let mut left = Vec::new();
-    for &i in order {
-        if !try_fill(prob, st, i, budget.cancelled(), rng) {
-            left.push(i);
-        }
-    }
-    left
 }

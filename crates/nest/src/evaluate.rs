@@ -50,7 +50,6 @@ impl Eval {
 pub(crate) trait Evaluator {
     /// Scores `dt`; may return [`Eval::Invalid`] as soon as the result cannot beat `bound`.
     fn eval(&mut self, dt: DTransformation, bound: Eval) -> Eval;
-    fn evals(&self) -> usize;
 }
 
 /// Collects the hazards a candidate collides with, adding up their weighted loss as they come.
@@ -123,7 +122,6 @@ pub(crate) struct SeparationEval<'a> {
     shape: SPolygon,
     poles: Poles,
     hits: Vec<(HazKey, BasicHazardEntity)>,
-    n: usize,
 }
 
 impl<'a> SeparationEval<'a> {
@@ -137,14 +135,12 @@ impl<'a> SeparationEval<'a> {
             shape: kind.jitem.shape_cd().as_ref().clone(),
             poles: Poles::default(),
             hits: Vec::new(),
-            n: 0,
         }
     }
 }
 
 impl Evaluator for SeparationEval<'_> {
     fn eval(&mut self, dt: DTransformation, bound: Eval) -> Eval {
-        self.n += 1;
         let bound = match bound {
             Eval::Clear(_) => 0.0,
             Eval::Collision(l) => l,
@@ -178,10 +174,6 @@ impl Evaluator for SeparationEval<'_> {
             Eval::Collision(loss.get())
         }
     }
-
-    fn evals(&self) -> usize {
-        self.n
-    }
 }
 
 /// Feasibility plus a left-bottom score, for the construction.
@@ -190,7 +182,6 @@ pub(crate) struct FillEval<'a> {
     kind: &'a Kind,
     filter: PieceFilter,
     shape: SPolygon,
-    n: usize,
 }
 
 impl<'a> FillEval<'a> {
@@ -203,14 +194,12 @@ impl<'a> FillEval<'a> {
                 min_quality: kind.min_quality,
             },
             shape: kind.jitem.shape_cd().as_ref().clone(),
-            n: 0,
         }
     }
 }
 
 impl Evaluator for FillEval<'_> {
     fn eval(&mut self, dt: DTransformation, _bound: Eval) -> Eval {
-        self.n += 1;
         let cde = self.layout.cde();
         let t = dt.compose();
         if cde.detect_surrogate_collision(self.kind.jitem.shape_cd().surrogate(), &t, &self.filter)
@@ -224,9 +213,5 @@ impl Evaluator for FillEval<'_> {
         let poi = self.shape.poi().center;
         let b = self.shape.bbox();
         Eval::Clear(LBF_X_WEIGHT * (poi.0 + b.x_min) + (poi.1 + b.y_min))
-    }
-
-    fn evals(&self) -> usize {
-        self.n
     }
 }

@@ -28,6 +28,7 @@ mod distance;
 mod error;
 mod evaluate;
 mod field;
+mod hide_io;
 pub mod instance;
 mod item;
 mod options;
@@ -44,6 +45,7 @@ mod strip;
 mod tracker;
 
 pub use error::NestError;
+pub use hide_io::{HideFormat, read_hide};
 pub use instance::{BenchInstance, load_bench_instance, load_scarpa};
 pub use item::{GrainDirections, NestItem, Rotations};
 pub use options::NestOptions;

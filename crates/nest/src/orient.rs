@@ -57,6 +57,7 @@ impl Turns {
     }
 
     /// Whether `a` is allowed, to `tol` radians.
+    #[cfg(test)]
     pub(crate) fn allows(&self, a: f32, tol: f32) -> bool {
         wrap(self.project(a) - a).abs() <= tol
     }

@@ -5,7 +5,7 @@ use crate::bin::Bin;
 use crate::problem::Problem;
 use crate::quantify::{Poles, pair_loss};
 use crate::tracker::{Losses, Tracker};
-use jagua_rs::collision_detection::hazards::collector::{BasicHazardCollector, HazardCollector};
+use jagua_rs::collision_detection::hazards::collector::BasicHazardCollector;
 use jagua_rs::collision_detection::hazards::filter::HazardFilter;
 use jagua_rs::collision_detection::hazards::{BasicHazardEntity, HazKey};
 use jagua_rs::entities::{Layout, LayoutSnapshot, PItemKey};

@@ -70,13 +70,3 @@ pub(crate) enum Material<'a> {
     Stock(Stock),
     Hides(&'a [Hide]),
 }
-
-impl Material<'_> {
-    pub(crate) fn describe(&self) -> String {
-        match self {
-            Material::Stock(s) => s.describe(),
-            Material::Hides(h) if h.len() == 1 => format!("hide `{}`", h[0].name),
-            Material::Hides(h) => format!("{} hides", h.len()),
-        }
-    }
-}

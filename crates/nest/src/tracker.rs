@@ -104,11 +104,6 @@ impl Tracker {
         self.stat[i].loss + self.pairs[i].iter().map(|(_, e)| e.loss).sum::<f32>()
     }
 
-    /// Weighted loss of instance `i`.
-    pub(crate) fn weighted_loss(&self, i: usize) -> f32 {
-        self.stat[i].weighted() + self.pairs[i].iter().map(|(_, e)| e.weighted()).sum::<f32>()
-    }
-
     pub(crate) fn total_loss(&self) -> f32 {
         let mut t = 0.0;
         for (i, list) in self.pairs.iter().enumerate() {
@@ -207,7 +202,7 @@ mod tests {
         assert!((t.pair_weight(0, 1) - 2.0).abs() < 1e-6);
         assert!((t.pair_weight(1, 0) - 2.0).abs() < 1e-6);
         assert!((t.static_weight(0) - 1.4).abs() < 1e-6);
-        assert!((t.weighted_loss(0) - (4.0 + 0.7)).abs() < 1e-5);
+        assert!((t.total_weighted_loss() - (4.0 + 0.7)).abs() < 1e-5);
         let saved = t.losses();
         t.set_losses(0, &[(2, 1.0)], 0.0);
         assert_eq!(t.loss(1), 0.0);
