@@ -164,17 +164,17 @@ pub(crate) fn nest_bins(
             if area >= refused[b] {
                 continue;
             }
-            let quick = budget.cancelled();
+            let quick = budget.out_of_time();
             if try_fill(prob, &mut p.states[b], i, quick, &mut p.rng) {
                 done = true;
                 break;
             }
             refused[b] = refused[b].min(area);
         }
-        while !done && !budget.cancelled() && p.open() {
+        while !done && p.open() {
             refused.push(f64::INFINITY);
             let b = p.states.len() - 1;
-            if try_fill(prob, &mut p.states[b], i, false, &mut p.rng) {
+            if try_fill(prob, &mut p.states[b], i, budget.out_of_time(), &mut p.rng) {
                 done = true;
             } else {
                 refused[b] = area;

@@ -59,6 +59,11 @@ impl Budget {
             || self.cancelled()
     }
 
+    /// The time is up (or the search was cancelled); iterations aside.
+    pub(crate) fn out_of_time(&self) -> bool {
+        self.time.is_some_and(|t| self.start.elapsed() >= t) || self.cancelled()
+    }
+
     /// The whole budget is used (or cancelled).
     pub(crate) fn over(&self) -> bool {
         self.iters >= self.max_iters

@@ -255,6 +255,45 @@ mod tests {
         assert!(role("zone-x").is_err());
     }
 
+    fn lwpolyline(layer: &str, pts: &[(f64, f64)], closed: bool) -> String {
+        let mut s = format!(
+            "0\nLWPOLYLINE\n8\n{layer}\n90\n{}\n70\n{}\n",
+            pts.len(),
+            closed as i32
+        );
+        for (x, y) in pts {
+            s += &format!("10\n{x}\n20\n{y}\n");
+        }
+        s
+    }
+
+    #[test]
+    fn dxf_hide_by_layer_names() {
+        let mut t = String::from("0\nSECTION\n2\nENTITIES\n");
+        t += &lwpolyline(
+            "HIDE",
+            &[(0., 0.), (500., 0.), (520., 300.), (0., 320.)],
+            true,
+        );
+        t += &lwpolyline("DEFECT", &[(100., 100.), (120., 100.), (110., 130.)], true);
+        t += &lwpolyline(
+            "QUALITY-3",
+            &[(300., 0.), (500., 0.), (500., 100.), (300., 100.)],
+            true,
+        );
+        t += &lwpolyline("BACKBONE", &[(0., 160.), (520., 160.)], false);
+        t += "0\nENDSEC\n0\nEOF\n";
+        let h = read_hide(&t, "h.dxf", HideFormat::Dxf).unwrap();
+        assert_eq!(h.outline.len(), 4);
+        assert_eq!(h.defects.len(), 1);
+        assert_eq!(h.zones.len(), 1);
+        assert_eq!(h.zones[0].grade, 3);
+        assert_eq!(h.directions, vec![vec![DVec2::new(0., 160.), DVec2::new(520., 160.)]]);
+        let open_defect = t.replace("DEFECT\n90\n3\n70\n1", "DEFECT\n90\n3\n70\n0");
+        let e = read_hide(&open_defect, "h.dxf", HideFormat::Dxf).unwrap_err();
+        assert!(e.to_string().contains("closed"), "{e}");
+    }
+
     #[test]
     fn a_bulge_is_flattened_on_its_arc() {
         // a half circle of radius 10 from (0,0) to (20,0): bulge 1

@@ -8,7 +8,7 @@
 //! being quantified on the pieces' inscribed circles (poles) so it is smooth and cheap; the
 //! strip is shrunk whenever a layout is separated (exploration, with restarts from disrupted
 //! layouts when separation fails) and then by ever smaller random cuts (compression).
-//! Sheets and hides are filled in order and improved by the same separation (see [`bins`]).
+//! Sheets and hides are filled in order and improved by the same separation.
 //!
 //! - Rotations per piece, grain rules (`fixed`, `0,180`, `any`, with a tolerance), mirrored
 //!   pairs placed as mirror images, spacing (kerf), rolls, sheets and hides with defects,
@@ -21,7 +21,7 @@
 //!   every phase; progress is reported per phase.
 
 mod bin;
-pub mod bins;
+mod bins;
 mod budget;
 mod construct;
 mod distance;
@@ -209,7 +209,15 @@ fn run(
         )));
     }
     let (extent, has_field) = match &material {
-        Material::Stock(Stock::Roll { width, .. }) => (*width, false),
+        Material::Stock(Stock::Roll { width, .. }) => {
+            // the strip starts about as long as the pieces' area needs
+            let area: f64 = items
+                .iter()
+                .map(|i| polygon_area(&i.outline).abs() * i.quantity as f64)
+                .filter(|a| a.is_finite())
+                .sum();
+            ((area / width).max(*width), false)
+        }
         Material::Stock(Stock::Sheets { width, height, .. }) => (width.max(*height), false),
         Material::Hides(hides) => (
             hides

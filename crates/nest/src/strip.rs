@@ -114,7 +114,7 @@ fn construct(
         let mut tries = 0;
         loop {
             // past a strip long enough for every piece side by side, stop sampling
-            let quick = budget.cancelled() || w > 2.0 * diam_sum + max_diam;
+            let quick = budget.out_of_time() || w > 2.0 * diam_sum + max_diam;
             if try_fill(prob, &mut st, i, quick, rng) {
                 break;
             }
@@ -267,7 +267,6 @@ pub(crate) fn nest_strip(
         if local.total_loss == 0.0 {
             if cur < width_of(&best) {
                 best = local;
-                report(NestPhase::Explore, budget, cur);
             }
             let next = cur * (1.0 - EXPLORE_SHRINK);
             set_width(&mut sep, prob, height, next, (0.5 * cur) as f32)?;
@@ -286,6 +285,7 @@ pub(crate) fn nest_strip(
             disrupt(&mut sep, prob);
             sep.resync_workers();
         }
+        report(NestPhase::Explore, budget, width_of(&best));
     }
 
     // compression
@@ -301,8 +301,8 @@ pub(crate) fn nest_strip(
         let local = sep.separate(&ccfg, budget);
         if local.total_loss == 0.0 {
             best = local;
-            report(NestPhase::Compress, budget, width_of(&best));
         }
+        report(NestPhase::Compress, budget, width_of(&best));
     }
     Ok(StripOutcome { best, baseline })
 }
