@@ -35,7 +35,7 @@ impl NestOptions {
     pub const DEFAULT_SPACING: f64 = 2.0;
     pub const DEFAULT_SEED: u64 = 0;
     /// Enough for a pattern's worth of pieces to settle well on a sheet or a roll in seconds.
-    pub const DEFAULT_MAX_ITERS: usize = 3000;
+    pub const DEFAULT_MAX_ITERS: usize = 1000;
     /// Two workers: one per core of a small machine (and of CI).
     pub const DEFAULT_WORKERS: usize = 2;
     /// 50 samples over the container per search, then refinement (Gardeyn & Vanden Berghe).
