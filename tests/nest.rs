@@ -21,7 +21,9 @@ fn run_cli(args: &[&str]) -> std::process::ExitCode {
 
 fn cut_outlines(svg: &Path) -> Vec<Vec<DVec2>> {
     let text = std::fs::read_to_string(svg).unwrap();
-    let d = flatcut::pattern::svg::read_svg(&text, "layout", 0.01).unwrap();
+    let d = flatcut::pattern::svg::read_svg(&text, "layout", 0.01, &flatcut::pattern::ColourTable::default())
+        .unwrap()
+        .drawing;
     d.strokes
         .into_iter()
         .filter(|s| s.closed && s.layer == Layer::Cut)

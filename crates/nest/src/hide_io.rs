@@ -15,12 +15,11 @@ use crate::error::NestError;
 use crate::problem::polygon_area;
 use crate::stock::{Hide, QualityZone};
 use flatcut_geom::DVec2;
+use flatcut_pattern::colours::{ColourJob, ColourTable, LIGHTBURN_PALETTE};
 use serde::Deserialize;
 
-/// Chordal tolerance for curves in hide SVGs (mm): far below a knife's kerf.
-const SVG_CHORD_MM: f64 = 0.1;
-/// Segments per quarter turn when a DXF bulge (arc) is flattened.
-const ARC_SEGMENTS_PER_QUARTER: f64 = 8.0;
+/// Chordal tolerance for curves in hide SVGs and DXFs (mm): far below a knife's kerf.
+const CHORD_MM: f64 = 0.1;
 
 /// The file formats a hide can come in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -134,42 +133,6 @@ fn classify(source: &str, elems: Vec<(String, Vec<DVec2>, bool)>) -> Result<Hide
     Ok(hide)
 }
 
-/// Points of a DXF polyline with its bulges (arcs) flattened.
-fn flatten_bulges(points: &[DVec2], bulges: &[f64], closed: bool) -> Vec<DVec2> {
-    let n = points.len();
-    let mut out = Vec::with_capacity(n);
-    let segs = if closed { n } else { n.saturating_sub(1) };
-    for i in 0..n {
-        out.push(points[i]);
-        let b = bulges.get(i).copied().unwrap_or(0.0);
-        if i >= segs || b == 0.0 || !b.is_finite() {
-            continue;
-        }
-        let (a, c) = (points[i], points[(i + 1) % n]);
-        let sweep = 4.0 * b.atan();
-        let chord = c - a;
-        let len = chord.length();
-        if len == 0.0 {
-            continue;
-        }
-        // the arc's centre lies on the chord's bisector
-        let r = len / (2.0 * (sweep / 2.0).sin());
-        let mid = a + chord * 0.5;
-        let normal = DVec2::new(-chord.y, chord.x) / len;
-        let h = r * (sweep / 2.0).cos();
-        let centre = mid + normal * h;
-        let start = (a - centre).y.atan2((a - centre).x);
-        let k = ((sweep.abs() / std::f64::consts::FRAC_PI_2) * ARC_SEGMENTS_PER_QUARTER)
-            .ceil()
-            .clamp(1.0, 256.0) as usize;
-        for j in 1..k {
-            let t = start + sweep * j as f64 / k as f64;
-            out.push(centre + r.abs() * DVec2::from_angle(t));
-        }
-    }
-    out
-}
-
 /// Reads a hide; `source` names it in the result and in errors (the file name).
 pub fn read_hide(text: &str, source: &str, format: HideFormat) -> Result<Hide, NestError> {
     let bad = |reason: String| NestError::InvalidStock {
@@ -195,20 +158,26 @@ pub fn read_hide(text: &str, source: &str, format: HideFormat) -> Result<Hide, N
             })
         }
         HideFormat::Dxf => {
-            let pls = flatcut_pattern::dxf::read_polylines(text).map_err(|e| bad(e.to_string()))?;
+            let (paths, _) = flatcut_pattern::dxf_read::read_dxf_layers(text, CHORD_MM)
+                .map_err(|e| bad(e.to_string()))?;
             classify(
                 source,
-                pls.into_iter()
-                    .map(|p| {
-                        let pts = flatten_bulges(&p.points, &p.bulges, p.closed);
-                        (p.layer, pts, p.closed)
-                    })
+                paths
+                    .into_iter()
+                    .map(|p| (p.layer, p.points, p.closed))
                     .collect(),
             )
         }
         HideFormat::Svg => {
-            let d = flatcut_pattern::svg::read_svg(text, source, SVG_CHORD_MM)
-                .map_err(|e| bad(e.to_string()))?;
+            // ids, not colours, say what a contour of a hide is: keep every colour
+            let all: std::collections::BTreeMap<String, ColourJob> = LIGHTBURN_PALETTE
+                .iter()
+                .map(|(n, _)| (n.to_string(), ColourJob::Draw))
+                .collect();
+            let table = ColourTable::with_overrides(&all).map_err(bad)?;
+            let d = flatcut_pattern::svg::read_svg(text, source, CHORD_MM, &table)
+                .map_err(|e| bad(e.to_string()))?
+                .drawing;
             classify(
                 source,
                 d.strokes
@@ -294,13 +263,4 @@ mod tests {
         assert!(e.to_string().contains("closed"), "{e}");
     }
 
-    #[test]
-    fn a_bulge_is_flattened_on_its_arc() {
-        // a half circle of radius 10 from (0,0) to (20,0): bulge 1
-        let p = flatten_bulges(&[DVec2::ZERO, DVec2::new(20., 0.)], &[1.0, 0.0], false);
-        assert!(p.len() > 10);
-        for q in &p {
-            assert!((q.distance(DVec2::new(10., 0.)) - 10.0).abs() < 1e-9, "{q}");
-        }
-    }
 }

@@ -16,8 +16,8 @@
 //! - Deterministic: the same input, seed and worker count give the same layout with an
 //!   iteration budget, whatever the number of threads. A time budget stops after however many
 //!   iterations the machine managed.
-//! - Bounded: inputs are checked (finite, within [`MAX_COORD_MM`], at most [`MAX_INSTANCES`]
-//!   pieces and [`MAX_VERTICES`] per outline); the time limit and the cancel hook are honoured in
+//! - Bounded: inputs are checked (finite, coordinates within [`MAX_COORD_MM`], stock within
+//!   [`MAX_STOCK_MM`], at most [`MAX_INSTANCES`] pieces and [`MAX_VERTICES`] per outline); the time limit and the cancel hook are honoured in
 //!   every phase; progress is reported per phase.
 
 mod bin;
@@ -49,7 +49,7 @@ pub use hide_io::{HideFormat, read_hide};
 pub use instance::{BenchInstance, load_bench_instance, load_scarpa};
 pub use item::{GrainDirections, NestItem, Rotations};
 pub use options::NestOptions;
-pub use problem::{MAX_COORD_MM, MAX_INSTANCES, MAX_VERTICES};
+pub use problem::{MAX_COORD_MM, MAX_INSTANCES, MAX_STOCK_MM, MAX_VERTICES};
 pub use progress::{NestPhase, NestProgress};
 pub use result::{NestResult, PlacedInstance, SheetUse, Unplaced};
 pub use stock::{Hide, QualityZone, Stock};
@@ -81,7 +81,7 @@ pub fn nest(
     opts: &NestOptions,
     progress: &mut dyn FnMut(&NestProgress),
 ) -> Result<NestResult, NestError> {
-    check_stock(&stock)?;
+    check_stock(&stock, opts.spacing)?;
     run(items, Material::Stock(stock), opts, progress)
 }
 
@@ -99,34 +99,38 @@ pub fn nest_hides(
     run(items, Material::Hides(hides), opts, progress)
 }
 
-fn size_ok(v: f64) -> bool {
-    v.is_finite() && v > 0.0 && v <= MAX_COORD_MM
-}
-
-fn check_stock(stock: &Stock) -> Result<(), NestError> {
+fn check_stock(stock: &Stock, spacing: f64) -> Result<(), NestError> {
     let bad = |reason: String| NestError::InvalidStock {
         stock: stock.describe(),
         reason,
     };
-    let range = format!("sizes must be finite, positive and at most {MAX_COORD_MM:e} mm");
-    match *stock {
-        Stock::Roll { width, max_length } => {
-            if !size_ok(width) || max_length.is_some_and(|l| !size_ok(l)) {
-                return Err(bad(range));
-            }
-        }
+    let sides: Vec<f64> = match *stock {
+        Stock::Roll { width, max_length } => std::iter::once(width).chain(max_length).collect(),
         Stock::Sheets {
             width,
             height,
             max_sheets,
         } => {
-            if !size_ok(width) || !size_ok(height) {
-                return Err(bad(range));
-            }
             if max_sheets.is_some_and(|m| m == 0 || m > MAX_SHEETS) {
                 return Err(bad(format!("max_sheets must be within 1..={MAX_SHEETS}")));
             }
+            vec![width, height]
         }
+    };
+    if sides.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+        return Err(bad("sizes must be finite and positive".into()));
+    }
+    if sides.iter().any(|s| *s > MAX_STOCK_MM) {
+        return Err(bad(format!(
+            "larger than the {MAX_STOCK_MM:e} mm the nester accepts"
+        )));
+    }
+    // the engine shrinks the stock by half the spacing on every side
+    let narrowest = sides.iter().copied().fold(f64::INFINITY, f64::min);
+    if spacing.is_finite() && 2.0 * spacing >= narrowest {
+        return Err(bad(format!(
+            "a spacing of {spacing} mm from the edges leaves no room"
+        )));
     }
     Ok(())
 }

@@ -18,10 +18,13 @@ use jagua_rs::io::import::Importer;
 use std::f64::consts::PI;
 use std::sync::Arc;
 
-/// Largest coordinate or stock size accepted (mm): a kilometre. The collision engine works in
-/// f32, which still resolves 0.06 mm there.
-pub const MAX_COORD_MM: f64 = 1e6;
-/// Most piece instances in one run: the search's memory and time grow with their square.
+pub use flatcut_geom::limits::MAX_COORD_MM;
+/// Largest sheet side, roll width or roll length the nester accepts (mm): 100 m. The collision
+/// engine computes in f32, whose resolution at 1e5 mm is 8 µm; at 1e6 mm it is 62 µm, coarser
+/// than the engine's edge handling, and the search slows by an order of magnitude.
+pub const MAX_STOCK_MM: f64 = 1e5;
+/// Most piece instances (copies, mirrored copies included) in one run: the collision tracker
+/// and the layouts grow with them, and the search's time with their square.
 pub const MAX_INSTANCES: usize = 2000;
 /// Most vertices in one outline (the engine checks outlines for self-intersection pairwise).
 pub const MAX_VERTICES: usize = 5000;
@@ -76,14 +79,11 @@ pub(crate) fn polygon_area(p: &[DVec2]) -> f64 {
     (0..n).map(|i| p[i].perp_dot(p[(i + 1) % n])).sum::<f64>() * 0.5
 }
 
-fn finite_in_range(p: DVec2) -> bool {
-    flatcut_geom::finite2(p) && p.x.abs() <= MAX_COORD_MM && p.y.abs() <= MAX_COORD_MM
-}
 
 /// Checks an outline: enough finite points within range, not too many, some area. Returns it
 /// counter-clockwise without repeated points.
 pub(crate) fn clean_outline(pts: &[DVec2], what: &str) -> Result<Vec<DVec2>, String> {
-    if let Some(p) = pts.iter().find(|p| !finite_in_range(**p)) {
+    if let Some(p) = pts.iter().find(|p| !flatcut_geom::limits::in_range2(**p)) {
         return Err(format!(
             "{what} has a point ({}, {}) that is not finite or beyond ±{MAX_COORD_MM:e} mm",
             p.x, p.y
@@ -208,7 +208,7 @@ impl Problem {
         }
         if total > MAX_INSTANCES {
             return Err(NestError::InvalidInput(format!(
-                "{total} pieces to place; at most {MAX_INSTANCES} are accepted in one run"
+                "{total} piece copies to place; the nester places at most {MAX_INSTANCES} in one run"
             )));
         }
         let n_inst = total;

@@ -4,13 +4,13 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use flatcut::design::PieceDef;
+use flatcut::flat::Limits;
 use flatcut::flatten::{FlattenParams, Method};
-use flatcut::geom::{DVec2, Tolerances};
-use flatcut::mesh::TriMesh;
-use flatcut::pattern::{CornerStyle, NotchStyle, Piece, PieceOptions, PlacedPiece, Placement};
-use flatcut::pipeline::{self, FlatPiece, PieceContext};
-use flatcut::report::Report;
+use flatcut::geom::Tolerances;
+use flatcut::pattern::{CornerStyle, NotchStyle, Piece, PieceOptions};
+use flatcut::pieces::PieceSettings;
+
+use crate::values;
 
 /// Flattening options shared by the commands that flatten.
 #[derive(Debug, Clone, clap::Args)]
@@ -19,16 +19,16 @@ pub struct FlattenArgs {
     #[arg(long, default_value = "isometric", value_parser = parse_method)]
     pub method: Method,
     /// Largest allowed stretch in percent (principal stretch).
-    #[arg(long, value_name = "P")]
+    #[arg(long, value_name = "P", value_parser = values::material_percent)]
     pub max_stretch: Option<f64>,
     /// Largest allowed compression in percent (leather: 0).
-    #[arg(long, value_name = "P")]
+    #[arg(long, value_name = "P", value_parser = values::material_percent)]
     pub max_compress: Option<f64>,
     /// Chordal tolerance of the tessellation in mm.
-    #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_name = "MM")]
+    #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_name = "MM", value_parser = values::positive_mm)]
     pub chord: f64,
     /// Iteration cap of the nonlinear methods.
-    #[arg(long, default_value_t = FlattenParams::DEFAULT_MAX_ITERS)]
+    #[arg(long, default_value_t = FlattenParams::DEFAULT_MAX_ITERS, value_parser = values::iterations)]
     pub max_iters: usize,
 }
 
@@ -78,7 +78,7 @@ impl FlattenArgs {
 #[derive(Debug, Clone, clap::Args)]
 pub struct PieceArgs {
     /// Seam allowance in mm where the design gives none.
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = values::nonneg_mm)]
     pub seam: Option<f64>,
     /// Corner style of the allowance: mitred, squared or reflected.
     #[arg(long, default_value = "mitred", value_parser = parse_corner)]
@@ -126,47 +126,25 @@ pub fn is_mesh(path: &Path) -> bool {
     flatcut::mesh::io::is_mesh_path(path)
 }
 
-/// A flattened piece ready for the pattern: its mesh (with `flat`), its design entry when it
-/// came from a design, and its distortion report.
-pub struct Flat {
-    pub name: String,
-    pub def: Option<PieceDef>,
-    pub mesh: TriMesh,
-    pub report: Report,
-    pub quantity: u32,
-}
+pub use flatcut::flat::Flat;
+pub use flatcut::pieces::{ROW_GAP_MM, row_layout};
 
-/// Loads a flattened OBJ (with `vt`) as it is, or flattens every piece of a design.
+/// Loads a flattened OBJ (with `vt`) as it is, or flattens every piece of a design; `verbose`
+/// prints each piece's progress and figures on stderr.
 pub fn load_flat(
     path: &Path,
     fa: &FlattenArgs,
     limits: (Option<f64>, Option<f64>),
     verbose: bool,
 ) -> anyhow::Result<Vec<Flat>> {
-    let name_of = |p: &Path| {
-        p.file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "piece".into())
-    };
-    if is_mesh(path) {
-        let mesh = flatcut::mesh::read_mesh(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
-        if mesh.flat.is_some() {
-            let name = name_of(path);
-            let report = pipeline::report_piece(&name, &mesh, &[], limits.0, limits.1)?;
-            return Ok(vec![Flat {
-                name,
-                def: None,
-                mesh,
-                report,
-                quantity: 1,
-            }]);
-        }
-    }
     let params = fa.params()?;
     let tol = fa.tolerances()?;
+    let limits = Limits {
+        stretch_pct: limits.0,
+        compress_pct: limits.1,
+    };
     let t0 = std::time::Instant::now();
-    let (_, pieces) = pipeline::flatten_design(path, &tol, &params, &mut |name, k, n| {
+    let flats = flatcut::flat::load_flat(path, &tol, &params, limits, &mut |name, k, n| {
         if verbose {
             eprintln!(
                 "flattening piece {}/{} '{}' ({})",
@@ -178,108 +156,79 @@ pub fn load_flat(
         }
     })
     .with_context(|| format!("cannot flatten {}", path.display()))?;
-    let mut out = Vec::new();
-    for FlatPiece { def, mesh, info } in pieces {
+    for f in &flats {
+        let Some(info) = &f.info else { continue };
         for w in &info.warnings {
-            eprintln!("warning: piece '{}': {w}", def.name);
+            eprintln!("warning: piece '{}': {w}", f.name);
         }
-        let boundary = pipeline::flat_boundary(&def.name, &mesh)
-            .map(|b| b.1)
-            .unwrap_or_default();
-        let marks = pipeline::notch_vertices(&def, &mesh, &boundary);
-        let report = pipeline::report_piece(&def.name, &mesh, &marks, limits.0, limits.1)?;
         if verbose {
+            let r = &f.report;
             eprintln!(
-                "  {} faces, {} iterations, mean δ2 {:.5}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
-                report.faces,
+                "  '{}': {} faces, {} iterations, mean δ2 {:.5}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
+                f.name,
+                r.faces,
                 info.iterations,
-                report.delta2_mean,
-                report.stretch_max_pct,
-                report.compress_max_pct,
+                r.delta2_mean,
+                r.stretch_max_pct,
+                r.compress_max_pct,
                 t0.elapsed().as_secs_f64()
             );
         }
-        out.push(Flat {
-            name: def.name.clone(),
-            quantity: def.quantity,
-            def: Some(def),
-            mesh,
-            report,
-        });
     }
-    Ok(out)
+    Ok(flats)
 }
 
 /// Builds the pattern piece of each flattened piece.
 pub fn build_pieces(flats: &[Flat], pa: &PieceArgs) -> anyhow::Result<Vec<Piece>> {
-    let opts = pa.options()?;
-    flats
-        .iter()
-        .map(|f| {
-            let ctx = PieceContext {
-                def: f.def.as_ref(),
-                report: Some(&f.report),
-                seam_mm: pa.seam,
-                size: String::new(),
-                corner: pa.corner,
-            };
-            pipeline::piece_from_flat(&f.name, &f.mesh, &ctx, &opts)
-                .with_context(|| format!("piece '{}'", f.name))
-        })
-        .collect()
+    let settings = PieceSettings {
+        options: pa.options()?,
+        seam_mm: pa.seam,
+        corner: pa.corner,
+    };
+    Ok(flatcut::pieces::build_pieces(flats, &settings)?)
 }
 
-/// Gap between pieces laid out in a row (mm).
-pub const ROW_GAP_MM: f64 = 10.0;
-
-/// Places pieces left to right with their lowest points on y = 0, one instance each.
-pub fn row_layout(pieces: &[Piece]) -> Vec<PlacedPiece<'_>> {
-    let mut x = 0.0;
-    pieces
-        .iter()
-        .map(|p| {
-            let b = p.bbox();
-            let pl = Placement {
-                rotation: 0.0,
-                mirror: false,
-                translation: DVec2::new(x - b.min.x, -b.min.y),
-            };
-            x += b.width() + ROW_GAP_MM;
-            PlacedPiece {
-                piece: p,
-                instance: 1,
-                placement: pl,
-            }
-        })
-        .collect()
+/// True when the path names a 2D pattern file (SVG or DXF) rather than a design or mesh.
+pub fn is_pattern_file(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg") || e.eq_ignore_ascii_case("dxf"))
 }
 
-/// Parses `WxH` in mm (e.g. `600x400`).
-pub fn parse_size(s: &str) -> Result<(f64, f64), String> {
-    let (w, h) = s
-        .split_once(['x', 'X', '×'])
-        .ok_or_else(|| format!("expected WIDTHxHEIGHT in mm, e.g. 600x400, got '{s}'"))?;
-    let w: f64 = w
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad width '{w}' in '{s}'"))?;
-    let h: f64 = h
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad height '{h}' in '{s}'"))?;
-    if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
-        return Err(format!("sheet size must be positive, got '{s}'"));
+/// Reads a pattern SVG or DXF (AAMA or plain) as a drawing in mm, curves flattened within
+/// `chord_mm`, SVG stroke colours mapped to layers by `colours`; the reader's warnings are
+/// printed.
+pub fn read_pattern_file(
+    path: &Path,
+    chord_mm: f64,
+    colours: &flatcut::pattern::ColourTable,
+) -> anyhow::Result<flatcut::pattern::Drawing> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let name = path.display().to_string();
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("dxf"))
+    {
+        let import = flatcut::pattern::dxf_read::read_dxf(&text, chord_mm)
+            .with_context(|| format!("cannot read {name}"))?;
+        for w in &import.warnings {
+            eprintln!("warning: {name}: {w}");
+        }
+        return Ok(import.drawing);
     }
-    Ok((w, h))
+    let import = flatcut::pattern::svg::read_svg(&text, &name, chord_mm, colours)?;
+    for w in &import.warnings {
+        eprintln!("warning: {name}: {w}");
+    }
+    Ok(import.drawing)
 }
 
-/// Writes a file whole or not at all, naming it in errors.
+/// Writes one file whole or not at all, naming it in errors (a set of one: see
+/// [`OutputSet`](crate::output::OutputSet) for a command's several outputs).
 pub fn write(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    }
-    flatcut::pattern::write_atomic(path, bytes)
-        .with_context(|| format!("cannot write {}", path.display()))
+    let mut set = crate::output::OutputSet::new();
+    set.add(path, bytes)?;
+    set.commit().map(drop)
 }
 
 /// `dir/stem-suffix.ext` next to `path`.
@@ -295,15 +244,4 @@ pub fn sibling(path: &Path, suffix: &str) -> PathBuf {
     path.with_file_name(format!("{stem}-{suffix}{ext}"))
 }
 
-/// A name usable in a file name.
-pub fn file_safe(name: &str) -> String {
-    name.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
-}
+pub use flatcut::run::file_safe;

@@ -12,21 +12,23 @@ use flatcut::nest::{
     GrainDirections, Hide, HideFormat, NestOptions, NestProgress, NestResult, Stock,
 };
 use flatcut::pattern::dxf::DxfLayers;
-use flatcut::pattern::{Drawing, Layer, Stroke};
+use flatcut::pattern::{Drawing, Layer, Stroke, StrokeKind};
 use flatcut::pipeline::{self, NestGroup};
 
 use super::common::{self, FlattenArgs, PieceArgs};
+use crate::output::OutputSet;
+use crate::values;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Pattern SVGs (from `flatcut pattern`), designs or flattened OBJs.
+    /// Pattern SVGs or DXFs (AAMA or plain CAD files), designs or flattened OBJs.
     #[arg(required_unless_present = "instance")]
     pub pieces: Vec<PathBuf>,
     /// Sheet size in mm, WIDTHxHEIGHT.
-    #[arg(long, value_parser = common::parse_size)]
+    #[arg(long, value_parser = values::sheet_size)]
     pub sheet: Option<(f64, f64)>,
     /// Nest on a roll of this width (mm) instead of sheets; the length is minimised.
-    #[arg(long, value_name = "WIDTH")]
+    #[arg(long, value_name = "WIDTH", value_parser = values::positive_mm)]
     pub roll: Option<f64>,
     /// Nest on leather hides (JSON, DXF or SVG with an outline, defects, graded zones and
     /// direction lines), used in the order given; repeat for more hides.
@@ -37,10 +39,11 @@ pub struct Args {
     #[arg(long, value_name = "FILE.json", conflicts_with_all = ["pieces", "sheet", "roll", "hide"])]
     pub instance: Option<PathBuf>,
     /// Gap between pieces (kerf), mm.
-    #[arg(long, default_value_t = NestOptions::DEFAULT_SPACING)]
+    #[arg(long, default_value_t = NestOptions::DEFAULT_SPACING, value_parser = values::nonneg_mm)]
     pub spacing: f64,
-    /// Copies of each input piece (designs use their own quantities).
-    #[arg(long, default_value_t = 1)]
+    /// Copies of each input piece, times the piece's own quantity (a design's, a pattern SVG's
+    /// `data-flatcut-quantity`, or a DXF's `Quantity:`).
+    #[arg(long, default_value_t = 1, value_parser = values::quantity)]
     pub quantity: usize,
     /// Also nest the mirror image of each piece (left and right shoe).
     #[arg(long)]
@@ -49,11 +52,11 @@ pub struct Args {
     /// (either way) or `any` (no grain: pieces turn in quarter turns).
     #[arg(long, value_parser = parse_grain, default_value = "0,180")]
     pub grain: GrainDirections,
-    /// How far a grain line may turn off the material's grain, degrees.
-    #[arg(long, value_name = "DEGREES", default_value_t = 0.0)]
+    /// How far a grain line may turn off the material's grain, degrees (0 to 90).
+    #[arg(long, value_name = "DEGREES", default_value_t = 0.0, value_parser = grain_degrees)]
     pub grain_tolerance: f64,
     /// The worst hide grade the pieces accept (1 = first quality only; default: any grade).
-    #[arg(long, value_name = "GRADE")]
+    #[arg(long, value_name = "GRADE", value_parser = grade)]
     pub quality: Option<u32>,
     /// Output SVG; further sheets or hides go to `<stem>-2.svg`, …
     #[arg(short, long, required_unless_present = "instance")]
@@ -65,13 +68,15 @@ pub struct Args {
     #[arg(long, default_value_t = NestOptions::DEFAULT_SEED)]
     pub seed: u64,
     /// Search budget in separation iterations.
-    #[arg(long, default_value_t = NestOptions::DEFAULT_MAX_ITERS)]
+    #[arg(long, default_value_t = NestOptions::DEFAULT_MAX_ITERS, value_parser = values::iterations)]
     pub iters: usize,
-    /// Time budget in seconds (results then depend on the machine's speed).
-    #[arg(long)]
-    pub time: Option<f64>,
-    /// Search workers: the layout depends on their number and the seed, not on the cores.
-    #[arg(long, default_value_t = NestOptions::DEFAULT_WORKERS)]
+    /// Time budget in seconds, > 0 (results then depend on the machine's speed); with the
+    /// default `--iters` the time alone bounds the search.
+    #[arg(long, value_name = "SECONDS", value_parser = values::seconds)]
+    pub time: Option<Duration>,
+    /// Search workers (1 to 64): the layout depends on their number and the seed, not on the
+    /// number of cores that run them.
+    #[arg(long, default_value_t = NestOptions::DEFAULT_WORKERS, value_parser = workers)]
     pub workers: usize,
     /// Print the result as one JSON object.
     #[arg(long)]
@@ -82,26 +87,44 @@ pub struct Args {
     pub flatten: FlattenArgs,
 }
 
-/// Chordal tolerance used when reading pattern SVGs (mm).
+/// Chordal tolerance used when reading pattern SVGs and DXFs (mm).
 const SVG_CHORD_MM: f64 = 0.05;
-/// Longest time budget accepted: a week.
-const MAX_TIME_S: f64 = 7.0 * 24.0 * 3600.0;
 
 fn parse_grain(s: &str) -> Result<GrainDirections, String> {
     GrainDirections::parse(s).ok_or_else(|| format!("expected fixed, 0,180 or any, got '{s}'"))
 }
 
+/// A grain tolerance: 0 to 90 degrees.
+fn grain_degrees(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))?;
+    if (0.0..=90.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("{v}: give 0 to 90 degrees"))
+    }
+}
+
+/// A hide grade: 1 (first quality) to 9.
+fn grade(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(v) if (1..=9).contains(&v) => Ok(v),
+        _ => Err(format!("'{s}': give a grade from 1 (first quality) to 9")),
+    }
+}
+
+/// A worker count: 1 to 64.
+fn workers(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(v) if (1..=64).contains(&v) => Ok(v),
+        _ => Err(format!("'{s}': give 1 to 64 workers")),
+    }
+}
+
 fn options(a: &Args, spacing: f64) -> anyhow::Result<NestOptions> {
-    let time = a
-        .time
-        .map(|t| {
-            anyhow::ensure!(
-                t.is_finite() && (0.0..=MAX_TIME_S).contains(&t),
-                "--time must be a number of seconds within 0..={MAX_TIME_S}, got {t}"
-            );
-            Ok(Duration::from_secs_f64(t))
-        })
-        .transpose()?;
+    let time = a.time;
     Ok(NestOptions::DEFAULT
         .with_spacing(spacing)
         .with_seed(a.seed)
@@ -114,14 +137,19 @@ fn options(a: &Args, spacing: f64) -> anyhow::Result<NestOptions> {
         .with_workers(a.workers))
 }
 
-/// A closed outline as a stroke of the layout drawing.
+/// A closed outline as a stroke of the layout drawing: a piece's cut line, or a drawn line
+/// (a hide's outline, defects and zones, for the operator).
 fn outline_stroke(id: String, points: Vec<DVec2>, layer: Layer, piece: Option<u32>) -> Stroke {
     Stroke {
         layer,
         points,
         closed: true,
         piece,
-        outer: layer == Layer::Cut,
+        kind: if layer == Layer::Cut {
+            StrokeKind::Boundary
+        } else {
+            StrokeKind::Internal
+        },
         id,
     }
 }
@@ -195,15 +223,17 @@ fn run_instance(a: &Args, path: &Path) -> anyhow::Result<ExitCode> {
                 .push(outline_stroke(id, pts, Layer::Cut, Some(k as u32)));
         }
         let size = DVec2::new(r.length.max(1.0), inst.strip_height);
-        common::write(
+        let mut set = OutputSet::new();
+        set.add(
             out,
             flatcut::pattern::svg::write_drawing(&d, Some(size)).as_bytes(),
         )?;
+        set.commit()?;
     }
     if a.json {
-        println!("{}", instance_json(&inst.name, &r, time_s, a.seed));
+        crate::outln!("{}", instance_json(&inst.name, &r, time_s, a.seed));
     } else {
-        println!(
+        crate::outln!(
             "{}: utilization {:.2}%, length {:.3} (strip {}), {:.1} s, seed {}, {} iterations",
             inst.name, r.utilization, r.length, inst.strip_height, time_s, a.seed, r.iterations
         );
@@ -255,7 +285,7 @@ fn hide_strokes(h: &Hide) -> Vec<Stroke> {
     out
 }
 
-fn print_json(r: &NestResult, time_s: f64, seed: u64) {
+fn print_json(r: &NestResult, time_s: f64, seed: u64) -> anyhow::Result<()> {
     let unplaced: Vec<_> = r
         .unplaced
         .iter()
@@ -266,7 +296,7 @@ fn print_json(r: &NestResult, time_s: f64, seed: u64) {
         .iter()
         .map(|u| serde_json::json!({"name": u.name, "pieces": u.pieces, "piece_area_mm2": u.piece_area, "usable_area_mm2": u.usable_area, "yield_pct": u.yield_pct}))
         .collect();
-    println!(
+    crate::outln!(
         "{}",
         serde_json::json!({
             "utilization": r.utilization,
@@ -279,6 +309,7 @@ fn print_json(r: &NestResult, time_s: f64, seed: u64) {
             "seed": seed,
         })
     );
+    Ok(())
 }
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
@@ -289,16 +320,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let stock = match (a.sheet, a.roll, hides.is_empty()) {
         (None, None, false) => None,
         (_, _, false) => anyhow::bail!("give --hide, or --sheet, or --roll, not several"),
-        (_, Some(w), true) => {
-            anyhow::ensure!(
-                w.is_finite() && w > 0.0,
-                "--roll must be a positive width in mm"
-            );
-            Some(Stock::Roll {
-                width: w,
-                max_length: None,
-            })
-        }
+        (_, Some(w), true) => Some(Stock::Roll {
+            width: w,
+            max_length: None,
+        }),
         (Some((w, h)), None, true) => Some(Stock::Sheets {
             width: w,
             height: h,
@@ -306,16 +331,14 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         }),
         (None, None, true) => anyhow::bail!("give --sheet WIDTHxHEIGHT, --roll WIDTH or --hide HIDE"),
     };
-    anyhow::ensure!(
-        a.spacing.is_finite() && a.spacing >= 0.0,
-        "--spacing must be >= 0 mm"
-    );
     let mut groups = Vec::new();
     for f in &a.pieces {
-        if f.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg")) {
-            let text = std::fs::read_to_string(f)
-                .with_context(|| format!("cannot read {}", f.display()))?;
-            let d = flatcut::pattern::svg::read_svg(&text, &f.display().to_string(), SVG_CHORD_MM)?;
+        if common::is_pattern_file(f) {
+            let d = common::read_pattern_file(
+                f,
+                SVG_CHORD_MM,
+                &flatcut::pattern::ColourTable::default(),
+            )?;
             let gs = NestGroup::from_drawing(&f.display().to_string(), &d);
             anyhow::ensure!(
                 !gs.is_empty(),
@@ -323,7 +346,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 f.display()
             );
             for mut g in gs {
-                g.quantity = a.quantity;
+                g.quantity = g.quantity.saturating_mul(a.quantity);
                 g.mirrored_pair = a.mirrored_pairs;
                 groups.push(g);
             }
@@ -357,6 +380,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     bar.finish_and_clear();
     let time_s = t0.elapsed().as_secs_f64();
     let output = a.output.clone().context("give -o layout.svg")?;
+    let mut set = OutputSet::new();
     for (k, d) in layout.sheets.iter_mut().enumerate() {
         let size = match stock {
             Some(Stock::Sheets { width, height, .. }) => Some(DVec2::new(width, height)),
@@ -375,7 +399,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         } else {
             common::sibling(&output, &(k + 1).to_string())
         };
-        common::write(
+        set.add(
             &path,
             flatcut::pattern::svg::write_drawing(d, size).as_bytes(),
         )?;
@@ -385,36 +409,37 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             } else {
                 common::sibling(dxf, &(k + 1).to_string())
             };
-            common::write(
+            set.add(
                 &p,
                 flatcut::pattern::dxf::write_drawing(d, DxfLayers::Aama).as_bytes(),
             )?;
         }
     }
+    set.commit()?;
     let r = &layout.result;
     if a.json {
-        print_json(r, time_s, a.seed);
+        print_json(r, time_s, a.seed)?;
     } else {
-        println!(
+        crate::outln!(
             "placed {} of {} pieces",
             r.placed.len(),
             r.placed.len() + r.unplaced.len()
         );
         match stock {
             Some(Stock::Roll { width, .. }) => {
-                println!("roll {width:.0} mm wide: length {:.1} mm", r.length)
+                crate::outln!("roll {width:.0} mm wide: length {:.1} mm", r.length)
             }
-            Some(Stock::Sheets { .. }) => println!("sheets used: {}", r.sheets),
+            Some(Stock::Sheets { .. }) => crate::outln!("sheets used: {}", r.sheets),
             None => {
                 for u in &r.sheet_use {
-                    println!(
+                    crate::outln!(
                         "hide {}: {} pieces, yield {:.2}% ({:.0} of {:.0} mm² usable)",
                         u.name, u.pieces, u.yield_pct, u.piece_area, u.usable_area
                     );
                 }
             }
         }
-        println!(
+        crate::outln!(
             "utilization {:.2}% (first layout {:.2}%), {} iterations, {:.1} s",
             r.utilization, r.baseline_utilization, r.iterations, time_s
         );
