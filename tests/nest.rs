@@ -21,9 +21,14 @@ fn run_cli(args: &[&str]) -> std::process::ExitCode {
 
 fn cut_outlines(svg: &Path) -> Vec<Vec<DVec2>> {
     let text = std::fs::read_to_string(svg).unwrap();
-    let d = flatcut::pattern::svg::read_svg(&text, "layout", 0.01, &flatcut::pattern::ColourTable::default())
-        .unwrap()
-        .drawing;
+    let d = flatcut::pattern::svg::read_svg(
+        &text,
+        "layout",
+        0.01,
+        &flatcut::pattern::ColourTable::default(),
+    )
+    .unwrap()
+    .drawing;
     d.strokes
         .into_iter()
         .filter(|s| s.closed && s.layer == Layer::Cut)
@@ -142,7 +147,12 @@ fn nest_on_a_hide_keeps_off_its_defect_and_worse_zone() {
         for q in p {
             assert!(inside(&outline, *q) || outline.iter().any(|o| o.distance(*q) < 1e-6));
             // off the defect and the grade-3 zone (first quality only)
-            assert!(!(q.x > 100.0 + 1e-6 && q.x < 140.0 - 1e-6 && q.y > 80.0 + 1e-6 && q.y < 120.0 - 1e-6));
+            assert!(
+                !(q.x > 100.0 + 1e-6
+                    && q.x < 140.0 - 1e-6
+                    && q.y > 80.0 + 1e-6
+                    && q.y < 120.0 - 1e-6)
+            );
             assert!(q.x <= 200.0 + 1e-6, "{q} on the grade-3 zone");
         }
     }

@@ -333,10 +333,10 @@ pub fn piece_from_flat(
             distortion: None,
         };
     }
-    if ctx.def.and_then(|d| d.seam_allowance_mm).is_none() {
-        if let Some(w) = ctx.seam_mm {
-            opts = opts.with_default_seam(w);
-        }
+    if ctx.def.and_then(|d| d.seam_allowance_mm).is_none()
+        && let Some(w) = ctx.seam_mm
+    {
+        opts = opts.with_default_seam(w);
     }
     if let Some(r) = ctx.report {
         input.label.distortion = Some(format!(

@@ -67,8 +67,7 @@ impl Packer<'_> {
     fn open(&mut self) -> bool {
         match self.supply.get(self.states.len()) {
             Some(bin) => {
-                self.states
-                    .push(State::new(bin, self.prob.instances.len()));
+                self.states.push(State::new(bin, self.prob.instances.len()));
                 true
             }
             None => false,

@@ -47,7 +47,10 @@ fn edge_distance(poly: &[DVec2], q: DVec2) -> f64 {
 impl DistanceGrid {
     pub(crate) fn new(outline: &[DVec2]) -> Self {
         let lo = outline.iter().copied().fold(DVec2::INFINITY, DVec2::min);
-        let hi = outline.iter().copied().fold(DVec2::NEG_INFINITY, DVec2::max);
+        let hi = outline
+            .iter()
+            .copied()
+            .fold(DVec2::NEG_INFINITY, DVec2::max);
         let margin = 0.05 * (hi - lo).max_element();
         let (min, max) = (lo - DVec2::splat(margin), hi + DVec2::splat(margin));
         let step = (max - min) / (NODES - 1) as f64;

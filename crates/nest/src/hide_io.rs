@@ -209,8 +209,12 @@ mod tests {
         assert_eq!(h.defects.len(), 1);
         assert_eq!(h.zones[0].grade, 3);
         assert_eq!(h.directions.len(), 1);
-        let e = read_hide(r#"{"outline": [], "colour": 1}"#, "x.json", HideFormat::Json)
-            .unwrap_err();
+        let e = read_hide(
+            r#"{"outline": [], "colour": 1}"#,
+            "x.json",
+            HideFormat::Json,
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("x.json"), "{e}");
     }
 
@@ -257,10 +261,12 @@ mod tests {
         assert_eq!(h.defects.len(), 1);
         assert_eq!(h.zones.len(), 1);
         assert_eq!(h.zones[0].grade, 3);
-        assert_eq!(h.directions, vec![vec![DVec2::new(0., 160.), DVec2::new(520., 160.)]]);
+        assert_eq!(
+            h.directions,
+            vec![vec![DVec2::new(0., 160.), DVec2::new(520., 160.)]]
+        );
         let open_defect = t.replace("DEFECT\n90\n3\n70\n1", "DEFECT\n90\n3\n70\n0");
         let e = read_hide(&open_defect, "h.dxf", HideFormat::Dxf).unwrap_err();
         assert!(e.to_string().contains("closed"), "{e}");
     }
-
 }

@@ -265,11 +265,13 @@ fn run(
             }
             Ok(res)
         }
-        Material::Stock(stock @ Stock::Sheets {
-            width,
-            height,
-            max_sheets,
-        }) => {
+        Material::Stock(
+            stock @ Stock::Sheets {
+                width,
+                height,
+                max_sheets,
+            },
+        ) => {
             check_fits(&prob, &stock)?;
             let template = Bin::rect(&prob.importer, "sheet".into(), width, height)?;
             let supply = Supply::Sheets {
@@ -318,7 +320,11 @@ fn outline_extent(prob: &Problem, p: &PlacedInstance) -> f64 {
     k.outline
         .iter()
         .map(|q| {
-            let q = if k.mirrored { DVec2::new(-q.x, q.y) } else { *q };
+            let q = if k.mirrored {
+                DVec2::new(-q.x, q.y)
+            } else {
+                *q
+            };
             p.placement.apply(q).x
         })
         .fold(f64::NEG_INFINITY, f64::max)

@@ -79,7 +79,6 @@ pub(crate) fn polygon_area(p: &[DVec2]) -> f64 {
     (0..n).map(|i| p[i].perp_dot(p[(i + 1) % n])).sum::<f64>() * 0.5
 }
 
-
 /// Checks an outline: enough finite points within range, not too many, some area. Returns it
 /// counter-clockwise without repeated points.
 pub(crate) fn clean_outline(pts: &[DVec2], what: &str) -> Result<Vec<DVec2>, String> {
@@ -194,7 +193,7 @@ impl Problem {
         has_field: bool,
     ) -> Result<Self, NestError> {
         let spacing = opts.spacing;
-        if !(spacing.is_finite() && spacing >= 0.0 && spacing <= MAX_COORD_MM) {
+        if !(0.0..=MAX_COORD_MM).contains(&spacing) {
             return Err(NestError::InvalidInput(format!(
                 "spacing must be a finite number of mm ≥ 0, got {spacing}"
             )));

@@ -126,10 +126,10 @@ pub(crate) fn field_exterior_loss(s: &SPolygon, sd: &impl Fn(f32, f32) -> f32) -
 #[cfg(test)]
 mod tests {
     use super::*;
+    use jagua_rs::geometry::Transformation;
     use jagua_rs::geometry::fail_fast::SPSurrogateConfig;
     use jagua_rs::geometry::geo_traits::Transformable;
     use jagua_rs::geometry::primitives::Point;
-    use jagua_rs::geometry::Transformation;
 
     fn square(s: f32) -> SPolygon {
         let mut p = SPolygon::new(vec![

@@ -25,9 +25,7 @@ impl HazardFilter<BasicHazardEntity> for PieceFilter {
     fn is_irrelevant(&self, _: HazKey, e: &BasicHazardEntity) -> bool {
         match e {
             BasicHazardEntity::PlacedItem { pk, .. } => Some(*pk) == self.own,
-            BasicHazardEntity::InferiorQualityZone { quality, .. } => {
-                *quality >= self.min_quality
-            }
+            BasicHazardEntity::InferiorQualityZone { quality, .. } => *quality >= self.min_quality,
             _ => false,
         }
     }
@@ -65,9 +63,7 @@ impl Snap {
         self.pk
             .iter()
             .enumerate()
-            .filter_map(|(i, k)| {
-                k.map(|k| (i, self.layout.placed_items()[k].d_transf()))
-            })
+            .filter_map(|(i, k)| k.map(|k| (i, self.layout.placed_items()[k].d_transf())))
             .collect()
     }
 }
@@ -130,10 +126,7 @@ impl State {
 
     /// Instances placed here, in index order.
     pub(crate) fn placed(&self) -> impl Iterator<Item = usize> + '_ {
-        self.pk
-            .iter()
-            .enumerate()
-            .filter_map(|(i, k)| k.map(|_| i))
+        self.pk.iter().enumerate().filter_map(|(i, k)| k.map(|_| i))
     }
 
     pub(crate) fn n_placed(&self) -> usize {

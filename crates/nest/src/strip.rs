@@ -166,7 +166,11 @@ fn disrupt(sep: &mut Separator, prob: &Problem) {
             break;
         }
     }
-    let large: Vec<usize> = placed.iter().copied().filter(|&i| hull(i) >= cutoff).collect();
+    let large: Vec<usize> = placed
+        .iter()
+        .copied()
+        .filter(|&i| hull(i) >= cutoff)
+        .collect();
     let i1 = large[sep.rng.random_range(0..large.len())];
     let s1 = prob.kind_of(i1).jitem.shape_cd();
     let distinct: Vec<usize> = large
@@ -184,7 +188,10 @@ fn disrupt(sep: &mut Separator, prob: &Problem) {
     } else {
         distinct[sep.rng.random_range(0..distinct.len())]
     };
-    let (d1, d2) = (sep.st.dt(i1).expect("placed"), sep.st.dt(i2).expect("placed"));
+    let (d1, d2) = (
+        sep.st.dt(i1).expect("placed"),
+        sep.st.dt(i2).expect("placed"),
+    );
     let bin = sep.st.bin.clone();
     let allowed = |i: usize, dt: DTransformation| {
         let k = prob.kind_of(i);
@@ -290,8 +297,8 @@ pub(crate) fn nest_strip(
             }
             let at = pool_.partition_point(|(_, l)| *l <= local.total_loss);
             pool_.insert(at, (local.clone(), local.total_loss));
-            let pick = ((half_normal(&mut sep, POOL_STDDEV).min(0.999)) * pool_.len() as f32)
-                as usize;
+            let pick =
+                ((half_normal(&mut sep, POOL_STDDEV).min(0.999)) * pool_.len() as f32) as usize;
             let chosen = pool_[pick.min(pool_.len() - 1)].0.clone();
             sep.rollback(&chosen, false);
             disrupt(&mut sep, prob);
@@ -304,7 +311,8 @@ pub(crate) fn nest_strip(
     budget.begin_phase(1.0);
     let ccfg = compress_config(prob.samples);
     while !budget.over() {
-        let step = COMPRESS_SHRINK.0 + (COMPRESS_SHRINK.1 - COMPRESS_SHRINK.0) * budget.phase_used();
+        let step =
+            COMPRESS_SHRINK.0 + (COMPRESS_SHRINK.1 - COMPRESS_SHRINK.0) * budget.phase_used();
         let bw = width_of(&best);
         sep.rollback(&best, false);
         sep.resync_workers();

@@ -30,8 +30,8 @@ fn check(name: &str, floor: f64) {
         "{}/../../../shared/bench/nesting/instances/{name}.json",
         env!("CARGO_MANIFEST_DIR")
     );
-    let text =
-        std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("instance missing at {path}: {e}"));
+    let text = std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("instance missing at {path}: {e}"));
     let inst = load_bench_instance(&text).unwrap();
     let opts = NestOptions::default()
         .with_spacing(0.0)
@@ -63,7 +63,10 @@ fn check(name: &str, floor: f64) {
     let overlap = max_pair_overlap(&polys);
     assert!(overlap < tol, "{name}: pieces overlap by {overlap}");
     let out = max_area_outside(&polys, &rect(r.length + 1e-9, inst.strip_height), 0);
-    assert!(out < tol, "{name}: a piece sticks out of the strip by {out}");
+    assert!(
+        out < tol,
+        "{name}: a piece sticks out of the strip by {out}"
+    );
 }
 
 #[test]

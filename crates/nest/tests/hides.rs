@@ -10,8 +10,8 @@ use common::{
 };
 use flatcut_geom::DVec2;
 use flatcut_nest::{
-    GrainDirections, Hide, NestItem, NestOptions, NestResult, QualityZone, Rotations,
-    load_scarpa, nest_hides,
+    GrainDirections, Hide, NestItem, NestOptions, NestResult, QualityZone, Rotations, load_scarpa,
+    nest_hides,
 };
 use geo::{Area, BooleanOps, BoundingRect, Intersects};
 
@@ -96,10 +96,18 @@ fn check_hide_layout(items: &[NestItem], hides: &[Hide], r: &NestResult) {
     }
     for (h, hide) in hides.iter().enumerate() {
         let out = max_area_outside(&polys, &hide.outline, h);
-        assert!(out < 1e-3, "a piece sticks out of {} by {out} mm²", hide.name);
+        assert!(
+            out < 1e-3,
+            "a piece sticks out of {} by {out} mm²",
+            hide.name
+        );
         for d in &hide.defects {
             let on = max_area_inside(&polys, d, h);
-            assert!(on < 1e-3, "a piece covers a defect of {} by {on} mm²", hide.name);
+            assert!(
+                on < 1e-3,
+                "a piece covers a defect of {} by {on} mm²",
+                hide.name
+            );
         }
         for z in &hide.zones {
             let zone = geo_poly(&z.outline);
@@ -116,7 +124,9 @@ fn check_hide_layout(items: &[NestItem], hides: &[Hide], r: &NestResult) {
                 }
             }
         }
-        let q = |item: usize| Some(10usize.saturating_sub(items[item].quality.map_or(10, |q| q as usize)));
+        let q = |item: usize| {
+            Some(10usize.saturating_sub(items[item].quality.map_or(10, |q| q as usize)))
+        };
         assert!(
             jagua_collision_free(items, r, h, hide_container(hide), 0.0, q),
             "jagua-rs finds a collision on {}",
@@ -150,7 +160,11 @@ fn pieces_keep_off_defects_and_worse_zones() {
     // yield = piece area / (outline − defects)
     let u = &r.sheet_use[0];
     let usable = geo_poly(&hide.outline).unsigned_area()
-        - hide.defects.iter().map(|d| geo_poly(d).unsigned_area()).sum::<f64>();
+        - hide
+            .defects
+            .iter()
+            .map(|d| geo_poly(d).unsigned_area())
+            .sum::<f64>();
     assert!((u.usable_area - usable).abs() < 1e-6 * usable);
     let area = 6.0 * 4500.0 + 12.0 * 2400.0;
     assert!((u.yield_pct - 100.0 * area / usable).abs() < 1e-6);

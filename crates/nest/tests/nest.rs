@@ -384,7 +384,8 @@ fn time_limit_and_cancel_are_honoured() {
     let r = nest(
         &items,
         roll,
-        &big.clone().with_time_limit(Some(Duration::from_millis(700))),
+        &big.clone()
+            .with_time_limit(Some(Duration::from_millis(700))),
         &mut |_| {},
     )
     .unwrap();

@@ -128,11 +128,13 @@ fn options(a: &Args, spacing: f64) -> anyhow::Result<NestOptions> {
     Ok(NestOptions::DEFAULT
         .with_spacing(spacing)
         .with_seed(a.seed)
-        .with_max_iters(if time.is_some() && a.iters == NestOptions::DEFAULT_MAX_ITERS {
-            usize::MAX
-        } else {
-            a.iters
-        })
+        .with_max_iters(
+            if time.is_some() && a.iters == NestOptions::DEFAULT_MAX_ITERS {
+                usize::MAX
+            } else {
+                a.iters
+            },
+        )
         .with_time_limit(time)
         .with_workers(a.workers))
 }
@@ -235,7 +237,13 @@ fn run_instance(a: &Args, path: &Path) -> anyhow::Result<ExitCode> {
     } else {
         crate::outln!(
             "{}: utilization {:.2}%, length {:.3} (strip {}), {:.1} s, seed {}, {} iterations",
-            inst.name, r.utilization, r.length, inst.strip_height, time_s, a.seed, r.iterations
+            inst.name,
+            r.utilization,
+            r.length,
+            inst.strip_height,
+            time_s,
+            a.seed,
+            r.iterations
         );
     }
     Ok(ExitCode::SUCCESS)
@@ -251,9 +259,13 @@ fn read_hides(paths: &[PathBuf]) -> anyhow::Result<Vec<Hide>> {
                 .with_context(|| {
                     format!("{}: a hide is a .json, .dxf or .svg file", p.display())
                 })?;
-            let text =
-                std::fs::read_to_string(p).with_context(|| format!("cannot read {}", p.display()))?;
-            Ok(flatcut::nest::read_hide(&text, &p.display().to_string(), fmt)?)
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("cannot read {}", p.display()))?;
+            Ok(flatcut::nest::read_hide(
+                &text,
+                &p.display().to_string(),
+                fmt,
+            )?)
         })
         .collect()
 }
@@ -329,7 +341,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             height: h,
             max_sheets: None,
         }),
-        (None, None, true) => anyhow::bail!("give --sheet WIDTHxHEIGHT, --roll WIDTH or --hide HIDE"),
+        (None, None, true) => {
+            anyhow::bail!("give --sheet WIDTHxHEIGHT, --roll WIDTH or --hide HIDE")
+        }
     };
     let mut groups = Vec::new();
     for f in &a.pieces {
@@ -373,9 +387,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let t0 = std::time::Instant::now();
     let mut layout = match stock {
         Some(stock) => pipeline::nest_groups(&groups, stock, &opts, &mut |p| on_progress(&bar, p))?,
-        None => pipeline::nest_groups_on_hides(&groups, &hides, &opts, &mut |p| {
-            on_progress(&bar, p)
-        })?,
+        None => {
+            pipeline::nest_groups_on_hides(&groups, &hides, &opts, &mut |p| on_progress(&bar, p))?
+        }
     };
     bar.finish_and_clear();
     let time_s = t0.elapsed().as_secs_f64();
@@ -434,14 +448,21 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 for u in &r.sheet_use {
                     crate::outln!(
                         "hide {}: {} pieces, yield {:.2}% ({:.0} of {:.0} mm² usable)",
-                        u.name, u.pieces, u.yield_pct, u.piece_area, u.usable_area
+                        u.name,
+                        u.pieces,
+                        u.yield_pct,
+                        u.piece_area,
+                        u.usable_area
                     );
                 }
             }
         }
         crate::outln!(
             "utilization {:.2}% (first layout {:.2}%), {} iterations, {:.1} s",
-            r.utilization, r.baseline_utilization, r.iterations, time_s
+            r.utilization,
+            r.baseline_utilization,
+            r.iterations,
+            time_s
         );
     }
     for u in &r.unplaced {

@@ -192,7 +192,12 @@ pub fn jagua_collision_free(
     let imp = importer(spacing);
     let c = imp.import_container(&container).unwrap();
     let mut layout = Layout::new(c);
-    for (k, p) in r.placed.iter().enumerate().filter(|(_, p)| p.sheet == sheet) {
+    for (k, p) in r
+        .placed
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.sheet == sheet)
+    {
         let world: Vec<DVec2> = items[p.item]
             .outline
             .iter()
