@@ -36,20 +36,6 @@ fn cut_outlines(svg: &Path) -> Vec<Vec<DVec2>> {
         .collect()
 }
 
-fn inside(poly: &[DVec2], q: DVec2) -> bool {
-    let n = poly.len();
-    let mut c = false;
-    let mut j = n - 1;
-    for i in 0..n {
-        let (a, b) = (poly[i], poly[j]);
-        if (a.y > q.y) != (b.y > q.y) && q.x < (b.x - a.x) * (q.y - a.y) / (b.y - a.y) + a.x {
-            c = !c;
-        }
-        j = i;
-    }
-    c
-}
-
 #[test]
 fn nest_instance_writes_every_piece_and_the_json_line() {
     let out = tempfile::tempdir().unwrap();
@@ -145,7 +131,10 @@ fn nest_on_a_hide_keeps_off_its_defect_and_worse_zone() {
     ];
     for p in &placed {
         for q in p {
-            assert!(inside(&outline, *q) || outline.iter().any(|o| o.distance(*q) < 1e-6));
+            assert!(
+                flatcut::pattern::poly::contains(&outline, *q)
+                    || outline.iter().any(|o| o.distance(*q) < 1e-6)
+            );
             // off the defect and the grade-3 zone (first quality only)
             assert!(
                 !(q.x > 100.0 + 1e-6

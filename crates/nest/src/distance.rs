@@ -2,6 +2,7 @@
 //! interpolated: how the search measures a piece sticking out of an irregular hide.
 
 use flatcut_geom::DVec2;
+use flatcut_pattern::poly;
 
 /// Grid nodes per side.
 const NODES: usize = 160;
@@ -12,36 +13,6 @@ pub(crate) struct DistanceGrid {
     min: DVec2,
     step: DVec2,
     d: Vec<f32>,
-}
-
-fn inside(poly: &[DVec2], q: DVec2) -> bool {
-    let n = poly.len();
-    let mut c = false;
-    let mut j = n - 1;
-    for i in 0..n {
-        let (a, b) = (poly[i], poly[j]);
-        if (a.y > q.y) != (b.y > q.y) && q.x < (b.x - a.x) * (q.y - a.y) / (b.y - a.y) + a.x {
-            c = !c;
-        }
-        j = i;
-    }
-    c
-}
-
-fn edge_distance(poly: &[DVec2], q: DVec2) -> f64 {
-    let n = poly.len();
-    (0..n)
-        .map(|i| {
-            let (a, b) = (poly[i], poly[(i + 1) % n]);
-            let d = b - a;
-            let t = if d.length_squared() > 0.0 {
-                ((q - a).dot(d) / d.length_squared()).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            (a + d * t).distance(q)
-        })
-        .fold(f64::INFINITY, f64::min)
 }
 
 impl DistanceGrid {
@@ -58,8 +29,8 @@ impl DistanceGrid {
         for j in 0..NODES {
             for i in 0..NODES {
                 let q = min + DVec2::new(i as f64, j as f64) * step;
-                let e = edge_distance(outline, q);
-                d.push(if inside(outline, q) { e } else { -e } as f32);
+                let e = poly::dist_to_closed(outline, q);
+                d.push(if poly::contains(outline, q) { e } else { -e } as f32);
             }
         }
         Self { min, step, d }

@@ -74,10 +74,7 @@ pub(crate) struct Problem {
     pub names: Vec<String>,
 }
 
-pub(crate) fn polygon_area(p: &[DVec2]) -> f64 {
-    let n = p.len();
-    (0..n).map(|i| p[i].perp_dot(p[(i + 1) % n])).sum::<f64>() * 0.5
-}
+pub(crate) use flatcut_pattern::poly::signed_area as polygon_area;
 
 /// Checks an outline: enough finite points within range, not too many, some area. Returns it
 /// counter-clockwise without repeated points.

@@ -43,19 +43,7 @@ fn seg_seg_dist(a0: DVec2, a1: DVec2, b0: DVec2, b1: DVec2) -> f64 {
         .min(pd(b1, a0, a1))
 }
 
-pub fn contains(poly: &[DVec2], q: DVec2) -> bool {
-    let n = poly.len();
-    let mut inside = false;
-    let mut j = n - 1;
-    for i in 0..n {
-        let (a, b) = (poly[i], poly[j]);
-        if (a.y > q.y) != (b.y > q.y) && q.x < (b.x - a.x) * (q.y - a.y) / (b.y - a.y) + a.x {
-            inside = !inside;
-        }
-        j = i;
-    }
-    inside
-}
+pub use flatcut_pattern::poly::contains;
 
 /// Placed outlines in stock coordinates, with their sheet.
 pub fn placed_polygons(items: &[NestItem], r: &NestResult) -> Vec<(usize, Vec<DVec2>)> {
