@@ -4,6 +4,7 @@
 mod dxf;
 mod fuzz;
 mod hpgl;
+mod nest;
 mod pipeline;
 mod regressions;
 mod stream;
