@@ -146,6 +146,7 @@ fn check_surface(ctx: &Ctx, s: &SurfaceDef) -> Result<(), DesignError> {
             Ok(())
         }
         SurfaceDef::Mesh { .. } => Ok(()),
+        SurfaceDef::Step { faces, .. } => crate::step::check_faces(ctx, faces),
     }
 }
 

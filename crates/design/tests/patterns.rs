@@ -53,7 +53,7 @@ fn mesh(name: &str, p: &PieceDef) -> TriMesh {
 fn patches(name: &str, p: &PieceDef) -> Vec<std::sync::Arc<dyn flatcut_surface::ParamSurface>> {
     match p.build(&dir(name)).unwrap() {
         PieceGeometry::Patches(v) => v,
-        PieceGeometry::Mesh(_) => panic!("{name}/{}: expected patches", p.name),
+        _ => panic!("{name}/{}: expected patches", p.name),
     }
 }
 

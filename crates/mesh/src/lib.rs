@@ -6,6 +6,7 @@
 //! **Architecture invariant:** this crate knows 3D surfaces and 2D maps of them, but nothing of
 //! patterns, sheets or machines.
 
+pub mod disk;
 pub mod distortion;
 pub mod geodesic;
 pub mod grid;
@@ -18,6 +19,7 @@ pub mod trimesh;
 pub mod trimmed;
 pub mod weld;
 
+pub use disk::cut_to_disk;
 pub use distortion::{FaceDistortion, face_distortion};
 pub use io::{MeshIoError, read_mesh, write_obj};
 pub use seams::{cut_along_seams, seam_from_points};

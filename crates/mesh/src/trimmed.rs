@@ -380,21 +380,22 @@ fn inside_faces(cdt: &Cdt) -> Vec<bool> {
     parity.into_iter().map(|p| p.unwrap_or(false)).collect()
 }
 
-/// Whether the triangle `[a, b, c]` (local vertices) needs refining, from its deviation from the
-/// surface and the turn of the normal across it.
+/// Whether the triangle `[a, b, c]` (local vertices, at parameters `uv` — the triangle's own
+/// corners: a pole vertex has a different (u, v) in each triangle) needs refining, from its
+/// deviation from the surface and the turn of the normal across it.
 #[allow(clippy::too_many_arguments)]
 fn needs_refining(
     s: &dyn ParamSurface,
     verts: &Verts,
     normals: &[Option<DVec3>],
     tri: [u32; 3],
+    uv: [DVec2; 3],
     boundary_edge: [bool; 3],
     tol: f64,
     min_edge: f64,
     max_turn_cos: f64,
 ) -> bool {
     let p = tri.map(|i| verts.pos[i as usize]);
-    let uv = tri.map(|i| verts.uv[i as usize]);
     let longest = (p[1] - p[0])
         .length()
         .max((p[2] - p[1]).length())
@@ -477,7 +478,8 @@ fn cdt_mesh(
     let max_turn_cos = opts.max_normal_turn.cos();
     for _ in 0..MAX_ROUNDS {
         let inside = inside_faces(&cdt);
-        let mut todo: Vec<DVec2> = Vec::new();
+        // (preferred point, fallback: the bad triangle's centroid), scaled plane.
+        let mut todo: Vec<(DVec2, DVec2)> = Vec::new();
         for f in cdt.inner_faces() {
             if !inside[f.fix().index()] {
                 continue;
@@ -490,11 +492,13 @@ fn cdt_mesh(
             let edges = f.adjacent_edges();
             // adjacent_edges()[k] runs from vertex k to vertex k + 1.
             let boundary = edges.map(|e| e.is_constraint_edge());
+            let uv = f.positions().map(|p| DVec2::new(p.x, p.y) / scale);
             if !needs_refining(
                 s,
                 verts,
                 &normals,
                 tri,
+                uv,
                 boundary,
                 tol.chord_mm,
                 min_edge,
@@ -502,13 +506,20 @@ fn cdt_mesh(
             ) {
                 continue;
             }
-            todo.push(refinement_point(&cdt, &inside, f.fix()));
+            let [a, b, c] = f.positions().map(|p| DVec2::new(p.x, p.y));
+            todo.push((refinement_point(&cdt, &inside, f.fix()), (a + b + c) / 3.0));
         }
         if todo.is_empty() {
             break;
         }
         let before = verts.uv.len();
-        for w in todo {
+        for (first, fallback) in todo {
+            // Points of one round can crowd each other (neighbouring triangles on one circle
+            // share their circumcentre): each goes in only with clearance in the triangulation
+            // as it stands, else its triangle's centroid, else not at all this round.
+            let Some(w) = [first, fallback].into_iter().find(|&w| clear(&cdt, w)) else {
+                continue;
+            };
             let uv = w / scale;
             let p = s.eval(uv.x, uv.y);
             if !flatcut_geom::finite3(p) {
@@ -522,14 +533,6 @@ fn cdt_mesh(
             }
             let local = verts.uv.len() as u32;
             let pos = Point2::new(tiny0(w.x), tiny0(w.y));
-            let free = match cdt.locate(pos) {
-                PositionInTriangulation::OnFace(_) => true,
-                PositionInTriangulation::OnEdge(e) => !cdt.is_constraint_edge(e.as_undirected()),
-                _ => false,
-            };
-            if !free {
-                continue;
-            }
             cdt.insert(Vx { pos, local })
                 .map_err(|_| TrimError::SurfaceNonFinite { u: uv.x, v: uv.y })?;
             verts.push(uv, p, None);
@@ -551,6 +554,26 @@ fn cdt_mesh(
         }
     }
     Ok(tris)
+}
+
+/// True when `w` lies strictly inside a face of the triangulation, at least [`MIN_INSET`] of
+/// that face's shortest side away from its sides.
+fn clear(cdt: &Cdt, w: DVec2) -> bool {
+    if !flatcut_geom::finite2(w) {
+        return false;
+    }
+    match cdt.locate(Point2::new(tiny0(w.x), tiny0(w.y))) {
+        PositionInTriangulation::OnFace(g) => {
+            let [p, q, r] = cdt.face(g).positions().map(|p| DVec2::new(p.x, p.y));
+            let shortest = (q - p).length().min((r - q).length()).min((p - r).length());
+            let inset = [(p, q), (q, r), (r, p)]
+                .iter()
+                .map(|&(x, y)| dist_to_segment(w, x, y))
+                .fold(f64::INFINITY, f64::min);
+            inset > MIN_INSET * shortest
+        }
+        _ => false,
+    }
 }
 
 /// Where to refine the inner face `f`: its circumcentre when that lies strictly inside an inside

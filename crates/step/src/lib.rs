@@ -15,6 +15,7 @@
 //! Errors name the instance (`#1234 = OFFSET_SURFACE: not supported`) or the line; a face that
 //! cannot be used keeps its number and error while the others load.
 
+pub mod adjacency;
 pub mod attrs;
 pub mod error;
 pub mod file;

@@ -206,19 +206,6 @@ impl Model {
     pub fn vertex_bbox(&self) -> Aabb3 {
         Aabb3::from_points(self.vertices.iter().map(|v| v.point))
     }
-
-    /// The edges between two different faces, as `(edge, face a, face b)`, in edge order: the
-    /// face adjacency of the model.
-    pub fn adjacency(&self) -> Vec<(usize, usize, usize)> {
-        self.edges
-            .iter()
-            .enumerate()
-            .filter_map(|(e, edge)| match edge.faces.as_slice() {
-                [a, b] if a != b => Some((e, *a, *b)),
-                _ => None,
-            })
-            .collect()
-    }
 }
 
 /// The top-level shape items and their shells `(shell, closed)`, in item order.

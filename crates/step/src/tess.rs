@@ -36,9 +36,6 @@ use crate::model::{EdgeGeometry, FaceGeometry, Model};
 pub const TRIM_GAP_MM: f64 = 0.1;
 /// Rounds of putting ruling crossings on edges (each round only adds points).
 pub const MAX_RULING_ROUNDS: usize = 8;
-/// Two faces meet smoothly (one piece under `group = "smooth"`) when their normals differ by less
-/// than this along their whole common edge (radians; 1°).
-pub const SMOOTH_MAX_ANGLE: f64 = PI / 180.0;
 /// Angular step of the points of a pole run on a curved face (radians of the collapsed
 /// parameter): 64 per turn.
 const POLE_STEP: f64 = PI / 32.0;
@@ -690,6 +687,11 @@ impl Tessellation {
     /// One mesh of the faces (all when `faces` is `None`), welded at shared vertices, with only
     /// the vertices those faces use (in shell order).
     pub fn welded(&self, faces: Option<&[usize]>) -> TriMesh {
+        self.welded_with_ids(faces).0
+    }
+
+    /// [`Self::welded`] and the index in it of every shell vertex (`u32::MAX` if unused).
+    fn welded_with_ids(&self, faces: Option<&[usize]>) -> (TriMesh, Vec<u32>) {
         let chosen: Vec<&FaceMesh> = self
             .faces
             .iter()
@@ -718,7 +720,7 @@ impl Tessellation {
                 }
             }
         }
-        TriMesh::new(positions, triangles)
+        (TriMesh::new(positions, triangles), new_id)
     }
 
     /// The mesh of one face, by face index.
@@ -726,78 +728,40 @@ impl Tessellation {
         self.faces.iter().find(|f| f.face == face)
     }
 
-    /// The faces grouped into pieces that meet smoothly: two faces sharing an edge are in one
-    /// group when their normals agree within [`SMOOTH_MAX_ANGLE`] at every point of the edge.
-    /// Groups are listed by their lowest face, faces in increasing order.
-    pub fn smooth_groups(&self, model: &Model) -> Vec<Vec<usize>> {
-        let idx: BTreeMap<usize, usize> = self
-            .faces
-            .iter()
-            .enumerate()
-            .map(|(k, f)| (f.face, k))
-            .collect();
-        let mut parent: Vec<usize> = (0..self.faces.len()).collect();
-        fn find(p: &mut [usize], mut x: usize) -> usize {
-            while p[x] != x {
-                p[x] = p[p[x]];
-                x = p[x];
-            }
-            x
-        }
-        // (u, v) of each shell vertex on each face.
-        let uv_maps: Vec<BTreeMap<u32, DVec2>> = self
-            .faces
-            .iter()
-            .map(|f| {
-                let uv = f.mesh.params.as_deref().unwrap_or(&[]);
-                f.global.iter().zip(uv).map(|(&g, &q)| (g, q)).collect()
-            })
-            .collect();
-        for em in &self.edges {
-            let fs = &model.edges[em.edge].faces;
-            let [a, b] = fs.as_slice() else { continue };
-            if a == b {
-                continue;
-            }
-            let (Some(&ka), Some(&kb)) = (idx.get(a), idx.get(b)) else {
-                continue;
-            };
-            let normal = |k: usize, v: u32| -> Option<DVec3> {
-                let g = model.face(self.faces[k].face).ok()?;
-                let q = uv_maps[k].get(&v)?;
-                let (_, su, sv) = g.surface.deriv1(q.x, q.y);
-                let n = su.cross(sv).try_normalize()?;
-                Some(if g.same_sense { n } else { -n })
-            };
-            let smooth = em
-                .vertices
+    /// The points of an edge (mm), from its start vertex to its end vertex, if the edge bounds
+    /// one of the tessellated faces: the polyline both its faces share.
+    pub fn edge_polyline(&self, edge: usize) -> Option<Vec<DVec3>> {
+        let e = self.edges.iter().find(|e| e.edge == edge)?;
+        Some(
+            e.vertices
                 .iter()
-                .all(|&v| match (normal(ka, v), normal(kb, v)) {
-                    (Some(na), Some(nb)) => na.angle_between(nb) < SMOOTH_MAX_ANGLE,
-                    // A singular point (pole) says nothing either way.
-                    _ => true,
-                });
-            if smooth {
-                let (ra, rb) = (find(&mut parent, ka), find(&mut parent, kb));
-                if ra != rb {
-                    parent[ra.max(rb)] = ra.min(rb);
-                }
-            }
+                .map(|&v| self.positions[v as usize])
+                .collect(),
+        )
+    }
+
+    /// The mesh of a piece made of the faces: a single face as meshed (cut at its own seam,
+    /// with (u, v)), several welded at their shared edges and cut open again along the seams of
+    /// periodic faces; then holes are cut to the outer boundary, so the piece is a disk when it
+    /// can be (see [`flatcut_mesh::cut_to_disk`]; otherwise it is returned uncut and a
+    /// flattening reports why).
+    pub fn piece_mesh(&self, model: &Model, faces: &[usize]) -> TriMesh {
+        if let [f] = faces
+            && let Some(fm) = self.face(*f)
+        {
+            return flatcut_mesh::cut_to_disk(&fm.mesh, &[]).unwrap_or_else(|_| fm.mesh.clone());
         }
-        let mut groups: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
-        for k in 0..self.faces.len() {
-            let r = find(&mut parent, k);
-            groups.entry(r).or_default().push(self.faces[k].face);
-        }
-        let mut out: Vec<Vec<usize>> = groups
-            .into_values()
-            .map(|mut g| {
-                g.sort_unstable();
-                g
+        let (mesh, new_id) = self.welded_with_ids(Some(faces));
+        let seams: Vec<Vec<u32>> = self
+            .edges
+            .iter()
+            .filter(|e| {
+                let fs = &model.edges[e.edge].faces;
+                fs.len() == 2 && fs[0] == fs[1] && faces.contains(&fs[0])
             })
+            .map(|e| e.vertices.iter().map(|&v| new_id[v as usize]).collect())
             .collect();
-        out.sort_by_key(|g| g[0]);
-        out
+        flatcut_mesh::cut_to_disk(&mesh, &seams).unwrap_or(mesh)
     }
 }
 

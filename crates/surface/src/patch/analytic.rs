@@ -37,15 +37,30 @@ const CURVE_NEAREST_ACCURACY: f64 = 1e-10;
 #[derive(Clone, Debug)]
 pub enum AnalyticKind {
     Plane,
-    Cylinder { radius: f64 },
+    Cylinder {
+        radius: f64,
+    },
     /// `radius` at v = 0 and the semi-angle α between the axis and the cone's lines.
-    Cone { radius: f64, semi_angle: f64 },
-    Sphere { radius: f64 },
-    Torus { major: f64, minor: f64 },
+    Cone {
+        radius: f64,
+        semi_angle: f64,
+    },
+    Sphere {
+        radius: f64,
+    },
+    Torus {
+        major: f64,
+        minor: f64,
+    },
     /// The swept curve `c(u)` and the extrusion vector `V` (direction times length).
-    Extrusion { curve: Arc<dyn ParamCurve>, vector: DVec3 },
+    Extrusion {
+        curve: Arc<dyn ParamCurve>,
+        vector: DVec3,
+    },
     /// The swept curve `c(v)` turned about the axis through `frame.origin` along `frame.z`.
-    Revolution { curve: Arc<dyn ParamCurve> },
+    Revolution {
+        curve: Arc<dyn ParamCurve>,
+    },
 }
 
 /// An elementary or swept surface (see the module documentation for the parametrisations).
