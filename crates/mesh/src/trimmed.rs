@@ -49,8 +49,11 @@ const MIN_EDGE_OVER_CHORD: f64 = 1e-3;
 /// A refined vertex closer than this fraction of its triangle's shortest edge (in the scaled
 /// plane) to the triangle's boundary is moved to the centroid instead (no slivers).
 const MIN_INSET: f64 = 0.05;
-/// Sample grid per side for the mean speeds `|S_u|`, `|S_v|` that scale the plane.
+/// Sample grid per side for the speeds and curvatures that scale the plane.
 const SPEED_SAMPLES: usize = 9;
+/// Largest ratio of wanted triangle lengths along u and along v (see [`plane_scale`]): long
+/// thin triangles follow a fillet, but never needles.
+const MAX_ANISOTROPY: f64 = 6.0;
 /// Points along a ruling are at most this many strip widths apart (ruled method).
 const RULING_ASPECT: f64 = 2.0;
 /// Two rulings closer than this fraction of the u range are one ruling (ruled method).
@@ -270,9 +273,20 @@ fn loop_vertices(
     Ok(out)
 }
 
-/// Mean `|S_u|` and `|S_v|` over the loops' parameter box: the scale of the working plane.
-fn mean_speeds(s: &dyn ParamSurface, lo: DVec2, hi: DVec2) -> DVec2 {
-    let (mut su, mut sv, mut n) = (0.0, 0.0, 0usize);
+/// The scale of the working plane: `(s_u, s_v)` such that a unit step in the scaled plane is
+/// about one wanted triangle edge in either direction. An edge along u may be as long as the
+/// chordal tolerance (`√(8 tol / κ_u)` for the normal curvature κ_u along u) and the normal-turn
+/// limit (`θ / κ_u`) allow; the scale is the mean of `|S_u|` divided by that length (with the
+/// box's 3D size as the longest edge), likewise for v, and the ratio of the two directions'
+/// densities is kept within [`MAX_ANISOTROPY`]. So a fillet, curved across and nearly straight
+/// along, gets long thin triangles along it, as the tolerance allows; a plane gets the isotropic
+/// scaling of its speeds.
+fn plane_scale(s: &dyn ParamSurface, lo: DVec2, hi: DVec2, tol: f64, max_turn: f64) -> DVec2 {
+    let mut speed = DVec2::ZERO;
+    let mut density = DVec2::ZERO;
+    let mut size = flatcut_geom::Aabb3::EMPTY;
+    let mut n = 0usize;
+    let mut samples = Vec::with_capacity(SPEED_SAMPLES * SPEED_SAMPLES);
     for i in 0..SPEED_SAMPLES {
         for j in 0..SPEED_SAMPLES {
             let t = DVec2::new(
@@ -280,20 +294,46 @@ fn mean_speeds(s: &dyn ParamSurface, lo: DVec2, hi: DVec2) -> DVec2 {
                 (j as f64 + 0.5) / SPEED_SAMPLES as f64,
             );
             let uv = lo + (hi - lo) * t;
-            let (_, a, b) = s.deriv1(uv.x, uv.y);
-            let (a, b) = (a.length(), b.length());
-            if a.is_finite() && b.is_finite() {
-                su += a;
-                sv += b;
-                n += 1;
-            }
+            let d = s.deriv2(uv.x, uv.y);
+            size.add(d.p);
+            samples.push(d);
         }
     }
-    let fix = |x: f64| if x.is_finite() && x > 0.0 { x } else { 1.0 };
-    if n == 0 {
+    let diag = size.diagonal();
+    let want = |kappa: f64| -> f64 {
+        let k = kappa.abs();
+        (8.0 * tol / k).sqrt().min(max_turn / k)
+    };
+    for d in &samples {
+        let (e, g) = (d.su.length(), d.sv.length());
+        let Some(nrm) = d.su.cross(d.sv).try_normalize() else {
+            continue;
+        };
+        if !(e.is_finite() && g.is_finite() && e > 0.0 && g > 0.0) {
+            continue;
+        }
+        let ku = d.suu.dot(nrm) / (e * e);
+        let kv = d.svv.dot(nrm) / (g * g);
+        let lu = want(ku).min(diag);
+        let lv = want(kv).min(diag);
+        if !(lu > 0.0 && lv > 0.0) {
+            continue;
+        }
+        speed += DVec2::new(e, g);
+        density += DVec2::new(e / lu, g / lv);
+        n += 1;
+    }
+    if n == 0 || !(speed.x > 0.0 && speed.y > 0.0) {
         return DVec2::ONE;
     }
-    DVec2::new(fix(su / n as f64), fix(sv / n as f64))
+    // Density per unit parameter; its ratio to the speeds' ratio is the anisotropy.
+    let iso = speed / n as f64;
+    let dens = density / n as f64;
+    let r = ((dens.x / iso.x) / (dens.y / iso.y)).clamp(1.0 / MAX_ANISOTROPY, MAX_ANISOTROPY);
+    if !r.is_finite() {
+        return iso;
+    }
+    DVec2::new(iso.x * r.sqrt(), iso.y / r.sqrt())
 }
 
 fn bounds(loops: &[Vec<(u32, DVec2)>]) -> (DVec2, DVec2) {
@@ -471,7 +511,7 @@ fn cdt_mesh(
     opts: &TessOptions,
 ) -> Result<Vec<[u32; 3]>, TrimError> {
     let (lo, hi) = bounds(loops);
-    let scale = mean_speeds(s, lo, hi);
+    let scale = plane_scale(s, lo, hi, tol.chord_mm, opts.max_normal_turn);
     let (mut cdt, _) = loops_cdt(loops, scale, verts.uv.len())?;
     let mut normals: Vec<Option<DVec3>> = verts.uv.iter().map(|&uv| unit_normal(s, uv)).collect();
     let min_edge = (MIN_EDGE_OVER_CHORD * tol.chord_mm).max(4.0 * tol.weld_mm);
