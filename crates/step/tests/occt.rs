@@ -73,3 +73,61 @@ fn areas_and_surfaces_match_opencascade() {
         }
     }
 }
+
+/// The other half of the Hausdorff check: every point of flatcut's triangles (centroids and edge
+/// midpoints) lies within the chordal tolerance of OCCT's exact face, measured by OCCT
+/// (tools/step/check_mesh.py). Skipped, saying so, without cadquery-ocp.
+#[test]
+fn tessellation_lies_on_opencascade_surfaces() {
+    let Some(py) = common::python_with_occt() else {
+        return;
+    };
+    let script =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/step/check_mesh.py");
+    let tol = Tolerances::DEFAULT.with_chord_mm(CHORD_MM);
+    let dir = tempfile::tempdir().unwrap();
+    for name in MODELS {
+        let model = Model::read(&data_dir().join(format!("{name}.step"))).unwrap();
+        let all: Vec<usize> = (0..model.faces.len()).collect();
+        let t = Tessellation::new(&model, &all, &tol, &TessOptions::DEFAULT).unwrap();
+        let faces: Vec<serde_json::Value> = t
+            .faces
+            .iter()
+            .map(|fm| {
+                let m = &fm.mesh;
+                let mut pts = Vec::new();
+                // At most ~2000 probes per face: every k-th triangle.
+                let step = (m.triangles.len() / 500).max(1);
+                for k in (0..m.triangles.len()).step_by(step) {
+                    let [a, b, c] = m.corners(k);
+                    for p in [
+                        (a + b + c) / 3.0,
+                        (a + b) / 2.0,
+                        (b + c) / 2.0,
+                        (c + a) / 2.0,
+                    ] {
+                        pts.push(p.to_array());
+                    }
+                }
+                serde_json::json!({"centroid": centroid(m).to_array(), "points": pts})
+            })
+            .collect();
+        let probes = dir.path().join(format!("{name}.json"));
+        std::fs::write(&probes, serde_json::json!({ "faces": faces }).to_string()).unwrap();
+        let out = std::process::Command::new(&py)
+            .arg(&script)
+            .arg(data_dir().join(format!("{name}.step")))
+            .arg(&probes)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let worst = r["worst_mm"].as_f64().unwrap();
+        eprintln!("{name}: flatcut's triangles within {worst:.5} mm of OCCT's faces");
+        assert!(worst <= CHORD_MM + 1e-6, "{name}: {worst} mm");
+    }
+}

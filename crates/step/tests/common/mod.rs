@@ -178,3 +178,21 @@ pub fn centroid(mesh: &TriMesh) -> DVec3 {
     }
     c / a
 }
+
+/// A Python that has cadquery-ocp (OpenCASCADE): `$FLATCUT_PYTHON`, else `python3`; `None`
+/// (with the reason printed) when there is none, so the caller skips its check.
+pub fn python_with_occt() -> Option<std::ffi::OsString> {
+    let py = std::env::var_os("FLATCUT_PYTHON").unwrap_or_else(|| "python3".into());
+    let ok = std::process::Command::new(&py)
+        .args(["-c", "import OCP"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if ok {
+        Some(py)
+    } else {
+        eprintln!(
+            "SKIPPED: needs a Python with cadquery-ocp (pip install -r tools/requirements.txt, or set FLATCUT_PYTHON)"
+        );
+        None
+    }
+}
