@@ -8,18 +8,18 @@ use clap::Parser as _;
 use flatcut::geom::DVec2;
 use flatcut::pattern::Layer;
 
-fn root() -> PathBuf {
+pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn run_cli(args: &[&str]) -> std::process::ExitCode {
+pub fn run_cli(args: &[&str]) -> std::process::ExitCode {
     let cli =
         flatcut_cli::Cli::try_parse_from(std::iter::once("flatcut").chain(args.iter().copied()))
             .expect("valid arguments");
     flatcut_cli::run(cli).expect("the command succeeds")
 }
 
-fn run_project(project: &str, out: &Path, extra: &[&str]) {
+pub fn run_project(project: &str, out: &Path, extra: &[&str]) {
     let p = root().join(project);
     let mut args = vec![
         "run",
@@ -112,7 +112,14 @@ fn streamed_job_traced_by_the_simulator_matches_the_pattern() {
     );
     // The pen profile maps drawing mm to machine mm one to one (origin lower-left, no offset).
     let svg = std::fs::read_to_string(out.path().join("layout-1.svg")).unwrap();
-    let drawing = flatcut::pattern::svg::read_svg(&svg, "layout-1.svg", 0.01).unwrap();
+    let drawing = flatcut::pattern::svg::read_svg(
+        &svg,
+        "layout-1.svg",
+        0.01,
+        &flatcut::pattern::ColourTable::default(),
+    )
+    .unwrap()
+    .drawing;
     let strokes: Vec<Vec<DVec2>> = drawing
         .strokes
         .iter()

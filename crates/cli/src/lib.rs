@@ -1,14 +1,18 @@
 //! The `flatcut` command line: argument parsing, files, terminal output and serial devices.
 //!
-//! **Architecture invariant:** this is the only crate that touches the file system, the terminal,
-//! environment variables and serial ports on behalf of the user, and the only one that uses
-//! `anyhow`. Every command is a thin layer over the `flatcut` facade and `flatcut-grbl`.
+//! **Architecture invariant:** this is the only crate that writes the user's output files, talks to
+//! the terminal, reads environment variables and opens serial ports on the user's behalf (the
+//! libraries read the input files they are given), and the only one that uses `anyhow`. Every
+//! command is a thin layer over the `flatcut` facade and `flatcut-grbl`.
 
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
 pub mod cmd;
+pub mod output;
+pub mod stdout;
+pub mod values;
 
 /// flatcut — from 3D designs to flat cutting patterns, and on to the cutter.
 #[derive(Debug, Parser)]
@@ -32,9 +36,11 @@ pub enum Command {
     Nest(cmd::nest::Args),
     /// G-code for a pen plotter, drag knife or laser from a pattern SVG, design or flattened OBJ.
     Gcode(cmd::gcode::Args),
+    /// HP-GL/1 for a vinyl cutter or pen plotter from a pattern SVG/DXF, design or flattened OBJ.
+    Hpgl(cmd::hpgl::Args),
     /// List serial ports.
     Ports(cmd::ports::Args),
-    /// Stream a G-code job to a GRBL controller (default: the embedded simulator).
+    /// Stream a G-code job to a GRBL controller, or HP-GL to a plotter (default: embedded simulators).
     Send(cmd::send::Args),
     /// Run the simulated GRBL controller on a pseudo-terminal.
     Sim(cmd::sim::Args),
@@ -47,17 +53,33 @@ pub const EXIT_LIMIT: u8 = 3;
 
 /// Runs the command line with the process arguments.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
-    match run(cli) {
+    exit_code(run(Cli::parse()))
+}
+
+/// The process's exit code for a command's result, printing an error; a closed standard
+/// output (the reader of `… | head` has gone) is a normal end.
+pub fn exit_code(result: anyhow::Result<ExitCode>) -> ExitCode {
+    match result {
         Ok(code) => code,
+        Err(e) if stdout::is_closed(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
-            for cause in e.chain().skip(1) {
-                eprintln!("  caused by: {cause}");
-            }
+            eprint!("{}", error_report(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes, one a line; a cause whose text the lines above already say (a
+/// typed error that prints its source, wrapped by a context that repeats it) is not repeated.
+pub fn error_report(e: &anyhow::Error) -> String {
+    let mut said = format!("error: {e}\n");
+    for cause in e.chain().skip(1) {
+        let text = cause.to_string();
+        if !said.contains(&text) {
+            said.push_str(&format!("  caused by: {text}\n"));
+        }
+    }
+    said
 }
 
 /// Runs a parsed command.
@@ -69,9 +91,44 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Pattern(a) => cmd::pattern::run(a),
         Command::Nest(a) => cmd::nest::run(a),
         Command::Gcode(a) => cmd::gcode::run(a),
+        Command::Hpgl(a) => cmd::hpgl::run(a),
         Command::Ports(a) => cmd::ports::run(a),
         Command::Send(a) => cmd::send::run(a),
         Command::Sim(a) => cmd::sim::run(a),
         Command::Run(a) => cmd::run::run(a),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[derive(Debug)]
+    struct Inner;
+    impl std::fmt::Display for Inner {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.write_str("vertex 3 is out of range")
+        }
+    }
+    impl std::error::Error for Inner {}
+
+    #[derive(Debug)]
+    struct Outer(Inner);
+    impl std::fmt::Display for Outer {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            write!(f, "piece 'a': {}", self.0)
+        }
+    }
+    impl std::error::Error for Outer {
+        fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+            Some(&self.0)
+        }
+    }
+
+    #[test]
+    fn a_cause_already_said_is_not_repeated() {
+        let e = anyhow::Error::from(Outer(Inner)).context("cannot flatten d.toml");
+        assert_eq!(
+            super::error_report(&e),
+            "error: cannot flatten d.toml\n  caused by: piece 'a': vertex 3 is out of range\n"
+        );
     }
 }

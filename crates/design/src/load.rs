@@ -118,7 +118,7 @@ impl Design {
         for (i, p) in pieces.iter_mut().enumerate() {
             p.index = i;
             p.file = name.to_string();
-            check_piece(p)?;
+            check_piece(p, s)?;
             if s != 1.0 {
                 scale_piece(p, s);
             }

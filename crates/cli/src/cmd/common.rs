@@ -10,6 +10,8 @@ use flatcut::geom::Tolerances;
 use flatcut::pattern::{CornerStyle, NotchStyle, Piece, PieceOptions};
 use flatcut::pieces::PieceSettings;
 
+use crate::values;
+
 /// Flattening options shared by the commands that flatten.
 #[derive(Debug, Clone, clap::Args)]
 pub struct FlattenArgs {
@@ -17,16 +19,16 @@ pub struct FlattenArgs {
     #[arg(long, default_value = "isometric", value_parser = parse_method)]
     pub method: Method,
     /// Largest allowed stretch in percent (principal stretch).
-    #[arg(long, value_name = "P")]
+    #[arg(long, value_name = "P", value_parser = values::material_percent)]
     pub max_stretch: Option<f64>,
     /// Largest allowed compression in percent (leather: 0).
-    #[arg(long, value_name = "P")]
+    #[arg(long, value_name = "P", value_parser = values::material_percent)]
     pub max_compress: Option<f64>,
     /// Chordal tolerance of the tessellation in mm.
-    #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_name = "MM")]
+    #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_name = "MM", value_parser = values::positive_mm)]
     pub chord: f64,
     /// Iteration cap of the nonlinear methods.
-    #[arg(long, default_value_t = FlattenParams::DEFAULT_MAX_ITERS)]
+    #[arg(long, default_value_t = FlattenParams::DEFAULT_MAX_ITERS, value_parser = values::iterations)]
     pub max_iters: usize,
 }
 
@@ -76,7 +78,7 @@ impl FlattenArgs {
 #[derive(Debug, Clone, clap::Args)]
 pub struct PieceArgs {
     /// Seam allowance in mm where the design gives none.
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = values::nonneg_mm)]
     pub seam: Option<f64>,
     /// Corner style of the allowance: mitred, squared or reflected.
     #[arg(long, default_value = "mitred", value_parser = parse_corner)]
@@ -186,32 +188,47 @@ pub fn build_pieces(flats: &[Flat], pa: &PieceArgs) -> anyhow::Result<Vec<Piece>
     Ok(flatcut::pieces::build_pieces(flats, &settings)?)
 }
 
-/// Parses `WxH` in mm (e.g. `600x400`).
-pub fn parse_size(s: &str) -> Result<(f64, f64), String> {
-    let (w, h) = s
-        .split_once(['x', 'X', '×'])
-        .ok_or_else(|| format!("expected WIDTHxHEIGHT in mm, e.g. 600x400, got '{s}'"))?;
-    let w: f64 = w
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad width '{w}' in '{s}'"))?;
-    let h: f64 = h
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad height '{h}' in '{s}'"))?;
-    if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
-        return Err(format!("sheet size must be positive, got '{s}'"));
-    }
-    Ok((w, h))
+/// True when the path names a 2D pattern file (SVG or DXF) rather than a design or mesh.
+pub fn is_pattern_file(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg") || e.eq_ignore_ascii_case("dxf"))
 }
 
-/// Writes a file whole or not at all, naming it in errors.
-pub fn write(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+/// Reads a pattern SVG or DXF (AAMA or plain) as a drawing in mm, curves flattened within
+/// `chord_mm`, SVG stroke colours mapped to layers by `colours`; the reader's warnings are
+/// printed.
+pub fn read_pattern_file(
+    path: &Path,
+    chord_mm: f64,
+    colours: &flatcut::pattern::ColourTable,
+) -> anyhow::Result<flatcut::pattern::Drawing> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let name = path.display().to_string();
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("dxf"))
+    {
+        let import = flatcut::pattern::dxf_read::read_dxf(&text, chord_mm)
+            .with_context(|| format!("cannot read {name}"))?;
+        for w in &import.warnings {
+            eprintln!("warning: {name}: {w}");
+        }
+        return Ok(import.drawing);
     }
-    flatcut::pattern::write_atomic(path, bytes)
-        .with_context(|| format!("cannot write {}", path.display()))
+    let import = flatcut::pattern::svg::read_svg(&text, &name, chord_mm, colours)?;
+    for w in &import.warnings {
+        eprintln!("warning: {name}: {w}");
+    }
+    Ok(import.drawing)
+}
+
+/// Writes one file whole or not at all, naming it in errors (a set of one: see
+/// [`OutputSet`](crate::output::OutputSet) for a command's several outputs).
+pub fn write(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let mut set = crate::output::OutputSet::new();
+    set.add(path, bytes)?;
+    set.commit().map(drop)
 }
 
 /// `dir/stem-suffix.ext` next to `path`.

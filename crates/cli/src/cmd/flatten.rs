@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use super::common::{self, FlattenArgs};
+use crate::output::OutputSet;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -64,23 +65,25 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     } else {
         common::load_flat(&a.file, &a.flatten, (None, None), true)?
     };
+    let mut out = OutputSet::new();
     let several = flats.len() > 1;
     let mut reports = Vec::new();
+    let mut lines = Vec::new();
     for f in &flats {
-        let out = if several {
+        let path = if several {
             common::sibling(&a.output, &common::file_safe(&f.name))
         } else {
             a.output.clone()
         };
-        common::write(&out, flatcut::mesh::io::obj_string(&f.mesh).as_bytes())?;
-        println!(
+        out.add(&path, flatcut::mesh::io::obj_string(&f.mesh).as_bytes())?;
+        lines.push(format!(
             "{}: {} vertices, {} faces, mean δ2 {:.6} -> {}",
             f.name,
             f.mesh.positions.len(),
             f.report.faces,
             f.report.delta2_mean,
-            out.display()
-        );
+            path.display()
+        ));
         reports.push(&f.report);
     }
     if let Some(path) = &a.report {
@@ -89,7 +92,11 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         } else {
             serde_json::to_string_pretty(reports[0])?
         };
-        common::write(path, json.as_bytes())?;
+        out.add(path, json.as_bytes())?;
+    }
+    out.commit()?;
+    for l in lines {
+        crate::outln!("{l}");
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -9,15 +9,17 @@ use flatcut::gcode::{GcodeOptions, Profile};
 use flatcut::pattern::Drawing;
 
 use super::common::{self, FlattenArgs, PieceArgs};
+use crate::output::OutputSet;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// A pattern or layout SVG (mm), a design, or a flattened OBJ.
+    /// A pattern or layout SVG (mm) or DXF (AAMA or plain), a design, or a flattened OBJ.
     pub file: PathBuf,
     /// pen, knife, laser, or a path to a machine profile (.toml).
     #[arg(long, default_value = "pen")]
     pub profile: String,
-    #[arg(short, long)]
+    /// The G-code job to write (GRBL dialect, mm); `flatcut send` streams it.
+    #[arg(short, long, value_name = "JOB.gcode")]
     pub output: PathBuf,
     /// Also write `<stem>-frame.gcode`: the bounding box traced with the tool off.
     #[arg(long)]
@@ -34,12 +36,17 @@ pub struct Args {
     pub flatten: FlattenArgs,
 }
 
-/// Chordal tolerance used when reading SVGs (mm).
+/// Chordal tolerance used when reading SVGs and DXFs (mm).
 const SVG_CHORD_MM: f64 = 0.02;
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let profile = Profile::resolve(&a.profile)?;
-    let drawing = load_drawing(&a.file, &a.piece, &a.flatten)?;
+    anyhow::ensure!(
+        profile.hpgl.is_none(),
+        "profile {} drives an HP-GL device: use `flatcut hpgl`",
+        profile.name
+    );
+    let drawing = load_drawing(&a.file, &a.piece, &a.flatten, &profile.colour_table()?)?;
     let mut opts = GcodeOptions::default();
     opts.reorder = !a.no_reorder;
     opts.arcs = !a.no_arcs;
@@ -52,44 +59,40 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     );
     let plan = flatcut::gcode::plan(&drawing, &profile, &opts)
         .with_context(|| format!("cannot plan {}", a.file.display()))?;
-    common::write(&a.output, plan.to_gcode().as_bytes())?;
+    let mut out = OutputSet::new();
+    out.add(&a.output, plan.to_gcode().as_bytes())?;
+    let frame = common::sibling(&a.output, "frame");
+    if a.frame {
+        out.add(
+            &frame,
+            flatcut::gcode::frame_job(plan.bbox(), &profile).as_bytes(),
+        )?;
+    }
+    out.commit()?;
     let s = plan.summary();
-    println!("{} lines, {} paths", s.lines, s.paths);
-    println!(
+    crate::outln!("{} lines, {} paths", s.lines, s.paths);
+    crate::outln!(
         "cut length {:.1} mm, travel {:.1} mm, estimated time {}",
         s.cut_length_mm,
         s.travel_length_mm,
         hms(s.est_time_s)
     );
-    println!("wrote {}", a.output.display());
+    crate::outln!("wrote {}", a.output.display());
     if a.frame {
-        let f = common::sibling(&a.output, "frame");
-        common::write(
-            &f,
-            flatcut::gcode::frame_job(plan.bbox(), &profile).as_bytes(),
-        )?;
-        println!("wrote {} (bounding box, tool off)", f.display());
+        crate::outln!("wrote {} (bounding box, tool off)", frame.display());
     }
     Ok(ExitCode::SUCCESS)
 }
 
-/// The drawing of an SVG, or of the pieces of a design / flattened OBJ laid out in a row.
+/// The drawing of an SVG or DXF, or of the pieces of a design / flattened OBJ laid out in a row.
 pub fn load_drawing(
     path: &std::path::Path,
     pa: &PieceArgs,
     fa: &FlattenArgs,
+    colours: &flatcut::pattern::ColourTable,
 ) -> anyhow::Result<Drawing> {
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
-    {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
-        return Ok(flatcut::pattern::svg::read_svg(
-            &text,
-            &path.display().to_string(),
-            SVG_CHORD_MM,
-        )?);
+    if common::is_pattern_file(path) {
+        return common::read_pattern_file(path, SVG_CHORD_MM, colours);
     }
     let flats = common::load_flat(path, fa, (None, None), true)?;
     let pieces = common::build_pieces(&flats, pa)?;

@@ -34,7 +34,7 @@ pub struct Args {
     #[arg(long)]
     pub force: bool,
     /// Nesting iterations.
-    #[arg(long, default_value_t = RunOptions::DEFAULT_NEST_ITERS)]
+    #[arg(long, default_value_t = RunOptions::DEFAULT_NEST_ITERS, value_parser = crate::values::iterations)]
     pub nest_iters: usize,
     #[command(flatten)]
     pub stream: StreamArgs,
@@ -52,11 +52,14 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let outputs = flatcut::run::run_project(&proj, &opts, &mut log)?;
     log.finish_bar();
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    // All of the run's files land together or not at all (the simulator's traces come later).
+    let mut set = crate::output::OutputSet::new();
     for f in &outputs.files {
-        common::write(&out.join(&f.name), &f.bytes)?;
+        set.add(&out.join(&f.name), &f.bytes)?;
     }
+    set.commit()?;
     let (stream_lines, exit) = send_stage(&a, &outputs, &out, &mut log)?;
-    print_summary(&outputs, &stream_lines, &out, t0);
+    print_summary(&outputs, &stream_lines, &out, t0)?;
     Ok(exit)
 }
 
@@ -157,31 +160,48 @@ fn cut_segments(trace: &[flatcut_firmware_sim::TraceSegment]) -> Vec<CutSegment>
         .collect()
 }
 
-fn print_summary(o: &ProjectOutputs, stream_lines: &[String], out: &Path, t0: Instant) {
-    println!();
-    println!(
+fn print_summary(
+    o: &ProjectOutputs,
+    stream_lines: &[String],
+    out: &Path,
+    t0: Instant,
+) -> anyhow::Result<()> {
+    crate::outln!();
+    crate::outln!(
         "{:<20} {:>4} {:>12} {:>10} {:>10} {:>10}",
-        "piece", "qty", "area mm²", "δ2 mean", "stretch%", "compr.%"
+        "piece",
+        "qty",
+        "area mm²",
+        "δ2 mean",
+        "stretch%",
+        "compr.%"
     );
     for p in &o.summary.pieces {
-        println!(
+        crate::outln!(
             "{:<20} {:>4} {:>12.0} {:>10.5} {:>10.2} {:>10.2}",
-            p.name, p.quantity, p.area_mm2, p.delta2_mean, p.stretch_max_pct, p.compress_max_pct
+            p.name,
+            p.quantity,
+            p.area_mm2,
+            p.delta2_mean,
+            p.stretch_max_pct,
+            p.compress_max_pct
         );
     }
     let s = &o.summary;
-    println!();
+    crate::outln!();
     match o.stock {
-        Stock::Sheets { width, height, .. } => println!(
+        Stock::Sheets { width, height, .. } => crate::outln!(
             "nesting      {} sheet(s) {width:.0}×{height:.0} mm, utilization {:.1}%",
-            s.sheets, s.utilization_pct
+            s.sheets,
+            s.utilization_pct
         ),
-        Stock::Roll { width, .. } => println!(
+        Stock::Roll { width, .. } => crate::outln!(
             "nesting      roll {width:.0} mm, length {:.0} mm, utilization {:.1}%",
-            o.layout.result.length, s.utilization_pct
+            o.layout.result.length,
+            s.utilization_pct
         ),
     }
-    println!(
+    crate::outln!(
         "G-code       {} lines, cut {:.0} mm, travel {:.0} mm, estimated {}",
         s.gcode_lines,
         s.cut_length_mm,
@@ -189,10 +209,11 @@ fn print_summary(o: &ProjectOutputs, stream_lines: &[String], out: &Path, t0: In
         super::gcode::hms(s.est_time_s)
     );
     for l in stream_lines {
-        println!("stream       {l}");
+        crate::outln!("stream       {l}");
     }
-    println!("outputs      {}", out.display());
-    println!("run time     {:.1} s", t0.elapsed().as_secs_f64());
+    crate::outln!("outputs      {}", out.display());
+    crate::outln!("run time     {:.1} s", t0.elapsed().as_secs_f64());
+    Ok(())
 }
 
 /// Renders a run's events on stderr: a numbered line per stage, warnings always, progress lines

@@ -447,13 +447,5 @@ fn json<T: serde::Serialize + ?Sized>(v: &T) -> Vec<u8> {
 
 /// A name usable in a file name: ASCII letters, digits, `-` and `_`; anything else becomes `_`.
 pub fn file_safe(name: &str) -> String {
-    name.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
+    flatcut_pattern::safe_name(name)
 }
