@@ -111,6 +111,7 @@ fn every_pattern_folder_has_a_design_and_notes() {
         [
             "helmet",
             "hull",
+            "kayak",
             "lampshade",
             "sail",
             "shoe",
