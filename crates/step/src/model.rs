@@ -370,7 +370,7 @@ fn edge_range(
     };
     for (t, p, which) in [(t0, p0, "start"), (t1, p1, "end")] {
         let d = curve.eval(t).distance(p);
-        if !(d <= VERTEX_ON_CURVE_MM) {
+        if d.is_nan() || d > VERTEX_ON_CURVE_MM {
             return Err(format!(
                 "its {which} vertex is {d:.3} mm from its {} (more than {VERTEX_ON_CURVE_MM} mm)",
                 curve.name()

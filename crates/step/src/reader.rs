@@ -209,7 +209,7 @@ impl<'f> Reader<'f> {
             let a = Self::expect_simple(inst, "VECTOR")?;
             let d = r.direction(a.reference(1, "orientation")?, id)?;
             let m = a.real(2, "magnitude")?;
-            if !(m >= 0.0) {
+            if m.is_nan() || m < 0.0 {
                 return Err(a.bad(2, "magnitude", format!("must be >= 0, got {m}")));
             }
             let s = if space == Space::Model { r.mm } else { 1.0 };
@@ -356,7 +356,10 @@ impl<'f> Reader<'f> {
                 format!("{} knots but {} multiplicities", knots.len(), mults.len()),
             ));
         }
-        if let Some(k) = knots.windows(2).position(|w| !(w[1] > w[0])) {
+        if let Some(k) = knots
+            .windows(2)
+            .position(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+        {
             return Err(a.bad(
                 ki,
                 "knots",

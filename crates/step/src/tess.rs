@@ -164,12 +164,12 @@ fn periodic(s: &Surface) -> (bool, bool) {
 
 /// The pcurve of `edge` on the face's surface to start projections from: for a seam (two
 /// pcurves on one surface) the one continuing from `prev`.
-fn pick_pcurve<'m>(
-    g: &'m EdgeGeometry,
+fn pick_pcurve(
+    g: &EdgeGeometry,
     surface_entity: u64,
     t_first: f64,
     prev: Option<DVec2>,
-) -> Option<&'m Curve> {
+) -> Option<&Curve> {
     let mut best: Option<(&Curve, f64)> = None;
     for p in g
         .pcurves
@@ -238,7 +238,7 @@ fn face_loops(
                     }
                 }
                 let gap = s.eval(uv.x, uv.y).distance(p);
-                if !(gap <= TRIM_GAP_MM) {
+                if gap.is_nan() || gap > TRIM_GAP_MM {
                     return Err(face_err(
                         model,
                         index,
