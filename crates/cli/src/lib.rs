@@ -1,14 +1,18 @@
 //! The `flatcut` command line: argument parsing, files, terminal output and serial devices.
 //!
-//! **Architecture invariant:** this is the only crate that touches the file system, the terminal,
-//! environment variables and serial ports on behalf of the user, and the only one that uses
-//! `anyhow`. Every command is a thin layer over the `flatcut` facade and `flatcut-grbl`.
+//! **Architecture invariant:** this is the only crate that writes the user's output files, talks to
+//! the terminal, reads environment variables and opens serial ports on the user's behalf (the
+//! libraries read the input files they are given), and the only one that uses `anyhow`. Every
+//! command is a thin layer over the `flatcut` facade and `flatcut-grbl`.
 
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
 pub mod cmd;
+pub mod output;
+pub mod stdout;
+pub mod values;
 
 /// flatcut — from 3D designs to flat cutting patterns, and on to the cutter.
 #[derive(Debug, Parser)]
@@ -28,7 +32,7 @@ pub enum Command {
     Report(cmd::report::Args),
     /// Pattern piece(s) from a design or flattened OBJ: SVG in true mm, optional DXF.
     Pattern(cmd::pattern::Args),
-    /// Nest pattern pieces on sheets or a roll.
+    /// Nest pattern pieces on sheets, a roll or leather hides (or a benchmark instance).
     Nest(cmd::nest::Args),
     /// G-code for a pen plotter, drag knife or laser from a pattern SVG, design or flattened OBJ.
     Gcode(cmd::gcode::Args),
@@ -49,14 +53,17 @@ pub const EXIT_LIMIT: u8 = 3;
 
 /// Runs the command line with the process arguments.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
-    match run(cli) {
+    exit_code(run(Cli::parse()))
+}
+
+/// The process's exit code for a command's result, printing an error; a closed standard
+/// output (the reader of `… | head` has gone) is a normal end.
+pub fn exit_code(result: anyhow::Result<ExitCode>) -> ExitCode {
+    match result {
         Ok(code) => code,
+        Err(e) if stdout::is_closed(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
-            for cause in e.chain().skip(1) {
-                eprintln!("  caused by: {cause}");
-            }
+            eprint!("{}", error_report(&e));
             // Limits that no dart could meet are a limit exceeded, not a failure to run.
             let out_of_limits = e.chain().any(|c| {
                 c.downcast_ref::<flatcut::pipeline::PipelineError>()
@@ -69,6 +76,19 @@ pub fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// The error and its causes, one a line; a cause whose text the lines above already say (a
+/// typed error that prints its source, wrapped by a context that repeats it) is not repeated.
+pub fn error_report(e: &anyhow::Error) -> String {
+    let mut said = format!("error: {e}\n");
+    for cause in e.chain().skip(1) {
+        let text = cause.to_string();
+        if !said.contains(&text) {
+            said.push_str(&format!("  caused by: {text}\n"));
+        }
+    }
+    said
 }
 
 /// Runs a parsed command.
@@ -85,5 +105,39 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Send(a) => cmd::send::run(a),
         Command::Sim(a) => cmd::sim::run(a),
         Command::Run(a) => cmd::run::run(a),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[derive(Debug)]
+    struct Inner;
+    impl std::fmt::Display for Inner {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.write_str("vertex 3 is out of range")
+        }
+    }
+    impl std::error::Error for Inner {}
+
+    #[derive(Debug)]
+    struct Outer(Inner);
+    impl std::fmt::Display for Outer {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            write!(f, "piece 'a': {}", self.0)
+        }
+    }
+    impl std::error::Error for Outer {
+        fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+            Some(&self.0)
+        }
+    }
+
+    #[test]
+    fn a_cause_already_said_is_not_repeated() {
+        let e = anyhow::Error::from(Outer(Inner)).context("cannot flatten d.toml");
+        assert_eq!(
+            super::error_report(&e),
+            "error: cannot flatten d.toml\n  caused by: piece 'a': vertex 3 is out of range\n"
+        );
     }
 }

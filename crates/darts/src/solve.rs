@@ -9,7 +9,7 @@
 //! changes [`newton`] only.
 
 use flatcut_flatten::nonlinear::kernel::{IsoEnergy, RestTri};
-use flatcut_flatten::nonlinear::newton::{self, EdgeTerms, MapProblem};
+use flatcut_flatten::nonlinear::newton::{self, Budget, EdgeTerms, MapProblem};
 use flatcut_geom::DVec2;
 
 /// Pairs of edges (vertex index pairs of the cut mesh) that must keep equal 2D lengths: the two
@@ -61,7 +61,7 @@ pub fn newton<E: IsoEnergy + Copy>(
     let pairs = pairs.filter(|p| !p.pairs.is_empty());
     let Some(pairs) = pairs else {
         let problem = MapProblem::new(rest, n, energy, None)?;
-        let (r, _) = newton::run(problem, x0, max_iters, rel, abs)?;
+        let (r, _) = newton::run(problem, x0, max_iters, rel, abs, &Budget::none("darts"))?;
         return Ok(Run {
             x: r.x,
             iterations: r.iterations,
@@ -82,7 +82,7 @@ pub fn newton<E: IsoEnergy + Copy>(
             weight: PAIR_WEIGHT,
         };
         let problem = MapProblem::new(rest, n, energy, Some(terms))?;
-        let (r, _) = newton::run(problem, &x, max_iters, rel, abs)?;
+        let (r, _) = newton::run(problem, &x, max_iters, rel, abs, &Budget::none("darts"))?;
         iterations += r.iterations;
         x = r.x;
     }

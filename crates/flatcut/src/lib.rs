@@ -44,6 +44,7 @@ pub mod check;
 pub mod darting;
 pub mod flat;
 pub mod inspect;
+pub mod inspect_step;
 pub mod pieces;
 pub mod pipeline;
 pub mod project;

@@ -19,8 +19,8 @@
 //! [machine]
 //! profile = "pen"               # pen | knife | laser | path to a profile .toml
 //! [device]
-//! # port = "/dev/ttyUSB0"       # absent: the embedded simulator
-//! baud = 115200
+//! # port = "/dev/ttyUSB0"       # the controller; "simulator" or absent: the embedded simulator
+//! baud = 115200                 # 1200..=2000000
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -62,13 +62,48 @@ pub struct Machine {
     pub profile: String,
 }
 
+/// The `[device]` a project's jobs stream to: a serial port, or the embedded simulator.
 #[derive(Clone, Debug, PartialEq, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct Device {
+    /// The controller's serial port; [`Device::SIMULATOR`] or absent: the embedded simulator.
     #[serde(default)]
     pub port: Option<String>,
+    /// Baud rate of the link (GRBL: 115200), within [`Device::BAUD_RANGE`].
     #[serde(default)]
     pub baud: Option<u32>,
+}
+
+impl Device {
+    /// The `port` that names the embedded simulator.
+    pub const SIMULATOR: &'static str = "simulator";
+    /// Baud rates a serial link to a controller can have: 1200 (the slowest plotters) to 2 Mbaud
+    /// (the fastest USB serial adapters).
+    pub const BAUD_RANGE: std::ops::RangeInclusive<u32> = 1200..=2_000_000;
+
+    /// Whether the jobs go to the embedded simulator.
+    pub fn is_simulator(&self) -> bool {
+        self.port.as_deref().is_none_or(|p| p == Device::SIMULATOR)
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        if let Some(b) = self.baud
+            && !Device::BAUD_RANGE.contains(&b)
+        {
+            return Err(format!(
+                "[device] baud = {b}: a serial link runs at {}..={} baud (GRBL: 115200)",
+                Device::BAUD_RANGE.start(),
+                Device::BAUD_RANGE.end()
+            ));
+        }
+        if self.port.as_deref().is_some_and(|p| p.trim().is_empty()) {
+            return Err(format!(
+                "[device] port is empty: name the controller's serial port, or \"{}\"",
+                Device::SIMULATOR
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// A `flatcut run` project.
@@ -144,7 +179,7 @@ impl Project {
     }
 
     fn validate(&self) -> Result<(), String> {
-        let pos = |v: Option<f64>| v.is_none_or(|v| v.is_finite() && v > 0.0);
+        let pos = |v: Option<f64>| v.is_none_or(|v| v > 0.0 && flatcut_geom::limits::in_range(v));
         match (
             self.sheet.width_mm,
             self.sheet.height_mm,
@@ -155,9 +190,13 @@ impl Project {
         }
         if !(pos(self.sheet.width_mm) && pos(self.sheet.height_mm) && pos(self.sheet.roll_width_mm))
         {
-            return Err("[sheet] sizes must be positive".into());
+            return Err(format!(
+                "[sheet] sizes must be positive and at most {:e} mm",
+                flatcut_geom::limits::MAX_COORD_MM
+            ));
         }
-        if !(self.sheet.spacing_mm.is_finite() && self.sheet.spacing_mm >= 0.0) {
+        if !(self.sheet.spacing_mm >= 0.0 && flatcut_geom::limits::in_range(self.sheet.spacing_mm))
+        {
             return Err("[sheet] spacing_mm must be >= 0".into());
         }
         for (k, v) in [
@@ -168,15 +207,18 @@ impl Project {
                 return Err(format!("[material] {k} must be a percentage in [0, 100)"));
             }
         }
-        if self.seam_mm.is_some_and(|v| !(v.is_finite() && v >= 0.0)) {
+        if self
+            .seam_mm
+            .is_some_and(|v| !(v >= 0.0 && flatcut_geom::limits::in_range(v)))
+        {
             return Err("seam_mm must be >= 0".into());
         }
-        if let Some(m) = &self.method {
-            if flatcut_flatten::Method::from_name(m).is_none() {
-                return Err(format!("unknown method '{m}'"));
-            }
+        if let Some(m) = &self.method
+            && flatcut_flatten::Method::from_name(m).is_none()
+        {
+            return Err(format!("unknown method '{m}'"));
         }
-        Ok(())
+        self.device.validate()
     }
 
     /// The design file's path.

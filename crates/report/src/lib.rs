@@ -13,9 +13,11 @@
 pub mod darts;
 pub mod draw;
 pub mod measure;
+pub mod per_face;
 
 pub use darts::DartReport;
 pub use draw::{Column, heatmap_svg, histogram_svg, html_report, render_png};
 pub use measure::{
     BoundarySegment, FaceMeasure, Measure, Region, Report, ReportError, ReportOptions, Stats,
 };
+pub use per_face::{FaceRow, ReportWithFaces, per_face_rows, with_faces};

@@ -5,10 +5,12 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use super::common::{self, FlattenArgs};
+use crate::output::OutputSet;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// A design (.toml, .json) or a mesh (.obj, .stl, .ply) with disk topology.
+    /// A design (.toml, .json), a mesh (.obj, .stl, .ply) with disk topology, or a STEP model
+    /// (.step, .stp; every face a piece).
     pub file: PathBuf,
     /// Output OBJ. With several pieces: `<stem>-<piece>.obj` beside it.
     #[arg(short, long)]
@@ -30,15 +32,16 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "mesh".into());
-        let params = a.flatten.params()?;
+        let (params, bar) = common::with_progress_bar(a.flatten.params()?);
         eprintln!(
             "flattening '{name}' ({} faces) with {}",
             mesh.triangles.len(),
             params.method
         );
         let t0 = std::time::Instant::now();
-        let f = flatcut::flatten::flatten(&mesh, &params)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?;
+        let f = flatcut::flatten::flatten(&mesh, &params);
+        bar.finish_and_clear();
+        let f = f.map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?;
         let settings = a.flatten.darts()?;
         let (darted, info, darts) = flatcut::darting::finish(
             &name,
@@ -80,23 +83,25 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     } else {
         common::load_flat(&a.file, &a.flatten, (None, None), true)?
     };
+    let mut out = OutputSet::new();
     let several = flats.len() > 1;
     let mut reports = Vec::new();
+    let mut lines = Vec::new();
     for f in &flats {
-        let out = if several {
+        let path = if several {
             common::sibling(&a.output, &common::file_safe(&f.name))
         } else {
             a.output.clone()
         };
-        common::write(&out, flatcut::mesh::io::obj_string(&f.mesh).as_bytes())?;
-        println!(
+        out.add(&path, flatcut::mesh::io::obj_string(&f.mesh).as_bytes())?;
+        lines.push(format!(
             "{}: {} vertices, {} faces, mean δ2 {:.6} -> {}",
             f.name,
             f.mesh.positions.len(),
             f.report.faces,
             f.report.delta2_mean,
-            out.display()
-        );
+            path.display()
+        ));
         reports.push(&f.report);
     }
     if let Some(path) = &a.report {
@@ -105,7 +110,11 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         } else {
             serde_json::to_string_pretty(reports[0])?
         };
-        common::write(path, json.as_bytes())?;
+        out.add(path, json.as_bytes())?;
+    }
+    out.commit()?;
+    for l in lines {
+        crate::outln!("{l}");
     }
     Ok(ExitCode::SUCCESS)
 }

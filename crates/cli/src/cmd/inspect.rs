@@ -1,4 +1,4 @@
-//! `flatcut inspect FILE [--json]`: what a design or mesh file contains.
+//! `flatcut inspect FILE [--json]`: what a design, mesh or STEP file contains.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -8,13 +8,13 @@ use flatcut::geom::Tolerances;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// A design file (.toml, .json) or a mesh (.obj, .stl, .ply).
+    /// A design file (.toml, .json), a mesh (.obj, .stl, .ply) or a STEP model (.step, .stp).
     pub file: PathBuf,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
     /// Chordal tolerance of the tessellation in mm.
-    #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM)]
+    #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_parser = crate::values::positive_mm)]
     pub chord: f64,
 }
 
@@ -28,9 +28,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let report = flatcut::inspect::inspect_file(&a.file, &tol)
         .with_context(|| format!("cannot inspect {}", a.file.display()))?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        crate::outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print!("{report}");
+        crate::out!("{report}");
     }
     Ok(ExitCode::SUCCESS)
 }
