@@ -267,11 +267,21 @@ fn darts_and_no_cut_regions_are_read_and_scaled() {
     assert_eq!(p.darts, Some(crate::DartsDef::Auto));
     assert_eq!(p.no_cut[0][1], [10.0, 0.0, 10.0]);
     let bad = text.replace("darts = \"auto\"", "darts = \"sometimes\"");
-    let e = Design::from_toml_str(&bad, "t.toml").unwrap_err().to_string();
+    let e = Design::from_toml_str(&bad, "t.toml")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("sometimes"), "{e}");
-    let short = text.replace("[[[0, 0, 1], [1, 0, 1], [0, 1, 1]]]", "[[[0, 0, 1], [1, 0, 1]]]");
-    let e = Design::from_toml_str(&short, "t.toml").unwrap_err().to_string();
-    assert!(e.contains("no_cut region 0") && e.contains("at least 3"), "{e}");
+    let short = text.replace(
+        "[[[0, 0, 1], [1, 0, 1], [0, 1, 1]]]",
+        "[[[0, 0, 1], [1, 0, 1]]]",
+    );
+    let e = Design::from_toml_str(&short, "t.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no_cut region 0") && e.contains("at least 3"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -73,29 +73,36 @@ pub fn flatten_and_report(
     let (_, pieces) = pipeline::flatten_design(path, tol, params, limits.darts.as_ref(), progress)?;
     pieces
         .into_iter()
-        .map(|FlatPiece { def, mesh, info, darts }| {
-            let boundary = pipeline::flat_boundary(&def.name, &mesh)
-                .map(|b| b.1)
-                .unwrap_or_default();
-            let marks = pipeline::notch_vertices(&def, &mesh, &boundary);
-            let mut report = pipeline::report_piece(
-                &def.name,
-                &mesh,
-                &marks,
-                limits.stretch_pct,
-                limits.compress_pct,
-            )?;
-            report.darts = darting::dart_reports(&darts);
-            Ok(Flat {
-                name: def.name.clone(),
-                quantity: def.quantity,
-                def: Some(def),
-                mesh,
-                report,
-                info: Some(info),
-                darts,
-            })
-        })
+        .map(
+            |FlatPiece {
+                 def,
+                 mesh,
+                 info,
+                 darts,
+             }| {
+                let boundary = pipeline::flat_boundary(&def.name, &mesh)
+                    .map(|b| b.1)
+                    .unwrap_or_default();
+                let marks = pipeline::notch_vertices(&def, &mesh, &boundary);
+                let mut report = pipeline::report_piece(
+                    &def.name,
+                    &mesh,
+                    &marks,
+                    limits.stretch_pct,
+                    limits.compress_pct,
+                )?;
+                report.darts = darting::dart_reports(&darts);
+                Ok(Flat {
+                    name: def.name.clone(),
+                    quantity: def.quantity,
+                    def: Some(def),
+                    mesh,
+                    report,
+                    info: Some(info),
+                    darts,
+                })
+            },
+        )
         .collect()
 }
 

@@ -43,16 +43,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         bar.finish_and_clear();
         let f = f.map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?;
         let settings = a.flatten.darts()?;
-        let (darted, info, darts) = flatcut::darting::finish(
-            &name,
-            None,
-            mesh,
-            f.uv,
-            f.info,
-            &params,
-            settings.as_ref(),
-        )
-        .map_err(|e| anyhow::Error::new(e).context(a.file.display().to_string()))?;
+        let (darted, info, darts) =
+            flatcut::darting::finish(&name, None, mesh, f.uv, f.info, &params, settings.as_ref())
+                .map_err(|e| anyhow::Error::new(e).context(a.file.display().to_string()))?;
         mesh = darted;
         if !darts.is_empty() {
             let total: f64 = darts.iter().map(|d| d.length_3d_mm).sum();
