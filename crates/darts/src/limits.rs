@@ -62,7 +62,7 @@ impl Band {
     /// The face's limit excess (log strain) for singular values σ1 ≥ σ2: negative inside the
     /// band; +∞ for a degenerate or inverted face.
     pub fn excess(&self, s1: f64, s2: f64) -> f64 {
-        if !(s2 > 0.0) {
+        if s2.is_nan() || s2 <= 0.0 {
             return f64::INFINITY;
         }
         (s1.ln() - self.ln_s).max(self.ln_c - s2.ln())
@@ -144,7 +144,7 @@ impl BandBarrier {
         let l = s.ln();
         if self.band.ln_s.is_finite() {
             let y = self.wall + self.band.ln_s - l;
-            if !(y > 0.0) {
+            if y.is_nan() || y <= 0.0 {
                 return (f64::INFINITY, 0.0, 0.0);
             }
             v -= y.ln();
@@ -153,7 +153,7 @@ impl BandBarrier {
         }
         if self.band.ln_c.is_finite() {
             let y = self.wall - self.band.ln_c + l;
-            if !(y > 0.0) {
+            if y.is_nan() || y <= 0.0 {
                 return (f64::INFINITY, 0.0, 0.0);
             }
             v -= y.ln();
@@ -166,7 +166,7 @@ impl BandBarrier {
 
 impl IsoEnergy for BandBarrier {
     fn psi(&self, s1: f64, s2: f64) -> f64 {
-        if !(s2 > 0.0) {
+        if s2.is_nan() || s2 <= 0.0 {
             return f64::INFINITY;
         }
         self.reg * SymDirichlet.psi(s1, s2) + self.terms(s1).0 + self.terms(s2).0
@@ -236,7 +236,7 @@ impl BandPower {
 
 impl IsoEnergy for BandPower {
     fn psi(&self, s1: f64, s2: f64) -> f64 {
-        if !(s2 > 0.0) {
+        if s2.is_nan() || s2 <= 0.0 {
             return f64::INFINITY;
         }
         self.reg * SymDirichlet.psi(s1, s2) + self.terms(s1).0 + self.terms(s2).0

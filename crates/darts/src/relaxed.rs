@@ -76,7 +76,7 @@ impl Yield {
 
 impl IsoEnergy for Yield {
     fn psi(&self, s1: f64, s2: f64) -> f64 {
-        if !(s2 > 0.0) {
+        if s2.is_nan() || s2 <= 0.0 {
             return f64::INFINITY;
         }
         self.g(s1).0 + self.f(s2).0
