@@ -164,31 +164,40 @@ impl BandBarrier {
     }
 }
 
-impl IsoEnergy for BandBarrier {
-    fn psi(&self, s1: f64, s2: f64) -> f64 {
-        if s2.is_nan() || s2 <= 0.0 {
-            return f64::INFINITY;
+/// The energy of a map whose per-face density is reg·δ2 plus a term of each singular value
+/// alone (`self.terms(σ)` = value, first and second derivative), infinite on an inverted face:
+/// the form both limit energies share, written once.
+macro_rules! separable_iso_energy {
+    ($t:ty) => {
+        impl IsoEnergy for $t {
+            fn psi(&self, s1: f64, s2: f64) -> f64 {
+                if s2.is_nan() || s2 <= 0.0 {
+                    return f64::INFINITY;
+                }
+                self.reg * SymDirichlet.psi(s1, s2) + self.terms(s1).0 + self.terms(s2).0
+            }
+            fn grad(&self, s1: f64, s2: f64) -> [f64; 2] {
+                let g = SymDirichlet.grad(s1, s2);
+                [
+                    self.reg * g[0] + self.terms(s1).1,
+                    self.reg * g[1] + self.terms(s2).1,
+                ]
+            }
+            fn hess(&self, s1: f64, s2: f64) -> [[f64; 2]; 2] {
+                let h = SymDirichlet.hess(s1, s2);
+                [
+                    [self.reg * h[0][0] + self.terms(s1).2, 0.0],
+                    [0.0, self.reg * h[1][1] + self.terms(s2).2],
+                ]
+            }
+            fn is_barrier(&self) -> bool {
+                true
+            }
         }
-        self.reg * SymDirichlet.psi(s1, s2) + self.terms(s1).0 + self.terms(s2).0
-    }
-    fn grad(&self, s1: f64, s2: f64) -> [f64; 2] {
-        let g = SymDirichlet.grad(s1, s2);
-        [
-            self.reg * g[0] + self.terms(s1).1,
-            self.reg * g[1] + self.terms(s2).1,
-        ]
-    }
-    fn hess(&self, s1: f64, s2: f64) -> [[f64; 2]; 2] {
-        let h = SymDirichlet.hess(s1, s2);
-        [
-            [self.reg * h[0][0] + self.terms(s1).2, 0.0],
-            [0.0, self.reg * h[1][1] + self.terms(s2).2],
-        ]
-    }
-    fn is_barrier(&self) -> bool {
-        true
-    }
+    };
 }
+
+separable_iso_energy!(BandBarrier);
 
 /// A smooth stand-in for the largest excess: reg·δ2 + Σ over both singular values of
 /// (σ/S)^p + (C/σ)^p, whose minimiser approaches the min-max of the excess as p grows (the sum of
@@ -234,31 +243,7 @@ impl BandPower {
     }
 }
 
-impl IsoEnergy for BandPower {
-    fn psi(&self, s1: f64, s2: f64) -> f64 {
-        if s2.is_nan() || s2 <= 0.0 {
-            return f64::INFINITY;
-        }
-        self.reg * SymDirichlet.psi(s1, s2) + self.terms(s1).0 + self.terms(s2).0
-    }
-    fn grad(&self, s1: f64, s2: f64) -> [f64; 2] {
-        let g = SymDirichlet.grad(s1, s2);
-        [
-            self.reg * g[0] + self.terms(s1).1,
-            self.reg * g[1] + self.terms(s2).1,
-        ]
-    }
-    fn hess(&self, s1: f64, s2: f64) -> [[f64; 2]; 2] {
-        let h = SymDirichlet.hess(s1, s2);
-        [
-            [self.reg * h[0][0] + self.terms(s1).2, 0.0],
-            [0.0, self.reg * h[1][1] + self.terms(s2).2],
-        ]
-    }
-    fn is_barrier(&self) -> bool {
-        true
-    }
-}
+separable_iso_energy!(BandPower);
 
 /// The largest limit excess over the faces of a map, and the face where it is.
 pub fn max_excess(rest: &[RestTri], x: &[DVec2], band: Band) -> (f64, usize) {
