@@ -293,7 +293,7 @@ fn entity(
         "CIRCLE" | "ARC" => {
             let c = DVec2::new(get(10)?, get(20)?);
             let r = get(40)?;
-            if !(r > 0.0) {
+            if r.is_nan() || r <= 0.0 {
                 return Err(err(line, format!("{kind} with radius {r}")));
             }
             let (a0, a1, closed) = if kind == "CIRCLE" {
@@ -532,7 +532,7 @@ fn spline(body: &[Pair<'_>], line: usize, tol: f64) -> Result<Geo, PatternError>
     if weights.len() != n {
         weights = vec![1.0; n];
     }
-    if weights.iter().any(|w| !(*w > 0.0)) {
+    if weights.iter().any(|w| w.is_nan() || *w <= 0.0) {
         return Err(err(line, "SPLINE weight not positive"));
     }
     let eval = |t: f64| nurbs_point(degree, &knots, &ctrl, &weights, t);
