@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use flatcut::flat::Limits;
-use flatcut::flatten::{FlattenParams, Method};
+use flatcut::flatten::{FlattenHooks, FlattenParams, FlattenProgress, Method};
 use flatcut::geom::Tolerances;
 use flatcut::pattern::{CornerStyle, NotchStyle, Piece, PieceOptions};
 use flatcut::pieces::PieceSettings;
@@ -27,9 +27,37 @@ pub struct FlattenArgs {
     /// Chordal tolerance of the tessellation in mm.
     #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_name = "MM", value_parser = values::positive_mm)]
     pub chord: f64,
-    /// Iteration cap of the nonlinear methods.
-    #[arg(long, default_value_t = FlattenParams::DEFAULT_MAX_ITERS, value_parser = values::iterations)]
-    pub max_iters: usize,
+    /// Iteration cap of the nonlinear methods [default: 200; minmax: 1000, all its stages together].
+    #[arg(long, value_name = "N", value_parser = values::iterations)]
+    pub max_iters: Option<usize>,
+    /// Time limit of the flattening of one piece in seconds: when it runs out, the best flip-free map found so far is used, with a warning.
+    #[arg(long, value_name = "S", value_parser = values::seconds)]
+    pub flatten_time: Option<std::time::Duration>,
+}
+
+/// Shows a flattening's progress (stage, iteration of the cap, objective) as a bar on stderr
+/// (indicatif hides it when stderr is not a terminal). Returns the params with the hook and the
+/// bar, to be cleared when the flattening returns.
+pub fn with_progress_bar(params: FlattenParams) -> (FlattenParams, indicatif::ProgressBar) {
+    let (hooks, bar) = progress_hooks(params.hooks.clone(), params.max_iters);
+    (params.with_hooks(hooks), bar)
+}
+
+/// `hooks` with a progress callback drawing a bar (initially of `len` steps) on stderr.
+pub fn progress_hooks(hooks: FlattenHooks, len: usize) -> (FlattenHooks, indicatif::ProgressBar) {
+    let bar = indicatif::ProgressBar::new(len as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{prefix} {bar:30} {pos}/{len} {msg} {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let shown = bar.clone();
+    let hooks = hooks.with_progress(std::sync::Arc::new(move |p: &FlattenProgress| {
+        shown.set_prefix(p.stage);
+        shown.set_length(p.max_iterations as u64);
+        shown.set_position(p.iteration as u64);
+        shown.set_message(format!("energy {:.6e}", p.energy));
+    }));
+    (hooks, bar)
 }
 
 pub fn parse_method(s: &str) -> Result<Method, String> {
@@ -58,10 +86,14 @@ impl FlattenArgs {
                 );
             }
         }
-        Ok(FlattenParams::new(self.method)
+        let mut p = FlattenParams::new(self.method)
             .with_max_stretch_pct(self.max_stretch)
             .with_max_compress_pct(self.max_compress)
-            .with_max_iters(self.max_iters))
+            .with_time_limit(self.flatten_time);
+        if let Some(n) = self.max_iters {
+            p = p.with_max_iters(n);
+        }
+        Ok(p)
     }
 
     pub fn tolerances(&self) -> anyhow::Result<Tolerances> {
@@ -137,7 +169,7 @@ pub fn load_flat(
     limits: (Option<f64>, Option<f64>),
     verbose: bool,
 ) -> anyhow::Result<Vec<Flat>> {
-    let params = fa.params()?;
+    let (params, bar) = with_progress_bar(fa.params()?);
     let tol = fa.tolerances()?;
     let limits = Limits {
         stretch_pct: limits.0,
@@ -146,16 +178,19 @@ pub fn load_flat(
     let t0 = std::time::Instant::now();
     let flats = flatcut::flat::load_flat(path, &tol, &params, limits, &mut |name, k, n| {
         if verbose {
-            eprintln!(
-                "flattening piece {}/{} '{}' ({})",
-                k + 1,
-                n,
-                name,
-                params.method
-            );
+            bar.suspend(|| {
+                eprintln!(
+                    "flattening piece {}/{} '{}' ({})",
+                    k + 1,
+                    n,
+                    name,
+                    params.method
+                )
+            });
         }
-    })
-    .with_context(|| format!("cannot flatten {}", path.display()))?;
+    });
+    bar.finish_and_clear();
+    let flats = flats.with_context(|| format!("cannot flatten {}", path.display()))?;
     for f in &flats {
         let Some(info) = &f.info else { continue };
         for w in &info.warnings {

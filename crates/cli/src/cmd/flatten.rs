@@ -31,15 +31,16 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "mesh".into());
-        let params = a.flatten.params()?;
+        let (params, bar) = common::with_progress_bar(a.flatten.params()?);
         eprintln!(
             "flattening '{name}' ({} faces) with {}",
             mesh.triangles.len(),
             params.method
         );
         let t0 = std::time::Instant::now();
-        let f = flatcut::flatten::flatten(&mesh, &params)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?;
+        let f = flatcut::flatten::flatten(&mesh, &params);
+        bar.finish_and_clear();
+        let f = f.map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?;
         for w in &f.info.warnings {
             eprintln!("warning: {w}");
         }

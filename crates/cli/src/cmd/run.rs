@@ -47,10 +47,17 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(common::file_safe(&proj.name)));
-    let opts = RunOptions::DEFAULT.with_nest_iters(a.nest_iters);
+    let mut opts = RunOptions::default().with_nest_iters(a.nest_iters);
+    let flatten_bar = (!a.stream.quiet).then(|| {
+        let (hooks, bar) = common::progress_hooks(opts.flatten_hooks.clone(), 1);
+        opts = opts.clone().with_flatten_hooks(hooks);
+        bar
+    });
     let mut log = StageLog::new(a.stream.quiet);
-    let outputs = flatcut::run::run_project(&proj, &opts, &mut log)?;
+    log.bar = flatten_bar;
+    let outputs = flatcut::run::run_project(&proj, &opts, &mut log);
     log.finish_bar();
+    let outputs = outputs?;
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     // All of the run's files land together or not at all (the simulator's traces come later).
     let mut set = crate::output::OutputSet::new();
@@ -58,6 +65,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         set.add(&out.join(&f.name), &f.bytes)?;
     }
     set.commit()?;
+    // The project's [device] is the device (a --port on the command line wins).
+    let mut stream = device::select::for_project(&proj.device, &outputs.profile, &a.stream);
+    stream.force_laser = a.force;
+    let a = Args { stream, ..a };
     let (stream_lines, exit) = send_stage(&a, &outputs, &out, &mut log)?;
     print_summary(&outputs, &stream_lines, &out, t0)?;
     Ok(exit)
@@ -99,7 +110,7 @@ fn send_stage(
         &format!(
             "{} job(s) to {}",
             to_send,
-            a.stream.port.as_deref().unwrap_or("the embedded simulator")
+            device::select::describe(&a.stream)
         ),
     );
     let mut lines = Vec::new();
@@ -127,8 +138,9 @@ fn send_stage(
             None => String::new(),
         };
         lines.push(format!(
-            "sheet {}: {} lines streamed in {:.1} s, link {:.0}% busy{}",
+            "sheet {} on {}: {} lines streamed in {:.1} s, link {:.0}% busy{}",
             job.number,
+            o.device,
             o.report.lines_sent,
             o.report.total_time.as_secs_f64(),
             o.link_utilisation() * 100.0,
@@ -239,7 +251,6 @@ impl Observer for StageLog {
     fn event(&mut self, e: &Event<'_>) {
         match *e {
             Event::Started { stage, detail } => {
-                self.finish_bar();
                 if !self.quiet {
                     let sep = if detail.is_empty() { "" } else { ": " };
                     let sep = if stage == Stage::Flatten { " " } else { sep };
@@ -257,7 +268,11 @@ impl Observer for StageLog {
                 total,
                 what,
             } if !self.quiet => {
-                eprintln!("flattening piece {}/{} '{}'", done + 1, total, what);
+                let line = format!("flattening piece {}/{} '{}'", done + 1, total, what);
+                match &self.bar {
+                    Some(b) => b.suspend(|| eprintln!("{line}")),
+                    None => eprintln!("{line}"),
+                }
             }
             Event::Progress {
                 stage: Stage::Nest,

@@ -7,7 +7,7 @@
 //! use flatcut::run::{run_project, RunOptions, Silent};
 //!
 //! let project = Project::load("patterns/shoe/project.toml".as_ref())?;
-//! let out = run_project(&project, &RunOptions::DEFAULT, &mut Silent)?;
+//! let out = run_project(&project, &RunOptions::default(), &mut Silent)?;
 //! for f in &out.files {
 //!     println!("{} ({} bytes)", f.name, f.bytes.len());
 //! }
@@ -19,7 +19,7 @@ mod outputs;
 
 use std::time::Instant;
 
-use flatcut_flatten::{FlattenParams, Method};
+use flatcut_flatten::{FlattenHooks, FlattenParams, Method};
 use flatcut_gcode::{GcodeOptions, Profile};
 use flatcut_geom::{DVec2, Tolerances};
 use flatcut_nest::{NestOptions, Stock};
@@ -36,12 +36,14 @@ use crate::pipeline::{self, Layout, NestGroup, PipelineError};
 use crate::project::Project;
 
 /// How a project is run beyond what the project file says.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone)]
 pub struct RunOptions {
     /// Nesting iterations.
     pub nest_iters: usize,
     /// Chordal tolerance of the tessellation (mm).
     pub chord_mm: f64,
+    /// Progress callback and cancel flag handed to every piece's flattening.
+    pub flatten_hooks: FlattenHooks,
 }
 
 impl RunOptions {
@@ -49,20 +51,25 @@ impl RunOptions {
     /// A project tessellates more coarsely than a single `flatten`: the pieces of a whole part
     /// are cut together, and 0.4 mm is below a knife's or a pen's width.
     pub const DEFAULT_CHORD_MM: f64 = Tolerances::DEFAULT_CHORD_MM * 4.0;
-    pub const DEFAULT: Self = Self {
-        nest_iters: Self::DEFAULT_NEST_ITERS,
-        chord_mm: Self::DEFAULT_CHORD_MM,
-    };
 
-    pub const fn with_nest_iters(mut self, n: usize) -> Self {
+    pub fn with_nest_iters(mut self, n: usize) -> Self {
         self.nest_iters = n;
+        self
+    }
+
+    pub fn with_flatten_hooks(mut self, hooks: FlattenHooks) -> Self {
+        self.flatten_hooks = hooks;
         self
     }
 }
 
 impl Default for RunOptions {
     fn default() -> Self {
-        Self::DEFAULT
+        Self {
+            nest_iters: Self::DEFAULT_NEST_ITERS,
+            chord_mm: Self::DEFAULT_CHORD_MM,
+            flatten_hooks: FlattenHooks::default(),
+        }
     }
 }
 
@@ -176,7 +183,8 @@ fn flatten_stage(
     let m = method(project)?;
     let params = FlattenParams::new(m)
         .with_max_stretch_pct(project.material.max_stretch_pct)
-        .with_max_compress_pct(project.material.max_compress_pct);
+        .with_max_compress_pct(project.material.max_compress_pct)
+        .with_hooks(opts.flatten_hooks.clone());
     let tol = Tolerances::DEFAULT.with_chord_mm(opts.chord_mm);
     let flats = flat::load_flat(
         &project.design_path(),
