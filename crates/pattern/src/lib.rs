@@ -11,7 +11,6 @@ pub mod dxf;
 pub mod dxf_read;
 pub mod error;
 pub mod fit;
-pub mod font;
 pub mod io;
 pub mod piece;
 pub mod poly;

@@ -1,8 +1,8 @@
 //! The label of a piece: its text lines, and where and how large they are written.
 
 use super::Piece;
-use crate::font;
 use crate::poly;
+use flatcut_font as font;
 use flatcut_geom::{Aabb2, DVec2};
 
 impl Piece {
