@@ -479,13 +479,8 @@ pub fn nest_groups(
 
 fn place(d: &Drawing, pl: &Placement, instance: u32, item: u32) -> Drawing {
     let mut out = d.clone();
+    out.apply_placement(pl);
     for s in &mut out.strokes {
-        for p in &mut s.points {
-            *p = pl.apply(*p);
-        }
-        if pl.mirror && s.closed && s.points.len() > 1 {
-            s.points[1..].reverse();
-        }
         // Unique piece numbers per placed instance so the G-code writer keeps holes before their
         // outer contour per instance.
         s.piece = Some(item * 10_000 + instance);
@@ -494,7 +489,6 @@ fn place(d: &Drawing, pl: &Placement, instance: u32, item: u32) -> Drawing {
     out.pieces.truncate(1);
     for info in &mut out.pieces {
         info.piece = item * 10_000 + instance;
-        info.grain = info.grain.map(|(a, b)| (pl.apply(a), pl.apply(b)));
     }
     out
 }

@@ -14,6 +14,7 @@ pub mod fit;
 pub mod io;
 pub mod piece;
 pub mod poly;
+pub mod room;
 pub mod seam;
 pub mod svg;
 

@@ -1,9 +1,14 @@
-//! The label of a piece: its text lines, and where and how large they are written.
+//! The label of a piece: its text lines, and where and how large they are written: upright, in
+//! the largest free room inside the sew line, clear of the grain line and every mark.
 
 use super::Piece;
-use crate::poly;
+use crate::drawing::StrokeKind;
+use crate::room;
 use flatcut_font as font;
-use flatcut_geom::{Aabb2, DVec2};
+use flatcut_geom::DVec2;
+
+/// Clear space kept round the label's text, in cap heights.
+const MARGIN: f64 = 0.5;
 
 impl Piece {
     /// Text lines of the label.
@@ -29,68 +34,65 @@ impl Piece {
         v
     }
 
-    /// Places the label at the most interior point of the sew polygon, along the grain line
-    /// when there is one, shrinking the text until the block fits the inscribed circle.
+    /// The label's strokes: the text block written upright (along +x), centred in the largest
+    /// room inside the sew line that the grain line, notches, drill holes, points and internal
+    /// lines leave, at the given cap height or smaller where the room is smaller.
     pub(super) fn layout_label(&self, max_height: f64) -> Vec<Vec<DVec2>> {
-        let lines = self.label_lines();
-        let Some((best, best_d)) = pole(&self.sew_polyline) else {
+        let block = text_block(&self.label_lines());
+        let Some((lo, hi)) = extent(&block) else {
             return Vec::new();
         };
-        let dir = self
-            .grain
-            .map(|(a, b)| (b - a).normalize())
-            .unwrap_or(DVec2::X);
-        // block of width W = max chars, height H = lines × spacing at cap height h
-        let widest = lines
-            .iter()
-            .map(|l| font::text_width(l, 1.0))
-            .fold(0.0, f64::max);
-        let rows = lines.len() as f64;
-        let block = |h: f64| DVec2::new(widest * h, (rows - 1.0) * font::LINE_SPACING * h + h);
-        let unit = block(1.0);
-        let h = max_height.min(2.0 * best_d / unit.length());
-        let size = block(h);
-        let up = DVec2::new(-dir.y, dir.x);
-        let mut out = Vec::new();
-        for (k, line) in lines.iter().enumerate() {
-            let w = font::text_width(line, h);
-            let y = size.y * 0.5 - h - k as f64 * font::LINE_SPACING * h;
-            let origin = best + dir * (-w * 0.5) + up * y;
-            out.extend(font::text_strokes(line, origin, h, dir));
-        }
-        out
+        let half = (hi - lo) * 0.5 + DVec2::splat(MARGIN);
+        let Some((at, room)) = room::largest_box(&self.sew_polyline, &self.label_obstacles(), half)
+        else {
+            return Vec::new();
+        };
+        let h = max_height.min(room);
+        let centre = (lo + hi) * 0.5;
+        block
+            .into_iter()
+            .map(|s| s.into_iter().map(|p| at + (p - centre) * h).collect())
+            .collect()
+    }
+
+    /// What a label must not cover: every drawn or cut stroke but the cut and sew lines (the sew
+    /// line is the room's wall) and the label itself.
+    fn label_obstacles(&self) -> Vec<Vec<DVec2>> {
+        self.to_drawing(0)
+            .strokes
+            .into_iter()
+            .filter(|s| {
+                !matches!(
+                    s.kind,
+                    StrokeKind::Boundary | StrokeKind::Sew | StrokeKind::Text
+                )
+            })
+            .map(|s| {
+                let mut p = s.points;
+                if s.closed && !p.is_empty() {
+                    p.push(p[0]);
+                }
+                p
+            })
+            .collect()
     }
 }
 
-/// The pole of inaccessibility of a polygon (the inside point farthest from its edges) and that
-/// distance, by a grid search refined twice; `None` when no grid point is inside.
-fn pole(poly: &[DVec2]) -> Option<(DVec2, f64)> {
-    let bb = Aabb2::from_points(poly.iter().copied());
-    let mut best = (bb.min + bb.max) * 0.5;
-    let mut best_d = -1.0;
-    let mut span = bb.max - bb.min;
-    let mut center = best;
-    const GRID: usize = 24;
-    for _ in 0..3 {
-        for i in 0..=GRID {
-            for j in 0..=GRID {
-                let q = center - span * 0.5
-                    + DVec2::new(
-                        span.x * i as f64 / GRID as f64,
-                        span.y * j as f64 / GRID as f64,
-                    );
-                if !poly::contains(poly, q) {
-                    continue;
-                }
-                let d = poly::dist_to_closed(poly, q);
-                if d > best_d {
-                    best_d = d;
-                    best = q;
-                }
-            }
-        }
-        center = best;
-        span *= 2.0 / GRID as f64 * 2.0;
+/// The label's lines at cap height 1, each centred on x = 0, baselines `LINE_SPACING` apart
+/// going down from y = 0.
+fn text_block(lines: &[String]) -> Vec<Vec<DVec2>> {
+    let mut out = Vec::new();
+    for (k, line) in lines.iter().enumerate() {
+        let w = font::text_width(line, 1.0);
+        let origin = DVec2::new(-0.5 * w, -(k as f64) * font::LINE_SPACING);
+        out.extend(font::text_strokes(line, origin, 1.0, DVec2::X));
     }
-    (best_d > 0.0).then_some((best, best_d))
+    out
+}
+
+/// The bounding box of strokes, if they have any point.
+fn extent(strokes: &[Vec<DVec2>]) -> Option<(DVec2, DVec2)> {
+    let mut pts = strokes.iter().flatten();
+    let first = *pts.next()?;
+    Some(pts.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
 }

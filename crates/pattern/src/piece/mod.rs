@@ -10,6 +10,8 @@
 mod allowance;
 mod draw;
 mod label;
+#[cfg(test)]
+mod label_tests;
 mod marks;
 mod outline;
 mod placement;

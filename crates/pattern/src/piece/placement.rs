@@ -41,22 +41,11 @@ pub struct PlacedPiece<'a> {
 }
 
 impl PlacedPiece<'_> {
-    /// The instance's drawing in sheet coordinates (closed strokes stay CCW under mirroring).
+    /// The instance's drawing in sheet coordinates (closed strokes stay CCW and the label reads
+    /// rightly under mirroring).
     pub fn to_drawing(&self) -> Drawing {
         let mut d = self.piece.to_drawing(self.instance);
-        for s in &mut d.strokes {
-            for p in &mut s.points {
-                *p = self.placement.apply(*p);
-            }
-            if self.placement.mirror && s.closed {
-                s.points[1..].reverse();
-            }
-        }
-        for info in &mut d.pieces {
-            info.grain = info
-                .grain
-                .map(|(a, b)| (self.placement.apply(a), self.placement.apply(b)));
-        }
+        d.apply_placement(&self.placement);
         d
     }
 }
