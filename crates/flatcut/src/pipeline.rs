@@ -219,7 +219,9 @@ const LINE_STEP_MM: f64 = 1.0;
 
 /// Builds the pattern piece of a flattened mesh: the flattened boundary is the sew line, notch
 /// marks sit on their nearest boundary vertex, drill/reference points, stitch lines and the grain
-/// line are carried through the map, and the label carries the distortion summary.
+/// line are carried through the map, the label carries the distortion summary, and the piece is
+/// turned with its grain along +x (without one, its minimum-area bounding box square to the axes,
+/// the longer side along x).
 pub fn piece_from_flat(
     name: &str,
     mesh: &TriMesh,
@@ -341,6 +343,9 @@ pub fn piece_from_flat(
             r.stretch_max_pct, r.compress_max_pct, r.delta2_mean
         ));
     }
+    // The flattening leaves the piece at the solver's rotation: turn it square (grain along +x,
+    // else its smallest bounding box) before it is built.
+    input.orient();
     Ok(Piece::build(&input, &opts)?)
 }
 

@@ -13,6 +13,7 @@ mod label;
 #[cfg(test)]
 mod label_tests;
 mod marks;
+mod orient;
 mod outline;
 mod placement;
 mod seams;
@@ -20,6 +21,7 @@ mod sew;
 #[cfg(test)]
 mod tests;
 
+pub use orient::orientation;
 pub use placement::{PlacedPiece, Placement};
 
 use crate::PatternError;
