@@ -96,6 +96,16 @@ mod tests {
         hi - lo
     }
 
+    /// A 50 × 200 strip standing upright.
+    fn strip() -> [DVec2; 4] {
+        [
+            DVec2::ZERO,
+            DVec2::new(50.0, 0.0),
+            DVec2::new(50.0, 200.0),
+            DVec2::new(0.0, 200.0),
+        ]
+    }
+
     #[test]
     fn a_square_at_45_degrees_comes_out_axis_aligned() {
         let sq = [DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y].map(|p| p * 100.0);
@@ -111,12 +121,7 @@ mod tests {
 
     #[test]
     fn without_grain_the_longer_side_runs_along_x() {
-        let r = [
-            DVec2::ZERO,
-            DVec2::new(50.0, 0.0),
-            DVec2::new(50.0, 200.0),
-            DVec2::new(0.0, 200.0),
-        ];
+        let r = strip();
         for deg in [0.0f64, 19.0, 90.0, 135.0, -71.0] {
             let mut input = PieceInput::new("strip", turned(&r, deg.to_radians()));
             input.orient();
@@ -130,12 +135,7 @@ mod tests {
 
     #[test]
     fn the_grain_runs_along_plus_x_and_everything_turns_with_it() {
-        let r = [
-            DVec2::ZERO,
-            DVec2::new(50.0, 0.0),
-            DVec2::new(50.0, 200.0),
-            DVec2::new(0.0, 200.0),
-        ];
+        let r = strip();
         let mut input = PieceInput::new("strip", r.to_vec());
         // grain across the strip at 30°: the piece turns by −30°
         let g = (
