@@ -98,22 +98,21 @@ fn shape(base: char, mark_chars: &[char]) -> Shape {
 /// The glyph of a base character (a Hershey glyph, a letter with a bar or stroke through it, a
 /// superscript digit) and whether it is the missing-glyph box instead.
 fn base_glyph(c: char) -> (Glyph, bool) {
-    if let Some((face, slot)) = hershey::slot_of(c) {
-        if let Some(g) = hershey::glyph(face, slot) {
-            return (g.clone(), false);
-        }
+    if let Some(g) = hershey_glyph(c) {
+        return (g.clone(), false);
     }
     if let Some(g) = marks::barred(c) {
         return (g, false);
     }
-    if let Some(d) = superscript(c) {
-        if let Some((face, slot)) = hershey::slot_of(d) {
-            if let Some(g) = hershey::glyph(face, slot) {
-                return (raised(g), false);
-            }
-        }
+    if let Some(g) = superscript(c).and_then(hershey_glyph) {
+        return (raised(g), false);
     }
     (missing_box(), true)
+}
+
+/// The Hershey glyph that draws `c`, if one does.
+fn hershey_glyph(c: char) -> Option<&'static Glyph> {
+    hershey::slot_of(c).and_then(|(face, slot)| hershey::glyph(face, slot))
 }
 
 /// The digit a superscript digit stands for.

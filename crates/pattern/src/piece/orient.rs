@@ -140,7 +140,7 @@ mod tests {
         // grain across the strip at 30°: the piece turns by −30°
         let g = (
             DVec2::new(10.0, 100.0),
-            DVec2::new(10.0, 100.0) + DVec2::from_angle(0.5236),
+            DVec2::new(10.0, 100.0) + DVec2::from_angle(std::f64::consts::FRAC_PI_6),
         );
         input.grain = Some(g);
         input
@@ -153,7 +153,7 @@ mod tests {
         });
         let before = input.clone();
         let a = input.orient();
-        assert!((a + 0.5236).abs() < 1e-12);
+        assert!((a + std::f64::consts::FRAC_PI_6).abs() < 1e-12);
         let (ga, gb) = input.grain.unwrap();
         assert!((gb - ga).y.abs() < 1e-12 && (gb - ga).x > 0.0);
         // rigid: distances between the outline, a line and a mark are kept
