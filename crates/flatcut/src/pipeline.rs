@@ -247,7 +247,9 @@ const LINE_STEP_MM: f64 = 1.0;
 
 /// Builds the pattern piece of a flattened mesh: the flattened boundary is the sew line, notch
 /// marks sit on their nearest boundary vertex, drill/reference points, stitch lines and the grain
-/// line are carried through the map, and the label carries the distortion summary.
+/// line are carried through the map, the label carries the distortion summary, and the piece is
+/// turned with its grain along +x (without one, its minimum-area bounding box square to the axes,
+/// the longer side along x).
 pub fn piece_from_flat(
     name: &str,
     mesh: &TriMesh,
@@ -373,6 +375,9 @@ pub fn piece_from_flat(
             r.stretch_max_pct, r.compress_max_pct, r.delta2_mean
         ));
     }
+    // The flattening leaves the piece at the solver's rotation: turn it square (grain along +x,
+    // else its smallest bounding box) before it is built.
+    input.orient();
     Ok(Piece::build(&input, &opts)?)
 }
 
@@ -642,13 +647,8 @@ pub fn nest_groups_on_hides(
 
 fn place(d: &Drawing, pl: &Placement, instance: u32, item: u32) -> Drawing {
     let mut out = d.clone();
+    out.apply_placement(pl);
     for s in &mut out.strokes {
-        for p in &mut s.points {
-            *p = pl.apply(*p);
-        }
-        if pl.mirror && s.closed && s.points.len() > 1 {
-            s.points[1..].reverse();
-        }
         // Unique piece numbers per placed instance so the G-code writer keeps holes before their
         // outer contour per instance.
         s.piece = Some(item * 10_000 + instance);
@@ -657,7 +657,6 @@ fn place(d: &Drawing, pl: &Placement, instance: u32, item: u32) -> Drawing {
     out.pieces.truncate(1);
     for info in &mut out.pieces {
         info.piece = item * 10_000 + instance;
-        info.grain = info.grain.map(|(a, b)| (pl.apply(a), pl.apply(b)));
     }
     out
 }

@@ -2,12 +2,12 @@
 //! column per input), a histogram, a PNG rendered from the same SVG by resvg, and a
 //! self-contained HTML page.
 //!
-//! Legend and titles are drawn with the pattern crate's single-stroke font as paths, so the SVG,
+//! Legend and titles are drawn with the single-stroke font (flatcut-font) as paths, so the SVG,
 //! the PNG and the browser show identical text without any font file.
 
+use flatcut_font as font;
 use flatcut_geom::{Aabb2, DVec2};
 use flatcut_mesh::TriMesh;
-use flatcut_pattern::font;
 use svg::Document;
 use svg::node::element::{Group, Path, Rectangle};
 
@@ -652,7 +652,16 @@ mod tests {
             wn < ANNOTATION_REF_W && ww > 4.0 * ANNOTATION_REF_W,
             "{wn} {ww}"
         );
-        assert!(hn <= 0.7 * TEXT_H + 1e-9, "nominal legend text {hn}");
+        // The measure's name at its nominal cap height (0.7 × TEXT_H): as tall as the font
+        // writes it there, parentheses included.
+        let name = Measure::Stretch.title();
+        let nominal =
+            text_height(&font::text_strokes(name, DVec2::ZERO, 0.7 * TEXT_H, DVec2::X).concat());
+        assert!(nominal > 0.7 * TEXT_H, "{nominal}");
+        assert!(
+            (hn - nominal).abs() < 0.01,
+            "nominal legend text {hn} vs {nominal}"
+        );
         // The wide drawing's annotations grow by its nominal width over the reference width, so
         // shrunk to the same page they read about as large (within the grown margins).
         let u = 2.0 * (800.0 + 2.0 * MARGIN) / ANNOTATION_REF_W;
