@@ -106,7 +106,10 @@ fn fault_case(
             // first of them is the operator's safe choice.
             let (rep, from) = match resumed {
                 Err(SendError::ResumeUncertain { from, to, reason }) => {
-                    assert_eq!(name, "hangup", "{name}: {reason}");
+                    // Only lines the first run could not locate are in doubt: those of a
+                    // hang-up, and of any stop whose status query went unanswered (a loaded
+                    // host, a damaged reply).
+                    assert!(!st.unconfirmed.is_empty(), "{name}: {reason}");
                     assert_eq!(Some(from.index), st.unconfirmed.first().copied());
                     assert!(to.index >= from.index);
                     let o = o2.clone().with_resume_from(Some(from.index));
@@ -125,17 +128,20 @@ fn fault_case(
                 None => assert_eq!(rep.previously_done, st.done_count()),
             }
             let r2 = sim2.stop();
-            if name == "hangup" {
-                // The hang-up loses the `ok`s in flight: lines the journal could not confirm may
-                // run again, but none is skipped and none journaled as done re-runs.
+            if name == "hangup" || from.is_some() {
+                // The hang-up (or a stop whose status query went unanswered) loses the `ok`s in
+                // flight: lines the journal could not confirm may run again, but none is
+                // skipped (beyond one per damaged byte, which no sender can see) and none
+                // journaled as done re-runs.
+                let damaged = (r1.stats.bytes_dropped_fault + r1.stats.bytes_corrupted) as usize;
                 let ran1: BTreeSet<&str> = r1.trace.iter().map(|s| s.text.as_str()).collect();
                 let ran2: BTreeSet<&str> = r2.trace.iter().map(|s| s.text.as_str()).collect();
+                let mut skipped = Vec::new();
                 for (i, l) in job.lines.iter().enumerate() {
                     if l.moves && l.length > 1e-6 {
-                        assert!(
-                            ran1.contains(l.text.as_str()) || ran2.contains(l.text.as_str()),
-                            "line {i} skipped"
-                        );
+                        if !ran1.contains(l.text.as_str()) && !ran2.contains(l.text.as_str()) {
+                            skipped.push(i);
+                        }
                         // (A resume preamble writes the pen moves of the job itself.)
                         let in_preamble =
                             (1..job.len()).any(|k| job.resume_preamble(k).contains(&l.text));
@@ -147,24 +153,34 @@ fn fault_case(
                         }
                     }
                 }
+                assert!(
+                    skipped.len() <= damaged,
+                    "{name}: lines {skipped:?} skipped"
+                );
             } else if name == "reset" {
-                // The line the reset cut may have run as a fragment; it is re-sent whole, so at
-                // most that one line runs twice, and none is skipped.
-                let mut twice = 0;
-                for (text, _, to) in job.motions() {
-                    let hits: Vec<&TraceSegment> = r1
-                        .trace
+                // The reset discards the line it interrupts and GRBL's RX buffer; the bytes still
+                // on the wire then run: perhaps the tail of a line, then whole lines. Whether the
+                // first line answered after the reset ran whole (from where the reset left the
+                // tool, not from its programmed start) or as a fragment depends on where the
+                // reset cut the byte stream, which no answer reveals, and whether the second
+                // started at its programmed start depends on that; the status reports come only
+                // after both ran. So the safety claim is about segments, not line texts: every
+                // segment of the job is cut (a line that ran from the wrong start did not cut
+                // its segment), and at most one of them, the second line after the reset when
+                // the first ran whole, is cut twice.
+                let ran: Vec<&TraceSegment> = r1.trace.iter().chain(&r2.trace).collect();
+                let mut twice = Vec::new();
+                for (text, from, to) in job.motions() {
+                    let cuts = ran
                         .iter()
-                        .chain(&r2.trace)
-                        .filter(|s| s.text == text)
-                        .collect();
-                    assert!(!hits.is_empty(), "`{text}` skipped");
-                    assert!(hits.iter().any(|h| close(h.to, to)), "`{text}` misplaced");
-                    if hits.len() > 1 && !text.starts_with("G0Z") {
-                        twice += 1;
+                        .filter(|s| s.text == text && close(s.from, from) && close(s.to, to))
+                        .count();
+                    assert!(cuts > 0, "`{text}` from {from:?} to {to:?} never cut");
+                    if cuts > 1 && !text.starts_with("G0Z") {
+                        twice.push(text);
                     }
                 }
-                assert!(twice <= 1, "{twice} lines ran twice");
+                assert!(twice.len() <= 1, "cut twice: {twice:?}");
             } else if name == "alarm" {
                 // The line that raised the alarm was interrupted by it: it runs again.
                 let hit: BTreeSet<String> = r1
