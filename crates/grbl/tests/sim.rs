@@ -559,3 +559,76 @@ fn resume_after_a_controller_restart_homes_or_needs_the_operators_word() {
     assert_eq!(trace.first().map(|s| s.motion.as_str()), Some("HOME"));
     assert!(Journal::read(&jp).unwrap().finished);
 }
+
+/// Issue 14, item 5: the soft reset at connection clears G92 and returns to G54 (GRBL 1.1h's
+/// `gc_init`); the sender reads `$#` and `$G` first and puts the operator's frame back, says
+/// so, and leaves it cleared only when told to.
+#[test]
+fn soft_reset_at_connection_keeps_the_operators_g92_origin_and_coordinate_system() {
+    let sim = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_dtr_reset(false),
+    );
+    // The operator's set-up: G55 at X20, then the work origin moved 5 mm further with G92.
+    let setup = Job::parse("G10 L2 P2 X20 Y0 Z0\nG55\nG0 X5 Y0\nG92 X0 Y0\n").unwrap();
+    run(&sim, &setup, &opts()).unwrap();
+    let job = Job::parse("G21 G90\nG1 X10 Y0 F3000\nG1 X10 Y4\n").unwrap();
+    let rep = run(&sim, &job, &opts()).unwrap();
+    assert!(
+        rep.notices.iter().any(|n| n.starts_with(
+            "kept the controller's work frame across the soft reset at connection (G55, G92 offset X5 Y0 Z0"
+        )),
+        "{:?}",
+        rep.notices
+    );
+    // Work X10 is machine X 20 (G55) + 5 (G92) + 10.
+    let trace = sim.trace();
+    let cut = trace.iter().find(|s| s.text == "G1X10Y0F3000").unwrap();
+    assert!(close(cut.to, [35.0, 0.0, 0.0]), "{cut:?}");
+    // Told to discard it: the job runs in G54 without G92, and the report says so.
+    let rep = run(&sim, &job, &opts().with_discard_offsets(true)).unwrap();
+    assert!(
+        rep.notices
+            .iter()
+            .any(|n| n.contains("it was left so as asked")),
+        "{:?}",
+        rep.notices
+    );
+    let trace = sim.stop().trace;
+    let last = trace.iter().rfind(|s| s.text == "G1X10Y0F3000").unwrap();
+    assert!(close(last.to, [10.0, 0.0, 0.0]), "{last:?}");
+}
+
+/// Issue 14, item 5: a job that never sets Z runs where the controller has Z (here 3 mm), and
+/// finishes there: not "a line was corrupted on the link".
+#[test]
+fn axes_the_job_never_sets_start_where_the_controller_has_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_dtr_reset(false),
+    );
+    run(&sim, &Job::parse("G0 Z3\n").unwrap(), &opts()).unwrap();
+    let job = Job::parse(
+        &zigzag(30)
+            .replace("G0 Z2\n", "")
+            .replace("G1 Z-0.5 F300\n", "")
+            .replace("G0 Z1.5\n", ""),
+    )
+    .unwrap();
+    assert!(job.safe_z.is_none(), "the job never moves Z");
+    let jp = dir.path().join("xy.journal");
+    let rep = run(&sim, &job, &opts().with_journal(&jp)).unwrap();
+    let end = rep.final_position.unwrap();
+    assert!((end[2] - 3.0).abs() < 1e-3, "{end:?}");
+    assert!(Journal::read(&jp).unwrap().finished);
+    let trace = sim.stop().trace;
+    assert!(
+        trace
+            .iter()
+            .filter(|s| s.text.starts_with("G1X"))
+            .all(|s| (s.to[2] - 3.0).abs() < 1e-3)
+    );
+}
