@@ -209,10 +209,10 @@ impl Project {
         {
             return Err("seam_mm must be >= 0".into());
         }
-        if let Some(m) = &self.method {
-            if flatcut_flatten::Method::from_name(m).is_none() {
-                return Err(format!("unknown method '{m}'"));
-            }
+        if let Some(m) = &self.method
+            && flatcut_flatten::Method::from_name(m).is_none()
+        {
+            return Err(format!("unknown method '{m}'"));
         }
         self.device.validate()
     }

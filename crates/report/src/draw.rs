@@ -408,6 +408,8 @@ pub fn histogram_svg(report: &Report, m: Measure, bins: usize) -> String {
 
 /// Pixels per millimetre of the PNG when no width is asked for (≈ 254 dpi).
 pub const DEFAULT_PX_PER_MM: f64 = 10.0;
+/// Largest PNG rendered (pixels): 16 megapixels, 64 MB of RGBA.
+pub const MAX_PNG_PIXELS: f64 = 16.0e6;
 
 /// Renders an SVG (ours) to PNG bytes with resvg, `width_px` wide (height in proportion).
 pub fn render_png(svg: &str, width_px: Option<u32>) -> Result<Vec<u8>, ReportError> {
@@ -419,7 +421,10 @@ pub fn render_png(svg: &str, width_px: Option<u32>) -> Result<Vec<u8>, ReportErr
         size.width() as f64 * DEFAULT_PX_PER_MM / (96.0 / 25.4),
         |w| w as f64,
     );
-    let s = w / size.width() as f64;
+    // A drawing metres long at the default density would need gigabytes of pixels: the image is
+    // scaled down to stay within MAX_PNG_PIXELS.
+    let area = size.width() as f64 * size.height() as f64;
+    let s = (w / size.width() as f64).min((MAX_PNG_PIXELS / area).sqrt());
     let (pw, ph) = (
         (size.width() as f64 * s).ceil() as u32,
         (size.height() as f64 * s).ceil() as u32,
