@@ -58,6 +58,11 @@ fn ten_thousand_lines_stream_completely_in_order() {
     assert_eq!(phases.last(), Some(&Phase::Done));
 }
 
+/// Asserts that one of the report's notices satisfies `f`.
+fn assert_notice(rep: &flatcut_grbl::SendReport, f: impl Fn(&str) -> bool) {
+    assert!(rep.notices.iter().any(|n| f(n)), "{:?}", rep.notices);
+}
+
 fn fault_case(
     name: &str,
     n: usize,
@@ -548,13 +553,7 @@ fn resume_after_a_controller_restart_homes_or_needs_the_operators_word() {
             .with_setting(23, 3.0),
     );
     let rep = run(&homing, &job, &resume).expect("homed and resumed");
-    assert!(
-        rep.notices
-            .iter()
-            .any(|n| n.starts_with("homed the machine ($H)")),
-        "{:?}",
-        rep.notices
-    );
+    assert_notice(&rep, |n| n.starts_with("homed the machine ($H)"));
     let trace = homing.stop().trace;
     assert_eq!(trace.first().map(|s| s.motion.as_str()), Some("HOME"));
     assert!(Journal::read(&jp).unwrap().finished);
@@ -575,26 +574,18 @@ fn soft_reset_at_connection_keeps_the_operators_g92_origin_and_coordinate_system
     run(&sim, &setup, &opts()).unwrap();
     let job = Job::parse("G21 G90\nG1 X10 Y0 F3000\nG1 X10 Y4\n").unwrap();
     let rep = run(&sim, &job, &opts()).unwrap();
-    assert!(
-        rep.notices.iter().any(|n| n.starts_with(
-            "kept the controller's work frame across the soft reset at connection (G55, G92 offset X5 Y0 Z0"
-        )),
-        "{:?}",
-        rep.notices
-    );
+    assert_notice(&rep, |n| {
+        n.starts_with(
+            "kept the controller's work frame across the soft reset at connection (G55, G92 offset X5 Y0 Z0",
+        )
+    });
     // Work X10 is machine X 20 (G55) + 5 (G92) + 10.
     let trace = sim.trace();
     let cut = trace.iter().find(|s| s.text == "G1X10Y0F3000").unwrap();
     assert!(close(cut.to, [35.0, 0.0, 0.0]), "{cut:?}");
     // Told to discard it: the job runs in G54 without G92, and the report says so.
     let rep = run(&sim, &job, &opts().with_discard_offsets(true)).unwrap();
-    assert!(
-        rep.notices
-            .iter()
-            .any(|n| n.contains("it was left so as asked")),
-        "{:?}",
-        rep.notices
-    );
+    assert_notice(&rep, |n| n.contains("it was left so as asked"));
     let trace = sim.stop().trace;
     let last = trace.iter().rfind(|s| s.text == "G1X10Y0F3000").unwrap();
     assert!(close(last.to, [10.0, 0.0, 0.0]), "{last:?}");
