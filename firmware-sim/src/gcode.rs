@@ -372,6 +372,8 @@ pub struct Context<'a> {
     pub persist: &'a mut Persist,
     /// Machine position (for G28.1/G30.1), mm.
     pub machine_position: [f64; N_AXIS],
+    /// `$C` check mode: program end leaves the coordinate system data and outputs alone.
+    pub check_mode: bool,
 }
 
 /// Parses and plans one pre-processed line (upper-case, no spaces/comments). `jog` is true for `$J=` lines
@@ -1104,15 +1106,18 @@ pub fn execute(line: &[u8], jog: bool, ctx: &mut Context<'_>) -> Result<Vec<Acti
             gc.plane = 0;
             gc.incremental = false;
             gc.inverse_time = false;
+            // GRBL 1.1h resets only modal groups 1, 2, 3, 5, 7, 12 and M7-M9 at program end
+            // (`gcode.c`): the G92 offset, the tool length offset and F, S, T stay.
             gc.coord_select = 0;
-            gc.coord_system = ctx.persist.coord[0];
-            gc.coord_offset = [0.0; N_AXIS];
             gc.spindle = Spindle::Off;
             gc.flood = false;
             gc.mist = false;
-            actions.push(Action::WcoChanged);
-            actions.push(Action::Spindle(Spindle::Off, 0.0));
-            actions.push(Action::Coolant(false, false));
+            if !ctx.check_mode {
+                gc.coord_system = ctx.persist.coord[0];
+                actions.push(Action::WcoChanged);
+                actions.push(Action::Spindle(Spindle::Off, 0.0));
+                actions.push(Action::Coolant(false, false));
+            }
             actions.push(Action::RestoreOverrides);
             actions.push(Action::Message("Pgm End"));
         }
@@ -1217,6 +1222,7 @@ mod tests {
             settings: &settings,
             persist: &mut persist,
             machine_position: [0.0; 3],
+            check_mode: false,
         };
         execute(line.as_bytes(), false, &mut ctx)
     }

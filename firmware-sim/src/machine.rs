@@ -1065,6 +1065,7 @@ impl Grbl {
             settings: &self.settings,
             persist: &mut self.persist,
             machine_position,
+            check_mode: self.state == State::CheckMode,
         };
         gcode::execute(line, jog, &mut ctx)
     }

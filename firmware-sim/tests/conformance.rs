@@ -643,3 +643,42 @@ fn status_spindle_speed_and_inch_reports() {
     let s = String::from_utf8(g.take_output()).unwrap();
     assert!(s.starts_with("<Idle|MPos:1.0000,-0.5000,0.0000|"), "{s}");
 }
+
+/// GRBL 1.1h (`gcode.c`, `gc_init`): program end (M2/M30) returns to G54 but keeps the G92
+/// offset and the tool length offset; a soft reset clears G92 and the tool length offset and
+/// returns to G54; the stored G54..G59 offsets survive both.
+#[test]
+fn g92_survives_program_end_but_not_a_soft_reset() {
+    let mut g = grbl(SimConfig::default().with_instant_motion(true));
+    send(&mut g, "G10 L2 P2 X50 Y20");
+    send(&mut g, "G55 G0 X10 Y0");
+    send(&mut g, "G92 X0 Y0");
+    send(&mut g, "G43.1 Z2");
+    let ngc = |g: &mut Grbl| send(g, "$#");
+    let before = ngc(&mut g);
+    assert!(before.contains("[G92:10.000,0.000,0.000]"), "{before}");
+    assert!(before.contains("[TLO:2.000]"), "{before}");
+    assert!(lines(&send(&mut g, "$G"))[0].contains(" G55 "));
+    send(&mut g, "M2");
+    let after_end = ngc(&mut g);
+    assert!(
+        after_end.contains("[G92:10.000,0.000,0.000]"),
+        "{after_end}"
+    );
+    assert!(after_end.contains("[TLO:2.000]"), "{after_end}");
+    assert!(lines(&send(&mut g, "$G"))[0].contains(" G54 "));
+    g.receive(0x18);
+    g.run_until_idle(1.0);
+    g.take_output();
+    let after_reset = ngc(&mut g);
+    assert!(
+        after_reset.contains("[G92:0.000,0.000,0.000]"),
+        "{after_reset}"
+    );
+    assert!(after_reset.contains("[TLO:0.000]"), "{after_reset}");
+    assert!(
+        after_reset.contains("[G55:50.000,20.000,0.000]"),
+        "{after_reset}"
+    );
+    assert!(lines(&send(&mut g, "$G"))[0].contains(" G54 "));
+}

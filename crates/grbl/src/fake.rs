@@ -139,6 +139,10 @@ impl FakeGrbl {
     }
 
     fn line(&mut self, line: String) {
+        if line.is_empty() {
+            self.say("ok");
+            return;
+        }
         self.received.push(line.clone());
         let n = self.received.len();
         if self.hangup_at == Some(n) {
@@ -174,6 +178,16 @@ impl FakeGrbl {
                     }
                 }
                 "G" => self.say("[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]"),
+                "#" => {
+                    for g in 54..=59 {
+                        self.say(&format!("[G{g}:0.000,0.000,0.000]"));
+                    }
+                    for n in ["G28", "G30", "G92"] {
+                        self.say(&format!("[{n}:0.000,0.000,0.000]"));
+                    }
+                    self.say("[TLO:0.000]");
+                    self.say("[PRB:0.000,0.000,0.000:0]");
+                }
                 "X" => {
                     self.alarm = false;
                     self.say("[MSG:Caution: Unlocked]");

@@ -6,6 +6,9 @@
 //! ```text
 //! flatcut-journal 1 <job hash, 16 hex digits> <line count>
 //! R <run number>          a send run starts (acks and confirmations below belong to it)
+//! F <wcs> <gx> <gy> <gz> <x> <y> <z>
+//!                         where the job started: in G<wcs>, with G92 offset (gx, gy, gz), at
+//!                         work position (x, y, z) (mm); the first one counts
 //! A <index>               line <index> (0-based job line) was answered `ok`
 //! E <index> <code>        line <index> was answered `error:<code>` (it did not run)
 //! X <index>               every line acknowledged in this run with index <= <index> has executed
@@ -27,7 +30,7 @@
 //! could not confirm (a hang-up) stay [`JournalState::unconfirmed`] until a resume settles them
 //! with `K` from where the machine is found.
 
-use crate::job::Job;
+use crate::job::{Job, JobStart};
 use std::fs::{File, OpenOptions};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -101,6 +104,8 @@ pub struct JournalState {
     pub partial: Option<(usize, [f64; 3])>,
     /// Lines that may or may not have run because the controller lost its position.
     pub uncertain: Option<(usize, usize)>,
+    /// Where the job started (its frame on the controller), if recorded.
+    pub start: Option<JobStart>,
 }
 
 impl JournalState {
@@ -249,6 +254,7 @@ impl Journal {
             unconfirmed: Vec::new(),
             partial: None,
             uncertain: None,
+            start: None,
         };
         // Acks of the current run not yet confirmed, kept sorted by arrival (= index order
         // within a run except across resume gaps).
@@ -359,6 +365,23 @@ impl Journal {
                         st.partial = None;
                     }
                 }
+                "F" => {
+                    let mut w = rest.unwrap_or("").split_whitespace();
+                    let wcs = w
+                        .next()
+                        .and_then(|s| s.parse::<u8>().ok())
+                        .filter(|n| (54..=59).contains(n))
+                        .ok_or_else(|| bad(n, "bad coordinate system"))?;
+                    let mut v = [0.0; 6];
+                    for x in &mut v {
+                        *x = coord(n, w.next())?;
+                    }
+                    st.start.get_or_insert(JobStart {
+                        wcs,
+                        g92: [v[0], v[1], v[2]],
+                        position: [v[3], v[4], v[5]],
+                    });
+                }
                 "N" => st.notes.push(rest.unwrap_or("").to_string()),
                 "D" => st.finished = true,
                 _ => return Err(bad(n, &format!("unknown record '{kind}'"))),
@@ -415,6 +438,15 @@ impl Journal {
     /// Records the resolution of a resume: lines `from..to` executed, none from `to` on.
     pub fn resolved(&mut self, from: usize, to: usize) {
         self.buf.push_str(&format!("K {from} {to}\n"));
+    }
+
+    /// Records where the job starts on the controller (its frame).
+    pub fn start(&mut self, s: &JobStart) {
+        let (g, p) = (s.g92, s.position);
+        self.buf.push_str(&format!(
+            "F {} {} {} {} {} {} {}\n",
+            s.wcs, g[0], g[1], g[2], p[0], p[1], p[2]
+        ));
     }
 
     /// Records a note (single line).

@@ -175,7 +175,7 @@ fn reset_in_motion_requires_an_explicit_resume_point() {
     let msg = e.to_string();
     assert!(matches!(e, SendError::ResumeUncertain { .. }), "{msg}");
     assert!(
-        msg.contains("ALARM:3") && msg.contains("--resume-from"),
+        msg.contains("ALARM:3") && msg.contains("resume explicitly from the first line"),
         "{msg}"
     );
     assert!(

@@ -80,11 +80,11 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 })
             })
             .collect();
-        super::send::print_stdout(&serde_json::to_string_pretty(&v)?)?;
+        crate::outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(ExitCode::SUCCESS);
     }
     if ports.is_empty() {
-        super::send::print_stdout("no serial ports found")?;
+        crate::outln!("no serial ports found");
     }
     for p in &ports {
         let mut line = format!("{:<24} {}", p.name, p.kind);
@@ -97,7 +97,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         if let Some(s) = &p.serial {
             line.push_str(&format!(" serial {s}"));
         }
-        super::send::print_stdout(&line)?;
+        crate::outln!("{line}");
     }
     eprintln!(
         "note: pseudo-terminals (such as `flatcut sim`) are not listed; pass their path with --port"

@@ -34,17 +34,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         );
     }
     let out = stream_file(&a.job, &a.stream)?;
-    print_stdout(&summary(&out))?;
+    // A closed stdout (`flatcut send … | head`) ends the command normally.
+    crate::outln!("{}", summary(&out));
     Ok(ExitCode::SUCCESS)
-}
-
-/// Prints a line to stdout; a closed pipe (`flatcut send … | head`) is not an error.
-pub(crate) fn print_stdout(text: &str) -> anyhow::Result<()> {
-    use std::io::Write;
-    match writeln!(std::io::stdout().lock(), "{text}") {
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
-        r => Ok(r?),
-    }
 }
 
 /// Parses a whole `flatcut ...` command line (argument 0 is the program name), for scripts and

@@ -25,9 +25,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         Some(link) => {
             sim.link(link)
                 .with_context(|| format!("cannot link {}", link.display()))?;
-            println!("{} -> {}", link.display(), sim.path().display());
+            crate::outln!("{} -> {}", link.display(), sim.path().display());
         }
-        None => println!("{}", sim.path().display()),
+        None => crate::outln!("{}", sim.path().display()),
     }
     eprintln!(
         "simulated GRBL 1.1h at {} baud; connect with `flatcut send JOB --port {}`; Ctrl-C stops",

@@ -21,11 +21,14 @@ pub(super) fn job_uses_unknown_moves(job: &Job) -> bool {
     })
 }
 
+/// Refuses a job that does not fit the machine: longer than the travel on an axis, or (with
+/// homing and soft limits) outside the machine space; `origin` is the machine position of the
+/// job's G92-free work origin.
 pub(super) fn check_travel(
     job: &Job,
     limits: &MachineLimits,
     settings: &BTreeMap<u16, f64>,
-    wco: [f64; 3],
+    origin: [f64; 3],
 ) -> Result<(), SendError> {
     let Some((lo, hi)) = job.extent else {
         return Ok(());
@@ -34,7 +37,7 @@ pub(super) fn check_travel(
     for a in 0..3 {
         let travel = limits.max_travel[a];
         let size = hi[a] - lo[a];
-        let (mlo, mhi) = (lo[a] + wco[a], hi[a] + wco[a]);
+        let (mlo, mhi) = (lo[a] + origin[a], hi[a] + origin[a]);
         // Absolute check only where GRBL itself enforces it (homing + soft limits: machine
         // space is [-travel, 0]); otherwise the job must at least fit the travel.
         let out = size > travel + POSITION_TOL_MM

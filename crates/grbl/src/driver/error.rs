@@ -90,7 +90,7 @@ pub enum SendError {
     },
     /// The controller is alarm-locked and unlocking was not allowed.
     #[error(
-        "the controller is in alarm lock ({reason}); home it, or pass --unlock to send $X if the machine position is known to be right"
+        "the controller is in alarm lock ({reason}) and unlocking it was not allowed: it must be homed, or unlocked with $X only if the machine position is known to be right"
     )]
     AlarmLocked {
         /// What GRBL said.
@@ -213,12 +213,12 @@ pub enum SendError {
     },
     /// The job declares that it needs laser mode, and the controller has `$32=0`.
     #[error(
-        "the job is a laser job (its header says it needs $32=1) but the controller has $32=0: in spindle mode the laser stays on during rapids and stops at every power change. Set $32=1 on the controller, or pass --force"
+        "the job is a laser job (its header says it needs $32=1) but the controller has $32=0: in spindle mode the laser stays on during rapids and stops at every power change. It needs $32=1 on the controller, or an explicit override"
     )]
     LaserModeOff,
     /// The job paused itself (`M0`) with nobody to resume it: the run was aborted.
     #[error(
-        "the job paused itself at {line} (M0) and --on-pause abort (the default without a terminal) aborted the run: soft reset sent, tool off. Last line known executed: {}",
+        "the job paused itself at {line} (M0) and the pause policy (abort, the default without a terminal) aborted the run: soft reset sent, tool off. Last line known executed: {}",
         opt_line(last_done)
     )]
     PausedByJob {
@@ -230,7 +230,7 @@ pub enum SendError {
     /// The controller restarted or lost its position since the journal was written, it does
     /// not home, and nobody confirmed the work origin.
     #[error(
-        "cannot resume: {why}, so the machine position is not known. Home the machine, or set its work origin back where it was, then resume with --origin-confirmed"
+        "cannot resume: {why}, so the machine position is not known; the machine does not home, and nobody confirmed that its work origin is where it was when the job stopped"
     )]
     PositionUnknown {
         /// Why the position is lost.
@@ -244,12 +244,21 @@ pub enum SendError {
         /// Why the run stopped.
         cause: Box<SendError>,
     },
+    /// The controller's work frame could not be read before the soft reset at connection,
+    /// which clears G92 and returns to G54: the job might run away from the operator's origin.
+    #[error(
+        "cannot read the controller's work offsets before the soft reset at connection ({why}); GRBL's reset clears a G92 offset and returns to G54, so the job could run away from the origin you set, and discarding the offsets was not allowed"
+    )]
+    OffsetsUnknown {
+        /// What went wrong.
+        why: String,
+    },
     /// `resume` was asked without a journal path.
     #[error("resume needs a journal path")]
     NoJournal,
     /// Resuming would have to guess which lines ran: the operator must choose.
     #[error(
-        "cannot tell where to resume: {reason}. Lines {} to {} may or may not have run; look at the work and resume explicitly from the first line to cut (--resume-from LINE, a line number of the file)",
+        "cannot tell where to resume: {reason}. Lines {} to {} may or may not have run; look at the work and resume explicitly from the first line to cut",
         from.source_line, to.source_line
     )]
     ResumeUncertain {
@@ -261,7 +270,7 @@ pub enum SendError {
         reason: String,
     },
     /// `resume_from` names no line of the job.
-    #[error("--resume-from: the job has {lines} lines to send; index {index} is not one of them")]
+    #[error("cannot resume from line index {index}: the job has {lines} lines to send")]
     ResumeFromOutOfRange {
         /// Index asked.
         index: usize,

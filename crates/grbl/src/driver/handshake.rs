@@ -3,11 +3,12 @@
 
 use super::SendOptions;
 use super::error::SendError;
+use super::frame::{self, Frame};
 use super::session::{Session, transport, wait_until_still};
 use crate::transport::Transport;
 
 /// What connecting found out.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub(super) struct Link {
     /// A banner came by itself: the controller just restarted (power-up, or the DTR pulse of
     /// opening the port), so its planner and position are gone.
@@ -15,6 +16,10 @@ pub(super) struct Link {
     /// The controller was alarm-locked and this sender unlocked it with `$X` (no homing): its
     /// position is whatever it was when the alarm struck.
     pub unlocked: bool,
+    /// The work frame the controller is in now (after any restore).
+    pub frame: Frame,
+    /// What happened to the frame the soft reset cleared, for the report.
+    pub frame_notice: Option<String>,
 }
 
 /// Connects: waits for the power-up banner (or, with `reset_on_connect` or when none comes,
@@ -28,12 +33,16 @@ pub(super) fn connect<T: Transport + ?Sized>(
         && sess
             .wait_banner(opts.banner_timeout)
             .map_err(|e| transport(e, None))?;
+    // The frame a reset would clear; none to read when the controller just restarted.
+    let mut before = None;
     if !restarted {
         if !opts.reset_on_connect {
             // A controller that kept running while the host was away may still be draining its
             // planner: a reset now would stop it mid-move (ALARM:3, position lost).
             wait_until_still(sess, opts).map_err(|e| transport(e, None))?;
         }
+        sess.clear_line().map_err(|e| transport(e, None))?;
+        before = Some(frame::read(sess, opts)?);
         sess.s.realtime(0x18);
         if !sess
             .wait_banner(opts.banner_timeout)
@@ -46,36 +55,72 @@ pub(super) fn connect<T: Transport + ?Sized>(
     sess.command_ok("$$", opts.command_timeout)?;
     sess.query_status(opts.command_timeout)
         .map_err(|e| transport(e, None))?;
-    if sess.alarm_lock {
-        let reason = sess
-            .messages
-            .iter()
-            .rev()
-            .find(|m| m.contains("unlock") || m.contains("Reset"))
-            .cloned()
-            .unwrap_or_else(|| "state Alarm".into());
-        // A resume on a machine that homes re-establishes its position with `$H` itself.
-        let homes = sess.settings.get(&22).is_some_and(|v| *v != 0.0);
-        if opts.resume && homes && !opts.unlock {
-            return Ok(Link {
-                restarted: true,
-                unlocked: false,
+    let inches = sess.report_inches;
+    let before = before.map(|b| b.map(|f| f.in_mm(inches)));
+    let (restarted, unlocked) = match unlock_policy(sess, opts)? {
+        Some(AlarmOutcome::LeftForHoming) => (true, false),
+        Some(AlarmOutcome::Unlocked) => (restarted, true),
+        None => (restarted, false),
+    };
+    // G-code is refused while alarm-locked (a resume homes first and restores the frame with
+    // its preamble).
+    let frame_notice = match before {
+        Some(b) if !sess.alarm_lock => frame::restore(sess, b, opts)?,
+        _ => None,
+    };
+    let frame = match frame::read(sess, opts)? {
+        Ok(f) => f.in_mm(inches),
+        Err(code) => {
+            return Err(SendError::SetupRejected {
+                command: "$#".into(),
+                code,
             });
         }
-        if !opts.unlock {
-            return Err(SendError::AlarmLocked { reason });
-        }
-        sess.command_ok("$X", opts.command_timeout)?;
-        sess.alarm_lock = false;
-        sess.query_status(opts.command_timeout)
-            .map_err(|e| transport(e, None))?;
-        return Ok(Link {
-            restarted,
-            unlocked: true,
-        });
-    }
+    };
+    // The position in the frame as it now stands.
+    sess.query_status(opts.command_timeout)
+        .map_err(|e| transport(e, None))?;
     Ok(Link {
         restarted,
-        unlocked: false,
+        unlocked,
+        frame,
+        frame_notice,
     })
+}
+
+/// How an alarm lock at connection was handled.
+enum AlarmOutcome {
+    /// Left locked: a resume on a machine that homes re-establishes its position with `$H`.
+    LeftForHoming,
+    /// Unlocked with `$X` (the options allow it).
+    Unlocked,
+}
+
+/// Unlocks an alarm lock only when the options allow it; `None` when there was none.
+fn unlock_policy<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    opts: &SendOptions,
+) -> Result<Option<AlarmOutcome>, SendError> {
+    if !sess.alarm_lock {
+        return Ok(None);
+    }
+    let reason = sess
+        .messages
+        .iter()
+        .rev()
+        .find(|m| m.contains("unlock") || m.contains("Reset"))
+        .cloned()
+        .unwrap_or_else(|| "state Alarm".into());
+    let homes = sess.settings.get(&22).is_some_and(|v| *v != 0.0);
+    if opts.resume && homes && !opts.unlock {
+        return Ok(Some(AlarmOutcome::LeftForHoming));
+    }
+    if !opts.unlock {
+        return Err(SendError::AlarmLocked { reason });
+    }
+    sess.command_ok("$X", opts.command_timeout)?;
+    sess.alarm_lock = false;
+    sess.query_status(opts.command_timeout)
+        .map_err(|e| transport(e, None))?;
+    Ok(Some(AlarmOutcome::Unlocked))
 }

@@ -18,6 +18,7 @@
 mod check;
 pub mod control;
 mod error;
+mod frame;
 mod handshake;
 pub mod options;
 pub mod progress;
@@ -32,7 +33,7 @@ pub use error::{LineError, LineRef, SendError};
 pub use options::{PausePolicy, SendOptions};
 pub use progress::{Phase, Progress, SendReport};
 
-use crate::job::{Job, MachineLimits};
+use crate::job::{Job, JobStart, MachineLimits};
 use crate::journal::{Journal, JournalState};
 use check::{check_pass, check_travel};
 use session::Session;
@@ -94,27 +95,45 @@ pub fn send_job(
     if job.needs_laser_mode && !limits.laser_mode && !opts.force_laser {
         return Err(SendError::LaserModeOff);
     }
-    let plan = resume::settle(&mut sess, job, opts, prior, link, &mut journal)?;
+    // The job as it runs here: from where the controller stands (or, on a resume, where the
+    // interrupted run started), timed with the controller's settings.
+    let start = match prior.as_ref().and_then(|p| p.start) {
+        Some(s) => s,
+        None => {
+            let s = JobStart {
+                wcs: link.frame.wcs,
+                g92: link.frame.g92,
+                position: sess.work_position().unwrap_or_default(),
+            };
+            if let Some(j) = journal.as_mut() {
+                j.start(&s);
+            }
+            s
+        }
+    };
+    let job = &job.rebased(&start, &limits);
+    let mut notices: Vec<String> = link.frame_notice.iter().cloned().collect();
+    let plan = resume::settle(&mut sess, job, opts, prior, &link, &mut journal)?;
+    notices.extend(plan.notice.iter().cloned());
     if opts.check_travel {
-        check_travel(job, &limits, &sess.settings, sess.wco)?;
+        check_travel(
+            job,
+            &limits,
+            &sess.settings,
+            link.frame.origin_of(start.wcs),
+        )?;
     }
-    let timed = (limits != MachineLimits::DEFAULT).then(|| {
-        let mut j = job.clone();
-        j.retime(&limits);
-        j
-    });
-    let job_t = timed.as_ref().unwrap_or(job);
     if opts.check {
         progress.phase = Phase::Checking;
         observer(&progress);
         check_pass(&mut sess, job, opts)?;
     }
 
-    let mut tracker = Tracker::new(job_t, &sess, plan.prior_done.as_deref());
+    let mut tracker = Tracker::new(job, &sess, plan.prior_done.as_deref());
     let queued = stream::queue(&mut sess, job, &tracker, plan.resume_at);
     let streamed = Stream::new(
         &mut sess,
-        (job, job_t),
+        (job, job),
         opts,
         &mut tracker,
         &mut journal,
@@ -138,9 +157,9 @@ pub fn send_job(
         total_time: t0.elapsed(),
         max_in_flight_bytes: sess.s.max_in_flight_bytes(),
         final_position,
-        estimated_time: job_t.total_time,
+        estimated_time: job.total_time,
         checked: opts.check,
-        notices: plan.notice.into_iter().collect(),
+        notices,
     })
 }
 

@@ -47,6 +47,9 @@ pub struct SendOptions {
     pub origin_confirmed: bool,
     /// Stream a job that declares it needs laser mode (`$32=1`) to a controller with `$32=0`.
     pub force_laser: bool,
+    /// Do not put back the work frame (G55..G59, G92, G43.1) that the soft reset at connection
+    /// clears: the job runs in G54 without G92.
+    pub discard_offsets: bool,
 }
 
 /// What to do when the job pauses itself with `M0` (GRBL 1.1h ignores `M1`, and `M2`/`M30` end
@@ -101,6 +104,12 @@ impl SendOptions {
     /// Sets [`SendOptions::force_laser`].
     pub fn with_force_laser(mut self, on: bool) -> Self {
         self.force_laser = on;
+        self
+    }
+
+    /// Sets [`SendOptions::discard_offsets`].
+    pub fn with_discard_offsets(mut self, on: bool) -> Self {
+        self.discard_offsets = on;
         self
     }
 
@@ -199,6 +208,7 @@ impl Default for SendOptions {
             on_pause: PausePolicy::Abort,
             origin_confirmed: false,
             force_laser: false,
+            discard_offsets: false,
         }
     }
 }

@@ -35,7 +35,7 @@ pub(super) fn settle<T: Transport + ?Sized>(
     job: &Job,
     opts: &SendOptions,
     prior: Option<JournalState>,
-    link: Link,
+    link: &Link,
     journal: &mut Option<Journal>,
 ) -> Result<ResumePlan, SendError> {
     let Some(mut st) = prior else {
@@ -43,7 +43,14 @@ pub(super) fn settle<T: Transport + ?Sized>(
     };
     let restarted = link.restarted;
     let trusted = !restarted && !link.unlocked && !sess.alarm_lock;
-    let here = if trusted { sess.work_position() } else { None };
+    // Work position without the controller's G92 offset: the frame of the job's geometry.
+    let g92 = link.frame.g92;
+    let here = if trusted {
+        sess.work_position()
+            .map(|p| [p[0] + g92[0], p[1] + g92[1], p[2] + g92[2]])
+    } else {
+        None
+    };
     let tol = position_tolerance(&sess.settings);
     let rx = sess.s.rx_size();
     if let Some(r) = resolve_resume(job, &st, opts.resume_from, here, rx, tol, restarted)? {
@@ -98,7 +105,7 @@ pub(super) fn settle<T: Transport + ?Sized>(
 /// Why the machine position cannot be trusted since the journal was written, if it cannot:
 /// the controller restarted (a banner at connect: power-up or the DTR reset of opening the
 /// port), was unlocked with `$X` without homing, or reset or alarmed during the interrupted run.
-fn position_lost(st: &JournalState, link: Link) -> Option<String> {
+fn position_lost(st: &JournalState, link: &Link) -> Option<String> {
     if link.restarted {
         return Some("the controller restarted when the port was opened (or lost power)".into());
     }
@@ -117,7 +124,7 @@ fn position_lost(st: &JournalState, link: Link) -> Option<String> {
 fn reestablish_position<T: Transport + ?Sized>(
     sess: &mut Session<'_, T>,
     st: &JournalState,
-    link: Link,
+    link: &Link,
     opts: &SendOptions,
 ) -> Result<Option<String>, SendError> {
     let started = st.done.iter().any(|d| *d) || st.partial.is_some() || opts.resume_from.is_some();

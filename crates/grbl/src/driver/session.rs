@@ -29,7 +29,12 @@ pub(super) struct Session<'a, T: Transport + ?Sized> {
     pub(super) resets: u64,
     /// The last `[GC:...]` parser state (`$G`).
     pub(super) last_gc: Option<String>,
+    /// Other `[...]` feedback (`$#` lines), at most [`FEEDBACK_KEPT`]; cleared by whoever reads it.
+    pub(super) feedback: Vec<String>,
 }
+
+/// Feedback lines kept for the reader of `$#` (it prints ten).
+const FEEDBACK_KEPT: usize = 64;
 
 impl<'a, T: Transport + ?Sized> Session<'a, T> {
     /// A session on `t`, knowing nothing of the controller yet.
@@ -50,6 +55,7 @@ impl<'a, T: Transport + ?Sized> Session<'a, T> {
             setup_seq: 0,
             resets: 0,
             last_gc: None,
+            feedback: Vec::new(),
         }
     }
 
@@ -94,6 +100,9 @@ impl<'a, T: Transport + ?Sized> Session<'a, T> {
                 }
                 Event::Alarm(_) => self.alarm_lock = true,
                 Event::Feedback(f) if f.starts_with("GC:") => self.last_gc = Some(f.clone()),
+                Event::Feedback(f) if self.feedback.len() < FEEDBACK_KEPT => {
+                    self.feedback.push(f.clone());
+                }
                 Event::Reset { version, .. } => {
                     self.resets += 1;
                     self.version = version.clone();
@@ -129,6 +138,24 @@ impl<'a, T: Transport + ?Sized> Session<'a, T> {
             self.pump(Duration::from_millis(10))?;
         }
         Ok(true)
+    }
+
+    /// Ends whatever partial line an earlier host left in GRBL's line buffer (a sender killed
+    /// mid-line), so the next command is read alone: a bare newline, whose answer (`ok`, or the
+    /// partial line's error) nobody waits for, then a short wait for that answer.
+    pub(super) fn clear_line(&mut self) -> Result<(), TransportError> {
+        self.t.write_all(b"\n")?;
+        let until = Instant::now() + Duration::from_millis(250);
+        while Instant::now() < until {
+            if self
+                .pump(READ_SLICE)?
+                .iter()
+                .any(|e| matches!(e, Event::Unmatched(_)))
+            {
+                break;
+            }
+        }
+        Ok(())
     }
 
     /// Sends one command with send-response and waits for its answer.

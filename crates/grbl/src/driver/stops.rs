@@ -142,6 +142,10 @@ pub(super) fn same_after_reset(job: &Job, i: usize) -> bool {
         && explicit_motion
 }
 
+/// How many of the lines answered after an unexpected reset may not have cut their programmed
+/// segment (see [`on_reset`]).
+const RESET_DOUBT_LINES: usize = 2;
+
 /// Stops on an unexpected banner. GRBL cleared its RX buffer at the reset, but bytes still on
 /// the wire landed in the fresh buffer and ran: their answers arrive after the banner and belong
 /// to the newest lines that were in flight.
@@ -164,6 +168,7 @@ pub(super) fn on_reset<T: Transport + ?Sized>(
     };
     let m = late.len().min(lost.len());
     let mut ran_after_reset = 0;
+    let mut resent = Vec::new();
     for (k, (tag, r)) in lost[lost.len() - m..]
         .iter()
         .zip(&late[late.len() - m..])
@@ -171,9 +176,18 @@ pub(super) fn on_reset<T: Transport + ?Sized>(
     {
         if let (Tag::Job(i), Response::Ok) = (tag, r) {
             ran_after_reset += 1;
-            // The first of them may be the tail of a line the reset cut in half (GRBL then ran
-            // only a fragment): never count it, so it is re-sent whole.
-            if k > 0 && same_after_reset(job, *i) {
+            // No answer tells whether the first of them ran whole or as the tail of a line the
+            // reset cut in half; either way it did not cut the job's segment (a whole one ran
+            // from where the reset left the tool, not from the end of the line before it, which
+            // the reset discarded). The second then started wherever the first stopped, which
+            // is its programmed start only if the first ran whole. The status reports come only
+            // after all of them ran, so neither can be confirmed: both are re-sent. The price is
+            // that the second is cut twice when the first ran whole; counting it instead would
+            // skip its cut when the first was a fragment.
+            if k < RESET_DOUBT_LINES {
+                resent.push(*i);
+            }
+            if k >= RESET_DOUBT_LINES && same_after_reset(job, *i) {
                 if let Some(j) = journal.as_mut() {
                     j.ack(*i);
                 }
@@ -183,7 +197,7 @@ pub(super) fn on_reset<T: Transport + ?Sized>(
     }
     if let Some(j) = journal.as_mut() {
         j.note(&format!(
-            "unexpected reset; {} line(s) in flight, {ran_after_reset} of them ran after the reset",
+            "unexpected reset; {} line(s) in flight, {ran_after_reset} of them ran after the reset; lines {resent:?} ran from where the reset left the tool and are re-sent",
             lost.len()
         ));
     }

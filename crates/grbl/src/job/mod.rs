@@ -151,6 +151,18 @@ pub struct Job {
     pub needs_laser_mode: bool,
 }
 
+/// Where a job starts on the controller: the active work coordinate system (54..=59), the G92
+/// offset in effect (mm) and the work position (mm, in the G92 frame, as `WPos` reports it).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct JobStart {
+    /// G54..G59 as 54..=59 (0 is read as 54).
+    pub wcs: u8,
+    /// G92 offset, mm.
+    pub g92: [f64; 3],
+    /// Work position, mm.
+    pub position: [f64; 3],
+}
+
 /// FNV-1a, 64 bit: a stable, dependency-free content hash (not cryptographic; it guards
 /// against resuming the wrong file, not against an adversary).
 pub fn fnv1a64(bytes: &[u8]) -> u64 {
@@ -176,6 +188,31 @@ impl Job {
             interp.line(i + 1, raw)?;
         }
         interp.finish(text, limits)
+    }
+
+    /// The job as it runs on a controller standing in `start`: the program begins in the
+    /// controller's work coordinate system, with its G92 offset, at its position, so axes the
+    /// job never sets stay where the controller has them (an XY-only job run with Z at 3 is at
+    /// Z 3 throughout, not at 0) and a first relative move starts from there. Timed with
+    /// `limits`; the hash (the job's identity for resume) is the file's.
+    pub fn rebased(&self, start: &JobStart, limits: &MachineLimits) -> Job {
+        let st = ModalState {
+            wcs: start.wcs.clamp(54, 59),
+            position: start.position,
+            g92: start.g92,
+            ..ModalState::default()
+        };
+        let mut interp = Interpreter::starting_at(limits.motion.arc_tolerance, st);
+        for l in &self.lines {
+            // The lines are already stripped and were accepted once: they parse again.
+            if interp.line(l.source_line, &l.text).is_err() {
+                return self.clone();
+            }
+        }
+        match interp.finish_lines(self.hash, self.needs_laser_mode, limits) {
+            Some(job) => job,
+            None => self.clone(),
+        }
     }
 
     /// Number of streamable lines.

@@ -94,10 +94,16 @@ pub(super) struct Interpreter {
 impl Interpreter {
     /// An interpreter in GRBL's power-up state, splitting arcs within `arc_tolerance` (`$12`).
     pub(super) fn new(arc_tolerance: f64) -> Interpreter {
+        Interpreter::starting_at(arc_tolerance, ModalState::default())
+    }
+
+    /// An interpreter whose program starts in state `st` (the controller's work coordinate
+    /// system, G92 offset and position).
+    pub(super) fn starting_at(arc_tolerance: f64, st: ModalState) -> Interpreter {
         Interpreter {
-            st: ModalState::default(),
+            uses_g92: st.g92 != [0.0; 3],
+            st,
             lines: Vec::new(),
-            uses_g92: false,
             lo: [f64::INFINITY; 3],
             hi: [f64::NEG_INFINITY; 3],
             z_moves: false,
@@ -379,21 +385,34 @@ impl Interpreter {
 
     /// The job read from `text`, timed with `limits`.
     pub(super) fn finish(self, text: &str, limits: &MachineLimits) -> Result<Job, JobError> {
+        let laser = self.needs_laser_mode;
+        self.finish_lines(fnv1a64(text.as_bytes()), laser, limits)
+            .ok_or(JobError::Empty)
+    }
+
+    /// The job of the lines read, identified by `hash`, timed with `limits`; `None` without
+    /// a line.
+    pub(super) fn finish_lines(
+        self,
+        hash: u64,
+        needs_laser_mode: bool,
+        limits: &MachineLimits,
+    ) -> Option<Job> {
         if self.lines.is_empty() {
-            return Err(JobError::Empty);
+            return None;
         }
         let mut job = Job {
             total_length: self.lines.iter().map(|l| l.length).sum(),
             lines: self.lines,
-            hash: fnv1a64(text.as_bytes()),
+            hash,
             total_time: 0.0,
             extent: self.lo[0].is_finite().then_some((self.lo, self.hi)),
             uses_g92: self.uses_g92,
             safe_z: self.z_moves.then_some(self.max_z),
             end_state: self.st,
-            needs_laser_mode: self.needs_laser_mode,
+            needs_laser_mode: needs_laser_mode || self.needs_laser_mode,
         };
         job.retime(limits);
-        Ok(job)
+        Some(job)
     }
 }

@@ -45,6 +45,11 @@ pub struct StreamArgs {
     /// on a terminal, abort without one.
     #[arg(long, value_enum, value_name = "POLICY")]
     pub on_pause: Option<OnPause>,
+    /// Run in G54 without G92: do not put back the work frame (G55..G59, a G92 offset, a tool
+    /// length offset) that the soft reset at connection clears, and do not stop when it cannot
+    /// be read.
+    #[arg(long)]
+    pub discard_offsets: bool,
     /// Stream a laser job (its header says it needs `$32=1`) to a controller with `$32=0`.
     #[arg(skip)]
     pub force_laser: bool,
@@ -97,6 +102,7 @@ impl Default for StreamArgs {
             resume: false,
             resume_from: None,
             origin_confirmed: false,
+            discard_offsets: false,
             on_pause: None,
             force_laser: false,
             journal: None,

@@ -57,12 +57,44 @@ pub(super) fn explain(
             None => String::new(),
         };
         let hint = format!(
-            "For example, if line {} never started: flatcut send {name}{port} --resume-from {}",
+            "Resume explicitly from the first line to cut with --resume-from LINE (a line number of the file). For example, if line {} never started: flatcut send {name}{port} --resume-from {}",
             from.source_line, from.source_line
         );
         return anyhow::Error::new(StreamError {
             error: e,
             hint: Some(hint),
+        });
+    }
+    let flag_hint = match &e {
+        SendError::AlarmLocked { .. } => Some(
+            "Home the machine, or add --unlock to send $X if the machine position is known to be right."
+                .to_string(),
+        ),
+        SendError::LaserModeOff => Some(
+            "Set $32=1 on the controller (or, with `flatcut run`, add --force to stream anyway)."
+                .to_string(),
+        ),
+        SendError::PausedByJob { .. } => Some(
+            "Choose what a program pause does with --on-pause resume|abort|wait, or run on a terminal to be asked."
+                .to_string(),
+        ),
+        SendError::PositionUnknown { .. } => Some(
+            "Home the machine, or set its work origin back where it was, then resume with --origin-confirmed (on a terminal, the resume asks)."
+                .to_string(),
+        ),
+        SendError::ResumeFromOutOfRange { .. } => {
+            Some("--resume-from takes a line number of the file that has a line to send.".to_string())
+        }
+        SendError::OffsetsUnknown { .. } => Some(
+            "Let the controller come to Idle and try again, or add --discard-offsets to run in G54 without G92."
+                .to_string(),
+        ),
+        _ => None,
+    };
+    if flag_hint.is_some() {
+        return anyhow::Error::new(StreamError {
+            error: e,
+            hint: flag_hint,
         });
     }
     let hint = resumable.then(|| {

@@ -118,6 +118,7 @@ pub fn stream_text_with_control(
         .with_resume_from(resume_from)
         .with_journal(&journal)
         .with_origin_confirmed(args.origin_confirmed)
+        .with_discard_offsets(args.discard_offsets)
         .with_on_pause(args.pause_policy())
         .with_force_laser(args.force_laser);
 
