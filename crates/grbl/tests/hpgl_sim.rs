@@ -3,6 +3,7 @@
 //! the device's pen traces exactly the job's pen-down moves, and an abort lifts the tool.
 
 use std::sync::atomic::AtomicBool;
+use std::sync::{Mutex, MutexGuard};
 use std::time::Duration;
 
 use flatcut_firmware_sim::hpgl::{HpglPtySim, PlotterConfig};
@@ -37,6 +38,14 @@ fn job(n: usize) -> (String, Vec<([i64; 2], [i64; 2])>) {
     (s, segs)
 }
 
+/// The plotter's timing is real time: its flow control only means something when its thread
+/// and the sender's are not starved, so the tests of this file run one at a time.
+static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
+
+fn one_at_a_time() -> MutexGuard<'static, ()> {
+    ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 fn device(buffer_query: bool) -> PlotterConfig {
     PlotterConfig {
         buffer: 512,
@@ -50,6 +59,7 @@ fn device(buffer_query: bool) -> PlotterConfig {
 }
 
 fn run(buffer_query: bool) {
+    let _serial = one_at_a_time();
     let (text, segs) = job(300);
     assert!(text.len() > 20 * 512, "job {} bytes", text.len());
     let baud = 38_400;
@@ -113,6 +123,7 @@ fn large_job_under_buffer_queries_loses_no_byte() {
 
 #[test]
 fn abort_clears_the_device_and_lifts_the_pen() {
+    let _serial = one_at_a_time();
     let (text, _) = job(300);
     let baud = 38_400;
     let sim = HpglPtySim::spawn(device(false), baud, 1.0).unwrap();
