@@ -26,7 +26,7 @@ pub mod transport;
 pub use driver::{
     CancelToken, Control, PausePolicy, Progress, SendError, SendOptions, SendReport, send_job,
 };
-pub use job::{Job, JobError, JobLine, JobStart, MachineLimits, ModalState};
+pub use job::{FeedClamp, Job, JobError, JobLine, JobStart, MachineLimits, ModalState};
 pub use journal::{Journal, JournalError, JournalState};
 pub use response::{MachineState, Response, StatusReport, parse_response};
 pub use streamer::{Event, Streamer, Tag};

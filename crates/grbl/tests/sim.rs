@@ -623,3 +623,38 @@ fn axes_the_job_never_sets_start_where_the_controller_has_them() {
             .all(|s| (s.to[2] - 3.0).abs() < 1e-3)
     );
 }
+
+/// Issue 14, item 12: a job whose feeds exceed the controller's max rates (read from `$$` at
+/// the handshake) is warned about before streaming; GRBL itself slows the moves without a word.
+#[test]
+fn feeds_over_the_controllers_max_rates_are_warned_before_streaming() {
+    let job = Job::parse("G21 G90\nG1 X10 F3000\nG1 Y10 F400\n").unwrap();
+    // X at 500 mm/min, the GRBL default; Y fast enough for its F400.
+    let sim = spawn(
+        SimConfig::default()
+            .with_time_scale(20.0)
+            .with_setting(110, 500.0)
+            .with_setting(111, 1000.0),
+    );
+    // The notice reaches the observer before the first line streams.
+    let mut seen_before_streaming = Vec::new();
+    let rep =
+        flatcut_testkit::pty::send_with(sim.path(), &job, &opts(), &CancelToken::new(), &mut |p| {
+            if p.phase != Phase::Streaming && p.lines_acked == 0 {
+                seen_before_streaming.clone_from(&p.notices);
+            }
+        })
+        .unwrap();
+    let want = "the job asks F3000 (line 2) but the controller's X max rate ($110) is 500 mm/min: \
+                1 move(s) will run slower than the job says, that one at 500 mm/min";
+    assert_eq!(seen_before_streaming, vec![want.to_string()]);
+    assert_notice(&rep, |n| n == want);
+    assert_eq!(rep.notices.len(), 1, "{:?}", rep.notices);
+    // The machine did run the 10 mm at 500 mm/min, not 3000 (1.2 s, not 0.2 s), and the
+    // estimate knew it.
+    let trace = sim.stop().trace;
+    let x = trace.iter().find(|s| s.text == "G1X10F3000").unwrap();
+    let took = x.t_end - x.t_start;
+    assert!(took >= 1.2 - 1e-6, "{took} s");
+    assert!(rep.estimated_time >= 1.2 + 1.5, "{}", rep.estimated_time);
+}

@@ -113,8 +113,12 @@ pub fn send_job(
     };
     let job = &job.rebased(&start, &limits);
     let mut notices: Vec<String> = link.frame_notice.iter().cloned().collect();
+    // GRBL clamps a feed over an axis's max rate without a word: say so before anything runs.
+    notices.extend(job.feed_clamps(&limits).iter().map(ToString::to_string));
     let plan = resume::settle(&mut sess, job, opts, prior, &link, &mut journal)?;
     notices.extend(plan.notice.iter().cloned());
+    progress.notices.clone_from(&notices);
+    observer(&progress);
     if opts.check_travel {
         check_travel(
             job,

@@ -54,6 +54,10 @@ pub struct Progress {
     /// The job paused itself (`M0`) at this line and waits for the operator (resume or abort
     /// through the [`super::CancelToken`]).
     pub paused_at: Option<LineRef>,
+    /// What the sender noticed so far that the operator should know before the machine runs
+    /// (feeds over the controller's max rates, a work frame kept across the reset, a resume's
+    /// homing), in order; the same texts end in [`SendReport::notices`].
+    pub notices: Vec<String>,
 }
 
 impl Progress {
@@ -74,6 +78,7 @@ impl Progress {
             bytes_written: 0,
             holding: false,
             paused_at: None,
+            notices: Vec::new(),
         }
     }
 

@@ -8,15 +8,17 @@
 //!
 //! One idea per module: `modal` (the interpreter's state), `parse` (stripping, words, the
 //! interpreter), `arc` (GRBL's arcs), `time` (the estimate), `resume` (preambles), `limits`
-//! (the controller's settings the sender uses).
+//! (the controller's settings the sender uses), `feeds` (the feeds those settings clamp).
 
 mod arc;
+mod feeds;
 mod limits;
 mod modal;
 mod parse;
 mod resume;
 mod time;
 
+pub use feeds::FeedClamp;
 pub use limits::MachineLimits;
 pub use modal::{ModalState, MotionMode, Spindle, Units};
 pub use parse::strip_line;

@@ -66,7 +66,18 @@ pub(super) fn run_send(
     let plain = !interactive && !args.quiet;
     let pause_tx = interrupts.as_ref().ok().map(|i| i.tx.clone());
     let mut asked_pause: Option<usize> = None;
+    let mut notices_shown = 0;
     let mut observer = |p: &Progress| {
+        // What the operator should know before the machine runs (feeds the controller clamps,
+        // say), as soon as the sender knows it; the summary repeats it.
+        for n in p.notices.iter().skip(notices_shown) {
+            if !args.quiet {
+                bar.suspend(|| {
+                    let _ = writeln!(std::io::stderr(), "warning: {n}");
+                });
+            }
+        }
+        notices_shown = p.notices.len();
         // The job paused itself and waits for the operator: ask once per pause.
         if let (Some(line), Some(tx)) = (&p.paused_at, &pause_tx)
             && asked_pause != Some(line.index)

@@ -23,6 +23,7 @@ fn progress() -> Progress {
         bytes_written: 1234,
         holding: false,
         paused_at: None,
+        notices: Vec::new(),
     }
 }
 
