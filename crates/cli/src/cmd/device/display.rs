@@ -1,23 +1,23 @@
 //! The progress display of a send: a bar and a status line on a terminal, plain lines every few
-//! seconds in a log, nothing with `--quiet`; and the observer that feeds it.
+//! seconds in a log, nothing with `--quiet`; and the observer that feeds it (the printing
+//! itself runs on its own thread, `printer`).
 
-use std::io::{IsTerminal, Write};
+use std::io::IsTerminal;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
 
 use flatcut_grbl::driver::Phase;
 use flatcut_grbl::{Control, Job, Progress, SendError, SendOptions, SendReport};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::StreamArgs;
+use super::printer::{BAR_STEPS, Printer, View};
 use super::signals::{Ev, Interrupts, prompt_loop};
 
 /// Interval of the plain progress lines printed when stderr is not a terminal (CI logs): often
 /// enough to show life, rare enough not to flood a log.
 pub const PLAIN_PROGRESS_INTERVAL: Duration = Duration::from_secs(3);
-/// Resolution of the progress bar (it shows the fraction of the path length executed).
-const BAR_STEPS: u64 = 1000;
 
 /// Runs `send_job` with the progress display and the Ctrl-C policy.
 pub(super) fn run_send(
@@ -62,22 +62,23 @@ pub(super) fn run_send(
         (true, false) => Some(1.0 / args.sim_speed),
         (true, true) => None,
     };
-    let mut last_plain = Instant::now();
-    let plain = !interactive && !args.quiet;
     let pause_tx = interrupts.as_ref().ok().map(|i| i.tx.clone());
     let mut asked_pause: Option<usize> = None;
-    let mut notices_shown = 0;
+    // The terminal is written on the printer's thread only: a terminal that stops reading
+    // (Ctrl-S) must not stop the stream.
+    let mut printer = Printer::spawn(
+        View {
+            bar: bar.clone(),
+            interactive,
+            plain: !interactive && !args.quiet,
+            plain_interval: PLAIN_PROGRESS_INTERVAL,
+            notices: !args.quiet,
+            eta_scale,
+            prompting,
+        },
+        Box::new(std::io::stderr()),
+    );
     let mut observer = |p: &Progress| {
-        // What the operator should know before the machine runs (feeds the controller clamps,
-        // say), as soon as the sender knows it; the summary repeats it.
-        for n in p.notices.iter().skip(notices_shown) {
-            if !args.quiet {
-                bar.suspend(|| {
-                    let _ = writeln!(std::io::stderr(), "warning: {n}");
-                });
-            }
-        }
-        notices_shown = p.notices.len();
         // The job paused itself and waits for the operator: ask once per pause.
         if let (Some(line), Some(tx)) = (&p.paused_at, &pause_tx)
             && asked_pause != Some(line.index)
@@ -85,36 +86,10 @@ pub(super) fn run_send(
             asked_pause = Some(line.index);
             let _ = tx.send(Ev::Pause(line.to_string()));
         }
-        if prompting.load(Ordering::Relaxed) {
-            return;
-        }
-        if interactive {
-            // The bar fills with the path length executed; the line count is what GRBL took.
-            bar.set_prefix(format!(
-                "{:>10} line {}/{}",
-                phase_name(p.phase),
-                p.lines_acked,
-                p.lines_total
-            ));
-            bar.set_position((p.fraction() * BAR_STEPS as f64).round() as u64);
-            bar.set_message(status_text(p, eta_scale));
-        } else if plain
-            && (last_plain.elapsed() >= PLAIN_PROGRESS_INTERVAL || p.phase == Phase::Done)
-        {
-            last_plain = Instant::now();
-            // A log that cannot be written is no reason to stop a machine mid-job.
-            let _ = writeln!(
-                std::io::stderr(),
-                "{}: line {}/{} {}",
-                phase_name(p.phase),
-                p.lines_acked,
-                p.lines_total,
-                status_text(p, eta_scale)
-            );
-        }
+        printer.show(p);
     };
     let result = flatcut_grbl::send_job(transport, job, opts, &mut observer, cancel);
-    bar.finish_and_clear();
+    printer.finish();
     if let Ok(i) = interrupts {
         i.done();
     }
@@ -124,7 +99,7 @@ pub(super) fn run_send(
     result
 }
 
-fn phase_name(p: Phase) -> &'static str {
+pub(super) fn phase_name(p: Phase) -> &'static str {
     match p {
         Phase::Connecting => "connecting",
         Phase::Checking => "checking",

@@ -9,7 +9,7 @@
 
 //!
 //! One concern per module: `args` (the flags), `embedded` (the simulator as the device),
-//! `display` (the progress display), `signals` (Ctrl-C, SIGTERM, SIGHUP and the prompt),
+//! `display` (the progress display), `printer` (the thread that writes it), `signals` (Ctrl-C, SIGTERM, SIGHUP and the prompt),
 //! `explain` (what a stopped send tells the operator); this module streams.
 
 use std::path::{Path, PathBuf};
@@ -22,6 +22,7 @@ mod args;
 mod display;
 mod embedded;
 mod explain;
+mod printer;
 pub mod select;
 mod signals;
 

@@ -69,3 +69,107 @@ fn journal_path_and_sim_bed() {
     };
     assert!(sim_config(&job, &bad).is_err());
 }
+
+/// A terminal output that blocks at its first write until released (a terminal paused with
+/// Ctrl-S), keeping what it is given.
+struct PausedTerminal {
+    release: std::sync::mpsc::Receiver<()>,
+    released: bool,
+    out: std::sync::Arc<std::sync::Mutex<Vec<u8>>>,
+}
+
+impl std::io::Write for PausedTerminal {
+    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+        if !self.released {
+            let _ = self.release.recv();
+            self.released = true;
+        }
+        self.out
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .extend_from_slice(b);
+        Ok(b.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// Issue 14, item 5: a terminal that stops reading (Ctrl-S) does not stop the stream: the
+/// whole job streams to firmware-sim while the printer's output is blocked, and everything
+/// (the feed notice first, the final line last) is printed once the terminal reads again.
+#[test]
+fn a_paused_terminal_does_not_stall_the_stream() {
+    use super::printer::{Printer, View};
+    use flatcut_firmware_sim::SimConfig;
+    use std::sync::atomic::AtomicBool;
+    use std::sync::{Arc, Mutex};
+
+    let (release, rx) = std::sync::mpsc::channel();
+    let out = Arc::new(Mutex::new(Vec::new()));
+    let mut printer = Printer::spawn(
+        View {
+            bar: indicatif::ProgressBar::hidden(),
+            interactive: false,
+            plain: true,
+            plain_interval: Duration::ZERO,
+            notices: true,
+            eta_scale: None,
+            prompting: Arc::new(AtomicBool::new(false)),
+        },
+        Box::new(PausedTerminal {
+            release: rx,
+            released: false,
+            out: out.clone(),
+        }),
+    );
+    // 300 strokes along Y at F3000 on a controller at GRBL's default 500 mm/min.
+    let mut text = String::from("G21 G90\n");
+    for i in 1..=300 {
+        text.push_str(&format!(
+            "G1 X{:.3} Y{} F3000\n",
+            i as f64 * 0.012,
+            (i % 2) * 5
+        ));
+    }
+    let job = Job::parse(&text).unwrap();
+    let sim = PtySim::spawn(SimConfig::default().with_instant_motion(true)).unwrap();
+    let mut port = flatcut_grbl::open_port(sim.path().to_str().unwrap(), 115_200).unwrap();
+    let opts = SendOptions::default().with_banner_timeout(Duration::from_millis(500));
+    let rep = flatcut_grbl::send_job(
+        &mut port,
+        &job,
+        &opts,
+        &mut |p| printer.show(p),
+        &flatcut_grbl::CancelToken::new(),
+    )
+    .unwrap();
+    drop(port);
+    let trace = sim.stop().trace;
+    assert_eq!(rep.lines_sent, job.len());
+    assert_eq!(trace.len(), job.motions().len());
+    // Nothing reached the terminal while it was paused.
+    assert!(out.lock().unwrap().is_empty());
+    release.send(()).unwrap();
+    printer.finish();
+    let printed = String::from_utf8(out.lock().unwrap().clone()).unwrap();
+    let lines: Vec<&str> = printed.lines().collect();
+    // The notice comes before any line of the stream; ticks the paused terminal missed were
+    // dropped, the final one was not.
+    let warning = lines.iter().position(|l| {
+        l.starts_with(
+            "warning: the job asks F3000 (line 2) but the controller's Y max rate ($111) is 500 mm/min",
+        )
+    });
+    let streaming = lines.iter().position(|l| l.starts_with("streaming:"));
+    assert!(warning.is_some() && warning < streaming, "{printed}");
+    assert!(lines.len() < 20, "{printed}");
+    assert_eq!(
+        lines.iter().filter(|l| l.starts_with("warning:")).count(),
+        1
+    );
+    assert!(
+        lines.last().unwrap().starts_with("done: line 301/301"),
+        "{printed}"
+    );
+}
