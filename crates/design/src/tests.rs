@@ -2,6 +2,9 @@
 //! file, the piece and the problem.
 
 use super::*;
+use flatcut_geom::Tolerances;
+use flatcut_mesh::TriMesh;
+use std::path::{Path, PathBuf};
 
 fn examples_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("examples")

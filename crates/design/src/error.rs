@@ -1,0 +1,85 @@
+//! Why a design could not be loaded or built, and the context (file, piece) every message names.
+
+use std::path::PathBuf;
+
+use flatcut_mesh::TessError;
+use flatcut_mesh::io::MeshIoError;
+use flatcut_surface::SurfaceError;
+
+use crate::PieceDef;
+
+/// Why a design could not be loaded or built. Messages name the file, the piece and the problem.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum DesignError {
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{file}:{line}:{col}: {msg}")]
+    Syntax {
+        file: String,
+        line: usize,
+        col: usize,
+        msg: String,
+    },
+    #[error("{file}: the design has no [[piece]]")]
+    NoPieces { file: String },
+    #[error("{file}: piece {index} '{piece}': {msg}")]
+    Piece {
+        file: String,
+        index: usize,
+        piece: String,
+        msg: String,
+    },
+    #[error("{file}: piece {index} '{piece}': {source}")]
+    Surface {
+        file: String,
+        index: usize,
+        piece: String,
+        source: SurfaceError,
+    },
+    #[error("{file}: piece {index} '{piece}': {source}")]
+    Mesh {
+        file: String,
+        index: usize,
+        piece: String,
+        source: Box<MeshIoError>,
+    },
+    #[error("{file}: piece {index} '{piece}': {source}")]
+    Tessellation {
+        file: String,
+        index: usize,
+        piece: String,
+        source: TessError,
+    },
+}
+
+/// Error context: file, piece index and name.
+pub(crate) struct Ctx {
+    pub(crate) file: String,
+    pub(crate) index: usize,
+    pub(crate) piece: String,
+}
+
+impl Ctx {
+    pub(crate) fn of(p: &PieceDef) -> Ctx {
+        Ctx {
+            file: p.file.clone(),
+            index: p.index,
+            piece: p.name.clone(),
+        }
+    }
+    pub(crate) fn err(&self, msg: String) -> DesignError {
+        DesignError::Piece {
+            file: self.file.clone(),
+            index: self.index,
+            piece: self.piece.clone(),
+            msg,
+        }
+    }
+    pub(crate) fn surf(&self, what: &str, e: SurfaceError) -> DesignError {
+        self.err(format!("{what}: {e}"))
+    }
+}

@@ -1,0 +1,122 @@
+//! Reading a design: the file (TOML, JSON or a bare mesh) to a checked `Design` in millimetres.
+
+use std::path::Path;
+
+use flatcut_mesh::io::is_mesh_path;
+
+use crate::check::check_piece;
+use crate::schema::DesignFile;
+use crate::units::scale_piece;
+use crate::{DesignError, PieceDef, SurfaceDef, Units};
+
+/// A loaded design: pieces with every length in mm.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Design {
+    /// Units the file was written in (lengths are already converted).
+    pub units: Units,
+    pub pieces: Vec<PieceDef>,
+    /// Name of the source (file path or the name given to `from_*_str`).
+    pub source: String,
+}
+
+fn line_col(src: &str, offset: usize) -> (usize, usize) {
+    let before = &src[..offset.min(src.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, col)
+}
+
+impl Design {
+    /// Loads a design from a `.toml` or `.json` file, or a mesh file (`.obj`, `.stl`, `.ply`)
+    /// as a one-piece design named after the file.
+    pub fn load(path: &Path) -> Result<Design, DesignError> {
+        let name = path.display().to_string();
+        if is_mesh_path(path) {
+            let stem = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "mesh".into());
+            let file = path
+                .file_name()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            return Ok(Design {
+                units: Units::Mm,
+                pieces: vec![PieceDef {
+                    name: stem,
+                    quantity: 1,
+                    surface: SurfaceDef::Mesh { file },
+                    seams: Vec::new(),
+                    marks: Vec::new(),
+                    grain: None,
+                    seam_allowance_mm: None,
+                    material: None,
+                    index: 0,
+                    file: name,
+                    mesh_scale: 1.0,
+                }],
+                source: path.display().to_string(),
+            });
+        }
+        let text = std::fs::read_to_string(path).map_err(|source| DesignError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let is_json = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        if is_json {
+            Self::from_json_str(&text, &name)
+        } else {
+            Self::from_toml_str(&text, &name)
+        }
+    }
+
+    /// Parses TOML text; `name` names the source in errors.
+    pub fn from_toml_str(text: &str, name: &str) -> Result<Design, DesignError> {
+        let f: DesignFile = toml::from_str(text).map_err(|e| {
+            let (line, col) = e.span().map_or((0, 0), |s| line_col(text, s.start));
+            DesignError::Syntax {
+                file: name.to_string(),
+                line,
+                col,
+                msg: e.message().to_string(),
+            }
+        })?;
+        Self::finish(f, name)
+    }
+
+    /// Parses JSON text (same structure as TOML: `{"units": "mm", "piece": [...]}`).
+    pub fn from_json_str(text: &str, name: &str) -> Result<Design, DesignError> {
+        let f: DesignFile = serde_json::from_str(text).map_err(|e| DesignError::Syntax {
+            file: name.to_string(),
+            line: e.line(),
+            col: e.column(),
+            msg: e.to_string(),
+        })?;
+        Self::finish(f, name)
+    }
+
+    fn finish(f: DesignFile, name: &str) -> Result<Design, DesignError> {
+        if f.pieces.is_empty() {
+            return Err(DesignError::NoPieces {
+                file: name.to_string(),
+            });
+        }
+        let s = f.units.mm();
+        let mut pieces = f.pieces;
+        for (i, p) in pieces.iter_mut().enumerate() {
+            p.index = i;
+            p.file = name.to_string();
+            check_piece(p)?;
+            if s != 1.0 {
+                scale_piece(p, s);
+            }
+        }
+        Ok(Design {
+            units: f.units,
+            pieces,
+            source: name.to_string(),
+        })
+    }
+}

@@ -1,0 +1,242 @@
+//! The file's schema: what a design file may contain, as serde types (design units until loaded).
+
+use serde::Deserialize;
+
+/// Length units of a design file; every length is converted to mm once at load time.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Units {
+    #[default]
+    Mm,
+    Cm,
+    M,
+    In,
+}
+
+impl Units {
+    /// Millimetres per unit.
+    pub fn mm(self) -> f64 {
+        match self {
+            Units::Mm => 1.0,
+            Units::Cm => 10.0,
+            Units::M => 1000.0,
+            Units::In => 25.4,
+        }
+    }
+}
+
+/// A 3D point as written in the file (design units until loaded).
+pub type P3 = [f64; 3];
+
+/// A curve in a design file.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum CurveDef {
+    /// Bézier curve of degree `points.len() − 1`.
+    Bezier { points: Vec<P3> },
+    /// B-spline; clamped uniform knots when `knots` is omitted.
+    Bspline {
+        degree: usize,
+        points: Vec<P3>,
+        #[serde(default)]
+        knots: Option<Vec<f64>>,
+    },
+    /// NURBS; clamped uniform knots when `knots` is omitted.
+    Nurbs {
+        degree: usize,
+        points: Vec<P3>,
+        weights: Vec<f64>,
+        #[serde(default)]
+        knots: Option<Vec<f64>>,
+    },
+    /// Straight segments through the points.
+    Polyline { points: Vec<P3> },
+    /// Cubic Hermite segment: end points and end tangents.
+    Hermite { p0: P3, t0: P3, p1: P3, t1: P3 },
+    /// Exact circular arc around `center` in the plane of `x_axis`, `y_axis` (default xy plane),
+    /// from `start_deg` to `end_deg`.
+    Arc {
+        center: P3,
+        radius: f64,
+        start_deg: f64,
+        end_deg: f64,
+        #[serde(default)]
+        x_axis: Option<P3>,
+        #[serde(default)]
+        y_axis: Option<P3>,
+    },
+    /// Interpolating C² cubic spline through the points (chord-length, natural ends; a closed
+    /// loop when `closed = true`).
+    Spline {
+        points: Vec<P3>,
+        #[serde(default)]
+        closed: bool,
+    },
+}
+
+/// Blending of a Coons patch.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Blend {
+    #[default]
+    Linear,
+    Cubic,
+}
+
+/// A surface in a design file.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum SurfaceDef {
+    /// Tensor-product Bézier patch: `(du+1)(dv+1)` points, v varying fastest.
+    Bezier { degree: [usize; 2], points: Vec<P3> },
+    /// Bicubic Hermite patch from corner data `corners[i][j] = P(i, j)`.
+    Hermite {
+        corners: [[P3; 2]; 2],
+        tangents_u: [[P3; 2]; 2],
+        tangents_v: [[P3; 2]; 2],
+        #[serde(default)]
+        twists: Option<[[P3; 2]; 2]>,
+    },
+    /// B-spline patch; `counts = [nu, nv]` poles (v fastest), clamped uniform knots by default.
+    Bspline {
+        degree: [usize; 2],
+        counts: [usize; 2],
+        points: Vec<P3>,
+        #[serde(default)]
+        knots_u: Option<Vec<f64>>,
+        #[serde(default)]
+        knots_v: Option<Vec<f64>>,
+    },
+    /// NURBS patch: as `bspline` with one weight per pole.
+    Nurbs {
+        degree: [usize; 2],
+        counts: [usize; 2],
+        points: Vec<P3>,
+        weights: Vec<f64>,
+        #[serde(default)]
+        knots_u: Option<Vec<f64>>,
+        #[serde(default)]
+        knots_v: Option<Vec<f64>>,
+    },
+    /// Coons patch: `P(u,0) = v0`, `P(u,1) = v1`, `P(0,v) = u0`, `P(1,v) = u1`.
+    Coons {
+        v0: CurveDef,
+        v1: CurveDef,
+        u0: CurveDef,
+        u1: CurveDef,
+        #[serde(default)]
+        blend: Blend,
+    },
+    /// Gordon surface through a curve network: `u_curves[i]` at `u = u_params[i]` (running in
+    /// v), `v_curves[j]` at `v = v_params[j]`.
+    Gordon {
+        u_curves: Vec<CurveDef>,
+        v_curves: Vec<CurveDef>,
+        u_params: Vec<f64>,
+        v_params: Vec<f64>,
+    },
+    /// Ruled surface between two curves.
+    Ruled { curves: [CurveDef; 2] },
+    /// Developable surface between two rails.
+    Developable { rails: [CurveDef; 2] },
+    /// Exact sphere.
+    Sphere { center: P3, radius: f64 },
+    /// Exact cylinder around the z axis through `base`.
+    Cylinder { base: P3, radius: f64, height: f64 },
+    /// Exact cone frustum around the z axis through `base`.
+    Cone {
+        base: P3,
+        base_radius: f64,
+        top_radius: f64,
+        height: f64,
+    },
+    /// Exact torus around the z axis.
+    Torus { center: P3, major: f64, minor: f64 },
+    /// Triangular Bézier patch of the given degree, `(n+1)(n+2)/2` points.
+    TriangularBezier { degree: usize, points: Vec<P3> },
+    /// Several surfaces forming one piece (tessellated crack-free).
+    Patches { patches: Vec<SurfaceDef> },
+    /// A mesh file (.obj, .stl, .ply), relative to the design file, in the design's units.
+    Mesh { file: String },
+}
+
+/// A seam: 3D points `[x, y, z]` (joined by shortest mesh-edge paths), surface parameters
+/// `[u, v]` of a single-patch piece (same), or, for mesh pieces, vertex indices.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum SeamDef {
+    Points(Vec<P3>),
+    Params(Vec<[f64; 2]>),
+    Vertices(Vec<u32>),
+}
+
+/// What a mark is for.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MarkKind {
+    /// A notch on the outline.
+    Notch,
+    /// A stitch or placement line.
+    #[default]
+    Line,
+    /// A drill hole or single reference point.
+    Point,
+}
+
+/// A named mark on the surface: a notch, a stitch line, a reference point.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MarkDef {
+    pub name: String,
+    #[serde(default)]
+    pub kind: MarkKind,
+    pub points: Vec<P3>,
+}
+
+fn one() -> u32 {
+    1
+}
+
+/// One piece of a design.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PieceDef {
+    pub name: String,
+    /// How many to cut (default 1).
+    #[serde(default = "one")]
+    pub quantity: u32,
+    pub surface: SurfaceDef,
+    #[serde(default)]
+    pub seams: Vec<SeamDef>,
+    #[serde(default)]
+    pub marks: Vec<MarkDef>,
+    /// Grain direction: from the first point to the second (on or near the surface).
+    #[serde(default)]
+    pub grain: Option<[P3; 2]>,
+    #[serde(default)]
+    pub seam_allowance_mm: Option<f64>,
+    #[serde(default)]
+    pub material: Option<String>,
+    /// Position in the file (0-based), set at load time.
+    #[serde(skip)]
+    pub index: usize,
+    /// The file the piece came from, for error messages.
+    #[serde(skip)]
+    pub file: String,
+    /// Millimetres per design unit, applied to mesh files when they are read.
+    #[serde(skip, default = "unit_scale")]
+    pub mesh_scale: f64,
+}
+
+fn unit_scale() -> f64 {
+    1.0
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct DesignFile {
+    #[serde(default)]
+    pub(crate) units: Units,
+    #[serde(default, rename = "piece")]
+    pub(crate) pieces: Vec<PieceDef>,
+}
