@@ -25,16 +25,21 @@
 //! **Architecture invariant:** this crate only translates the file into surfaces and meshes; all
 //! geometry lives in flatcut-surface and flatcut-mesh.
 
+mod assemble;
 mod build;
 mod check;
 mod error;
+mod join;
 mod load;
+mod part;
 mod schema;
 mod units;
 
+pub use assemble::{AssembledPiece, Assembly};
 pub use build::PieceGeometry;
 pub use error::DesignError;
 pub use load::Design;
+pub use part::{JoinDef, JoinEdgeDef, LineDef, PartDef, PartPieceDef};
 pub use schema::{Blend, CurveDef, MarkDef, MarkKind, P3, PieceDef, SeamDef, SurfaceDef, Units};
 
 #[cfg(test)]

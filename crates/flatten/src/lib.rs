@@ -13,8 +13,10 @@
 //! flipped triangle from a method documented flip-free; never rescales the result.
 
 pub mod arap;
+pub mod assembly;
 pub mod conformal_boundary;
 pub mod developable;
+pub mod limits;
 pub mod lscm;
 pub mod marks;
 pub mod method;

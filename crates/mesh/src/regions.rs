@@ -12,6 +12,7 @@ use std::collections::BTreeSet;
 
 use flatcut_geom::DVec3;
 
+use crate::mating::SeamSide;
 use crate::{Topology, TopologyError, TriMesh};
 
 /// One region of the split mesh.
@@ -26,13 +27,6 @@ pub struct Region {
     pub faces: Vec<u32>,
 }
 
-/// One side of a seam: the region and its vertices along the seam.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct SeamSide {
-    pub region: usize,
-    pub vertices: Vec<u32>,
-}
-
 /// A stretch of one line with the same region on each side, ordered like the line.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SeamRun {
@@ -40,7 +34,8 @@ pub struct SeamRun {
     /// The index in the line's vertex path of each vertex of the seam.
     pub path_index: Vec<usize>,
     /// The side on the left of the line's direction (the triangles in which the line's edges
-    /// run forward, seen from the surface's normal side), then the right side.
+    /// run forward, seen from the surface's normal side), then the right side; each side's
+    /// `piece` is a region index.
     pub sides: [SeamSide; 2],
 }
 
@@ -176,8 +171,8 @@ pub fn split_along_lines(mesh: &TriMesh, lines: &[Vec<u32>]) -> Result<Split, Re
             let (rl, la, lb) = side(left);
             let (rr, ra, rb) = side(right);
             let chained = runs.last().is_some_and(|r: &SeamRun| {
-                r.sides[0].region == rl
-                    && r.sides[1].region == rr
+                r.sides[0].piece == rl
+                    && r.sides[1].piece == rr
                     && r.sides[0].vertices.last() == Some(&la)
                     && r.sides[1].vertices.last() == Some(&ra)
                     && r.path_index.last() == Some(&i)
@@ -193,11 +188,11 @@ pub fn split_along_lines(mesh: &TriMesh, lines: &[Vec<u32>]) -> Result<Split, Re
                     path_index: vec![i, i + 1],
                     sides: [
                         SeamSide {
-                            region: rl,
+                            piece: rl,
                             vertices: vec![la, lb],
                         },
                         SeamSide {
-                            region: rr,
+                            piece: rr,
                             vertices: vec![ra, rb],
                         },
                     ],
@@ -209,7 +204,7 @@ pub fn split_along_lines(mesh: &TriMesh, lines: &[Vec<u32>]) -> Result<Split, Re
         if closed && runs.len() > 1 {
             let (first, last) = (&runs[0], &runs[runs.len() - 1]);
             let joins = (0..2).all(|s| {
-                first.sides[s].region == last.sides[s].region
+                first.sides[s].piece == last.sides[s].piece
                     && last.sides[s].vertices.last() == first.sides[s].vertices.first()
             });
             if joins {
@@ -305,7 +300,7 @@ mod tests {
         assert_eq!(s.seams.len(), 1);
         let seam = &s.seams[0];
         // Going up (+y) with +z up, the left side is x < 2.
-        let left = &s.regions[seam.sides[0].region];
+        let left = &s.regions[seam.sides[0].piece];
         assert!(left.mesh.positions.iter().all(|p| p.x <= 2.0));
         for side in &seam.sides {
             let reg = &s.regions[side.region];
@@ -333,11 +328,7 @@ mod tests {
         let s = split_along_lines(&m, &[v, h]).unwrap();
         assert_eq!(s.regions.len(), 4);
         assert_eq!(s.seams.len(), 4);
-        assert!(
-            s.seams
-                .iter()
-                .all(|r| r.sides[0].region != r.sides[1].region)
-        );
+        assert!(s.seams.iter().all(|r| r.sides[0].piece != r.sides[1].piece));
     }
 
     #[test]
@@ -355,7 +346,7 @@ mod tests {
         let s = split_along_lines(&m, &[line]).unwrap();
         assert_eq!(s.regions.len(), 1);
         let seam = &s.seams[0];
-        assert_eq!(seam.sides[0].region, seam.sides[1].region);
+        assert_eq!(seam.sides[0].piece, seam.sides[1].piece);
         assert_ne!(seam.sides[0].vertices, seam.sides[1].vertices);
         crate::check_disk(&s.regions[0].mesh).unwrap();
     }

@@ -100,7 +100,7 @@ fn a_straight_line_across_a_plane_runs_along_new_edges_and_splits_it_in_two() {
     // Both sides carry the same vertices at the same coordinates.
     let seam = &s.seams[0];
     let coords = |k: usize| -> Vec<DVec3> {
-        let r = &s.regions[seam.sides[k].region];
+        let r = &s.regions[seam.sides[k].piece];
         seam.sides[k]
             .vertices
             .iter()
