@@ -8,18 +8,18 @@ use clap::Parser as _;
 use flatcut::geom::DVec2;
 use flatcut::pattern::Layer;
 
-fn root() -> PathBuf {
+pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn run_cli(args: &[&str]) -> std::process::ExitCode {
+pub fn run_cli(args: &[&str]) -> std::process::ExitCode {
     let cli =
         flatcut_cli::Cli::try_parse_from(std::iter::once("flatcut").chain(args.iter().copied()))
             .expect("valid arguments");
     flatcut_cli::run(cli).expect("the command succeeds")
 }
 
-fn run_project(project: &str, out: &Path, extra: &[&str]) {
+pub fn run_project(project: &str, out: &Path, extra: &[&str]) {
     let p = root().join(project);
     let mut args = vec![
         "run",

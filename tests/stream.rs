@@ -456,7 +456,7 @@ fn explicit_port_streams_to_an_external_controller() {
 fn laser_job_from_the_gcode_writer_cuts_the_drawn_circle() {
     use flatcut::gcode::{GcodeOptions, Profile, plan};
     use flatcut::geom::DVec2;
-    use flatcut::pattern::drawing::{Drawing, Layer, Stroke};
+    use flatcut::pattern::drawing::{Drawing, Layer, Stroke, StrokeKind};
     /// Fitting tolerance of the writer plus one machine step, mm.
     const ON_CIRCLE_MM: f64 = 0.06;
     let (centre, r) = (DVec2::new(60.0, 45.0), 30.0);
@@ -466,16 +466,14 @@ fn laser_job_from_the_gcode_writer_cuts_the_drawn_circle() {
             centre + r * DVec2::new(a.cos(), a.sin())
         })
         .collect();
-    let drawing = Drawing {
-        strokes: vec![Stroke {
-            layer: Layer::Cut,
-            points: circle,
-            closed: true,
-            piece: Some(0),
-            outer: true,
-            id: "disc".into(),
-        }],
-    };
+    let drawing = Drawing::from_strokes(vec![Stroke {
+        layer: Layer::Cut,
+        points: circle,
+        closed: true,
+        piece: Some(0),
+        kind: StrokeKind::Boundary,
+        id: "disc".into(),
+    }]);
     let profile = Profile::laser();
     let gcode = plan(&drawing, &profile, &GcodeOptions::default())
         .unwrap()

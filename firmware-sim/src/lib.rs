@@ -40,6 +40,7 @@
 //! ```
 
 mod gcode;
+pub mod hpgl;
 mod machine;
 mod planner;
 mod pty;

@@ -205,25 +205,25 @@ impl Drop for PtySim {
 }
 
 /// Token bucket pacing bytes at `rate` bytes/s.
-struct Pace {
-    rate: f64,
-    credit: f64,
+pub(crate) struct Pace {
+    pub(crate) rate: f64,
+    pub(crate) credit: f64,
 }
 
 impl Pace {
-    fn add(&mut self, dt: f64) {
+    pub(crate) fn add(&mut self, dt: f64) {
         self.credit = (self.credit + dt * self.rate).min((self.rate * MAX_BURST_S).max(1.0));
     }
-    fn available(&self) -> usize {
+    pub(crate) fn available(&self) -> usize {
         self.credit.max(0.0).floor() as usize
     }
-    fn take(&mut self, n: usize) {
+    pub(crate) fn take(&mut self, n: usize) {
         self.credit -= n as f64;
     }
 }
 
 /// Opens a pseudo-terminal pair in raw mode with a non-blocking master; returns (master, slave, slave path).
-fn open_pty() -> io::Result<(OwnedFd, OwnedFd, PathBuf)> {
+pub(crate) fn open_pty() -> io::Result<(OwnedFd, OwnedFd, PathBuf)> {
     let pty = nix::pty::openpty(None, None).map_err(io_err)?;
     let (master, slave) = (pty.master, pty.slave);
     let mut t = tcgetattr(&slave).map_err(io_err)?;

@@ -32,9 +32,11 @@ pub enum Command {
     Nest(cmd::nest::Args),
     /// G-code for a pen plotter, drag knife or laser from a pattern SVG, design or flattened OBJ.
     Gcode(cmd::gcode::Args),
+    /// HP-GL/1 for a vinyl cutter or pen plotter from a pattern SVG/DXF, design or flattened OBJ.
+    Hpgl(cmd::hpgl::Args),
     /// List serial ports.
     Ports(cmd::ports::Args),
-    /// Stream a G-code job to a GRBL controller (default: the embedded simulator).
+    /// Stream a G-code job to a GRBL controller, or HP-GL to a plotter (default: embedded simulators).
     Send(cmd::send::Args),
     /// Run the simulated GRBL controller on a pseudo-terminal.
     Sim(cmd::sim::Args),
@@ -69,6 +71,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Pattern(a) => cmd::pattern::run(a),
         Command::Nest(a) => cmd::nest::run(a),
         Command::Gcode(a) => cmd::gcode::run(a),
+        Command::Hpgl(a) => cmd::hpgl::run(a),
         Command::Ports(a) => cmd::ports::run(a),
         Command::Send(a) => cmd::send::run(a),
         Command::Sim(a) => cmd::sim::run(a),

@@ -340,8 +340,9 @@ impl NestGroup {
         }
     }
 
-    /// The pieces of a drawing read from an SVG: one group per outer cut contour with the strokes
-    /// that belong to it.
+    /// The pieces of a drawing read from an SVG or a DXF: one group per outer cut contour with
+    /// the strokes that belong to it, its quantity and grain from the drawing's piece
+    /// information where the file carried them.
     pub fn from_drawing(name: &str, d: &Drawing) -> Vec<Self> {
         let mut groups: Vec<Self> = Vec::new();
         let mut by_piece: std::collections::BTreeMap<u32, Vec<usize>> = Default::default();
@@ -355,7 +356,7 @@ impl NestGroup {
             let Some(outer) = idx
                 .iter()
                 .map(|&i| &d.strokes[i])
-                .find(|s| s.outer && s.closed)
+                .find(|s| s.is_outer() && s.closed)
             else {
                 continue;
             };
@@ -363,25 +364,36 @@ impl NestGroup {
             if signed_area(&outline) < 0.0 {
                 outline.reverse();
             }
-            let gname = outer
-                .id
-                .strip_suffix("-cut")
-                .unwrap_or(&outer.id)
-                .to_string();
+            let info = d.piece_info(p);
+            let label_name = info.map(|i| i.label.name.clone()).unwrap_or_default();
+            let gname = if !label_name.is_empty() {
+                label_name
+            } else {
+                outer
+                    .id
+                    .strip_suffix("-cut")
+                    .unwrap_or(&outer.id)
+                    .to_string()
+            };
             let gname = if gname.is_empty() {
                 format!("{name}-{p}")
             } else {
                 gname
             };
+            let mut pieces: Vec<_> = info.cloned().into_iter().collect();
+            pieces.iter_mut().for_each(|i| i.piece = p);
             groups.push(Self {
                 name: gname,
                 drawing: Drawing {
                     strokes: idx.iter().map(|&i| d.strokes[i].clone()).collect(),
+                    pieces,
                 },
                 outline,
-                quantity: 1,
+                quantity: info.map_or(1, |i| i.label.quantity.max(1) as usize),
                 mirrored_pair: false,
-                grain_angle: None,
+                grain_angle: info
+                    .and_then(|i| i.grain)
+                    .map(|(a, b)| (b - a).y.atan2((b - a).x)),
             });
         }
         groups
@@ -425,6 +437,7 @@ pub fn nest_groups(
         let d = place(&g.drawing, &p.placement, counters[p.item], p.item as u32);
         if let Some(sheet) = sheets.get_mut(p.sheet) {
             sheet.strokes.extend(d.strokes);
+            sheet.pieces.extend(d.pieces);
         }
     }
     Ok(Layout {
@@ -447,6 +460,11 @@ fn place(d: &Drawing, pl: &Placement, instance: u32, item: u32) -> Drawing {
         // outer contour per instance.
         s.piece = Some(item * 10_000 + instance);
         s.id = format!("{}#{}", s.id, instance);
+    }
+    out.pieces.truncate(1);
+    for info in &mut out.pieces {
+        info.piece = item * 10_000 + instance;
+        info.grain = info.grain.map(|(a, b)| (pl.apply(a), pl.apply(b)));
     }
     out
 }

@@ -7,6 +7,7 @@
 //! (capped by [`MAX_RUN`]).
 
 use flatcut_geom::DVec2;
+use flatcut_geom::num::{GoldenStop, golden_section_min};
 
 use crate::plan::Move;
 
@@ -76,26 +77,13 @@ fn best_arc(run: &[DVec2]) -> Option<(DVec2, f64, bool, f64)> {
         let c = m + n * s;
         deviation(run, c, c.distance(a), ccw).unwrap_or(f64::INFINITY)
     };
-    let (mut lo, mut hi) = (s0 - 0.5 * r0, s0 + 0.5 * r0);
-    let g = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut x1, mut x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
-    let (mut f1, mut f2) = (eval(x1), eval(x2));
-    for _ in 0..CENTRE_ITERS {
-        if f1 <= f2 {
-            hi = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = hi - g * (hi - lo);
-            f1 = eval(x1);
-        } else {
-            lo = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = lo + g * (hi - lo);
-            f2 = eval(x2);
-        }
-    }
-    let (s, f) = if f1 <= f2 { (x1, f1) } else { (x2, f2) };
+    let best = golden_section_min(
+        eval,
+        s0 - 0.5 * r0,
+        s0 + 0.5 * r0,
+        GoldenStop::Iterations(CENTRE_ITERS),
+    );
+    let (s, f) = (best.x, best.fx);
     let f0 = eval(s0);
     let (s, f) = if f0 <= f { (s0, f0) } else { (s, f) };
     let c = m + n * s;

@@ -115,7 +115,11 @@ impl<'a> Writer<'a> {
     fn tool_up(&mut self) {
         match self.p.kind {
             ToolKind::Pen => {
-                let pen = self.p.pen.as_ref().expect("validated");
+                // An HP-GL pen profile has no [pen] section: its G-code lifts nothing.
+                let Some(pen) = self.p.pen.as_ref() else {
+                    self.tool_on = false;
+                    return;
+                };
                 match pen.mode {
                     PenMode::Servo => {
                         let s = format!("M3 S{}", self.num(pen.up_s));
@@ -137,7 +141,10 @@ impl<'a> Writer<'a> {
     fn tool_down(&mut self) {
         match self.p.kind {
             ToolKind::Pen => {
-                let pen = self.p.pen.as_ref().expect("validated");
+                let Some(pen) = self.p.pen.as_ref() else {
+                    self.tool_on = true;
+                    return;
+                };
                 match pen.mode {
                     PenMode::Servo => {
                         let s = format!("M3 S{}", self.num(pen.down_s));

@@ -10,7 +10,9 @@
 //! the simulator is the independent check on what this crate writes.
 
 pub mod arcs;
+pub mod cutter;
 pub mod emit;
+pub mod hpgl;
 pub mod knife;
 pub mod order;
 pub mod plan;
@@ -18,5 +20,6 @@ pub mod profile;
 pub mod time;
 
 pub use emit::{GRBL_MAX_LINE, frame_job};
+pub use hpgl::{HpglError, HpglSummary};
 pub use plan::{GcodeError, GcodeOptions, Move, Plan, Summary, Toolpath, plan};
-pub use profile::{Profile, ProfileError, ToolKind};
+pub use profile::{FlowControl, HpglConfig, Profile, ProfileError, ToolKind};

@@ -4,6 +4,7 @@ use flatcut_geom::{Aabb2, DVec2};
 use flatcut_pattern::{Drawing, Layer};
 
 use crate::arcs;
+use crate::cutter;
 use crate::knife;
 use crate::order::{self, OrderItem};
 use crate::profile::{Profile, ToolKind};
@@ -176,9 +177,12 @@ pub fn plan(drawing: &Drawing, profile: &Profile, opts: &GcodeOptions) -> Result
         if pts.len() < 3 {
             closed = false;
         }
+        if closed && s.layer == Layer::Cut && profile.kerf_mm > 0.0 {
+            pts = cutter::kerf_offset(&pts, s.is_outer(), 0.5 * profile.kerf_mm);
+        }
         strokes.push(S {
             layer: s.layer,
-            outer: s.outer,
+            outer: s.is_outer(),
             closed,
             id: s.id.clone(),
             pts,
@@ -234,41 +238,96 @@ pub fn plan(drawing: &Drawing, profile: &Profile, opts: &GcodeOptions) -> Result
         for v in tour {
             let s = members[v.item];
             let pts = order::visit_points(&items[v.item], &v);
-            let (start, moves) = match (&profile.knife, profile.kind) {
-                (Some(k), ToolKind::Knife) => {
-                    let pts = if s.closed {
-                        knife::with_overcut(&pts, k.overcut_mm)
-                    } else {
-                        pts
-                    };
-                    let (start, moves) = knife::compensate(&pts, k);
-                    (start, refit_lines(start, moves, opts, profile))
+            let passes = if profile.kind == ToolKind::Laser {
+                cfg.passes
+            } else {
+                1
+            };
+            let closed_cut = s.closed && layer == Layer::Cut;
+            // Tabs split a closed cut into open runs; otherwise overcut and leads extend it.
+            let runs: Vec<(Vec<DVec2>, bool)> = match cfg.tabs {
+                Some(t) if closed_cut => cutter::split_tabs(&pts, t.count, t.width_mm)
+                    .into_iter()
+                    .map(|r| (r, false))
+                    .collect(),
+                _ => vec![(pts, s.closed)],
+            };
+            for (run, closed) in runs {
+                let overcut = match (&profile.knife, profile.kind) {
+                    (Some(k), ToolKind::Knife) if closed => k.overcut_mm,
+                    _ => 0.0,
+                };
+                let run = match &profile.lead {
+                    Some(lead) if closed && closed_cut => {
+                        cutter::with_leads(&run, &s.pts, s.outer, lead, overcut)
+                    }
+                    _ if overcut > 0.0 => knife::with_overcut(&run, overcut),
+                    _ => run,
+                };
+                let tp = toolpath(run, layer, &s.id, feed, power_s, passes, opts, profile);
+                if tp.moves.is_empty() {
+                    continue;
                 }
-                _ => (pts[0], arcs::fit(&pts, arc_tolerance(opts, profile))),
-            };
-            let tp = Toolpath {
-                layer,
-                id: s.id.clone(),
-                start,
-                moves,
-                feed,
-                power_s,
-                passes: if profile.kind == ToolKind::Laser {
-                    cfg.passes
-                } else {
-                    1
-                },
-            };
-            check_work_area(&tp, profile)?;
-            at = tp.end();
-            paths.push(tp);
+                check_work_area(&tp, profile)?;
+                at = tp.end();
+                paths.push(tp);
+            }
         }
+    }
+    if let (Some(w), ToolKind::Knife) = (
+        profile.hpgl.as_ref().and_then(|h| h.weed_border_mm),
+        profile.kind,
+    ) && !paths.is_empty()
+    {
+        let mut b = Aabb2::EMPTY;
+        paths.iter().for_each(|tp| b.add(tp.start));
+        for tp in &paths {
+            tp.moves.iter().for_each(|m| b.add(m.end()));
+        }
+        let (lo, hi) = (b.min - DVec2::splat(w), b.max + DVec2::splat(w));
+        let border = vec![lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y), lo];
+        let k = profile.knife.as_ref().expect("validated");
+        let run = knife::with_overcut(&border, k.overcut_mm);
+        let feed = profile.layer_feed(Layer::Cut);
+        let tp = toolpath(run, Layer::Cut, "weed-border", feed, 0.0, 1, opts, profile);
+        check_work_area(&tp, profile)?;
+        paths.push(tp);
     }
     Ok(Plan {
         profile: profile.clone(),
         paths,
         title: opts.title.clone(),
     })
+}
+
+/// One toolpath from a run of points: drag-knife compensation for knives, arc fitting, and
+/// moves below the output's resolution dropped.
+fn toolpath(
+    run: Vec<DVec2>,
+    layer: Layer,
+    id: &str,
+    feed: f64,
+    power_s: f64,
+    passes: u32,
+    opts: &GcodeOptions,
+    profile: &Profile,
+) -> Toolpath {
+    let (start, moves) = match (&profile.knife, profile.kind) {
+        (Some(k), ToolKind::Knife) => {
+            let (start, moves) = knife::compensate(&run, k);
+            (start, refit_lines(start, moves, opts, profile))
+        }
+        _ => (run[0], arcs::fit(&run, arc_tolerance(opts, profile))),
+    };
+    Toolpath {
+        layer,
+        id: id.to_string(),
+        start,
+        moves: drop_sub_resolution(start, moves, resolution(profile)),
+        feed,
+        power_s,
+        passes,
+    }
 }
 
 /// Arc-fits the maximal runs of lines in a compensated knife path (swivel arcs stay as they are).
@@ -292,6 +351,30 @@ fn refit_lines(
         }
     }
     out.extend(arcs::fit(&run, tol));
+    out
+}
+
+/// The smallest step the output can express: one unit in the last printed digit (mm).
+pub fn resolution(profile: &Profile) -> f64 {
+    10f64.powi(-(profile.decimals as i32))
+}
+
+/// Drops the moves that would print as no motion: a line or arc whose end, rounded to the
+/// output's resolution, is where the tool already stands (rounded the same way). Such moves
+/// come from knife compensation and arc fitting around points closer than the resolution; on
+/// the machine they are repeated identical lines, and between them the blade turns on the spot.
+pub fn drop_sub_resolution(start: DVec2, moves: Vec<Move>, resolution: f64) -> Vec<Move> {
+    let grid = |p: DVec2| ((p.x / resolution).round(), (p.y / resolution).round());
+    let mut at = grid(start);
+    let mut out = Vec::with_capacity(moves.len());
+    for m in moves {
+        let end = grid(m.end());
+        if end == at {
+            continue;
+        }
+        at = end;
+        out.push(m);
+    }
     out
 }
 
@@ -387,5 +470,61 @@ impl Plan {
             o.x.clamp(0.0, self.profile.work_area_mm[0]),
             o.y.clamp(0.0, self.profile.work_area_mm[1]),
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flatcut_pattern::{Stroke, StrokeKind};
+
+    /// A closed outline whose vertices come in clusters closer than the output resolution (as
+    /// offsets of fine meshes give): a knife job must not repeat a line or turn on the spot.
+    #[test]
+    fn no_repeated_or_sub_resolution_moves() {
+        let mut pts = Vec::new();
+        for k in 0..90 {
+            let c =
+                DVec2::new(100.0, 100.0) + 40.0 * DVec2::from_angle(k as f64 * 4f64.to_radians());
+            pts.push(c);
+            pts.push(c + DVec2::new(0.0003, -0.0002));
+            pts.push(c + DVec2::new(-0.0002, 0.0004));
+        }
+        let d = Drawing::from_strokes(vec![Stroke {
+            layer: Layer::Cut,
+            points: pts,
+            closed: true,
+            piece: Some(0),
+            kind: StrokeKind::Boundary,
+            id: "disc".into(),
+        }]);
+        for profile in [Profile::knife(), Profile::laser(), Profile::pen()] {
+            let mut opts = GcodeOptions::default();
+            opts.arcs = false;
+            let text = plan(&d, &profile, &opts).unwrap().to_gcode();
+            let moves: Vec<&str> = text.lines().filter(|l| l.starts_with("G1 X")).collect();
+            for w in moves.windows(2) {
+                let xy = |l: &str| l.split(' ').take(3).collect::<Vec<_>>().join(" ");
+                assert_ne!(xy(w[0]), xy(w[1]), "{}: repeated move", profile.name);
+            }
+            let pos = |l: &str| -> DVec2 {
+                let v = |a: char| {
+                    l.split(' ')
+                        .find_map(|w| w.strip_prefix(a))
+                        .unwrap()
+                        .parse::<f64>()
+                        .unwrap()
+                };
+                DVec2::new(v('X'), v('Y'))
+            };
+            let res = resolution(&profile);
+            for w in moves.windows(2) {
+                assert!(
+                    pos(w[0]).distance(pos(w[1])) >= res * 0.999,
+                    "{}: {w:?}",
+                    profile.name
+                );
+            }
+        }
     }
 }

@@ -104,6 +104,82 @@ pub struct LaserConfig {
     pub air_assist: bool,
 }
 
+/// How an HP-GL device keeps its receive buffer from overflowing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FlowControl {
+    /// Software handshake: the device sends XOFF (0x13) when its buffer fills, XON (0x11) when
+    /// it has room again.
+    #[default]
+    XonXoff,
+    /// Hardware handshake on the RTS/CTS lines (the serial driver holds the bytes back).
+    RtsCts,
+}
+
+/// An HP-GL/1 device (vinyl cutter, pen plotter) on a serial line: what its job text says
+/// and how it is streamed. Coordinates are plotter units of 0.025 mm.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HpglConfig {
+    /// Pen (or knife holder) selected with `SP`.
+    #[serde(default = "HpglConfig::default_pen")]
+    pub pen: u32,
+    /// `VS`: tool-down speed in cm/s; omitted when absent.
+    pub velocity_cm_s: Option<f64>,
+    /// `FS`: knife force in the device's units (grams on most vinyl cutters); omitted when absent.
+    pub force: Option<f64>,
+    /// Flow control the device uses.
+    #[serde(default)]
+    pub flow_control: FlowControl,
+    /// The device answers `ESC.B` (free buffer bytes) and `ESC.L` (buffer size).
+    #[serde(default)]
+    pub buffer_query: bool,
+    /// Serial speed.
+    #[serde(default = "HpglConfig::default_baud")]
+    pub baud: u32,
+    /// A weeding border this far around the job (mm), cut last so the waste lifts in one sheet.
+    pub weed_border_mm: Option<f64>,
+}
+
+impl HpglConfig {
+    fn default_pen() -> u32 {
+        1
+    }
+    fn default_baud() -> u32 {
+        9600
+    }
+}
+
+/// Bridges left uncut on each closed cut so small parts stay in the sheet.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TabsConfig {
+    /// Tabs per closed path, evenly spaced along it.
+    pub count: u32,
+    /// Length of each tab along the path (mm).
+    pub width_mm: f64,
+}
+
+/// Shape of a lead-in and lead-out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LeadKind {
+    /// A straight approach along the start vertex's normal.
+    Line,
+    /// A quarter circle tangent to the first (last) segment.
+    Arc,
+}
+
+/// Where a closed cut starts and ends: off the part, in the scrap (outside an outer contour,
+/// inside a hole), so a laser's pierce and a knife's entry do not mark the part.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LeadConfig {
+    pub kind: LeadKind,
+    /// Length of a line lead, radius of an arc lead (mm).
+    pub length_mm: f64,
+}
+
 /// Settings of one drawing layer.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -117,6 +193,8 @@ pub struct LayerConfig {
     /// Number of passes (lasers cutting thick material).
     #[serde(default = "one")]
     pub passes: u32,
+    /// Tabs (bridges) on the closed paths of this layer.
+    pub tabs: Option<TabsConfig>,
 }
 
 fn yes() -> bool {
@@ -133,6 +211,7 @@ impl Default for LayerConfig {
             feed_mm_min: None,
             power_pct: None,
             passes: 1,
+            tabs: None,
         }
     }
 }
@@ -166,6 +245,14 @@ pub struct Profile {
     pub pen: Option<PenConfig>,
     pub knife: Option<KnifeConfig>,
     pub laser: Option<LaserConfig>,
+    /// An HP-GL device instead of a GRBL controller (`flatcut hpgl`).
+    pub hpgl: Option<HpglConfig>,
+    /// Laser kerf (mm): outer contours are offset outward and holes inward by half of it, so
+    /// the part measures true.
+    #[serde(default)]
+    pub kerf_mm: f64,
+    /// Lead-in and lead-out of closed cuts.
+    pub lead: Option<LeadConfig>,
     #[serde(default)]
     pub layers: BTreeMap<String, LayerConfig>,
 }
@@ -188,13 +275,17 @@ pub enum ProfileError {
         value: String,
         reason: &'static str,
     },
-    #[error("unknown profile '{0}': use pen, knife, laser or a path to a .toml file")]
+    #[error(
+        "unknown profile '{0}': use pen, knife, laser, vinyl, pen-hpgl or a path to a .toml file"
+    )]
     Unknown(String),
 }
 
 const PEN: &str = include_str!("../profiles/pen.toml");
 const KNIFE: &str = include_str!("../profiles/knife.toml");
 const LASER: &str = include_str!("../profiles/laser.toml");
+const VINYL: &str = include_str!("../profiles/vinyl.toml");
+const PEN_HPGL: &str = include_str!("../profiles/pen-hpgl.toml");
 
 impl Profile {
     fn default_decimals() -> u8 {
@@ -217,12 +308,23 @@ impl Profile {
         Self::from_toml(LASER, "laser.toml").expect("bundled profile parses")
     }
 
-    /// `pen`, `knife`, `laser`, or a path to a TOML profile.
+    /// The bundled HP-GL vinyl cutter (drag knife) profile.
+    pub fn vinyl() -> Self {
+        Self::from_toml(VINYL, "vinyl.toml").expect("bundled profile parses")
+    }
+    /// The bundled HP-GL pen plotter profile.
+    pub fn pen_hpgl() -> Self {
+        Self::from_toml(PEN_HPGL, "pen-hpgl.toml").expect("bundled profile parses")
+    }
+
+    /// `pen`, `knife`, `laser`, `vinyl`, `pen-hpgl`, or a path to a TOML profile.
     pub fn resolve(name_or_path: &str) -> Result<Self, ProfileError> {
         match name_or_path {
             "pen" => Ok(Self::pen()),
             "knife" => Ok(Self::knife()),
             "laser" => Ok(Self::laser()),
+            "vinyl" => Ok(Self::vinyl()),
+            "pen-hpgl" => Ok(Self::pen_hpgl()),
             p if p.ends_with(".toml") => Self::load(Path::new(p)),
             other => Err(ProfileError::Unknown(other.to_string())),
         }
@@ -298,8 +400,39 @@ impl Profile {
                 reason: "one axis must be horizontal and the other vertical",
             });
         }
+        if !(self.kerf_mm.is_finite() && (0.0..2.0).contains(&self.kerf_mm)) {
+            return Err(self.invalid("kerf_mm", self.kerf_mm, "must be in [0, 2)"));
+        }
+        if let Some(l) = &self.lead
+            && !(l.length_mm.is_finite() && l.length_mm > 0.0 && l.length_mm <= 50.0)
+        {
+            return Err(self.invalid("lead.length_mm", l.length_mm, "must be in (0, 50]"));
+        }
+        if let Some(h) = &self.hpgl {
+            for (key, v) in [
+                ("hpgl.velocity_cm_s", h.velocity_cm_s),
+                ("hpgl.force", h.force),
+            ] {
+                if let Some(v) = v
+                    && !(v.is_finite() && v > 0.0 && v < 10_000.0)
+                {
+                    return Err(self.invalid(key, v, "must be in (0, 10000)"));
+                }
+            }
+            if let Some(w) = h.weed_border_mm
+                && !(w.is_finite() && w > 0.0)
+            {
+                return Err(self.invalid("hpgl.weed_border_mm", w, "must be > 0"));
+            }
+            if h.pen > 8 {
+                return Err(self.invalid("hpgl.pen", h.pen as f64, "must be 0..=8"));
+            }
+            if h.baud == 0 {
+                return Err(self.invalid("hpgl.baud", 0.0, "must be > 0"));
+            }
+        }
         match self.kind {
-            ToolKind::Pen if self.pen.is_none() => {
+            ToolKind::Pen if self.pen.is_none() && self.hpgl.is_none() => {
                 return Err(ProfileError::Invalid {
                     profile: self.name.clone(),
                     key: "pen",
@@ -370,6 +503,15 @@ impl Profile {
                 if !(p.is_finite() && (0.0..=100.0).contains(&p)) {
                     return Err(self.invalid("layers.*.power_pct", p, "must be in [0, 100]"));
                 }
+            }
+            if let Some(t) = &l.tabs
+                && !(t.count <= 64 && t.width_mm.is_finite() && t.width_mm > 0.0)
+            {
+                return Err(self.invalid(
+                    "layers.*.tabs",
+                    t.width_mm,
+                    "count <= 64 and width_mm > 0",
+                ));
             }
             if l.passes == 0 || l.passes > 50 {
                 return Err(self.invalid("layers.*.passes", l.passes as f64, "must be 1..=50"));

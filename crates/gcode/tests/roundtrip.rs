@@ -4,7 +4,7 @@
 
 use flatcut_gcode::{GcodeOptions, Profile, ToolKind, frame_job, plan};
 use flatcut_geom::DVec2;
-use flatcut_pattern::{Drawing, Layer, Stroke};
+use flatcut_pattern::{Drawing, Layer, Stroke, StrokeKind};
 
 /// Words GRBL 1.1 accepts that we may write.
 const ALLOWED_G: [&str; 9] = ["0", "1", "2", "3", "4", "17", "21", "90", "94"];
@@ -189,24 +189,26 @@ fn sample() -> Drawing {
         points,
         closed,
         piece: Some(0),
-        outer,
+        kind: if outer {
+            StrokeKind::Boundary
+        } else {
+            StrokeKind::Internal
+        },
         id: id.into(),
     };
-    Drawing {
-        strokes: vec![
-            st(Layer::Cut, circle, true, true, "disc/cut"),
-            st(Layer::Cut, hole, true, false, "disc/hole"),
-            st(Layer::Draw, wave, false, false, "disc/grain"),
-            st(Layer::Cut, square, true, true, "square/cut"),
-            st(
-                Layer::Engrave,
-                vec![DVec2::new(30.0, 120.0), DVec2::new(60.0, 120.0)],
-                false,
-                false,
-                "disc/label",
-            ),
-        ],
-    }
+    Drawing::from_strokes(vec![
+        st(Layer::Cut, circle, true, true, "disc/cut"),
+        st(Layer::Cut, hole, true, false, "disc/hole"),
+        st(Layer::Draw, wave, false, false, "disc/grain"),
+        st(Layer::Cut, square, true, true, "square/cut"),
+        st(
+            Layer::Engrave,
+            vec![DVec2::new(30.0, 120.0), DVec2::new(60.0, 120.0)],
+            false,
+            false,
+            "disc/label",
+        ),
+    ])
 }
 
 fn expected(d: &Drawing, p: &Profile) -> Vec<Vec<DVec2>> {

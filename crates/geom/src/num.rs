@@ -1,5 +1,5 @@
 //! Small numeric kernels shared by the geometry crates: Gauss–Legendre quadrature (fixed and
-//! adaptive) and a safeguarded 1D root finder.
+//! adaptive), a safeguarded 1D root finder and golden-section minimisation.
 
 /// Nodes and weights of the 16-point Gauss–Legendre rule on [-1, 1] (positive half; the rule is symmetric).
 const GL16_X: [f64; 8] = [
@@ -121,6 +121,65 @@ pub fn bracket_root<F: FnMut(f64) -> f64>(
     Some(0.5 * (a + b))
 }
 
+/// When a golden-section search stops.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GoldenStop {
+    /// After this many shrinks of the bracket (each by 0.618).
+    Iterations(usize),
+    /// Once the bracket is no wider than this (at most [`GOLDEN_MAX_ITERS`] shrinks).
+    Width(f64),
+}
+
+/// Cap on the shrinks of a [`GoldenStop::Width`] search: 0.618^200 ≈ 1e-42 of the start bracket,
+/// below any f64 width, so the cap only guards a zero or NaN width.
+pub const GOLDEN_MAX_ITERS: usize = 200;
+
+/// Result of [`golden_section_min`]: the better of the two interior points and the final bracket.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GoldenMin {
+    pub x: f64,
+    pub fx: f64,
+    pub lo: f64,
+    pub hi: f64,
+}
+
+/// Minimises a function unimodal on `[lo, hi]` by golden-section search (on ties the left point
+/// is kept). Cost: one evaluation per shrink of the bracket by 0.618.
+pub fn golden_section_min<F: FnMut(f64) -> f64>(
+    mut f: F,
+    mut lo: f64,
+    mut hi: f64,
+    stop: GoldenStop,
+) -> GoldenMin {
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let (iters, width) = match stop {
+        GoldenStop::Iterations(n) => (n, 0.0),
+        GoldenStop::Width(w) => (GOLDEN_MAX_ITERS, w),
+    };
+    let (mut x1, mut x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
+    let (mut f1, mut f2) = (f(x1), f(x2));
+    for _ in 0..iters {
+        if matches!(stop, GoldenStop::Width(_)) && hi - lo <= width {
+            break;
+        }
+        if f1 <= f2 {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - g * (hi - lo);
+            f1 = f(x1);
+        } else {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + g * (hi - lo);
+            f2 = f(x2);
+        }
+    }
+    let (x, fx) = if f1 <= f2 { (x1, f1) } else { (x2, f2) };
+    GoldenMin { x, fx, lo, hi }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -146,5 +205,22 @@ mod tests {
         let r = bracket_root(|x| x * x * x - 2.0, 0.0, 2.0, 1e-14).unwrap();
         assert!((r - 2f64.cbrt()).abs() < 1e-12);
         assert!(bracket_root(|x| x * x + 1.0, -1.0, 1.0, 1e-12).is_none());
+    }
+
+    #[test]
+    fn golden_section_finds_the_minimum_of_a_parabola_to_the_bracket_width() {
+        let m = golden_section_min(|x| (x - 0.3).powi(2), -2.0, 5.0, GoldenStop::Width(1e-10));
+        assert!(m.hi - m.lo <= 1e-10, "bracket {}..{}", m.lo, m.hi);
+        assert!((m.x - 0.3).abs() < 1e-10 && m.lo <= 0.3 && 0.3 <= m.hi);
+        // 40 shrinks leave 0.618^40 ≈ 4.4e-9 of the 7-wide bracket.
+        let m = golden_section_min(|x| (x - 0.3).powi(2), -2.0, 5.0, GoldenStop::Iterations(40));
+        let w = 7.0 * (0.5 * (5f64.sqrt() - 1.0)).powi(40);
+        assert!(((m.hi - m.lo) - w).abs() < 1e-12 && (m.x - 0.3).abs() < w);
+        // A minimum at the end of the bracket is approached, not missed.
+        let m = golden_section_min(|x| x, 0.0, 1.0, GoldenStop::Width(1e-12));
+        assert!(m.x < 1e-11 && m.fx == m.x);
+        // A NaN width stops at the iteration cap rather than looping.
+        let m = golden_section_min(|x| x * x, -1.0, 1.0, GoldenStop::Width(f64::NAN));
+        assert!(m.hi - m.lo < 1e-30);
     }
 }

@@ -16,6 +16,7 @@ pub mod codes;
 pub mod driver;
 #[cfg(test)]
 mod fake;
+pub mod hpgl;
 pub mod job;
 pub mod journal;
 pub mod response;

@@ -40,6 +40,7 @@
 
 use std::collections::BTreeMap;
 
+use flatcut_geom::num::{GoldenStop, golden_section_min};
 use flatcut_geom::{DVec2, DVec3, Tolerances};
 use flatcut_surface::{DomainKind, ParamSurface};
 
@@ -472,29 +473,9 @@ impl Builder<'_> {
     fn project_on_edge(&self, patch: u32, uv_a: DVec2, uv_b: DVec2, target: DVec3) -> DVec2 {
         let s = self.surfs[patch as usize];
         let f = |t: f64| eval_at(s, uv_a.lerp(uv_b, t)).distance_squared(target);
-        // Golden-section search on [0, 1]: the distance along a short boundary arc to a point on
-        // it is unimodal.
-        let g = 0.5 * (5f64.sqrt() - 1.0);
-        let (mut a, mut b) = (0.0f64, 1.0f64);
-        let mut c = b - g * (b - a);
-        let mut d = a + g * (b - a);
-        let (mut fc, mut fd) = (f(c), f(d));
-        while b - a > PROJECT_T_TOL {
-            if fc < fd {
-                b = d;
-                d = c;
-                fd = fc;
-                c = b - g * (b - a);
-                fc = f(c);
-            } else {
-                a = c;
-                c = d;
-                fc = fd;
-                d = a + g * (b - a);
-                fd = f(d);
-            }
-        }
-        uv_a.lerp(uv_b, 0.5 * (a + b))
+        // The distance along a short boundary arc to a point on it is unimodal.
+        let m = golden_section_min(f, 0.0, 1.0, GoldenStop::Width(PROJECT_T_TOL));
+        uv_a.lerp(uv_b, 0.5 * (m.lo + m.hi))
     }
 
     /// Bisects triangle `t` at its edge `k` (from corner k to k+1), creating or reusing the split

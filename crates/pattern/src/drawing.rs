@@ -1,10 +1,15 @@
 //! A flat drawing in millimetres: polylines on layers, grouped by piece.
 //!
-//! This is the hand-over format from patterns (and imported SVGs) to the G-code writer and the
-//! nester: every curve is already flattened to a polyline within the chordal tolerance (arcs are
-//! re-fitted by the G-code writer). Coordinates: x to the right, y up, origin at the sheet's
-//! lower-left corner.
+//! This is the hand-over format from patterns (and imported SVGs and DXFs) to the G-code and
+//! HP-GL writers and the nester: every curve is already flattened to a polyline within the
+//! chordal tolerance (arcs are re-fitted by the G-code writer). Coordinates: x to the right,
+//! y up, origin at the sheet's lower-left corner.
+//!
+//! Each stroke carries its tool [`Layer`] (what the machine does: cut, draw, engrave) and its
+//! [`StrokeKind`] (what the line is on the pattern: boundary, notch, drill hole, grain line, …),
+//! so writers choose DXF layers and cut order from types, never from the stroke's id text.
 
+use crate::piece::LabelInfo;
 use flatcut_geom::{Aabb2, DVec2};
 use serde::{Deserialize, Serialize};
 
@@ -42,19 +47,82 @@ pub struct Stroke {
     /// Which piece (instance) the stroke belongs to, if any: inner cuts of a piece are cut before
     /// the outer contour that holds them.
     pub piece: Option<u32>,
-    /// True for the outer cut contour of a piece (its cut line).
-    pub outer: bool,
-    /// A human-readable id (`"vamp-1/cut"`, `"vamp-1/notch-3"`), carried into comments.
+    /// What the stroke is on the pattern.
+    pub kind: StrokeKind,
+    /// A human-readable id (`"vamp-1-cut"`, `"vamp-1-notch-3"`), carried into comments; never
+    /// parsed for meaning (that is [`Stroke::kind`]).
     pub id: String,
+}
+
+/// What a stroke is on the pattern; decides its DXF layer and its place in the cut order.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum StrokeKind {
+    /// The outer cut contour of a piece (its cut line, seam allowance included).
+    Boundary,
+    /// A closed cut inside a piece that is not a drill hole (a cut-out).
+    InnerCut,
+    /// A notch cut into the seam allowance.
+    Notch,
+    /// A drill hole.
+    Drill,
+    /// The sew line (seam line).
+    Sew,
+    /// The grain line with its arrow heads.
+    Grain,
+    /// A fold (mirror) line: the piece is cut on the fold along it.
+    Mirror,
+    /// Any other drawn internal line: stitch and placement lines, reference-point crosses.
+    #[default]
+    Internal,
+    /// Label text strokes.
+    Text,
+}
+
+impl StrokeKind {
+    /// True for the outer cut contour of a piece.
+    pub fn is_outer(self) -> bool {
+        self == StrokeKind::Boundary
+    }
+}
+
+/// What a drawing knows about one of its pieces beyond the strokes: the label fields a cutting
+/// room reads (name, size, quantity, material) and the grain line, so that a pattern read back
+/// from a DXF or SVG nests with its grain and cut count.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PieceInfo {
+    /// The value of [`Stroke::piece`] of the strokes this describes.
+    pub piece: u32,
+    pub label: LabelInfo,
+    /// Grain line end points in the drawing's frame (mm).
+    pub grain: Option<(DVec2, DVec2)>,
 }
 
 /// A set of strokes in mm.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Drawing {
     pub strokes: Vec<Stroke>,
+    /// Label and grain of the pieces the strokes belong to, where known (by [`PieceInfo::piece`]).
+    #[serde(default)]
+    pub pieces: Vec<PieceInfo>,
 }
 
 impl Drawing {
+    /// A drawing of strokes with no piece information.
+    pub fn from_strokes(strokes: Vec<Stroke>) -> Self {
+        Self {
+            strokes,
+            pieces: Vec::new(),
+        }
+    }
+
+    /// What is known about piece `piece`.
+    pub fn piece_info(&self, piece: u32) -> Option<&PieceInfo> {
+        self.pieces.iter().find(|p| p.piece == piece)
+    }
+
     pub fn bbox(&self) -> Aabb2 {
         Aabb2::from_points(self.strokes.iter().flat_map(|s| s.points.iter().copied()))
     }
@@ -70,6 +138,11 @@ impl Drawing {
 }
 
 impl Stroke {
+    /// True for the outer cut contour of a piece.
+    pub fn is_outer(&self) -> bool {
+        self.kind.is_outer()
+    }
+
     /// Length in mm, including the closing segment of a closed stroke.
     pub fn length(&self) -> f64 {
         let open: f64 = self.points.windows(2).map(|w| w[0].distance(w[1])).sum();

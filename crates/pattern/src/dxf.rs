@@ -1,100 +1,121 @@
-//! DXF export (R12, `AC1009`, ASCII) for industrial cutters, and a small reader for the subset
-//! we write (round trips and re-import of our own files).
+//! DXF export (R12, `AC1009`, ASCII) in the AAMA/ASTM D6673 structure that pattern CAD and
+//! cutter front ends import, or with descriptive layer names for laser/knife software.
 //!
-//! Entities are `POLYLINE`/`VERTEX`/`SEQEND` (arcs as vertex bulges, group code 42), which every
-//! R12 reader and every cutter front end accepts. Units are mm (`$INSUNITS` 4, `$MEASUREMENT` 1).
-//! Layers follow one of two conventions:
-//! * [`DxfLayers::Aama`] (default): the AAMA/ASTM D6673 pattern layer numbers — `1` boundary
-//!   (cut line), `4` notches, `8` internal lines (grain line, marks), `13` drill holes,
-//!   `14` sew lines, `15` annotation text (label strokes). Layer 11 (internal cut-outs) is
-//!   used for other closed inner cut contours.
-//! * [`DxfLayers::Named`]: `CUT`, `DRAW`, `NOTCH`, `DRILL`, `TEXT` for laser/knife software.
+//! * [`DxfLayers::Aama`] (default): one `BLOCK` per piece instance, placed by an `INSERT` in
+//!   `ENTITIES`. Inside a block, by AAMA layer number: `1` boundary (the cut line) and the
+//!   piece's `TEXT` (`Piece Name:`, `Size:`, `Quantity:`, `Material:`), `2` turn points and
+//!   `3` curve points of the boundary (`POINT`s), `4` notches, `6` mirror (fold) lines, `7` the
+//!   grain line (one `LINE`), `8` internal lines, `11` internal cut-outs, `13` drill holes
+//!   (`POINT` at the centre), `14` the sew line (arcs kept as vertex bulges), `15` annotation
+//!   (the label's stroke text). R12 has no header variable for the drawing unit, so the unit is
+//!   stated as AAMA files state it, in a `TEXT` on layer 1 outside the blocks: `Units: METRIC`.
+//! * [`DxfLayers::Named`]: the flat style laser and knife software reads — every stroke a
+//!   `POLYLINE` in `ENTITIES` on `CUT`, `DRAW`, `NOTCH`, `DRILL` or `TEXT`.
 //!
-//! Numbers are written with 4 decimals (0.1 µm), so output is byte-identical for identical input.
+//! The layer of a stroke comes from its [`StrokeKind`], never from its id.
+//!
+//! A fixed writer of our own rather than the `dxf` crate: the output must be byte-identical for
+//! identical input and exactly R12 (no handles, no R13+ header variables, a fixed table order),
+//! which a general writer that fills in its own defaults and handles does not promise across
+//! versions. Numbers are written with 6 decimals (1 nm), so a round trip through another
+//! program keeps the geometry to 1e-6 mm.
 
-use crate::PatternError;
-use crate::drawing::{Drawing, Layer, Stroke};
-use crate::fit::PathSeg;
-use crate::piece::PlacedPiece;
-use flatcut_geom::DVec2;
+use crate::drawing::{Drawing, Layer, PieceInfo, Stroke, StrokeKind};
+use crate::fit::{self, PathSeg};
+use crate::piece::{LabelInfo, PlacedPiece};
+use flatcut_geom::{Aabb2, DVec2};
 use std::fmt::Write;
 
 /// Layer naming convention.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DxfLayers {
-    /// AAMA/ASTM D6673 numeric layers.
+    /// AAMA/ASTM D6673 numeric layers, one block per piece.
     #[default]
     Aama,
-    /// Descriptive names.
+    /// Descriptive names, every stroke in `ENTITIES`.
     Named,
 }
 
-/// What a stroke is, for layer selection.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Role {
-    Boundary,
-    InnerCut,
-    Notch,
-    Drill,
-    Sew,
-    Internal,
-    Text,
-}
+/// AAMA layer of the turn points (corners) of a boundary.
+pub const AAMA_TURN_POINTS: &str = "2";
+/// AAMA layer of the curve points of a boundary.
+pub const AAMA_CURVE_POINTS: &str = "3";
+/// Cap height of the piece `TEXT` entities (mm).
+pub const TEXT_HEIGHT_MM: f64 = 2.5;
+/// A boundary vertex turning more than this (degrees) is a turn point, else a curve point: the
+/// outline fitter's corner angle.
+pub const TURN_POINT_DEG: f64 = fit::DEFAULT_CORNER_DEG;
+/// Decimals of every coordinate.
+const DECIMALS: usize = 6;
 
 impl DxfLayers {
-    fn name(self, role: Role) -> &'static str {
-        match (self, role) {
-            (DxfLayers::Aama, Role::Boundary) => "1",
-            (DxfLayers::Aama, Role::Notch) => "4",
-            (DxfLayers::Aama, Role::Internal) => "8",
-            (DxfLayers::Aama, Role::InnerCut) => "11",
-            (DxfLayers::Aama, Role::Drill) => "13",
-            (DxfLayers::Aama, Role::Sew) => "14",
-            (DxfLayers::Aama, Role::Text) => "15",
-            (DxfLayers::Named, Role::Boundary | Role::InnerCut) => "CUT",
-            (DxfLayers::Named, Role::Notch) => "NOTCH",
-            (DxfLayers::Named, Role::Drill) => "DRILL",
-            (DxfLayers::Named, Role::Sew | Role::Internal) => "DRAW",
-            (DxfLayers::Named, Role::Text) => "TEXT",
+    /// The layer of a stroke kind.
+    pub fn layer(self, kind: StrokeKind) -> &'static str {
+        match (self, kind) {
+            (DxfLayers::Aama, StrokeKind::Boundary) => "1",
+            (DxfLayers::Aama, StrokeKind::Notch) => "4",
+            (DxfLayers::Aama, StrokeKind::Mirror) => "6",
+            (DxfLayers::Aama, StrokeKind::Grain) => "7",
+            (DxfLayers::Aama, StrokeKind::Internal) => "8",
+            (DxfLayers::Aama, StrokeKind::InnerCut) => "11",
+            (DxfLayers::Aama, StrokeKind::Drill) => "13",
+            (DxfLayers::Aama, StrokeKind::Sew) => "14",
+            (DxfLayers::Aama, StrokeKind::Text) => "15",
+            (DxfLayers::Named, StrokeKind::Boundary | StrokeKind::InnerCut) => "CUT",
+            (DxfLayers::Named, StrokeKind::Notch) => "NOTCH",
+            (DxfLayers::Named, StrokeKind::Drill) => "DRILL",
+            (
+                DxfLayers::Named,
+                StrokeKind::Sew | StrokeKind::Internal | StrokeKind::Grain | StrokeKind::Mirror,
+            ) => "DRAW",
+            (DxfLayers::Named, StrokeKind::Text) => "TEXT",
         }
     }
+
     /// Layers in table order with their ACI colour.
     fn table(self) -> Vec<(&'static str, u8)> {
-        let roles = [
-            (Role::Boundary, 1),
-            (Role::Notch, 3),
-            (Role::Internal, 5),
-            (Role::InnerCut, 1),
-            (Role::Drill, 6),
-            (Role::Sew, 5),
-            (Role::Text, 7),
-        ];
-        let mut v: Vec<(&'static str, u8)> = Vec::new();
-        for (r, c) in roles {
-            let n = self.name(r);
-            if !v.iter().any(|(m, _)| *m == n) {
-                v.push((n, c));
-            }
+        match self {
+            DxfLayers::Aama => vec![
+                ("1", 1),
+                (AAMA_TURN_POINTS, 2),
+                (AAMA_CURVE_POINTS, 3),
+                ("4", 3),
+                ("6", 4),
+                ("7", 5),
+                ("8", 5),
+                ("11", 1),
+                ("13", 6),
+                ("14", 5),
+                ("15", 7),
+            ],
+            DxfLayers::Named => vec![
+                ("CUT", 1),
+                ("NOTCH", 3),
+                ("DRAW", 5),
+                ("DRILL", 6),
+                ("TEXT", 7),
+            ],
         }
-        v
-    }
-}
-
-fn role_of(s: &Stroke) -> Role {
-    match s.layer {
-        Layer::Cut if s.outer => Role::Boundary,
-        Layer::Cut if s.id.contains("-notch-") => Role::Notch,
-        Layer::Cut if s.id.contains("-drill-") => Role::Drill,
-        Layer::Cut => Role::InnerCut,
-        Layer::Draw if s.id.ends_with("-sew") => Role::Sew,
-        Layer::Draw => Role::Internal,
-        Layer::Engrave => Role::Text,
     }
 }
 
 fn num(v: f64) -> String {
-    let s = format!("{v:.4}");
-    if s == "-0.0000" { "0.0000".into() } else { s }
+    let s = format!("{v:.DECIMALS$}");
+    if s.trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.')
+    {
+        format!("{:.DECIMALS$}", 0.0)
+    } else {
+        s
+    }
+}
+
+/// DXF text values are one line; group-code 1 strings cannot hold a newline.
+fn text_value(s: &str) -> String {
+    s.chars()
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect()
 }
 
 struct Writer {
@@ -105,20 +126,21 @@ impl Writer {
     fn pair(&mut self, code: i32, value: &str) {
         let _ = write!(self.out, "{code:>3}\n{value}\n");
     }
+    fn xy(&mut self, base: i32, p: DVec2) {
+        self.pair(base, &num(p.x));
+        self.pair(base + 10, &num(p.y));
+        self.pair(base + 20, &num(0.0));
+    }
     fn polyline(&mut self, layer: &str, pts: &[DVec2], bulges: Option<&[f64]>, closed: bool) {
         self.pair(0, "POLYLINE");
         self.pair(8, layer);
         self.pair(66, "1");
-        self.pair(10, "0.0");
-        self.pair(20, "0.0");
-        self.pair(30, "0.0");
+        self.xy(10, DVec2::ZERO);
         self.pair(70, if closed { "1" } else { "0" });
         for (i, p) in pts.iter().enumerate() {
             self.pair(0, "VERTEX");
             self.pair(8, layer);
-            self.pair(10, &num(p.x));
-            self.pair(20, &num(p.y));
-            self.pair(30, "0.0");
+            self.xy(10, *p);
             if let Some(b) = bulges.and_then(|b| b.get(i)).filter(|b| **b != 0.0) {
                 self.pair(42, &num(*b));
             }
@@ -126,24 +148,47 @@ impl Writer {
         self.pair(0, "SEQEND");
         self.pair(8, layer);
     }
+    fn line(&mut self, layer: &str, a: DVec2, b: DVec2) {
+        self.pair(0, "LINE");
+        self.pair(8, layer);
+        self.xy(10, a);
+        self.xy(11, b);
+    }
+    fn point(&mut self, layer: &str, p: DVec2) {
+        self.pair(0, "POINT");
+        self.pair(8, layer);
+        self.xy(10, p);
+    }
+    fn text(&mut self, layer: &str, at: DVec2, height: f64, value: &str) {
+        self.pair(0, "TEXT");
+        self.pair(8, layer);
+        self.xy(10, at);
+        self.pair(40, &num(height));
+        self.pair(1, &text_value(value));
+    }
 }
 
-fn header(layers: DxfLayers, extents: (DVec2, DVec2)) -> Writer {
-    let mut w = Writer { out: String::new() };
+fn header(w: &mut Writer, layers: DxfLayers, extents: Aabb2) {
+    let (lo, hi) = if extents.min.is_finite() && extents.max.is_finite() {
+        (extents.min, extents.max)
+    } else {
+        (DVec2::ZERO, DVec2::ZERO)
+    };
     w.pair(0, "SECTION");
     w.pair(2, "HEADER");
     w.pair(9, "$ACADVER");
     w.pair(1, "AC1009");
-    w.pair(9, "$INSUNITS");
-    w.pair(70, "4");
-    w.pair(9, "$MEASUREMENT");
-    w.pair(70, "1");
+    w.pair(9, "$INSBASE");
+    w.xy(10, DVec2::ZERO);
     w.pair(9, "$EXTMIN");
-    w.pair(10, &num(extents.0.x));
-    w.pair(20, &num(extents.0.y));
+    w.xy(10, lo);
     w.pair(9, "$EXTMAX");
-    w.pair(10, &num(extents.1.x));
-    w.pair(20, &num(extents.1.y));
+    w.xy(10, hi);
+    // Decimal units with the writer's precision (R12's only unit-related header variables).
+    w.pair(9, "$LUNITS");
+    w.pair(70, "2");
+    w.pair(9, "$LUPREC");
+    w.pair(70, &DECIMALS.to_string());
     w.pair(0, "ENDSEC");
     w.pair(0, "SECTION");
     w.pair(2, "TABLES");
@@ -171,9 +216,6 @@ fn header(layers: DxfLayers, extents: (DVec2, DVec2)) -> Writer {
     }
     w.pair(0, "ENDTAB");
     w.pair(0, "ENDSEC");
-    w.pair(0, "SECTION");
-    w.pair(2, "ENTITIES");
-    w
 }
 
 fn footer(mut w: Writer) -> String {
@@ -182,53 +224,274 @@ fn footer(mut w: Writer) -> String {
     w.out
 }
 
-fn extents(d: &Drawing) -> (DVec2, DVec2) {
-    let b = d.bbox();
-    if b.min.is_finite() {
-        (b.min, b.max)
-    } else {
-        (DVec2::ZERO, DVec2::ZERO)
-    }
+/// A stroke to write, with the sew line's exact bulges where known.
+struct Item<'a> {
+    stroke: &'a Stroke,
+    bulges: Option<Vec<f64>>,
+    points: Option<Vec<DVec2>>,
 }
 
-/// Writes a drawing (all strokes as polylines).
+/// One piece (a block in the AAMA style).
+struct Block<'a> {
+    name: String,
+    info: Option<&'a PieceInfo>,
+    items: Vec<Item<'a>>,
+}
+
+/// Writes a drawing; in the AAMA style every piece of the drawing is a block.
 pub fn write_drawing(d: &Drawing, layers: DxfLayers) -> String {
-    let mut w = header(layers, extents(d));
-    for s in d.strokes.iter().filter(|s| s.points.len() >= 2) {
-        w.polyline(layers.name(role_of(s)), &s.points, None, s.closed);
-    }
-    footer(w)
+    let blocks = blocks_of_drawing(d);
+    write_blocks(&blocks, d, layers)
 }
 
 /// Writes placed pieces; the sew line keeps its fitted lines and arcs as bulge polylines
 /// (cubics are flattened within the piece's chord tolerance).
 pub fn write_pieces(placed: &[PlacedPiece], layers: DxfLayers, chord_tol: f64) -> String {
     let drawings: Vec<Drawing> = placed.iter().map(|p| p.to_drawing()).collect();
-    let all = Drawing {
-        strokes: drawings
-            .iter()
-            .flat_map(|d| d.strokes.iter().cloned())
-            .collect(),
-    };
-    let mut w = header(layers, extents(&all));
-    for (pp, d) in placed.iter().zip(&drawings) {
-        let sew_id = format!("{}-sew", pp.piece.instance_id(pp.instance));
-        for s in d.strokes.iter().filter(|s| s.points.len() >= 2) {
-            if s.id == sew_id && !pp.piece.sew.is_empty() {
+    let mut all = Drawing::default();
+    for d in &drawings {
+        all.strokes.extend(d.strokes.iter().cloned());
+        all.pieces.extend(d.pieces.iter().cloned());
+    }
+    let sews: Vec<Option<(Vec<DVec2>, Vec<f64>)>> = placed
+        .iter()
+        .map(|pp| {
+            (!pp.piece.sew.is_empty()).then(|| {
                 let (pts, bulges) = bulge_polyline(&pp.piece.sew, chord_tol);
                 let pl = pp.placement;
-                let pts: Vec<DVec2> = pts.iter().map(|q| pl.apply(*q)).collect();
-                let bulges: Vec<f64> = bulges
-                    .iter()
-                    .map(|b| if pl.mirror { -b } else { *b })
-                    .collect();
-                w.polyline(layers.name(Role::Sew), &pts, Some(&bulges), true);
+                (
+                    pts.iter().map(|q| pl.apply(*q)).collect(),
+                    bulges
+                        .iter()
+                        .map(|b| if pl.mirror { -b } else { *b })
+                        .collect(),
+                )
+            })
+        })
+        .collect();
+    let mut blocks = blocks_of_drawing(&all);
+    for b in &mut blocks {
+        let Some(k) = b
+            .info
+            .and_then(|i| placed.iter().position(|p| p.instance == i.piece))
+        else {
+            continue;
+        };
+        for it in &mut b.items {
+            if it.stroke.kind == StrokeKind::Sew
+                && let Some((pts, bulges)) = &sews[k]
+            {
+                it.points = Some(pts.clone());
+                it.bulges = Some(bulges.clone());
+            }
+        }
+    }
+    write_blocks(&blocks, &all, layers)
+}
+
+/// Groups the strokes by piece, in order of first appearance; strokes of no piece form a block
+/// without a name (written straight into `ENTITIES`).
+fn blocks_of_drawing(d: &Drawing) -> Vec<Block<'_>> {
+    let mut blocks: Vec<(Option<u32>, Block<'_>)> = Vec::new();
+    for s in d.strokes.iter().filter(|s| s.points.len() >= 2) {
+        let at = match blocks.iter().position(|(p, _)| *p == s.piece) {
+            Some(i) => i,
+            None => {
+                let info = s.piece.and_then(|p| d.piece_info(p));
+                let name = match (s.piece, info) {
+                    (Some(p), Some(i)) => block_name(&i.label.name, p),
+                    (Some(p), None) => format!("PIECE_{p}"),
+                    (None, _) => String::new(),
+                };
+                blocks.push((
+                    s.piece,
+                    Block {
+                        name,
+                        info,
+                        items: Vec::new(),
+                    },
+                ));
+                blocks.len() - 1
+            }
+        };
+        blocks[at].1.items.push(Item {
+            stroke: s,
+            bulges: None,
+            points: None,
+        });
+    }
+    // Unique block names (two pieces may share a name after sanitising).
+    let mut out: Vec<Block<'_>> = Vec::with_capacity(blocks.len());
+    for (_, mut b) in blocks {
+        if !b.name.is_empty() {
+            let base = b.name.clone();
+            let mut k = 2;
+            while out.iter().any(|o| o.name == b.name) {
+                b.name = format!("{base}_{k}");
+                k += 1;
+            }
+        }
+        out.push(b);
+    }
+    out
+}
+
+/// A block name R12 accepts: letters, digits, `-`, `_`, `$`, upper case.
+fn block_name(name: &str, instance: u32) -> String {
+    let clean: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '$' {
+                c.to_ascii_uppercase()
             } else {
-                w.polyline(layers.name(role_of(s)), &s.points, None, s.closed);
+                '_'
+            }
+        })
+        .collect();
+    let clean = if clean.is_empty() {
+        "PIECE".into()
+    } else {
+        clean
+    };
+    format!("{clean}-{instance}")
+}
+
+fn write_blocks(blocks: &[Block<'_>], all: &Drawing, layers: DxfLayers) -> String {
+    let mut w = Writer { out: String::new() };
+    header(&mut w, layers, all.bbox());
+    if layers == DxfLayers::Aama {
+        w.pair(0, "SECTION");
+        w.pair(2, "BLOCKS");
+        for b in blocks.iter().filter(|b| !b.name.is_empty()) {
+            w.pair(0, "BLOCK");
+            w.pair(8, "0");
+            w.pair(2, &b.name);
+            w.pair(70, "0");
+            w.xy(10, DVec2::ZERO);
+            w.pair(3, &b.name);
+            write_aama_piece(&mut w, b);
+            w.pair(0, "ENDBLK");
+            w.pair(8, "0");
+        }
+        w.pair(0, "ENDSEC");
+    }
+    w.pair(0, "SECTION");
+    w.pair(2, "ENTITIES");
+    match layers {
+        DxfLayers::Aama => {
+            let o = all.bbox();
+            let at = if o.min.is_finite() {
+                o.min
+            } else {
+                DVec2::ZERO
+            };
+            w.text(
+                "1",
+                at - DVec2::new(0.0, 2.0 * TEXT_HEIGHT_MM),
+                TEXT_HEIGHT_MM,
+                "Units: METRIC",
+            );
+            for b in blocks {
+                if b.name.is_empty() {
+                    write_aama_items(&mut w, &b.items);
+                } else {
+                    w.pair(0, "INSERT");
+                    w.pair(8, "0");
+                    w.pair(2, &b.name);
+                    w.xy(10, DVec2::ZERO);
+                }
+            }
+        }
+        DxfLayers::Named => {
+            for b in blocks {
+                for it in &b.items {
+                    let s = it.stroke;
+                    let pts = it.points.as_deref().unwrap_or(&s.points);
+                    w.polyline(layers.layer(s.kind), pts, it.bulges.as_deref(), s.closed);
+                }
             }
         }
     }
     footer(w)
+}
+
+/// The entities of one AAMA piece block: geometry by kind, turn and curve points of the
+/// boundary, and the piece's text.
+fn write_aama_piece(w: &mut Writer, b: &Block<'_>) {
+    write_aama_items(w, &b.items);
+    if let Some(boundary) = b
+        .items
+        .iter()
+        .find(|i| i.stroke.kind == StrokeKind::Boundary)
+    {
+        let p = &boundary.stroke.points;
+        let n = p.len();
+        for k in 0..n {
+            let (a, c, d) = (p[(k + n - 1) % n], p[k], p[(k + 1) % n]);
+            let turn = (c - a).angle_to(d - c).abs().to_degrees();
+            let layer = if turn > TURN_POINT_DEG {
+                AAMA_TURN_POINTS
+            } else {
+                AAMA_CURVE_POINTS
+            };
+            w.point(layer, c);
+        }
+    }
+    let label = b
+        .info
+        .map(|i| i.label.clone())
+        .unwrap_or_else(|| LabelInfo {
+            name: b.name.clone(),
+            quantity: 1,
+            ..LabelInfo::default()
+        });
+    let bbox = Aabb2::from_points(
+        b.items
+            .iter()
+            .filter(|i| i.stroke.kind == StrokeKind::Boundary)
+            .flat_map(|i| i.stroke.points.iter().copied()),
+    );
+    let origin = if bbox.min.is_finite() {
+        DVec2::new(bbox.min.x, bbox.max.y) + DVec2::new(0.0, TEXT_HEIGHT_MM)
+    } else {
+        DVec2::ZERO
+    };
+    for (k, text) in [
+        format!("Piece Name: {}", label.name),
+        format!("Size: {}", label.size),
+        format!("Quantity: {}", label.quantity),
+        format!("Material: {}", label.material),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let at = origin + DVec2::new(0.0, (3 - k) as f64 * 1.5 * TEXT_HEIGHT_MM);
+        w.text("1", at, TEXT_HEIGHT_MM, text);
+    }
+}
+
+fn write_aama_items(w: &mut Writer, items: &[Item<'_>]) {
+    let layers = DxfLayers::Aama;
+    for it in items {
+        let s = it.stroke;
+        let layer = layers.layer(s.kind);
+        let pts = it.points.as_deref().unwrap_or(&s.points);
+        match s.kind {
+            StrokeKind::Drill => w.point(layer, centroid(pts)),
+            // The grain line itself; its arrow heads are drawing decoration an importer draws.
+            StrokeKind::Grain if pts.len() == 2 => w.line(layer, pts[0], pts[1]),
+            StrokeKind::Grain => {}
+            StrokeKind::Notch | StrokeKind::Mirror if pts.len() == 2 && !s.closed => {
+                w.line(layer, pts[0], pts[1])
+            }
+            _ => w.polyline(layer, pts, it.bulges.as_deref(), s.closed),
+        }
+    }
+}
+
+/// Centre of a drill hole's polygon (its vertices are evenly spaced on the circle).
+fn centroid(p: &[DVec2]) -> DVec2 {
+    p.iter().copied().sum::<DVec2>() / p.len().max(1) as f64
 }
 
 /// Vertices and bulges (bulge `i` belongs to the segment leaving vertex `i`) of a closed path.
@@ -257,128 +520,30 @@ fn bulge_polyline(segs: &[PathSeg], chord_tol: f64) -> (Vec<DVec2>, Vec<f64>) {
     (pts, bulges)
 }
 
-/// A polyline read back from a DXF.
-#[derive(Clone, Debug, PartialEq)]
-pub struct DxfPolyline {
-    pub layer: String,
-    pub points: Vec<DVec2>,
-    pub bulges: Vec<f64>,
-    pub closed: bool,
-}
-
-/// Reads the `POLYLINE`/`VERTEX` and `LWPOLYLINE` entities of an ASCII DXF.
-pub fn read_polylines(text: &str) -> Result<Vec<DxfPolyline>, PatternError> {
-    let lines: Vec<&str> = text.lines().collect();
-    if !lines.len().is_multiple_of(2) {
-        return Err(PatternError::Dxf {
-            line: lines.len(),
-            reason: "odd number of lines (code/value pairs)".into(),
-        });
-    }
-    let mut pairs = Vec::with_capacity(lines.len() / 2);
-    for k in (0..lines.len()).step_by(2) {
-        let code: i32 = lines[k].trim().parse().map_err(|_| PatternError::Dxf {
-            line: k + 1,
-            reason: format!("group code expected, found `{}`", lines[k].trim()),
-        })?;
-        pairs.push((code, lines[k + 1].trim(), k + 2));
-    }
-    let parse = |v: &str, line: usize| -> Result<f64, PatternError> {
-        v.parse::<f64>()
-            .ok()
-            .filter(|x| x.is_finite())
-            .ok_or_else(|| PatternError::Dxf {
-                line,
-                reason: format!("number expected, found `{v}`"),
-            })
-    };
-    let mut out = Vec::new();
-    let mut i = 0;
-    let mut in_entities = false;
-    while i < pairs.len() {
-        let (code, val, _) = pairs[i];
-        if code == 2 && val == "ENTITIES" {
-            in_entities = true;
-        }
-        if !(in_entities && code == 0 && (val == "POLYLINE" || val == "LWPOLYLINE")) {
-            i += 1;
-            continue;
-        }
-        let lw = val == "LWPOLYLINE";
-        let mut pl = DxfPolyline {
-            layer: String::new(),
-            points: Vec::new(),
-            bulges: Vec::new(),
-            closed: false,
-        };
-        i += 1;
-        // entity header
-        while i < pairs.len() && pairs[i].0 != 0 {
-            let (c, v, ln) = pairs[i];
-            match c {
-                8 => pl.layer = v.to_string(),
-                70 => pl.closed = (parse(v, ln)? as i64) & 1 == 1,
-                10 if lw => {
-                    pl.points.push(DVec2::new(parse(v, ln)?, 0.0));
-                    pl.bulges.push(0.0);
-                }
-                20 if lw => {
-                    if let Some(p) = pl.points.last_mut() {
-                        p.y = parse(v, ln)?;
-                    }
-                }
-                42 if lw => {
-                    if let Some(b) = pl.bulges.last_mut() {
-                        *b = parse(v, ln)?;
-                    }
-                }
-                _ => {}
-            }
-            i += 1;
-        }
-        if !lw {
-            while i < pairs.len() && pairs[i].0 == 0 && pairs[i].1 == "VERTEX" {
-                i += 1;
-                let (mut p, mut b) = (DVec2::ZERO, 0.0);
-                while i < pairs.len() && pairs[i].0 != 0 {
-                    let (c, v, ln) = pairs[i];
-                    match c {
-                        10 => p.x = parse(v, ln)?,
-                        20 => p.y = parse(v, ln)?,
-                        42 => b = parse(v, ln)?,
-                        _ => {}
-                    }
-                    i += 1;
-                }
-                pl.points.push(p);
-                pl.bulges.push(b);
-            }
-            if i < pairs.len() && pairs[i].1 == "SEQEND" {
-                i += 1;
-            } else {
-                let ln = pairs.get(i).map(|p| p.2).unwrap_or(lines.len());
-                return Err(PatternError::Dxf {
-                    line: ln,
-                    reason: "POLYLINE without SEQEND".into(),
-                });
-            }
-        }
-        out.push(pl);
-    }
-    Ok(out)
+/// Kept for the tool layer of a stroke read back without a kind (the named style).
+pub(crate) fn named_layer_kind(name: &str) -> Option<(Layer, StrokeKind)> {
+    Some(match name {
+        "CUT" => (Layer::Cut, StrokeKind::InnerCut),
+        "NOTCH" => (Layer::Cut, StrokeKind::Notch),
+        "DRILL" => (Layer::Cut, StrokeKind::Drill),
+        "DRAW" => (Layer::Draw, StrokeKind::Internal),
+        "TEXT" => (Layer::Engrave, StrokeKind::Text),
+        _ => return None,
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::dxf_read::read_dxf;
     use crate::piece::{Mark, MarkKind, Piece, PieceInput, PieceOptions, Placement};
 
-    fn piece() -> Piece {
+    fn piece(name: &str) -> Piece {
         // half-disc: a straight edge and an arc
         let pts: Vec<DVec2> = (0..=32)
             .map(|i| 50.0 * DVec2::from_angle(i as f64 / 32.0 * std::f64::consts::PI))
             .collect();
-        let mut input = PieceInput::new("cap", pts);
+        let mut input = PieceInput::new(name, pts);
         input.marks.push(Mark {
             kind: MarkKind::Notch,
             pos: DVec2::new(0., 50.),
@@ -389,72 +554,123 @@ mod tests {
             pos: DVec2::new(0., 20.),
             boundary_index: None,
         });
+        input.grain = Some((DVec2::new(-30., 10.), DVec2::new(30., 10.)));
+        input.label.size = "38".into();
+        input.label.material = "felt 3mm".into();
+        input.label.quantity = 2;
         Piece::build(&input, &PieceOptions::default()).unwrap()
     }
 
+    const PL: Placement = Placement {
+        rotation: 0.3,
+        mirror: true,
+        translation: DVec2::new(100., 100.),
+    };
+
+    fn placed(p: &Piece) -> [PlacedPiece<'_>; 1] {
+        [PlacedPiece {
+            piece: p,
+            instance: 1,
+            placement: PL,
+        }]
+    }
+
     #[test]
-    fn round_trip_of_coordinates_and_layers() {
-        let p = piece();
-        let pl = Placement {
-            rotation: 0.0,
-            mirror: false,
-            translation: DVec2::new(100., 100.),
-        };
-        let text = write_pieces(
-            &[PlacedPiece {
-                piece: &p,
-                instance: 1,
-                placement: pl,
-            }],
-            DxfLayers::Aama,
-            0.01,
-        );
-        assert!(text.contains("AC1009"));
-        let pls = read_polylines(&text).unwrap();
-        let cut = pls.iter().find(|l| l.layer == "1").unwrap();
-        assert!(cut.closed);
-        assert_eq!(cut.points.len(), p.cut.len());
-        for (a, b) in cut.points.iter().zip(&p.cut) {
-            assert!(a.distance(pl.apply(*b)) <= 0.5e-4 * 1.5, "{a} vs {b}");
+    fn aama_blocks_text_and_layers_read_back_exactly() {
+        let p = piece("cap");
+        let text = write_pieces(&placed(&p), DxfLayers::Aama, 0.01);
+        assert!(text.contains("AC1009") && !text.contains("$INSUNITS"));
+        assert!(text.contains("\n  0\nBLOCK\n") && text.contains("\n  0\nINSERT\n"));
+        for t in [
+            "Piece Name: cap",
+            "Size: 38",
+            "Quantity: 2",
+            "Material: felt 3mm",
+            "Units: METRIC",
+        ] {
+            assert!(text.contains(t), "missing TEXT {t}");
         }
-        assert!(pls.iter().any(|l| l.layer == "4"), "notch layer");
-        assert!(pls.iter().any(|l| l.layer == "13"), "drill layer");
-        let sew = pls.iter().find(|l| l.layer == "14").unwrap();
-        // the half-disc's curved side is two quarter arcs (split at the notch): bulge tan(π/8)
-        let q = (std::f64::consts::PI / 8.0).tan();
-        assert_eq!(
-            sew.bulges.iter().filter(|b| (**b - q).abs() < 1e-3).count(),
-            2,
-            "{:?}",
-            sew.bulges
-        );
-        assert_eq!(
-            text,
-            write_pieces(
-                &[PlacedPiece {
-                    piece: &p,
-                    instance: 1,
-                    placement: pl
-                }],
-                DxfLayers::Aama,
-                0.01
-            )
-        );
+        let d = read_dxf(&text, 0.01).unwrap();
+        assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+        let d = d.drawing;
+        let cut = d.strokes.iter().find(|s| s.is_outer()).unwrap();
+        assert!(cut.closed && cut.layer == Layer::Cut);
+        let expect: Vec<DVec2> = p.cut.iter().map(|q| PL.apply(*q)).collect();
+        assert_eq!(cut.points.len(), expect.len());
+        // Mirrored placement: the drawing reverses closed strokes to keep them CCW.
+        for q in &cut.points {
+            let best = expect
+                .iter()
+                .map(|e| e.distance(*q))
+                .fold(f64::INFINITY, f64::min);
+            assert!(best <= 1e-6, "{q} is {best} mm from the cut line");
+        }
+        let notches: Vec<_> = d
+            .strokes
+            .iter()
+            .filter(|s| s.kind == StrokeKind::Notch)
+            .collect();
+        assert_eq!(notches.len(), 1);
+        let drills: Vec<_> = d
+            .strokes
+            .iter()
+            .filter(|s| s.kind == StrokeKind::Drill)
+            .collect();
+        assert_eq!(drills.len(), 1);
+        assert!(centroid(&drills[0].points).distance(PL.apply(DVec2::new(0., 20.))) < 1e-6);
+        let info = &d.pieces[0];
+        assert_eq!(info.label.name, "cap");
+        assert_eq!(info.label.size, "38");
+        assert_eq!(info.label.quantity, 2);
+        assert_eq!(info.label.material, "felt 3mm");
+        let (a, b) = info.grain.unwrap();
+        assert!(a.distance(PL.apply(DVec2::new(-30., 10.))) < 1e-6);
+        assert!(b.distance(PL.apply(DVec2::new(30., 10.))) < 1e-6);
+        // the sew line keeps its arcs: flattened back it lies on the sew polyline
+        let sew = d
+            .strokes
+            .iter()
+            .find(|s| s.kind == StrokeKind::Sew)
+            .unwrap();
+        let sew_exp: Vec<DVec2> = p.sew_polyline.iter().map(|q| PL.apply(*q)).collect();
+        for q in &sew.points {
+            assert!(crate::poly::dist_to_closed(&sew_exp, *q) < 0.03, "{q}");
+        }
+        assert!(d.strokes.iter().any(|s| s.kind == StrokeKind::Text));
+        assert!(d.strokes.iter().all(|s| s.piece == Some(0)));
+        assert_eq!(text, write_pieces(&placed(&p), DxfLayers::Aama, 0.01));
+    }
+
+    #[test]
+    fn layers_come_from_kinds_not_from_names() {
+        // A piece whose name looks like a stroke id of another kind.
+        let p = piece("a-notch-b-drill-1-sew");
+        let text = write_drawing(&p.to_drawing(1), DxfLayers::Aama);
+        let d = read_dxf(&text, 0.01).unwrap().drawing;
+        let count = |k| d.strokes.iter().filter(|s| s.kind == k).count();
+        assert_eq!(count(StrokeKind::Drill), 1);
+        assert_eq!(count(StrokeKind::Notch), 1);
+        assert_eq!(count(StrokeKind::Sew), 1);
+        assert_eq!(count(StrokeKind::Boundary), 1);
+        assert_eq!(count(StrokeKind::Grain), 1);
     }
 
     #[test]
     fn named_layers_from_a_drawing() {
-        let p = piece();
+        let p = piece("cap");
         let text = write_drawing(&p.to_drawing(1), DxfLayers::Named);
-        let pls = read_polylines(&text).unwrap();
+        assert!(!text.contains("BLOCK"));
         for l in ["CUT", "DRAW", "NOTCH", "DRILL", "TEXT"] {
-            assert!(pls.iter().any(|p| p.layer == l), "layer {l}");
+            assert!(text.contains(&format!("  8\n{l}\n")), "layer {l}");
         }
+        let d = read_dxf(&text, 0.01).unwrap().drawing;
+        assert_eq!(d.strokes.iter().filter(|s| s.is_outer()).count(), 1);
+        assert!(d.strokes.iter().any(|s| s.kind == StrokeKind::Notch));
     }
 
     #[test]
     fn malformed_dxf_reports_the_line() {
-        let e = read_polylines("  0\nSECTION\nxx\nENTITIES\n").unwrap_err();
+        let e = read_dxf("  0\nSECTION\nxx\nENTITIES\n", 0.01).unwrap_err();
         assert!(e.to_string().contains("line 3"), "{e}");
     }
 }

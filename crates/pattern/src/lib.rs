@@ -1,5 +1,5 @@
 //! 2D pattern pieces: outlines fitted to lines, arcs and cubics, seam allowance, notches, grain
-//! lines, labels; SVG and DXF export; SVG import; the [`Drawing`] that the nester and the G-code
+//! lines, labels; SVG and DXF export; SVG and DXF import; the [`Drawing`] that the nester and the G-code
 //! writer consume.
 //!
 //! **Architecture invariant:** this crate is 2D only. It cannot name a surface or a mesh type
@@ -7,6 +7,7 @@
 
 pub mod drawing;
 pub mod dxf;
+pub mod dxf_read;
 pub mod error;
 pub mod fit;
 pub mod font;
@@ -16,7 +17,7 @@ pub mod poly;
 pub mod seam;
 pub mod svg;
 
-pub use drawing::{Drawing, Layer, Stroke};
+pub use drawing::{Drawing, Layer, PieceInfo, Stroke, StrokeKind};
 pub use error::PatternError;
 pub use fit::PathSeg;
 pub use io::write_atomic;

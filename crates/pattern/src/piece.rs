@@ -8,7 +8,7 @@
 //! boundary is segment 0). `seam_widths` gives one width per segment (or one for all).
 
 use crate::PatternError;
-use crate::drawing::{Drawing, Layer, Stroke};
+use crate::drawing::{Drawing, Layer, PieceInfo, Stroke, StrokeKind};
 use crate::fit::{self, PathSeg};
 use crate::font;
 use crate::poly;
@@ -657,17 +657,25 @@ impl Piece {
         format!("{}-{}", sanitize(&self.name), instance)
     }
 
-    /// The piece as strokes: cut line (outer Cut), drill holes and notches (Cut), sew line,
-    /// points and grain line (Draw), label (Engrave). Ids are `{name}-{instance}-{what}`.
+    /// The piece as strokes: cut line (Boundary), drill holes and notches (Cut), sew line, points,
+    /// internal and grain lines (Draw), label (Engrave). Ids are `{name}-{instance}-{what}`; the
+    /// drawing's [`PieceInfo`] carries the label fields and the grain line.
     pub fn to_drawing(&self, instance: u32) -> Drawing {
         let id = self.instance_id(instance);
         let pid = Some(instance);
-        let mk = |layer, points: Vec<DVec2>, closed, outer, what: String| Stroke {
-            layer,
+        let mk = |kind: StrokeKind, points: Vec<DVec2>, closed, what: String| Stroke {
+            layer: match kind {
+                StrokeKind::Boundary
+                | StrokeKind::InnerCut
+                | StrokeKind::Notch
+                | StrokeKind::Drill => Layer::Cut,
+                StrokeKind::Text => Layer::Engrave,
+                _ => Layer::Draw,
+            },
             points,
             closed,
             piece: pid,
-            outer,
+            kind,
             id: format!("{id}-{what}"),
         };
         let mut s = Vec::new();
@@ -678,47 +686,47 @@ impl Piece {
             let pts = (0..m)
                 .map(|i| *c + r * DVec2::from_angle(i as f64 * std::f64::consts::TAU / m as f64))
                 .collect();
-            s.push(mk(Layer::Cut, pts, true, false, format!("drill-{}", k + 1)));
+            s.push(mk(StrokeKind::Drill, pts, true, format!("drill-{}", k + 1)));
         }
         for (k, nt) in self.notches.iter().enumerate() {
             s.push(mk(
-                Layer::Cut,
+                StrokeKind::Notch,
                 nt.clone(),
-                false,
                 false,
                 format!("notch-{}", k + 1),
             ));
         }
-        s.push(mk(Layer::Cut, self.cut.clone(), true, true, "cut".into()));
         s.push(mk(
-            Layer::Draw,
+            StrokeKind::Boundary,
+            self.cut.clone(),
+            true,
+            "cut".into(),
+        ));
+        s.push(mk(
+            StrokeKind::Sew,
             self.sew_polyline.clone(),
             true,
-            false,
             "sew".into(),
         ));
         for (k, p) in self.points.iter().enumerate() {
             const CROSS: f64 = 1.5; // half-size of a point cross (mm)
             s.push(mk(
-                Layer::Draw,
+                StrokeKind::Internal,
                 vec![*p - DVec2::X * CROSS, *p + DVec2::X * CROSS],
-                false,
                 false,
                 format!("point-{}-a", k + 1),
             ));
             s.push(mk(
-                Layer::Draw,
+                StrokeKind::Internal,
                 vec![*p - DVec2::Y * CROSS, *p + DVec2::Y * CROSS],
-                false,
                 false,
                 format!("point-{}-b", k + 1),
             ));
         }
         for (k, l) in self.lines.iter().enumerate() {
             s.push(mk(
-                Layer::Draw,
+                StrokeKind::Internal,
                 l.clone(),
-                false,
                 false,
                 format!("line-{}", k + 1),
             ));
@@ -727,40 +735,53 @@ impl Piece {
             let d = (b - a).normalize();
             let nrm = DVec2::new(-d.y, d.x);
             let head = (a.distance(b) * 0.1).min(8.0);
-            s.push(mk(Layer::Draw, vec![a, b], false, false, "grain".into()));
+            s.push(mk(StrokeKind::Grain, vec![a, b], false, "grain".into()));
             s.push(mk(
-                Layer::Draw,
+                StrokeKind::Grain,
                 vec![
                     b - d * head + nrm * head * 0.4,
                     b,
                     b - d * head - nrm * head * 0.4,
                 ],
                 false,
-                false,
                 "grain-head".into(),
             ));
             s.push(mk(
-                Layer::Draw,
+                StrokeKind::Grain,
                 vec![
                     a + d * head + nrm * head * 0.4,
                     a,
                     a + d * head - nrm * head * 0.4,
                 ],
                 false,
-                false,
                 "grain-tail".into(),
             ));
         }
         for (k, st) in self.label_strokes.iter().enumerate() {
             s.push(mk(
-                Layer::Engrave,
+                StrokeKind::Text,
                 st.clone(),
-                false,
                 false,
                 format!("label-{}", k + 1),
             ));
         }
-        Drawing { strokes: s }
+        Drawing {
+            strokes: s,
+            pieces: vec![PieceInfo {
+                piece: instance,
+                label: self.label_with_name(),
+                grain: self.grain,
+            }],
+        }
+    }
+
+    /// The label fields with the piece's name filled in where the label has none.
+    pub fn label_with_name(&self) -> LabelInfo {
+        let mut l = self.label.clone();
+        if l.name.is_empty() {
+            l.name = self.name.clone();
+        }
+        l
     }
 }
 
@@ -810,6 +831,11 @@ impl PlacedPiece<'_> {
             if self.placement.mirror && s.closed {
                 s.points[1..].reverse();
             }
+        }
+        for info in &mut d.pieces {
+            info.grain = info
+                .grain
+                .map(|(a, b)| (self.placement.apply(a), self.placement.apply(b)));
         }
         d
     }
@@ -921,7 +947,11 @@ mod tests {
         assert!(nt[1].distance(DVec2::new(100., -6.)) < 1e-6);
         assert!(!p.label_strokes.is_empty());
         let d = p.to_drawing(1);
-        assert!(d.strokes.iter().any(|s| s.id == "vamp-1-cut" && s.outer));
+        assert!(
+            d.strokes
+                .iter()
+                .any(|s| s.id == "vamp-1-cut" && s.is_outer())
+        );
         assert!(d.strokes.iter().any(|s| s.id == "vamp-1-notch-1"));
         // label inside the sew line
         for st in &p.label_strokes {
@@ -1024,7 +1054,7 @@ mod tests {
             },
         };
         let d = pp.to_drawing();
-        let cut = d.strokes.iter().find(|s| s.outer).unwrap();
+        let cut = d.strokes.iter().find(|s| s.is_outer()).unwrap();
         assert!((poly::signed_area(&cut.points) - p.cut_area()).abs() < 1e-6);
     }
 }

@@ -12,7 +12,7 @@
 //! flattened here within a chordal tolerance. Layers come from the enclosing group id, then
 //! from the element id, then from the stroke colour (blue = draw, anything else = cut).
 
-use crate::drawing::{Drawing, Layer, Stroke};
+use crate::drawing::{Drawing, Layer, Stroke, StrokeKind};
 use crate::fit::PathSeg;
 use crate::piece::PlacedPiece;
 use crate::{PatternError, poly};
@@ -227,6 +227,24 @@ fn layer_from_id(id: &str) -> Option<Layer> {
     }
 }
 
+/// The kind of one of our elements, read back from the id the writer gave it (an SVG has no
+/// other place for it); other SVGs' strokes are internal lines or inner cuts until the piece
+/// search below finds their outer contours.
+fn kind_from_id(id: &str, layer: Layer) -> StrokeKind {
+    let parts: Vec<&str> = id.rsplitn(3, '-').collect();
+    let what = |w: &str| parts.contains(&w);
+    match layer {
+        Layer::Cut if id.ends_with("-cut") => StrokeKind::Boundary,
+        Layer::Cut if what("notch") => StrokeKind::Notch,
+        Layer::Cut if what("drill") => StrokeKind::Drill,
+        Layer::Cut => StrokeKind::InnerCut,
+        Layer::Draw if id.ends_with("-sew") => StrokeKind::Sew,
+        Layer::Draw if id.contains("-grain") => StrokeKind::Grain,
+        Layer::Draw => StrokeKind::Internal,
+        Layer::Engrave => StrokeKind::Text,
+    }
+}
+
 /// Piece prefix of one of our element ids (`vamp-1-notch-2` → `vamp-1`).
 fn piece_prefix(id: &str) -> Option<&str> {
     for key in [
@@ -341,14 +359,14 @@ fn walk(
                     } else {
                         format!("{id}-{k}")
                     };
-                    let outer = lay == Layer::Cut && id.ends_with("-cut");
+                    let kind = kind_from_id(&id, lay);
                     out.push((
                         Stroke {
                             layer: lay,
                             points: pts,
                             closed,
                             piece: None,
-                            outer,
+                            kind,
                             id: sid,
                         },
                         prefix.clone(),
@@ -411,7 +429,7 @@ pub fn read_svg(text: &str, source_name: &str, chord_tol: f64) -> Result<Drawing
             .filter(|&i| !closed_cut.iter().any(|&j| j != i && inside(i, j)))
             .collect();
         for (k, &i) in outers.iter().enumerate() {
-            strokes[i].outer = true;
+            strokes[i].kind = StrokeKind::Boundary;
             strokes[i].piece = Some(k as u32);
         }
         for i in 0..strokes.len() {
@@ -427,7 +445,7 @@ pub fn read_svg(text: &str, source_name: &str, chord_tol: f64) -> Result<Drawing
             }
         }
     }
-    Ok(Drawing { strokes })
+    Ok(Drawing::from_strokes(strokes))
 }
 
 #[cfg(test)]
@@ -513,7 +531,7 @@ mod tests {
         );
         let d = read_svg(&s, "test", 0.01).unwrap();
         let cut = d.strokes.iter().find(|s| s.id == "vamp-2-cut").unwrap();
-        assert!(cut.outer && cut.layer == Layer::Cut && cut.piece == Some(0));
+        assert!(cut.is_outer() && cut.layer == Layer::Cut && cut.piece == Some(0));
         let expect: Vec<DVec2> = p.cut.iter().map(|q| pl.apply(*q)).collect();
         let l0: f64 = (0..expect.len())
             .map(|i| expect[i].distance(expect[(i + 1) % expect.len()]))
@@ -542,7 +560,7 @@ mod tests {
             <circle cx="50" cy="25" r="10" stroke="black" fill="none"/></g></svg>"#;
         let d = read_svg(s, "in.svg", 0.01).unwrap();
         assert_eq!(d.strokes.len(), 2);
-        let outer = d.strokes.iter().find(|s| s.outer).unwrap();
+        let outer = d.strokes.iter().find(|s| s.is_outer()).unwrap();
         // 100 user units = 1 in = 25.4 mm
         assert!(
             (outer.length() - 2.0 * (25.4 + 12.7)).abs() < 1e-3,
@@ -554,7 +572,7 @@ mod tests {
             (bb.min.x - 25.4).abs() < 1e-3 && (bb.max.y - (50.8 - 12.7)).abs() < 1e-3,
             "{bb:?}"
         );
-        let hole = d.strokes.iter().find(|s| !s.outer).unwrap();
+        let hole = d.strokes.iter().find(|s| !s.is_outer()).unwrap();
         assert_eq!(hole.piece, Some(0));
         // a polygon inscribed within 0.01 mm chordal error is at most ~2·0.01/r shorter
         let c = 2.0 * std::f64::consts::PI * 2.54;

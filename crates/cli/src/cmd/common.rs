@@ -4,13 +4,11 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use flatcut::design::PieceDef;
+use flatcut::flat::Limits;
 use flatcut::flatten::{FlattenParams, Method};
-use flatcut::geom::{DVec2, Tolerances};
-use flatcut::mesh::TriMesh;
-use flatcut::pattern::{CornerStyle, NotchStyle, Piece, PieceOptions, PlacedPiece, Placement};
-use flatcut::pipeline::{self, FlatPiece, PieceContext};
-use flatcut::report::Report;
+use flatcut::geom::Tolerances;
+use flatcut::pattern::{CornerStyle, NotchStyle, Piece, PieceOptions};
+use flatcut::pieces::PieceSettings;
 
 /// Flattening options shared by the commands that flatten.
 #[derive(Debug, Clone, clap::Args)]
@@ -126,47 +124,25 @@ pub fn is_mesh(path: &Path) -> bool {
     flatcut::mesh::io::is_mesh_path(path)
 }
 
-/// A flattened piece ready for the pattern: its mesh (with `flat`), its design entry when it
-/// came from a design, and its distortion report.
-pub struct Flat {
-    pub name: String,
-    pub def: Option<PieceDef>,
-    pub mesh: TriMesh,
-    pub report: Report,
-    pub quantity: u32,
-}
+pub use flatcut::flat::Flat;
+pub use flatcut::pieces::{ROW_GAP_MM, row_layout};
 
-/// Loads a flattened OBJ (with `vt`) as it is, or flattens every piece of a design.
+/// Loads a flattened OBJ (with `vt`) as it is, or flattens every piece of a design; `verbose`
+/// prints each piece's progress and figures on stderr.
 pub fn load_flat(
     path: &Path,
     fa: &FlattenArgs,
     limits: (Option<f64>, Option<f64>),
     verbose: bool,
 ) -> anyhow::Result<Vec<Flat>> {
-    let name_of = |p: &Path| {
-        p.file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "piece".into())
-    };
-    if is_mesh(path) {
-        let mesh = flatcut::mesh::read_mesh(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
-        if mesh.flat.is_some() {
-            let name = name_of(path);
-            let report = pipeline::report_piece(&name, &mesh, &[], limits.0, limits.1)?;
-            return Ok(vec![Flat {
-                name,
-                def: None,
-                mesh,
-                report,
-                quantity: 1,
-            }]);
-        }
-    }
     let params = fa.params()?;
     let tol = fa.tolerances()?;
+    let limits = Limits {
+        stretch_pct: limits.0,
+        compress_pct: limits.1,
+    };
     let t0 = std::time::Instant::now();
-    let (_, pieces) = pipeline::flatten_design(path, &tol, &params, &mut |name, k, n| {
+    let flats = flatcut::flat::load_flat(path, &tol, &params, limits, &mut |name, k, n| {
         if verbose {
             eprintln!(
                 "flattening piece {}/{} '{}' ({})",
@@ -178,80 +154,36 @@ pub fn load_flat(
         }
     })
     .with_context(|| format!("cannot flatten {}", path.display()))?;
-    let mut out = Vec::new();
-    for FlatPiece { def, mesh, info } in pieces {
+    for f in &flats {
+        let Some(info) = &f.info else { continue };
         for w in &info.warnings {
-            eprintln!("warning: piece '{}': {w}", def.name);
+            eprintln!("warning: piece '{}': {w}", f.name);
         }
-        let boundary = pipeline::flat_boundary(&def.name, &mesh)
-            .map(|b| b.1)
-            .unwrap_or_default();
-        let marks = pipeline::notch_vertices(&def, &mesh, &boundary);
-        let report = pipeline::report_piece(&def.name, &mesh, &marks, limits.0, limits.1)?;
         if verbose {
+            let r = &f.report;
             eprintln!(
-                "  {} faces, {} iterations, mean δ2 {:.5}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
-                report.faces,
+                "  '{}': {} faces, {} iterations, mean δ2 {:.5}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
+                f.name,
+                r.faces,
                 info.iterations,
-                report.delta2_mean,
-                report.stretch_max_pct,
-                report.compress_max_pct,
+                r.delta2_mean,
+                r.stretch_max_pct,
+                r.compress_max_pct,
                 t0.elapsed().as_secs_f64()
             );
         }
-        out.push(Flat {
-            name: def.name.clone(),
-            quantity: def.quantity,
-            def: Some(def),
-            mesh,
-            report,
-        });
     }
-    Ok(out)
+    Ok(flats)
 }
 
 /// Builds the pattern piece of each flattened piece.
 pub fn build_pieces(flats: &[Flat], pa: &PieceArgs) -> anyhow::Result<Vec<Piece>> {
-    let opts = pa.options()?;
-    flats
-        .iter()
-        .map(|f| {
-            let ctx = PieceContext {
-                def: f.def.as_ref(),
-                report: Some(&f.report),
-                seam_mm: pa.seam,
-                size: String::new(),
-                corner: pa.corner,
-            };
-            pipeline::piece_from_flat(&f.name, &f.mesh, &ctx, &opts)
-                .with_context(|| format!("piece '{}'", f.name))
-        })
-        .collect()
-}
-
-/// Gap between pieces laid out in a row (mm).
-pub const ROW_GAP_MM: f64 = 10.0;
-
-/// Places pieces left to right with their lowest points on y = 0, one instance each.
-pub fn row_layout(pieces: &[Piece]) -> Vec<PlacedPiece<'_>> {
-    let mut x = 0.0;
-    pieces
-        .iter()
-        .map(|p| {
-            let b = p.bbox();
-            let pl = Placement {
-                rotation: 0.0,
-                mirror: false,
-                translation: DVec2::new(x - b.min.x, -b.min.y),
-            };
-            x += b.width() + ROW_GAP_MM;
-            PlacedPiece {
-                piece: p,
-                instance: 1,
-                placement: pl,
-            }
-        })
-        .collect()
+    let settings = PieceSettings {
+        options: pa.options()?,
+        seam_mm: pa.seam,
+        corner: pa.corner,
+    };
+    Ok(flatcut::pieces::build_pieces(flats, &settings)?)
 }
 
 /// Parses `WxH` in mm (e.g. `600x400`).
@@ -271,6 +203,32 @@ pub fn parse_size(s: &str) -> Result<(f64, f64), String> {
         return Err(format!("sheet size must be positive, got '{s}'"));
     }
     Ok((w, h))
+}
+
+/// True when the path names a 2D pattern file (SVG or DXF) rather than a design or mesh.
+pub fn is_pattern_file(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg") || e.eq_ignore_ascii_case("dxf"))
+}
+
+/// Reads a pattern SVG or DXF (AAMA or plain) as a drawing in mm, curves flattened within
+/// `chord_mm`; the reader's warnings are printed.
+pub fn read_pattern_file(path: &Path, chord_mm: f64) -> anyhow::Result<flatcut::pattern::Drawing> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let name = path.display().to_string();
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("dxf"))
+    {
+        let import = flatcut::pattern::dxf_read::read_dxf(&text, chord_mm)
+            .with_context(|| format!("cannot read {name}"))?;
+        for w in &import.warnings {
+            eprintln!("warning: {name}: {w}");
+        }
+        return Ok(import.drawing);
+    }
+    Ok(flatcut::pattern::svg::read_svg(&text, &name, chord_mm)?)
 }
 
 /// Writes a file whole or not at all, naming it in errors.
@@ -295,15 +253,4 @@ pub fn sibling(path: &Path, suffix: &str) -> PathBuf {
     path.with_file_name(format!("{stem}-{suffix}{ext}"))
 }
 
-/// A name usable in a file name.
-pub fn file_safe(name: &str) -> String {
-    name.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
-}
+pub use flatcut::run::file_safe;

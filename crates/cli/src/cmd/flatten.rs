@@ -58,6 +58,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             mesh,
             report,
             quantity: 1,
+            info: Some(f.info),
         }]
     } else {
         common::load_flat(&a.file, &a.flatten, (None, None), true)?

@@ -12,7 +12,7 @@ use super::common::{self, FlattenArgs, PieceArgs};
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// A pattern or layout SVG (mm), a design, or a flattened OBJ.
+    /// A pattern or layout SVG (mm) or DXF (AAMA or plain), a design, or a flattened OBJ.
     pub file: PathBuf,
     /// pen, knife, laser, or a path to a machine profile (.toml).
     #[arg(long, default_value = "pen")]
@@ -34,11 +34,16 @@ pub struct Args {
     pub flatten: FlattenArgs,
 }
 
-/// Chordal tolerance used when reading SVGs (mm).
+/// Chordal tolerance used when reading SVGs and DXFs (mm).
 const SVG_CHORD_MM: f64 = 0.02;
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let profile = Profile::resolve(&a.profile)?;
+    anyhow::ensure!(
+        profile.hpgl.is_none(),
+        "profile {} drives an HP-GL device: use `flatcut hpgl`",
+        profile.name
+    );
     let drawing = load_drawing(&a.file, &a.piece, &a.flatten)?;
     let mut opts = GcodeOptions::default();
     opts.reorder = !a.no_reorder;
@@ -73,23 +78,14 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The drawing of an SVG, or of the pieces of a design / flattened OBJ laid out in a row.
+/// The drawing of an SVG or DXF, or of the pieces of a design / flattened OBJ laid out in a row.
 pub fn load_drawing(
     path: &std::path::Path,
     pa: &PieceArgs,
     fa: &FlattenArgs,
 ) -> anyhow::Result<Drawing> {
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
-    {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
-        return Ok(flatcut::pattern::svg::read_svg(
-            &text,
-            &path.display().to_string(),
-            SVG_CHORD_MM,
-        )?);
+    if common::is_pattern_file(path) {
+        return common::read_pattern_file(path, SVG_CHORD_MM);
     }
     let flats = common::load_flat(path, fa, (None, None), true)?;
     let pieces = common::build_pieces(&flats, pa)?;

@@ -4,6 +4,7 @@ pub mod common;
 pub mod device;
 pub mod flatten;
 pub mod gcode;
+pub mod hpgl;
 pub mod inspect;
 pub mod nest;
 pub mod pattern;

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
-use anyhow::Context as _;
 use flatcut::geom::DVec2;
 use flatcut::nest::{NestOptions, Stock};
 use flatcut::pattern::dxf::DxfLayers;
@@ -15,7 +14,7 @@ use super::common::{self, FlattenArgs, PieceArgs};
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Pattern SVGs (from `flatcut pattern`), designs or flattened OBJs.
+    /// Pattern SVGs or DXFs (AAMA or plain CAD files), designs or flattened OBJs.
     #[arg(required = true)]
     pub pieces: Vec<PathBuf>,
     /// Sheet size in mm, WIDTHxHEIGHT.
@@ -27,7 +26,8 @@ pub struct Args {
     /// Gap between pieces (kerf), mm.
     #[arg(long, default_value_t = NestOptions::DEFAULT_SPACING)]
     pub spacing: f64,
-    /// Copies of each input piece (designs use their own quantities).
+    /// Copies of each input piece, times the piece's own quantity (a design's, or a DXF's
+    /// `Quantity:`).
     #[arg(long, default_value_t = 1)]
     pub quantity: usize,
     /// Also nest the mirror image of each piece (left and right shoe).
@@ -53,7 +53,7 @@ pub struct Args {
     pub flatten: FlattenArgs,
 }
 
-/// Chordal tolerance used when reading pattern SVGs (mm).
+/// Chordal tolerance used when reading pattern SVGs and DXFs (mm).
 const SVG_CHORD_MM: f64 = 0.05;
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
@@ -81,10 +81,8 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     );
     let mut groups = Vec::new();
     for f in &a.pieces {
-        if f.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg")) {
-            let text = std::fs::read_to_string(f)
-                .with_context(|| format!("cannot read {}", f.display()))?;
-            let d = flatcut::pattern::svg::read_svg(&text, &f.display().to_string(), SVG_CHORD_MM)?;
+        if common::is_pattern_file(f) {
+            let d = common::read_pattern_file(f, SVG_CHORD_MM)?;
             let gs = NestGroup::from_drawing(&f.display().to_string(), &d);
             anyhow::ensure!(
                 !gs.is_empty(),
@@ -92,7 +90,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 f.display()
             );
             for mut g in gs {
-                g.quantity = a.quantity;
+                g.quantity *= a.quantity;
                 g.mirrored_pair = a.mirrored_pairs;
                 groups.push(g);
             }

@@ -9,15 +9,30 @@ use super::device::{StreamArgs, StreamOutcome, stream_file};
 /// Arguments of `flatcut send`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The G-code job.
-    #[arg(value_name = "JOB.gcode")]
+    /// The job: G-code, or HP-GL with `--protocol hpgl`.
+    #[arg(value_name = "JOB")]
     pub job: PathBuf,
     #[command(flatten)]
     pub stream: StreamArgs,
+    /// grbl (G-code, character counting) or hpgl (HP-GL with the profile's flow control).
+    #[arg(long, default_value = "grbl", value_parser = ["grbl", "hpgl"])]
+    pub protocol: String,
+    /// With `--protocol hpgl`: the device's profile (vinyl, pen-hpgl or a .toml).
+    #[arg(long, default_value = "vinyl")]
+    pub profile: String,
 }
 
 /// Runs `flatcut send`.
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
+    if a.protocol == "hpgl" {
+        let s = &a.stream;
+        return super::hpgl::send(
+            &a.job,
+            &a.profile,
+            s.port.as_deref(),
+            s.sim_trace.as_deref(),
+        );
+    }
     let out = stream_file(&a.job, &a.stream)?;
     print_stdout(&summary(&out))?;
     Ok(ExitCode::SUCCESS)

@@ -169,6 +169,81 @@ pub fn ders_basis_funs(
     }
 }
 
+/// Nonzero basis functions and their derivatives up to order `nd ≤ 2` at `t` in span `span`
+/// (Piegl–Tiller A2.3). `N` is the array size and must exceed the degree.
+///
+/// The fixed-size twin of [`ders_basis_funs`] for the patch evaluators' hot loop: no heap, no
+/// slices, so the compiler unrolls it for the small degrees of real patches.
+#[inline(always)]
+pub fn ders_basis_funs_fixed<const N: usize>(
+    knots: &[f64],
+    span: usize,
+    p: usize,
+    t: f64,
+    nd: usize,
+    ders: &mut [[f64; N]; 3],
+) {
+    let mut ndu = [[0.0f64; N]; N];
+    let mut left = [0.0f64; N];
+    let mut right = [0.0f64; N];
+    ndu[0][0] = 1.0;
+    for j in 1..=p {
+        left[j] = t - knots[span + 1 - j];
+        right[j] = knots[span + j] - t;
+        let mut saved = 0.0;
+        for r in 0..j {
+            ndu[j][r] = right[r + 1] + left[j - r];
+            let temp = ndu[r][j - 1] / ndu[j][r];
+            ndu[r][j] = saved + right[r + 1] * temp;
+            saved = left[j - r] * temp;
+        }
+        ndu[j][j] = saved;
+    }
+    for j in 0..=p {
+        ders[0][j] = ndu[j][p];
+    }
+    if nd == 0 {
+        return;
+    }
+    let mut a = [[0.0f64; N]; 2];
+    for r in 0..=p {
+        let (mut s1, mut s2) = (0usize, 1usize);
+        a[0][0] = 1.0;
+        for k in 1..=nd.min(p) {
+            let mut d = 0.0;
+            let rk = r as isize - k as isize;
+            let pk = p - k;
+            if r >= k {
+                a[s2][0] = a[s1][0] / ndu[pk + 1][rk as usize];
+                d = a[s2][0] * ndu[rk as usize][pk];
+            }
+            let j1 = if rk >= -1 { 1 } else { (-rk) as usize };
+            let j2 = if r <= pk + 1 { k - 1 } else { p - r };
+            for j in j1..=j2 {
+                let idx = (rk + j as isize) as usize;
+                a[s2][j] = (a[s1][j] - a[s1][j - 1]) / ndu[pk + 1][idx];
+                d += a[s2][j] * ndu[idx][pk];
+            }
+            if r <= pk {
+                a[s2][k] = -a[s1][k - 1] / ndu[pk + 1][r];
+                d += a[s2][k] * ndu[r][pk];
+            }
+            ders[k][r] = d;
+            std::mem::swap(&mut s1, &mut s2);
+        }
+        for k in (p + 1)..=nd {
+            ders[k][r] = 0.0;
+        }
+    }
+    let mut f = p as f64;
+    for k in 1..=nd.min(p) {
+        for j in 0..=p {
+            ders[k][j] *= f;
+        }
+        f *= (p - k) as f64;
+    }
+}
+
 /// Validates a knot vector for `n` control points of degree `p`: length `n + p + 1`, finite,
 /// non-decreasing, no knot of multiplicity above `p + 1`, and a non-empty domain `U[p] < U[n]`.
 pub fn check_knots(n: usize, p: usize, knots: &[f64]) -> Result<(), crate::SurfaceError> {
@@ -383,6 +458,34 @@ mod tests {
             let sum: f64 = b.iter().sum();
             prop_assert!((sum - 1.0).abs() < 1e-13, "sum {}", sum);
             prop_assert!(b.iter().all(|&v| v >= -1e-15));
+        }
+    }
+
+    #[test]
+    fn fixed_size_derivatives_equal_the_general_ones() {
+        // Cubic and quadratic on a non-uniform clamped vector with a double interior knot.
+        let knots = [0.0, 0.0, 0.0, 0.0, 0.2, 0.5, 0.5, 0.9, 1.0, 1.0, 1.0, 1.0];
+        for p in [2usize, 3] {
+            let k = &knots[3 - p..knots.len() - (3 - p)];
+            let n = k.len() - p - 1;
+            for i in 0..=50 {
+                let t = i as f64 / 50.0;
+                let span = find_span(n, p, t, k);
+                let mut general = vec![0.0; 3 * (p + 1)];
+                let mut scratch = vec![0.0; ders_scratch_len(p)];
+                ders_basis_funs(span, t, p, 2, k, &mut general, &mut scratch);
+                let mut fixed = [[0.0; 4]; 3];
+                ders_basis_funs_fixed::<4>(k, span, p, t, 2, &mut fixed);
+                for d in 0..3 {
+                    for j in 0..=p {
+                        let (a, b) = (general[d * (p + 1) + j], fixed[d][j]);
+                        assert!(
+                            (a - b).abs() <= 1e-12 * (1.0 + a.abs()),
+                            "p {p} t {t} d {d} j {j}: {a} vs {b}"
+                        );
+                    }
+                }
+            }
         }
     }
 }

@@ -11,6 +11,7 @@
 //! Written here rather than taken from a crate: the NURBS crates available (curvo, truck) bring
 //! a second linear-algebra stack or lack a no-allocation `D1` hot path; this file is ~400 lines.
 
+use crate::curve::basis;
 use crate::{Domain2, ParamSurface, SurfaceDerivs, SurfaceError};
 use glam::{DVec3, DVec4};
 use std::ops::{Add, AddAssign, Mul};
@@ -63,7 +64,7 @@ fn insert_knot<T: Pole>(knots: &mut Vec<f64>, p: usize, pts: &mut Vec<T>, t: f64
     let n = pts.len();
     // Span k with knots[k] ≤ t < knots[k+1], or the last span with knots[k] < t at the end.
     let k = if t < knots[n] {
-        find_span(knots, p, n, t)
+        basis::find_span(n, p, t, knots)
     } else {
         let mut k = n - 1;
         while knots[k] >= t {
@@ -382,38 +383,8 @@ fn check_knots(
             reason: "above the supported maximum of 25",
         });
     }
-    if count < degree + 1 {
-        return Err(SurfaceError::Invalid(format!(
-            "{dir}: {count} poles are too few for degree {degree} (need at least {})",
-            degree + 1
-        )));
-    }
-    if knots.len() != count + degree + 1 {
-        return Err(SurfaceError::KnotCount {
-            expected: count + degree + 1,
-            got: knots.len(),
-        });
-    }
-    if let Some(i) = knots.iter().position(|k| !k.is_finite()) {
-        return Err(SurfaceError::Invalid(format!(
-            "{dir} knot {i} is not finite"
-        )));
-    }
-    for i in 1..knots.len() {
-        if knots[i] < knots[i - 1] {
-            return Err(SurfaceError::DecreasingKnots {
-                index: i,
-                prev: knots[i - 1],
-                next: knots[i],
-            });
-        }
-    }
-    if knots[degree] >= knots[count] {
-        return Err(SurfaceError::Invalid(format!(
-            "{dir}: empty parameter domain [{}, {}]",
-            knots[degree], knots[count]
-        )));
-    }
+    // Length, finiteness, order and a non-empty domain: the same rules as a curve's.
+    basis::check_knots(count, degree, knots)?;
     // Interior multiplicity above the degree would make the patch discontinuous.
     let mut i = degree + 1;
     while i < count {
@@ -431,108 +402,6 @@ fn check_knots(
         i = j + 1;
     }
     Ok(())
-}
-
-/// The index `k` of the knot span `[knots[k], knots[k+1])` containing `t` (clamped to the domain).
-#[inline]
-fn find_span(knots: &[f64], degree: usize, count: usize, t: f64) -> usize {
-    if t >= knots[count] {
-        // Last non-empty span.
-        let mut k = count - 1;
-        while k > degree && knots[k] == knots[k + 1] {
-            k -= 1;
-        }
-        return k;
-    }
-    if t <= knots[degree] {
-        let mut k = degree;
-        while knots[k + 1] == knots[k] {
-            k += 1;
-        }
-        return k;
-    }
-    let (mut lo, mut hi) = (degree, count);
-    while hi - lo > 1 {
-        let mid = (lo + hi) / 2;
-        if t < knots[mid] {
-            hi = mid;
-        } else {
-            lo = mid;
-        }
-    }
-    lo
-}
-
-/// Nonzero basis functions and their derivatives up to order `nd ≤ 2` at `t` in span `span`
-/// (Piegl–Tiller A2.3). `N` is the array size and must exceed the degree.
-#[inline(always)]
-fn basis_ders<const N: usize>(
-    knots: &[f64],
-    span: usize,
-    p: usize,
-    t: f64,
-    nd: usize,
-    ders: &mut [[f64; N]; 3],
-) {
-    let mut ndu = [[0.0f64; N]; N];
-    let mut left = [0.0f64; N];
-    let mut right = [0.0f64; N];
-    ndu[0][0] = 1.0;
-    for j in 1..=p {
-        left[j] = t - knots[span + 1 - j];
-        right[j] = knots[span + j] - t;
-        let mut saved = 0.0;
-        for r in 0..j {
-            ndu[j][r] = right[r + 1] + left[j - r];
-            let temp = ndu[r][j - 1] / ndu[j][r];
-            ndu[r][j] = saved + right[r + 1] * temp;
-            saved = left[j - r] * temp;
-        }
-        ndu[j][j] = saved;
-    }
-    for j in 0..=p {
-        ders[0][j] = ndu[j][p];
-    }
-    if nd == 0 {
-        return;
-    }
-    let mut a = [[0.0f64; N]; 2];
-    for r in 0..=p {
-        let (mut s1, mut s2) = (0usize, 1usize);
-        a[0][0] = 1.0;
-        for k in 1..=nd.min(p) {
-            let mut d = 0.0;
-            let rk = r as isize - k as isize;
-            let pk = p - k;
-            if r >= k {
-                a[s2][0] = a[s1][0] / ndu[pk + 1][rk as usize];
-                d = a[s2][0] * ndu[rk as usize][pk];
-            }
-            let j1 = if rk >= -1 { 1 } else { (-rk) as usize };
-            let j2 = if r <= pk + 1 { k - 1 } else { p - r };
-            for j in j1..=j2 {
-                let idx = (rk + j as isize) as usize;
-                a[s2][j] = (a[s1][j] - a[s1][j - 1]) / ndu[pk + 1][idx];
-                d += a[s2][j] * ndu[idx][pk];
-            }
-            if r <= pk {
-                a[s2][k] = -a[s1][k - 1] / ndu[pk + 1][r];
-                d += a[s2][k] * ndu[r][pk];
-            }
-            ders[k][r] = d;
-            std::mem::swap(&mut s1, &mut s2);
-        }
-        for k in (p + 1)..=nd {
-            ders[k][r] = 0.0;
-        }
-    }
-    let mut f = p as f64;
-    for k in 1..=nd.min(p) {
-        for j in 0..=p {
-            ders[k][j] *= f;
-        }
-        f *= (p - k) as f64;
-    }
 }
 
 /// Partial sums of a tensor contraction: `out[a][b] = Σ_ij N_u^(a)_i N_v^(b)_j P_ij`
@@ -649,12 +518,12 @@ impl BSplinePatch {
         pairs: &[(usize, usize); K],
     ) -> [T; K] {
         let (p, q) = (self.degree_u, self.degree_v);
-        let su = find_span(&self.knots_u, p, self.count_u, u);
-        let sv = find_span(&self.knots_v, q, self.count_v, v);
+        let su = basis::find_span(self.count_u, p, u, &self.knots_u);
+        let sv = basis::find_span(self.count_v, q, v, &self.knots_v);
         let mut nu = [[0.0; N]; 3];
         let mut nv = [[0.0; N]; 3];
-        basis_ders::<N>(&self.knots_u, su, p, u, nd, &mut nu);
-        basis_ders::<N>(&self.knots_v, sv, q, v, nd, &mut nv);
+        basis::ders_basis_funs_fixed::<N>(&self.knots_u, su, p, u, nd, &mut nu);
+        basis::ders_basis_funs_fixed::<N>(&self.knots_v, sv, q, v, nd, &mut nv);
         let mut out = [T::default(); K];
         // For each row i, the v-contractions of order 0..=nd, then blend along u.
         for i in 0..=p {

@@ -9,6 +9,7 @@
 
 use crate::{DomainKind, ParamSurface, SurfaceError};
 use flatcut_geom::Aabb3;
+use flatcut_geom::num::{GoldenStop, golden_section_min};
 use glam::{DVec2, DVec3};
 use std::sync::Arc;
 
@@ -108,26 +109,9 @@ fn nearest_dist(patch: &dyn ParamSurface, side: Side, q: DVec3) -> f64 {
     let (mut lo, mut hi) = (((best.1 as f64) - 1.0) * h, ((best.1 as f64) + 1.0) * h);
     lo = lo.max(0.0);
     hi = hi.min(1.0);
-    let g = 0.5 * (5f64.sqrt() - 1.0);
     let f = |s: f64| side.eval(patch, s).distance_squared(q);
-    let (mut x1, mut x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
-    let (mut f1, mut f2) = (f(x1), f(x2));
-    for _ in 0..NEAREST_REFINE {
-        if f1 < f2 {
-            hi = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = hi - g * (hi - lo);
-            f1 = f(x1);
-        } else {
-            lo = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = lo + g * (hi - lo);
-            f2 = f(x2);
-        }
-    }
-    best.0.min(f1).min(f2).sqrt()
+    let m = golden_section_min(f, lo, hi, GoldenStop::Iterations(NEAREST_REFINE));
+    best.0.min(m.fx).sqrt()
 }
 
 impl Model {

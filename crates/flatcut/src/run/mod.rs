@@ -1,0 +1,459 @@
+//! Running a project: design → flatten → report → pattern → nest → G-code, as named stages that
+//! tell an [`Observer`] what they do and return every output as a value. The caller writes the
+//! files (as one set) and streams the jobs to its device.
+//!
+//! ```no_run
+//! use flatcut::project::Project;
+//! use flatcut::run::{run_project, RunOptions, Silent};
+//!
+//! let project = Project::load("patterns/shoe/project.toml".as_ref())?;
+//! let out = run_project(&project, &RunOptions::DEFAULT, &mut Silent)?;
+//! for f in &out.files {
+//!     println!("{} ({} bytes)", f.name, f.bytes.len());
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod events;
+mod outputs;
+
+use std::time::Instant;
+
+use flatcut_flatten::{FlattenParams, Method};
+use flatcut_gcode::{GcodeOptions, Profile};
+use flatcut_geom::{DVec2, Tolerances};
+use flatcut_nest::{NestOptions, Stock};
+use flatcut_pattern::Piece;
+use flatcut_pattern::dxf::DxfLayers;
+use flatcut_report::{Column, Measure, Region};
+
+pub use events::{Event, Observer, Silent, Stage};
+pub use outputs::{OutputFile, PieceSummary, ProjectOutputs, RunSummary, SheetJob};
+
+use crate::flat::{self, Flat, Limits};
+use crate::pieces::{self, PieceSettings};
+use crate::pipeline::{self, Layout, NestGroup, PipelineError};
+use crate::project::Project;
+
+/// How a project is run beyond what the project file says.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunOptions {
+    /// Nesting iterations.
+    pub nest_iters: usize,
+    /// Chordal tolerance of the tessellation (mm).
+    pub chord_mm: f64,
+}
+
+impl RunOptions {
+    pub const DEFAULT_NEST_ITERS: usize = 60;
+    /// A project tessellates more coarsely than a single `flatten`: the pieces of a whole part
+    /// are cut together, and 0.4 mm is below a knife's or a pen's width.
+    pub const DEFAULT_CHORD_MM: f64 = Tolerances::DEFAULT_CHORD_MM * 4.0;
+    pub const DEFAULT: Self = Self {
+        nest_iters: Self::DEFAULT_NEST_ITERS,
+        chord_mm: Self::DEFAULT_CHORD_MM,
+    };
+
+    pub const fn with_nest_iters(mut self, n: usize) -> Self {
+        self.nest_iters = n;
+        self
+    }
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// Why a project run stopped.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RunError {
+    #[error(transparent)]
+    Pipeline(#[from] PipelineError),
+    #[error("project '{project}': {message}")]
+    Project { project: String, message: String },
+    #[error("machine profile: {0}")]
+    Profile(#[from] flatcut_gcode::ProfileError),
+    #[error("heat map: {0}")]
+    Render(#[from] flatcut_report::ReportError),
+    #[error("sheet {sheet}: {source}")]
+    Gcode {
+        sheet: usize,
+        source: flatcut_gcode::GcodeError,
+    },
+}
+
+/// Runs every stage but streaming. Events go to `obs`; the outputs come back as values.
+pub fn run_project(
+    project: &Project,
+    opts: &RunOptions,
+    obs: &mut dyn Observer,
+) -> Result<ProjectOutputs, RunError> {
+    let mut files = Vec::new();
+    let flats = timed(obs, Stage::Flatten, &flatten_detail(project)?, |obs| {
+        flatten_stage(project, opts, obs, &mut files)
+    })?;
+    let limits_exceeded = timed(obs, Stage::Report, "", |obs| {
+        report_stage(&flats, obs, &mut files)
+    })?;
+    let pieces = timed(obs, Stage::Pattern, "", |_| {
+        pattern_stage(project, &flats, &mut files)
+    })?;
+    let (layout, stock) = timed(obs, Stage::Nest, "", |obs| {
+        nest_stage(project, &flats, &pieces, opts, obs)
+    })?;
+    let (profile, sheets) = timed(obs, Stage::Gcode, "", |_| {
+        gcode_stage(project, &layout, stock, &mut files)
+    })?;
+    let summary = summarise(project, &flats, &layout, &sheets, limits_exceeded);
+    files.push(OutputFile {
+        name: "summary.json".into(),
+        bytes: json(&summary),
+    });
+    Ok(ProjectOutputs {
+        flats,
+        pieces,
+        layout,
+        stock,
+        profile,
+        sheets,
+        summary,
+        files,
+    })
+}
+
+/// Runs one stage between its Started and Finished events.
+fn timed<T>(
+    obs: &mut dyn Observer,
+    stage: Stage,
+    detail: &str,
+    f: impl FnOnce(&mut dyn Observer) -> Result<T, RunError>,
+) -> Result<T, RunError> {
+    obs.event(&Event::Started { stage, detail });
+    let t0 = Instant::now();
+    let out = f(obs)?;
+    obs.event(&Event::Finished {
+        stage,
+        elapsed: t0.elapsed(),
+    });
+    Ok(out)
+}
+
+fn method(project: &Project) -> Result<Method, RunError> {
+    match project.method.as_deref() {
+        None => Ok(Method::Isometric),
+        Some(m) => Method::from_name(m).ok_or_else(|| RunError::Project {
+            project: project.name.clone(),
+            message: format!("unknown flattening method '{m}'"),
+        }),
+    }
+}
+
+fn flatten_detail(project: &Project) -> Result<String, RunError> {
+    Ok(format!(
+        "{} ({})",
+        project.design_path().display(),
+        method(project)?
+    ))
+}
+
+fn limits(project: &Project) -> Limits {
+    Limits {
+        stretch_pct: project.material.max_stretch_pct,
+        compress_pct: project.material.max_compress_pct,
+    }
+}
+
+/// Flattens every piece of the design (`<piece>.obj` each).
+fn flatten_stage(
+    project: &Project,
+    opts: &RunOptions,
+    obs: &mut dyn Observer,
+    files: &mut Vec<OutputFile>,
+) -> Result<Vec<Flat>, RunError> {
+    let m = method(project)?;
+    let params = FlattenParams::new(m)
+        .with_max_stretch_pct(project.material.max_stretch_pct)
+        .with_max_compress_pct(project.material.max_compress_pct);
+    let tol = Tolerances::DEFAULT.with_chord_mm(opts.chord_mm);
+    let flats = flat::load_flat(
+        &project.design_path(),
+        &tol,
+        &params,
+        limits(project),
+        &mut |name, k, n| {
+            obs.event(&Event::Progress {
+                stage: Stage::Flatten,
+                done: k,
+                total: n,
+                what: name,
+            })
+        },
+    )?;
+    for f in &flats {
+        if let Some(info) = &f.info {
+            for w in &info.warnings {
+                obs.event(&Event::Warning {
+                    stage: Stage::Flatten,
+                    message: &format!("piece '{}': {w}", f.name),
+                });
+            }
+        }
+        files.push(OutputFile {
+            name: format!("{}.obj", file_safe(&f.name)),
+            bytes: flatcut_mesh::io::obj_string(&f.mesh).into_bytes(),
+        });
+    }
+    Ok(flats)
+}
+
+/// Most regions beyond the limits reported per piece as warnings (all are in the report).
+const WARNED_REGIONS: usize = 5;
+
+/// Distortion report: JSON, heat map (SVG, PNG) and the HTML page; returns one line per region
+/// beyond the material limits.
+fn report_stage(
+    flats: &[Flat],
+    obs: &mut dyn Observer,
+    files: &mut Vec<OutputFile>,
+) -> Result<Vec<String>, RunError> {
+    let reports: Vec<_> = flats.iter().map(|f| &f.report).collect();
+    files.push(OutputFile {
+        name: "report.json".into(),
+        bytes: json(&reports),
+    });
+    let cols: Vec<Column<'_>> = flats
+        .iter()
+        .map(|f| Column {
+            title: f.name.to_uppercase(),
+            mesh: &f.mesh,
+            report: &f.report,
+        })
+        .collect();
+    let heat = flatcut_report::heatmap_svg(&cols, Measure::Stretch, false);
+    let png = flatcut_report::render_png(&heat, None)?;
+    files.push(OutputFile {
+        name: "heatmap.svg".into(),
+        bytes: heat.into_bytes(),
+    });
+    files.push(OutputFile {
+        name: "heatmap.png".into(),
+        bytes: png,
+    });
+    files.push(OutputFile {
+        name: "report.html".into(),
+        bytes: flatcut_report::html_report(&cols, Measure::Stretch, false).into_bytes(),
+    });
+    let mut over = Vec::new();
+    for f in flats {
+        for (k, r) in f.report.regions.iter().enumerate() {
+            let line = region_line(&f.name, r);
+            if k < WARNED_REGIONS {
+                obs.event(&Event::Warning {
+                    stage: Stage::Report,
+                    message: &format!("material limit exceeded: {line}"),
+                });
+            }
+            over.push(line);
+        }
+        if f.report.regions.len() > WARNED_REGIONS {
+            obs.event(&Event::Warning {
+                stage: Stage::Report,
+                message: &format!(
+                    "… and {} more region(s) of '{}' (see report.html)",
+                    f.report.regions.len() - WARNED_REGIONS,
+                    f.name
+                ),
+            });
+        }
+    }
+    Ok(over)
+}
+
+fn region_line(piece: &str, r: &Region) -> String {
+    format!(
+        "{piece}: {} {:.2}% over {:.0} mm² near ({:.0}, {:.0}, {:.0})",
+        r.kind, r.worst_pct, r.area_mm2, r.centroid_3d[0], r.centroid_3d[1], r.centroid_3d[2]
+    )
+}
+
+/// Pattern pieces, laid out in a row (`pattern.svg`, `pattern.dxf`).
+fn pattern_stage(
+    project: &Project,
+    flats: &[Flat],
+    files: &mut Vec<OutputFile>,
+) -> Result<Vec<Piece>, RunError> {
+    let settings = PieceSettings {
+        seam_mm: project.seam_mm,
+        ..PieceSettings::default()
+    };
+    let pieces = pieces::build_pieces(flats, &settings)?;
+    let placed = pieces::row_layout(&pieces);
+    files.push(OutputFile {
+        name: "pattern.svg".into(),
+        bytes: flatcut_pattern::svg::write_pieces(&placed, None).into_bytes(),
+    });
+    files.push(OutputFile {
+        name: "pattern.dxf".into(),
+        bytes: flatcut_pattern::dxf::write_pieces(
+            &placed,
+            DxfLayers::Aama,
+            flatcut_pattern::PieceOptions::DEFAULT_CHORD_TOL,
+        )
+        .into_bytes(),
+    });
+    Ok(pieces)
+}
+
+/// The project's stock: sheets of a size, or a roll.
+pub fn stock(project: &Project) -> Result<Stock, RunError> {
+    let s = &project.sheet;
+    match (s.width_mm, s.height_mm, s.roll_width_mm) {
+        (Some(width), Some(height), None) => Ok(Stock::Sheets {
+            width,
+            height,
+            max_sheets: None,
+        }),
+        (None, None, Some(width)) => Ok(Stock::Roll {
+            width,
+            max_length: None,
+        }),
+        _ => Err(RunError::Project {
+            project: project.name.clone(),
+            message: "[sheet] needs width_mm and height_mm, or roll_width_mm".into(),
+        }),
+    }
+}
+
+/// Nests every piece, as many times as its quantity, on the project's stock.
+fn nest_stage(
+    project: &Project,
+    flats: &[Flat],
+    pieces: &[Piece],
+    opts: &RunOptions,
+    obs: &mut dyn Observer,
+) -> Result<(Layout, Stock), RunError> {
+    let stock = stock(project)?;
+    let groups: Vec<NestGroup> = pieces
+        .iter()
+        .zip(flats)
+        .map(|(p, f)| NestGroup::from_piece(p, f.quantity as usize, false))
+        .collect();
+    let nopts = NestOptions::DEFAULT
+        .with_spacing(project.sheet.spacing_mm)
+        .with_max_iters(opts.nest_iters);
+    let layout = pipeline::nest_groups(&groups, stock, &nopts, &mut |p| {
+        obs.event(&Event::Progress {
+            stage: Stage::Nest,
+            done: p.iteration,
+            total: opts.nest_iters,
+            what: "",
+        })
+    })?;
+    for u in &layout.result.unplaced {
+        obs.event(&Event::Warning {
+            stage: Stage::Nest,
+            message: &format!("unplaced: {} copy {}: {}", u.name, u.copy, u.reason),
+        });
+    }
+    Ok((layout, stock))
+}
+
+/// One G-code job per sheet (`job-N.gcode`, `job-N-frame.gcode`) with the sheet's layout
+/// (`layout-N.svg`, `layout-N.dxf`).
+fn gcode_stage(
+    project: &Project,
+    layout: &Layout,
+    stock: Stock,
+    files: &mut Vec<OutputFile>,
+) -> Result<(Profile, Vec<SheetJob>), RunError> {
+    let profile = Profile::resolve(&project.profile_spec())?;
+    let sheet_size = match stock {
+        Stock::Sheets { width, height, .. } => DVec2::new(width, height),
+        Stock::Roll { width, .. } => DVec2::new(layout.result.length.max(1.0), width),
+    };
+    let mut jobs = Vec::new();
+    for (k, d) in layout.sheets.iter().enumerate() {
+        let n = k + 1;
+        files.push(OutputFile {
+            name: format!("layout-{n}.svg"),
+            bytes: flatcut_pattern::svg::write_drawing(d, Some(sheet_size)).into_bytes(),
+        });
+        files.push(OutputFile {
+            name: format!("layout-{n}.dxf"),
+            bytes: flatcut_pattern::dxf::write_drawing(d, DxfLayers::Aama).into_bytes(),
+        });
+        let mut go = GcodeOptions::default();
+        go.title = format!("flatcut {} sheet {n}", project.name);
+        let plan = flatcut_gcode::plan(d, &profile, &go)
+            .map_err(|source| RunError::Gcode { sheet: n, source })?;
+        let gcode_file = format!("job-{n}.gcode");
+        files.push(OutputFile {
+            name: gcode_file.clone(),
+            bytes: plan.to_gcode().into_bytes(),
+        });
+        files.push(OutputFile {
+            name: format!("job-{n}-frame.gcode"),
+            bytes: flatcut_gcode::frame_job(plan.bbox(), &profile).into_bytes(),
+        });
+        jobs.push(SheetJob {
+            number: n,
+            drawing: d.clone(),
+            gcode_file,
+            summary: plan.summary(),
+        });
+    }
+    Ok((profile, jobs))
+}
+
+fn summarise(
+    project: &Project,
+    flats: &[Flat],
+    layout: &Layout,
+    sheets: &[SheetJob],
+    limits_exceeded: Vec<String>,
+) -> RunSummary {
+    let r = &layout.result;
+    RunSummary {
+        cut_length_mm: sheets.iter().map(|s| s.summary.cut_length_mm).sum(),
+        est_time_s: sheets.iter().map(|s| s.summary.est_time_s).sum(),
+        gcode_lines: sheets.iter().map(|s| s.summary.lines).sum(),
+        limits_exceeded,
+        pieces: flats
+            .iter()
+            .map(|f| PieceSummary {
+                area_mm2: f.report.area_3d_mm2,
+                compress_max_pct: f.report.compress_max_pct,
+                delta2_mean: f.report.delta2_mean,
+                name: f.name.clone(),
+                quantity: f.quantity,
+                stretch_max_pct: f.report.stretch_max_pct,
+            })
+            .collect(),
+        project: project.name.clone(),
+        sheets: r.sheets,
+        travel_length_mm: sheets.iter().map(|s| s.summary.travel_length_mm).sum(),
+        unplaced: r.unplaced.len(),
+        utilization_pct: r.utilization,
+    }
+}
+
+/// Pretty JSON; serialising these plain structs cannot fail (non-finite numbers become null).
+fn json<T: serde::Serialize + ?Sized>(v: &T) -> Vec<u8> {
+    serde_json::to_vec_pretty(v).unwrap_or_default()
+}
+
+/// A name usable in a file name: ASCII letters, digits, `-` and `_`; anything else becomes `_`.
+pub fn file_safe(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,76 @@
+//! What a project run produces, as values: the pieces, the layout, one job per sheet, the summary,
+//! and every file's name and bytes so the caller can write them as one set.
+
+use flatcut_gcode::{Profile, Summary};
+use flatcut_nest::Stock;
+use flatcut_pattern::{Drawing, Piece};
+use serde::Serialize;
+
+use crate::flat::Flat;
+use crate::pipeline::Layout;
+
+/// One output file: its name relative to the output folder, and its contents.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct OutputFile {
+    pub name: String,
+    pub bytes: Vec<u8>,
+}
+
+/// The job of one sheet (or of the roll).
+#[derive(Clone, Debug)]
+pub struct SheetJob {
+    /// 1-based sheet number, as in the file names.
+    pub number: usize,
+    /// What is cut, in sheet coordinates (mm).
+    pub drawing: Drawing,
+    /// The G-code file's name among the outputs (`job-N.gcode`).
+    pub gcode_file: String,
+    pub summary: Summary,
+}
+
+/// One piece's line of the summary (keys in alphabetical order).
+#[derive(Clone, Debug, Serialize)]
+pub struct PieceSummary {
+    pub area_mm2: f64,
+    pub compress_max_pct: f64,
+    pub delta2_mean: f64,
+    pub name: String,
+    pub quantity: u32,
+    pub stretch_max_pct: f64,
+}
+
+/// The figures of a run (`summary.json`; keys in alphabetical order, as before).
+#[derive(Clone, Debug, Serialize)]
+pub struct RunSummary {
+    pub cut_length_mm: f64,
+    pub est_time_s: f64,
+    pub gcode_lines: usize,
+    /// One line per region beyond the material limits.
+    pub limits_exceeded: Vec<String>,
+    pub pieces: Vec<PieceSummary>,
+    pub project: String,
+    pub sheets: usize,
+    pub travel_length_mm: f64,
+    pub unplaced: usize,
+    pub utilization_pct: f64,
+}
+
+/// Everything a project run produced.
+pub struct ProjectOutputs {
+    pub flats: Vec<Flat>,
+    pub pieces: Vec<Piece>,
+    pub layout: Layout,
+    pub stock: Stock,
+    pub profile: Profile,
+    pub sheets: Vec<SheetJob>,
+    pub summary: RunSummary,
+    /// Every file, in the order a caller should write them.
+    pub files: Vec<OutputFile>,
+}
+
+impl ProjectOutputs {
+    /// True when some region exceeds the material limits.
+    pub fn limits_exceeded(&self) -> bool {
+        !self.summary.limits_exceeded.is_empty()
+    }
+}
