@@ -10,6 +10,7 @@
 use std::path::Path;
 
 use flatcut_geom::{DVec3, Tolerances};
+use flatcut_mesh::joins::boundary_vertex;
 use flatcut_mesh::lines::{LineSpec, OFF_SURFACE_REL, embed_lines};
 use flatcut_mesh::mating::{MatingSeam, SeamNotch, SeamSide};
 use flatcut_mesh::nearest::Bvh;
@@ -25,6 +26,9 @@ pub struct AssembledPiece {
     /// The part it was cut from (`None` for a `[[piece]]`).
     pub part: Option<String>,
     pub mesh: TriMesh,
+    /// The piece's notch marks (`kind = "notch"`) as boundary vertices of `mesh`, inserted
+    /// exactly where each mark's point falls on the boundary: (mark name, vertex).
+    pub notch_marks: Vec<(String, u32)>,
 }
 
 /// Every piece of a design and the mating seams between them (sides index `pieces`).
@@ -47,10 +51,14 @@ impl Design {
                 def: def.clone(),
                 part: None,
                 mesh: def.mesh(base_dir, tol)?,
+                notch_marks: Vec::new(),
             });
         }
         for part in &self.parts {
             split_part(part, base_dir, tol, &mut out)?;
+        }
+        for p in &mut out.pieces {
+            place_notch_marks(p)?;
         }
         for (k, p) in out.pieces.iter().enumerate() {
             if let Some(j) = out.pieces[..k]
@@ -209,6 +217,7 @@ fn split_part(
             def,
             part: Some(part.name.clone()),
             mesh: reg.mesh.clone(),
+            notch_marks: Vec::new(),
         });
     }
     // The seams: one per stretch of a line between two regions.
@@ -238,6 +247,32 @@ fn split_part(
                 }),
                 notches,
             });
+        }
+    }
+    Ok(())
+}
+
+/// Inserts the piece's notch marks as boundary vertices, each exactly where its point falls.
+fn place_notch_marks(p: &mut AssembledPiece) -> Result<(), DesignError> {
+    let tol = OFF_SURFACE_REL * p.mesh.bbox().diagonal();
+    for m in p
+        .def
+        .marks
+        .iter()
+        .filter(|m| m.kind == crate::MarkKind::Notch)
+    {
+        for q in &m.points {
+            let what = format!("notch mark '{}'", m.name);
+            let v =
+                boundary_vertex(&mut p.mesh, DVec3::from_array(*q), tol, &what).map_err(|e| {
+                    DesignError::Piece {
+                        file: p.def.file.clone(),
+                        index: p.def.index,
+                        piece: p.def.name.clone(),
+                        msg: e.to_string(),
+                    }
+                })?;
+            p.notch_marks.push((m.name.clone(), v));
         }
     }
     Ok(())

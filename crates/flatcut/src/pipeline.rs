@@ -8,6 +8,7 @@ use flatcut_design::{Design, DesignError, MarkKind as DesignMark, PieceDef};
 use flatcut_flatten::{FlattenError, FlattenInfo, FlattenParams};
 use flatcut_geom::{DVec2, DVec3, Tolerances};
 use flatcut_mesh::TriMesh;
+use flatcut_mesh::mating::MatingSeam;
 use flatcut_nest::{NestError, NestItem, NestOptions, NestProgress, NestResult, Rotations, Stock};
 use flatcut_pattern::{
     Drawing, LabelInfo, Mark, MarkKind, PatternError, Piece, PieceInput, PieceOptions, Placement,
@@ -36,6 +37,14 @@ pub enum PipelineError {
     Piece { piece: String, reason: String },
 }
 
+/// A notch of a piece: a boundary vertex of its mesh, exactly where the notch is, and its name
+/// (a mating seam's notch `line n`, or the design's notch mark).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FlatNotch {
+    pub name: String,
+    pub vertex: u32,
+}
+
 /// A piece of a design, cut along its seams and flattened: `mesh.flat` holds the 2D position of
 /// every vertex (mm, true scale).
 #[derive(Clone, Debug)]
@@ -43,25 +52,94 @@ pub struct FlatPiece {
     pub def: PieceDef,
     pub mesh: TriMesh,
     pub info: FlattenInfo,
+    /// Its notches: the notches of its mating seams and its own notch marks.
+    pub notches: Vec<FlatNotch>,
 }
 
-/// Loads a design (or a mesh file) and flattens every piece; `progress(piece, index, count)` is
-/// called before each piece.
+/// A design flattened: every piece (a `[[piece]]` or a region of a `[[part]]`) and the mating
+/// seams between them (sides index `pieces`).
+#[derive(Clone, Debug)]
+pub struct FlatDesign {
+    pub design: Design,
+    pub pieces: Vec<FlatPiece>,
+    pub seams: Vec<MatingSeam>,
+}
+
+/// Loads a design (or a mesh file), builds its pieces and seams, and flattens them, the pieces
+/// joined by seams together ([`flatcut_flatten::assembly`]); `progress(piece, index, count)` is
+/// called for each piece before the solve.
 pub fn flatten_design(
     path: &Path,
     tol: &Tolerances,
     params: &FlattenParams,
     progress: &mut dyn FnMut(&str, usize, usize),
-) -> Result<(Design, Vec<FlatPiece>), PipelineError> {
+) -> Result<FlatDesign, PipelineError> {
     let design = Design::load(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
-    let mut out = Vec::new();
-    for (k, def) in design.pieces.iter().enumerate() {
-        progress(&def.name, k, design.pieces.len());
-        let mesh = def.mesh(base, tol)?;
-        out.push(flatten_piece(def.clone(), mesh, params)?);
+    let asm = design.assemble(base, tol)?;
+    for (k, p) in asm.pieces.iter().enumerate() {
+        progress(&p.def.name, k, asm.pieces.len());
     }
-    Ok((design, out))
+    let meshes: Vec<&TriMesh> = asm.pieces.iter().map(|p| &p.mesh).collect();
+    let flats =
+        flatcut_flatten::assembly::flatten_assembly(&meshes, &asm.seams, params).map_err(|e| {
+            match e {
+                flatcut_flatten::assembly::AssemblyError::Piece { piece, source } => {
+                    PipelineError::Flatten {
+                        piece: asm.pieces[piece].def.name.clone(),
+                        source,
+                    }
+                }
+                other => PipelineError::Piece {
+                    piece: design.source.clone(),
+                    reason: other.to_string(),
+                },
+            }
+        })?;
+    let mut notches: Vec<Vec<FlatNotch>> = asm
+        .pieces
+        .iter()
+        .map(|p| {
+            p.notch_marks
+                .iter()
+                .map(|(name, vertex)| FlatNotch {
+                    name: name.clone(),
+                    vertex: *vertex,
+                })
+                .collect()
+        })
+        .collect();
+    for s in &asm.seams {
+        for side in &s.sides {
+            for n in &s.notches {
+                notches[side.piece].push(FlatNotch {
+                    name: n.name.clone(),
+                    vertex: side.vertices[n.index],
+                });
+            }
+        }
+    }
+    let pieces = asm
+        .pieces
+        .into_iter()
+        .zip(flats)
+        .zip(notches)
+        .map(|((p, f), notches)| {
+            let mut mesh = p.mesh;
+            mesh.flat = Some(f.uv);
+            FlatPiece {
+                def: p.def,
+                mesh,
+                info: f.info,
+                notches,
+            }
+        })
+        .collect();
+    Ok(FlatDesign {
+        design,
+        pieces,
+        seams: asm.seams,
+    })
 }
 
 /// Flattens one piece's mesh.
@@ -79,6 +157,7 @@ pub fn flatten_piece(
         def,
         mesh,
         info: f.info,
+        notches: Vec::new(),
     })
 }
 
@@ -152,26 +231,6 @@ fn signed_area(p: &[DVec2]) -> f64 {
         * 0.5
 }
 
-/// The 3D positions of a piece's notch marks, as mesh boundary vertices (nearest).
-pub fn notch_vertices(def: &PieceDef, mesh: &TriMesh, boundary: &[u32]) -> Vec<u32> {
-    let mut out = Vec::new();
-    for m in def.marks.iter().filter(|m| m.kind == DesignMark::Notch) {
-        for p in &m.points {
-            let p = DVec3::from_array(*p);
-            if let Some(&v) = boundary.iter().min_by(|&&a, &&b| {
-                mesh.positions[a as usize]
-                    .distance(p)
-                    .total_cmp(&mesh.positions[b as usize].distance(p))
-            }) {
-                out.push(v);
-            }
-        }
-    }
-    out.sort_unstable();
-    out.dedup();
-    out
-}
-
 /// What a pattern piece is built with beyond the flattened mesh.
 #[derive(Clone, Debug, Default)]
 pub struct PieceContext<'a> {
@@ -181,15 +240,18 @@ pub struct PieceContext<'a> {
     pub seam_mm: Option<f64>,
     pub size: String,
     pub corner: flatcut_pattern::CornerStyle,
+    /// The piece's notches as boundary vertices (exact positions; named on mating seams).
+    pub notches: &'a [FlatNotch],
 }
 
 /// Longest step (mm) between samples of a stitch or placement line carried into the plane:
 /// fine enough that the drawn line follows the map's bending within a pen width.
 const LINE_STEP_MM: f64 = 1.0;
 
-/// Builds the pattern piece of a flattened mesh: the flattened boundary is the sew line, notch
-/// marks sit on their nearest boundary vertex, drill/reference points, stitch lines and the grain
-/// line are carried through the map, and the label carries the distortion summary.
+/// Builds the pattern piece of a flattened mesh: the flattened boundary is the sew line, notches
+/// sit on their boundary vertices (inserted where they are, never snapped), drill/reference
+/// points, stitch lines and the grain line are carried through the map, and the label carries
+/// the distortion summary.
 pub fn piece_from_flat(
     name: &str,
     mesh: &TriMesh,
@@ -201,26 +263,28 @@ pub fn piece_from_flat(
     let mut input = PieceInput::new(name, outline);
     input.corner_style = ctx.corner;
     let mut opts = *opts;
+    for n in ctx.notches {
+        let k = ids
+            .iter()
+            .position(|&v| v == n.vertex)
+            .ok_or_else(|| PipelineError::Piece {
+                piece: name.into(),
+                reason: format!("notch '{}' is not on the piece's outline", n.name),
+            })?;
+        input.mark_names.resize(input.marks.len(), String::new());
+        input.mark_names.push(n.name.clone());
+        input.marks.push(Mark {
+            kind: MarkKind::Notch,
+            pos: input.outline[k],
+            boundary_index: Some(k),
+        });
+    }
     if let Some(def) = ctx.def {
         for mark in &def.marks {
             let pts: Vec<DVec3> = mark.points.iter().map(|p| DVec3::from_array(*p)).collect();
             match mark.kind {
-                DesignMark::Notch => {
-                    for p in &pts {
-                        let k = (0..ids.len())
-                            .min_by(|&a, &b| {
-                                mesh.positions[ids[a] as usize]
-                                    .distance(*p)
-                                    .total_cmp(&mesh.positions[ids[b] as usize].distance(*p))
-                            })
-                            .unwrap_or(0);
-                        input.marks.push(Mark {
-                            kind: MarkKind::Notch,
-                            pos: input.outline[k],
-                            boundary_index: Some(k),
-                        });
-                    }
-                }
+                // Notch marks are boundary vertices of the mesh already (`ctx.notches`).
+                DesignMark::Notch => {}
                 DesignMark::Line if pts.len() >= 2 => {
                     // Stitch and placement lines follow the surface: each 3D segment is
                     // subdivided and every sample carried by its nearest surface point, so the

@@ -8,7 +8,8 @@
 //! next point and the surface normal, re-aimed at every crossed edge (a normal section of the
 //! surface, as a designer's "curve on surface" between two picks). A crossing closer than
 //! [`SNAP_REL`] of an edge's length to one of its ends goes through that vertex instead of
-//! splitting the edge next to it (no sliver triangles); every other crossing splits the edge.
+//! splitting the edge next to it (no sliver triangles), unless the line would then fold back onto
+//! itself or run along the boundary or another line; every other crossing splits the edge.
 //! The surface itself never moves: new vertices lie on the old edges and faces.
 //!
 //! Notches are extra points of their line, inserted exactly where they project (never snapped to
@@ -25,9 +26,10 @@ use crate::nearest::closest_on_triangle;
 
 /// A crossing within this fraction of an edge's length from one of its ends goes through that
 /// end (a given point within this fraction of a triangle's shortest edge from a corner is that
-/// corner): the line moves by at most a tenth of a mesh edge, and no triangle thinner than a
-/// tenth of its neighbours is made.
-pub const SNAP_REL: f64 = 0.1;
+/// corner): the line moves by at most a twentieth of a mesh edge (0.25 mm on the 5 mm edges of a
+/// shoe upper at 0.4 mm chordal tolerance), and no triangle thinner than a twentieth of its
+/// neighbours is made.
+pub const SNAP_REL: f64 = 0.05;
 /// A line end within this fraction of the mesh's bounding-box diagonal of the surface boundary
 /// or of another line lies on it (and is moved onto it).
 pub const END_REL: f64 = 0.01;
@@ -339,8 +341,7 @@ fn trace(
             Target::Point(anchors[i].p)
         };
         let exact = anchors[i].notch.is_some();
-        let from = *path.last().expect("path starts with a vertex");
-        let steps = ed.walk(from, target, exact, same).map_err(|stop| {
+        let steps = ed.walk(&path, target, exact, same).map_err(|stop| {
             let p = ed.pos[stop.at as usize];
             let (from, to) = (anchors[i - 1].point, anchors[i].point);
             if stop.left_surface {
@@ -527,16 +528,32 @@ impl Edit {
         v
     }
 
-    /// The vertex at parameter `t` of edge (a, b): an end within [`SNAP_REL`], else a new
-    /// vertex splitting the edge.
-    fn insert_on_edge(&mut self, a: u32, b: u32, t: f64) -> u32 {
-        if t <= SNAP_REL {
-            a
-        } else if t >= 1.0 - SNAP_REL {
-            b
-        } else {
+    /// True when the line may not step from `v` to its neighbour `w`: `w` is one of the line's
+    /// own vertices (`visited`: going back through one would fold the line on itself), or the
+    /// edge v–w is a boundary edge or an edge of another line (the line would run along it).
+    fn blocked(&self, v: u32, w: u32, visited: &[u32]) -> bool {
+        visited.contains(&w)
+            || self.faces_of_edge(v, w).len() == 1
+            || self.lines.iter().any(|l| {
+                l.windows(2)
+                    .any(|e| (e[0], e[1]) == (v, w) || (e[0], e[1]) == (w, v))
+            })
+    }
+
+    /// The vertex at parameter `t` of edge (a, b) (opposite `v` in a triangle): an end within
+    /// [`SNAP_REL`] the line may step onto from `v` ([`Edit::blocked`]), else a new vertex
+    /// splitting the edge; `None` when `t` is a blocked end itself.
+    fn insert_on_edge(&mut self, v: u32, a: u32, b: u32, t: f64, visited: &[u32]) -> Option<u32> {
+        const END: f64 = 1e-12;
+        if t <= SNAP_REL && !self.blocked(v, a, visited) {
+            Some(a)
+        } else if t >= 1.0 - SNAP_REL && !self.blocked(v, b, visited) {
+            Some(b)
+        } else if t > END && t < 1.0 - END {
             let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
-            self.split_edge(a, b, pa + (pb - pa) * t)
+            Some(self.split_edge(a, b, pa + (pb - pa) * t))
+        } else {
+            None
         }
     }
 
@@ -552,18 +569,30 @@ impl Edit {
                 best = (d, f as u32);
             }
         }
-        self.insert_in_face(best.1, p, snap, same)
+        self.insert_in_face(best.1, p, snap, same, None)
     }
 
-    /// Inserts `p` (on face `f`) as in [`Edit::insert_point`].
-    fn insert_in_face(&mut self, f: u32, p: DVec3, snap: f64, same: f64) -> u32 {
+    /// Inserts `p` (on face `f`) as in [`Edit::insert_point`]; on a walk (`from` = the walk's
+    /// vertex and the line so far), snapping to no corner the line may not step onto unless `p`
+    /// is that corner.
+    fn insert_in_face(
+        &mut self,
+        f: u32,
+        p: DVec3,
+        snap: f64,
+        same: f64,
+        from: Option<(u32, &[u32])>,
+    ) -> u32 {
         let t = self.tris[f as usize];
         let c = t.map(|v| self.pos[v as usize]);
         let shortest = (0..3)
             .map(|k| c[k].distance(c[(k + 1) % 3]))
             .fold(f64::INFINITY, f64::min);
         if let Some(k) = (0..3).min_by(|&i, &j| c[i].distance(p).total_cmp(&c[j].distance(p)))
-            && c[k].distance(p) <= (snap * shortest).max(same)
+            && (c[k].distance(p) <= same
+                || (c[k].distance(p) <= snap * shortest
+                    && from
+                        .is_none_or(|(v, visited)| t[k] == v || !self.blocked(v, t[k], visited))))
         {
             return t[k];
         }
@@ -593,12 +622,13 @@ impl Edit {
             .sum()
     }
 
-    /// Walks from vertex `from` to the target along the surface, splitting the crossed edges;
-    /// returns the vertices passed after `from`, the last one at the target. An `exact` target
-    /// point is inserted where it is (a notch), otherwise it snaps like any crossing.
+    /// Walks from the last vertex of `done` (the line so far) to the target along the surface,
+    /// splitting the crossed edges and never stepping back onto a vertex of the line; returns
+    /// the vertices passed, the last one at the target. An `exact` target point is inserted
+    /// where it is (a notch), otherwise it snaps like any crossing.
     fn walk(
         &mut self,
-        from: u32,
+        done: &[u32],
         target: Target,
         exact: bool,
         same: f64,
@@ -608,8 +638,10 @@ impl Edit {
             Target::Vertex(v) => self.pos[v as usize],
         };
         let snap = if exact { 0.0 } else { SNAP_REL };
-        let mut v = from;
+        let mut v = *done.last().expect("a walk starts at a vertex");
         let mut path = Vec::new();
+        // The line's vertices so far, which the walk must not step back onto.
+        let mut visited = done.to_vec();
         let max_steps = self.tris.len() + 1000;
         for _ in 0..max_steps {
             if let Target::Vertex(w) = target
@@ -638,7 +670,9 @@ impl Edit {
                         }
                         w
                     }
-                    Target::Point(p) => self.insert_in_face(f, p, snap, same),
+                    Target::Point(p) => {
+                        self.insert_in_face(f, p, snap, same, Some((v, visited.as_slice())))
+                    }
                 };
                 if w != v {
                     path.push(w);
@@ -686,8 +720,14 @@ impl Edit {
                     left_surface: true,
                 });
             };
-            let w = self.insert_on_edge(b, c, s);
+            let Some(w) = self.insert_on_edge(v, b, c, s, &visited) else {
+                return Err(Stop {
+                    at: v,
+                    left_surface: false,
+                });
+            };
             path.push(w);
+            visited.push(w);
             v = w;
         }
         Err(Stop {

@@ -69,6 +69,10 @@ pub struct PieceInput {
     pub seam_widths: Vec<f64>,
     pub corner_style: CornerStyle,
     pub label: LabelInfo,
+    /// Names of the notch marks, by mark index (a mating seam's notch carries the seam's name
+    /// into the notch's id); marks past its end, and empty names, are unnamed.
+    #[serde(default)]
+    pub mark_names: Vec<String>,
 }
 
 impl PieceInput {
@@ -88,6 +92,7 @@ impl PieceInput {
             grain: None,
             seam_widths: Vec::new(),
             corner_style: CornerStyle::default(),
+            mark_names: Vec::new(),
         }
     }
 }
@@ -202,6 +207,8 @@ pub struct Piece {
     pub cut: Vec<DVec2>,
     /// Notch strokes (open polylines cut through the allowance).
     pub notches: Vec<Vec<DVec2>>,
+    /// The name of each notch (empty when unnamed), in the order of `notches`.
+    pub notch_names: Vec<String>,
     /// Drill holes: centre and diameter.
     pub drills: Vec<(DVec2, f64)>,
     /// Reference points (drawn crosses).
@@ -446,6 +453,7 @@ impl Piece {
         };
         // 6. marks
         let mut notches = Vec::new();
+        let mut notch_names = Vec::new();
         let mut drills = Vec::new();
         let mut points = Vec::new();
         for (k, m) in input.marks.iter().enumerate() {
@@ -484,6 +492,7 @@ impl Piece {
                             vec![at_cut + h, tip, at_cut - h]
                         }
                     });
+                    notch_names.push(input.mark_names.get(k).cloned().unwrap_or_default());
                 }
                 MarkKind::Drill => {
                     if !poly::contains(&sew_poly, m.pos) {
@@ -538,6 +547,7 @@ impl Piece {
             sew_polyline: sew_poly,
             cut,
             notches,
+            notch_names,
             drills,
             points,
             lines,
@@ -689,12 +699,13 @@ impl Piece {
             s.push(mk(StrokeKind::Drill, pts, true, format!("drill-{}", k + 1)));
         }
         for (k, nt) in self.notches.iter().enumerate() {
-            s.push(mk(
-                StrokeKind::Notch,
-                nt.clone(),
-                false,
-                format!("notch-{}", k + 1),
-            ));
+            // A named notch (a mating seam's) says which: `notch-<seam>_<n>`, with the name's
+            // dashes and spaces as underscores so the id still splits into piece and notch.
+            let what = match self.notch_names.get(k).filter(|n| !n.is_empty()) {
+                Some(n) => format!("notch-{}", sanitize(n).replace('-', "_")),
+                None => format!("notch-{}", k + 1),
+            };
+            s.push(mk(StrokeKind::Notch, nt.clone(), false, what));
         }
         s.push(mk(
             StrokeKind::Boundary,

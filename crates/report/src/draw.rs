@@ -485,6 +485,31 @@ pub fn html_report(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
             }
             h.push_str("</table>\n");
         }
+        if !r.mating_seams.is_empty() {
+            h.push_str("<h3>Mating seams</h3><table><tr><th>seam</th><th>pieces</th><th>3D mm</th><th>2D mm</th><th>mismatch mm</th></tr>\n");
+            for s in &r.mating_seams {
+                h.push_str(&format!(
+                    "<tr><td>{}</td><td>{} / {}</td><td>{:.2}</td><td>{:.3} / {:.3}</td><td>{:.4}</td></tr>\n",
+                    esc(&s.name),
+                    esc(&s.pieces[0]),
+                    esc(&s.pieces[1]),
+                    s.length_3d_mm,
+                    s.length_2d_mm[0],
+                    s.length_2d_mm[1],
+                    s.mismatch_mm
+                ));
+                for n in &s.notches {
+                    h.push_str(&format!(
+                        "<tr><td>notch {}</td><td></td><td></td><td>{:.3} / {:.3}</td><td>{:.4}</td></tr>\n",
+                        esc(&n.name),
+                        n.offset_mm[0],
+                        n.offset_mm[1],
+                        (n.offset_mm[0] - n.offset_mm[1]).abs()
+                    ));
+                }
+            }
+            h.push_str("</table>\n");
+        }
         let over = !c.report.regions.is_empty();
         h.push_str(if over {
             "<h3>Regions beyond the limits</h3>\n"

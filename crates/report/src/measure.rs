@@ -235,6 +235,9 @@ pub struct Report {
     /// the surface area most stretched and the 1 % most compressed, worst first (at most
     /// [`MAX_HOT_SPOTS`]); empty for a map without measurable distortion.
     pub hot_spots: Vec<Region>,
+    /// The mating seams this piece takes part in (filled by whoever knows the other pieces: the
+    /// seams of a design, or the coincident boundaries of several flattened meshes).
+    pub mating_seams: Vec<crate::MatingSeamReport>,
     #[serde(skip)]
     pub per_face: Vec<FaceMeasure>,
 }
@@ -465,6 +468,7 @@ impl Report {
             boundary_segments,
             regions,
             hot_spots,
+            mating_seams: Vec::new(),
             per_face,
         })
     }

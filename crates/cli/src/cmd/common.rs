@@ -28,6 +28,10 @@ pub struct FlattenArgs {
     /// Iteration cap of the nonlinear methods.
     #[arg(long, default_value_t = FlattenParams::DEFAULT_MAX_ITERS)]
     pub max_iters: usize,
+    /// Largest difference between the two flat sides of a mating seam, or between a notch's
+    /// offsets on them, in mm; beyond it the command exits with code 3.
+    #[arg(long, default_value_t = flatcut::report::DEFAULT_SEAM_TOLERANCE_MM, value_name = "MM")]
+    pub seam_tolerance: f64,
 }
 
 pub fn parse_method(s: &str) -> Result<Method, String> {
@@ -60,6 +64,16 @@ impl FlattenArgs {
             .with_max_stretch_pct(self.max_stretch)
             .with_max_compress_pct(self.max_compress)
             .with_max_iters(self.max_iters))
+    }
+
+    /// The seam tolerance, checked.
+    pub fn seam_tolerance(&self) -> anyhow::Result<f64> {
+        anyhow::ensure!(
+            self.seam_tolerance.is_finite() && self.seam_tolerance >= 0.0,
+            "--seam-tolerance must be a length in mm >= 0, got {}",
+            self.seam_tolerance
+        );
+        Ok(self.seam_tolerance)
     }
 
     pub fn tolerances(&self) -> anyhow::Result<Tolerances> {
@@ -174,6 +188,64 @@ pub fn load_flat(
         }
     }
     Ok(flats)
+}
+
+/// Prints, on stderr, every region beyond the material limits (where on the 3D surface and by
+/// how much), every mating seam beyond `seam_tolerance` mm and, with `flips`, every piece with
+/// flipped faces; true when there is any, for the caller to exit with [`crate::EXIT_LIMIT`].
+pub fn report_limits(flats: &[Flat], seam_tolerance: f64, flips: bool) -> bool {
+    let mut over = false;
+    for f in flats {
+        if flips && f.report.flipped > 0 {
+            eprintln!(
+                "{}: {} flipped faces (the pattern folds over itself)",
+                f.name, f.report.flipped
+            );
+            over = true;
+        }
+        for r in &f.report.regions {
+            over = true;
+            eprintln!(
+                "{}: {} {:.2}% over {:.1} mm² at 3D ({:.1}, {:.1}, {:.1}) / 2D ({:.1}, {:.1})",
+                f.name,
+                r.kind,
+                r.worst_pct,
+                r.area_mm2,
+                r.centroid_3d[0],
+                r.centroid_3d[1],
+                r.centroid_3d[2],
+                r.centroid_2d[0],
+                r.centroid_2d[1]
+            );
+        }
+    }
+    for line in flatcut::flat::seams_over(flats, seam_tolerance) {
+        eprintln!("{line}");
+        over = true;
+    }
+    over
+}
+
+/// Prints every mating seam: its sides' flat lengths against 3D and its notches' offsets.
+pub fn print_seams(flats: &[Flat]) {
+    for s in flatcut::flat::mating_seams(flats) {
+        println!(
+            "mating seam '{}' ({} / {}): 3D {:.2} mm, flat {:.3} / {:.3} mm, mismatch {:.4} mm",
+            s.name,
+            s.pieces[0],
+            s.pieces[1],
+            s.length_3d_mm,
+            s.length_2d_mm[0],
+            s.length_2d_mm[1],
+            s.mismatch_mm
+        );
+        for n in &s.notches {
+            println!(
+                "  notch '{}': {:.3} / {:.3} mm from the seam's start",
+                n.name, n.offset_mm[0], n.offset_mm[1]
+            );
+        }
+    }
 }
 
 /// Builds the pattern piece of each flattened piece.

@@ -42,6 +42,9 @@ pub struct RunOptions {
     pub nest_iters: usize,
     /// Chordal tolerance of the tessellation (mm).
     pub chord_mm: f64,
+    /// Largest difference between the two sides of a mating seam, or between a notch's offsets
+    /// on them (mm), before the run counts as beyond its limits.
+    pub seam_tolerance_mm: f64,
 }
 
 impl RunOptions {
@@ -52,10 +55,16 @@ impl RunOptions {
     pub const DEFAULT: Self = Self {
         nest_iters: Self::DEFAULT_NEST_ITERS,
         chord_mm: Self::DEFAULT_CHORD_MM,
+        seam_tolerance_mm: flatcut_report::DEFAULT_SEAM_TOLERANCE_MM,
     };
 
     pub const fn with_nest_iters(mut self, n: usize) -> Self {
         self.nest_iters = n;
+        self
+    }
+
+    pub const fn with_seam_tolerance_mm(mut self, mm: f64) -> Self {
+        self.seam_tolerance_mm = mm;
         self
     }
 }
@@ -96,13 +105,13 @@ pub fn run_project(
         flatten_stage(project, opts, obs, &mut files)
     })?;
     let limits_exceeded = timed(obs, Stage::Report, "", |obs| {
-        report_stage(&flats, obs, &mut files)
+        report_stage(&flats, opts, obs, &mut files)
     })?;
     let pieces = timed(obs, Stage::Pattern, "", |_| {
         pattern_stage(project, &flats, &mut files)
     })?;
     let (layout, stock) = timed(obs, Stage::Nest, "", |obs| {
-        nest_stage(project, &flats, &pieces, opts, obs)
+        nest_stage(project, &pieces, opts, obs)
     })?;
     let (profile, sheets) = timed(obs, Stage::Gcode, "", |_| {
         gcode_stage(project, &layout, stock, &mut files)
@@ -213,9 +222,10 @@ fn flatten_stage(
 const WARNED_REGIONS: usize = 5;
 
 /// Distortion report: JSON, heat map (SVG, PNG) and the HTML page; returns one line per region
-/// beyond the material limits.
+/// beyond the material limits and per mating seam whose sides differ beyond the tolerance.
 fn report_stage(
     flats: &[Flat],
+    opts: &RunOptions,
     obs: &mut dyn Observer,
     files: &mut Vec<OutputFile>,
 ) -> Result<Vec<String>, RunError> {
@@ -268,6 +278,13 @@ fn report_stage(
                 ),
             });
         }
+    }
+    for line in flat::seams_over(flats, opts.seam_tolerance_mm) {
+        obs.event(&Event::Warning {
+            stage: Stage::Report,
+            message: &line,
+        });
+        over.push(line);
     }
     Ok(over)
 }
@@ -327,10 +344,10 @@ pub fn stock(project: &Project) -> Result<Stock, RunError> {
     }
 }
 
-/// Nests every piece, as many times as its quantity, on the project's stock.
+/// Nests every piece (both sides of a pair), as many times as its label says, on the project's
+/// stock.
 fn nest_stage(
     project: &Project,
-    flats: &[Flat],
     pieces: &[Piece],
     opts: &RunOptions,
     obs: &mut dyn Observer,
@@ -338,8 +355,7 @@ fn nest_stage(
     let stock = stock(project)?;
     let groups: Vec<NestGroup> = pieces
         .iter()
-        .zip(flats)
-        .map(|(p, f)| NestGroup::from_piece(p, f.quantity as usize, false))
+        .map(|p| NestGroup::from_piece(p, p.label.quantity as usize, false))
         .collect();
     let nopts = NestOptions::DEFAULT
         .with_spacing(project.sheet.spacing_mm)
@@ -421,6 +437,7 @@ fn summarise(
         est_time_s: sheets.iter().map(|s| s.summary.est_time_s).sum(),
         gcode_lines: sheets.iter().map(|s| s.summary.lines).sum(),
         limits_exceeded,
+        mating_seams: flat::mating_seams(flats),
         pieces: flats
             .iter()
             .map(|f| PieceSummary {
@@ -428,6 +445,7 @@ fn summarise(
                 compress_max_pct: f.report.compress_max_pct,
                 delta2_mean: f.report.delta2_mean,
                 name: f.name.clone(),
+                mirrored: f.mirrored,
                 quantity: f.quantity,
                 stretch_max_pct: f.report.stretch_max_pct,
             })
