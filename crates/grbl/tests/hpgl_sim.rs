@@ -83,9 +83,13 @@ fn run(buffer_query: bool) {
         assert_eq!(report.device_buffer, Some(512));
         assert!(report.queries > 10);
     } else {
+        // Every XOFF the device sent while bytes were still to come reached the sender; the
+        // device may send one more after the last byte, when the sender has stopped listening.
         assert!(
-            st.xoff_sent > 0 && report.xoff_received == st.xoff_sent,
-            "XOFF used"
+            st.xoff_sent > 0 && report.xoff_received + 1 >= st.xoff_sent,
+            "XOFF used: {} sent, {} seen",
+            st.xoff_sent,
+            report.xoff_received
         );
     }
     assert_eq!(report.bytes_sent, text.len());

@@ -12,10 +12,12 @@
 
 pub mod draw;
 pub mod measure;
+pub mod per_face;
 pub mod seams;
 
 pub use draw::{Column, heatmap_svg, histogram_svg, html_report, render_png};
 pub use measure::{
     BoundarySegment, FaceMeasure, Measure, Region, Report, ReportError, ReportOptions, Stats,
 };
+pub use per_face::{FaceRow, ReportWithFaces, per_face_rows, with_faces};
 pub use seams::{DEFAULT_SEAM_TOLERANCE_MM, MatingSeamReport, NotchOffset, measure_seam};

@@ -255,6 +255,32 @@ fn json_has_the_stable_keys() {
 }
 
 #[test]
+fn per_face_rows_carry_each_face_with_its_centroid_and_measures() {
+    // A stretch of 1.5 along x only: μ1 = 2.25, μ2 = 1 on every face, stretch 50 %.
+    let m = with_map(grid(3, 30.0), |p| DVec2::new(1.5 * p.x, p.y));
+    let r = Report::compute("x", &m, &ReportOptions::default()).unwrap();
+    let v = serde_json::to_value(flatcut_report::with_faces(&r, &m)).unwrap();
+    assert_eq!(v["faces"], 18, "the report's own keys stay");
+    let rows = v["per_face"].as_array().unwrap();
+    assert_eq!(rows.len(), 18);
+    for (k, row) in rows.iter().enumerate() {
+        assert_eq!(row["face"], k);
+        let t = m.triangles[k];
+        let c =
+            (m.positions[t[0] as usize] + m.positions[t[1] as usize] + m.positions[t[2] as usize])
+                / 3.0;
+        for (i, x) in c.to_array().iter().enumerate() {
+            assert!((row["centroid_3d"][i].as_f64().unwrap() - x).abs() < 1e-12);
+        }
+        assert!((row["mu1"].as_f64().unwrap() - 2.25).abs() < 1e-12);
+        assert!((row["mu2"].as_f64().unwrap() - 1.0).abs() < 1e-12);
+        assert!((row["stretch_pct"].as_f64().unwrap() - 50.0).abs() < 1e-9);
+        assert!((row["area_3d_mm2"].as_f64().unwrap() - 50.0).abs() < 1e-9);
+        assert_eq!(row["flipped"], false);
+    }
+}
+
+#[test]
 fn pictures_are_true_scale_deterministic_and_the_png_shows_the_legend() {
     let a = with_map(grid(10, 100.0), |p| {
         DVec2::new(

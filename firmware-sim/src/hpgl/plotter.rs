@@ -204,16 +204,17 @@ mod tests {
     #[test]
     fn overrun_loses_bytes_and_xoff_comes_first() {
         let mut p = Plotter::new(PlotterConfig {
-            buffer: 16,
+            buffer: 20,
             xoff_free: 4,
             xon_free: 12,
             ..PlotterConfig::default()
         });
-        p.receive(b"PU0,0;PD40,0;PD40,40;");
-        assert_eq!(p.stats.bytes_lost, 21 - 16);
+        // Pen 1 selected, then one pen-down move; the overrun cuts the second move's tail.
+        p.receive(b"SP1;PU0,0;PD40,0;PD40,40;");
+        assert_eq!(p.stats.bytes_lost, 25 - 20);
         assert_eq!(p.take_output(), vec![XOFF]);
         p.receive(b"\x1b.B\x1b.L");
-        assert_eq!(p.take_output(), b"0\r16\r".to_vec());
+        assert_eq!(p.take_output(), b"0\r20\r".to_vec());
         for _ in 0..1000 {
             p.tick(0.01);
         }

@@ -17,6 +17,10 @@ pub struct Args {
     /// Write the figures as JSON (one object; an array for several inputs).
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// With --json: add `per_face`, each face's index, 3D centroid and measures (μ1, μ2, δ1, δ2,
+    /// area ratio, stretch, compression, flipped).
+    #[arg(long, requires = "json")]
+    pub per_face: bool,
     /// Heat map as SVG (true mm, one column per input).
     #[arg(long)]
     pub svg: Option<PathBuf>,
@@ -108,12 +112,21 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             );
         }
     }
-    let reports: Vec<_> = flats.iter().map(|f| &f.report).collect();
     if let Some(p) = &a.json {
-        let json = if reports.len() == 1 {
-            serde_json::to_string_pretty(reports[0])?
-        } else {
-            serde_json::to_string_pretty(&reports)?
+        // One object for one input, an array for several; keys in the report's own order.
+        let json = match (a.per_face, flats.as_slice()) {
+            (true, [f]) => {
+                serde_json::to_string_pretty(&flatcut::report::with_faces(&f.report, &f.mesh))?
+            }
+            (true, all) => serde_json::to_string_pretty(
+                &all.iter()
+                    .map(|f| flatcut::report::with_faces(&f.report, &f.mesh))
+                    .collect::<Vec<_>>(),
+            )?,
+            (false, [f]) => serde_json::to_string_pretty(&f.report)?,
+            (false, all) => {
+                serde_json::to_string_pretty(&all.iter().map(|f| &f.report).collect::<Vec<_>>())?
+            }
         };
         common::write(p, json.as_bytes())?;
     }
