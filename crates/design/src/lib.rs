@@ -43,4 +43,6 @@ pub use part::{JoinDef, JoinEdgeDef, LineDef, PartDef, PartPieceDef};
 pub use schema::{Blend, CurveDef, MarkDef, MarkKind, P3, PieceDef, SeamDef, SurfaceDef, Units};
 
 #[cfg(test)]
+mod part_tests;
+#[cfg(test)]
 mod tests;

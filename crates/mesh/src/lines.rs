@@ -528,12 +528,24 @@ impl Edit {
         v
     }
 
-    /// True when the line may not step from `v` to its neighbour `w`: `w` is one of the line's
-    /// own vertices (`visited`: going back through one would fold the line on itself), or the
-    /// edge v–w is a boundary edge or an edge of another line (the line would run along it).
+    /// True when `v` is on the boundary (one of its edges has one triangle).
+    fn on_boundary(&self, v: u32) -> bool {
+        self.vf[v as usize].iter().any(|&f| {
+            let t = self.tris[f as usize];
+            let k = t.iter().position(|&x| x == v).expect("v is a corner");
+            [t[(k + 1) % 3], t[(k + 2) % 3]]
+                .into_iter()
+                .any(|w| self.faces_of_edge(v, w).len() == 1)
+        })
+    }
+
+    /// True when the line may not step from `v` to its neighbour `w` on its way: `w` is one of
+    /// the line's own vertices (`visited`: going back through one would fold the line on
+    /// itself), or a boundary vertex (the line touches the boundary only at its ends), or the
+    /// edge v–w is an edge of another line (the line would run along it).
     fn blocked(&self, v: u32, w: u32, visited: &[u32]) -> bool {
         visited.contains(&w)
-            || self.faces_of_edge(v, w).len() == 1
+            || self.on_boundary(w)
             || self.lines.iter().any(|l| {
                 l.windows(2)
                     .any(|e| (e[0], e[1]) == (v, w) || (e[0], e[1]) == (w, v))
@@ -714,7 +726,10 @@ impl Edit {
                     best = Some((cos, b, c, s));
                 }
             }
-            let Some((_, b, c, s)) = best else {
+            // No way ahead, or only across the boundary: the line would leave the surface (the
+            // target is not on that boundary edge, or it would have been in the star).
+            let Some((_, b, c, s)) = best.filter(|bst| self.faces_of_edge(bst.1, bst.2).len() > 1)
+            else {
                 return Err(Stop {
                     at: v,
                     left_surface: true,

@@ -303,7 +303,7 @@ mod tests {
         let left = &s.regions[seam.sides[0].piece];
         assert!(left.mesh.positions.iter().all(|p| p.x <= 2.0));
         for side in &seam.sides {
-            let reg = &s.regions[side.region];
+            let reg = &s.regions[side.piece];
             let pts: Vec<DVec3> = side
                 .vertices
                 .iter()

@@ -378,14 +378,21 @@ pub fn histogram_svg(report: &Report, m: Measure, bins: usize) -> String {
 /// Pixels per millimetre of the PNG when no width is asked for (≈ 254 dpi).
 pub const DEFAULT_PX_PER_MM: f64 = 10.0;
 
+/// Longest side of a PNG rendered by default (pixels): a 2.5 m sail panel at the default
+/// resolution would need 25,000 pixels a side (gigabytes); larger drawings get fewer pixels per
+/// mm instead.
+pub const MAX_DEFAULT_SIDE_PX: f64 = 4096.0;
+
 /// Renders an SVG (ours) to PNG bytes with resvg, `width_px` wide (height in proportion).
 pub fn render_png(svg: &str, width_px: Option<u32>) -> Result<Vec<u8>, ReportError> {
     use resvg::{tiny_skia, usvg};
     let tree = usvg::Tree::from_str(svg, &usvg::Options::default())
         .map_err(|e| ReportError::Render(e.to_string()))?;
     let size = tree.size();
+    let longest = size.width().max(size.height()) as f64;
     let w = width_px.map_or(
-        size.width() as f64 * DEFAULT_PX_PER_MM / (96.0 / 25.4),
+        size.width() as f64
+            * (DEFAULT_PX_PER_MM / (96.0 / 25.4)).min(MAX_DEFAULT_SIDE_PX / longest),
         |w| w as f64,
     );
     let s = w / size.width() as f64;

@@ -27,7 +27,7 @@ pub struct Args {
     /// Heat map as PNG, rendered from the same SVG.
     #[arg(long)]
     pub png: Option<PathBuf>,
-    /// Width of the PNG in pixels (default: 10 pixels per mm).
+    /// Width of the PNG in pixels (default: 10 pixels per mm, the longest side at most 4096).
     #[arg(long)]
     pub png_width: Option<u32>,
     /// Self-contained HTML report.
