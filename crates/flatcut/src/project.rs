@@ -10,6 +10,8 @@
 //! name = "parchment"
 //! max_stretch_pct = 2.0
 //! max_compress_pct = 0.0
+//! grain = "0,180"               # "fixed" (one way), "0,180" (either way, default) or "any"
+//! grain_tolerance_deg = 0.0     # how far a piece's grain line may turn off the material's
 //! [sheet]
 //! width_mm = 600.0              # sheets of width × height, or
 //! height_mm = 400.0
@@ -34,6 +36,48 @@ pub struct Material {
     pub max_stretch_pct: Option<f64>,
     #[serde(default)]
     pub max_compress_pct: Option<f64>,
+    /// The material's grain rule for pieces with a grain line: `"fixed"` (along the grain one
+    /// way), `"0,180"` (either way; the default) or `"any"` (no grain: pieces turn freely in
+    /// quarter turns).
+    #[serde(default)]
+    pub grain: Option<String>,
+    /// How far a piece's grain line may turn off the material's grain (degrees).
+    #[serde(default)]
+    pub grain_tolerance_deg: Option<f64>,
+}
+
+/// A material's grain rule.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Grain {
+    /// Along the grain, one way only.
+    Fixed,
+    /// Along the grain either way.
+    #[default]
+    Reversible,
+    /// No grain to keep.
+    Any,
+}
+
+impl Grain {
+    /// Parses `"fixed"`, `"0,180"` and `"any"` (the project file's spellings).
+    pub fn parse(s: &str) -> Option<Self> {
+        match s.trim().to_ascii_lowercase().replace(' ', "").as_str() {
+            "fixed" | "0" => Some(Self::Fixed),
+            "0,180" | "reversible" => Some(Self::Reversible),
+            "any" => Some(Self::Any),
+            _ => None,
+        }
+    }
+}
+
+impl Material {
+    /// The grain rule (validated at load time).
+    pub fn grain_rule(&self) -> Grain {
+        self.grain
+            .as_deref()
+            .and_then(Grain::parse)
+            .unwrap_or_default()
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -163,6 +207,20 @@ impl Project {
             if v.is_some_and(|v| !(v.is_finite() && (0.0..100.0).contains(&v))) {
                 return Err(format!("[material] {k} must be a percentage in [0, 100)"));
             }
+        }
+        if let Some(g) = &self.material.grain
+            && Grain::parse(g).is_none()
+        {
+            return Err(format!(
+                "[material] grain must be \"fixed\", \"0,180\" or \"any\", got \"{g}\""
+            ));
+        }
+        if self
+            .material
+            .grain_tolerance_deg
+            .is_some_and(|v| !(v.is_finite() && (0.0..=90.0).contains(&v)))
+        {
+            return Err("[material] grain_tolerance_deg must be an angle in [0, 90]".into());
         }
         if self.seam_mm.is_some_and(|v| !(v.is_finite() && v >= 0.0)) {
             return Err("seam_mm must be >= 0".into());

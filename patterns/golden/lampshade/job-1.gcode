@@ -1230,14 +1230,14 @@ G1 X684.315 Y18.270
 M3 S0.000
 G4 P0.150
 (layer cut)
-(shade-1-notch-2#1)
+(shade-1-notch-top_ring_clip#1)
 G0 X241.545 Y247.213
 M3 S1000.000
 G4 P0.150
 G1 X241.603 Y251.213 F3000.000
 M3 S0.000
 G4 P0.150
-(shade-1-notch-1#1)
+(shade-1-notch-bottom_ring_clip#1)
 G0 X244.783 Y475.088
 M3 S1000.000
 G4 P0.150

@@ -353,9 +353,17 @@ fn nest_stage(
     obs: &mut dyn Observer,
 ) -> Result<(Layout, Stock), RunError> {
     let stock = stock(project)?;
+    let any_grain = project.material.grain_rule() == crate::project::Grain::Any;
     let groups: Vec<NestGroup> = pieces
         .iter()
-        .map(|p| NestGroup::from_piece(p, p.label.quantity as usize, false))
+        .map(|p| {
+            let mut g = NestGroup::from_piece(p, p.label.quantity as usize, false);
+            if any_grain {
+                // The material has no grain to keep: the piece turns as any piece does.
+                g.grain_angle = None;
+            }
+            g
+        })
         .collect();
     let nopts = NestOptions::DEFAULT
         .with_spacing(project.sheet.spacing_mm)
