@@ -110,14 +110,20 @@ pub fn flatten_and_report(
 
 /// Measures every mating seam and lists it in the reports of the pieces on its sides.
 pub fn attach_seams(flats: &mut [Flat], seams: &[MatingSeam]) {
+    let all: Vec<usize> = (0..flats.len()).collect();
+    attach_seams_among(flats, &all, seams);
+}
+
+/// [`attach_seams`] for seams whose sides index `idx` (piece k of a seam is `flats[idx[k]]`).
+fn attach_seams_among(flats: &mut [Flat], idx: &[usize], seams: &[MatingSeam]) {
     let reports: Vec<(usize, usize, MatingSeamReport)> = {
-        let meshes: Vec<&TriMesh> = flats.iter().map(|f| &f.mesh).collect();
-        let names: Vec<&str> = flats.iter().map(|f| f.name.as_str()).collect();
+        let meshes: Vec<&TriMesh> = idx.iter().map(|&k| &flats[k].mesh).collect();
+        let names: Vec<&str> = idx.iter().map(|&k| flats[k].name.as_str()).collect();
         seams
             .iter()
             .filter_map(|s| {
                 let r = flatcut_report::measure_seam(s, &meshes, &names)?;
-                Some((s.sides[0].piece, s.sides[1].piece, r))
+                Some((idx[s.sides[0].piece], idx[s.sides[1].piece], r))
             })
             .collect()
     };
@@ -127,6 +133,21 @@ pub fn attach_seams(flats: &mut [Flat], seams: &[MatingSeam]) {
         }
         flats[a].report.mating_seams.push(r);
     }
+}
+
+/// Pairs flattened meshes read from files (no design) by their coincident boundary vertices (the
+/// `OUT-<piece>.obj` files of one split surface carry a seam's vertices at identical
+/// coordinates on both sides) and lists each such seam in both pieces' reports.
+pub fn pair_coincident(flats: &mut [Flat]) {
+    let idx: Vec<usize> = (0..flats.len())
+        .filter(|&k| flats[k].def.is_none())
+        .collect();
+    let seams = {
+        let meshes: Vec<&TriMesh> = idx.iter().map(|&k| &flats[k].mesh).collect();
+        let names: Vec<&str> = idx.iter().map(|&k| flats[k].name.as_str()).collect();
+        flatcut_mesh::mating::coincident_seams(&meshes, &names)
+    };
+    attach_seams_among(flats, &idx, &seams);
 }
 
 /// The mating seams of the pieces (each once, in the order of the pieces that list them).

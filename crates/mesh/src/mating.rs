@@ -133,3 +133,161 @@ pub fn arc_lengths<P>(points: &[P], dist: impl Fn(&P, &P) -> f64) -> Vec<f64> {
     }
     out
 }
+
+/// The mating seams of meshes written from one split surface (`flatten`'s `OUT-<piece>.obj`
+/// files): boundary stretches of two meshes (or two stretches of one) whose vertices sit at
+/// identical 3D coordinates, edge for edge. Each maximal run of such edges is a seam named
+/// `"<a>/<b>"` (`"<a>/<b>-2"`, … when the pair shares several); `names` names the meshes. The
+/// sides run along the first mesh's boundary loop.
+pub fn coincident_seams(meshes: &[&TriMesh], names: &[&str]) -> Vec<MatingSeam> {
+    use std::collections::BTreeMap;
+    let key = |p: DVec3| p.to_array().map(f64::to_bits);
+    let loops: Vec<Vec<Vec<u32>>> = meshes
+        .iter()
+        .map(|m| {
+            crate::Topology::build(m)
+                .map(|t| t.boundary_loops)
+                .unwrap_or_default()
+        })
+        .collect();
+    // Boundary vertices by position, and boundary edges (either way) per mesh.
+    let mut at: BTreeMap<[u64; 3], Vec<(usize, u32)>> = BTreeMap::new();
+    let mut edges: Vec<std::collections::BTreeSet<(u32, u32)>> = Vec::new();
+    for (i, ls) in loops.iter().enumerate() {
+        let mut e = std::collections::BTreeSet::new();
+        for lp in ls {
+            for k in 0..lp.len() {
+                let (a, b) = (lp[k], lp[(k + 1) % lp.len()]);
+                e.insert((a.min(b), a.max(b)));
+                at.entry(key(meshes[i].positions[a as usize]))
+                    .or_default()
+                    .push((i, a));
+            }
+        }
+        edges.push(e);
+    }
+    // The partner of boundary edge (a, b) of mesh i on mesh j, if any.
+    let partner = |i: usize, a: u32, b: u32, j: usize| -> Option<(u32, u32)> {
+        let find = |v: u32| {
+            at.get(&key(meshes[i].positions[v as usize]))?
+                .iter()
+                .find(|&&(m, w)| m == j && (m != i || w != v))
+                .map(|&(_, w)| w)
+        };
+        let (pa, pb) = (find(a)?, find(b)?);
+        edges[j]
+            .contains(&(pa.min(pb), pa.max(pb)))
+            .then_some((pa, pb))
+    };
+    let mut out: Vec<MatingSeam> = Vec::new();
+    for i in 0..meshes.len() {
+        for j in i..meshes.len() {
+            let mut runs: Vec<[Vec<u32>; 2]> = Vec::new();
+            for lp in &loops[i] {
+                let n = lp.len();
+                let paired: Vec<Option<(u32, u32)>> = (0..n)
+                    .map(|k| partner(i, lp[k], lp[(k + 1) % n], j))
+                    .collect();
+                // Start each run where the previous edge is unpaired (or anywhere for a loop
+                // paired all round).
+                let start = (0..n)
+                    .find(|&k| paired[(k + n - 1) % n].is_none())
+                    .unwrap_or(0);
+                let mut k = 0;
+                while k < n {
+                    let e = (start + k) % n;
+                    let Some((pa, pb)) = paired[e] else {
+                        k += 1;
+                        continue;
+                    };
+                    let mut run = [vec![lp[e], lp[(e + 1) % n]], vec![pa, pb]];
+                    k += 1;
+                    while k < n {
+                        let e = (start + k) % n;
+                        match paired[e] {
+                            Some((qa, qb)) if qa == *run[1].last().expect("non-empty") => {
+                                run[0].push(lp[(e + 1) % n]);
+                                run[1].push(qb);
+                                k += 1;
+                            }
+                            _ => break,
+                        }
+                    }
+                    runs.push(run);
+                }
+            }
+            // On one mesh each seam is found from both of its sides: keep it once.
+            if i == j {
+                let mut kept: Vec<[Vec<u32>; 2]> = Vec::new();
+                for r in runs {
+                    let mut rev = [r[1].clone(), r[0].clone()];
+                    rev.iter_mut().for_each(|s| s.reverse());
+                    let same = |x: &[Vec<u32>; 2]| *x == rev || *x == r;
+                    if !kept.iter().any(same) {
+                        kept.push(r);
+                    }
+                }
+                runs = kept;
+            }
+            let several = runs.len() > 1;
+            for (k, [a, b]) in runs.into_iter().enumerate() {
+                let base = format!("{}/{}", names[i], names[j]);
+                out.push(MatingSeam {
+                    name: if several {
+                        format!("{base}-{}", k + 1)
+                    } else {
+                        base
+                    },
+                    sides: [
+                        SeamSide {
+                            piece: i,
+                            vertices: a,
+                        },
+                        SeamSide {
+                            piece: j,
+                            vertices: b,
+                        },
+                    ],
+                    notches: Vec::new(),
+                });
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::regions::split_along_lines;
+
+    #[test]
+    fn the_pieces_of_a_split_grid_pair_up_by_their_coordinates() {
+        // A 4 × 4 grid split along x = 2: two meshes sharing the line's five vertices.
+        let mut p = Vec::new();
+        for j in 0..=4 {
+            for i in 0..=4 {
+                p.push(DVec3::new(i as f64, j as f64, 0.0));
+            }
+        }
+        let id = |i: u32, j: u32| j * 5 + i;
+        let mut t = Vec::new();
+        for j in 0..4 {
+            for i in 0..4 {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let m = TriMesh::new(p, t);
+        let line: Vec<u32> = (0..=4).map(|j| id(2, j)).collect();
+        let s = split_along_lines(&m, &[line]).unwrap();
+        let meshes: Vec<&TriMesh> = s.regions.iter().map(|r| &r.mesh).collect();
+        let seams = coincident_seams(&meshes, &["a", "b"]);
+        assert_eq!(seams.len(), 1);
+        let seam = &seams[0];
+        assert_eq!(seam.name, "a/b");
+        assert_eq!(seam.sides[0].vertices.len(), 5);
+        assert_eq!(seam.points_3d(0, &meshes), seam.points_3d(1, &meshes));
+        seam.check(&meshes).unwrap();
+    }
+}

@@ -77,6 +77,8 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             flats.push(flat);
         }
     }
+    // Flattened meshes of one split surface pair up by their seams' shared coordinates.
+    flatcut::flat::pair_coincident(&mut flats);
     for f in &flats {
         let r = &f.report;
         println!("{}", f.name);
