@@ -1,8 +1,9 @@
 //! The `flatcut` command line: argument parsing, files, terminal output and serial devices.
 //!
-//! **Architecture invariant:** this is the only crate that touches the file system, the terminal,
-//! environment variables and serial ports on behalf of the user, and the only one that uses
-//! `anyhow`. Every command is a thin layer over the `flatcut` facade and `flatcut-grbl`.
+//! **Architecture invariant:** this is the only crate that writes the user's output files, talks to
+//! the terminal, reads environment variables and opens serial ports on the user's behalf (the
+//! libraries read the input files they are given), and the only one that uses `anyhow`. Every
+//! command is a thin layer over the `flatcut` facade and `flatcut-grbl`.
 
 use std::process::ExitCode;
 

@@ -224,4 +224,23 @@ mod tests {
             .unwrap_err();
         assert!(matches!(e, HpglError::NotHpgl { .. }));
     }
+
+    #[test]
+    fn weed_border_follows_the_work_area_edge_where_the_job_touches_it() {
+        // A piece drawn 2 mm from the sheet's corner: the border cannot go 5 mm below or left of it,
+        // so it runs along the edge there, and the whole job stays in the work area.
+        let d = Drawing::from_strokes(vec![square(DVec2::splat(2.0), 50.0, StrokeKind::Boundary)]);
+        let plan = plan(&d, &Profile::vinyl(), &GcodeOptions::default()).unwrap();
+        let border = plan.paths.iter().find(|p| p.id == "weed-border").unwrap();
+        let k = Profile::vinyl().knife.unwrap();
+        let margin = 2.0 * k.blade_offset_mm + k.overcut_mm;
+        assert!((border.start.x - margin).abs() < 1e-9 || (border.start.y - margin).abs() < 1e-9);
+        // Up and to the right the full 5 mm is kept.
+        let far = border
+            .moves
+            .iter()
+            .map(|m| m.end().x)
+            .fold(f64::MIN, f64::max);
+        assert!(far >= 57.0 - 1e-9, "border reaches x = {far}");
+    }
 }

@@ -278,18 +278,8 @@ pub fn plan(drawing: &Drawing, profile: &Profile, opts: &GcodeOptions) -> Result
         profile.hpgl.as_ref().and_then(|h| h.weed_border_mm),
         profile.kind,
     ) && !paths.is_empty()
+        && let Some(tp) = weed_border(&paths, w, opts, profile)
     {
-        let mut b = Aabb2::EMPTY;
-        paths.iter().for_each(|tp| b.add(tp.start));
-        for tp in &paths {
-            tp.moves.iter().for_each(|m| b.add(m.end()));
-        }
-        let (lo, hi) = (b.min - DVec2::splat(w), b.max + DVec2::splat(w));
-        let border = vec![lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y), lo];
-        let k = profile.knife.as_ref().expect("validated");
-        let run = knife::with_overcut(&border, k.overcut_mm);
-        let feed = profile.layer_feed(Layer::Cut);
-        let tp = toolpath(run, Layer::Cut, "weed-border", feed, 0.0, 1, opts, profile);
         check_work_area(&tp, profile)?;
         paths.push(tp);
     }
@@ -298,6 +288,47 @@ pub fn plan(drawing: &Drawing, profile: &Profile, opts: &GcodeOptions) -> Result
         paths,
         title: opts.title.clone(),
     })
+}
+
+/// The weeding border: a rectangle `w` mm around everything cut, cut last so the waste lifts in
+/// one sheet. Where the job lies closer than `w` to the edge of the work area the border follows
+/// the edge instead (the material ends there, nothing to weed beyond it), kept a blade offset
+/// and a swivel inside so the compensated cut stays in the work area. `None` when no border fits
+/// around the job.
+fn weed_border(
+    paths: &[Toolpath],
+    w: f64,
+    opts: &GcodeOptions,
+    profile: &Profile,
+) -> Option<Toolpath> {
+    let k = profile.knife.as_ref()?;
+    let mut b = Aabb2::EMPTY;
+    paths.iter().for_each(|tp| b.add(tp.start));
+    for tp in paths {
+        tp.moves.iter().for_each(|m| b.add(m.end()));
+    }
+    // The compensated knife path swings up to the blade offset (plus the swivel's lift-off)
+    // outside the programmed corner.
+    let margin = 2.0 * k.blade_offset_mm + k.overcut_mm;
+    let area = DVec2::from_array(profile.work_area_mm);
+    let lo = (b.min - DVec2::splat(w)).max(DVec2::splat(margin));
+    let hi = (b.max + DVec2::splat(w)).min(area - DVec2::splat(margin));
+    if !(lo.x < b.min.x && lo.y < b.min.y && hi.x > b.max.x && hi.y > b.max.y) {
+        return None;
+    }
+    let border = vec![lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y), lo];
+    let run = knife::with_overcut(&border, k.overcut_mm);
+    let feed = profile.layer_feed(Layer::Cut);
+    Some(toolpath(
+        run,
+        Layer::Cut,
+        "weed-border",
+        feed,
+        0.0,
+        1,
+        opts,
+        profile,
+    ))
 }
 
 /// One toolpath from a run of points: drag-knife compensation for knives, arc fitting, and
