@@ -150,7 +150,7 @@ fn two_pieces_in_one_region_or_a_loose_line_are_errors() {
         e.contains("line 0 'dart'") && e.contains("does not close a region"),
         "{e}"
     );
-    let off = format!("[[part.piece]]\nname = \"a\"\nat = [40, 50, 90]\n");
+    let off = "[[part.piece]]\nname = \"a\"\nat = [40, 50, 90]\n".to_string();
     let e = assemble(&sheet("", &off)).unwrap_err().to_string();
     assert!(e.contains("`at` (40.00, 50.00, 90.00) is"), "{e}");
 }

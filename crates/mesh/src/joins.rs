@@ -99,7 +99,7 @@ pub fn boundary_vertex(
         }
     }
     let (d, u, v, t) = best;
-    if !(d <= tol) {
+    if d.is_nan() || d > tol {
         return Err(JoinError::OffBoundary {
             what: what.to_string(),
             x: p.x,
@@ -181,7 +181,7 @@ pub fn vertex_on_side(
         }
     }
     let (d, i, t) = best;
-    if !(d <= tol) {
+    if d.is_nan() || d > tol {
         return Err(JoinError::OffBoundary {
             what: what.to_string(),
             x: p.x,

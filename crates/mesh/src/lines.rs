@@ -183,7 +183,7 @@ fn anchors(ed: &Edit, line: usize, s: &LineSpec, diag: f64) -> Result<Vec<Anchor
     let mut out: Vec<Anchor> = Vec::with_capacity(s.points.len() + s.notches.len());
     for (i, &p) in s.points.iter().enumerate() {
         let (q, d) = ed.nearest(p);
-        if !(d <= OFF_SURFACE_REL * diag) {
+        if d.is_nan() || d > OFF_SURFACE_REL * diag {
             return Err(LineError::OffSurface {
                 line,
                 point: i,
@@ -718,7 +718,8 @@ impl Edit {
                 let s = sb / (sb - sc);
                 let x = pb + (pc - pb) * s;
                 let dir = x - pv;
-                if !(dir.length() > 0.0) {
+                let len = dir.length();
+                if len.is_nan() || len <= 0.0 {
                     continue;
                 }
                 let cos = dir.normalize().dot(ahead);

@@ -10,8 +10,6 @@
 
 use std::collections::BTreeSet;
 
-use flatcut_geom::DVec3;
-
 use crate::mating::SeamSide;
 use crate::{Topology, TopologyError, TriMesh};
 
@@ -138,8 +136,11 @@ pub fn split_along_lines(mesh: &TriMesh, lines: &[Vec<u32>]) -> Result<Split, Re
         reg.faces.push(t as u32);
     }
     for reg in &mut regions {
-        let pick = |src: &[DVec3]| reg.origin.iter().map(|&o| src[o as usize]).collect();
-        reg.mesh.positions = pick(&mesh.positions);
+        reg.mesh.positions = reg
+            .origin
+            .iter()
+            .map(|&o| mesh.positions[o as usize])
+            .collect();
         reg.mesh.params = mesh
             .params
             .as_ref()
@@ -268,6 +269,7 @@ impl UnionFind {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flatcut_geom::DVec3;
 
     /// A unit-spaced n × n grid in the plane z = 0, triangles CCW from +z.
     fn grid(n: usize) -> TriMesh {

@@ -285,7 +285,7 @@ impl<'a> Joint<'a> {
                 reg *= 100.0;
             }
             let mut gd: f64 = g.iter().zip(&dir).map(|(a, b)| a * b).sum();
-            if dir.is_empty() || !(gd < 0.0) {
+            if dir.is_empty() || gd.is_nan() || gd >= 0.0 {
                 dir = g.iter().map(|v| -v).collect();
                 gd = -g.iter().map(|v| v * v).sum::<f64>();
             }
