@@ -135,8 +135,10 @@ fn bench_drawing_as_hpgl_agrees_with_ezhpgl_and_the_plotter_traces_it() {
         &std::fs::read_to_string(&svg).unwrap(),
         "drawing.svg",
         0.005,
+        &flatcut::pattern::ColourTable::default(),
     )
-    .unwrap();
+    .unwrap()
+    .drawing;
     let segs: Vec<(DVec2, DVec2)> = drawing
         .strokes
         .iter()

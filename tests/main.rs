@@ -3,7 +3,9 @@
 
 mod assembly;
 mod dxf;
+mod fuzz;
 mod hpgl;
 mod pipeline;
+mod regressions;
 mod stream;
 mod tidy;

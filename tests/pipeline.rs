@@ -112,7 +112,14 @@ fn streamed_job_traced_by_the_simulator_matches_the_pattern() {
     );
     // The pen profile maps drawing mm to machine mm one to one (origin lower-left, no offset).
     let svg = std::fs::read_to_string(out.path().join("layout-1.svg")).unwrap();
-    let drawing = flatcut::pattern::svg::read_svg(&svg, "layout-1.svg", 0.01).unwrap();
+    let drawing = flatcut::pattern::svg::read_svg(
+        &svg,
+        "layout-1.svg",
+        0.01,
+        &flatcut::pattern::ColourTable::default(),
+    )
+    .unwrap()
+    .drawing;
     let strokes: Vec<Vec<DVec2>> = drawing
         .strokes
         .iter()

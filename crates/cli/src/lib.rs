@@ -10,6 +10,9 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 pub mod cmd;
+pub mod output;
+pub mod stdout;
+pub mod values;
 
 /// flatcut — from 3D designs to flat cutting patterns, and on to the cutter.
 #[derive(Debug, Parser)]
@@ -50,17 +53,33 @@ pub const EXIT_LIMIT: u8 = 3;
 
 /// Runs the command line with the process arguments.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
-    match run(cli) {
+    exit_code(run(Cli::parse()))
+}
+
+/// The process's exit code for a command's result, printing an error; a closed standard
+/// output (the reader of `… | head` has gone) is a normal end.
+pub fn exit_code(result: anyhow::Result<ExitCode>) -> ExitCode {
+    match result {
         Ok(code) => code,
+        Err(e) if stdout::is_closed(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
-            for cause in e.chain().skip(1) {
-                eprintln!("  caused by: {cause}");
-            }
+            eprint!("{}", error_report(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes, one a line; a cause whose text the lines above already say (a
+/// typed error that prints its source, wrapped by a context that repeats it) is not repeated.
+pub fn error_report(e: &anyhow::Error) -> String {
+    let mut said = format!("error: {e}\n");
+    for cause in e.chain().skip(1) {
+        let text = cause.to_string();
+        if !said.contains(&text) {
+            said.push_str(&format!("  caused by: {text}\n"));
+        }
+    }
+    said
 }
 
 /// Runs a parsed command.
@@ -77,5 +96,39 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Send(a) => cmd::send::run(a),
         Command::Sim(a) => cmd::sim::run(a),
         Command::Run(a) => cmd::run::run(a),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[derive(Debug)]
+    struct Inner;
+    impl std::fmt::Display for Inner {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.write_str("vertex 3 is out of range")
+        }
+    }
+    impl std::error::Error for Inner {}
+
+    #[derive(Debug)]
+    struct Outer(Inner);
+    impl std::fmt::Display for Outer {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            write!(f, "piece 'a': {}", self.0)
+        }
+    }
+    impl std::error::Error for Outer {
+        fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+            Some(&self.0)
+        }
+    }
+
+    #[test]
+    fn a_cause_already_said_is_not_repeated() {
+        let e = anyhow::Error::from(Outer(Inner)).context("cannot flatten d.toml");
+        assert_eq!(
+            super::error_report(&e),
+            "error: cannot flatten d.toml\n  caused by: piece 'a': vertex 3 is out of range\n"
+        );
     }
 }

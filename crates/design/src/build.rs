@@ -325,6 +325,18 @@ impl PieceDef {
                 if let Some(f) = &mut m.flat {
                     f.iter_mut().for_each(|q| *q *= self.mesh_scale);
                 }
+                if let Some(i) = m
+                    .positions
+                    .iter()
+                    .position(|p| !flatcut_geom::limits::in_range3(*p))
+                {
+                    return Err(ctx.err(format!(
+                        "mesh {}: vertex {} lies beyond ±{:e} mm once converted to mm",
+                        path.display(),
+                        i + 1,
+                        flatcut_geom::limits::MAX_COORD_MM
+                    )));
+                }
             }
             return Ok(PieceGeometry::Mesh(m));
         }

@@ -118,7 +118,7 @@ impl Design {
         for (i, p) in pieces.iter_mut().enumerate() {
             p.index = i;
             p.file = name.to_string();
-            check_piece(p)?;
+            check_piece(p, s)?;
             p.resolve_pairs();
             if s != 1.0 {
                 scale_piece(p, s);
@@ -128,7 +128,7 @@ impl Design {
         for (i, p) in parts.iter_mut().enumerate() {
             p.index = i;
             p.file = name.to_string();
-            check_part(p)?;
+            check_part(p, s)?;
             if s != 1.0 {
                 scale_part(p, s);
             }
@@ -136,7 +136,7 @@ impl Design {
         let mut joins = f.joins;
         for (i, j) in joins.iter_mut().enumerate() {
             j.index = i;
-            check_join(name, j)?;
+            check_join(name, j, s)?;
             if s != 1.0 {
                 scale_join(j, s);
             }

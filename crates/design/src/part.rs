@@ -25,6 +25,7 @@
 //! notches = [[x, y, z]]
 //! ```
 
+use flatcut_geom::limits;
 use serde::Deserialize;
 
 use crate::check::check_piece;
@@ -167,18 +168,24 @@ impl PartDef {
     }
 }
 
-/// Checks a parsed part (design units): its surface, lines and pieces.
-pub(crate) fn check_part(p: &PartDef) -> Result<(), DesignError> {
+/// Checks a parsed part (design units, `s` mm per unit): its surface, lines and pieces.
+pub(crate) fn check_part(p: &PartDef, s: f64) -> Result<(), DesignError> {
     if p.pieces.is_empty() {
         return Err(p.err("it has no [[part.piece]]".into()));
     }
     for (k, l) in p.lines.iter().enumerate() {
         let what = format!("line {k} '{}'", l.name);
-        if let Some(i) = non_finite(&l.points) {
-            return Err(p.err(format!("{what}: point {i} has a non-finite coordinate")));
+        if let Some(i) = out_of_range(&l.points, s) {
+            return Err(p.err(format!(
+                "{what}: point {i} has a coordinate that is not finite or beyond ±{:e} mm",
+                limits::MAX_COORD_MM
+            )));
         }
-        if let Some(i) = non_finite(&l.notches) {
-            return Err(p.err(format!("{what}: notch {i} has a non-finite coordinate")));
+        if let Some(i) = out_of_range(&l.notches, s) {
+            return Err(p.err(format!(
+                "{what}: notch {i} has a coordinate that is not finite or beyond ±{:e} mm",
+                limits::MAX_COORD_MM
+            )));
         }
         if l.points.len() < 2 {
             return Err(p.err(format!("{what}: a line needs at least two points")));
@@ -189,12 +196,13 @@ pub(crate) fn check_part(p: &PartDef) -> Result<(), DesignError> {
     }
     for k in 0..p.pieces.len() {
         let def = p.piece_def(k);
-        check_piece(&def)
+        check_piece(&def, s)
             .map_err(|e| p.err(format!("piece {k} '{}': {}", def.name, strip_context(&e))))?;
-        if non_finite(&[p.pieces[k].at]).is_some() {
+        if out_of_range(&[p.pieces[k].at], s).is_some() {
             return Err(p.err(format!(
-                "piece {k} '{}': `at` has a non-finite coordinate",
-                def.name
+                "piece {k} '{}': `at` has a coordinate that is not finite or beyond ±{:e} mm",
+                def.name,
+                limits::MAX_COORD_MM
             )));
         }
         if let Some(j) = p.pieces[..k].iter().position(|o| o.name == def.name) {
@@ -207,9 +215,11 @@ pub(crate) fn check_part(p: &PartDef) -> Result<(), DesignError> {
     Ok(())
 }
 
-/// The index of the first point with a non-finite coordinate.
-fn non_finite(pts: &[P3]) -> Option<usize> {
-    pts.iter().position(|p| !p.iter().all(|x| x.is_finite()))
+/// The index of the first point with a coordinate not finite or out of range in mm (`s` mm per
+/// design unit).
+fn out_of_range(pts: &[P3], s: f64) -> Option<usize> {
+    pts.iter()
+        .position(|p| !p.iter().all(|x| limits::in_range(x * s)))
 }
 
 /// The message of a piece error without its "file: piece i 'name': " prefix.
@@ -220,8 +230,8 @@ fn strip_context(e: &DesignError) -> String {
     }
 }
 
-/// Checks a parsed join (design units).
-pub(crate) fn check_join(file: &str, j: &JoinDef) -> Result<(), DesignError> {
+/// Checks a parsed join (design units, `s` mm per unit).
+pub(crate) fn check_join(file: &str, j: &JoinDef, s: f64) -> Result<(), DesignError> {
     let err = |msg: String| DesignError::Join {
         file: file.to_string(),
         index: j.index,
@@ -231,15 +241,21 @@ pub(crate) fn check_join(file: &str, j: &JoinDef) -> Result<(), DesignError> {
     for (side, e) in [("a", &j.a), ("b", &j.b)] {
         let mut pts = vec![e.from, e.to];
         pts.extend(e.via);
-        if non_finite(&pts).is_some() {
-            return Err(err(format!("{side}: a point has a non-finite coordinate")));
+        if out_of_range(&pts, s).is_some() {
+            return Err(err(format!(
+                "{side}: a point has a coordinate that is not finite or beyond ±{:e} mm",
+                limits::MAX_COORD_MM
+            )));
         }
         if e.from == e.to {
             return Err(err(format!("{side}: `from` and `to` coincide")));
         }
     }
-    if non_finite(&j.notches).is_some() {
-        return Err(err("a notch has a non-finite coordinate".into()));
+    if out_of_range(&j.notches, s).is_some() {
+        return Err(err(format!(
+            "a notch has a coordinate that is not finite or beyond ±{:e} mm",
+            limits::MAX_COORD_MM
+        )));
     }
     Ok(())
 }

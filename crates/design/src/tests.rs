@@ -213,11 +213,11 @@ fn geometry_errors_name_the_piece() {
     let e =
         panel("type = \"bezier\"\ndegree = [1, 1]\npoints = [[0,0,0],[1,0,nan],[0,1,0],[1,1,0]]\n");
     assert!(
-        e.contains("piece 1 'panel'") && e.contains("point 1 has a non-finite"),
+        e.contains("piece 1 'panel'") && e.contains("point 1: coordinate NaN is not a finite"),
         "{e}"
     );
     let e = panel("type = \"sphere\"\ncenter = [0,0,0]\nradius = -3\n");
-    assert!(e.contains("sphere radius must be finite and > 0"), "{e}");
+    assert!(e.contains("sphere radius must be finite, > 0"), "{e}");
     let e = panel("type = \"cylinder\"\nbase = [0,0,0]\nradius = inf\nheight = 3\n");
     assert!(e.contains("cylinder radius"), "{e}");
     let e = panel(
@@ -257,4 +257,53 @@ fn seams_in_uv_cut_a_closed_cylinder_open_along_a_generator() {
     assert!(cut.vertex_count() > plain.vertex_count());
     flatcut_mesh::check_disk(&cut).unwrap();
     assert!((cut.area() - plain.area()).abs() < 1e-9 * plain.area());
+}
+
+#[test]
+fn huge_bspline_counts_are_refused_before_any_allocation() {
+    // 2^32 × 2^32 poles with 16 points: the default knots were built from the counts first.
+    let e = err_toml(
+        "[[piece]]\nname = \"big\"\n[piece.surface]\ntype = \"bspline\"\ndegree = [3, 3]\n\
+         counts = [4294967296, 4294967296]\npoints = [[0,0,0],[0,1,0],[0,2,0],[0,3,0],[1,0,0],[1,1,0],\
+         [1,2,0],[1,3,0],[2,0,0],[2,1,0],[2,2,0],[2,3,0],[3,0,0],[3,1,0],[3,2,0],[3,3,1]]\n",
+    );
+    assert!(
+        e.contains("piece 0 'big'") && e.contains("control points"),
+        "{e}"
+    );
+    let e = err_toml(
+        "[[piece]]\nname = \"odd\"\n[piece.surface]\ntype = \"bspline\"\ndegree = [1, 1]\n\
+         counts = [3, 3]\npoints = [[0,0,0],[0,1,0],[1,0,0],[1,1,0]]\n",
+    );
+    assert!(e.contains("need 9 points, the file gives 4"), "{e}");
+    let e = err_toml(
+        "[[piece]]\nname = \"deg\"\n[piece.surface]\ntype = \"bezier\"\ndegree = [4294967295, 1]\n\
+         points = [[0,0,0],[0,1,0],[1,0,0],[1,1,0]]\n",
+    );
+    assert!(e.contains("degree 4294967295 is above"), "{e}");
+    let e = err_toml(
+        "[[piece]]\nname = \"q\"\nquantity = 4000000000\n[piece.surface]\ntype = \"sphere\"\ncenter = [0,0,0]\nradius = 1\n",
+    );
+    assert!(e.contains("quantity must be between 1 and"), "{e}");
+}
+
+#[test]
+fn coordinates_beyond_the_sane_range_are_refused_in_mm() {
+    let e = err_toml(
+        "[[piece]]\nname = \"far\"\n[piece.surface]\ntype = \"bezier\"\ndegree = [1, 1]\n\
+         points = [[0,0,0],[0,1,0],[1,0,0],[1e9,1,0]]\n",
+    );
+    assert!(
+        e.contains("piece 0 'far'") && e.contains("point 3") && e.contains("beyond"),
+        "{e}"
+    );
+    let e = err_toml(
+        "[[piece]]\nname = \"huge\"\n[piece.surface]\ntype = \"sphere\"\ncenter = [0,0,0]\nradius = 1e308\n",
+    );
+    assert!(e.contains("sphere radius must be finite"), "{e}");
+    // 900 m is fine in mm, not in metres
+    let ok = "[[piece]]\nname = \"m\"\n[piece.surface]\ntype = \"sphere\"\ncenter = [0,0,900000]\nradius = 1\n";
+    assert!(Design::from_toml_str(ok, "ok.toml").is_ok());
+    let e = err_toml(&format!("units = \"m\"\n{ok}"));
+    assert!(e.contains("beyond"), "{e}");
 }

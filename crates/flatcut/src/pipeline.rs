@@ -35,6 +35,35 @@ pub enum PipelineError {
     Mesh(#[from] flatcut_mesh::MeshIoError),
     #[error("piece '{piece}': {reason}")]
     Piece { piece: String, reason: String },
+    #[error(
+        "{file}: pieces '{first}' and '{second}' would share the name '{safe}' in ids and file names; rename one of them"
+    )]
+    NameClash {
+        file: String,
+        first: String,
+        second: String,
+        safe: String,
+    },
+}
+
+/// Refuses a design whose piece names collide, exactly or once made safe for ids and file
+/// names (`a/b` and `a_b` both become `a_b`): their SVG ids, DXF blocks and per-piece files
+/// would overwrite each other. Renaming silently would put a name on the cut piece that is in
+/// no design, so the design must say which is which.
+pub fn check_unique_names(design: &Design) -> Result<(), PipelineError> {
+    let mut seen: std::collections::BTreeMap<String, &str> = Default::default();
+    for p in &design.pieces {
+        let safe = flatcut_pattern::safe_name(&p.name);
+        if let Some(first) = seen.insert(safe.clone(), &p.name) {
+            return Err(PipelineError::NameClash {
+                file: design.source.clone(),
+                first: first.to_string(),
+                second: p.name.clone(),
+                safe,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// A notch of a piece: a boundary vertex of its mesh, exactly where the notch is, and its name
@@ -75,6 +104,7 @@ pub fn flatten_design(
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<FlatDesign, PipelineError> {
     let design = Design::load(path)?;
+    check_unique_names(&design)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let asm = design.assemble(base, tol)?;
     for (k, p) in asm.pieces.iter().enumerate() {

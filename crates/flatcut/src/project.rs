@@ -184,7 +184,7 @@ impl Project {
     }
 
     fn validate(&self) -> Result<(), String> {
-        let pos = |v: Option<f64>| v.is_none_or(|v| v.is_finite() && v > 0.0);
+        let pos = |v: Option<f64>| v.is_none_or(|v| v > 0.0 && flatcut_geom::limits::in_range(v));
         match (
             self.sheet.width_mm,
             self.sheet.height_mm,
@@ -195,9 +195,13 @@ impl Project {
         }
         if !(pos(self.sheet.width_mm) && pos(self.sheet.height_mm) && pos(self.sheet.roll_width_mm))
         {
-            return Err("[sheet] sizes must be positive".into());
+            return Err(format!(
+                "[sheet] sizes must be positive and at most {:e} mm",
+                flatcut_geom::limits::MAX_COORD_MM
+            ));
         }
-        if !(self.sheet.spacing_mm.is_finite() && self.sheet.spacing_mm >= 0.0) {
+        if !(self.sheet.spacing_mm >= 0.0 && flatcut_geom::limits::in_range(self.sheet.spacing_mm))
+        {
             return Err("[sheet] spacing_mm must be >= 0".into());
         }
         for (k, v) in [
@@ -222,7 +226,10 @@ impl Project {
         {
             return Err("[material] grain_tolerance_deg must be an angle in [0, 90]".into());
         }
-        if self.seam_mm.is_some_and(|v| !(v.is_finite() && v >= 0.0)) {
+        if self
+            .seam_mm
+            .is_some_and(|v| !(v >= 0.0 && flatcut_geom::limits::in_range(v)))
+        {
             return Err("seam_mm must be >= 0".into());
         }
         if let Some(m) = &self.method {

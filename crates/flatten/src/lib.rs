@@ -8,9 +8,12 @@
 //! (flip-free), LSCM, conformal with an isometric boundary (Duncan's f2), ARAP, exact developable
 //! unfolding, min-max global distortion δ0, and boundary-isometric (Duncan's f1).
 //!
-//! **Architecture invariants:** deterministic (bit-identical output for the same input: sequential
-//! faer, no hash-map iteration, no threads whose scheduling changes results); never returns a
-//! flipped triangle from a method documented flip-free; never rescales the result.
+//! **Architecture invariants:** deterministic (bit-identical output for the same input, with any
+//! number of threads: sequential faer, no hash-map iteration; the nonlinear methods assemble in
+//! parallel with rayon over fixed blocks whose partial sums are combined in a fixed order);
+//! never returns a flipped triangle from a method documented flip-free; never rescales the
+//! result. Long solves report progress, honour a time limit and can be cancelled
+//! ([`FlattenParams::time_limit`], [`FlattenHooks`]).
 
 pub mod arap;
 pub mod assembly;
@@ -21,14 +24,21 @@ pub mod lscm;
 pub mod marks;
 pub mod method;
 pub mod nonlinear;
-pub mod ops;
+pub(crate) mod ops;
 pub mod params;
-pub mod sparse;
+pub(crate) mod sparse;
+/// Generated test surfaces (caps, cylinders, cones, saddles): for this crate's tests, benches
+/// and examples only (feature `test-support`), not part of the public API.
+#[cfg(any(test, feature = "test-support"))]
+#[doc(hidden)]
 pub mod testmesh;
 pub mod tutte;
 
 pub use method::Method;
-pub use params::{FlattenError, FlattenInfo, FlattenParams, Flattening, Pin};
+pub use params::{
+    FlattenError, FlattenHooks, FlattenInfo, FlattenParams, FlattenProgress, Flattening, Pin,
+    ProgressFn,
+};
 
 use flatcut_mesh::{TriMesh, check_disk};
 

@@ -20,6 +20,7 @@ use flatcut_geom::DVec2;
 use flatcut_mesh::{TriMesh, face_distortion};
 
 use crate::nonlinear::kernel::{IsoEnergy, RestTri, SymDirichlet, WithLimits, svd2};
+use crate::nonlinear::newton::{Budget, EarlyStop};
 use crate::{FlattenError, FlattenParams};
 
 /// Stiffness stages of the feasibility penalty (relative to the δ2 density).
@@ -180,13 +181,20 @@ pub(crate) trait EnergySolve {
         energy: E,
         x: &[DVec2],
     ) -> Result<(Vec<DVec2>, usize), FlattenError>;
+    /// True once a solve stopped early (the caller's time limit): no further stage runs.
+    fn stopped(&self) -> bool {
+        false
+    }
 }
 
-/// The Newton solve of one piece ([`crate::nonlinear::newton_solve`]).
+/// The Newton solve of one piece ([`crate::nonlinear::newton_solve`]) within the caller's
+/// budget; `early` records a solve the time limit stopped.
 pub(crate) struct OnePiece<'a> {
     pub rest: &'a [RestTri],
     pub n: usize,
     pub params: &'a FlattenParams,
+    pub budget: &'a Budget,
+    pub early: Option<EarlyStop>,
 }
 
 impl EnergySolve for OnePiece<'_> {
@@ -202,8 +210,13 @@ impl EnergySolve for OnePiece<'_> {
             x,
             self.params,
             crate::Method::Isometric,
+            self.budget,
         )?;
+        self.early = self.early.or(r.early);
         Ok((r.x, r.iterations))
+    }
+    fn stopped(&self) -> bool {
+        self.early.is_some()
     }
 }
 
@@ -232,6 +245,9 @@ pub(crate) fn enforce<S: EnergySolve>(
         .map(|&k| (k, 1.0))
         .chain(MARGIN_SHRINK.iter().map(|&f| (last, f)));
     for (k, factor) in stages {
+        if solver.stopped() {
+            break;
+        }
         let aim = limits.aim(factor);
         let e = WithLimits {
             inner: SymDirichlet,
@@ -250,6 +266,9 @@ pub(crate) fn enforce<S: EnergySolve>(
         return Ok(Enforced { x, iterations });
     }
     for mu in BARRIER_WEIGHTS {
+        if solver.stopped() {
+            break;
+        }
         let e = Barrier {
             inner: SymDirichlet,
             limits,

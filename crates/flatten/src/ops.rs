@@ -111,13 +111,10 @@ pub fn uv_area(triangles: &[[u32; 3]], uv: &[DVec2]) -> f64 {
 /// definite. Solving gives `Q_ff x_f = b_f − Q_fc x_c`.
 #[derive(Debug)]
 pub struct Reduced {
-    /// Free-unknown index of each dof (`usize::MAX` for a fixed dof).
-    free_index: Vec<usize>,
     /// Dof of each free unknown.
     free: Vec<u32>,
     /// `(free row, fixed dof, Q entry)`: couplings moved to the right-hand side.
     coupling: Vec<(usize, u32, f64)>,
-    triplets: SymTriplets,
     solver: SpdSolver,
 }
 
@@ -127,11 +124,16 @@ pub struct QuadraticBuilder {
     free_index: Vec<usize>,
     free: Vec<u32>,
     coupling: Vec<(usize, u32, f64)>,
+    /// Off-diagonal entries of `Q_ff`.
     triplets: SymTriplets,
+    /// Diagonal of `Q_ff`, summed as it comes: a third of the entries of a Laplacian, which
+    /// would otherwise each be a triplet (the memory peak of LSCM on large meshes).
+    diag: Vec<f64>,
 }
 
 impl QuadraticBuilder {
-    /// A builder over `fixed.len()` dofs; `fixed[i]` marks the dofs with given values.
+    /// A builder over `fixed.len()` dofs; `fixed[i]` marks the dofs with given values;
+    /// `capacity` off-diagonal entries are reserved.
     pub fn new(fixed: &[bool], capacity: usize) -> Self {
         let mut free_index = vec![usize::MAX; fixed.len()];
         let mut free = Vec::new();
@@ -141,8 +143,9 @@ impl QuadraticBuilder {
                 free.push(i as u32);
             }
         }
-        let triplets = SymTriplets::with_capacity(free.len(), capacity);
+        let triplets = SymTriplets::with_capacity(free.len(), capacity + free.len());
         Self {
+            diag: vec![0.0; free.len()],
             free_index,
             free,
             coupling: Vec::new(),
@@ -156,6 +159,7 @@ impl QuadraticBuilder {
             (usize::MAX, usize::MAX) => {}
             (fi, usize::MAX) => self.coupling.push((fi, j as u32, v)),
             (usize::MAX, fj) => self.coupling.push((fj, i as u32, v)),
+            (fi, fj) if fi == fj => self.diag[fi] += v,
             (fi, fj) => self.triplets.add(fi, fj, v),
         }
     }
@@ -168,7 +172,10 @@ impl QuadraticBuilder {
     }
 
     /// Factors `Q_ff`.
-    pub fn build(self, stage: &'static str) -> Result<Reduced, FlattenError> {
+    pub fn build(mut self, stage: &'static str) -> Result<Reduced, FlattenError> {
+        for (i, &d) in self.diag.iter().enumerate() {
+            self.triplets.add(i, i, d);
+        }
         if self.free.is_empty() {
             return Err(FlattenError::Internal(format!(
                 "{stage}: every unknown is fixed"
@@ -176,26 +183,14 @@ impl QuadraticBuilder {
         }
         let solver = SpdSolver::from_triplets(&self.triplets, stage)?;
         Ok(Reduced {
-            free_index: self.free_index,
             free: self.free,
             coupling: self.coupling,
-            triplets: self.triplets,
             solver,
         })
     }
 }
 
 impl Reduced {
-    /// Number of free unknowns.
-    pub fn free_count(&self) -> usize {
-        self.free.len()
-    }
-
-    /// True when dof `i` is a free unknown.
-    pub fn is_free(&self, i: usize) -> bool {
-        self.free_index[i] != usize::MAX
-    }
-
     /// Minimizes for several fields at once: `values[c]` holds the values of field `c` at the
     /// fixed dofs (free entries are overwritten with the solution); `source[c]`, when given, is
     /// the linear term `b` (read at free dofs).
@@ -226,11 +221,6 @@ impl Reduced {
         }
         Ok(())
     }
-
-    /// The triplets of `Q_ff`, in assembly order.
-    pub fn triplets(&self) -> &SymTriplets {
-        &self.triplets
-    }
 }
 
 /// The Laplace problem `Σ w (x_a − x_b)²/2 → min` with the weights given per triangle corner
@@ -242,7 +232,7 @@ pub fn laplace(
     fixed: &[bool],
     stage: &'static str,
 ) -> Result<Reduced, FlattenError> {
-    let mut b = QuadraticBuilder::new(fixed, 9 * triangles.len());
+    let mut b = QuadraticBuilder::new(fixed, 3 * triangles.len());
     for (tri, w) in triangles.iter().zip(corner_weights) {
         for k in 0..3 {
             b.add_edge(tri[(k + 1) % 3] as usize, tri[(k + 2) % 3] as usize, w[k]);

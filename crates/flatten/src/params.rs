@@ -1,5 +1,9 @@
 //! Parameters, results and errors of a flattening.
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
 use flatcut_geom::DVec2;
 use flatcut_mesh::TopologyError;
 
@@ -23,16 +27,24 @@ pub struct FlattenParams {
     pub max_compress_pct: Option<f64>,
     /// Pinned vertices.
     pub pins: Vec<Pin>,
-    /// Iteration cap of the nonlinear methods.
+    /// Iteration cap of the nonlinear methods (Newton steps; for `minmax`, L-BFGS steps of all
+    /// its stages together).
     pub max_iters: usize,
     /// Relative decrease of the energy below which a nonlinear method stops.
     pub rel_tolerance: f64,
     /// Relative length error below which a developable input counts as developable (`developable`).
     pub developable_tolerance: f64,
+    /// Wall-clock budget of the iterative methods: when it runs out they return the best
+    /// flip-free map found so far with a warning saying so.
+    pub time_limit: Option<Duration>,
+    /// Progress callback and cancel flag of the iterative methods.
+    pub hooks: FlattenHooks,
 }
 
 impl FlattenParams {
     pub const DEFAULT_MAX_ITERS: usize = 200;
+    /// `minmax`'s default cap: 200 L-BFGS steps for each of its five sharpness stages.
+    pub const DEFAULT_MINMAX_ITERS: usize = 1000;
     pub const DEFAULT_REL_TOLERANCE: f64 = 1e-9;
     pub const DEFAULT_DEVELOPABLE_TOLERANCE: f64 = 1e-6;
 
@@ -42,9 +54,19 @@ impl FlattenParams {
             max_stretch_pct: None,
             max_compress_pct: None,
             pins: Vec::new(),
-            max_iters: Self::DEFAULT_MAX_ITERS,
+            max_iters: Self::default_max_iters(method),
             rel_tolerance: Self::DEFAULT_REL_TOLERANCE,
             developable_tolerance: Self::DEFAULT_DEVELOPABLE_TOLERANCE,
+            time_limit: None,
+            hooks: FlattenHooks::default(),
+        }
+    }
+
+    /// The iteration cap of `method` when none is given.
+    pub fn default_max_iters(method: Method) -> usize {
+        match method {
+            Method::Minmax => Self::DEFAULT_MINMAX_ITERS,
+            _ => Self::DEFAULT_MAX_ITERS,
         }
     }
 
@@ -66,6 +88,98 @@ impl FlattenParams {
     pub fn with_max_iters(mut self, n: usize) -> Self {
         self.max_iters = n;
         self
+    }
+
+    pub fn with_time_limit(mut self, t: Option<Duration>) -> Self {
+        self.time_limit = t;
+        self
+    }
+
+    pub fn with_hooks(mut self, hooks: FlattenHooks) -> Self {
+        self.hooks = hooks;
+        self
+    }
+}
+
+/// Where an iterative flattening is, reported after every iteration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlattenProgress {
+    /// What is being solved ("isometric", "boundary lengths", "min-max", ...).
+    pub stage: &'static str,
+    /// Iterations done so far in this stage.
+    pub iteration: usize,
+    /// The stage's iteration cap.
+    pub max_iterations: usize,
+    /// The stage's objective after this iteration.
+    pub energy: f64,
+    /// Time since the flattening started.
+    pub elapsed: Duration,
+}
+
+/// The callback type of [`FlattenHooks::with_progress`].
+pub type ProgressFn = dyn Fn(&FlattenProgress) + Send + Sync;
+
+/// A progress callback and a cancel flag for the iterative methods. Clones share both. Two hooks
+/// compare equal when they share the same callback and flag (or both have none).
+#[derive(Clone, Default)]
+pub struct FlattenHooks {
+    progress: Option<Arc<ProgressFn>>,
+    cancel: Option<Arc<AtomicBool>>,
+}
+
+impl FlattenHooks {
+    /// Calls `f` after every iteration of an iterative method.
+    pub fn with_progress(mut self, f: Arc<ProgressFn>) -> Self {
+        self.progress = Some(f);
+        self
+    }
+
+    /// Stops the flattening with [`FlattenError::Cancelled`] once `flag` is set.
+    pub fn with_cancel(mut self, flag: Arc<AtomicBool>) -> Self {
+        self.cancel = Some(flag);
+        self
+    }
+
+    /// Reports `p` to the callback, if any.
+    pub fn report(&self, p: &FlattenProgress) {
+        if let Some(f) = &self.progress {
+            f(p);
+        }
+    }
+
+    /// True once the cancel flag is set.
+    pub fn cancelled(&self) -> bool {
+        self.cancel
+            .as_ref()
+            .is_some_and(|c| c.load(Ordering::Relaxed))
+    }
+}
+
+impl std::fmt::Debug for FlattenHooks {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FlattenHooks")
+            .field("progress", &self.progress.is_some())
+            .field(
+                "cancel",
+                &self.cancel.as_ref().map(|c| c.load(Ordering::Relaxed)),
+            )
+            .finish()
+    }
+}
+
+impl PartialEq for FlattenHooks {
+    fn eq(&self, other: &Self) -> bool {
+        let same = |a: Option<&Arc<ProgressFn>>, b: Option<&Arc<ProgressFn>>| match (a, b) {
+            (None, None) => true,
+            (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        };
+        same(self.progress.as_ref(), other.progress.as_ref())
+            && match (&self.cancel, &other.cancel) {
+                (None, None) => true,
+                (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+                _ => false,
+            }
     }
 }
 
@@ -111,6 +225,9 @@ pub enum FlattenError {
     /// The linear solver failed (the system was singular or not positive definite).
     #[error("linear solve failed in {stage}: {reason}")]
     Solver { stage: &'static str, reason: String },
+    /// The caller's cancel flag was set ([`FlattenHooks::with_cancel`]).
+    #[error("{method} was cancelled")]
+    Cancelled { method: Method },
     /// The method did not reach a valid (finite, flip-free) result.
     #[error("{method} did not converge: {reason}")]
     NoConvergence { method: Method, reason: String },

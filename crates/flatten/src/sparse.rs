@@ -19,7 +19,7 @@ use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
     factorize_symbolic_cholesky,
 };
-use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
+use faer::sparse::{Argsort, Pair, SparseColMat, SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Side};
 
 use crate::FlattenError;
@@ -40,6 +40,7 @@ pub struct SymTriplets {
 
 impl SymTriplets {
     /// An empty `n × n` symmetric matrix.
+    #[cfg(test)]
     pub fn new(n: usize) -> Self {
         Self {
             n,
@@ -57,19 +58,9 @@ impl SymTriplets {
         }
     }
 
-    /// The dimension `n`.
-    pub fn dim(&self) -> usize {
-        self.n
-    }
-
     /// Number of triplets (before duplicates are summed).
     pub fn len(&self) -> usize {
         self.vals.len()
-    }
-
-    /// True when no triplet was added.
-    pub fn is_empty(&self) -> bool {
-        self.vals.is_empty()
     }
 
     /// Adds `v` at `(i, j)` and, implicitly, at `(j, i)` (an off-diagonal call therefore adds
@@ -88,25 +79,26 @@ impl SymTriplets {
     }
 
     /// Mutable values, to refill a matrix of the same pattern.
+    #[cfg(test)]
     pub fn values_mut(&mut self) -> &mut [f64] {
         &mut self.vals
     }
-
-    /// Forgets the values but keeps the positions (all values set to zero).
-    pub fn zero_values(&mut self) {
-        self.vals.iter_mut().for_each(|v| *v = 0.0);
-    }
 }
 
-/// The sparsity pattern of a [`SymTriplets`] (lower triangle, duplicates merged), with the
-/// order that maps triplet values to matrix values. Built once per mesh, reused for every
-/// refill.
+/// The sparsity pattern of a symmetric matrix, built once per mesh and reused for every refill:
+/// either from [`SymTriplets`] (lower triangle, duplicates merged, with the order that maps
+/// triplet values to matrix values) or given directly in compressed-column form (upper triangle,
+/// values passed in that order, no copy per factorisation).
 #[derive(Clone, Debug)]
 pub struct SymPattern {
     n: usize,
-    n_triplets: usize,
     symbolic: SymbolicSparseColMat<usize>,
-    argsort: Argsort<usize>,
+    /// Which triangle `symbolic` holds.
+    side: Side,
+    /// `Some` for a pattern built from triplets: the sort from triplet order to column order.
+    argsort: Option<Argsort<usize>>,
+    /// Number of values a refill passes (triplets, or stored entries).
+    n_values: usize,
 }
 
 impl SymPattern {
@@ -125,15 +117,47 @@ impl SymPattern {
             })?;
         Ok(Self {
             n: t.n,
-            n_triplets: t.len(),
+            n_values: t.len(),
             symbolic,
-            argsort,
+            side: Side::Lower,
+            argsort: Some(argsort),
         })
     }
 
-    /// The dimension `n`.
-    pub fn dim(&self) -> usize {
-        self.n
+    /// The upper triangle (row ≤ column) in compressed-column form: `col_ptr` (n + 1 offsets) and
+    /// `row_idx` (sorted, unique rows of each column). Values are then passed in this order.
+    pub fn from_upper_csc(
+        n: usize,
+        col_ptr: Vec<usize>,
+        row_idx: Vec<usize>,
+        stage: &'static str,
+    ) -> Result<Self, FlattenError> {
+        let bad = |reason: String| FlattenError::Solver {
+            stage,
+            reason: format!("cannot build the sparse pattern: {reason}"),
+        };
+        if col_ptr.len() != n + 1 || col_ptr.last() != Some(&row_idx.len()) {
+            return Err(bad("column offsets do not match the row indices".into()));
+        }
+        for c in 0..n {
+            let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+            if rows.windows(2).any(|w| w[0] >= w[1]) || rows.last().is_some_and(|&r| r > c) {
+                return Err(bad(format!("column {c} is not sorted upper-triangular")));
+            }
+        }
+        let n_values = row_idx.len();
+        Ok(Self {
+            n,
+            symbolic: SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx),
+            side: Side::Upper,
+            argsort: None,
+            n_values,
+        })
+    }
+
+    /// Column offsets and row indices of the stored triangle.
+    pub fn csc(&self) -> (&[usize], &[usize]) {
+        (self.symbolic.col_ptr(), self.symbolic.row_idx())
     }
 
     /// The lower-triangular matrix with these triplet `values` (same order as they were added).
@@ -142,14 +166,19 @@ impl SymPattern {
         values: &[f64],
         stage: &'static str,
     ) -> Result<SparseColMat<usize, f64>, FlattenError> {
-        if values.len() != self.n_triplets {
+        if values.len() != self.n_values {
             return Err(FlattenError::Internal(format!(
                 "{stage}: {} values for a pattern of {} triplets",
                 values.len(),
-                self.n_triplets
+                self.n_values
             )));
         }
-        SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, values).map_err(|e| {
+        let Some(argsort) = &self.argsort else {
+            return Err(FlattenError::Internal(format!(
+                "{stage}: a compressed-column pattern has no triplet order"
+            )));
+        };
+        SparseColMat::new_from_argsort(self.symbolic.clone(), argsort, values).map_err(|e| {
             FlattenError::Solver {
                 stage,
                 reason: format!("cannot assemble the matrix: {e:?}"),
@@ -160,6 +189,7 @@ impl SymPattern {
 
 /// `y = A x` for the symmetric matrix whose lower triangle is `lower` (as built by
 /// [`SymPattern::matrix`]).
+#[cfg(test)]
 pub fn sym_mul(lower: &SparseColMat<usize, f64>, x: &[f64], y: &mut [f64]) {
     y.iter_mut().for_each(|v| *v = 0.0);
     let a = lower.as_ref();
@@ -193,7 +223,7 @@ impl SpdSolver {
     pub fn new(pattern: SymPattern, stage: &'static str) -> Result<Self, FlattenError> {
         let symbolic = factorize_symbolic_cholesky(
             pattern.symbolic.as_ref(),
-            Side::Lower,
+            pattern.side,
             SymmetricOrdering::Amd,
             CholeskySymbolicParams::default(),
         )
@@ -239,7 +269,23 @@ impl SpdSolver {
                 reason: format!("matrix entry {k} is not finite"),
             });
         }
-        let a = self.pattern.matrix(values, self.stage)?;
+        // A triplet pattern is sorted into a matrix; a compressed-column one is viewed in place.
+        let owned = match self.pattern.argsort {
+            Some(_) => Some(self.pattern.matrix(values, self.stage)?),
+            None if values.len() == self.pattern.n_values => None,
+            None => {
+                return Err(FlattenError::Internal(format!(
+                    "{}: {} values for a pattern of {} entries",
+                    self.stage,
+                    values.len(),
+                    self.pattern.n_values
+                )));
+            }
+        };
+        let a = match &owned {
+            Some(m) => m.as_ref(),
+            None => SparseColMatRef::new(self.pattern.symbolic.as_ref(), values),
+        };
         let mut mem = MemBuffer::try_new(
             self.symbolic
                 .factorize_numeric_llt_scratch::<f64>(PAR, Default::default()),
@@ -251,8 +297,8 @@ impl SpdSolver {
         self.symbolic
             .factorize_numeric_llt::<f64>(
                 &mut self.l_values,
-                a.as_ref(),
-                Side::Lower,
+                a,
+                self.pattern.side,
                 LltRegularization::default(),
                 PAR,
                 MemStack::new(&mut mem),

@@ -162,6 +162,49 @@ fn grid_triangles(nu: usize, nv: usize) -> Vec<[u32; 3]> {
     t
 }
 
+/// `mesh` with slivers: every `every`-th interior edge (in the order of first appearance, one
+/// per triangle pair at most) is split at a point a fraction `t` of its length from one end, so
+/// each split leaves two triangles whose smallest angle is a fraction of a degree — the shape of
+/// scanned meshes, on an otherwise regular surface. The new vertex lies on the old edge, so the
+/// surface is unchanged.
+pub fn slivered(mesh: &TriMesh, every: usize, t: f64) -> TriMesh {
+    let mut pos = mesh.positions.clone();
+    let mut tris = mesh.triangles.clone();
+    // Interior edges with their two triangles, in order of first appearance.
+    let mut seen: Vec<((u32, u32), usize)> = Vec::new();
+    let mut pairs: Vec<((u32, u32), usize, usize)> = Vec::new();
+    for (f, tri) in mesh.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            let key = (a.min(b), a.max(b));
+            match seen.binary_search_by_key(&key, |e| e.0) {
+                Ok(i) => pairs.push((key, seen[i].1, f)),
+                Err(i) => seen.insert(i, (key, f)),
+            }
+        }
+    }
+    pairs.sort_by_key(|p| p.1.min(p.2));
+    let mut touched = vec![false; tris.len()];
+    for (k, &((a, b), f0, f1)) in pairs.iter().enumerate() {
+        if k % every.max(1) != 0 || touched[f0] || touched[f1] {
+            continue;
+        }
+        let m = pos.len() as u32;
+        pos.push(pos[a as usize] * (1.0 - t) + pos[b as usize] * t);
+        for f in [f0, f1] {
+            let tri = tris[f];
+            let c = (0..3).find(|&j| tri[j] != a && tri[j] != b).unwrap_or(0);
+            let (apex, x, y) = (tri[c], tri[(c + 1) % 3], tri[(c + 2) % 3]);
+            // (apex, x, y) becomes (apex, x, m) and (apex, m, y): same orientation.
+            tris[f] = [apex, x, m];
+            tris.push([apex, m, y]);
+            touched[f] = true;
+            touched.push(true);
+        }
+    }
+    TriMesh::new(pos, tris)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -255,6 +255,10 @@ pub struct Profile {
     pub lead: Option<LeadConfig>,
     #[serde(default)]
     pub layers: BTreeMap<String, LayerConfig>,
+    /// SVG input: LightBurn palette layer (`"00"`…`"29"`, `"T1"`, `"T2"`) → `cut`, `draw`,
+    /// `engrave` or `skip`, over the default table of `flatcut_pattern::colours`.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub svg_colours: BTreeMap<String, flatcut_pattern::ColourJob>,
 }
 
 /// A profile that cannot be used.
@@ -357,8 +361,19 @@ impl Profile {
         }
     }
 
+    /// The colour → layer table for SVG input (the default with this profile's `[svg_colours]`).
+    pub fn colour_table(&self) -> Result<flatcut_pattern::ColourTable, ProfileError> {
+        flatcut_pattern::ColourTable::with_overrides(&self.svg_colours).map_err(|message| {
+            ProfileError::Parse {
+                path: self.name.clone(),
+                message,
+            }
+        })
+    }
+
     /// Checks ranges and that the tool section matches the kind.
     pub fn validate(&self) -> Result<(), ProfileError> {
+        self.colour_table()?;
         let pos = |v: f64| v.is_finite() && v > 0.0;
         if !pos(self.feed_mm_min) {
             return Err(self.invalid("feed_mm_min", self.feed_mm_min, "must be > 0"));

@@ -7,6 +7,7 @@
 //! **Architecture invariant:** this crate depends on no other workspace crate and does no IO.
 
 pub mod aabb;
+pub mod limits;
 pub mod num;
 pub mod tol;
 

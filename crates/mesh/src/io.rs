@@ -39,7 +39,7 @@ pub enum MeshIoError {
         col: usize,
         msg: String,
     },
-    #[error("{}:{line}:{col}: {what} index {index} is out of range (the file has {count} {what}s at this point)", path.display())]
+    #[error("{}:{line}:{col}: {what} index {index} is out of range (the file has {} at this point)", path.display(), count_of(*count, what))]
     BadIndex {
         path: PathBuf,
         line: usize,
@@ -56,12 +56,29 @@ pub enum MeshIoError {
         what: &'static str,
         text: String,
     },
+    #[error("{}:{line}:{col}: {what} coordinate {}", path.display(), flatcut_geom::limits::out_of_range_reason(*value))]
+    OutOfRange {
+        path: PathBuf,
+        line: usize,
+        col: usize,
+        what: &'static str,
+        value: f64,
+    },
     #[error("{}: {msg}", path.display())]
     Format { path: PathBuf, msg: String },
     #[error("{}: the file contains no triangles", path.display())]
     Empty { path: PathBuf },
     #[error("{}: unknown mesh format (expected .obj, .stl or .ply)", path.display())]
     UnknownFormat { path: PathBuf },
+}
+
+/// "1 vertex", "121 vertices", "3 texture coordinates": a count with its noun.
+fn count_of(count: usize, what: &str) -> String {
+    match (count, what) {
+        (1, w) => format!("1 {w}"),
+        (n, "vertex") => format!("{n} vertices"),
+        (n, w) => format!("{n} {w}s"),
+    }
 }
 
 /// Reads a mesh, choosing the format from the extension (`.obj`, `.stl`, `.ply`, any case).
@@ -159,6 +176,15 @@ impl ObjCtx<'_> {
                 col,
                 what,
                 text: t.to_string(),
+            });
+        }
+        if !flatcut_geom::limits::in_range(v) {
+            return Err(MeshIoError::OutOfRange {
+                path: self.path.to_path_buf(),
+                line: self.line,
+                col,
+                what,
+                value: v,
             });
         }
         Ok(v)
@@ -352,10 +378,17 @@ pub fn parse_stl(bytes: &[u8], path: &Path, weld_mm: f64) -> Result<TriMesh, Mes
         })?;
         for (k, v) in tri.vertices.iter().enumerate() {
             let p = DVec3::new(v.0[0] as f64, v.0[1] as f64, v.0[2] as f64);
-            if !flatcut_geom::finite3(p) {
+            if let Some(x) = p
+                .to_array()
+                .into_iter()
+                .find(|x| !flatcut_geom::limits::in_range(*x))
+            {
                 return Err(MeshIoError::Format {
                     path: path.to_path_buf(),
-                    msg: format!("facet {t} corner {k} has a non-finite coordinate"),
+                    msg: format!(
+                        "facet {t} corner {k}: coordinate {}",
+                        flatcut_geom::limits::out_of_range_reason(x)
+                    ),
                 });
             }
             pts.push(p);
@@ -436,13 +469,22 @@ pub fn parse_ply(bytes: &[u8], path: &Path, weld_mm: f64) -> Result<TriMesh, Mes
         let (Some(x), Some(y), Some(z)) = (get("x"), get("y"), get("z")) else {
             return Err(fmt(format!("vertex {i} lacks a numeric x, y or z")));
         };
-        let p = DVec3::new(x, y, z);
-        if !flatcut_geom::finite3(p) {
-            return Err(fmt(format!("vertex {i} has a non-finite coordinate")));
+        if let Some(c) = [x, y, z]
+            .into_iter()
+            .find(|c| !flatcut_geom::limits::in_range(*c))
+        {
+            return Err(fmt(format!(
+                "vertex {i}: coordinate {}",
+                flatcut_geom::limits::out_of_range_reason(c)
+            )));
         }
-        positions.push(p);
+        positions.push(DVec3::new(x, y, z));
         match (get("u").or(get("s")), get("v").or(get("t"))) {
-            (Some(a), Some(b)) if a.is_finite() && b.is_finite() => uv.push(DVec2::new(a, b)),
+            (Some(a), Some(b))
+                if flatcut_geom::limits::in_range(a) && flatcut_geom::limits::in_range(b) =>
+            {
+                uv.push(DVec2::new(a, b))
+            }
             _ => has_uv = false,
         }
     }
@@ -840,5 +882,41 @@ mod tests {
                 proptest::prop_assert!((*a - *b).abs().max_element() <= 5e-7);
             }
         }
+    }
+    #[test]
+    fn coordinates_beyond_the_sane_range_name_file_line_and_column() {
+        let p = Path::new("far.obj");
+        let e = parse_obj("v 0 0 0\nv 1 0 0\nv 0 -1e308 0\nf 1 2 3\n", p)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("far.obj:3:5: vertex coordinate") && e.contains("beyond"),
+            "{e}"
+        );
+        let e = parse_obj("v 0 0 0\nvt 1e7 0\n", p).unwrap_err().to_string();
+        assert!(e.contains("far.obj:2:4: texture coordinate"), "{e}");
+        let ply = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1e30 0\n3 0 1 2\n";
+        let e = parse_ply(ply, Path::new("far.ply"), 1e-3)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("far.ply: vertex 2: coordinate") && e.contains("beyond"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn index_errors_count_in_plain_english() {
+        let p = Path::new("i.obj");
+        let e = parse_obj("v 0 0 0\nf 1 2 3\n", p).unwrap_err().to_string();
+        assert!(e.contains("(the file has 1 vertex at this point)"), "{e}");
+        let e = parse_obj("v 0 0 0\nv 1 0 0\nf 1 2 3\n", p)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("(the file has 2 vertices at this point)"), "{e}");
+        let e = parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/2 3/3\n", p)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("the file has 0 texture coordinates"), "{e}");
     }
 }

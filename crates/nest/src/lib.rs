@@ -17,6 +17,6 @@ pub mod search;
 
 pub use instance::{BenchInstance, load_bench_instance, load_scarpa_items};
 pub use search::{
-    NestError, NestItem, NestOptions, NestProgress, NestResult, PlacedInstance, Rotations, Stock,
-    Unplaced, nest, placed_pieces,
+    MAX_INSTANCES, MAX_STOCK_MM, NestError, NestItem, NestOptions, NestProgress, NestResult,
+    PlacedInstance, Rotations, Stock, Unplaced, nest, placed_pieces,
 };

@@ -309,6 +309,7 @@ pub fn nest(
     opts: &NestOptions,
     progress: &mut dyn FnMut(&NestProgress),
 ) -> Result<NestResult, NestError> {
+    check_input_size(items, stock, opts.spacing)?;
     let eng = Engine::new(items, stock, opts)?;
     let start = Instant::now();
     let mut rng = Rng(opts.seed ^ 0x5EED_F1A7_C0DE_0001);
@@ -372,6 +373,51 @@ pub fn nest(
         });
     }
     Ok(eng.result(&best, baseline, iters))
+}
+
+/// Largest sheet side, roll width or roll length the nester accepts (mm): 100 m. The collision
+/// engine computes in f32, whose resolution at 1e5 mm is 8 µm; at 1e6 mm it is 62 µm, coarser
+/// than the engine's edge inset, and the search slows by an order of magnitude (measured: a
+/// 1e6 mm sheet took 8× as long as a 2 m one for the same pieces; 1e9 mm never finished).
+pub const MAX_STOCK_MM: f64 = 1e5;
+/// Most piece instances (copies, mirrored copies included) one nesting run places.
+pub const MAX_INSTANCES: usize = 10_000;
+
+/// Input checks at the public entry: a stock the engine can resolve, and a bounded number of
+/// instances, before anything is allocated for them.
+fn check_input_size(items: &[NestItem], stock: Stock, spacing: f64) -> Result<(), NestError> {
+    let sides: Vec<f64> = match stock {
+        Stock::Roll { width, max_length } => std::iter::once(width).chain(max_length).collect(),
+        Stock::Sheets { width, height, .. } => vec![width, height],
+    };
+    if sides.iter().any(|s| !(s.is_finite() && *s <= MAX_STOCK_MM)) {
+        return Err(NestError::InvalidInput(format!(
+            "the {} is larger than the {MAX_STOCK_MM:e} mm the nester accepts",
+            stock.describe()
+        )));
+    }
+    // The engine shrinks the stock by the spacing; a spacing of half its width leaves nothing
+    // (the engine's own words were "Offset resulted in an empty polygon").
+    let narrowest = sides.iter().copied().fold(f64::INFINITY, f64::min);
+    if 2.0 * spacing >= narrowest {
+        return Err(NestError::InvalidInput(format!(
+            "a spacing of {spacing} mm from the edges leaves no room on the {}",
+            stock.describe()
+        )));
+    }
+    let mut instances = 0usize;
+    for it in items {
+        let copies = it
+            .quantity
+            .saturating_mul(if it.mirrored_pair { 2 } else { 1 });
+        instances = instances.saturating_add(copies);
+    }
+    if instances > MAX_INSTANCES {
+        return Err(NestError::InvalidInput(format!(
+            "{instances} piece copies to place; the nester places at most {MAX_INSTANCES} in one run"
+        )));
+    }
+    Ok(())
 }
 
 impl<'a> Engine<'a> {

@@ -347,3 +347,68 @@ fn grain_turned_piece_fits_a_roll() {
         r.length
     );
 }
+
+/// A 10 mm square.
+fn square10() -> Vec<DVec2> {
+    vec![
+        DVec2::ZERO,
+        DVec2::new(10.0, 0.0),
+        DVec2::new(10.0, 10.0),
+        DVec2::new(0.0, 10.0),
+    ]
+}
+
+#[test]
+fn stock_beyond_what_the_engine_resolves_and_too_many_copies_are_refused() {
+    let square = square10();
+    let items = [NestItem::new("sq", square.clone(), 2)];
+    for stock in [
+        Stock::Sheets {
+            width: 1e9,
+            height: 1e9,
+            max_sheets: None,
+        },
+        Stock::Roll {
+            width: 1e308,
+            max_length: None,
+        },
+    ] {
+        let e = nest(&items, stock, &NestOptions::DEFAULT, &mut |_| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("larger than the 1e5 mm"), "{e}");
+    }
+    let many = [NestItem::new("sq", square, 1_000_000)];
+    let e = nest(
+        &many,
+        Stock::Roll {
+            width: 1000.0,
+            max_length: None,
+        },
+        &NestOptions::DEFAULT,
+        &mut |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("1000000 piece copies"), "{e}");
+}
+
+#[test]
+fn a_spacing_that_leaves_no_room_on_the_stock_is_named() {
+    let e = nest(
+        &[NestItem::new("sq", square10(), 1)],
+        Stock::Sheets {
+            width: 100.0,
+            height: 40.0,
+            max_sheets: None,
+        },
+        &NestOptions::DEFAULT.with_spacing(20.0),
+        &mut |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("spacing of 20 mm from the edges leaves no room"),
+        "{e}"
+    );
+}

@@ -5,6 +5,7 @@
 //! **Architecture invariant:** this crate is 2D only. It cannot name a surface or a mesh type
 //! (the crate graph enforces it); the facade turns a flattened boundary into a piece.
 
+pub mod colours;
 pub mod drawing;
 pub mod dxf;
 pub mod dxf_read;
@@ -17,11 +18,13 @@ pub mod poly;
 pub mod seam;
 pub mod svg;
 
+pub use colours::{ColourJob, ColourTable};
 pub use drawing::{Drawing, Layer, PieceInfo, Stroke, StrokeKind};
 pub use error::PatternError;
 pub use fit::PathSeg;
 pub use io::write_atomic;
 pub use piece::{
     LabelInfo, Mark, MarkKind, NotchStyle, Piece, PieceInput, PieceOptions, PlacedPiece, Placement,
+    safe_name,
 };
 pub use seam::CornerStyle;

@@ -236,7 +236,10 @@ fn simplify_line(l: &[DVec2], tol: f64) -> Vec<DVec2> {
         .collect()
 }
 
-fn sanitize(name: &str) -> String {
+/// A piece name made safe for element ids and file names: ASCII letters, digits, `-` and `_`
+/// kept, everything else `_`; an empty name is `piece`. Two pieces of a design must not share
+/// it (the facade refuses such a design).
+pub fn safe_name(name: &str) -> String {
     let s: String = name
         .chars()
         .map(|c| {
@@ -664,7 +667,7 @@ impl Piece {
 
     /// Id prefix of instance `instance` of this piece, e.g. `vamp-1`.
     pub fn instance_id(&self, instance: u32) -> String {
-        format!("{}-{}", sanitize(&self.name), instance)
+        format!("{}-{}", safe_name(&self.name), instance)
     }
 
     /// The piece as strokes: cut line (Boundary), drill holes and notches (Cut), sew line, points,

@@ -8,15 +8,24 @@
 //! each element is (`vamp-1-cut`, `vamp-1-sew`, `vamp-1-notch-2`). Numbers are written with
 //! 3 decimals, so the output is byte-identical for identical input.
 //!
+//! Each piece's cut line carries what nesting needs to know again when the SVG is read back:
+//! `data-flatcut-quantity` (copies to cut) and `data-flatcut-grain-deg` (the grain direction,
+//! degrees counter-clockwise from +x, y up) when the piece has a grain line.
+//!
 //! Import: `usvg` resolves units, transforms, basic shapes and arcs into paths; curves are
-//! flattened here within a chordal tolerance. Layers come from the enclosing group id, then
-//! from the element id, then from the stroke colour (blue = draw, anything else = cut).
+//! flattened here within a chordal tolerance. Layers come from the enclosing group id (`cut`,
+//! `draw`, `engrave`: flatcut's own SVGs), then from the element id, then from the stroke colour
+//! through a [`ColourTable`] (LightBurn's palette; see `crate::colours`). Everything dropped or
+//! assumed is a warning of the import: text, images, fills, colours the table maps to nothing,
+//! a document without width and height (read as CSS px). A width or height in percent has no
+//! physical size and is refused, as is any coordinate beyond the sane range.
 
-use crate::drawing::{Drawing, Layer, Stroke, StrokeKind};
+use crate::colours::ColourTable;
+use crate::drawing::{Drawing, Layer, PieceInfo, Stroke, StrokeKind};
 use crate::fit::PathSeg;
 use crate::piece::PlacedPiece;
 use crate::{PatternError, poly};
-use flatcut_geom::{Aabb2, DVec2};
+use flatcut_geom::{Aabb2, DVec2, limits};
 use svg::node::element::{Group, Path, Polygon, Polyline};
 
 /// Stroke width of every exported element (mm): thin enough for hairline-cut detection.
@@ -89,7 +98,10 @@ enum Item {
     Path(Layer, String, String),
 }
 
-fn document(items: Vec<Item>, frame: &Frame) -> String {
+/// Extra attributes of an element, by element id (the piece metadata on cut lines).
+type Attrs = std::collections::BTreeMap<String, Vec<(&'static str, String)>>;
+
+fn document(items: Vec<Item>, frame: &Frame, attrs: &Attrs) -> String {
     let mut doc = svg::Document::new()
         .set("width", format!("{}mm", f(frame.size.x)))
         .set("height", format!("{}mm", f(frame.size.y)))
@@ -108,7 +120,11 @@ fn document(items: Vec<Item>, frame: &Frame) -> String {
                 Item::Stroke(s) if s.layer == layer && s.points.len() >= 2 => {
                     let pts = frame.pts(&s.points);
                     if s.closed {
-                        g = g.add(Polygon::new().set("id", s.id.clone()).set("points", pts));
+                        let mut e = Polygon::new().set("id", s.id.clone()).set("points", pts);
+                        for (k, v) in attrs.get(&s.id).into_iter().flatten() {
+                            e = e.set(*k, v.clone());
+                        }
+                        g = g.add(e);
                     } else {
                         g = g.add(Polyline::new().set("id", s.id.clone()).set("points", pts));
                     }
@@ -133,6 +149,7 @@ pub fn write_drawing(d: &Drawing, sheet: Option<DVec2>) -> String {
     document(
         d.strokes.iter().cloned().map(Item::Stroke).collect(),
         &frame,
+        &Attrs::new(),
     )
 }
 
@@ -185,8 +202,18 @@ pub fn write_pieces(placed: &[PlacedPiece], sheet: Option<DVec2>) -> String {
         );
     }
     let frame = Frame::new(bbox, sheet);
+    let mut attrs = Attrs::new();
     for (pp, d) in placed.iter().zip(drawings) {
         let sew_id = format!("{}-sew", pp.piece.instance_id(pp.instance));
+        let mut meta = vec![(
+            "data-flatcut-quantity",
+            pp.piece.label.quantity.max(1).to_string(),
+        )];
+        if let Some((a, b)) = pp.piece.grain {
+            let d = pp.placement.apply(b) - pp.placement.apply(a);
+            meta.push(("data-flatcut-grain-deg", f(d.y.atan2(d.x).to_degrees())));
+        }
+        attrs.insert(format!("{}-cut", pp.piece.instance_id(pp.instance)), meta);
         for s in d.strokes {
             if s.id == sew_id && !pp.piece.sew.is_empty() {
                 let pl = pp.placement;
@@ -200,7 +227,7 @@ pub fn write_pieces(placed: &[PlacedPiece], sheet: Option<DVec2>) -> String {
             }
         }
     }
-    document(items, &frame)
+    document(items, &frame, &attrs)
 }
 
 fn layer_from_id(id: &str) -> Option<Layer> {
@@ -261,7 +288,11 @@ fn piece_prefix(id: &str) -> Option<&str> {
     None
 }
 
-fn flatten_usvg_path(path: &usvg::Path, tol_mm: f64, height_mm: f64) -> Vec<(Vec<DVec2>, bool)> {
+fn flatten_usvg_path(
+    path: &usvg::Path,
+    tol_mm: f64,
+    height_mm: f64,
+) -> Result<Vec<(Vec<DVec2>, bool)>, String> {
     use tiny_skia_path::PathSegment as S;
     let ts = path.abs_transform();
     let to_mm = |p: tiny_skia_path::Point| {
@@ -281,6 +312,21 @@ fn flatten_usvg_path(path: &usvg::Path, tol_mm: f64, height_mm: f64) -> Vec<(Vec
         }
     };
     for seg in path.data().segments() {
+        // Checked before flattening: a curve spanning 1e30 mm would flatten to billions of points.
+        let ends: Vec<tiny_skia_path::Point> = match seg {
+            S::MoveTo(p) | S::LineTo(p) => vec![p],
+            S::QuadTo(a, b) => vec![a, b],
+            S::CubicTo(a, b, c) => vec![a, b, c],
+            S::Close => Vec::new(),
+        };
+        if let Some(q) = ends
+            .iter()
+            .map(|p| to_mm(*p))
+            .find(|q| !limits::in_range2(*q))
+        {
+            let x = if limits::in_range(q.x) { q.y } else { q.x };
+            return Err(format!("coordinate {}", limits::out_of_range_reason(x)));
+        }
         match seg {
             S::MoveTo(p) => {
                 finish(&mut cur, false, &mut out);
@@ -319,71 +365,263 @@ fn flatten_usvg_path(path: &usvg::Path, tol_mm: f64, height_mm: f64) -> Vec<(Vec
     }
     finish(&mut cur, false, &mut out);
     out.retain(|(p, _)| p.len() >= 2);
-    out
+    Ok(out)
 }
 
-fn walk(
-    g: &usvg::Group,
-    layer: Option<Layer>,
-    tol: f64,
-    h: f64,
-    out: &mut Vec<(Stroke, Option<String>)>,
-) {
-    for node in g.children() {
-        match node {
-            usvg::Node::Group(sub) => {
-                let l = layer_from_id(sub.id())
-                    .filter(|_| matches!(sub.id(), "cut" | "draw" | "engrave"))
-                    .or(layer);
-                walk(sub, l, tol, h, out);
-            }
-            usvg::Node::Path(p) => {
-                if !p.is_visible() {
-                    continue;
-                }
-                let id = p.id().to_string();
-                let colour_layer = match p.stroke().map(|s| s.paint()) {
-                    Some(usvg::Paint::Color(c)) if c.blue > 128 && c.red < 128 && c.green < 128 => {
-                        Some(Layer::Draw)
-                    }
-                    _ => None,
-                };
-                let lay = layer
-                    .or_else(|| layer_from_id(&id))
-                    .or(colour_layer)
-                    .unwrap_or(Layer::Cut);
-                let prefix = piece_prefix(&id).map(str::to_string);
-                for (k, (pts, closed)) in flatten_usvg_path(p, tol, h).into_iter().enumerate() {
-                    let sid = if k == 0 {
-                        id.clone()
-                    } else {
-                        format!("{id}-{k}")
-                    };
-                    let kind = kind_from_id(&id, lay);
-                    out.push((
-                        Stroke {
-                            layer: lay,
-                            points: pts,
-                            closed,
-                            piece: None,
-                            kind,
-                            id: sid,
-                        },
-                        prefix.clone(),
-                    ));
-                }
-            }
-            _ => {}
+/// What an import left out or assumed, counted while walking the tree.
+#[derive(Default)]
+struct Dropped {
+    /// Palette layer → (colour as written, count) of strokes whose colour maps to nothing.
+    colours: std::collections::BTreeMap<&'static str, (String, usize)>,
+    fills_only: usize,
+    fills_ignored: usize,
+    paints: usize,
+    images: usize,
+}
+
+impl Dropped {
+    fn warnings(&self, texts: usize) -> Vec<String> {
+        let mut w = Vec::new();
+        for (layer, (colour, n)) in &self.colours {
+            w.push(format!(
+                "{n} stroke(s) in colour {colour} (LightBurn layer {layer}) dropped: the colour table maps layer {layer} to no layer (map it in the machine profile's [svg_colours])"
+            ));
         }
+        let mut say = |n: usize, what: &str| {
+            if n > 0 {
+                w.push(format!("{n} {what}"));
+            }
+        };
+        say(
+            texts,
+            "<text> element(s) dropped: text is neither cut nor drawn; convert text to paths",
+        );
+        say(
+            self.images,
+            "image(s) dropped: raster images are neither cut nor drawn",
+        );
+        say(
+            self.fills_only,
+            "filled shape(s) without a stroke dropped: fills are neither cut nor drawn",
+        );
+        say(
+            self.fills_ignored,
+            "shape(s) have a fill as well as a stroke: the fill is ignored, the stroke is used",
+        );
+        say(
+            self.paints,
+            "stroke(s) painted with a gradient or pattern dropped: no colour to choose a layer by",
+        );
+        w
     }
 }
 
+/// The tree walk of an import: strokes with their piece prefix, and what was dropped.
+struct Walk<'a> {
+    /// Paths seen, to name those without an id (`svg-path-3`) in later messages.
+    paths: usize,
+    tol: f64,
+    h: f64,
+    table: &'a ColourTable,
+    out: Vec<(Stroke, Option<String>)>,
+    dropped: Dropped,
+}
+
+impl Walk<'_> {
+    fn group(&mut self, g: &usvg::Group, layer: Option<Layer>) -> Result<(), String> {
+        for node in g.children() {
+            match node {
+                usvg::Node::Group(sub) => {
+                    let l = layer_from_id(sub.id())
+                        .filter(|_| matches!(sub.id(), "cut" | "draw" | "engrave"))
+                        .or(layer);
+                    self.group(sub, l)?;
+                }
+                usvg::Node::Path(p) => self.path(p, layer)?,
+                usvg::Node::Image(_) => self.dropped.images += 1,
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// The layer of a path: its group's, its id's, or its stroke colour's (`None`: dropped).
+    fn layer(&mut self, p: &usvg::Path, named: Option<Layer>) -> Option<Layer> {
+        match (named, p.stroke().map(|s| s.paint())) {
+            (Some(l), _) => Some(l),
+            (None, Some(usvg::Paint::Color(c))) => {
+                if p.fill().is_some() {
+                    self.dropped.fills_ignored += 1;
+                }
+                let (name, layer) = self.table.layer_of([c.red, c.green, c.blue]);
+                if layer.is_none() {
+                    let e = self.dropped.colours.entry(name).or_insert_with(|| {
+                        (format!("#{:02x}{:02x}{:02x}", c.red, c.green, c.blue), 0)
+                    });
+                    e.1 += 1;
+                }
+                layer
+            }
+            (None, Some(_)) => {
+                self.dropped.paints += 1;
+                None
+            }
+            (None, None) => {
+                if p.fill().is_some() {
+                    self.dropped.fills_only += 1;
+                }
+                None
+            }
+        }
+    }
+
+    fn path(&mut self, p: &usvg::Path, layer: Option<Layer>) -> Result<(), String> {
+        if !p.is_visible() {
+            return Ok(());
+        }
+        self.paths += 1;
+        let id = if p.id().is_empty() {
+            format!("svg-path-{}", self.paths)
+        } else {
+            p.id().to_string()
+        };
+        let Some(lay) = self.layer(p, layer.or_else(|| layer_from_id(&id))) else {
+            return Ok(());
+        };
+        let prefix = piece_prefix(&id).map(str::to_string);
+        let parts =
+            flatten_usvg_path(p, self.tol, self.h).map_err(|e| format!("element '{id}': {e}"))?;
+        for (k, (pts, closed)) in parts.into_iter().enumerate() {
+            let sid = if k == 0 {
+                id.clone()
+            } else {
+                format!("{id}-{k}")
+            };
+            let kind = kind_from_id(&id, lay);
+            self.out.push((
+                Stroke {
+                    layer: lay,
+                    points: pts,
+                    closed,
+                    piece: None,
+                    kind,
+                    id: sid,
+                },
+                prefix.clone(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// What flatcut wrote on a piece's cut line: copies to cut, and the grain direction in the
+/// drawing's frame (radians counter-clockwise from +x, y up).
+struct PieceMeta {
+    quantity: u32,
+    grain_angle: Option<f64>,
+}
+
+/// An imported SVG: the drawing (with the quantity and grain of flatcut's pieces in
+/// [`Drawing::pieces`]) and what was dropped or assumed, one sentence each.
+#[derive(Clone, Debug, Default)]
+pub struct SvgImport {
+    pub drawing: Drawing,
+    pub warnings: Vec<String>,
+}
+
+/// The metadata flatcut wrote on a cut line (`None` for any other element).
+fn piece_meta(n: usvg::roxmltree::Node) -> Result<Option<(String, PieceMeta)>, String> {
+    let (Some(id), Some(q)) = (n.attribute("id"), n.attribute("data-flatcut-quantity")) else {
+        return Ok(None);
+    };
+    let Some(prefix) = id.strip_suffix("-cut") else {
+        return Ok(None);
+    };
+    let quantity = q
+        .trim()
+        .parse::<u32>()
+        .ok()
+        .filter(|q| (1..=limits::MAX_QUANTITY).contains(q))
+        .ok_or_else(|| {
+            format!(
+                "element '{id}': data-flatcut-quantity=\"{q}\" is not a count from 1 to {}",
+                limits::MAX_QUANTITY
+            )
+        })?;
+    let grain_angle = match n.attribute("data-flatcut-grain-deg") {
+        None => None,
+        Some(g) => Some(
+            g.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|g| g.is_finite())
+                .ok_or_else(|| {
+                    format!("element '{id}': data-flatcut-grain-deg=\"{g}\" is not an angle")
+                })?
+                .to_radians(),
+        ),
+    };
+    Ok(Some((
+        prefix.to_string(),
+        PieceMeta {
+            quantity,
+            grain_angle,
+        },
+    )))
+}
+
+/// What the raw document says before usvg resolves it: refusals (percent sizes), warnings
+/// (px assumed), the number of `<text>` elements and flatcut's piece metadata.
+fn scan_document(
+    text: &str,
+    import: &mut SvgImport,
+    metas: &mut std::collections::BTreeMap<String, PieceMeta>,
+) -> Result<usize, String> {
+    let doc = usvg::roxmltree::Document::parse(text).map_err(|e| e.to_string())?;
+    let root = doc.root_element();
+    let mut missing = Vec::new();
+    for attr in ["width", "height"] {
+        match root.attribute(attr) {
+            Some(v) if v.trim().ends_with('%') => {
+                return Err(format!(
+                    "{attr}=\"{v}\" on <svg> is a percentage, which has no physical size; give the {attr} in mm (e.g. {attr}=\"600mm\")"
+                ));
+            }
+            Some(_) => {}
+            None => missing.push(attr),
+        }
+    }
+    if !missing.is_empty() {
+        import.warnings.push(format!(
+            "the <svg> element has no {}: its user units are read as CSS px (96 per inch, {:.4} mm each); give width and height in mm",
+            missing.join(" and "),
+            1.0 / PX_PER_MM
+        ));
+    }
+    let mut texts = 0;
+    for n in doc.descendants().filter(|n| n.is_element()) {
+        if n.tag_name().name() == "text" {
+            texts += 1;
+        }
+        if let Some((prefix, meta)) = piece_meta(n)? {
+            metas.insert(prefix, meta);
+        }
+    }
+    Ok(texts)
+}
+
 /// Parses an SVG (ours or any SVG with real units) into a drawing in mm, y up, origin at the
-/// lower-left corner of the document; curves are flattened within `chord_tol` mm.
+/// lower-left corner of the document; curves are flattened within `chord_tol` mm; stroke
+/// colours choose layers through `table`.
 ///
 /// Pieces: strokes with our ids are grouped by their id prefix; in other SVGs every closed
 /// cut contour not inside another one is a piece (`outer`), and strokes inside it belong to it.
-pub fn read_svg(text: &str, source_name: &str, chord_tol: f64) -> Result<Drawing, PatternError> {
+pub fn read_svg(
+    text: &str,
+    source_name: &str,
+    chord_tol: f64,
+    table: &ColourTable,
+) -> Result<SvgImport, PatternError> {
     let err = |reason: String| PatternError::Svg {
         source_name: source_name.to_string(),
         reason,
@@ -393,11 +631,23 @@ pub fn read_svg(text: &str, source_name: &str, chord_tol: f64) -> Result<Drawing
             "chord tolerance must be positive, got {chord_tol}"
         )));
     }
+    let mut import = SvgImport::default();
+    let mut metas = std::collections::BTreeMap::new();
+    let texts = scan_document(text, &mut import, &mut metas).map_err(err)?;
     let tree =
         usvg::Tree::from_str(text, &usvg::Options::default()).map_err(|e| err(e.to_string()))?;
     let h_mm = tree.size().height() as f64 / PX_PER_MM;
-    let mut raw = Vec::new();
-    walk(tree.root(), None, chord_tol, h_mm, &mut raw);
+    let mut walk = Walk {
+        paths: 0,
+        tol: chord_tol,
+        h: h_mm,
+        table,
+        out: Vec::new(),
+        dropped: Dropped::default(),
+    };
+    walk.group(tree.root(), None).map_err(err)?;
+    import.warnings.extend(walk.dropped.warnings(texts));
+    let raw = walk.out;
     // piece numbering
     let mut prefixes: Vec<String> = Vec::new();
     let mut strokes: Vec<Stroke> = Vec::with_capacity(raw.len());
@@ -445,7 +695,24 @@ pub fn read_svg(text: &str, source_name: &str, chord_tol: f64) -> Result<Drawing
             }
         }
     }
-    Ok(Drawing::from_strokes(strokes))
+    // The quantity and grain flatcut wrote, for each of its pieces found.
+    let pieces = prefixes
+        .iter()
+        .enumerate()
+        .filter_map(|(k, p)| {
+            let m = metas.get(p)?;
+            Some(PieceInfo {
+                piece: k as u32,
+                label: crate::LabelInfo {
+                    quantity: m.quantity,
+                    ..Default::default()
+                },
+                grain: m.grain_angle.map(|a| (DVec2::ZERO, DVec2::from_angle(a))),
+            })
+        })
+        .collect();
+    import.drawing = Drawing { strokes, pieces };
+    Ok(import)
 }
 
 #[cfg(test)]
@@ -529,7 +796,9 @@ mod tests {
             }],
             Some(DVec2::new(600., 400.)),
         );
-        let d = read_svg(&s, "test", 0.01).unwrap();
+        let d = read_svg(&s, "test", 0.01, &ColourTable::default())
+            .unwrap()
+            .drawing;
         let cut = d.strokes.iter().find(|s| s.id == "vamp-2-cut").unwrap();
         assert!(cut.is_outer() && cut.layer == Layer::Cut && cut.piece == Some(0));
         let expect: Vec<DVec2> = p.cut.iter().map(|q| pl.apply(*q)).collect();
@@ -555,10 +824,12 @@ mod tests {
 
     #[test]
     fn general_svg_in_inches_with_transform() {
-        let s = r#"<svg xmlns="http://www.w3.org/2000/svg" width="4in" height="2in" viewBox="0 0 400 200">
-            <g transform="translate(100,50)"><rect x="0" y="0" width="100" height="50" stroke="black" fill="none"/>
-            <circle cx="50" cy="25" r="10" stroke="black" fill="none"/></g></svg>"#;
-        let d = read_svg(s, "in.svg", 0.01).unwrap();
+        let s = r##"<svg xmlns="http://www.w3.org/2000/svg" width="4in" height="2in" viewBox="0 0 400 200">
+            <g transform="translate(100,50)"><rect x="0" y="0" width="100" height="50" stroke="red" fill="none"/>
+            <circle cx="50" cy="25" r="10" stroke="#f00" fill="none"/></g></svg>"##;
+        let d = read_svg(s, "in.svg", 0.01, &ColourTable::default())
+            .unwrap()
+            .drawing;
         assert_eq!(d.strokes.len(), 2);
         let outer = d.strokes.iter().find(|s| s.is_outer()).unwrap();
         // 100 user units = 1 in = 25.4 mm
@@ -596,7 +867,113 @@ mod tests {
 
     #[test]
     fn garbage_is_an_error_naming_the_source() {
-        let e = read_svg("<svg", "broken.svg", 0.01).unwrap_err();
+        let e = read_svg("<svg", "broken.svg", 0.01, &ColourTable::default()).unwrap_err();
         assert!(e.to_string().contains("broken.svg"));
+    }
+
+    fn import(s: &str) -> Result<SvgImport, PatternError> {
+        read_svg(s, "x.svg", 0.01, &ColourTable::default())
+    }
+
+    #[test]
+    fn colours_go_to_layers_by_the_table_and_dropped_ones_are_named() {
+        let s = r##"<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" viewBox="0 0 100 100">
+            <path d="M0 0 L10 0" stroke="black"/><path d="M0 5 L10 5" stroke="#0000ff"/>
+            <path d="M0 9 L10 9" stroke="#ff0000"/><path d="M0 20 L10 20" stroke="#00e000"/>
+            <path d="M0 30 L10 30" stroke="#00ff00"/>
+            <rect x="50" y="50" width="10" height="10" fill="black"/>
+            <rect x="70" y="50" width="10" height="10" fill="yellow" stroke="red"/>
+            <text x="5" y="90">SIZE 42</text></svg>"##;
+        let r = import(s).unwrap();
+        let layers: Vec<Layer> = r.drawing.strokes.iter().map(|s| s.layer).collect();
+        assert_eq!(
+            layers,
+            [Layer::Engrave, Layer::Draw, Layer::Cut, Layer::Cut],
+            "{:?}",
+            r.drawing.strokes
+        );
+        let w = r.warnings.join("\n");
+        assert!(
+            w.contains("2 stroke(s) in colour #00e000 (LightBurn layer 03) dropped"),
+            "{w}"
+        );
+        assert!(w.contains("1 <text> element(s) dropped"), "{w}");
+        assert!(
+            w.contains("1 filled shape(s) without a stroke dropped"),
+            "{w}"
+        );
+        assert!(w.contains("the fill is ignored"), "{w}");
+        assert!(!w.contains("px"), "{w}");
+        // a profile may send layer 03 to the cut
+        let t = ColourTable::with_overrides(
+            &[("03".to_string(), crate::ColourJob::Cut)]
+                .into_iter()
+                .collect(),
+        )
+        .unwrap();
+        let r = read_svg(s, "x.svg", 0.01, &t).unwrap();
+        assert_eq!(
+            r.drawing
+                .strokes
+                .iter()
+                .filter(|s| s.layer == Layer::Cut)
+                .count(),
+            4
+        );
+    }
+
+    #[test]
+    fn percentage_size_is_refused_and_a_missing_size_is_a_warning() {
+        let e = import(r##"<svg xmlns="http://www.w3.org/2000/svg" width="100%" height="100%" viewBox="0 0 10 10"><path d="M0 0 L5 5" stroke="red"/></svg>"##)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("x.svg") && e.contains("width=\"100%\"") && e.contains("percentage"),
+            "{e}"
+        );
+        let r = import(r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 96 96"><path d="M0 0 L96 0" stroke="red"/></svg>"##)
+            .unwrap();
+        assert!(r.warnings[0].contains("no width and height") && r.warnings[0].contains("px"));
+        // 96 px = 1 in
+        assert!((r.drawing.strokes[0].length() - 25.4).abs() < 1e-9);
+    }
+
+    #[test]
+    fn coordinates_beyond_the_sane_range_are_refused_naming_the_element() {
+        let e = import(r##"<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="10mm" viewBox="0 0 10 10"><path id="far" d="M0 0 L1e12 5" stroke="red"/></svg>"##)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("element 'far'") && e.contains("beyond"), "{e}");
+        // a path without id is named by its place in the document
+        let e = import(r##"<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="10mm" viewBox="0 0 10 10"><path d="M0 0 L1 1" stroke="red"/><path d="M0 0 L1e12 5" stroke="red"/></svg>"##)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("element 'svg-path-2'"), "{e}");
+    }
+
+    #[test]
+    fn quantity_and_grain_come_back_from_the_metadata_we_write() {
+        let mut p = sample_piece();
+        p.label.quantity = 2;
+        let pl = Placement {
+            rotation: std::f64::consts::FRAC_PI_2,
+            mirror: false,
+            translation: DVec2::new(200., 150.),
+        };
+        let s = write_pieces(
+            &[PlacedPiece {
+                piece: &p,
+                instance: 1,
+                placement: pl,
+            }],
+            None,
+        );
+        let r = import(&s).unwrap();
+        let m = r.drawing.piece_info(0).unwrap();
+        assert_eq!(m.label.quantity, 2);
+        // the sample's grain runs along +x; placed a quarter turn, it runs along +y
+        let (a, b) = m.grain.unwrap();
+        assert!(((b - a).y.atan2((b - a).x) - std::f64::consts::FRAC_PI_2).abs() < 1e-4);
+        assert!(r.warnings.is_empty(), "{:?}", r.warnings);
     }
 }

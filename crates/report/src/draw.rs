@@ -27,7 +27,7 @@ const TEXT_H: f64 = 4.0;
 /// Minimum column width so titles and legends fit (mm).
 const MIN_COL_W: f64 = 120.0;
 /// Height of the legend block (mm).
-const LEGEND_H: f64 = 28.0;
+const LEGEND_H: f64 = 36.0;
 /// Colour given to flipped faces.
 const FLIPPED: &str = "#ff00ff";
 /// Drawing width (mm) up to which titles and legend keep their nominal size. A wider drawing is
@@ -88,33 +88,47 @@ fn hex(c: [u8; 3]) -> String {
     format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2])
 }
 
-/// The colour scale shared by all columns: (lo, hi).
-fn scale(cols: &[Column<'_>], m: Measure) -> (f64, f64) {
-    let hi = cols
-        .iter()
-        .map(|c| {
-            let s = c.report.stats(m);
-            if m.signed() {
-                c.report
-                    .per_face
-                    .iter()
-                    .map(|f| m.of(f).abs())
-                    .filter(|v| v.is_finite())
-                    .fold(0.0, f64::max)
-            } else {
-                s.p99.max(s.mean)
-            }
-        })
-        .filter(|v| v.is_finite())
-        .fold(0.0, f64::max);
-    let hi = if hi > 0.0 {
-        hi
-    } else if m.signed() {
-        1.0
+/// The colour scale of one column (each piece has its own, so one spike in one piece does not
+/// wash out the others): (lo, hi). A piece with nothing above the noise floor gets a scale of
+/// ± the floor, on which it shows as zero.
+fn scale(c: &Column<'_>, m: Measure) -> (f64, f64) {
+    let hi = if m.signed() {
+        c.report
+            .per_face
+            .iter()
+            .map(|f| m.drawn(f).abs())
+            .filter(|v| v.is_finite())
+            .fold(0.0, f64::max)
     } else {
-        0.01
+        let s = c.report.stats(m);
+        s.p99.max(s.mean)
+    };
+    let hi = if hi.is_finite() && hi >= m.floor() {
+        hi
+    } else {
+        m.floor()
     };
     if m.signed() { (-hi, hi) } else { (0.0, hi) }
+}
+
+/// A legend tick: enough decimals to tell the ticks of a scale reaching `hi` apart.
+fn tick(m: Measure, v: f64, hi: f64) -> String {
+    let d = (1.0 - hi.log10()).ceil().clamp(1.0, 6.0) as usize;
+    let d = if m.signed() { d } else { d.max(3) };
+    let v = if v.abs() < 0.5 * 10f64.powi(-(d as i32)) {
+        0.0
+    } else {
+        v
+    };
+    if m.signed() {
+        if v == 0.0 {
+            "0".to_string()
+        } else {
+            format!("{v:+.d$}")
+        }
+    } else {
+        format!("{v:.d$}")
+    }
 }
 
 fn colour(m: Measure, v: f64, (lo, hi): (f64, f64)) -> String {
@@ -149,7 +163,6 @@ fn text_path(text: &str, origin: DVec2, h: f64, colour: &str) -> Path {
 /// The heat map of one or more flattened pieces, side by side, at true scale in mm, with a legend
 /// in real units. `glyphs` adds short ticks along the principal stretch direction.
 pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
-    let range = scale(cols, m);
     let boxes: Vec<Aabb2> = cols
         .iter()
         .map(|c| {
@@ -194,6 +207,7 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
         let top = title_h + margin;
         // Plane y up → SVG y down: y_svg = top + (b.max.y − y).
         let map = |p: DVec2| DVec2::new(ox + p.x, top + (b.max.y - p.y));
+        let range = scale(c, m);
         let mut g = Group::new().set("id", format!("piece-{k}"));
         let flat = c.mesh.flat.as_ref();
         for (t, tri) in c.mesh.triangles.iter().enumerate() {
@@ -202,7 +216,7 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
             let fill = if f.flipped {
                 FLIPPED.to_string()
             } else {
-                colour(m, m.of(f), range)
+                colour(m, m.drawn(f), range)
             };
             let q: Vec<DVec2> = tri.iter().map(|&v| map(flat[v as usize])).collect();
             g = g.add(
@@ -264,23 +278,34 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
             th,
             "#000000",
         ));
+        // Legend: this piece's colour bar with five ticks.
+        let ly = title_h + piece_h + 2.0 * margin;
+        let bar_w = (col_w[k] - 2.0 * margin).min(LEGEND_BAR_W * u);
+        doc = legend(doc, m, range, DVec2::new(x0 + margin, ly), bar_w, u);
         x0 += col_w[k];
     }
-    // Legend: a colour bar with five ticks.
-    let ly = title_h + piece_h + 2.0 * margin;
-    let bar_w = (width - 2.0 * margin).min(LEGEND_BAR_W * u);
-    let bar_h = LEGEND_BAR_H * u;
+    doc.to_string()
+}
+
+/// A colour bar at `at` (SVG frame, mm), `bar_w` long, with five ticks, the measure's title and
+/// what the scale is.
+fn legend(
+    mut doc: Document,
+    m: Measure,
+    range: (f64, f64),
+    at: DVec2,
+    bar_w: f64,
+    u: f64,
+) -> Document {
+    let (bar_h, text_h) = (LEGEND_BAR_H * u, TEXT_H * u);
     let steps = 64;
     for s in 0..steps {
         let t = s as f64 / (steps - 1) as f64;
         let v = range.0 + t * (range.1 - range.0);
         doc = doc.add(
             Rectangle::new()
-                .set(
-                    "x",
-                    n(margin + t * bar_w * (steps - 1) as f64 / steps as f64),
-                )
-                .set("y", n(ly))
+                .set("x", n(at.x + t * bar_w * (steps - 1) as f64 / steps as f64))
+                .set("y", n(at.y))
                 .set("width", n(bar_w / steps as f64 + 0.05 * u))
                 .set("height", n(bar_h))
                 .set("fill", colour(m, v, range)),
@@ -288,29 +313,35 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
     }
     for i in 0..=4 {
         let t = i as f64 / 4.0;
-        let v = range.0 + t * (range.1 - range.0);
-        let label = if m.signed() {
-            format!("{v:+.1}")
-        } else if range.1 < 0.1 {
-            format!("{v:.4}")
-        } else {
-            format!("{v:.3}")
-        };
-        let x = margin + t * bar_w - font::text_width(&label, text_h * 0.7) / 2.0;
+        let label = tick(m, range.0 + t * (range.1 - range.0), range.1);
+        let x = at.x + t * bar_w - font::text_width(&label, text_h * 0.7) / 2.0;
         doc = doc.add(text_path(
             &label,
-            DVec2::new(x, -(ly + bar_h + 1.5 * text_h)),
+            DVec2::new(x, -(at.y + bar_h + 1.5 * text_h)),
             text_h * 0.7,
             "#000000",
         ));
     }
-    doc = doc.add(text_path(
-        m.title(),
-        DVec2::new(margin, -(ly + bar_h + 3.5 * text_h)),
-        text_h * 0.7,
-        "#000000",
-    ));
-    doc.to_string()
+    for (row, line) in [
+        m.title().to_string(),
+        format!("SCALE OF THIS PIECE; BELOW {} SHOWN AS 0", m.floor()),
+    ]
+    .iter()
+    .enumerate()
+    {
+        doc = doc.add(text_path(
+            line,
+            DVec2::new(at.x, -(at.y + bar_h + (3.5 + 1.6 * row as f64) * text_h)),
+            // The note shrinks to the bar; the measure's name keeps its size.
+            if row == 0 {
+                text_h * 0.7
+            } else {
+                text_h * 0.7 * (bar_w / font::text_width(line, text_h * 0.7)).min(1.0)
+            },
+            "#000000",
+        ));
+    }
+    doc
 }
 
 /// A histogram of the measure over surface area (fraction of the area per bin), as SVG.
@@ -629,9 +660,10 @@ mod tests {
         );
         let (pn, wn) = text_paths(&narrow);
         let (pw, ww) = text_paths(&wide);
-        // Legend labels: the last path is the measure's name, drawn at 0.7 × TEXT_H (× scale).
-        let hn = text_height(pn.last().unwrap());
-        let hw = text_height(pw.last().unwrap());
+        // Per column: title, then its legend (five ticks, the measure's name drawn at
+        // 0.7 × TEXT_H × scale, the scale note).
+        let hn = text_height(&pn[pn.len() - 2]);
+        let hw = text_height(&pw[pw.len() - 2]);
         assert!(
             wn < ANNOTATION_REF_W && ww > 4.0 * ANNOTATION_REF_W,
             "{wn} {ww}"
@@ -656,6 +688,54 @@ mod tests {
             "title 0 ends at {}",
             xmax(&pw[0])
         );
-        assert!(xmin(&pw[1]) >= 0.5 * ww - 1e-6 && xmax(&pw[1]) <= ww + 1e-6);
+        assert!(xmin(&pw[8]) >= 0.5 * ww - 1e-6 && xmax(&pw[8]) <= ww + 1e-6);
+        // Each column's legend stays in its column too.
+        for p in &pw[1..8] {
+            assert!(xmax(p) <= 0.5 * ww + 1e-6);
+        }
+    }
+
+    #[test]
+    fn each_piece_has_its_own_scale_and_noise_below_the_floor_is_zero() {
+        let opts = ReportOptions::default();
+        // floating-point noise: 1e-13 relative
+        let mut noisy = square(100.0);
+        if let Some(f) = &mut noisy.flat {
+            f[0] *= 1.0 + 1e-13;
+        }
+        let rn = Report::compute("noisy", &noisy, &opts).unwrap();
+        let mut stretched = square(100.0);
+        if let Some(f) = &mut stretched.flat {
+            f.iter_mut().for_each(|q| q.x *= 1.2);
+        }
+        let rs = Report::compute("stretched", &stretched, &opts).unwrap();
+        let cols = [
+            Column {
+                title: "NOISY".into(),
+                mesh: &noisy,
+                report: &rn,
+            },
+            Column {
+                title: "STRETCHED".into(),
+                mesh: &stretched,
+                report: &rs,
+            },
+        ];
+        let svg = heatmap_svg(&cols, Measure::Stretch, false);
+        // the noisy piece is white (zero on the diverging map), not saturated
+        let piece0 = svg.split("id=\"piece-0\"").nth(1).unwrap();
+        let piece0 = piece0.split("</g>").next().unwrap();
+        assert!(
+            piece0.contains("fill=\"#f7f7f7\"") && !piece0.contains("#b2182b"),
+            "{piece0}"
+        );
+        // the stretched piece is saturated on its own scale (+20 %)
+        let piece1 = svg.split("id=\"piece-1\"").nth(1).unwrap();
+        let piece1 = piece1.split("</g>").next().unwrap();
+        assert!(piece1.contains("fill=\"#b2182b\""), "{piece1}");
+        // legend ticks are drawn as strokes; their text comes from `tick`
+        assert_eq!(tick(Measure::Stretch, 20.0, 20.0), "+20.0");
+        assert_eq!(tick(Measure::Stretch, -0.005, 0.01), "-0.005");
+        assert_eq!(tick(Measure::Stretch, 1e-17, 0.01), "0");
     }
 }

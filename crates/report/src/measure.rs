@@ -50,6 +50,24 @@ impl Measure {
         }
     }
 
+    /// The noise floor of the pictures: a face whose |value| is below it is drawn as exactly 0,
+    /// so floating-point noise on an undistorted piece shows as no distortion rather than as
+    /// saturated bands on a ±1e-12 scale. 0.01 % is 0.1 mm over a metre, below what any cutter
+    /// reproduces; δ1 and δ2 floors are of the same order for small distortions.
+    pub fn floor(self) -> f64 {
+        match self {
+            Self::Delta1 => 1e-4,
+            Self::Delta2 => 1e-5,
+            Self::Stretch | Self::Area => 0.01,
+        }
+    }
+
+    /// The value drawn for a face: [`Measure::of`] with |value| below [`Measure::floor`] as 0.
+    pub fn drawn(self, f: &FaceMeasure) -> f64 {
+        let v = self.of(f);
+        if v.abs() < self.floor() { 0.0 } else { v }
+    }
+
     /// True for measures with a sign (drawn with a diverging colour map).
     pub fn signed(self) -> bool {
         matches!(self, Self::Stretch | Self::Area)

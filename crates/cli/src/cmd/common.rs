@@ -5,10 +5,12 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use flatcut::flat::Limits;
-use flatcut::flatten::{FlattenParams, Method};
+use flatcut::flatten::{FlattenHooks, FlattenParams, FlattenProgress, Method};
 use flatcut::geom::Tolerances;
 use flatcut::pattern::{CornerStyle, NotchStyle, Piece, PieceOptions};
 use flatcut::pieces::PieceSettings;
+
+use crate::values;
 
 /// Flattening options shared by the commands that flatten.
 #[derive(Debug, Clone, clap::Args)]
@@ -17,21 +19,49 @@ pub struct FlattenArgs {
     #[arg(long, default_value = "isometric", value_parser = parse_method)]
     pub method: Method,
     /// Largest allowed stretch in percent (principal stretch).
-    #[arg(long, value_name = "P")]
+    #[arg(long, value_name = "P", value_parser = values::material_percent)]
     pub max_stretch: Option<f64>,
     /// Largest allowed compression in percent (leather: 0).
-    #[arg(long, value_name = "P")]
+    #[arg(long, value_name = "P", value_parser = values::material_percent)]
     pub max_compress: Option<f64>,
     /// Chordal tolerance of the tessellation in mm.
-    #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_name = "MM")]
+    #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_name = "MM", value_parser = values::positive_mm)]
     pub chord: f64,
-    /// Iteration cap of the nonlinear methods.
-    #[arg(long, default_value_t = FlattenParams::DEFAULT_MAX_ITERS)]
-    pub max_iters: usize,
+    /// Iteration cap of the nonlinear methods [default: 200; minmax: 1000, all its stages together].
+    #[arg(long, value_name = "N", value_parser = values::iterations)]
+    pub max_iters: Option<usize>,
+    /// Time limit of the flattening of one piece in seconds: when it runs out, the best flip-free map found so far is used, with a warning.
+    #[arg(long, value_name = "S", value_parser = values::seconds)]
+    pub flatten_time: Option<std::time::Duration>,
     /// Largest difference between the two flat sides of a mating seam, or between a notch's
     /// offsets on them, in mm; beyond it the command exits with code 3.
-    #[arg(long, default_value_t = flatcut::report::DEFAULT_SEAM_TOLERANCE_MM, value_name = "MM")]
+    #[arg(long, default_value_t = flatcut::report::DEFAULT_SEAM_TOLERANCE_MM, value_name = "MM", value_parser = values::nonneg_mm)]
     pub seam_tolerance: f64,
+}
+
+/// Shows a flattening's progress (stage, iteration of the cap, objective) as a bar on stderr
+/// (indicatif hides it when stderr is not a terminal). Returns the params with the hook and the
+/// bar, to be cleared when the flattening returns.
+pub fn with_progress_bar(params: FlattenParams) -> (FlattenParams, indicatif::ProgressBar) {
+    let (hooks, bar) = progress_hooks(params.hooks.clone(), params.max_iters);
+    (params.with_hooks(hooks), bar)
+}
+
+/// `hooks` with a progress callback drawing a bar (initially of `len` steps) on stderr.
+pub fn progress_hooks(hooks: FlattenHooks, len: usize) -> (FlattenHooks, indicatif::ProgressBar) {
+    let bar = indicatif::ProgressBar::new(len as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{prefix} {bar:30} {pos}/{len} {msg} {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let shown = bar.clone();
+    let hooks = hooks.with_progress(std::sync::Arc::new(move |p: &FlattenProgress| {
+        shown.set_prefix(p.stage);
+        shown.set_length(p.max_iterations as u64);
+        shown.set_position(p.iteration as u64);
+        shown.set_message(format!("energy {:.6e}", p.energy));
+    }));
+    (hooks, bar)
 }
 
 pub fn parse_method(s: &str) -> Result<Method, String> {
@@ -60,20 +90,14 @@ impl FlattenArgs {
                 );
             }
         }
-        Ok(FlattenParams::new(self.method)
+        let mut p = FlattenParams::new(self.method)
             .with_max_stretch_pct(self.max_stretch)
             .with_max_compress_pct(self.max_compress)
-            .with_max_iters(self.max_iters))
-    }
-
-    /// The seam tolerance, checked.
-    pub fn seam_tolerance(&self) -> anyhow::Result<f64> {
-        anyhow::ensure!(
-            self.seam_tolerance.is_finite() && self.seam_tolerance >= 0.0,
-            "--seam-tolerance must be a length in mm >= 0, got {}",
-            self.seam_tolerance
-        );
-        Ok(self.seam_tolerance)
+            .with_time_limit(self.flatten_time);
+        if let Some(n) = self.max_iters {
+            p = p.with_max_iters(n);
+        }
+        Ok(p)
     }
 
     pub fn tolerances(&self) -> anyhow::Result<Tolerances> {
@@ -90,7 +114,7 @@ impl FlattenArgs {
 #[derive(Debug, Clone, clap::Args)]
 pub struct PieceArgs {
     /// Seam allowance in mm where the design gives none.
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = values::nonneg_mm)]
     pub seam: Option<f64>,
     /// Corner style of the allowance: mitred, squared or reflected.
     #[arg(long, default_value = "mitred", value_parser = parse_corner)]
@@ -149,7 +173,7 @@ pub fn load_flat(
     limits: (Option<f64>, Option<f64>),
     verbose: bool,
 ) -> anyhow::Result<Vec<Flat>> {
-    let params = fa.params()?;
+    let (params, bar) = with_progress_bar(fa.params()?);
     let tol = fa.tolerances()?;
     let limits = Limits {
         stretch_pct: limits.0,
@@ -158,16 +182,19 @@ pub fn load_flat(
     let t0 = std::time::Instant::now();
     let flats = flatcut::flat::load_flat(path, &tol, &params, limits, &mut |name, k, n| {
         if verbose {
-            eprintln!(
-                "flattening piece {}/{} '{}' ({})",
-                k + 1,
-                n,
-                name,
-                params.method
-            );
+            bar.suspend(|| {
+                eprintln!(
+                    "flattening piece {}/{} '{}' ({})",
+                    k + 1,
+                    n,
+                    name,
+                    params.method
+                )
+            });
         }
-    })
-    .with_context(|| format!("cannot flatten {}", path.display()))?;
+    });
+    bar.finish_and_clear();
+    let flats = flats.with_context(|| format!("cannot flatten {}", path.display()))?;
     for f in &flats {
         let Some(info) = &f.info else { continue };
         for w in &info.warnings {
@@ -227,9 +254,9 @@ pub fn report_limits(flats: &[Flat], seam_tolerance: f64, flips: bool) -> bool {
 }
 
 /// Prints every mating seam: its sides' flat lengths against 3D and its notches' offsets.
-pub fn print_seams(flats: &[Flat]) {
+pub fn print_seams(flats: &[Flat]) -> anyhow::Result<()> {
     for s in flatcut::flat::mating_seams(flats) {
-        println!(
+        crate::outln!(
             "mating seam '{}' ({} / {}): 3D {:.2} mm, flat {:.3} / {:.3} mm, mismatch {:.4} mm",
             s.name,
             s.pieces[0],
@@ -240,12 +267,15 @@ pub fn print_seams(flats: &[Flat]) {
             s.mismatch_mm
         );
         for n in &s.notches {
-            println!(
+            crate::outln!(
                 "  notch '{}': {:.3} / {:.3} mm from the seam's start",
-                n.name, n.offset_mm[0], n.offset_mm[1]
+                n.name,
+                n.offset_mm[0],
+                n.offset_mm[1]
             );
         }
     }
+    Ok(())
 }
 
 /// Builds the pattern piece of each flattened piece.
@@ -258,25 +288,6 @@ pub fn build_pieces(flats: &[Flat], pa: &PieceArgs) -> anyhow::Result<Vec<Piece>
     Ok(flatcut::pieces::build_pieces(flats, &settings)?)
 }
 
-/// Parses `WxH` in mm (e.g. `600x400`).
-pub fn parse_size(s: &str) -> Result<(f64, f64), String> {
-    let (w, h) = s
-        .split_once(['x', 'X', '×'])
-        .ok_or_else(|| format!("expected WIDTHxHEIGHT in mm, e.g. 600x400, got '{s}'"))?;
-    let w: f64 = w
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad width '{w}' in '{s}'"))?;
-    let h: f64 = h
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad height '{h}' in '{s}'"))?;
-    if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
-        return Err(format!("sheet size must be positive, got '{s}'"));
-    }
-    Ok((w, h))
-}
-
 /// True when the path names a 2D pattern file (SVG or DXF) rather than a design or mesh.
 pub fn is_pattern_file(path: &Path) -> bool {
     path.extension()
@@ -284,8 +295,13 @@ pub fn is_pattern_file(path: &Path) -> bool {
 }
 
 /// Reads a pattern SVG or DXF (AAMA or plain) as a drawing in mm, curves flattened within
-/// `chord_mm`; the reader's warnings are printed.
-pub fn read_pattern_file(path: &Path, chord_mm: f64) -> anyhow::Result<flatcut::pattern::Drawing> {
+/// `chord_mm`, SVG stroke colours mapped to layers by `colours`; the reader's warnings are
+/// printed.
+pub fn read_pattern_file(
+    path: &Path,
+    chord_mm: f64,
+    colours: &flatcut::pattern::ColourTable,
+) -> anyhow::Result<flatcut::pattern::Drawing> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let name = path.display().to_string();
@@ -300,16 +316,19 @@ pub fn read_pattern_file(path: &Path, chord_mm: f64) -> anyhow::Result<flatcut::
         }
         return Ok(import.drawing);
     }
-    Ok(flatcut::pattern::svg::read_svg(&text, &name, chord_mm)?)
+    let import = flatcut::pattern::svg::read_svg(&text, &name, chord_mm, colours)?;
+    for w in &import.warnings {
+        eprintln!("warning: {name}: {w}");
+    }
+    Ok(import.drawing)
 }
 
-/// Writes a file whole or not at all, naming it in errors.
+/// Writes one file whole or not at all, naming it in errors (a set of one: see
+/// [`OutputSet`](crate::output::OutputSet) for a command's several outputs).
 pub fn write(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    }
-    flatcut::pattern::write_atomic(path, bytes)
-        .with_context(|| format!("cannot write {}", path.display()))
+    let mut set = crate::output::OutputSet::new();
+    set.add(path, bytes)?;
+    set.commit().map(drop)
 }
 
 /// `dir/stem-suffix.ext` next to `path`.

@@ -636,12 +636,23 @@ fn install_handler() -> Result<(), String> {
                 let sink = SINK.lock().unwrap_or_else(|p| p.into_inner());
                 match sink.last() {
                     Some((_, tx)) if tx.send(Ev::Interrupt).is_ok() => {}
-                    _ => std::process::exit(130),
+                    _ => {
+                        // No stream to stop: the command ends here, leaving no temporary file.
+                        crate::output::remove_staged();
+                        std::process::exit(130)
+                    }
                 }
             })
             .map_err(|e| e.to_string())
         })
         .clone()
+}
+
+/// Installs the signal handler for a command that writes files, so SIGINT, SIGTERM and SIGHUP
+/// remove its temporary outputs before the process ends. When the handler cannot be installed
+/// (an embedding program owns the signals) the outputs are still cleaned on every other path.
+pub(crate) fn install_signal_cleanup() {
+    let _ = install_handler();
 }
 
 /// A registration with the Ctrl-C handler; unregisters on drop.

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use super::common::{self, FlattenArgs};
+use crate::output::OutputSet;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -32,15 +33,16 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "mesh".into());
-        let params = a.flatten.params()?;
+        let (params, bar) = common::with_progress_bar(a.flatten.params()?);
         eprintln!(
             "flattening '{name}' ({} faces) with {}",
             mesh.triangles.len(),
             params.method
         );
         let t0 = std::time::Instant::now();
-        let f = flatcut::flatten::flatten(&mesh, &params)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?;
+        let f = flatcut::flatten::flatten(&mesh, &params);
+        bar.finish_and_clear();
+        let f = f.map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?;
         for w in &f.info.warnings {
             eprintln!("warning: {w}");
         }
@@ -74,24 +76,26 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         let limits = (a.flatten.max_stretch, a.flatten.max_compress);
         common::load_flat(&a.file, &a.flatten, limits, true)?
     };
-    let seam_tolerance = a.flatten.seam_tolerance()?;
+    let seam_tolerance = a.flatten.seam_tolerance;
+    let mut out = OutputSet::new();
     let several = flats.len() > 1;
     let mut reports = Vec::new();
+    let mut lines = Vec::new();
     for f in &flats {
-        let out = if several {
+        let path = if several {
             common::sibling(&a.output, &common::file_safe(&f.name))
         } else {
             a.output.clone()
         };
-        common::write(&out, flatcut::mesh::io::obj_string(&f.mesh).as_bytes())?;
-        println!(
+        out.add(&path, flatcut::mesh::io::obj_string(&f.mesh).as_bytes())?;
+        lines.push(format!(
             "{}: {} vertices, {} faces, mean δ2 {:.6} -> {}",
             f.name,
             f.mesh.positions.len(),
             f.report.faces,
             f.report.delta2_mean,
-            out.display()
-        );
+            path.display()
+        ));
         reports.push(&f.report);
     }
     if let Some(path) = &a.report {
@@ -100,9 +104,13 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         } else {
             serde_json::to_string_pretty(reports[0])?
         };
-        common::write(path, json.as_bytes())?;
+        out.add(path, json.as_bytes())?;
     }
-    common::print_seams(&flats);
+    out.commit()?;
+    for l in lines {
+        crate::outln!("{l}");
+    }
+    common::print_seams(&flats)?;
     // The outputs are written either way, so the user can see what breaks the limits.
     if common::report_limits(&flats, seam_tolerance, false) {
         eprintln!("material limits or seam tolerance exceeded");

@@ -9,6 +9,7 @@ use flatcut::gcode::{GcodeOptions, Profile};
 use flatcut::pattern::Drawing;
 
 use super::common::{self, FlattenArgs, PieceArgs};
+use crate::output::OutputSet;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -17,7 +18,8 @@ pub struct Args {
     /// pen, knife, laser, or a path to a machine profile (.toml).
     #[arg(long, default_value = "pen")]
     pub profile: String,
-    #[arg(short, long)]
+    /// The G-code job to write (GRBL dialect, mm); `flatcut send` streams it.
+    #[arg(short, long, value_name = "JOB.gcode")]
     pub output: PathBuf,
     /// Also write `<stem>-frame.gcode`: the bounding box traced with the tool off.
     #[arg(long)]
@@ -44,7 +46,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         "profile {} drives an HP-GL device: use `flatcut hpgl`",
         profile.name
     );
-    let drawing = load_drawing(&a.file, &a.piece, &a.flatten)?;
+    let drawing = load_drawing(&a.file, &a.piece, &a.flatten, &profile.colour_table()?)?;
     let mut opts = GcodeOptions::default();
     opts.reorder = !a.no_reorder;
     opts.arcs = !a.no_arcs;
@@ -57,23 +59,27 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     );
     let plan = flatcut::gcode::plan(&drawing, &profile, &opts)
         .with_context(|| format!("cannot plan {}", a.file.display()))?;
-    common::write(&a.output, plan.to_gcode().as_bytes())?;
+    let mut out = OutputSet::new();
+    out.add(&a.output, plan.to_gcode().as_bytes())?;
+    let frame = common::sibling(&a.output, "frame");
+    if a.frame {
+        out.add(
+            &frame,
+            flatcut::gcode::frame_job(plan.bbox(), &profile).as_bytes(),
+        )?;
+    }
+    out.commit()?;
     let s = plan.summary();
-    println!("{} lines, {} paths", s.lines, s.paths);
-    println!(
+    crate::outln!("{} lines, {} paths", s.lines, s.paths);
+    crate::outln!(
         "cut length {:.1} mm, travel {:.1} mm, estimated time {}",
         s.cut_length_mm,
         s.travel_length_mm,
         hms(s.est_time_s)
     );
-    println!("wrote {}", a.output.display());
+    crate::outln!("wrote {}", a.output.display());
     if a.frame {
-        let f = common::sibling(&a.output, "frame");
-        common::write(
-            &f,
-            flatcut::gcode::frame_job(plan.bbox(), &profile).as_bytes(),
-        )?;
-        println!("wrote {} (bounding box, tool off)", f.display());
+        crate::outln!("wrote {} (bounding box, tool off)", frame.display());
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -83,9 +89,10 @@ pub fn load_drawing(
     path: &std::path::Path,
     pa: &PieceArgs,
     fa: &FlattenArgs,
+    colours: &flatcut::pattern::ColourTable,
 ) -> anyhow::Result<Drawing> {
     if common::is_pattern_file(path) {
-        return common::read_pattern_file(path, SVG_CHORD_MM);
+        return common::read_pattern_file(path, SVG_CHORD_MM, colours);
     }
     let flats = common::load_flat(path, fa, (None, None), true)?;
     let pieces = common::build_pieces(&flats, pa)?;

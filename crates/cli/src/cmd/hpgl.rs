@@ -35,21 +35,26 @@ const READ_CHORD_MM: f64 = 0.02;
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let profile = Profile::resolve(&a.profile)?;
+    let colours = profile.colour_table()?;
     let drawing = if common::is_pattern_file(&a.file) {
-        common::read_pattern_file(&a.file, READ_CHORD_MM)?
+        common::read_pattern_file(&a.file, READ_CHORD_MM, &colours)?
     } else {
-        super::gcode::load_drawing(&a.file, &a.piece, &a.flatten)?
+        super::gcode::load_drawing(&a.file, &a.piece, &a.flatten, &colours)?
     };
     let plan = flatcut::gcode::plan(&drawing, &profile, &GcodeOptions::default())
         .with_context(|| format!("cannot plan {}", a.file.display()))?;
     let text = plan.to_hpgl()?;
     common::write(&a.output, text.as_bytes())?;
     let s = plan.hpgl_summary()?;
-    println!(
+    crate::outln!(
         "{} bytes, {} commands, {} paths; cut {:.1} mm, travel {:.1} mm",
-        s.bytes, s.commands, s.paths, s.cut_length_mm, s.travel_length_mm
+        s.bytes,
+        s.commands,
+        s.paths,
+        s.cut_length_mm,
+        s.travel_length_mm
     );
-    println!("wrote {}", a.output.display());
+    crate::outln!("wrote {}", a.output.display());
     Ok(ExitCode::SUCCESS)
 }
 
@@ -118,7 +123,7 @@ pub fn send(
     })
     .with_context(|| format!("streaming {} to {path}", job.display()))?;
     bar.finish_and_clear();
-    println!(
+    crate::outln!(
         "sent {} bytes to {path} in {:.1} s: XOFF {} / XON {}, {} buffer queries{}",
         report.bytes_sent,
         report.elapsed_s,
@@ -133,7 +138,7 @@ pub fn send(
     if let Some(sim) = sim {
         sim.wait_idle(Duration::from_secs(600));
         let (tr, st) = sim.stop();
-        println!(
+        crate::outln!(
             "plotter: {} pen-down segments, {} bytes received, {} lost, buffer high-water {} bytes",
             tr.len(),
             st.bytes_received,

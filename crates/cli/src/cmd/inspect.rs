@@ -14,7 +14,7 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Chordal tolerance of the tessellation in mm.
-    #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM)]
+    #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_parser = crate::values::positive_mm)]
     pub chord: f64,
 }
 
@@ -28,9 +28,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let report = flatcut::inspect::inspect_file(&a.file, &tol)
         .with_context(|| format!("cannot inspect {}", a.file.display()))?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        crate::outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print!("{report}");
+        crate::out!("{report}");
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -11,6 +11,8 @@ use flatcut::pattern::dxf::DxfLayers;
 use flatcut::pipeline::{self, NestGroup};
 
 use super::common::{self, FlattenArgs, PieceArgs};
+use crate::output::OutputSet;
+use crate::values;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -18,17 +20,17 @@ pub struct Args {
     #[arg(required = true)]
     pub pieces: Vec<PathBuf>,
     /// Sheet size in mm, WIDTHxHEIGHT.
-    #[arg(long, value_parser = common::parse_size)]
+    #[arg(long, value_parser = values::sheet_size)]
     pub sheet: Option<(f64, f64)>,
     /// Nest on a roll of this width (mm) instead of sheets; the length is minimised.
-    #[arg(long, value_name = "WIDTH")]
+    #[arg(long, value_name = "WIDTH", value_parser = values::positive_mm)]
     pub roll: Option<f64>,
     /// Gap between pieces (kerf), mm.
-    #[arg(long, default_value_t = NestOptions::DEFAULT_SPACING)]
+    #[arg(long, default_value_t = NestOptions::DEFAULT_SPACING, value_parser = values::nonneg_mm)]
     pub spacing: f64,
-    /// Copies of each input piece, times the piece's own quantity (a design's, or a DXF's
-    /// `Quantity:`).
-    #[arg(long, default_value_t = 1)]
+    /// Copies of each input piece, times the piece's own quantity (a design's, a pattern SVG's
+    /// `data-flatcut-quantity`, or a DXF's `Quantity:`).
+    #[arg(long, default_value_t = 1, value_parser = values::quantity)]
     pub quantity: usize,
     /// Also nest the mirror image of each piece (left and right shoe).
     #[arg(long)]
@@ -36,17 +38,18 @@ pub struct Args {
     /// Output SVG; further sheets go to `<stem>-2.svg`, …
     #[arg(short, long)]
     pub output: PathBuf,
-    #[arg(long)]
+    /// Also write the layout as DXF (R12, AAMA layers); further sheets go to `<stem>-2.dxf`, …
+    #[arg(long, value_name = "LAYOUT.dxf")]
     pub dxf: Option<PathBuf>,
     /// Seed of the search (same seed and budget → same layout).
     #[arg(long, default_value_t = NestOptions::DEFAULT_SEED)]
     pub seed: u64,
     /// Local-search iterations.
-    #[arg(long, default_value_t = NestOptions::DEFAULT_MAX_ITERS)]
+    #[arg(long, default_value_t = NestOptions::DEFAULT_MAX_ITERS, value_parser = values::iterations)]
     pub iters: usize,
-    /// Time budget in seconds (results then depend on the machine's speed).
-    #[arg(long)]
-    pub time: Option<f64>,
+    /// Time budget in seconds, > 0 (results then depend on the machine's speed).
+    #[arg(long, value_name = "SECONDS", value_parser = values::seconds)]
+    pub time: Option<Duration>,
     #[command(flatten)]
     pub piece: PieceArgs,
     #[command(flatten)]
@@ -58,16 +61,10 @@ const SVG_CHORD_MM: f64 = 0.05;
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let stock = match (a.sheet, a.roll) {
-        (_, Some(w)) => {
-            anyhow::ensure!(
-                w.is_finite() && w > 0.0,
-                "--roll must be a positive width in mm"
-            );
-            Stock::Roll {
-                width: w,
-                max_length: None,
-            }
-        }
+        (_, Some(w)) => Stock::Roll {
+            width: w,
+            max_length: None,
+        },
         (Some((w, h)), None) => Stock::Sheets {
             width: w,
             height: h,
@@ -75,14 +72,14 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         },
         (None, None) => anyhow::bail!("give --sheet WIDTHxHEIGHT or --roll WIDTH"),
     };
-    anyhow::ensure!(
-        a.spacing.is_finite() && a.spacing >= 0.0,
-        "--spacing must be >= 0 mm"
-    );
     let mut groups = Vec::new();
     for f in &a.pieces {
         if common::is_pattern_file(f) {
-            let d = common::read_pattern_file(f, SVG_CHORD_MM)?;
+            let d = common::read_pattern_file(
+                f,
+                SVG_CHORD_MM,
+                &flatcut::pattern::ColourTable::default(),
+            )?;
             let gs = NestGroup::from_drawing(&f.display().to_string(), &d);
             anyhow::ensure!(
                 !gs.is_empty(),
@@ -90,7 +87,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 f.display()
             );
             for mut g in gs {
-                g.quantity *= a.quantity;
+                g.quantity = g.quantity.saturating_mul(a.quantity);
                 g.mirrored_pair = a.mirrored_pairs;
                 groups.push(g);
             }
@@ -111,7 +108,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         .with_spacing(a.spacing)
         .with_seed(a.seed)
         .with_max_iters(a.iters)
-        .with_time_limit(a.time.map(Duration::from_secs_f64));
+        .with_time_limit(a.time);
     let bar = indicatif::ProgressBar::new(a.iters as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("nesting {bar:30} {pos}/{len} {msg}")
@@ -129,13 +126,14 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         Stock::Sheets { width, height, .. } => DVec2::new(width, height),
         Stock::Roll { width, .. } => DVec2::new(layout.result.length.max(1.0), width),
     };
+    let mut out = OutputSet::new();
     for (k, d) in layout.sheets.iter().enumerate() {
         let path = if k == 0 {
             a.output.clone()
         } else {
             common::sibling(&a.output, &(k + 1).to_string())
         };
-        common::write(
+        out.add(
             &path,
             flatcut::pattern::svg::write_drawing(d, Some(sheet_size)).as_bytes(),
         )?;
@@ -145,25 +143,30 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             } else {
                 common::sibling(dxf, &(k + 1).to_string())
             };
-            common::write(
+            out.add(
                 &p,
                 flatcut::pattern::dxf::write_drawing(d, DxfLayers::Aama).as_bytes(),
             )?;
         }
     }
+    out.commit()?;
     let r = &layout.result;
-    println!(
+    crate::outln!(
         "placed {} of {} pieces",
         r.placed.len(),
         r.placed.len() + r.unplaced.len()
     );
     match stock {
-        Stock::Roll { width, .. } => println!("roll {width:.0} mm wide: length {:.1} mm", r.length),
-        Stock::Sheets { .. } => println!("sheets used: {}", r.sheets),
+        Stock::Roll { width, .. } => {
+            crate::outln!("roll {width:.0} mm wide: length {:.1} mm", r.length)
+        }
+        Stock::Sheets { .. } => crate::outln!("sheets used: {}", r.sheets),
     }
-    println!(
+    crate::outln!(
         "utilization {:.2}% (bottom-left fill baseline {:.2}%), {} iterations",
-        r.utilization, r.baseline_utilization, r.iterations
+        r.utilization,
+        r.baseline_utilization,
+        r.iterations
     );
     for u in &r.unplaced {
         eprintln!(

@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use flatcut::pattern::dxf::DxfLayers;
 
 use super::common::{self, FlattenArgs, PieceArgs};
+use crate::output::OutputSet;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -36,19 +37,20 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let flats = common::load_flat(&a.file, &a.flatten, (None, None), true)?;
     let pieces = common::build_pieces(&flats, &a.piece)?;
     let placed = common::row_layout(&pieces);
+    let mut out = OutputSet::new();
     let svg = flatcut::pattern::svg::write_pieces(&placed, None);
-    common::write(&a.output, svg.as_bytes())?;
+    out.add(&a.output, svg.as_bytes())?;
     if let Some(p) = &a.dxf {
         let dxf = flatcut::pattern::dxf::write_pieces(
             &placed,
             layers,
             flatcut::pattern::PieceOptions::DEFAULT_CHORD_TOL,
         );
-        common::write(p, dxf.as_bytes())?;
+        out.add(p, dxf.as_bytes())?;
     }
     for p in &pieces {
         let b = p.bbox();
-        println!(
+        crate::outln!(
             "{}: cut line {:.1} mm, area {:.0} mm², {:.1} × {:.1} mm, {} notches, {} drill holes",
             p.name,
             p.cut_length(),
@@ -59,7 +61,8 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             p.drills.len()
         );
     }
-    println!(
+    out.commit()?;
+    crate::outln!(
         "wrote {}{}",
         a.output.display(),
         a.dxf

@@ -8,6 +8,8 @@ use std::process::ExitCode;
 use flatcut::report::{Column, Measure};
 
 use super::common::{self, FlattenArgs};
+use crate::output::OutputSet;
+use crate::values;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -27,8 +29,9 @@ pub struct Args {
     /// Heat map as PNG, rendered from the same SVG.
     #[arg(long)]
     pub png: Option<PathBuf>,
-    /// Width of the PNG in pixels (default: 10 pixels per mm, the longest side at most 4096).
-    #[arg(long)]
+    /// Width of the PNG in pixels (default: 10 pixels per mm, the longest side at most 4096;
+    /// at most 16384).
+    #[arg(long, value_parser = values::png_width)]
     pub png_width: Option<u32>,
     /// Self-contained HTML report.
     #[arg(long)]
@@ -40,10 +43,10 @@ pub struct Args {
     #[arg(long)]
     pub glyphs: bool,
     /// Exit with code 3 and list the regions stretched more than P percent.
-    #[arg(long, value_name = "P")]
+    #[arg(long, value_name = "P", value_parser = values::limit_percent)]
     pub limit_stretch: Option<f64>,
     /// Exit with code 3 and list the regions compressed more than P percent.
-    #[arg(long, value_name = "P")]
+    #[arg(long, value_name = "P", value_parser = values::limit_percent)]
     pub limit_compress: Option<f64>,
     #[command(flatten)]
     pub flatten: FlattenArgs,
@@ -81,30 +84,39 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     flatcut::flat::pair_coincident(&mut flats);
     for f in &flats {
         let r = &f.report;
-        println!("{}", f.name);
-        println!(
+        crate::outln!("{}", f.name);
+        crate::outln!(
             "  faces {}   flipped {}   area 3D {:.1} mm²   area 2D {:.1} mm²",
-            r.faces, r.flipped, r.area_3d_mm2, r.area_2d_mm2
+            r.faces,
+            r.flipped,
+            r.area_3d_mm2,
+            r.area_2d_mm2
         );
-        println!("  δ0 {:.5} ({} pairs)", r.delta0, r.delta0_pairs);
-        println!(
+        crate::outln!("  δ0 {:.5} ({} pairs)", r.delta0, r.delta0_pairs);
+        crate::outln!(
             "  δ1 mean {:.5}  p90 {:.5}  max {:.5}",
-            r.delta1_mean, r.delta1_p90, r.delta1_max
+            r.delta1_mean,
+            r.delta1_p90,
+            r.delta1_max
         );
-        println!(
+        crate::outln!(
             "  δ2 mean {:.5}  p90 {:.5}  max {:.5}",
-            r.delta2_mean, r.delta2_p90, r.delta2_max
+            r.delta2_mean,
+            r.delta2_p90,
+            r.delta2_max
         );
-        println!(
+        crate::outln!(
             "  stretch max {:.2}%  compression max {:.2}%  area ratio mean {:.5}",
-            r.stretch_max_pct, r.compress_max_pct, r.area_mean
+            r.stretch_max_pct,
+            r.compress_max_pct,
+            r.area_mean
         );
-        println!(
+        crate::outln!(
             "  boundary length error {:+.4}%",
             r.boundary_length_error * 100.0
         );
         for s in &r.boundary_segments {
-            println!(
+            crate::outln!(
                 "    seam {}→{}: 3D {:.2} mm, 2D {:.2} mm ({:+.3}%)",
                 s.from_vertex,
                 s.to_vertex,
@@ -114,6 +126,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             );
         }
     }
+    let mut out = OutputSet::new();
     if let Some(p) = &a.json {
         // One object for one input, an array for several; keys in the report's own order.
         let json = match (a.per_face, flats.as_slice()) {
@@ -130,7 +143,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 serde_json::to_string_pretty(&all.iter().map(|f| &f.report).collect::<Vec<_>>())?
             }
         };
-        common::write(p, json.as_bytes())?;
+        out.add(p, json.as_bytes())?;
     }
     let cols: Vec<Column<'_>> = flats
         .iter()
@@ -143,21 +156,22 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     if a.svg.is_some() || a.png.is_some() {
         let svg = flatcut::report::heatmap_svg(&cols, a.measure, a.glyphs);
         if let Some(p) = &a.svg {
-            common::write(p, svg.as_bytes())?;
+            out.add(p, svg.as_bytes())?;
         }
         if let Some(p) = &a.png {
-            common::write(p, &flatcut::report::render_png(&svg, a.png_width)?)?;
+            out.add(p, &flatcut::report::render_png(&svg, a.png_width)?)?;
         }
     }
     if let Some(p) = &a.html {
-        common::write(
+        out.add(
             p,
             flatcut::report::html_report(&cols, a.measure, a.glyphs).as_bytes(),
         )?;
     }
-    common::print_seams(&flats);
+    out.commit()?;
+    common::print_seams(&flats)?;
     let limits_given = a.limit_stretch.is_some() || a.limit_compress.is_some();
-    let over = common::report_limits(&flats, a.flatten.seam_tolerance()?, limits_given);
+    let over = common::report_limits(&flats, a.flatten.seam_tolerance, limits_given);
     if over {
         eprintln!("material limits or seam tolerance exceeded");
         return Ok(ExitCode::from(crate::EXIT_LIMIT));

@@ -34,11 +34,11 @@ pub struct Args {
     #[arg(long)]
     pub force: bool,
     /// Nesting iterations.
-    #[arg(long, default_value_t = RunOptions::DEFAULT_NEST_ITERS)]
+    #[arg(long, default_value_t = RunOptions::DEFAULT_NEST_ITERS, value_parser = crate::values::iterations)]
     pub nest_iters: usize,
     /// Largest difference between the two flat sides of a mating seam, or between a notch's
     /// offsets on them, in mm; beyond it the run counts as beyond its limits (exit code 3).
-    #[arg(long, default_value_t = flatcut::report::DEFAULT_SEAM_TOLERANCE_MM, value_name = "MM")]
+    #[arg(long, default_value_t = flatcut::report::DEFAULT_SEAM_TOLERANCE_MM, value_name = "MM", value_parser = crate::values::nonneg_mm)]
     pub seam_tolerance: f64,
     #[command(flatten)]
     pub stream: StreamArgs,
@@ -51,23 +51,28 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(common::file_safe(&proj.name)));
-    anyhow::ensure!(
-        a.seam_tolerance.is_finite() && a.seam_tolerance >= 0.0,
-        "--seam-tolerance must be a length in mm >= 0, got {}",
-        a.seam_tolerance
-    );
-    let opts = RunOptions::DEFAULT
+    let mut opts = RunOptions::default()
         .with_nest_iters(a.nest_iters)
         .with_seam_tolerance_mm(a.seam_tolerance);
+    let flatten_bar = (!a.stream.quiet).then(|| {
+        let (hooks, bar) = common::progress_hooks(opts.flatten_hooks.clone(), 1);
+        opts = opts.clone().with_flatten_hooks(hooks);
+        bar
+    });
     let mut log = StageLog::new(a.stream.quiet);
-    let outputs = flatcut::run::run_project(&proj, &opts, &mut log)?;
+    log.bar = flatten_bar;
+    let outputs = flatcut::run::run_project(&proj, &opts, &mut log);
     log.finish_bar();
+    let outputs = outputs?;
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    // All of the run's files land together or not at all (the simulator's traces come later).
+    let mut set = crate::output::OutputSet::new();
     for f in &outputs.files {
-        common::write(&out.join(&f.name), &f.bytes)?;
+        set.add(&out.join(&f.name), &f.bytes)?;
     }
+    set.commit()?;
     let (stream_lines, exit) = send_stage(&a, &outputs, &out, &mut log)?;
-    print_summary(&outputs, &stream_lines, &out, t0);
+    print_summary(&outputs, &stream_lines, &out, t0)?;
     Ok(exit)
 }
 
@@ -173,11 +178,21 @@ fn cut_segments(trace: &[flatcut_firmware_sim::TraceSegment]) -> Vec<CutSegment>
         .collect()
 }
 
-fn print_summary(o: &ProjectOutputs, stream_lines: &[String], out: &Path, t0: Instant) {
-    println!();
-    println!(
+fn print_summary(
+    o: &ProjectOutputs,
+    stream_lines: &[String],
+    out: &Path,
+    t0: Instant,
+) -> anyhow::Result<()> {
+    crate::outln!();
+    crate::outln!(
         "{:<20} {:>4} {:>12} {:>10} {:>10} {:>10}",
-        "piece", "qty", "area mm²", "δ2 mean", "stretch%", "compr.%"
+        "piece",
+        "qty",
+        "area mm²",
+        "δ2 mean",
+        "stretch%",
+        "compr.%"
     );
     for p in &o.summary.pieces {
         let qty = if p.mirrored > 0 {
@@ -185,13 +200,18 @@ fn print_summary(o: &ProjectOutputs, stream_lines: &[String], out: &Path, t0: In
         } else {
             p.quantity.to_string()
         };
-        println!(
+        crate::outln!(
             "{:<20} {:>4} {:>12.0} {:>10.5} {:>10.2} {:>10.2}",
-            p.name, qty, p.area_mm2, p.delta2_mean, p.stretch_max_pct, p.compress_max_pct
+            p.name,
+            qty,
+            p.area_mm2,
+            p.delta2_mean,
+            p.stretch_max_pct,
+            p.compress_max_pct
         );
     }
     for m in &o.summary.mating_seams {
-        println!(
+        crate::outln!(
             "seam {:<15} {} / {}: flat {:.2} / {:.2} mm (3D {:.2}), mismatch {:.3} mm",
             m.name,
             m.pieces[0],
@@ -203,18 +223,20 @@ fn print_summary(o: &ProjectOutputs, stream_lines: &[String], out: &Path, t0: In
         );
     }
     let s = &o.summary;
-    println!();
+    crate::outln!();
     match o.stock {
-        Stock::Sheets { width, height, .. } => println!(
+        Stock::Sheets { width, height, .. } => crate::outln!(
             "nesting      {} sheet(s) {width:.0}×{height:.0} mm, utilization {:.1}%",
-            s.sheets, s.utilization_pct
+            s.sheets,
+            s.utilization_pct
         ),
-        Stock::Roll { width, .. } => println!(
+        Stock::Roll { width, .. } => crate::outln!(
             "nesting      roll {width:.0} mm, length {:.0} mm, utilization {:.1}%",
-            o.layout.result.length, s.utilization_pct
+            o.layout.result.length,
+            s.utilization_pct
         ),
     }
-    println!(
+    crate::outln!(
         "G-code       {} lines, cut {:.0} mm, travel {:.0} mm, estimated {}",
         s.gcode_lines,
         s.cut_length_mm,
@@ -222,10 +244,11 @@ fn print_summary(o: &ProjectOutputs, stream_lines: &[String], out: &Path, t0: In
         super::gcode::hms(s.est_time_s)
     );
     for l in stream_lines {
-        println!("stream       {l}");
+        crate::outln!("stream       {l}");
     }
-    println!("outputs      {}", out.display());
-    println!("run time     {:.1} s", t0.elapsed().as_secs_f64());
+    crate::outln!("outputs      {}", out.display());
+    crate::outln!("run time     {:.1} s", t0.elapsed().as_secs_f64());
+    Ok(())
 }
 
 /// Renders a run's events on stderr: a numbered line per stage, warnings always, progress lines
@@ -251,7 +274,6 @@ impl Observer for StageLog {
     fn event(&mut self, e: &Event<'_>) {
         match *e {
             Event::Started { stage, detail } => {
-                self.finish_bar();
                 if !self.quiet {
                     let sep = if detail.is_empty() { "" } else { ": " };
                     let sep = if stage == Stage::Flatten { " " } else { sep };
@@ -269,7 +291,11 @@ impl Observer for StageLog {
                 total,
                 what,
             } if !self.quiet => {
-                eprintln!("flattening piece {}/{} '{}'", done + 1, total, what);
+                let line = format!("flattening piece {}/{} '{}'", done + 1, total, what);
+                match &self.bar {
+                    Some(b) => b.suspend(|| eprintln!("{line}")),
+                    None => eprintln!("{line}"),
+                }
             }
             Event::Progress {
                 stage: Stage::Nest,

@@ -7,7 +7,7 @@
 //! use flatcut::run::{run_project, RunOptions, Silent};
 //!
 //! let project = Project::load("patterns/shoe/project.toml".as_ref())?;
-//! let out = run_project(&project, &RunOptions::DEFAULT, &mut Silent)?;
+//! let out = run_project(&project, &RunOptions::default(), &mut Silent)?;
 //! for f in &out.files {
 //!     println!("{} ({} bytes)", f.name, f.bytes.len());
 //! }
@@ -19,7 +19,7 @@ mod outputs;
 
 use std::time::Instant;
 
-use flatcut_flatten::{FlattenParams, Method};
+use flatcut_flatten::{FlattenHooks, FlattenParams, Method};
 use flatcut_gcode::{GcodeOptions, Profile};
 use flatcut_geom::{DVec2, Tolerances};
 use flatcut_nest::{NestOptions, Stock};
@@ -36,7 +36,7 @@ use crate::pipeline::{self, Layout, NestGroup, PipelineError};
 use crate::project::Project;
 
 /// How a project is run beyond what the project file says.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone)]
 pub struct RunOptions {
     /// Nesting iterations.
     pub nest_iters: usize,
@@ -45,6 +45,8 @@ pub struct RunOptions {
     /// Largest difference between the two sides of a mating seam, or between a notch's offsets
     /// on them (mm), before the run counts as beyond its limits.
     pub seam_tolerance_mm: f64,
+    /// Progress callback and cancel flag handed to every piece's flattening.
+    pub flatten_hooks: FlattenHooks,
 }
 
 impl RunOptions {
@@ -52,26 +54,31 @@ impl RunOptions {
     /// A project tessellates more coarsely than a single `flatten`: the pieces of a whole part
     /// are cut together, and 0.4 mm is below a knife's or a pen's width.
     pub const DEFAULT_CHORD_MM: f64 = Tolerances::DEFAULT_CHORD_MM * 4.0;
-    pub const DEFAULT: Self = Self {
-        nest_iters: Self::DEFAULT_NEST_ITERS,
-        chord_mm: Self::DEFAULT_CHORD_MM,
-        seam_tolerance_mm: flatcut_report::DEFAULT_SEAM_TOLERANCE_MM,
-    };
 
-    pub const fn with_nest_iters(mut self, n: usize) -> Self {
+    pub fn with_nest_iters(mut self, n: usize) -> Self {
         self.nest_iters = n;
         self
     }
 
-    pub const fn with_seam_tolerance_mm(mut self, mm: f64) -> Self {
+    pub fn with_seam_tolerance_mm(mut self, mm: f64) -> Self {
         self.seam_tolerance_mm = mm;
+        self
+    }
+
+    pub fn with_flatten_hooks(mut self, hooks: FlattenHooks) -> Self {
+        self.flatten_hooks = hooks;
         self
     }
 }
 
 impl Default for RunOptions {
     fn default() -> Self {
-        Self::DEFAULT
+        Self {
+            nest_iters: Self::DEFAULT_NEST_ITERS,
+            chord_mm: Self::DEFAULT_CHORD_MM,
+            seam_tolerance_mm: flatcut_report::DEFAULT_SEAM_TOLERANCE_MM,
+            flatten_hooks: FlattenHooks::default(),
+        }
     }
 }
 
@@ -185,7 +192,8 @@ fn flatten_stage(
     let m = method(project)?;
     let params = FlattenParams::new(m)
         .with_max_stretch_pct(project.material.max_stretch_pct)
-        .with_max_compress_pct(project.material.max_compress_pct);
+        .with_max_compress_pct(project.material.max_compress_pct)
+        .with_hooks(opts.flatten_hooks.clone());
     let tol = Tolerances::DEFAULT.with_chord_mm(opts.chord_mm);
     let flats = flat::load_flat(
         &project.design_path(),
@@ -473,13 +481,5 @@ fn json<T: serde::Serialize + ?Sized>(v: &T) -> Vec<u8> {
 
 /// A name usable in a file name: ASCII letters, digits, `-` and `_`; anything else becomes `_`.
 pub fn file_safe(name: &str) -> String {
-    name.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
+    flatcut_pattern::safe_name(name)
 }

@@ -29,8 +29,8 @@ use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
 use super::kernel::{GREEN_CONCAVE_BELOW, GuardedGreen, RestTri, SymDirichlet, svd2};
-use super::newton::{EdgeTerms, MapProblem, run};
-use super::{ABS_DECREMENT_PER_AREA, mean_density, newton_solve, total_area};
+use super::newton::{Budget, EarlyStop, EdgeTerms, MapProblem, run};
+use super::{ABS_DECREMENT_PER_AREA, mean_density, newton_solve, time_limit_warning, total_area};
 use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
 
 /// Target relative boundary-length error.
@@ -123,11 +123,13 @@ pub fn boundary_isometric(
     topo: &Topology,
     rest: &[RestTri],
     params: &FlattenParams,
+    budget: &Budget,
 ) -> Result<Flattening, FlattenError> {
     let n = mesh.positions.len();
     let method = Method::BoundaryIsometric;
     let x0 = super::init::tutte(mesh, topo)?;
-    let iso = newton_solve(rest, n, SymDirichlet, &x0, params, method)?;
+    let iso = newton_solve(rest, n, SymDirichlet, &x0, params, method, budget)?;
+    let mut early = iso.early;
     let mut iterations = iso.iterations;
     let mut x = iso.x;
     let edges = boundary_edges(mesh, topo);
@@ -157,8 +159,12 @@ pub fn boundary_isometric(
     // The closest non-degenerate map so far: (largest relative boundary error, map).
     let mut best = (viol, x.clone());
     let mut stop = None;
+    let budget = Budget {
+        stage: "boundary lengths",
+        ..budget.clone()
+    };
     for _ in 0..MAX_OUTER {
-        if viol <= BOUNDARY_REL_TOLERANCE {
+        if viol <= BOUNDARY_REL_TOLERANCE || early.is_some() {
             break;
         }
         let Some(pb) = problem.take() else { break };
@@ -170,9 +176,13 @@ pub fn boundary_isometric(
             params.max_iters
         };
         let rel = params.rel_tolerance * INNER_REL_TIGHTENING;
-        let (r, mut p) = run(pb, &x, iters, rel, abs)
+        let (r, mut p) = run(pb, &x, iters, rel, abs, &budget)
             .map_err(|reason| FlattenError::NoConvergence { method, reason })?;
         iterations += r.iterations;
+        early = r.early;
+        if early == Some(EarlyStop::Cancelled) {
+            return Err(FlattenError::Cancelled { method });
+        }
         // A stall only proves anything after an inner solve that converged.
         let converged = r.iterations < iters;
         let (s_min, t_min) = min_stretch(rest, &r.x);
@@ -208,7 +218,14 @@ pub fn boundary_isometric(
     }
     let (viol, x) = best;
     let mut warnings = Vec::new();
-    if viol > REPORT_REL_ERROR {
+    if early == Some(EarlyStop::TimeLimit) {
+        warnings.push(time_limit_warning(method, iterations));
+        if viol > REPORT_REL_ERROR {
+            warnings.push(format!(
+                "boundary lengths not all kept yet: largest relative length error {viol:.2e}"
+            ));
+        }
+    } else if viol > REPORT_REL_ERROR {
         warnings.push(infeasible_warning(mesh, rest, &edges, &x, viol, stop));
     }
     Ok(Flattening {

@@ -52,7 +52,7 @@ pub fn rest_frames(mesh: &TriMesh) -> Result<Vec<RestTri>, usize> {
         let (loc, _, _) = local_frame(c[0], c[1], c[2]).ok_or(t)?;
         let dm = DMat2::from_cols(loc[1] - loc[0], loc[2] - loc[0]);
         let det = dm.determinant();
-        if !(det > 0.0) || !det.is_finite() {
+        if !det.is_finite() || det <= 0.0 {
             return Err(t);
         }
         let dm_inv = dm.inverse();
@@ -103,7 +103,7 @@ pub fn svd2(f: DMat2) -> Svd2 {
 }
 
 /// An isotropic per-triangle energy density Ψ(σ1, σ2) (dimensionless; integrated over 3D area).
-pub trait IsoEnergy {
+pub trait IsoEnergy: Sync {
     /// Ψ at σ1 ≥ |σ2|, σ2 > 0; +∞ where the map is degenerate or reflected if the energy is a
     /// barrier.
     fn psi(&self, s1: f64, s2: f64) -> f64;
@@ -137,7 +137,7 @@ pub struct SymDirichlet;
 
 impl IsoEnergy for SymDirichlet {
     fn psi(&self, s1: f64, s2: f64) -> f64 {
-        if !(s2 > 0.0) {
+        if s2.is_nan() || s2 <= 0.0 {
             return f64::INFINITY;
         }
         0.5 * (s1 * s1 + 1.0 / (s1 * s1) + s2 * s2 + 1.0 / (s2 * s2) - 4.0)
@@ -171,7 +171,7 @@ pub struct Mips;
 
 impl IsoEnergy for Mips {
     fn psi(&self, s1: f64, s2: f64) -> f64 {
-        if !(s2 > 0.0) {
+        if s2.is_nan() || s2 <= 0.0 {
             return f64::INFINITY;
         }
         s1 / s2 + s2 / s1 - 2.0
@@ -381,20 +381,44 @@ pub struct TriEval {
     pub hess: [[f64; 6]; 6],
 }
 
+/// How the indefinite eigenvalues of a triangle's Hessian are made non-negative.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Projection {
+    /// Clamped at zero: the closest PSD matrix, exact Newton where the energy is locally convex.
+    Clamp,
+    /// Mirrored (|λ|): keeps the curvature of the modes that head for inversion as a stiffness,
+    /// so a sliver on its way to collapse slows the step down instead of bounding it at the
+    /// first inversion (Chen et al., "Trust-region eigenvalue filtering for projected Newton",
+    /// 2024).
+    Abs,
+    /// Not projected: the energy's own Hessian, indefinite on single triangles.
+    Raw,
+}
+
 /// Evaluates the area-weighted energy of one triangle only (`None` if not finite).
 #[inline]
 pub fn tri_energy<E: IsoEnergy>(e: &E, r: &RestTri, x: &[DVec2]) -> f64 {
     let f = r.jacobian(x);
     let det = f.determinant();
-    if !(det > 0.0) && e.is_barrier() {
+    if (det.is_nan() || det <= 0.0) && e.is_barrier() {
         return f64::INFINITY;
     }
     let s = svd2(f);
     r.area * e.psi(s.s1, s.s2)
 }
 
-/// Full evaluation of one triangle; `with_hess` = false skips the Hessian.
+/// Full evaluation of one triangle with the clamped Hessian; `with_hess` = false skips it.
 pub fn tri_eval<E: IsoEnergy>(e: &E, r: &RestTri, x: &[DVec2], with_hess: bool) -> TriEval {
+    tri_eval_projected(e, r, x, with_hess.then_some(Projection::Clamp))
+}
+
+/// Full evaluation of one triangle with its Hessian projected by `proj` (`None` skips it).
+pub fn tri_eval_projected<E: IsoEnergy>(
+    e: &E,
+    r: &RestTri,
+    x: &[DVec2],
+    proj: Option<Projection>,
+) -> TriEval {
     let f = r.jacobian(x);
     let s = svd2(f);
     let (s1, s2) = (s.s1, s.s2);
@@ -408,7 +432,7 @@ pub fn tri_eval<E: IsoEnergy>(e: &E, r: &RestTri, x: &[DVec2], with_hess: bool) 
         r.area * (p * r.g[2]),
     ];
     let mut hess = [[0.0; 6]; 6];
-    if with_hess {
+    if let Some(proj) = proj {
         let h = e.hess(s1, s2);
         // Eigen-decomposition of the symmetric 2×2 scaling block.
         let (a, b, c) = (h[0][0], h[0][1], h[1][1]);
@@ -445,7 +469,13 @@ pub fn tri_eval<E: IsoEnergy>(e: &E, r: &RestTri, x: &[DVec2], with_hess: bool) 
             ),
         ];
         for (lambda, m) in modes {
-            if !(lambda > 0.0) || !lambda.is_finite() {
+            let lambda = match proj {
+                Projection::Clamp => lambda,
+                Projection::Abs => lambda.abs(),
+                Projection::Raw if lambda.is_finite() => lambda,
+                Projection::Raw => 0.0,
+            };
+            if !lambda.is_finite() || lambda == 0.0 || (proj != Projection::Raw && lambda < 0.0) {
                 continue;
             }
             // Mode vector in x-space: for corner v, m · g_v.

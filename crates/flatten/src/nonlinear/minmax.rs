@@ -28,7 +28,8 @@ use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
 use super::kernel::{RestTri, max_step_tri, svd2};
-use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
+use super::newton::{Budget, EarlyStop};
+use crate::{FlattenError, FlattenInfo, FlattenParams, FlattenProgress, Flattening, Method};
 
 /// Far-pair sources: farthest-point samples whose geodesic distances to every vertex enter the
 /// surrogate and the measure (the report's default is 12; a few more steady the optimum).
@@ -127,7 +128,7 @@ pub fn measure(rest: &[RestTri], uv: &[DVec2], pairs: &PairSet) -> Delta0 {
     let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
     for r in rest {
         let f = r.jacobian(uv);
-        if !(f.determinant() > 0.0) {
+        if f.determinant().is_nan() || f.determinant() <= 0.0 {
             return Delta0 {
                 delta0: f64::INFINITY,
                 s_min: 0.0,
@@ -171,7 +172,7 @@ impl Surrogate<'_> {
         let mut svds = Vec::with_capacity(if grad.is_some() { nf } else { 0 });
         for r in self.rest {
             let f = r.jacobian(x);
-            if !(f.determinant() > 0.0) {
+            if f.determinant().is_nan() || f.determinant() <= 0.0 {
                 return f64::INFINITY;
             }
             let s = svd2(f);
@@ -232,24 +233,34 @@ fn dot(a: &[DVec2], b: &[DVec2]) -> f64 {
 }
 
 /// One annealing stage of L-BFGS on the surrogate; updates `x` and `best` (the map with the
-/// lowest measured δ0). Returns the number of iterations.
+/// lowest measured δ0). Returns the number of iterations, and why the stage stopped early if
+/// the caller asked it to (cancel flag, time limit); `done` counts the iterations of the
+/// earlier stages for the progress reports.
 fn lbfgs_stage(
     s: &mut Surrogate<'_>,
     x: &mut Vec<DVec2>,
     best: &mut (f64, Vec<DVec2>),
     max_iters: usize,
-) -> usize {
+    budget: &Budget,
+    (done, total): (usize, usize),
+) -> (usize, Option<EarlyStop>) {
     let n = x.len();
     let mut g = vec![DVec2::ZERO; n];
     let mut f = s.eval(x, Some(&mut g));
     if !f.is_finite() {
-        return 0;
+        return (0, None);
     }
     let mut hist: VecDeque<(Vec<DVec2>, Vec<DVec2>, f64)> = VecDeque::new();
     let mut xn = x.clone();
     let mut gn = vec![DVec2::ZERO; n];
     let mut iters = 0;
     for _ in 0..max_iters {
+        if budget.hooks.cancelled() {
+            return (iters, Some(EarlyStop::Cancelled));
+        }
+        if budget.expired() {
+            return (iters, Some(EarlyStop::TimeLimit));
+        }
         iters += 1;
         // Two-loop recursion.
         let mut d: Vec<DVec2> = g.iter().map(|v| -*v).collect();
@@ -281,11 +292,11 @@ fn lbfgs_stage(
             }
         }
         let mut gd = dot(&g, &d);
-        if !(gd < 0.0) {
+        if gd.is_nan() || gd >= 0.0 {
             hist.clear();
             d = g.iter().map(|v| -*v).collect();
             gd = dot(&g, &d);
-            if !(gd < 0.0) {
+            if gd.is_nan() || gd >= 0.0 {
                 break;
             }
         }
@@ -329,11 +340,18 @@ fn lbfgs_stage(
             best.0 = m;
             best.1.clone_from(x);
         }
+        budget.hooks.report(&FlattenProgress {
+            stage: budget.stage,
+            iteration: done + iters,
+            max_iterations: total,
+            energy: best.0,
+            elapsed: budget.started.elapsed(),
+        });
         if decrease < STAGE_TOLERANCE {
             break;
         }
     }
-    iters
+    (iters, None)
 }
 
 /// Largest coordinate extent of a point set.
@@ -391,15 +409,27 @@ pub fn minmax(
     topo: &Topology,
     rest: &[RestTri],
     params: &FlattenParams,
+    budget: &Budget,
 ) -> Result<Flattening, FlattenError> {
     let (pairs, fields) = PairSet::sample(mesh, DEFAULT_SOURCES);
-    let warnings = Vec::new();
+    let mut warnings = Vec::new();
     // Two flip-free candidates; the descent starts from the one with the lower δ0, so the result
     // is never worse than the isometric map (which wins on nearly developable surfaces, where the
     // log map's harmonic angle is only approximate).
     let iso = {
         let p = FlattenParams::new(Method::Isometric).with_max_iters(params.max_iters);
-        super::isometric(mesh, topo, rest, &p)?.uv
+        let b = Budget {
+            stage: "min-max start",
+            ..budget.clone()
+        };
+        super::isometric(mesh, topo, rest, &p, &b)
+            .map_err(|e| match e {
+                FlattenError::Cancelled { .. } => FlattenError::Cancelled {
+                    method: Method::Minmax,
+                },
+                e => e,
+            })?
+            .uv
     };
     let mut x = iso;
     let mut start = measure(rest, &x, &pairs);
@@ -424,12 +454,40 @@ pub fn minmax(
         up: Vec::new(),
         down: Vec::new(),
     };
+    // `max_iters` caps the L-BFGS iterations of all stages together: each stage may use its
+    // share of what the earlier ones left.
     let mut iterations = 0;
-    for p in SHARPNESS {
+    let mut early = None;
+    for (k, p) in SHARPNESS.into_iter().enumerate() {
+        let left = params.max_iters - iterations;
+        let share = left.div_ceil(SHARPNESS.len() - k);
+        if share == 0 || early.is_some() {
+            break;
+        }
         sur.p = p;
-        iterations += lbfgs_stage(&mut sur, &mut x, &mut best, params.max_iters);
+        let (it, stop) = lbfgs_stage(
+            &mut sur,
+            &mut x,
+            &mut best,
+            share,
+            budget,
+            (iterations, params.max_iters),
+        );
+        iterations += it;
+        early = stop;
         // Continue each stage from the best map so far: a sharper surrogate only refines it.
         x.clone_from(&best.1);
+    }
+    match early {
+        Some(EarlyStop::Cancelled) => {
+            return Err(FlattenError::Cancelled {
+                method: Method::Minmax,
+            });
+        }
+        Some(EarlyStop::TimeLimit) => {
+            warnings.push(super::time_limit_warning(Method::Minmax, iterations));
+        }
+        None => {}
     }
     let mut uv = best.1;
     let m = measure(rest, &uv, &pairs);

@@ -14,12 +14,15 @@ pub mod minmax;
 pub mod newton;
 pub mod spd;
 
+use std::time::Instant;
+
 use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
 use crate::limits::{Limits, OnePiece};
 use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
 use kernel::{IsoEnergy, Mips, RestTri, SymDirichlet};
+use newton::{Budget, EarlyStop};
 
 /// Newton decrement (energy units per mm² of surface) below which a solve has converged: far
 /// below any distortion a pattern maker can see (δ2 ~ 1e-12).
@@ -31,15 +34,23 @@ pub fn solve(
     topo: &Topology,
     params: &FlattenParams,
 ) -> Result<Flattening, FlattenError> {
+    let started = Instant::now();
+    let budget = Budget {
+        hooks: params.hooks.clone(),
+        deadline: params.time_limit.and_then(|t| started.checked_add(t)),
+        started,
+        stage: params.method.name(),
+    };
     let rest = kernel::rest_frames(mesh).map_err(|t| {
         FlattenError::Internal(format!("triangle {t} is degenerate after the disk check"))
     })?;
     let mut out = match params.method {
-        Method::Isometric => isometric(mesh, topo, &rest, params)?,
-        Method::Conformal => conformal(mesh, topo, &rest, params)?,
-        Method::BoundaryIsometric => boundary::boundary_isometric(mesh, topo, &rest, params)?,
-
-        Method::Minmax => minmax::minmax(mesh, topo, &rest, params)?,
+        Method::Isometric => isometric(mesh, topo, &rest, params, &budget)?,
+        Method::Conformal => conformal(mesh, topo, &rest, params, &budget)?,
+        Method::BoundaryIsometric => {
+            boundary::boundary_isometric(mesh, topo, &rest, params, &budget)?
+        }
+        Method::Minmax => minmax::minmax(mesh, topo, &rest, params, &budget)?,
         m => {
             return Err(FlattenError::Internal(format!(
                 "method {m} is not a nonlinear method"
@@ -51,7 +62,8 @@ pub fn solve(
     Ok(out)
 }
 
-/// Runs projected Newton on `energy` from `x0`.
+/// Runs projected Newton on `energy` from `x0`. A cancelled run is an error; a run stopped by
+/// the time limit returns its last (flip-free) iterate with `early` set.
 pub(crate) fn newton_solve<E: IsoEnergy>(
     rest: &[RestTri],
     n: usize,
@@ -59,6 +71,7 @@ pub(crate) fn newton_solve<E: IsoEnergy>(
     x0: &[DVec2],
     params: &FlattenParams,
     method: Method,
+    budget: &Budget,
 ) -> Result<newton::NewtonRun, FlattenError> {
     let problem =
         newton::MapProblem::new(rest, n, energy, None).map_err(|reason| FlattenError::Solver {
@@ -66,35 +79,73 @@ pub(crate) fn newton_solve<E: IsoEnergy>(
             reason,
         })?;
     let abs = ABS_DECREMENT_PER_AREA * problem.total_area;
-    let (run, _) = newton::run(problem, x0, params.max_iters, params.rel_tolerance, abs)
-        .map_err(|reason| FlattenError::NoConvergence { method, reason })?;
+    let (run, _) = newton::run(
+        problem,
+        x0,
+        params.max_iters,
+        params.rel_tolerance,
+        abs,
+        budget,
+    )
+    .map_err(|reason| FlattenError::NoConvergence { method, reason })?;
+    if run.early == Some(EarlyStop::Cancelled) {
+        return Err(FlattenError::Cancelled { method });
+    }
     Ok(run)
 }
 
+/// The warning of a solve stopped by the caller's time limit.
+pub(crate) fn time_limit_warning(method: Method, iterations: usize) -> String {
+    format!(
+        "{method} stopped at the time limit after {iterations} iterations: the map is flip-free but not fully converged"
+    )
+}
+
 /// Duncan's isometric distortion δ2 (symmetric Dirichlet), with material limits if asked.
-fn isometric(
+pub(crate) fn isometric(
     mesh: &TriMesh,
     topo: &Topology,
     rest: &[RestTri],
     params: &FlattenParams,
+    budget: &Budget,
 ) -> Result<Flattening, FlattenError> {
     let n = mesh.positions.len();
     let x0 = init::lscm_or_tutte(mesh, topo)?;
-    let run = newton_solve(rest, n, SymDirichlet, &x0, params, Method::Isometric)?;
+    let run = newton_solve(
+        rest,
+        n,
+        SymDirichlet,
+        &x0,
+        params,
+        Method::Isometric,
+        budget,
+    )?;
     let mut info = FlattenInfo {
         iterations: run.iterations,
         final_energy: run.energy / total_area(rest),
         warnings: Vec::new(),
     };
+    let mut early = run.early;
     let mut x = run.x;
     if let Some(limits) = Limits::of(params)? {
-        let mut one = OnePiece { rest, n, params };
+        let mut one = OnePiece {
+            rest,
+            n,
+            params,
+            budget,
+            early: None,
+        };
         let r = crate::limits::enforce(&mut one, rest, x, limits)?;
         info.iterations += r.iterations;
+        early = early.or(one.early);
         x = r.x;
         info.final_energy = mean_density(rest, &x, &SymDirichlet);
         info.warnings
             .extend(crate::limits::violations(mesh, &x, limits));
+    }
+    if early == Some(EarlyStop::TimeLimit) {
+        info.warnings
+            .push(time_limit_warning(Method::Isometric, info.iterations));
     }
     Ok(Flattening { uv: x, info })
 }
@@ -105,17 +156,22 @@ fn conformal(
     topo: &Topology,
     rest: &[RestTri],
     params: &FlattenParams,
+    budget: &Budget,
 ) -> Result<Flattening, FlattenError> {
     let n = mesh.positions.len();
     let x0 = init::tutte(mesh, topo)?;
-    let run = newton_solve(rest, n, Mips, &x0, params, Method::Conformal)?;
+    let run = newton_solve(rest, n, Mips, &x0, params, Method::Conformal, budget)?;
     let mut x = run.x;
     init::scale_to_area(mesh, &mut x);
+    let mut warnings = Vec::new();
+    if run.early == Some(EarlyStop::TimeLimit) {
+        warnings.push(time_limit_warning(Method::Conformal, run.iterations));
+    }
     Ok(Flattening {
         info: FlattenInfo {
             iterations: run.iterations,
             final_energy: mean_density(rest, &x, &Mips),
-            warnings: Vec::new(),
+            warnings,
         },
         uv: x,
     })
@@ -140,7 +196,10 @@ fn check_flip_free(mesh: &TriMesh, uv: &[DVec2], method: Method) -> Result<(), F
             reason: format!("vertex {v} has a non-finite position"),
         });
     }
-    if let Some(t) = (0..mesh.triangles.len()).find(|&t| !(init::signed_area(mesh, uv, t) > 0.0)) {
+    if let Some(t) = (0..mesh.triangles.len()).find(|&t| {
+        let a = init::signed_area(mesh, uv, t);
+        a.is_nan() || a <= 0.0
+    }) {
         return Err(FlattenError::NoConvergence {
             method,
             reason: format!("triangle {t} is inverted in the result"),

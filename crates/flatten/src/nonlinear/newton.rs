@@ -14,10 +14,16 @@ use argmin::core::{
     Error as ArgminError, Executor, IterState, KV, Problem, Solver, State, TerminationReason,
     TerminationStatus, observers::Observe, observers::ObserverMode,
 };
-use flatcut_geom::DVec2;
+use std::time::Instant;
 
-use super::kernel::{IsoEnergy, RestTri, max_step_tri, tri_energy, tri_eval};
+use flatcut_geom::DVec2;
+use rayon::prelude::*;
+
+use super::kernel::{
+    IsoEnergy, Projection, RestTri, TriEval, max_step_tri, tri_energy, tri_eval_projected,
+};
 use super::spd::SpdSystem;
+use crate::{FlattenHooks, FlattenProgress};
 
 /// Fraction of the distance to the first inversion taken as the largest trial step
 /// (SLIM uses 0.8; closer than that, the barrier makes the energy explode anyway).
@@ -29,6 +35,17 @@ pub(crate) const MAX_HALVINGS: usize = 60;
 /// Diagonal regularisation relative to the mean Hessian diagonal: removes the rigid-motion null
 /// space of the projected Hessian without changing the step measurably.
 pub(crate) const REG_REL: f64 = 1e-9;
+/// Triangles per block of the parallel passes. Fixed (not derived from the thread count) so that
+/// every partial sum, and therefore every bit of the result, is the same with any number of
+/// threads.
+const BLOCK: usize = 4096;
+/// Fewest triangles one parallel task evaluates: below it the threads' hand-over costs more than
+/// the work (on a 2k-face patch two threads were slower than one).
+const MIN_PER_TASK: usize = 1024;
+/// Relative energy decrease of a full step below which the next step tries the unprojected
+/// Hessian (the tail of the solve, where it is positive definite on the whole mesh although
+/// single triangles are not).
+const RAW_BELOW: f64 = 1e-3;
 
 /// A boundary-length term for the augmented Lagrangian of the boundary-isometric method:
 /// L²·(λ c + w c²/2) with c = (|x_b − x_a|² − L²)/L².
@@ -67,12 +84,28 @@ pub struct MapProblem<'a, E> {
     pub edges: Option<EdgeTerms>,
     n: usize,
     sys: SpdSystem,
-    /// Per triangle: slot of local dof pair (p, q) in `sys.values`, `u32::MAX` if mirrored.
-    tri_slots: Vec<[u32; 36]>,
+    /// Per triangle: slot in `sys.values` of each local dof pair (p ≤ q), in [`PAIRS`] order.
+    tri_slots: Vec<[u32; 21]>,
     edge_slots: Vec<[u32; 16]>,
     /// Σ A_t, to report mean densities.
     pub total_area: f64,
 }
+
+/// The 21 local dof pairs (p ≤ q) of a triangle's 6×6 Hessian.
+const PAIRS: [(u8, u8); 21] = {
+    let mut out = [(0u8, 0u8); 21];
+    let (mut p, mut k) = (0u8, 0usize);
+    while p < 6 {
+        let mut q = p;
+        while q < 6 {
+            out[k] = (p, q);
+            k += 1;
+            q += 1;
+        }
+        p += 1;
+    }
+    out
+};
 
 fn slots_for(sys: &SpdSystem, dofs: &[usize]) -> Vec<u32> {
     let k = dofs.len();
@@ -82,10 +115,8 @@ fn slots_for(sys: &SpdSystem, dofs: &[usize]) -> Vec<u32> {
             let (r, c) = (dofs[p], dofs[q]);
             // Each unordered pair is added once, from its upper-triangle (row ≤ col) side; the
             // dofs of one element are distinct, so r == c only on the diagonal.
-            if r <= c {
-                if let Some(s) = sys.slot(r, c) {
-                    out[p * k + q] = s as u32;
-                }
+            if let Some(s) = sys.slot(r, c).filter(|_| r <= c) {
+                out[p * k + q] = s as u32;
             }
         }
     }
@@ -100,33 +131,29 @@ impl<'a, E: IsoEnergy> MapProblem<'a, E> {
         energy: E,
         edges: Option<EdgeTerms>,
     ) -> Result<Self, String> {
-        let mut entries = Vec::with_capacity(rest.len() * 21);
+        // Vertex pairs sharing a triangle (each vertex with itself too): the 2×2 dof blocks of
+        // the pattern. Built from the edges rather than from every element entry, which would
+        // hold 36 pairs per triangle at once.
+        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(rest.len() * 3 + n);
         for r in rest {
-            for &a in &r.v {
-                for &b in &r.v {
-                    for i in 0..2 {
-                        for j in 0..2 {
-                            entries.push((2 * a + i, 2 * b + j));
-                        }
-                    }
-                }
+            for k in 0..3 {
+                let (a, b) = (r.v[k] as u32, r.v[(k + 1) % 3] as u32);
+                pairs.push((a.min(b), a.max(b)));
             }
         }
-        let sys = SpdSystem::new(2 * n, entries)?;
+        pairs.extend((0..n as u32).map(|v| (v, v)));
+        let sys = SpdSystem::from_vertex_pairs(n, pairs)?;
         let tri_slots = rest
-            .iter()
+            .par_iter()
             .map(|r| {
-                let d = [
-                    2 * r.v[0],
-                    2 * r.v[0] + 1,
-                    2 * r.v[1],
-                    2 * r.v[1] + 1,
-                    2 * r.v[2],
-                    2 * r.v[2] + 1,
-                ];
-                let s = slots_for(&sys, &d);
-                let mut a = [u32::MAX; 36];
-                a.copy_from_slice(&s);
+                let d = r.v.map(|v| [2 * v, 2 * v + 1]);
+                let mut a = [u32::MAX; 21];
+                for (k, &(p, q)) in PAIRS.iter().enumerate() {
+                    let (p, q) = (p as usize, q as usize);
+                    if let Some(s) = sys.slot(d[p / 2][p % 2], d[q / 2][q % 2]) {
+                        a[k] = s as u32;
+                    }
+                }
                 a
             })
             .collect();
@@ -159,10 +186,13 @@ impl<'a, E: IsoEnergy> MapProblem<'a, E> {
 
     /// Total energy (+∞ if a barrier energy sees an inverted triangle).
     pub fn total_energy(&self, x: &[DVec2]) -> f64 {
-        let mut s = 0.0;
-        for r in self.rest {
-            s += tri_energy(&self.energy, r, x);
-        }
+        let energy = &self.energy;
+        let partial: Vec<f64> = self
+            .rest
+            .par_chunks(BLOCK)
+            .map(|c| c.iter().map(|r| tri_energy(energy, r, x)).sum())
+            .collect();
+        let mut s: f64 = partial.iter().sum();
         if let Some(e) = &self.edges {
             s += e.energy(x);
         }
@@ -172,33 +202,64 @@ impl<'a, E: IsoEnergy> MapProblem<'a, E> {
     /// Largest step along `d` before any triangle inverts.
     pub fn max_step(&self, x: &[DVec2], d: &[DVec2]) -> f64 {
         self.rest
-            .iter()
-            .map(|r| max_step_tri(r, x, d))
-            .fold(f64::INFINITY, f64::min)
+            .par_chunks(BLOCK)
+            .map(|c| {
+                c.iter()
+                    .map(|r| max_step_tri(r, x, d))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .reduce(|| f64::INFINITY, f64::min)
     }
 
     /// Assembles gradient (returned) and the projected Hessian (into the system); returns the
-    /// energy too.
-    fn assemble(&mut self, x: &[DVec2]) -> (f64, Vec<f64>) {
+    /// energy too. The triangles are evaluated in parallel, block by block, while the previous
+    /// block is scattered in triangle order, so every sum is formed in the same order as by a
+    /// sequential loop: the result does not depend on the number of threads.
+    fn assemble(&mut self, x: &[DVec2], proj: Projection) -> (f64, Vec<f64>) {
         let mut g = vec![0.0; 2 * self.n];
         self.sys.clear();
         let mut en = 0.0;
-        for (t, r) in self.rest.iter().enumerate() {
-            let ev = tri_eval(&self.energy, r, x, true);
-            en += ev.energy;
-            for k in 0..3 {
-                g[2 * r.v[k]] += ev.grad[k].x;
-                g[2 * r.v[k] + 1] += ev.grad[k].y;
-            }
-            let slots = &self.tri_slots[t];
-            for p in 0..6 {
-                for q in 0..6 {
-                    let s = slots[p * 6 + q];
-                    if s != u32::MAX {
-                        self.sys.values[s as usize] += ev.hess[p][q];
+        let (rest, energy) = (self.rest, &self.energy);
+        let eval = |b: usize| -> Vec<TriEval> {
+            let lo = (b * BLOCK).min(rest.len());
+            let hi = ((b + 1) * BLOCK).min(rest.len());
+            rest[lo..hi]
+                .par_iter()
+                .with_min_len(MIN_PER_TASK)
+                .map(|r| tri_eval_projected(energy, r, x, Some(proj)))
+                .collect()
+        };
+        let blocks = rest.len().div_ceil(BLOCK);
+        let mut cur = eval(0);
+        for b in 0..blocks {
+            let values = &mut self.sys.values;
+            let slots = &self.tri_slots[b * BLOCK..];
+            let scatter = |evs: &[TriEval], g: &mut [f64], en: &mut f64, values: &mut [f64]| {
+                for (k, ev) in evs.iter().enumerate() {
+                    let r = &rest[b * BLOCK + k];
+                    *en += ev.energy;
+                    for c in 0..3 {
+                        g[2 * r.v[c]] += ev.grad[c].x;
+                        g[2 * r.v[c] + 1] += ev.grad[c].y;
+                    }
+                    for (s, &(p, q)) in slots[k].iter().zip(PAIRS.iter()) {
+                        if *s != u32::MAX {
+                            values[*s as usize] += ev.hess[p as usize][q as usize];
+                        }
                     }
                 }
-            }
+            };
+            let (_, next) = rayon::join(
+                || scatter(&cur, &mut g, &mut en, values),
+                || {
+                    if b + 1 < blocks {
+                        eval(b + 1)
+                    } else {
+                        Vec::new()
+                    }
+                },
+            );
+            cur = next;
         }
         if let Some(e) = &self.edges {
             for (k, &(a, b, l)) in e.edges.iter().enumerate() {
@@ -246,6 +307,45 @@ pub fn to_flat(x: &[DVec2]) -> Vec<f64> {
     x.iter().flat_map(|p| [p.x, p.y]).collect()
 }
 
+/// When a Newton run stops early at the caller's request.
+#[derive(Clone, Debug)]
+pub struct Budget {
+    /// Progress callback and cancel flag.
+    pub hooks: FlattenHooks,
+    /// Stop after this instant (the best iterate so far is the result).
+    pub deadline: Option<Instant>,
+    /// When the whole flattening started (for the progress reports).
+    pub started: Instant,
+    /// Name of the stage in the progress reports.
+    pub stage: &'static str,
+}
+
+impl Budget {
+    /// No callback, no cancel flag, no deadline.
+    pub fn none(stage: &'static str) -> Self {
+        Self {
+            hooks: FlattenHooks::default(),
+            deadline: None,
+            started: Instant::now(),
+            stage,
+        }
+    }
+
+    /// True when the deadline has passed.
+    pub fn expired(&self) -> bool {
+        self.deadline.is_some_and(|d| Instant::now() >= d)
+    }
+}
+
+/// Why a Newton run stopped before convergence, if it did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EarlyStop {
+    /// The caller's cancel flag was set.
+    Cancelled,
+    /// The time limit ran out.
+    TimeLimit,
+}
+
 /// Projected Newton with the flip-free line search.
 #[derive(Clone, Debug)]
 pub struct ProjectedNewton {
@@ -256,16 +356,25 @@ pub struct ProjectedNewton {
     last_decrease: f64,
     last_decrement: f64,
     stalled: bool,
+    /// How the next step projects the triangles' Hessians.
+    projection: Projection,
+    budget: Budget,
+    max_iters: usize,
+    early: Option<EarlyStop>,
 }
 
 impl ProjectedNewton {
-    pub fn new(rel_tolerance: f64, abs_tolerance: f64) -> Self {
+    pub fn new(rel_tolerance: f64, abs_tolerance: f64, budget: Budget, max_iters: usize) -> Self {
         Self {
             rel_tolerance,
             abs_tolerance,
             last_decrease: f64::INFINITY,
             last_decrement: f64::INFINITY,
             stalled: false,
+            projection: Projection::Abs,
+            budget,
+            max_iters,
+            early: None,
         }
     }
 }
@@ -311,57 +420,60 @@ impl<E: IsoEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
             .take_param()
             .ok_or_else(|| argmin::core::Error::msg("no parameter"))?;
         let x = to_points(&xf);
-        let (e0, g) = p.assemble(&x);
-        let ndof = g.len();
-        let mean_diag = (0..ndof)
-            .map(|i| p.sys.values[p.sys.diag_slot(i)])
-            .sum::<f64>()
-            / ndof as f64;
-        let base: Vec<f64> = p.sys.values.clone();
-        let mut reg = REG_REL * mean_diag.max(f64::MIN_POSITIVE);
-        let mut dir = Vec::new();
-        for _ in 0..8 {
-            p.sys.values.copy_from_slice(&base);
-            for i in 0..ndof {
-                let s = p.sys.diag_slot(i);
-                p.sys.values[s] += reg;
-            }
-            let mut rhs: Vec<f64> = g.iter().map(|v| -v).collect();
-            if p.sys.factor_solve(&mut rhs).is_ok() && rhs.iter().all(|v| v.is_finite()) {
-                dir = rhs;
-                break;
-            }
-            reg *= 100.0;
+        // Near convergence the unprojected Hessian, if positive definite, gives Newton's
+        // quadratic convergence where the projected one (stiffer than the energy wherever it
+        // clamped a mode) converges only linearly; where it is indefinite, clamp.
+        let mut step = newton_direction(p, &x, self.projection);
+        if self.projection == Projection::Raw && step.2.is_none() {
+            step = newton_direction(p, &x, Projection::Clamp);
         }
-        let mut gd: f64 = g.iter().zip(&dir).map(|(a, b)| a * b).sum();
-        if dir.is_empty() || !(gd < 0.0) {
+        let (e0, g, dir) = step;
+        let (mut dir, mut gd) = match dir {
+            Some(d) => {
+                let gd: f64 = g.iter().zip(&d).map(|(a, b)| a * b).sum();
+                (d, gd)
+            }
+            None => (Vec::new(), 0.0),
+        };
+        if dir.is_empty() || gd.is_nan() || gd >= 0.0 {
             // Fall back to steepest descent (should not happen with a PSD Hessian).
             dir = g.iter().map(|v| -v).collect();
             gd = -g.iter().map(|v| v * v).sum::<f64>();
         }
         let d = to_points(&dir);
         let tmax = p.max_step(&x, &d);
-        let mut t = (INVERSION_STEP_FRACTION * tmax).min(1.0);
-        let mut xn = x.clone();
-        let mut en = f64::INFINITY;
-        let mut accepted = false;
-        for _ in 0..MAX_HALVINGS {
-            for (k, q) in xn.iter_mut().enumerate() {
-                *q = x[k] + t * d[k];
-            }
-            en = p.total_energy(&xn);
-            if en.is_finite() && en <= e0 + ARMIJO_C * t * gd {
-                accepted = true;
-                break;
-            }
-            t *= 0.5;
-        }
+        let found = line_search(p, &x, &d, e0, gd, tmax);
         self.last_decrement = -0.5 * gd;
-        if !accepted || !(en < e0) {
+        let Some((t, xn, en)) = found.filter(|f| f.2 < e0) else {
             self.stalled = true;
             return Ok((state.param(xf).cost(e0), None));
-        }
+        };
+        tracing::trace!(
+            step = t,
+            tmax,
+            projection = ?self.projection,
+            decrease = e0 - en,
+            predicted = -t * gd * (1.0 - 0.5 * t),
+            "newton step"
+        );
         self.last_decrease = e0 - en;
+        // The quadratic model predicts a decrease of −t g·d (1 − t/2) along the Newton step
+        // (dᵀHd = −g·d); where it is met, the model is trusted and the next step clamps.
+        self.projection = if t < 1.0 {
+            // Bounded by an inversion or cut back: the model does not see the barrier.
+            Projection::Abs
+        } else if self.last_decrease < RAW_BELOW * en.abs() {
+            Projection::Raw
+        } else {
+            Projection::Clamp
+        };
+        self.budget.hooks.report(&FlattenProgress {
+            stage: self.budget.stage,
+            iteration: state.get_iter() as usize + 1,
+            max_iterations: self.max_iters,
+            energy: en,
+            elapsed: self.budget.started.elapsed(),
+        });
         // argmin's key-value record is a HashMap inside argmin; only observers read it, never
         // the iterates, so its order cannot reach any output.
         #[allow(clippy::disallowed_types)]
@@ -373,6 +485,18 @@ impl<E: IsoEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
         if self.stalled {
             return TerminationStatus::Terminated(TerminationReason::SolverConverged);
         }
+        if self.budget.hooks.cancelled() {
+            self.early = Some(EarlyStop::Cancelled);
+            return TerminationStatus::Terminated(TerminationReason::SolverExit(
+                "cancelled".into(),
+            ));
+        }
+        if self.budget.expired() {
+            self.early = Some(EarlyStop::TimeLimit);
+            return TerminationStatus::Terminated(TerminationReason::SolverExit(
+                "time limit".into(),
+            ));
+        }
         let e = state.get_cost();
         if state.get_iter() > 0
             && (self.last_decrease <= self.rel_tolerance * e.abs()
@@ -382,6 +506,93 @@ impl<E: IsoEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
         }
         TerminationStatus::NotTerminated
     }
+}
+
+/// Assembles at `x` with `proj` and solves for the Newton direction: energy, gradient and the
+/// direction (`None` if the system could not be solved). A projected Hessian is only positive
+/// semi-definite (rigid motions), so a small diagonal shift is added and raised until the
+/// factorisation succeeds; the unprojected one gets one try.
+fn newton_direction<E: IsoEnergy>(
+    p: &mut MapProblem<'_, E>,
+    x: &[DVec2],
+    proj: Projection,
+) -> (f64, Vec<f64>, Option<Vec<f64>>) {
+    let (e0, g) = p.assemble(x, proj);
+    let ndof = g.len();
+    let mean_diag = (0..ndof)
+        .map(|i| p.sys.values[p.sys.diag_slot(i)])
+        .sum::<f64>()
+        / ndof as f64;
+    let tries = if proj == Projection::Raw { 1 } else { 8 };
+    let base: Vec<f64> = if tries > 1 {
+        p.sys.values.clone()
+    } else {
+        Vec::new()
+    };
+    let mut reg = REG_REL * mean_diag.max(f64::MIN_POSITIVE);
+    for k in 0..tries {
+        if k > 0 {
+            p.sys.values.copy_from_slice(&base);
+        }
+        for i in 0..ndof {
+            let s = p.sys.diag_slot(i);
+            p.sys.values[s] += reg;
+        }
+        let mut rhs: Vec<f64> = g.iter().map(|v| -v).collect();
+        if p.sys.factor_solve(&mut rhs).is_ok() && rhs.iter().all(|v| v.is_finite()) {
+            return (e0, g, Some(rhs));
+        }
+        reg *= 100.0;
+    }
+    (e0, g, None)
+}
+
+/// Largest number of step doublings past the Newton step.
+const MAX_DOUBLINGS: usize = 30;
+
+/// The flip-free line search along `d` from `x` (energy `e0`, slope `gd` < 0): the Newton step
+/// (t = 1), or 90 % of the way to the first inversion if that is shorter, halved until the
+/// Armijo condition holds. Where the full step was accepted and the first inversion is farther,
+/// the step is doubled while the energy keeps falling: far from the optimum a barrier term 1/σ²
+/// lets Newton grow a crushed triangle by only a third per step (the model underestimates the
+/// decrease), and doubling covers in one step what would otherwise take many. Returns the step,
+/// the new map and its energy, or `None` if no step decreases the energy enough.
+fn line_search<E: IsoEnergy>(
+    p: &MapProblem<'_, E>,
+    x: &[DVec2],
+    d: &[DVec2],
+    e0: f64,
+    gd: f64,
+    tmax: f64,
+) -> Option<(f64, Vec<DVec2>, f64)> {
+    let limit = INVERSION_STEP_FRACTION * tmax;
+    let step = |t: f64| -> Vec<DVec2> { x.iter().zip(d).map(|(a, b)| *a + t * *b).collect() };
+    let armijo = |t: f64, e: f64| e.is_finite() && e <= e0 + ARMIJO_C * t * gd;
+    let mut t = limit.min(1.0);
+    for _ in 0..MAX_HALVINGS {
+        let xn = step(t);
+        let en = p.total_energy(&xn);
+        if armijo(t, en) {
+            let mut best = (t, xn, en);
+            if t == 1.0 {
+                for _ in 0..MAX_DOUBLINGS {
+                    let t2 = (2.0 * best.0).min(limit);
+                    if t2 <= best.0 {
+                        break;
+                    }
+                    let x2 = step(t2);
+                    let e2 = p.total_energy(&x2);
+                    if !(armijo(t2, e2) && e2 < best.2) {
+                        break;
+                    }
+                    best = (t2, x2, e2);
+                }
+            }
+            return Some(best);
+        }
+        t *= 0.5;
+    }
+    None
 }
 
 /// Logs the progress of a solve through `tracing` (debug level).
@@ -405,6 +616,8 @@ pub struct NewtonRun {
     pub x: Vec<DVec2>,
     pub energy: f64,
     pub iterations: usize,
+    /// Set when the run stopped at the caller's request rather than by convergence.
+    pub early: Option<EarlyStop>,
 }
 
 /// Runs projected Newton from the flip-free map `x0`.
@@ -414,14 +627,16 @@ pub fn run<'a, E: IsoEnergy>(
     max_iters: usize,
     rel_tolerance: f64,
     abs_tolerance: f64,
+    budget: &Budget,
 ) -> Result<(NewtonRun, MapProblem<'a, E>), String> {
-    let solver = ProjectedNewton::new(rel_tolerance, abs_tolerance);
+    let solver = ProjectedNewton::new(rel_tolerance, abs_tolerance, budget.clone(), max_iters);
     let res = Executor::new(problem, solver)
         .configure(|s| s.param(to_flat(x0)).max_iters(max_iters as u64))
         .add_observer(TraceObserver, ObserverMode::Always)
         .timer(false)
         .run()
         .map_err(|e| e.to_string())?;
+    let early = res.solver.early;
     let state = res.state();
     let iterations = state.get_iter() as usize;
     let energy = state.get_cost();
@@ -439,6 +654,7 @@ pub fn run<'a, E: IsoEnergy>(
             x,
             energy,
             iterations,
+            early,
         },
         problem,
     ))

@@ -5,17 +5,15 @@
 //! once and reused for every step, sequential `Par::Seq`: faster on small machines and
 //! bit-for-bit deterministic, crates.md §3).
 //!
-//! The pattern is handed to [`crate::sparse::SymPattern`] as one triplet per stored entry in slot
-//! order, so `values` is exactly the triplet value array that [`crate::sparse::SpdSolver::factor`]
-//! expects: no duplicate summing, no per-step assembly beyond the scatter.
+//! The pattern is handed to [`crate::sparse::SymPattern`] in compressed-column form, so `values`
+//! is exactly the value array that [`crate::sparse::SpdSolver::factor`] reads in place: no
+//! duplicate summing, no copy, no per-step assembly beyond the scatter.
 
-use crate::sparse::{SpdSolver, SymPattern, SymTriplets};
+use crate::sparse::{SpdSolver, SymPattern};
 
 /// A fixed-pattern SPD matrix and its reusable symbolic Cholesky factorisation.
 pub struct SpdSystem {
     n: usize,
-    col_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
     /// Values of the upper triangle, in CSC order.
     pub values: Vec<f64>,
     /// Slot of each diagonal entry.
@@ -37,26 +35,71 @@ impl SpdSystem {
         entries.sort_unstable_by_key(|&(r, c)| (c, r));
         entries.dedup();
         let mut col_ptr = vec![0usize; n + 1];
-        let mut row_idx = Vec::with_capacity(entries.len());
-        let mut triplets = SymTriplets::with_capacity(n, entries.len());
-        for &(r, c) in &entries {
+        for &(_, c) in &entries {
             col_ptr[c + 1] += 1;
-            row_idx.push(r);
-            triplets.add(r, c, 0.0);
         }
         for c in 0..n {
             col_ptr[c + 1] += col_ptr[c];
         }
-        let diag = (0..n)
-            .map(|c| col_ptr[c + 1] - 1) // rows sorted, the diagonal is last in its column
-            .collect();
-        let pattern = SymPattern::new(&triplets, "newton").map_err(|e| e.to_string())?;
-        let solver = SpdSolver::new(pattern, "newton").map_err(|e| e.to_string())?;
+        let row_idx = entries.iter().map(|e| e.0).collect();
+        Self::from_csc(n, col_ptr, row_idx)
+    }
+
+    /// The pattern of 2×2 blocks over `n_vertices` vertices (dofs 2v, 2v + 1): one block for
+    /// each vertex pair in `pairs` (any order, duplicates allowed, (a, b) and (b, a) the same)
+    /// and one for each vertex with itself.
+    pub fn from_vertex_pairs(
+        n_vertices: usize,
+        mut pairs: Vec<(u32, u32)>,
+    ) -> Result<Self, String> {
+        for p in pairs.iter_mut() {
+            if p.0 > p.1 {
+                *p = (p.1, p.0);
+            }
+        }
+        pairs.extend((0..n_vertices as u32).map(|v| (v, v)));
+        // By column vertex, then row vertex: the CSC order of the upper triangle.
+        pairs.sort_unstable_by_key(|&(a, b)| (b, a));
+        pairs.dedup();
+        let n = 2 * n_vertices;
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut row_idx = Vec::with_capacity(4 * pairs.len());
+        col_ptr.push(0);
+        let mut start = 0;
+        for col in 0..n_vertices {
+            let mut end = start;
+            while end < pairs.len() && pairs[end].1 as usize == col {
+                end += 1;
+            }
+            for cj in [2 * col, 2 * col + 1] {
+                for &(a, _) in &pairs[start..end] {
+                    for r in [2 * a as usize, 2 * a as usize + 1] {
+                        if r <= cj {
+                            row_idx.push(r);
+                        }
+                    }
+                }
+                col_ptr.push(row_idx.len());
+            }
+            start = end;
+        }
+        drop(pairs);
+        Self::from_csc(n, col_ptr, row_idx)
+    }
+
+    /// The system of the upper-triangle CSC pattern `col_ptr`/`row_idx`, whose diagonal is
+    /// stored (last in each column).
+    fn from_csc(n: usize, col_ptr: Vec<usize>, row_idx: Vec<usize>) -> Result<Self, String> {
+        let diag: Vec<usize> = (0..n).map(|c| col_ptr[c + 1].saturating_sub(1)).collect();
+        if (0..n).any(|c| col_ptr[c + 1] == col_ptr[c] || row_idx[diag[c]] != c) {
+            return Err("the pattern lacks a diagonal entry".into());
+        }
         let nnz = row_idx.len();
+        let pattern =
+            SymPattern::from_upper_csc(n, col_ptr, row_idx, "newton").map_err(|e| e.to_string())?;
+        let solver = SpdSolver::new(pattern, "newton").map_err(|e| e.to_string())?;
         Ok(Self {
             n,
-            col_ptr,
-            row_idx,
             values: vec![0.0; nnz],
             diag,
             solver,
@@ -71,8 +114,9 @@ impl SpdSystem {
     /// The slot of entry (r, c) of the upper triangle (r ≤ c); `None` if not in the pattern.
     pub fn slot(&self, r: usize, c: usize) -> Option<usize> {
         let (r, c) = if r <= c { (r, c) } else { (c, r) };
-        let rows = &self.row_idx[self.col_ptr[c]..self.col_ptr[c + 1]];
-        rows.binary_search(&r).ok().map(|k| self.col_ptr[c] + k)
+        let (col_ptr, row_idx) = self.solver.pattern().csc();
+        let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+        rows.binary_search(&r).ok().map(|k| col_ptr[c] + k)
     }
 
     /// Slot of diagonal entry i.

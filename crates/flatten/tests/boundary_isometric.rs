@@ -1,13 +1,9 @@
 //! What keeping the boundary costs the interior (issue 10): `boundary-isometric` (Duncan's f1,
 //! every boundary edge at its 3D length, interior minimising Σ(σi² − 1)²) against `isometric`
-//! (δ2, boundary free). With `FLATCUT_BENCH_DIR=/path/to/meshes` it flattens every `*.obj` there
-//! with both methods, prints one table row per mesh (mean δ2 and largest stretch σ1 of each,
-//! largest relative boundary-edge error of each, solve times, flipped triangles) and writes
-//! `NAME.boundary-isometric.out.obj` (`v` + `vt`) for the bench's `metrics.py`;
-//! `FLATCUT_BENCH_ONLY=_2k,_20k` keeps only the meshes whose name contains one of the listed
-//! parts. Without the variable it runs the same comparison on a generated cap and cylinder and
-//! checks it. Run with
-//! `cargo test -p flatcut-flatten --test boundary_isometric_bench -- --nocapture`.
+//! (δ2, boundary free) on a generated cap (not developable: keeping its boundary costs interior
+//! strain) and cylinder (developable: both methods reach the exact development). The same
+//! comparison on the bench meshes is `examples/bench.rs` with `--method` (see
+//! `tools/flatten/bench.py`).
 
 use std::time::Instant;
 
@@ -26,20 +22,6 @@ const DELTA2_SLACK: f64 = 1e-9;
 /// (σ2 down to 0.83 where isometric's σ ranges ±14 %), and δ2 punishes compression hard. The
 /// bound leaves room for solver changes but fails if the interior degrades much further.
 const CAP_DELTA2_FACTOR: f64 = 10.0;
-
-fn read_obj(text: &str) -> TriMesh {
-    // The mesh crate's reader (line:column errors); bench meshes carry no `vt`.
-    let mut m = flatcut_mesh::io::parse_obj(text, std::path::Path::new("bench.obj"))
-        .expect("bench mesh parses");
-    m.flat = None;
-    m
-}
-
-fn write_obj(mesh: &TriMesh, uv: &[DVec2]) -> String {
-    let mut m = mesh.clone();
-    m.flat = Some(uv.to_vec());
-    flatcut_mesh::io::obj_string(&m)
-}
 
 /// Scores of one flattening, at true scale (no area normalisation: both methods fix the scale
 /// by their energies).
@@ -139,62 +121,6 @@ fn ratio(a: f64, b: f64) -> String {
 
 #[test]
 fn boundary_isometric_against_isometric() {
-    let Ok(dir) = std::env::var("FLATCUT_BENCH_DIR") else {
-        generated_comparison();
-        return;
-    };
-    let only: Vec<String> = std::env::var("FLATCUT_BENCH_ONLY")
-        .map(|s| s.split(',').map(str::to_owned).collect())
-        .unwrap_or_default();
-    let mut names: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            let s = p.file_name().unwrap().to_string_lossy().into_owned();
-            p.extension().is_some_and(|e| e == "obj")
-                && !s.contains(".out.")
-                && !s.contains(".isometric.")
-                && (only.is_empty() || only.iter().any(|o| s.contains(o.as_str())))
-        })
-        .collect();
-    names.sort();
-    println!("{HEADER}");
-    let mut notes = Vec::new();
-    for p in names {
-        let name = p.file_stem().unwrap().to_string_lossy().into_owned();
-        let mesh = read_obj(&std::fs::read_to_string(&p).unwrap());
-        let topo = Topology::build(&mesh).unwrap();
-        let (iso, _, _) = run(&mesh, &topo, Method::Isometric);
-        // A failure of f1 is a finding of the bench, not a reason to stop it.
-        let t0 = Instant::now();
-        let f1 = match flatten(&mesh, &FlattenParams::new(Method::BoundaryIsometric)) {
-            Ok(f) => f,
-            Err(e) => {
-                notes.push(format!("{name}: boundary-isometric failed: {e}"));
-                continue;
-            }
-        };
-        let steps = f1.info.iterations;
-        let (f1, uv, warnings) = (
-            score(&mesh, &topo, &f1.uv, t0.elapsed().as_secs_f64()),
-            f1.uv,
-            f1.info.warnings,
-        );
-        println!("{}", row(&name, mesh.triangles.len(), &iso, &f1, steps));
-        for w in warnings {
-            notes.push(format!("{name}: {w}"));
-        }
-        let out = p.with_extension(format!("{}.out.obj", Method::BoundaryIsometric.name()));
-        std::fs::write(out, write_obj(&mesh, &uv)).unwrap();
-    }
-    for n in notes {
-        println!("{n}");
-    }
-}
-
-/// The same comparison on a generated cap (not developable: keeping its boundary costs
-/// interior strain) and cylinder (developable: both methods reach the exact development).
-fn generated_comparison() {
     println!("{HEADER}");
     let cap = testmesh::spherical_cap(80.0, 1.0, 10);
     let cyl = testmesh::cylinder_patch(50.0, 2.0, 80.0, 16, 8);
