@@ -52,13 +52,19 @@ pub enum PipelineError {
 /// no design, so the design must say which is which.
 pub fn check_unique_names(design: &Design) -> Result<(), PipelineError> {
     let mut seen: std::collections::BTreeMap<String, &str> = Default::default();
-    for p in &design.pieces {
-        let safe = flatcut_pattern::safe_name(&p.name);
-        if let Some(first) = seen.insert(safe.clone(), &p.name) {
+    let names = design.pieces.iter().map(|p| p.name.as_str()).chain(
+        design
+            .parts
+            .iter()
+            .flat_map(|p| p.pieces.iter().map(|q| q.name.as_str())),
+    );
+    for name in names {
+        let safe = flatcut_pattern::safe_name(name);
+        if let Some(first) = seen.insert(safe.clone(), name) {
             return Err(PipelineError::NameClash {
                 file: design.source.clone(),
                 first: first.to_string(),
-                second: p.name.clone(),
+                second: name.to_string(),
                 safe,
             });
         }

@@ -705,7 +705,7 @@ impl Piece {
             // A named notch (a mating seam's) says which: `notch-<seam>_<n>`, with the name's
             // dashes and spaces as underscores so the id still splits into piece and notch.
             let what = match self.notch_names.get(k).filter(|n| !n.is_empty()) {
-                Some(n) => format!("notch-{}", sanitize(n).replace('-', "_")),
+                Some(n) => format!("notch-{}", safe_name(n).replace('-', "_")),
                 None => format!("notch-{}", k + 1),
             };
             s.push(mk(StrokeKind::Notch, nt.clone(), false, what));
