@@ -75,6 +75,47 @@ fn split_boundary_edge(mesh: &mut TriMesh, u: u32, v: u32, t: f64) -> u32 {
     x
 }
 
+/// The edge of `edges` nearest to `p`: (distance, edge index, parameter along it).
+fn nearest_edge(mesh: &TriMesh, edges: &[(u32, u32)], p: DVec3) -> (f64, usize, f64) {
+    let mut best = (f64::INFINITY, 0usize, 0.0);
+    for (k, &(u, v)) in edges.iter().enumerate() {
+        let (pu, pv) = (mesh.positions[u as usize], mesh.positions[v as usize]);
+        let uv = pv - pu;
+        let t = ((p - pu).dot(uv) / uv.length_squared()).clamp(0.0, 1.0);
+        let d = p.distance(pu + uv * t);
+        if d < best.0 {
+            best = (d, k, t);
+        }
+    }
+    best
+}
+
+/// The point at parameter `t` of boundary edge (u, v) as a vertex: `None` when it is `u` (within
+/// round-off), else `v` (within round-off) or a new vertex splitting the edge.
+fn vertex_at(mesh: &mut TriMesh, (u, v): (u32, u32), t: f64) -> Option<u32> {
+    let len = mesh.positions[u as usize].distance(mesh.positions[v as usize]);
+    let same = SAME_FRACTION * mesh.bbox().diagonal();
+    if t * len <= same {
+        None
+    } else if (1.0 - t) * len <= same {
+        Some(v)
+    } else {
+        Some(split_boundary_edge(mesh, u, v, t))
+    }
+}
+
+/// The error of a point `dist` mm from the boundary, beyond `tol`.
+fn off_boundary(what: &str, p: DVec3, dist: f64, tol: f64) -> JoinError {
+    JoinError::OffBoundary {
+        what: what.to_string(),
+        x: p.x,
+        y: p.y,
+        z: p.z,
+        dist,
+        tol,
+    }
+}
+
 /// The boundary point nearest to `p` as a vertex: an existing vertex within round-off, else a
 /// new one splitting the boundary edge. `what` names the point in errors; `tol` is the largest
 /// distance from the boundary accepted.
@@ -85,39 +126,16 @@ pub fn boundary_vertex(
     what: &str,
 ) -> Result<u32, JoinError> {
     let topo = Topology::build(mesh)?;
-    let mut best = (f64::INFINITY, 0u32, 0u32, 0.0);
-    for lp in &topo.boundary_loops {
-        for i in 0..lp.len() {
-            let (u, v) = (lp[i], lp[(i + 1) % lp.len()]);
-            let (pu, pv) = (mesh.positions[u as usize], mesh.positions[v as usize]);
-            let uv = pv - pu;
-            let t = ((p - pu).dot(uv) / uv.length_squared()).clamp(0.0, 1.0);
-            let d = p.distance(pu + uv * t);
-            if d < best.0 {
-                best = (d, u, v, t);
-            }
-        }
-    }
-    let (d, u, v, t) = best;
+    let edges: Vec<(u32, u32)> = topo
+        .boundary_loops
+        .iter()
+        .flat_map(|lp| (0..lp.len()).map(move |i| (lp[i], lp[(i + 1) % lp.len()])))
+        .collect();
+    let (d, k, t) = nearest_edge(mesh, &edges, p);
     if d.is_nan() || d > tol {
-        return Err(JoinError::OffBoundary {
-            what: what.to_string(),
-            x: p.x,
-            y: p.y,
-            z: p.z,
-            dist: d,
-            tol,
-        });
+        return Err(off_boundary(what, p, d, tol));
     }
-    let len = mesh.positions[u as usize].distance(mesh.positions[v as usize]);
-    let same = SAME_FRACTION * mesh.bbox().diagonal();
-    Ok(if t * len <= same {
-        u
-    } else if (1.0 - t) * len <= same {
-        v
-    } else {
-        split_boundary_edge(mesh, u, v, t)
-    })
+    Ok(vertex_at(mesh, edges[k], t).unwrap_or(edges[k].0))
 }
 
 /// The boundary vertices from `a` to `b` along their loop: the shorter way round, or the way
@@ -167,41 +185,19 @@ pub fn vertex_on_side(
     tol: f64,
     what: &str,
 ) -> Result<usize, JoinError> {
-    let mut best = (f64::INFINITY, 0usize, 0.0);
-    for i in 0..side.len() - 1 {
-        let (pu, pv) = (
-            mesh.positions[side[i] as usize],
-            mesh.positions[side[i + 1] as usize],
-        );
-        let uv = pv - pu;
-        let t = ((p - pu).dot(uv) / uv.length_squared()).clamp(0.0, 1.0);
-        let d = p.distance(pu + uv * t);
-        if d < best.0 {
-            best = (d, i, t);
-        }
-    }
-    let (d, i, t) = best;
+    let edges: Vec<(u32, u32)> = side.windows(2).map(|w| (w[0], w[1])).collect();
+    let (d, i, t) = nearest_edge(mesh, &edges, p);
     if d.is_nan() || d > tol {
-        return Err(JoinError::OffBoundary {
-            what: what.to_string(),
-            x: p.x,
-            y: p.y,
-            z: p.z,
-            dist: d,
-            tol,
-        });
+        return Err(off_boundary(what, p, d, tol));
     }
-    let len = mesh.positions[side[i] as usize].distance(mesh.positions[side[i + 1] as usize]);
-    let same = SAME_FRACTION * mesh.bbox().diagonal();
-    if t * len <= same {
-        return Ok(i);
-    }
-    if (1.0 - t) * len <= same {
-        return Ok(i + 1);
-    }
-    let x = split_boundary_edge(mesh, side[i], side[i + 1], t);
-    side.insert(i + 1, x);
-    Ok(i + 1)
+    Ok(match vertex_at(mesh, edges[i], t) {
+        None => i,
+        Some(x) if x == side[i + 1] => i + 1,
+        Some(x) => {
+            side.insert(i + 1, x);
+            i + 1
+        }
+    })
 }
 
 /// Fractions of the 3D length from `side[from]` at each vertex up to `side[to]`.
