@@ -83,26 +83,10 @@ fn a_line_across_a_part_makes_two_pieces_and_a_seam_named_after_it() {
     let n = pts(0)[s.notches[0].index];
     assert!(n.distance(DVec3::new(88.0, 27.0, z(27.0))) < 0.05, "{n}");
     // The two pieces cover the sheet.
-    let whole = PieceDef {
-        name: "w".into(),
-        quantity: 1,
-        pairs: None,
-        mirrored: 0,
-        pair_labels: None,
-        surface: Design::from_toml_str(&text, "t.toml").unwrap().parts[0]
-            .surface
-            .clone(),
-        seams: Vec::new(),
-        marks: Vec::new(),
-        grain: None,
-        seam_allowance_mm: None,
-        material: None,
-        index: 0,
-        file: "t.toml".into(),
-        mesh_scale: 1.0,
-    }
-    .mesh(Path::new("."), &TOL)
-    .unwrap();
+    let whole = Design::from_toml_str(&text, "t.toml").unwrap().parts[0]
+        .surface_piece()
+        .mesh(Path::new("."), &TOL)
+        .unwrap();
     let sum: f64 = a.pieces.iter().map(|p| p.mesh.area()).sum();
     assert!((sum - whole.area()).abs() < 1e-9 * whole.area());
 }
