@@ -77,7 +77,8 @@ pub struct InspectReport {
     pub pieces: Vec<PieceSummary>,
 }
 
-/// Loads a design or mesh file and summarises every piece.
+/// Loads a design or mesh file and summarises every piece (a part's too: the regions between its
+/// style lines).
 pub fn inspect_file(path: &Path, tol: &Tolerances) -> Result<InspectReport, DesignError> {
     let design = Design::load(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
@@ -86,6 +87,14 @@ pub fn inspect_file(path: &Path, tol: &Tolerances) -> Result<InspectReport, Desi
         let geom = def.build(base)?;
         let mesh = def.mesh(base, tol)?;
         pieces.push(summarise(&def.name, def.quantity, &geom, &mesh));
+    }
+    if !design.parts.is_empty() {
+        // A part's pieces are regions of its surface: summarised as the meshes they are.
+        let asm = design.assemble(base, tol)?;
+        for p in asm.pieces.iter().filter(|p| p.part.is_some()) {
+            let geom = PieceGeometry::Mesh(p.mesh.clone());
+            pieces.push(summarise(&p.def.name, p.def.quantity, &geom, &p.mesh));
+        }
     }
     Ok(InspectReport {
         source: design.source.clone(),
