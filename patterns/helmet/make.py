@@ -44,18 +44,7 @@ def crown_height(z):
 
 
 def main():
-    rows = []
-    for i in range(N):
-        s = -1 + 2 * i / (N - 1)
-        row = []
-        for j in range(N):
-            t = -1 + 2 * j / (N - 1)
-            x = A * s * math.sqrt(1 - t * t / 2)
-            y = B * t * math.sqrt(1 - s * s / 2)
-            q = 1 - (x / A) ** 2 - (y / B) ** 2
-            z = H * math.sqrt(q) if q > 1e-12 else 0.0
-            row.append((x, y, z))
-        rows.append(row)
+    rows = net_points()
     # The spline lies inside its net: lift the net so the crown (u = v = 1/2) is exactly H high.
     lift = H / crown_height([[p[2] for p in r] for r in rows])
     rows = [
@@ -118,6 +107,7 @@ points = [
 
 
 def net_points():
+    """The 7 x 7 net: the half-ellipsoid over the square through the square-to-disk map."""
     out = []
     for i in range(N):
         s = -1 + 2 * i / (N - 1)
