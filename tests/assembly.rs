@@ -129,6 +129,7 @@ fn every_bundled_folder_has_a_project_that_runs_within_its_limits() {
         [
             "helmet",
             "hull",
+            "kayak",
             "lampshade",
             "sail",
             "shoe",

@@ -1,11 +1,13 @@
 //! End-to-end tests of flatcut: one test binary with a module tree (architecture rules, the
-//! command line, the pipeline against the simulated controller).
+//! command line, the pipeline against the simulated controller, STEP models in).
 
 mod assembly;
 mod dxf;
 mod fuzz;
 mod hpgl;
+mod nest;
 mod pipeline;
 mod regressions;
+mod step;
 mod stream;
 mod tidy;

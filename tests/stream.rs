@@ -10,49 +10,10 @@ use flatcut_cli::cmd::device::{
 use flatcut_cli::cmd::send::parse_command_line;
 use flatcut_firmware_sim::TraceSegment;
 use flatcut_grbl::{Control, Job, Journal, SendError};
+use flatcut_testkit::jobs::pattern_job;
+use flatcut_testkit::trace::{self, close, moving, read_trace};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
-
-/// Position tolerance, mm: the simulator moves in whole steps (0.004 mm at 250 steps/mm) and the
-/// job's coordinates lie on that grid, so agreement is exact up to float formatting.
-const TOL: f64 = 1e-3;
-/// Step of the simulated machine (250 steps/mm), mm.
-const STEP: f64 = 0.004;
-
-fn on_grid(v: f64) -> f64 {
-    (v / STEP).round() * STEP
-}
-
-/// A pen-plotter job like the G-code writer's: `pieces` closed 48-gons at different places, each
-/// drawn pen down (Z-0.5) after a rapid to its start, pen up (Z2) between pieces. Every drawing
-/// line has a unique text.
-fn pattern_job(pieces: usize) -> String {
-    const SIDES: usize = 48;
-    let mut s = String::from("G21 G90 G17\nG0 Z2\n");
-    for k in 0..pieces {
-        let (cx, cy) = (20.0 + 45.0 * k as f64, 30.0 + 7.0 * k as f64);
-        let r = 12.0 + 1.5 * k as f64;
-        let pts: Vec<(f64, f64)> = (0..SIDES)
-            .map(|i| {
-                let a = std::f64::consts::TAU * i as f64 / SIDES as f64;
-                (on_grid(cx + r * a.cos()), on_grid(cy + r * a.sin()))
-            })
-            .collect();
-        s.push_str(&format!("G0 X{:.3} Y{:.3}\n", pts[0].0, pts[0].1));
-        s.push_str(&format!("G1 Z-0.5 F{}\n", 300 + k));
-        for (i, p) in pts.iter().enumerate().skip(1) {
-            if i == 1 {
-                s.push_str(&format!("G1 X{:.3} Y{:.3} F{}\n", p.0, p.1, 2400 + k));
-            } else {
-                s.push_str(&format!("G1 X{:.3} Y{:.3}\n", p.0, p.1));
-            }
-        }
-        s.push_str(&format!("G1 X{:.3} Y{:.3}\n", pts[0].0, pts[0].1));
-        s.push_str("G0 Z2\n");
-    }
-    s.push_str("G0 X0 Y0\nM2\n");
-    s
-}
 
 struct Case {
     _dir: tempfile::TempDir,
@@ -84,64 +45,20 @@ fn args(c: &Case) -> StreamArgs {
         .with_journal(&c.journal)
 }
 
-fn close(a: [f64; 3], b: [f64; 3]) -> bool {
-    (0..3).all(|k| (a[k] - b[k]).abs() <= TOL)
-}
-
-/// Expected motion of the job: (text, from, to) of every line that moves.
-fn geometry(job: &Job) -> Vec<(String, [f64; 3], [f64; 3])> {
-    job.motions()
-}
-
-fn moving(trace: &[TraceSegment]) -> Vec<&TraceSegment> {
-    trace.iter().filter(|s| !close(s.from, s.to)).collect()
-}
-
 fn trace_of(out: &StreamOutcome) -> &[TraceSegment] {
     out.sim_trace
         .as_deref()
         .expect("the embedded simulator's trace")
 }
 
-fn read_trace(path: &Path) -> Vec<TraceSegment> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
-}
-
-/// Every job motion with a unique text ran exactly once over all runs, ending where the job says
-/// (lines also written by a resume preamble, or repeated in the job, are skipped).
+/// Every job motion with a unique text ran exactly once over all runs (and most lines are
+/// checkable).
 fn assert_exactly_once(job: &Job, traces: &[&[TraceSegment]]) {
     assert_exactly_once_except(job, traces, &BTreeSet::new());
 }
 
 fn assert_exactly_once_except(job: &Job, traces: &[&[TraceSegment]], except: &BTreeSet<String>) {
-    let preamble: BTreeSet<String> = (1..job.len())
-        .flat_map(|k| job.resume_preamble(k))
-        .collect();
-    let mut checked = 0;
-    for (text, _, to) in geometry(job) {
-        if preamble.contains(&text)
-            || except.contains(&text)
-            || job.lines.iter().filter(|l| l.text == text).count() != 1
-        {
-            continue;
-        }
-        let hits: Vec<&TraceSegment> = traces
-            .iter()
-            .flat_map(|t| t.iter())
-            .filter(|s| s.text == text)
-            .collect();
-        assert_eq!(hits.len(), 1, "`{text}` ran {} times", hits.len());
-        assert!(
-            close(hits[0].to, to),
-            "`{text}` ended at {:?}, want {to:?}",
-            hits[0].to
-        );
-        checked += 1;
-    }
+    let checked = trace::assert_exactly_once_except(job, traces, except);
     assert!(
         checked > job.len() / 2,
         "only {checked} lines were checkable"
@@ -160,7 +77,7 @@ fn streams_to_the_embedded_simulator_every_motion_once_in_order() {
     .unwrap();
     assert_eq!(out.report.lines_sent, c.job.len());
     assert!(!out.report.checked);
-    let want = geometry(&c.job);
+    let want = c.job.motions();
     let got = moving(trace_of(&out));
     assert_eq!(got.len(), want.len(), "motion segment count");
     for (k, (w, g)) in want.iter().zip(&got).enumerate() {
@@ -228,7 +145,7 @@ fn command_line_send_with_check_pass() {
     // The same through the library entry, to see the report: a check pass ran, then the cut.
     let out = stream_file(&c.job_path, &args(&c).with_check(true)).unwrap();
     assert!(out.report.checked);
-    assert_eq!(moving(trace_of(&out)).len(), geometry(&c.job).len());
+    assert_eq!(moving(trace_of(&out)).len(), c.job.motions().len());
 }
 
 #[test]
@@ -286,7 +203,11 @@ fn injected_error_names_the_line_and_resume_completes() {
     assert!(!st.finished);
     assert!(st.done_count() > 0 && st.done_count() < c.job.len());
 
-    let out = stream_file(&c.job_path, &args(&c).with_resume(true)).unwrap();
+    let out = stream_file(
+        &c.job_path,
+        &args(&c).with_resume(true).with_origin_confirmed(true),
+    )
+    .unwrap();
     assert_eq!(out.report.previously_done, st.done_count());
     assert!(out.report.preamble_lines > 0);
     assert!(
@@ -325,7 +246,11 @@ fn hold_then_abort_stops_with_a_soft_reset_and_resume_completes() {
     assert!(!st.finished);
     assert!(st.done_count() < c.job.len());
 
-    let out = stream_file(&c.job_path, &args(&c).with_resume(true)).unwrap();
+    let out = stream_file(
+        &c.job_path,
+        &args(&c).with_resume(true).with_origin_confirmed(true),
+    )
+    .unwrap();
     assert_eq!(out.report.previously_done, st.done_count());
     // The line the abort cut short runs again whole; every other motion runs exactly once.
     let cut_short: BTreeSet<String> = run1.last().map(|s| s.text.clone()).into_iter().collect();
@@ -350,7 +275,11 @@ fn hangup_reports_the_last_executed_line_and_resume_completes() {
     // The embedded simulator comes back as a fresh controller (power-up banner, position zero):
     // nothing can tell which of the queued lines ran, so a plain resume refuses to guess, names
     // the lines in doubt and says how to choose.
-    let e = stream_file(&c.job_path, &args(&c).with_resume(true)).unwrap_err();
+    let e = stream_file(
+        &c.job_path,
+        &args(&c).with_resume(true).with_origin_confirmed(true),
+    )
+    .unwrap_err();
     let msg = format!("{e:#}");
     let se = e.downcast_ref::<StreamError>().expect("a send error");
     let SendError::ResumeUncertain { from, to, .. } = se.send_error() else {
@@ -370,7 +299,9 @@ fn hangup_reports_the_last_executed_line_and_resume_completes() {
     );
     let out = stream_file(
         &c.job_path,
-        &args(&c).with_resume_from(Some(from.source_line)),
+        &args(&c)
+            .with_resume_from(Some(from.source_line))
+            .with_origin_confirmed(true),
     )
     .unwrap();
     assert_eq!(out.report.previously_done, from.index);
@@ -423,7 +354,11 @@ fn alarm_mid_job_is_explained_and_resume_completes() {
     assert!(msg.contains("--resume"), "{msg}");
     let run1 = read_trace(&t1);
     assert!(!Journal::read(&c.journal).unwrap().finished);
-    let out = stream_file(&c.job_path, &args(&c).with_resume(true)).unwrap();
+    let out = stream_file(
+        &c.job_path,
+        &args(&c).with_resume(true).with_origin_confirmed(true),
+    )
+    .unwrap();
     // The line the alarm interrupted runs again; every other motion exactly once.
     let hit: BTreeSet<String> = run1.last().map(|s| s.text.clone()).into_iter().collect();
     assert_exactly_once_except(&c.job, &[&run1, trace_of(&out)], &hit);
@@ -446,7 +381,7 @@ fn explicit_port_streams_to_an_external_controller() {
     assert!(u > 0.0 && u <= 1.0, "{u}");
     let report = sim.stop();
     let got = moving(&report.trace);
-    assert_eq!(got.len(), geometry(&c.job).len());
+    assert_eq!(got.len(), c.job.motions().len());
 }
 
 /// A laser job written by flatcut's own G-code writer (arcs fitted, laser on only while cutting)
@@ -613,6 +548,17 @@ fn sigterm_child_process() {
 /// flushed, and a message naming the last line executed.
 #[test]
 fn sigterm_aborts_safely_and_names_the_last_line() {
+    signal_aborts_with_the_tool_off("-TERM");
+}
+
+/// Issue 14, item 5: closing the terminal (SIGHUP) aborts as SIGTERM does, and the tool-off is
+/// confirmed.
+#[test]
+fn sighup_aborts_with_the_tool_off() {
+    signal_aborts_with_the_tool_off("-HUP");
+}
+
+fn signal_aborts_with_the_tool_off(signal: &str) {
     use std::process::{Command, Stdio};
     use std::time::{Duration, Instant};
     let dir = tempfile::tempdir().unwrap();
@@ -644,7 +590,7 @@ fn sigterm_aborts_safely_and_names_the_last_line() {
         std::thread::sleep(Duration::from_millis(20));
     };
     let killed = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
+        .args([signal, &child.id().to_string()])
         .status()
         .unwrap();
     assert!(killed.success());
@@ -660,6 +606,75 @@ fn sigterm_aborts_safely_and_names_the_last_line() {
     );
     let text = std::fs::read_to_string(&journal).unwrap();
     assert!(text.contains("N aborted by the user"), "{text}");
+    assert!(
+        text.contains("N tool off (M5 M9), confirmed by $G"),
+        "{text}"
+    );
     let st = Journal::read(&journal).unwrap();
     assert!(!st.finished && st.done_count() > 0);
+}
+
+/// Writes the lampshade project into `dir` with `device` as its `[device]` section.
+fn lampshade_project(dir: &Path, device: &str) -> PathBuf {
+    let src = crate::pipeline::root().join("patterns/lampshade");
+    let text = format!(
+        "name = \"lampshade\"\ndesign = \"{}\"\nmethod = \"developable\"\nseam_mm = 10.0\n\
+         [material]\nname = \"parchment\"\n[sheet]\nwidth_mm = 1189.0\nheight_mm = 841.0\n\
+         spacing_mm = 5.0\n[machine]\nprofile = \"{}\"\n{device}",
+        src.join("design.toml").display(),
+        src.join("plotter-a0.toml").display(),
+    );
+    let p = dir.join("project.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// Issue 14, item 1: `flatcut run` streams to the project's `[device]`, refuses a port that is
+/// not there (instead of quietly using the simulator), and refuses a baud rate of 0.
+#[test]
+fn run_uses_the_projects_device() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = flatcut_firmware_sim::PtySim::spawn(
+        flatcut_firmware_sim::SimConfig::default()
+            .with_instant_motion(true)
+            .with_setting(130, 1200.0)
+            .with_setting(131, 1000.0),
+    )
+    .unwrap();
+    let dev = format!(
+        "[device]\nport = \"{}\"\nbaud = 115200\n",
+        sim.path().display()
+    );
+    let project = lampshade_project(dir.path(), &dev);
+    let out = dir.path().join("out");
+    let run = |project: &Path| {
+        let cli = parse_command_line([
+            "flatcut",
+            "run",
+            project.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .unwrap();
+        flatcut_cli::run(cli)
+    };
+    run(&project).expect("the run streams to the project's port");
+    let report = sim.stop();
+    let job = Job::parse(&std::fs::read_to_string(out.join("job-1.gcode")).unwrap()).unwrap();
+    assert_eq!(
+        moving(&report.trace).len(),
+        job.motions().len(),
+        "the project's controller received the job"
+    );
+
+    let nope = lampshade_project(dir.path(), "[device]\nport = \"/dev/ttyNOPE\"\n");
+    let e = run(&nope).expect_err("a missing port fails the run");
+    assert!(
+        format!("{e:#}").contains("cannot open the serial port /dev/ttyNOPE"),
+        "{e:#}"
+    );
+    let zero = lampshade_project(dir.path(), "[device]\nbaud = 0\n");
+    let e = run(&zero).expect_err("baud = 0 is refused");
+    assert!(format!("{e:#}").contains("[device] baud = 0"), "{e:#}");
 }

@@ -64,9 +64,34 @@ fn sender_is_independent_of_the_gcode_writer_and_geometry() {
     let g = workspace_deps();
     assert_eq!(
         closure(&g, "flatcut-grbl"),
-        Vec::<String>::new(),
-        "flatcut-grbl streams any file: no workspace dependency"
+        vec!["flatcut-motion".to_string()],
+        "flatcut-grbl streams any file: no workspace dependency but the motion model"
     );
+}
+
+#[test]
+fn the_motion_model_stands_alone_and_is_the_only_one() {
+    let g = workspace_deps();
+    assert_eq!(
+        closure(&g, "flatcut-motion"),
+        Vec::<String>::new(),
+        "flatcut-motion depends on no workspace crate"
+    );
+    for user in ["flatcut-gcode", "flatcut-grbl"] {
+        assert!(
+            g[user].contains(&"flatcut-motion".to_string()),
+            "{user} times jobs with flatcut-motion"
+        );
+    }
+    // No IO in the model: it is physics, not plumbing.
+    let mut files = Vec::new();
+    rust_files(&root().join("crates/motion/src"), &mut files);
+    for f in files {
+        let text = std::fs::read_to_string(&f).unwrap();
+        for io in ["std::fs", "std::io", "std::net", "std::process"] {
+            assert!(!text.contains(io), "{}: uses {io}", f.display());
+        }
+    }
 }
 
 #[test]
@@ -88,6 +113,57 @@ fn two_dimensional_crates_know_nothing_of_surfaces() {
             );
         }
     }
+}
+
+/// Package name → names in its `[dev-dependencies]`.
+fn workspace_dev_deps() -> BTreeMap<String, Vec<String>> {
+    let mut out = BTreeMap::new();
+    let mut manifests: Vec<PathBuf> = std::fs::read_dir(root().join("crates"))
+        .unwrap()
+        .map(|e| e.unwrap().path().join("Cargo.toml"))
+        .filter(|p| p.exists())
+        .collect();
+    manifests.push(root().join("firmware-sim/Cargo.toml"));
+    manifests.push(root().join("Cargo.toml"));
+    for m in manifests {
+        let v: toml::Value = toml::from_str(&std::fs::read_to_string(&m).unwrap()).unwrap();
+        let name = v["package"]["name"].as_str().unwrap().to_string();
+        let deps = v
+            .get("dev-dependencies")
+            .and_then(|d| d.as_table())
+            .map(|t| t.keys().cloned().collect())
+            .unwrap_or_default();
+        out.insert(name, deps);
+    }
+    out
+}
+
+#[test]
+fn the_testkit_is_only_ever_a_dev_dependency() {
+    let g = workspace_deps();
+    for (name, deps) in &g {
+        assert!(
+            !deps.contains(&"flatcut-testkit".to_string()),
+            "{name}: flatcut-testkit is test code, a dev-dependency only"
+        );
+    }
+    let dev = workspace_dev_deps();
+    assert!(
+        dev.values()
+            .any(|d| d.contains(&"flatcut-testkit".to_string())),
+        "the shared fixtures are used"
+    );
+    // Being dev-only, the testkit is the one library besides the CLI (which embeds the
+    // simulator as a device) allowed to depend on the simulator.
+    let users: Vec<&String> = g
+        .iter()
+        .filter(|(_, d)| d.contains(&"flatcut-firmware-sim".to_string()))
+        .map(|(n, _)| n)
+        .collect();
+    assert_eq!(users, ["flatcut-cli", "flatcut-testkit"]);
+    let manifest = std::fs::read_to_string(root().join("crates/testkit/Cargo.toml")).unwrap();
+    let v: toml::Value = toml::from_str(&manifest).unwrap();
+    assert_eq!(v["package"]["publish"].as_bool(), Some(false));
 }
 
 #[test]

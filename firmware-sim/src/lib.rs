@@ -39,6 +39,8 @@
 //! # Ok::<(), std::io::Error>(())
 //! ```
 
+mod args;
+mod files;
 mod gcode;
 pub mod hpgl;
 mod machine;
@@ -49,6 +51,8 @@ mod settings;
 mod status;
 mod svg;
 
+pub use args::{ArgsError, DEFAULT_INJECTED_ALARM, DEFAULT_INJECTED_ERROR, SimArgs, line_code};
+pub use files::write_atomic;
 pub use gcode::{Flow, GcState, Motion, Persist, Spindle, read_float};
 pub use machine::{BANNER, Grbl, Machine, SimEvent, State};
 pub use planner::PLANNER_BLOCKS;
@@ -114,6 +118,10 @@ pub struct SimConfig {
     pub trace_svg: Option<PathBuf>,
     /// Seed of the fault-injection random generator.
     pub seed: u64,
+    /// Opening the port resets the controller, as the DTR pulse does on an Uno (a hang-up
+    /// power-cycles it). `false`: a board with auto-reset disabled and its own supply, which
+    /// keeps running its planner and its position through a hang-up and a reconnect.
+    pub dtr_reset: bool,
 }
 
 /// Default baud rate of GRBL 1.1 (`config.h`).
@@ -131,6 +139,7 @@ impl Default for SimConfig {
             trace_jsonl: None,
             trace_svg: None,
             seed: 0,
+            dtr_reset: true,
         }
     }
 }
@@ -221,6 +230,11 @@ impl SimConfig {
     /// Sets the faults.
     pub fn with_faults(mut self, faults: Faults) -> Self {
         self.faults = faults;
+        self
+    }
+    /// Sets whether opening the port resets the controller ([`SimConfig::dtr_reset`]).
+    pub fn with_dtr_reset(mut self, on: bool) -> Self {
+        self.dtr_reset = on;
         self
     }
 }

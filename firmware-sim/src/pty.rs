@@ -6,6 +6,7 @@
 //! Opening the port resets the board as the DTR line does on an Uno: an inotify watch on the device sees each
 //! client open, stale bytes in the pseudo-terminal are flushed, and the controller restarts with its banner.
 
+use crate::files::write_atomic;
 use crate::machine::{Grbl, SimEvent};
 use crate::{RxOverflow, SimConfig, SimReport, SimStats, TraceSegment};
 use nix::errno::Errno;
@@ -65,8 +66,10 @@ fn io_err(e: Errno) -> io::Error {
 impl PtySim {
     /// Creates the pseudo-terminal pair and starts the simulator thread. The banner is already waiting when a
     /// client opens [`PtySim::path`].
+    /// Whether opening the port resets the controller is [`SimConfig::dtr_reset`].
     pub fn spawn(config: SimConfig) -> io::Result<PtySim> {
-        PtySim::spawn_with_dtr_reset(config, true)
+        let dtr_reset = config.dtr_reset;
+        PtySim::spawn_with_dtr_reset(config, dtr_reset)
     }
 
     /// [`PtySim::spawn`], choosing whether opening the port resets the controller. `true` is an Uno, whose DTR
@@ -174,12 +177,12 @@ impl PtySim {
                     s.push('\n');
                 }
             }
-            if let Err(e) = std::fs::write(p, s) {
+            if let Err(e) = write_atomic(p, s.as_bytes()) {
                 eprintln!("firmware-sim: cannot write trace {}: {e}", p.display());
             }
         }
         if let Some(p) = &self.config.trace_svg
-            && let Err(e) = std::fs::write(p, crate::svg::trace_svg(&report.trace))
+            && let Err(e) = write_atomic(p, crate::svg::trace_svg(&report.trace).as_bytes())
         {
             eprintln!("firmware-sim: cannot write SVG {}: {e}", p.display());
         }

@@ -32,7 +32,7 @@ pub enum Command {
     Report(cmd::report::Args),
     /// Pattern piece(s) from a design or flattened OBJ: SVG in true mm, optional DXF.
     Pattern(cmd::pattern::Args),
-    /// Nest pattern pieces on sheets or a roll.
+    /// Nest pattern pieces on sheets, a roll or leather hides (or a benchmark instance).
     Nest(cmd::nest::Args),
     /// G-code for a pen plotter, drag knife or laser from a pattern SVG, design or flattened OBJ.
     Gcode(cmd::gcode::Args),

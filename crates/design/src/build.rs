@@ -25,6 +25,8 @@ pub enum PieceGeometry {
     Patches(Vec<Arc<dyn ParamSurface>>),
     /// A mesh (mm).
     Mesh(TriMesh),
+    /// Faces of a STEP model (mm).
+    Step(crate::step::StepPiece),
 }
 
 impl PieceGeometry {
@@ -33,6 +35,7 @@ impl PieceGeometry {
     pub fn tessellate(&self, tol: &Tolerances) -> Result<TriMesh, TessError> {
         match self {
             PieceGeometry::Mesh(m) => Ok(m.clone()),
+            PieceGeometry::Step(s) => s.mesh(tol).map_err(|e| TessError::Face(e.to_string())),
             PieceGeometry::Patches(p) if p.len() == 1 && is_developable(p[0].as_ref()) => {
                 // Ruling-aligned grid: the polyhedral surface is exactly developable too.
                 flatcut_mesh::grid::tessellate_grid(p[0].as_ref(), tol)
@@ -289,7 +292,10 @@ fn build_surface(
         }
         SurfaceDef::Patches { patches } => {
             for p in patches {
-                if matches!(p, SurfaceDef::Mesh { .. } | SurfaceDef::Patches { .. }) {
+                if matches!(
+                    p,
+                    SurfaceDef::Mesh { .. } | SurfaceDef::Patches { .. } | SurfaceDef::Step { .. }
+                ) {
                     return Err(ctx.err(
                         "patches: a patch list may hold parametric surfaces only (no mesh, no nested list)"
                             .into(),
@@ -301,6 +307,9 @@ fn build_surface(
         }
         SurfaceDef::Mesh { .. } => {
             return Err(ctx.err("mesh: not a parametric surface".into()));
+        }
+        SurfaceDef::Step { .. } => {
+            return Err(ctx.err("step: a STEP model is not one parametric surface".into()));
         }
     };
     out.push(surf);
@@ -339,6 +348,9 @@ impl PieceDef {
                 }
             }
             return Ok(PieceGeometry::Mesh(m));
+        }
+        if let SurfaceDef::Step { .. } = &self.surface {
+            return crate::step::build(self, base_dir).map(PieceGeometry::Step);
         }
         let mut out = Vec::new();
         build_surface(&ctx, &self.surface, &mut out)?;

@@ -225,6 +225,7 @@ fn check_surface(ctx: &Ctx, s: f64, surf: &SurfaceDef) -> Result<(), DesignError
             Ok(())
         }
         SurfaceDef::Mesh { .. } => Ok(()),
+        SurfaceDef::Step { faces, .. } => crate::step::check_faces(ctx, faces),
     }
 }
 

@@ -14,7 +14,8 @@
 //!
 //! Surface types: `bezier`, `hermite`, `bspline`, `nurbs`, `coons`, `gordon`, `ruled`,
 //! `developable`, `sphere`, `cylinder`, `cone`, `torus`, `triangular-bezier`, `patches` (a list of
-//! surfaces forming one piece) and `mesh` (`file = "x.obj"`, relative to the design file). Curves
+//! surfaces forming one piece), `mesh` (`file = "x.obj"`, relative to the design file) and `step`
+//! (faces of a STEP model, expanded into pieces when the design is loaded). Curves
 //! (for coons, gordon, ruled, developable): `bezier`, `bspline`, `nurbs`, `polyline`, `hermite`,
 //! `arc`, `spline` (interpolating cubic through points).
 //!
@@ -33,6 +34,7 @@ mod join;
 mod load;
 mod part;
 mod schema;
+mod step;
 mod units;
 
 pub use assemble::{AssembledPiece, Assembly};
@@ -41,6 +43,7 @@ pub use error::DesignError;
 pub use load::Design;
 pub use part::{JoinDef, JoinEdgeDef, LineDef, PartDef, PartPieceDef};
 pub use schema::{Blend, CurveDef, MarkDef, MarkKind, P3, PieceDef, SeamDef, SurfaceDef, Units};
+pub use step::{StepFaces, StepGroup, StepModel, StepPiece};
 
 #[cfg(test)]
 mod part_tests;

@@ -32,10 +32,20 @@ fn line_col(src: &str, offset: usize) -> (usize, usize) {
 }
 
 impl Design {
-    /// Loads a design from a `.toml` or `.json` file, or a mesh file (`.obj`, `.stl`, `.ply`)
-    /// as a one-piece design named after the file.
+    /// Loads a design from a `.toml` or `.json` file, a mesh file (`.obj`, `.stl`, `.ply`) as a
+    /// one-piece design named after the file, or a STEP file (`.step`, `.stp`) with a piece per
+    /// face. `type = "step"` pieces are expanded into their pieces (see the `step` module).
     pub fn load(path: &Path) -> Result<Design, DesignError> {
         let name = path.display().to_string();
+        if flatcut_step::is_step_path(path) {
+            return Ok(Design {
+                units: Units::Mm,
+                pieces: crate::step::design_pieces(path)?,
+                parts: Vec::new(),
+                joins: Vec::new(),
+                source: name,
+            });
+        }
         if is_mesh_path(path) {
             let stem = path
                 .file_stem()
@@ -75,11 +85,13 @@ impl Design {
         let is_json = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("json"));
-        if is_json {
+        let mut d = if is_json {
             Self::from_json_str(&text, &name)
         } else {
             Self::from_toml_str(&text, &name)
-        }
+        }?;
+        d.pieces = crate::step::expand(d.pieces, path.parent().unwrap_or(Path::new(".")))?;
+        Ok(d)
     }
 
     /// Parses TOML text; `name` names the source in errors.

@@ -1,5 +1,6 @@
 //! The file's schema: what a design file may contain, as serde types (design units until loaded).
 
+use crate::step::{StepFaces, StepGroup, StepModel};
 use serde::Deserialize;
 
 /// Length units of a design file; every length is converted to mm once at load time.
@@ -158,6 +159,18 @@ pub enum SurfaceDef {
     Patches { patches: Vec<SurfaceDef> },
     /// A mesh file (.obj, .stl, .ply), relative to the design file, in the design's units.
     Mesh { file: String },
+    /// Faces of a STEP model (relative to the design file, in the model's own unit); expanded
+    /// into one piece per face or per smooth group when the design is loaded (see `step`).
+    Step {
+        file: String,
+        #[serde(default)]
+        faces: StepFaces,
+        #[serde(default)]
+        group: StepGroup,
+        /// The model, once read (set when the design is loaded).
+        #[serde(skip)]
+        model: Option<StepModel>,
+    },
 }
 
 /// A seam: 3D points `[x, y, z]` (joined by shortest mesh-edge paths), surface parameters

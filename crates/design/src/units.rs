@@ -101,6 +101,8 @@ fn scale_surface(surf: &mut SurfaceDef, s: f64) {
         SurfaceDef::Patches { patches } => patches.iter_mut().for_each(|p| scale_surface(p, s)),
         // Mesh files are scaled when read (see `PieceDef::build`): they carry design units.
         SurfaceDef::Mesh { .. } => {}
+        // A STEP file states its own unit; the model is converted to mm when read.
+        SurfaceDef::Step { .. } => {}
     }
 }
 

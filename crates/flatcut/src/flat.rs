@@ -195,10 +195,10 @@ pub fn load_flat(
     limits: Limits,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Vec<Flat>, PipelineError> {
-    if flatcut_mesh::io::is_mesh_path(path) {
-        if let Some(f) = read_flat_mesh(path, limits)? {
-            return Ok(vec![f]);
-        }
+    if flatcut_mesh::io::is_mesh_path(path)
+        && let Some(f) = read_flat_mesh(path, limits)?
+    {
+        return Ok(vec![f]);
     }
     flatten_and_report(path, tol, params, limits, progress)
 }

@@ -75,6 +75,10 @@ pub struct PieceSummary {
 pub struct InspectReport {
     pub source: String,
     pub pieces: Vec<PieceSummary>,
+    /// For a STEP file: its unit, shells, faces and edges (keys `unit`, `schemas`, `shells`,
+    /// `faces`, `edges` beside `pieces`).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub step: Option<crate::inspect_step::StepSummary>,
 }
 
 /// Loads a design or mesh file and summarises every piece (a part's too: the regions between its
@@ -86,7 +90,12 @@ pub fn inspect_file(path: &Path, tol: &Tolerances) -> Result<InspectReport, Desi
     for def in &design.pieces {
         let geom = def.build(base)?;
         let mesh = def.mesh(base, tol)?;
-        pieces.push(summarise(&def.name, def.quantity, &geom, &mesh));
+        pieces.push(match &geom {
+            PieceGeometry::Step(sp) => {
+                crate::inspect_step::summarise_piece(&def.name, def.quantity, sp, &mesh, tol)
+            }
+            g => summarise(&def.name, def.quantity, g, &mesh),
+        });
     }
     if !design.parts.is_empty() {
         // A part's pieces are regions of its surface: summarised as the meshes they are.
@@ -96,9 +105,19 @@ pub fn inspect_file(path: &Path, tol: &Tolerances) -> Result<InspectReport, Desi
             pieces.push(summarise(&p.def.name, p.def.quantity, &geom, &p.mesh));
         }
     }
+    // A STEP file: the model the pieces were expanded from.
+    let step = design.pieces.iter().find_map(|p| match &p.surface {
+        flatcut_design::SurfaceDef::Step { model: Some(m), .. }
+            if flatcut_step::is_step_path(path) =>
+        {
+            Some(crate::inspect_step::summarise_model(&m.0, tol))
+        }
+        _ => None,
+    });
     Ok(InspectReport {
         source: design.source.clone(),
         pieces,
+        step,
     })
 }
 
@@ -110,6 +129,9 @@ fn bbox_arr(b: &Aabb3) -> [[f64; 3]; 2] {
 pub fn summarise(name: &str, quantity: u32, geom: &PieceGeometry, mesh: &TriMesh) -> PieceSummary {
     let stats = MeshStats::of(mesh);
     match geom {
+        PieceGeometry::Step(sp) => {
+            crate::inspect_step::summarise_piece(name, quantity, sp, mesh, &Tolerances::DEFAULT)
+        }
         PieceGeometry::Mesh(_) => {
             let worst_defect = max_interior_angle_defect(mesh);
             let (kmin, kmax) = stats.gaussian_range.unwrap_or((0.0, 0.0));
@@ -368,6 +390,9 @@ impl std::fmt::Display for InspectReport {
                 None => writeln!(f, "  boundary          invalid topology")?,
             }
         }
+        if let Some(step) = &self.step {
+            write!(f, "{step}")?;
+        }
         Ok(())
     }
 }
@@ -384,7 +409,7 @@ mod tests {
         let design = Design::load(&dir.join("design.toml")).unwrap();
         match design.pieces[0].build(&dir).unwrap() {
             PieceGeometry::Patches(p) => p,
-            PieceGeometry::Mesh(_) => panic!("the teapot is a patch list"),
+            _ => panic!("the teapot is a patch list"),
         }
     }
 

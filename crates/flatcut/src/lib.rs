@@ -43,6 +43,7 @@
 pub mod check;
 pub mod flat;
 pub mod inspect;
+pub mod inspect_step;
 pub mod pieces;
 pub mod pipeline;
 pub mod project;

@@ -9,7 +9,10 @@ use flatcut_flatten::{FlattenError, FlattenInfo, FlattenParams};
 use flatcut_geom::{DVec2, DVec3, Tolerances};
 use flatcut_mesh::TriMesh;
 use flatcut_mesh::mating::MatingSeam;
-use flatcut_nest::{NestError, NestItem, NestOptions, NestProgress, NestResult, Rotations, Stock};
+use flatcut_nest::{
+    GrainDirections, Hide, NestError, NestItem, NestOptions, NestProgress, NestResult, Rotations,
+    Stock,
+};
 use flatcut_pattern::{
     Drawing, LabelInfo, Mark, MarkKind, PatternError, Piece, PieceInput, PieceOptions, Placement,
 };
@@ -400,10 +403,10 @@ pub fn piece_from_flat(
             distortion: None,
         };
     }
-    if ctx.def.and_then(|d| d.seam_allowance_mm).is_none() {
-        if let Some(w) = ctx.seam_mm {
-            opts = opts.with_default_seam(w);
-        }
+    if ctx.def.and_then(|d| d.seam_allowance_mm).is_none()
+        && let Some(w) = ctx.seam_mm
+    {
+        opts = opts.with_default_seam(w);
     }
     if let Some(r) = ctx.report {
         input.label.distortion = Some(format!(
@@ -424,6 +427,11 @@ pub struct NestGroup {
     pub quantity: usize,
     pub mirrored_pair: bool,
     pub grain_angle: Option<f64>,
+    /// The material's grain rule for a piece with a grain line, and its tolerance (degrees).
+    pub grain_directions: GrainDirections,
+    pub grain_tolerance_deg: f64,
+    /// The worst hide grade the piece accepts (`None` = any).
+    pub quality: Option<u32>,
 }
 
 impl NestGroup {
@@ -437,6 +445,9 @@ impl NestGroup {
             quantity,
             mirrored_pair,
             grain_angle: item.grain_angle,
+            grain_directions: item.grain_directions,
+            grain_tolerance_deg: item.grain_tolerance_deg,
+            quality: item.quality,
         }
     }
 
@@ -494,41 +505,43 @@ impl NestGroup {
                 grain_angle: info
                     .and_then(|i| i.grain)
                     .map(|(a, b)| (b - a).y.atan2((b - a).x)),
+                grain_directions: GrainDirections::default(),
+                grain_tolerance_deg: 0.0,
+                quality: None,
             });
         }
         groups
     }
 }
 
-/// A nested layout: one drawing per sheet (sheet coordinates, mm) and the nesting figures.
+/// A nested layout: one drawing per sheet or hide (its coordinates, mm) and the nesting figures.
 pub struct Layout {
     pub sheets: Vec<Drawing>,
     pub result: NestResult,
-    pub stock: Stock,
+    /// The roll or sheets (`None` on hides).
+    pub stock: Option<Stock>,
 }
 
-/// Nests the groups on the stock and places their drawings.
-pub fn nest_groups(
-    groups: &[NestGroup],
-    stock: Stock,
-    opts: &NestOptions,
-    progress: &mut dyn FnMut(&NestProgress),
-) -> Result<Layout, PipelineError> {
-    let items: Vec<NestItem> = groups
+/// The nesting items of the groups: a piece with a grain line keeps it by the group's rule
+/// (which may be `any`), others turn in quarter turns.
+fn nest_items(groups: &[NestGroup]) -> Vec<NestItem> {
+    groups
         .iter()
         .map(|g| {
             let mut it = NestItem::new(g.name.clone(), g.outline.clone(), g.quantity);
             it.mirrored_pair = g.mirrored_pair;
             it.grain_angle = g.grain_angle;
-            it.rotations = if g.grain_angle.is_some() {
-                Rotations::Half
-            } else {
-                Rotations::Quarter
-            };
+            it.grain_directions = g.grain_directions;
+            it.grain_tolerance_deg = g.grain_tolerance_deg;
+            it.quality = g.quality;
+            it.rotations = Rotations::Quarter;
             it
         })
-        .collect();
-    let result = flatcut_nest::nest(&items, stock, opts, progress)?;
+        .collect()
+}
+
+/// The groups' drawings at their placements, one drawing per sheet or hide.
+fn place_groups(groups: &[NestGroup], result: NestResult, stock: Option<Stock>) -> Layout {
     let mut sheets = vec![Drawing::default(); result.sheets.max(1)];
     let mut counters = vec![0u32; groups.len()];
     for p in &result.placed {
@@ -540,11 +553,33 @@ pub fn nest_groups(
             sheet.pieces.extend(d.pieces);
         }
     }
-    Ok(Layout {
+    Layout {
         sheets,
         result,
         stock,
-    })
+    }
+}
+
+/// Nests the groups on the stock and places their drawings.
+pub fn nest_groups(
+    groups: &[NestGroup],
+    stock: Stock,
+    opts: &NestOptions,
+    progress: &mut dyn FnMut(&NestProgress),
+) -> Result<Layout, PipelineError> {
+    let result = flatcut_nest::nest(&nest_items(groups), stock, opts, progress)?;
+    Ok(place_groups(groups, result, Some(stock)))
+}
+
+/// Nests the groups on leather hides (in order) and places their drawings, one per hide used.
+pub fn nest_groups_on_hides(
+    groups: &[NestGroup],
+    hides: &[Hide],
+    opts: &NestOptions,
+    progress: &mut dyn FnMut(&NestProgress),
+) -> Result<Layout, PipelineError> {
+    let result = flatcut_nest::nest_hides(&nest_items(groups), hides, opts, progress)?;
+    Ok(place_groups(groups, result, None))
 }
 
 fn place(d: &Drawing, pl: &Placement, instance: u32, item: u32) -> Drawing {

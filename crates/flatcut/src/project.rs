@@ -20,8 +20,8 @@
 //! [machine]
 //! profile = "pen"               # pen | knife | laser | path to a profile .toml
 //! [device]
-//! # port = "/dev/ttyUSB0"       # absent: the embedded simulator
-//! baud = 115200
+//! # port = "/dev/ttyUSB0"       # the controller; "simulator" or absent: the embedded simulator
+//! baud = 115200                 # 1200..=2000000
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -105,13 +105,48 @@ pub struct Machine {
     pub profile: String,
 }
 
+/// The `[device]` a project's jobs stream to: a serial port, or the embedded simulator.
 #[derive(Clone, Debug, PartialEq, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct Device {
+    /// The controller's serial port; [`Device::SIMULATOR`] or absent: the embedded simulator.
     #[serde(default)]
     pub port: Option<String>,
+    /// Baud rate of the link (GRBL: 115200), within [`Device::BAUD_RANGE`].
     #[serde(default)]
     pub baud: Option<u32>,
+}
+
+impl Device {
+    /// The `port` that names the embedded simulator.
+    pub const SIMULATOR: &'static str = "simulator";
+    /// Baud rates a serial link to a controller can have: 1200 (the slowest plotters) to 2 Mbaud
+    /// (the fastest USB serial adapters).
+    pub const BAUD_RANGE: std::ops::RangeInclusive<u32> = 1200..=2_000_000;
+
+    /// Whether the jobs go to the embedded simulator.
+    pub fn is_simulator(&self) -> bool {
+        self.port.as_deref().is_none_or(|p| p == Device::SIMULATOR)
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        if let Some(b) = self.baud
+            && !Device::BAUD_RANGE.contains(&b)
+        {
+            return Err(format!(
+                "[device] baud = {b}: a serial link runs at {}..={} baud (GRBL: 115200)",
+                Device::BAUD_RANGE.start(),
+                Device::BAUD_RANGE.end()
+            ));
+        }
+        if self.port.as_deref().is_some_and(|p| p.trim().is_empty()) {
+            return Err(format!(
+                "[device] port is empty: name the controller's serial port, or \"{}\"",
+                Device::SIMULATOR
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// A `flatcut run` project.
@@ -232,12 +267,12 @@ impl Project {
         {
             return Err("seam_mm must be >= 0".into());
         }
-        if let Some(m) = &self.method {
-            if flatcut_flatten::Method::from_name(m).is_none() {
-                return Err(format!("unknown method '{m}'"));
-            }
+        if let Some(m) = &self.method
+            && flatcut_flatten::Method::from_name(m).is_none()
+        {
+            return Err(format!("unknown method '{m}'"));
         }
-        Ok(())
+        self.device.validate()
     }
 
     /// The design file's path.

@@ -6,10 +6,9 @@ use std::fmt::Write as _;
 
 use flatcut_geom::{Aabb2, DVec2};
 
-use crate::arcs;
 use crate::plan::{Move, Plan, Summary};
 use crate::profile::{PenMode, Profile, ToolKind};
-use crate::time::{Motion, estimate};
+use crate::time::{self, Motion, estimate};
 
 /// Our longest line (GRBL's limit is 79 significant characters; we keep a margin).
 pub const GRBL_MAX_LINE: usize = 70;
@@ -79,10 +78,11 @@ impl<'a> Writer<'a> {
         };
         let s = format!("G0 X{} Y{}{}", self.num(to.x), self.num(to.y), laser_off);
         self.line(&s);
-        self.motion([to.x, to.y, self.pos[2]], self.p.travel_mm_min);
+        self.motion([to.x, to.y, self.pos[2]], None);
     }
 
-    fn motion(&mut self, to: [f64; 3], feed: f64) {
+    /// Records a move for the estimate (`feed` `None`: a rapid).
+    fn motion(&mut self, to: [f64; 3], feed: Option<f64>) {
         self.motions.push(Motion::Move {
             from: self.pos,
             to,
@@ -100,10 +100,7 @@ impl<'a> Writer<'a> {
             Some(f) => format!("G1 Z{} F{}", self.num(z), self.num(f)),
         };
         self.line(&s);
-        self.motion(
-            [self.pos[0], self.pos[1], z],
-            feed.unwrap_or(self.p.travel_mm_min),
-        );
+        self.motion([self.pos[0], self.pos[1], z], feed);
     }
 
     fn dwell(&mut self, s: f64) {
@@ -173,7 +170,7 @@ impl<'a> Writer<'a> {
             Move::Line(p) => {
                 let s = format!("G1 X{} Y{}{}", self.num(p.x), self.num(p.y), extra);
                 self.line(&s);
-                self.motion([p.x, p.y, self.pos[2]], feed);
+                self.motion([p.x, p.y, self.pos[2]], Some(feed));
             }
             Move::Arc { to, center, ccw } => {
                 let off = center - from;
@@ -187,13 +184,19 @@ impl<'a> Writer<'a> {
                     extra
                 );
                 self.line(&s);
-                // Time the arc as its chords.
-                let mut at = from;
-                for q in arcs::sample_arc(from, to, center, ccw, 0.01) {
-                    self.motion([q.x, q.y, self.pos[2]], feed);
-                    at = q;
+                // Time the arc as the chords GRBL splits it into.
+                let z = self.pos[2];
+                let chords = flatcut_motion::arc_chords(
+                    [from.x, from.y, z],
+                    [to.x, to.y, z],
+                    [center.x, center.y],
+                    (0, 1, 2),
+                    !ccw,
+                    time::limits(self.p).arc_tolerance,
+                );
+                for q in chords.into_iter().skip(1) {
+                    self.motion(q, Some(feed));
                 }
-                let _ = at;
             }
         }
     }
@@ -259,11 +262,7 @@ impl Plan {
             lines,
             cut_length_mm: self.cut_length(),
             travel_length_mm: self.travel_length(),
-            est_time_s: estimate(
-                &motions,
-                self.profile.accel_mm_s2,
-                self.profile.junction_deviation_mm,
-            ),
+            est_time_s: estimate(&motions, &time::limits(&self.profile)),
             paths: self.paths.len(),
         }
     }

@@ -9,20 +9,8 @@
 
 use flatcut_firmware_sim::{PtySim, SimConfig};
 use flatcut_grbl::{CancelToken, Job, SendOptions, open_port, send_job};
+use flatcut_testkit::jobs::zigzag;
 use std::time::Duration;
-
-fn zigzag(n: usize, dx: f64, dy: f64, feed: f64) -> String {
-    let mut s = String::from("G21 G90\nG0 Z1\nG0 X0 Y0\nG1 Z-0.5 F300\n");
-    for i in 1..=n {
-        s.push_str(&format!(
-            "G1 X{:.3} Y{:.3} F{feed}\n",
-            i as f64 * dx,
-            (i % 2) as f64 * dy
-        ));
-    }
-    s.push_str("G0 Z1\n");
-    s
-}
 
 fn main() {
     let args: Vec<usize> = std::env::args()

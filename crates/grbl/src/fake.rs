@@ -6,12 +6,19 @@ use crate::transport::{Transport, TransportError};
 use std::collections::VecDeque;
 use std::time::Duration;
 
+/// Lines the sender writes on its own, not from the job: the dwell that proves the planner
+/// empty at the end, and the tool-off sequence after a stop.
+pub(crate) const HOUSEKEEPING: [&str; 4] = ["G4P0.01", "M5", "S0", "M9"];
+
 pub(crate) struct FakeGrbl {
     rx: VecDeque<u8>,
     pub rx_cap: usize,
     out: VecDeque<u8>,
-    /// G-code lines executed (motion or not), in order.
+    /// G-code lines executed (motion or not), in order, apart from the sender's own
+    /// housekeeping ([`HOUSEKEEPING`]).
     pub executed: Vec<String>,
+    /// The sender's housekeeping lines executed (the end-of-job dwell, the tool-off sequence).
+    pub housekeeping: Vec<String>,
     /// Every line received, in order.
     pub received: Vec<String>,
     pub max_rx_fill: usize,
@@ -48,6 +55,7 @@ impl FakeGrbl {
             rx_cap: 128,
             out: VecDeque::new(),
             executed: Vec::new(),
+            housekeeping: Vec::new(),
             received: Vec::new(),
             max_rx_fill: 0,
             dropped: 0,
@@ -165,6 +173,7 @@ impl FakeGrbl {
                         self.say(&format!("${k}={v:.3}"));
                     }
                 }
+                "G" => self.say("[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]"),
                 "X" => {
                     self.alarm = false;
                     self.say("[MSG:Caution: Unlocked]");
@@ -203,6 +212,11 @@ impl FakeGrbl {
             return;
         }
         if self.check {
+            self.say("ok");
+            return;
+        }
+        if HOUSEKEEPING.contains(&line.as_str()) {
+            self.housekeeping.push(line);
             self.say("ok");
             return;
         }

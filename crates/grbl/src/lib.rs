@@ -23,7 +23,9 @@ pub mod response;
 pub mod streamer;
 pub mod transport;
 
-pub use driver::{CancelToken, Control, Progress, SendError, SendOptions, SendReport, send_job};
+pub use driver::{
+    CancelToken, Control, PausePolicy, Progress, SendError, SendOptions, SendReport, send_job,
+};
 pub use job::{Job, JobError, JobLine, MachineLimits, ModalState};
 pub use journal::{Journal, JournalError, JournalState};
 pub use response::{MachineState, Response, StatusReport, parse_response};

@@ -5,26 +5,17 @@
 //! exactly once, in order.
 
 use flatcut_firmware_sim::{Faults, PtySim, SimConfig, TraceSegment};
-use flatcut_grbl::{CancelToken, Job, Journal, SendError, SendOptions, open_port, send_job};
+use flatcut_grbl::{CancelToken, Job, Journal, SendError, SendOptions};
+use flatcut_testkit::jobs;
+use flatcut_testkit::pty::send_with;
+use flatcut_testkit::trace::{assert_job_exactly_once, close};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
-
-/// Step of the simulated machine (250 steps/mm), mm: positions on the grid are exact.
-const TOL: f64 = 1e-3;
 
 /// A pen-plotter job of `n` strokes, each at its own place, at F1200 so that motion is still
 /// queued when the link drops.
 fn strokes(n: usize) -> String {
-    let mut s = String::from("G21 G90\nG0 Z2\nG0 X0 Y0\nG1 Z-0.5 F300\n");
-    for i in 1..=n {
-        s.push_str(&format!(
-            "G1 X{:.3} Y{} F1200\n",
-            i as f64 * 0.2,
-            (i % 2) * 4
-        ));
-    }
-    s.push_str("G0 Z2\n");
-    s
+    jobs::zigzag(n, 0.2, 4.0, 1200.0)
 }
 
 fn opts(journal: &Path) -> SendOptions {
@@ -34,10 +25,6 @@ fn opts(journal: &Path) -> SendOptions {
         .with_journal(journal)
 }
 
-fn close(a: [f64; 3], b: [f64; 3]) -> bool {
-    (0..3).all(|k| (a[k] - b[k]).abs() <= TOL)
-}
-
 fn send(
     path: &Path,
     job: &Job,
@@ -45,63 +32,12 @@ fn send(
     cancel: &CancelToken,
     abort_after: Option<usize>,
 ) -> Result<flatcut_grbl::SendReport, SendError> {
-    let mut port = open_port(path.to_str().unwrap(), 115_200).expect("open pty");
     let c = cancel.clone();
-    send_job(
-        &mut port,
-        job,
-        o,
-        &mut |p| {
-            if abort_after.is_some_and(|n| p.lines_acked >= n) {
-                c.abort();
-            }
-        },
-        cancel,
-    )
-}
-
-/// The job's motions: (text, from, to) in work = machine coordinates (no offsets in use).
-fn geometry(job: &Job) -> Vec<(String, [f64; 3], [f64; 3])> {
-    job.motions()
-}
-
-/// Moving segments, with a line stopped part-way and completed later (same text, the second
-/// starting where the first ended) joined into one.
-fn joined(trace: &[TraceSegment]) -> Vec<TraceSegment> {
-    let mut out: Vec<TraceSegment> = Vec::new();
-    for s in trace.iter().filter(|s| !close(s.from, s.to)) {
-        if let Some(last) = out.last_mut()
-            && last.text == s.text
-            && close(last.to, s.from)
-        {
-            last.to = s.to;
-            continue;
+    send_with(path, job, o, cancel, &mut |p| {
+        if abort_after.is_some_and(|n| p.lines_acked >= n) {
+            c.abort();
         }
-        out.push(s.clone());
-    }
-    out
-}
-
-fn assert_job_exactly_once(job: &Job, trace: &[TraceSegment]) {
-    let want = geometry(job);
-    let got = joined(trace);
-    for (k, (w, g)) in want.iter().zip(&got).enumerate() {
-        assert!(
-            g.text == w.0 && close(g.from, w.1) && close(g.to, w.2),
-            "motion {k}: ran `{}` {:?} -> {:?}, the job has `{}` {:?} -> {:?}; ran next: {:?}",
-            g.text,
-            g.from,
-            g.to,
-            w.0,
-            w.1,
-            w.2,
-            got[k + 1..(k + 4).min(got.len())]
-                .iter()
-                .map(|s| (&s.text, s.from, s.to))
-                .collect::<Vec<_>>()
-        );
-    }
-    assert_eq!(got.len(), want.len(), "number of motions");
+    })
 }
 
 struct Bench {
@@ -251,11 +187,14 @@ fn reset_in_motion_requires_an_explicit_resume_point() {
     );
     assert_eq!(sim.trace().len(), run1.len(), "nothing moved");
 
-    // The operator saw line k cut short: resume from it.
+    // The operator saw line k cut short, and that the machine stands where it did: resume
+    // from it (the reset in motion lost the position, so the origin needs the operator's word).
     let rep = send(
         sim.path(),
         &b.job,
-        &o.clone().with_resume_from(Some(k)),
+        &o.clone()
+            .with_resume_from(Some(k))
+            .with_origin_confirmed(true),
         &CancelToken::new(),
         None,
     )

@@ -1,26 +1,20 @@
 //! The sender against firmware-sim over a real pseudo-terminal: complete streaming, every
 //! fault-injection mode, resume from the journal.
 
-use flatcut_firmware_sim::{Faults, PtySim, SimConfig, TraceSegment};
+use flatcut_firmware_sim::{Faults, SimConfig, TraceSegment};
 use flatcut_grbl::driver::Phase;
 use flatcut_grbl::{CancelToken, Job, Journal, SendError, SendOptions, open_port, send_job};
+use flatcut_testkit::jobs;
+use flatcut_testkit::pty::{send as run, spawn};
+use flatcut_testkit::trace::{
+    assert_exactly_once, assert_exactly_once_except, assert_trace_is_job, close,
+};
 use std::collections::BTreeSet;
-use std::path::Path;
 use std::time::Duration;
 
-/// A pen-plotter job of `n` zig-zag strokes with unique line texts.
+/// A pen-plotter job of `n` zig-zag strokes with unique line texts, X on the step grid.
 fn zigzag(n: usize) -> String {
-    let mut s = String::from("G21 G90\nG0 Z2\nG0 X0 Y0\nG1 Z-0.5 F300\n");
-    for i in 1..=n {
-        // X on the 250 steps/mm grid (3 steps apart), so positions are exact in steps.
-        s.push_str(&format!(
-            "G1 X{:.3} Y{} F3000\n",
-            i as f64 * 0.012,
-            (i % 2) * 5
-        ));
-    }
-    s.push_str("G0 Z1.5\n");
-    s
+    jobs::zigzag(n, 0.012, 5.0, 3000.0)
 }
 
 fn opts() -> SendOptions {
@@ -29,75 +23,6 @@ fn opts() -> SendOptions {
         .with_idle_ack_timeout(Duration::from_millis(1500))
         .with_silence_timeout(Duration::from_secs(5))
         .with_hold_timeout(Some(Duration::from_secs(2)))
-}
-
-fn spawn(cfg: SimConfig) -> PtySim {
-    PtySim::spawn(cfg).expect("spawn firmware-sim")
-}
-
-fn run(sim: &PtySim, job: &Job, o: &SendOptions) -> Result<flatcut_grbl::SendReport, SendError> {
-    let mut port = open_port(sim.path().to_str().unwrap(), 115_200).expect("open pty");
-    send_job(&mut port, job, o, &mut |_| {}, &CancelToken::new())
-}
-
-const TOL: f64 = 1e-3;
-
-fn close(a: [f64; 3], b: [f64; 3]) -> bool {
-    (0..3).all(|k| (a[k] - b[k]).abs() <= TOL)
-}
-
-/// Expected motion of the job: (text, from, to) of every line that moves.
-fn geometry(job: &Job) -> Vec<(String, [f64; 3], [f64; 3])> {
-    job.motions()
-}
-
-fn moving(trace: &[TraceSegment]) -> Vec<&TraceSegment> {
-    trace.iter().filter(|s| !close(s.from, s.to)).collect()
-}
-
-fn assert_trace_is_job(job: &Job, trace: &[TraceSegment]) {
-    let want = geometry(job);
-    let got = moving(trace);
-    assert_eq!(got.len(), want.len(), "segment count");
-    for (k, (w, g)) in want.iter().zip(&got).enumerate() {
-        assert_eq!(g.text, w.0, "segment {k}");
-        assert!(
-            close(g.from, w.1) && close(g.to, w.2),
-            "segment {k}: {g:?} vs {w:?}"
-        );
-    }
-}
-
-/// Every job motion with a unique text (not also written by a resume preamble) ran exactly once
-/// over the traces of all runs, at the right place.
-fn assert_exactly_once(job: &Job, traces: &[&[TraceSegment]]) {
-    assert_exactly_once_except(job, traces, &BTreeSet::new());
-}
-
-fn assert_exactly_once_except(job: &Job, traces: &[&[TraceSegment]], except: &BTreeSet<String>) {
-    let preamble: BTreeSet<String> = (1..job.len())
-        .flat_map(|k| job.resume_preamble(k))
-        .collect();
-    for (text, from, to) in geometry(job) {
-        if preamble.contains(&text)
-            || except.contains(&text)
-            || job.lines.iter().filter(|l| l.text == text).count() != 1
-        {
-            continue;
-        }
-        let hits: Vec<&TraceSegment> = traces
-            .iter()
-            .flat_map(|t| t.iter())
-            .filter(|s| s.text == text)
-            .collect();
-        assert_eq!(hits.len(), 1, "`{text}` ran {} times", hits.len());
-        assert!(
-            close(hits[0].to, to),
-            "`{text}` ended at {:?}, want {to:?}",
-            hits[0].to
-        );
-        let _ = from;
-    }
 }
 
 #[test]
@@ -170,7 +95,12 @@ fn fault_case(
             }
             assert!(!st.finished, "{name}: journal says finished after {e}");
             let sim2 = spawn(SimConfig::default().with_instant_motion(true));
-            let resumed = run(&sim2, &job, &opts().with_journal(&jp).with_resume(true));
+            // A fresh controller restarted (power-up banner): the operator confirms the origin.
+            let o2 = opts()
+                .with_journal(&jp)
+                .with_resume(true)
+                .with_origin_confirmed(true);
+            let resumed = run(&sim2, &job, &o2);
             // A fresh controller (power-up banner, position zero) cannot say which queued lines
             // ran: the sender refuses to guess and names the lines in doubt; resuming from the
             // first of them is the operator's safe choice.
@@ -179,7 +109,7 @@ fn fault_case(
                     assert_eq!(name, "hangup", "{name}: {reason}");
                     assert_eq!(Some(from.index), st.unconfirmed.first().copied());
                     assert!(to.index >= from.index);
-                    let o = opts().with_journal(&jp).with_resume_from(Some(from.index));
+                    let o = o2.clone().with_resume_from(Some(from.index));
                     let rep = run(&sim2, &job, &o).unwrap_or_else(|e2| {
                         panic!("{name}: resume from {} failed: {e2}", from.index)
                     });
@@ -206,9 +136,12 @@ fn fault_case(
                             ran1.contains(l.text.as_str()) || ran2.contains(l.text.as_str()),
                             "line {i} skipped"
                         );
-                        if st.done[i] {
+                        // (A resume preamble writes the pen moves of the job itself.)
+                        let in_preamble =
+                            (1..job.len()).any(|k| job.resume_preamble(k).contains(&l.text));
+                        if st.done[i] && !in_preamble {
                             assert!(
-                                !ran2.contains(l.text.as_str()) || i == 1,
+                                !ran2.contains(l.text.as_str()),
                                 "line {i} journaled done but re-ran"
                             );
                         }
@@ -218,7 +151,7 @@ fn fault_case(
                 // The line the reset cut may have run as a fragment; it is re-sent whole, so at
                 // most that one line runs twice, and none is skipped.
                 let mut twice = 0;
-                for (text, _, to) in geometry(&job) {
+                for (text, _, to) in job.motions() {
                     let hits: Vec<&TraceSegment> = r1
                         .trace
                         .iter()
@@ -246,7 +179,7 @@ fn fault_case(
                 // something else and cannot be seen by any sender. Each damaged byte may spoil
                 // one line; beyond those, nothing is skipped or repeated.
                 let damaged = (r1.stats.bytes_dropped_fault + r1.stats.bytes_corrupted) as usize;
-                let want = geometry(&job);
+                let want = job.motions();
                 let bad: Vec<&String> = want
                     .iter()
                     .filter(|(t, _, to)| {
@@ -432,7 +365,6 @@ fn refuses_to_resume_another_job() {
     let other = Job::parse(&zigzag(11)).unwrap();
     let e = run(&sim, &other, &opts().with_journal(&jp).with_resume(true)).unwrap_err();
     assert!(e.to_string().contains("different job"), "{e}");
-    let _ = Path::new("");
 }
 
 /// The time estimate against the simulated planner on virtual time (lines fed as GRBL's RX
@@ -470,4 +402,144 @@ fn estimate_matches_the_simulated_machine() {
         );
         eprintln!("{name}: estimate {est:.3} s, simulated {sim:.3} s");
     }
+}
+
+/// Issue 14, item 5: with homing and soft limits GRBL allows machine coordinates −travel..0
+/// only; the refusal says so in machine coordinates.
+#[test]
+fn travel_refusal_explains_machine_coordinates() {
+    let job = Job::parse("G0X0Y0\nG1X95Y10F1000\n").unwrap();
+    let sim = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_setting(22, 1.0)
+            .with_setting(20, 1.0)
+            .with_setting(130, 800.0),
+    );
+    let e = run(&sim, &job, &opts().with_unlock(true)).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        matches!(e, SendError::OutOfTravel { axis: 'X', .. }),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("0.000..95.000 mm in machine coordinates")
+            && msg.contains("outside -800.000..0.000 mm"),
+        "{msg}"
+    );
+    assert!(sim.stop().trace.is_empty());
+}
+
+/// Issue 14, item 3: a job that pauses itself (M0) is aborted by default when nobody can
+/// answer (tool off, the line named), and runs through with `PausePolicy::Resume`.
+#[test]
+fn program_pause_aborts_without_an_operator_and_resumes_when_asked() {
+    let text = "G21 G90\nG1 X1 F3000\nM0\nG1 X2\nG1 X3\n";
+    let job = Job::parse(text).unwrap();
+    let sim = spawn(SimConfig::default().with_instant_motion(true));
+    let e = run(&sim, &job, &opts()).unwrap_err();
+    assert!(
+        matches!(&e, SendError::PausedByJob { line, .. } if line.source_line == 3),
+        "{e}"
+    );
+    assert!(e.to_string().contains("tool off"), "{e}");
+    let o = opts().with_on_pause(flatcut_grbl::PausePolicy::Resume);
+    run(&sim, &job, &o).expect("resumed after the pause");
+    let trace = sim.stop().trace;
+    assert_eq!(trace.iter().filter(|s| s.text == "G1X3").count(), 1);
+    assert!(!trace.iter().any(|s| s.text == "G1X2" && s.line < 5));
+}
+
+/// Issue 14, item 5: a laser job (M3 keeps the laser on while stopped) stopped by a rejected
+/// line ends with M5 S0 M9, confirmed by `$G`.
+#[test]
+fn error_stop_turns_the_laser_off_and_confirms_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let jp = dir.path().join("laser.journal");
+    let mut text = String::from("G21 G90\nM8\nG1 F600\nM3 S500\n");
+    for i in 1..=40 {
+        text.push_str(&format!("G1 X{} Y{}\n", i, i % 2));
+    }
+    let job = Job::parse(&text).unwrap();
+    let sim = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_setting(32, 1.0)
+            .with_faults(Faults {
+                error_at_line: Some((30, 33)),
+                ..Faults::default()
+            }),
+    );
+    let e = run(&sim, &job, &opts().with_journal(&jp)).unwrap_err();
+    assert!(matches!(e, SendError::LineRejected { .. }), "{e}");
+    let notes = Journal::read(&jp).unwrap().notes;
+    assert!(
+        notes
+            .iter()
+            .any(|n| n == "tool off (M5 M9), confirmed by $G"),
+        "{notes:?}"
+    );
+    sim.stop();
+}
+
+/// Issue 14, item 5: a job whose header says it needs laser mode is refused on a controller
+/// with `$32=0` before anything moves, unless forced.
+#[test]
+fn laser_job_is_refused_when_laser_mode_is_off() {
+    let job =
+        Job::parse("(profile laser - laser: needs $32=1)\nG21 G90\nM4 S0\nG1 X5 F600 S300\nM5\n")
+            .unwrap();
+    let sim = spawn(SimConfig::default().with_instant_motion(true));
+    let e = run(&sim, &job, &opts()).unwrap_err();
+    assert!(matches!(e, SendError::LaserModeOff), "{e}");
+    run(&sim, &job, &opts().with_force_laser(true)).unwrap();
+    assert_eq!(sim.stop().trace.len(), 1);
+}
+
+/// Issue 14, item 2: a resume on a controller that restarted (the DTR reset of opening the
+/// port) re-establishes the position first: homing where the machine homes, else only on the
+/// operator's word; never the remaining lines at once.
+#[test]
+fn resume_after_a_controller_restart_homes_or_needs_the_operators_word() {
+    let dir = tempfile::tempdir().unwrap();
+    let jp = dir.path().join("j.journal");
+    let job = Job::parse(&zigzag(120)).unwrap();
+    let faults = Faults {
+        error_at_line: Some((60, 33)),
+        ..Faults::default()
+    };
+    let first = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_faults(faults),
+    );
+    run(&first, &job, &opts().with_journal(&jp)).unwrap_err();
+    first.stop();
+    let resume = opts().with_journal(&jp).with_resume(true);
+    // A fresh controller that does not home: refused, with the reason.
+    let plain = spawn(SimConfig::default().with_instant_motion(true));
+    let e = run(&plain, &job, &resume).unwrap_err();
+    assert!(
+        matches!(&e, SendError::PositionUnknown { why } if why.contains("restarted")),
+        "{e}"
+    );
+    assert!(plain.stop().trace.is_empty(), "nothing moved");
+    // A fresh controller that homes ($22=1, alarm-locked at power-up): homed, then resumed.
+    let homing = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_setting(22, 1.0)
+            .with_setting(23, 3.0),
+    );
+    let rep = run(&homing, &job, &resume).expect("homed and resumed");
+    assert!(
+        rep.notices
+            .iter()
+            .any(|n| n.starts_with("homed the machine ($H)")),
+        "{:?}",
+        rep.notices
+    );
+    let trace = homing.stop().trace;
+    assert_eq!(trace.first().map(|s| s.motion.as_str()), Some("HOME"));
+    assert!(Journal::read(&jp).unwrap().finished);
 }

@@ -1,11 +1,12 @@
 //! Triangle meshes in millimetres: the indexed [`TriMesh`], readers and writers (OBJ, STL, PLY),
 //! topology (edges, boundary loops, components, manifold checks), tessellation of parametric
-//! surfaces to a chordal tolerance, geodesic distances, and the per-triangle distortion kernel
+//! surfaces and of trimmed faces (CAD models) to a chordal tolerance, geodesic distances, and the per-triangle distortion kernel
 //! shared by the flattener and the report.
 //!
 //! **Architecture invariant:** this crate knows 3D surfaces and 2D maps of them, but nothing of
 //! patterns, sheets or machines.
 
+pub mod disk;
 pub mod distortion;
 pub mod geodesic;
 pub mod grid;
@@ -20,8 +21,10 @@ pub mod stats;
 pub mod tessellate;
 pub mod topology;
 pub mod trimesh;
+pub mod trimmed;
 pub mod weld;
 
+pub use disk::cut_to_disk;
 pub use distortion::{FaceDistortion, face_distortion};
 pub use io::{MeshIoError, read_mesh, write_obj};
 pub use seams::{cut_along_seams, seam_from_points};
@@ -29,3 +32,6 @@ pub use stats::MeshStats;
 pub use tessellate::{TessError, tessellate, tessellate_model, tessellate_patches};
 pub use topology::{Topology, TopologyError, check_disk};
 pub use trimesh::TriMesh;
+pub use trimmed::{
+    TrimError, TrimPoint, TrimmedFace, TrimmedMesh, tessellate_trimmed, trimmed_area,
+};

@@ -98,6 +98,9 @@ pub enum TessError {
         "tessellation needs more than {limit} vertices at chordal tolerance {chord_mm} mm; raise the tolerance"
     )]
     TooManyVertices { limit: usize, chord_mm: f64 },
+    /// A face of a trimmed (CAD) model could not be tessellated; the message names it.
+    #[error("{0}")]
+    Face(String),
 }
 
 /// Options of the tessellator beyond the tolerances.

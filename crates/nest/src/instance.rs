@@ -1,9 +1,11 @@
-//! Loader for the ESICUP strip-packing benchmark instances in the jagua-rs JSON format
-//! (`/work/shared/bench/nesting/instances`): `{name, strip_height, items: [{id, demand,
-//! allowed_orientations?, shape: {type: "simple_polygon", data: [[x, y], …]}}]}`, and the
-//! shoe-part items of the Baldacci `Scarpa.json` leather instance (older PascalCase schema).
+//! Loaders for benchmark instances: the ESICUP strip-packing instances in the jagua-rs JSON
+//! format (`../shared/bench/nesting/instances`), and the leather instances of Baldacci et al.
+//! (2014) in their PascalCase schema (`Scarpa.json`: shoe parts and two hides with defects and
+//! quality zones).
 
-use crate::search::{NestError, NestItem, Rotations};
+use crate::error::NestError;
+use crate::item::{NestItem, Rotations};
+use crate::stock::{Hide, QualityZone};
 use flatcut_geom::DVec2;
 use serde::Deserialize;
 
@@ -43,9 +45,21 @@ impl BenchInstance {
     pub fn total_area(&self) -> f64 {
         self.items
             .iter()
-            .map(|i| crate::search::polygon_area(&i.outline).abs() * i.quantity as f64)
+            .map(|i| crate::polygon_area(&i.outline).abs() * i.quantity as f64)
             .sum()
     }
+}
+
+fn points(v: &[Vec<f64>]) -> Vec<DVec2> {
+    let mut out: Vec<DVec2> = v
+        .iter()
+        .filter(|p| p.len() == 2)
+        .map(|p| DVec2::new(p[0], p[1]))
+        .collect();
+    if out.len() > 1 && out[0] == out[out.len() - 1] {
+        out.pop();
+    }
+    out
 }
 
 /// Parses an instance from JSON text.
@@ -69,26 +83,14 @@ pub fn load_bench_instance(json: &str) -> Result<BenchInstance, NestError> {
                 });
             }
         };
-        let mut outline: Vec<DVec2> = pts
-            .iter()
-            .filter(|p| p.len() == 2)
-            .map(|p| DVec2::new(p[0], p[1]))
-            .collect();
-        if outline.len() > 1 && outline[0] == outline[outline.len() - 1] {
-            outline.pop();
-        }
         let rotations = match it.allowed_orientations {
             None => Rotations::Free,
             Some(a) if a.is_empty() => Rotations::None,
             Some(a) => Rotations::List(a.iter().map(|d| d.to_radians()).collect()),
         };
         items.push(NestItem {
-            name,
-            outline,
-            quantity: it.demand,
             rotations,
-            grain_angle: None,
-            mirrored_pair: false,
+            ..NestItem::new(name, points(&pts), it.demand)
         });
     }
     Ok(BenchInstance {
@@ -99,62 +101,104 @@ pub fn load_bench_instance(json: &str) -> Result<BenchInstance, NestError> {
 }
 
 #[derive(Deserialize)]
-struct ScarpaShape {
+struct BShape {
     #[serde(rename = "Outer")]
     outer: Vec<Vec<f64>>,
+    #[serde(rename = "Inner", default)]
+    inner: Vec<Vec<Vec<f64>>>,
 }
 
 #[derive(Deserialize)]
-struct ScarpaItem {
+struct BZone {
+    #[serde(rename = "Quality")]
+    quality: u32,
+    #[serde(rename = "Shape")]
+    shape: BShape,
+}
+
+#[derive(Deserialize)]
+struct BItem {
     #[serde(rename = "Demand")]
     demand: usize,
+    #[serde(rename = "BaseQuality", default)]
+    base_quality: Option<u32>,
     #[serde(rename = "Shape")]
-    shape: ScarpaShape,
+    shape: BShape,
 }
 
 #[derive(Deserialize)]
-struct ScarpaInstance {
+struct BObject {
+    #[serde(rename = "Shape")]
+    shape: BShape,
+    #[serde(rename = "Zones", default)]
+    zones: Vec<BZone>,
+}
+
+#[derive(Deserialize)]
+struct BInstance {
     #[serde(rename = "Name", default)]
     name: String,
     #[serde(rename = "Items")]
-    items: Vec<ScarpaItem>,
+    items: Vec<BItem>,
+    #[serde(rename = "Objects")]
+    objects: Vec<BObject>,
 }
 
-/// Shoe parts of the Baldacci `Scarpa.json` instance as mirrored left/right pairs (mm): each
-/// part gets `pairs` copies per side, free rotation (leather has no woven grain). The hides,
-/// defects and quality zones of the instance are not used.
-pub fn load_scarpa_items(json: &str, pairs: usize) -> Result<Vec<NestItem>, NestError> {
-    let raw: ScarpaInstance = serde_json::from_str(json)
-        .map_err(|e| NestError::InvalidInput(format!("Scarpa JSON: {e}")))?;
+/// A leather instance of Baldacci et al.: its pieces (free rotation, the demanded quantity,
+/// each with the worst grade it accepts) and its hides (outline, defects, graded zones).
+///
+/// The file grades quality the jagua-rs way: larger numbers are better, the hide outside every
+/// zone is best, and a piece accepts zones at least as good as its base quality. flatcut grades
+/// 1 = first quality and larger = worse, so level `q` becomes grade `m + 2 − q` with `m` the
+/// best level in the file (the unzoned hide is grade 1). The per-piece quality zones of the
+/// file (a region of a piece that needs a better grade) are not modelled: the whole piece meets
+/// its base quality.
+pub fn load_scarpa(json: &str) -> Result<(Vec<NestItem>, Vec<Hide>), NestError> {
+    let raw: BInstance = serde_json::from_str(json)
+        .map_err(|e| NestError::InvalidInput(format!("leather instance JSON: {e}")))?;
     let base = if raw.name.is_empty() {
-        "scarpa".to_string()
+        "hide-instance".to_string()
     } else {
         raw.name.to_lowercase()
     };
-    Ok(raw
+    let best = raw
+        .objects
+        .iter()
+        .flat_map(|o| o.zones.iter().map(|z| z.quality))
+        .chain(raw.items.iter().filter_map(|i| i.base_quality))
+        .max()
+        .unwrap_or(1);
+    let grade = |q: u32| best + 2 - q.min(best + 1);
+    let items = raw
         .items
-        .into_iter()
+        .iter()
         .enumerate()
         .filter(|(_, it)| it.demand > 0)
-        .map(|(k, it)| {
-            let mut outline: Vec<DVec2> = it
-                .shape
-                .outer
-                .iter()
-                .filter(|p| p.len() == 2)
-                .map(|p| DVec2::new(p[0], p[1]))
-                .collect();
-            if outline.len() > 1 && outline[0] == outline[outline.len() - 1] {
-                outline.pop();
-            }
-            NestItem {
-                name: format!("{base}-{k}"),
-                outline,
-                quantity: pairs,
-                rotations: Rotations::Free,
-                grain_angle: None,
-                mirrored_pair: true,
-            }
+        .map(|(k, it)| NestItem {
+            rotations: Rotations::Free,
+            quality: it.base_quality.map(grade),
+            ..NestItem::new(format!("{base}-{k}"), points(&it.shape.outer), it.demand)
         })
-        .collect())
+        .collect();
+    let hides = raw
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(k, o)| {
+            let mut h = Hide::new(format!("{base}-hide-{}", k + 1), points(&o.shape.outer));
+            h.defects = o.shape.inner.iter().map(|d| points(d)).collect();
+            for z in &o.zones {
+                if z.quality == 0 {
+                    h.defects.push(points(&z.shape.outer));
+                } else {
+                    h.zones.push(QualityZone {
+                        grade: grade(z.quality),
+                        outline: points(&z.shape.outer),
+                    });
+                }
+            }
+            h
+        })
+        .collect();
+    Ok((items, hides))
 }

@@ -115,6 +115,53 @@ fn number(v: &str, line: usize) -> Result<f64, PatternError> {
 
 /// Reads a DXF into a drawing in mm; curves are flattened within `chord_tol` mm.
 pub fn read_dxf(text: &str, chord_tol: f64) -> Result<DxfImport, PatternError> {
+    let (top, n_insert, warnings) = read_entities(text, chord_tol)?;
+    Ok(classify(top, n_insert, warnings))
+}
+
+/// A contour of a DXF with the name of its layer (lines and arcs chained into contours).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LayerPath {
+    pub layer: String,
+    /// Points in mm; a closed contour does not repeat its first point.
+    pub points: Vec<DVec2>,
+    pub closed: bool,
+}
+
+/// Reads a DXF's contours by layer name, for files whose layers say what a contour is (a hide's
+/// outline, defects and zones), with the same entities, units and chaining as [`read_dxf`].
+pub fn read_dxf_layers(
+    text: &str,
+    chord_tol: f64,
+) -> Result<(Vec<LayerPath>, Vec<String>), PatternError> {
+    let (top, _, warnings) = read_entities(text, chord_tol)?;
+    let mut groups: BTreeMap<String, Vec<(Vec<DVec2>, bool)>> = BTreeMap::new();
+    for (_, e) in top {
+        if let Geo::Path { pts, closed } = e.geo
+            && pts.len() >= 2
+        {
+            groups.entry(e.layer).or_default().push((pts, closed));
+        }
+    }
+    let mut out = Vec::new();
+    for (layer, paths) in groups {
+        for (points, closed) in chain(paths) {
+            out.push(LayerPath {
+                layer: layer.clone(),
+                points,
+                closed,
+            });
+        }
+    }
+    Ok((out, warnings))
+}
+
+/// The entities of a DXF with inserts expanded and units applied: (top-level insert index,
+/// entity), the number of inserts, and warnings.
+fn read_entities(
+    text: &str,
+    chord_tol: f64,
+) -> Result<(Vec<(Option<usize>, Entity)>, usize, Vec<String>), PatternError> {
     if !(chord_tol.is_finite() && chord_tol > 0.0) {
         return Err(err(
             0,
@@ -244,7 +291,7 @@ pub fn read_dxf(text: &str, chord_tol: f64) -> Result<DxfImport, PatternError> {
         scale_geo(&mut e.geo, scale);
         check_range(e)?;
     }
-    Ok(classify(top, n_insert, warnings))
+    Ok((top, n_insert, warnings))
 }
 
 /// Reads one entity starting at `pairs[*i]` (a code-0 pair); advances past it.
@@ -293,7 +340,7 @@ fn entity(
         "CIRCLE" | "ARC" => {
             let c = DVec2::new(get(10)?, get(20)?);
             let r = get(40)?;
-            if !(r > 0.0) {
+            if r.is_nan() || r <= 0.0 {
                 return Err(err(line, format!("{kind} with radius {r}")));
             }
             let (a0, a1, closed) = if kind == "CIRCLE" {
@@ -532,7 +579,7 @@ fn spline(body: &[Pair<'_>], line: usize, tol: f64) -> Result<Geo, PatternError>
     if weights.len() != n {
         weights = vec![1.0; n];
     }
-    if weights.iter().any(|w| !(*w > 0.0)) {
+    if weights.iter().any(|w| w.is_nan() || *w <= 0.0) {
         return Err(err(line, "SPLINE weight not positive"));
     }
     let eval = |t: f64| nurbs_point(degree, &knots, &ctrl, &weights, t);

@@ -408,6 +408,8 @@ pub fn histogram_svg(report: &Report, m: Measure, bins: usize) -> String {
 
 /// Pixels per millimetre of the PNG when no width is asked for (≈ 254 dpi).
 pub const DEFAULT_PX_PER_MM: f64 = 10.0;
+/// Largest PNG rendered (pixels): 16 megapixels, 64 MB of RGBA.
+pub const MAX_PNG_PIXELS: f64 = 16.0e6;
 
 /// Longest side of a PNG rendered by default (pixels): a 2.5 m sail panel at the default
 /// resolution would need 25,000 pixels a side (gigabytes); larger drawings get fewer pixels per
@@ -426,7 +428,10 @@ pub fn render_png(svg: &str, width_px: Option<u32>) -> Result<Vec<u8>, ReportErr
             * (DEFAULT_PX_PER_MM / (96.0 / 25.4)).min(MAX_DEFAULT_SIDE_PX / longest),
         |w| w as f64,
     );
-    let s = w / size.width() as f64;
+    // A drawing metres long at the default density would need gigabytes of pixels: the image is
+    // scaled down to stay within MAX_PNG_PIXELS.
+    let area = size.width() as f64 * size.height() as f64;
+    let s = (w / size.width() as f64).min((MAX_PNG_PIXELS / area).sqrt());
     let (pw, ph) = (
         (size.width() as f64 * s).ceil() as u32,
         (size.height() as f64 * s).ceil() as u32,

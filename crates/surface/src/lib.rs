@@ -9,7 +9,8 @@
 //!
 //! Patches ([`patch`]): [`BezierPatch`], [`HermitePatch`], [`BSplinePatch`] (with exact sphere,
 //! cylinder, cone and torus pieces), [`CoonsPatch`], [`GordonSurface`], [`RuledSurface`],
-//! [`DevelopableSurface`], [`TriBezierPatch`], and the multi-patch [`Model`]. Differential
+//! [`DevelopableSurface`], [`TriBezierPatch`], the multi-patch [`Model`], and the elementary and
+//! swept surfaces of STEP files in their own parametrisation ([`patch::Analytic`]). Differential
 //! geometry ([`diffgeom`]): normals, fundamental forms, curvatures, Christoffel symbols,
 //! geodesics, developability tests.
 //!

@@ -11,7 +11,8 @@ use crate::output::OutputSet;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// A design (.toml, .json) or a mesh (.obj, .stl, .ply) with disk topology.
+    /// A design (.toml, .json), a mesh (.obj, .stl, .ply) with disk topology, or a STEP model
+    /// (.step, .stp; every face a piece).
     pub file: PathBuf,
     /// Output OBJ. With several pieces: `<stem>-<piece>.obj` beside it.
     #[arg(short, long)]

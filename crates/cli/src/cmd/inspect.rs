@@ -1,4 +1,4 @@
-//! `flatcut inspect FILE [--json]`: what a design or mesh file contains.
+//! `flatcut inspect FILE [--json]`: what a design, mesh or STEP file contains.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -8,7 +8,7 @@ use flatcut::geom::Tolerances;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// A design file (.toml, .json) or a mesh (.obj, .stl, .ply).
+    /// A design file (.toml, .json), a mesh (.obj, .stl, .ply) or a STEP model (.step, .stp).
     pub file: PathBuf,
     /// Print one JSON object instead of a table.
     #[arg(long)]

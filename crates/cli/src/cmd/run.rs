@@ -71,6 +71,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         set.add(&out.join(&f.name), &f.bytes)?;
     }
     set.commit()?;
+    // The project's [device] is the device (a --port on the command line wins).
+    let mut stream = device::select::for_project(&proj.device, &outputs.profile, &a.stream);
+    stream.force_laser = a.force;
+    let a = Args { stream, ..a };
     let (stream_lines, exit) = send_stage(&a, &outputs, &out, &mut log)?;
     print_summary(&outputs, &stream_lines, &out, t0)?;
     Ok(exit)
@@ -117,7 +121,7 @@ fn send_stage(
         &format!(
             "{} job(s) to {}",
             to_send,
-            a.stream.port.as_deref().unwrap_or("the embedded simulator")
+            device::select::describe(&a.stream)
         ),
     );
     let mut lines = Vec::new();
@@ -145,8 +149,9 @@ fn send_stage(
             None => String::new(),
         };
         lines.push(format!(
-            "sheet {}: {} lines streamed in {:.1} s, link {:.0}% busy{}",
+            "sheet {} on {}: {} lines streamed in {:.1} s, link {:.0}% busy{}",
             job.number,
+            o.device,
             o.report.lines_sent,
             o.report.total_time.as_secs_f64(),
             o.link_utilisation() * 100.0,

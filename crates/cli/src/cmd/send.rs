@@ -106,6 +106,9 @@ pub fn summary(out: &StreamOutcome) -> String {
             st.bytes_dropped_overflow,
         ));
     }
+    for n in &r.notices {
+        s.push_str(&format!("\nnote: {n}"));
+    }
     s.push_str(&format!("\njournal: {}", out.journal.display()));
     s
 }

@@ -36,6 +36,7 @@ pub mod any;
 pub mod basis;
 pub mod bezier;
 pub mod bspline;
+pub mod conic;
 pub mod ext;
 pub mod fit;
 pub mod hermite;
@@ -46,6 +47,7 @@ pub mod spline;
 pub use any::Curve;
 pub use bezier::Bezier;
 pub use bspline::{BSpline, Nurbs};
+pub use conic::{Ellipse, Frame, Line};
 pub use ext::{CurveExt, Frenet, flatten_with_breaks, nearest_from_samples};
 pub use fit::{Fit, fit_bspline};
 pub use hermite::{

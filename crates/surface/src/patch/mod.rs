@@ -1,4 +1,5 @@
-//! Patches: tensor-product Bézier, Hermite, B-spline/NURBS, Coons, Gordon, ruled, developable, triangular.
+//! Patches: tensor-product Bézier, Hermite, B-spline/NURBS, Coons, Gordon, ruled, developable,
+//! triangular, and the elementary and swept surfaces of STEP files.
 //!
 //! Every patch implements [`crate::ParamSurface`]. Constructors validate their input (counts,
 //! knots, weights, finite coordinates, matching corners) and return [`crate::SurfaceError`]
@@ -7,6 +8,7 @@
 //! The multi-patch [`Model`] records which patch edges coincide so that a tessellator can
 //! produce crack-free meshes.
 
+pub mod analytic;
 mod bernstein;
 pub mod bezier;
 pub mod bspline;
@@ -16,6 +18,7 @@ pub mod hermite;
 pub mod model;
 pub mod tri;
 
+pub use analytic::{Analytic, AnalyticKind};
 pub use bezier::BezierPatch;
 pub use bspline::BSplinePatch;
 pub use coons::{CoonsPatch, GordonSurface, RuledSurface};

@@ -1,0 +1,229 @@
+//! STEP models in a design: `type = "step"` pieces, and a `.step`/`.stp` file loaded as a design.
+//!
+//! ```toml
+//! [[piece]]
+//! name = "hull"
+//! [piece.surface]
+//! type = "step"
+//! file = "hull.step"        # relative to the design file; lengths in the STEP file's own unit
+//! faces = [0, 1]            # or "all" (the default); numbers as `flatcut inspect` lists them
+//! group = "smooth"          # "face" (default): each face a piece; "smooth": faces meeting
+//!                           # tangent-continuously form one piece
+//! ```
+//!
+//! When the design is loaded, such a piece expands into its pieces: one per face or per smooth
+//! group (named `<name>-f<first face>` when there are several), each carrying the model it was
+//! read from, so the file is read once. Seams, marks and grain need a piece that stays one.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use flatcut_geom::Tolerances;
+use flatcut_mesh::TriMesh;
+use flatcut_mesh::tessellate::TessOptions;
+use flatcut_step::{Model, StepError, Tessellation};
+use serde::Deserialize;
+
+use crate::error::Ctx;
+use crate::{DesignError, PieceDef, SurfaceDef};
+
+/// Which faces of the model: `"all"` or a list of face numbers.
+#[derive(Clone, Debug, PartialEq, Eq, Deserialize)]
+#[serde(untagged)]
+pub enum StepFaces {
+    /// Only `"all"` is accepted.
+    Keyword(String),
+    List(Vec<usize>),
+}
+
+impl Default for StepFaces {
+    fn default() -> Self {
+        StepFaces::Keyword("all".into())
+    }
+}
+
+/// How the chosen faces become pieces.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum StepGroup {
+    /// Each face is a piece.
+    #[default]
+    Face,
+    /// Faces that meet smoothly (tangent-continuously) form one piece.
+    Smooth,
+}
+
+/// A STEP model read once and shared by the pieces expanded from it (compared by identity).
+#[derive(Clone, Debug)]
+pub struct StepModel(pub Arc<Model>);
+
+impl PartialEq for StepModel {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+/// The geometry of a STEP piece: faces of a model, meshed together.
+#[derive(Clone, Debug)]
+pub struct StepPiece {
+    pub model: Arc<Model>,
+    pub faces: Vec<usize>,
+}
+
+impl StepPiece {
+    /// The piece's mesh to `tol.chord_mm`: the faces welded at their shared edges, cut to a disk
+    /// where they can be (see [`Tessellation::piece_mesh`]).
+    pub fn mesh(&self, tol: &Tolerances) -> Result<TriMesh, StepError> {
+        let t = Tessellation::new(&self.model, &self.faces, tol, &TessOptions::DEFAULT)?;
+        Ok(t.piece_mesh(&self.model, &self.faces))
+    }
+}
+
+pub(crate) fn check_faces(ctx: &Ctx, faces: &StepFaces) -> Result<(), DesignError> {
+    match faces {
+        StepFaces::Keyword(k) if k == "all" => Ok(()),
+        StepFaces::Keyword(k) => Err(ctx.err(format!(
+            "step: faces must be \"all\" or a list of face numbers, got \"{k}\""
+        ))),
+        StepFaces::List(l) if l.is_empty() => Err(ctx.err("step: the face list is empty".into())),
+        StepFaces::List(_) => Ok(()),
+    }
+}
+
+fn read_model(ctx: &Ctx, path: &Path) -> Result<Arc<Model>, DesignError> {
+    Model::read(path)
+        .map(Arc::new)
+        .map_err(|e| ctx.err(format!("{}: {e}", path.display())))
+}
+
+/// The face numbers a selection names, checked against the model.
+fn selected(ctx: &Ctx, model: &Model, faces: &StepFaces) -> Result<Vec<usize>, DesignError> {
+    match faces {
+        StepFaces::List(l) => {
+            if let Some(&bad) = l.iter().find(|&&f| f >= model.faces.len()) {
+                return Err(ctx.err(format!(
+                    "step: face {bad} does not exist (the model has {} faces, 0 to {})",
+                    model.faces.len(),
+                    model.faces.len().saturating_sub(1)
+                )));
+            }
+            let mut l = l.clone();
+            l.sort_unstable();
+            l.dedup();
+            Ok(l)
+        }
+        StepFaces::Keyword(_) => Ok((0..model.faces.len()).collect()),
+    }
+}
+
+/// Expands every `type = "step"` piece into its pieces (see the module documentation); STEP
+/// files are resolved against `base_dir` and each is read once.
+pub(crate) fn expand(pieces: Vec<PieceDef>, base_dir: &Path) -> Result<Vec<PieceDef>, DesignError> {
+    let mut models: BTreeMap<PathBuf, Arc<Model>> = BTreeMap::new();
+    let mut out = Vec::with_capacity(pieces.len());
+    for p in pieces {
+        let SurfaceDef::Step {
+            file,
+            faces,
+            group,
+            model: None,
+        } = &p.surface
+        else {
+            out.push(p);
+            continue;
+        };
+        let ctx = Ctx::of(&p);
+        let path = base_dir.join(file);
+        let model = match models.get(&path) {
+            Some(m) => m.clone(),
+            None => {
+                let m = read_model(&ctx, &path)?;
+                models.insert(path.clone(), m.clone());
+                m
+            }
+        };
+        let chosen = selected(&ctx, &model, faces)?;
+        let groups: Vec<Vec<usize>> = match group {
+            StepGroup::Face => chosen.iter().map(|&f| vec![f]).collect(),
+            StepGroup::Smooth => model.smooth_groups(&chosen),
+        };
+        let several = groups.len() > 1;
+        if several && (!p.seams.is_empty() || !p.marks.is_empty() || p.grain.is_some()) {
+            return Err(ctx.err(format!(
+                "step: the faces make {} pieces, but seams, marks and grain need one piece: choose faces that form one",
+                groups.len()
+            )));
+        }
+        for g in groups {
+            let mut q = p.clone();
+            if several {
+                q.name = format!("{}-f{}", p.name, g[0]);
+            }
+            q.surface = SurfaceDef::Step {
+                file: file.clone(),
+                faces: StepFaces::List(g),
+                group: StepGroup::Face,
+                model: Some(StepModel(model.clone())),
+            };
+            out.push(q);
+        }
+    }
+    Ok(out)
+}
+
+/// A `.step`/`.stp` file as a design: every face a piece named `<file stem>-f<face>`.
+pub(crate) fn design_pieces(path: &Path) -> Result<Vec<PieceDef>, DesignError> {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "model".into());
+    let file = path
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let piece = PieceDef {
+        name: stem,
+        quantity: 1,
+        pairs: None,
+        mirrored: 0,
+        pair_labels: None,
+        surface: SurfaceDef::Step {
+            file,
+            faces: StepFaces::default(),
+            group: StepGroup::Face,
+            model: None,
+        },
+        seams: Vec::new(),
+        marks: Vec::new(),
+        grain: None,
+        seam_allowance_mm: None,
+        material: None,
+        index: 0,
+        file: path.display().to_string(),
+        mesh_scale: 1.0,
+    };
+    expand(vec![piece], path.parent().unwrap_or(Path::new(".")))
+}
+
+/// The geometry of a STEP piece (reading the model if the piece was not expanded at load).
+pub(crate) fn build(p: &PieceDef, base_dir: &Path) -> Result<StepPiece, DesignError> {
+    let ctx = Ctx::of(p);
+    let SurfaceDef::Step {
+        file, faces, model, ..
+    } = &p.surface
+    else {
+        return Err(ctx.err("not a STEP piece".into()));
+    };
+    let model = match model {
+        Some(m) => m.0.clone(),
+        None => read_model(&ctx, &base_dir.join(file))?,
+    };
+    let faces = selected(&ctx, &model, faces)?;
+    for &f in &faces {
+        model
+            .face(f)
+            .map_err(|e| ctx.err(format!("step: face {f}: {e}")))?;
+    }
+    Ok(StepPiece { model, faces })
+}

@@ -1,0 +1,366 @@
+//! `inspect` of STEP models: the unit the file states, its shells, every face (surface type,
+//! area, bounding box, curvature range, developable or not, or why it cannot be used) and every
+//! edge (curve type, length, the faces it joins); and the summary of a piece made of STEP faces.
+//!
+//! Areas are integrated on the exact trimmed surfaces ([`flatcut_step::face_area`]); curvatures
+//! are the exact differential geometry at the vertices of the tessellation.
+
+use flatcut_design::StepPiece;
+use flatcut_geom::{Aabb3, Tolerances};
+use flatcut_mesh::tessellate::TessOptions;
+use flatcut_mesh::{MeshStats, TriMesh};
+use flatcut_step::{Model, Tessellation, face_area};
+use flatcut_surface::ParamSurface;
+use serde::Serialize;
+
+use crate::inspect::{DEVELOPABLE_SCALED_K, PieceSummary, Range2, Range3, forms_at};
+
+/// The length unit a STEP file states.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StepUnit {
+    /// As the file names it (`millimetre`, `metre`, `inch`, …).
+    pub name: String,
+    /// Millimetres per unit (every figure here is already in mm).
+    pub mm: f64,
+    /// False when the file states no length unit (millimetres assumed).
+    pub stated: bool,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StepShell {
+    pub index: usize,
+    pub entity: u64,
+    pub closed: bool,
+    pub faces: Vec<usize>,
+}
+
+/// One face (keys are a stable contract). Without `error`, all figures are present.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StepFace {
+    pub index: usize,
+    pub entity: u64,
+    pub shell: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub surface: Option<&'static str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub area_mm2: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bbox_mm: Option<[[f64; 3]; 2]>,
+    /// Gaussian curvature range (1/mm²).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gaussian_curvature: Option<Range2>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub developable: Option<bool>,
+    /// Why the face cannot be used.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StepEdge {
+    pub index: usize,
+    pub entity: u64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub curve: Option<&'static str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub length_mm: Option<f64>,
+    /// The faces whose loops use the edge (a face twice for its seam).
+    pub faces: Vec<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+}
+
+/// What `inspect` adds for a STEP file.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StepSummary {
+    pub unit: StepUnit,
+    pub schemas: Vec<String>,
+    pub shells: Vec<StepShell>,
+    pub faces: Vec<StepFace>,
+    pub edges: Vec<StepEdge>,
+}
+
+/// Figures of a set of faces from their tessellation: bounding box, Gaussian and mean curvature
+/// ranges, the area-weighted mean Gaussian curvature and the developability measure.
+struct Sampled {
+    bbox: Aabb3,
+    k: (f64, f64),
+    h: (f64, f64),
+    k_integral: f64,
+    area: f64,
+    worst_scaled_k: f64,
+}
+
+impl Sampled {
+    fn none() -> Self {
+        Sampled {
+            bbox: Aabb3::EMPTY,
+            k: (0.0, 0.0),
+            h: (0.0, 0.0),
+            k_integral: 0.0,
+            area: 0.0,
+            worst_scaled_k: 0.0,
+        }
+    }
+}
+
+fn sample(model: &Model, t: &Tessellation) -> Sampled {
+    let mut s = Sampled {
+        k: (f64::INFINITY, f64::NEG_INFINITY),
+        h: (f64::INFINITY, f64::NEG_INFINITY),
+        ..Sampled::none()
+    };
+    for fm in &t.faces {
+        let Ok(g) = model.face(fm.face) else { continue };
+        let surf: &dyn ParamSurface = g.surface.as_ref();
+        let uv = fm.mesh.params.as_deref().unwrap_or(&[]);
+        let diag = fm.mesh.bbox().diagonal();
+        let ks: Vec<Option<(f64, f64)>> = uv
+            .iter()
+            .map(|q| forms_at(surf, q.x, q.y).map(|ff| (ff.gaussian(), ff.mean())))
+            .collect();
+        s.bbox = s.bbox.union(&fm.mesh.bbox());
+        for (k, h) in ks.iter().flatten() {
+            s.k = (s.k.0.min(*k), s.k.1.max(*k));
+            s.h = (s.h.0.min(*h), s.h.1.max(*h));
+            if !g.surface.is_ruled_developable() {
+                s.worst_scaled_k = s.worst_scaled_k.max(k.abs() * diag * diag);
+            }
+        }
+        for (t, tri) in fm.mesh.triangles.iter().enumerate() {
+            let a = fm.mesh.triangle_area(t);
+            let kk: Vec<f64> = tri
+                .iter()
+                .filter_map(|&v| ks[v as usize].map(|x| x.0))
+                .collect();
+            if !kk.is_empty() {
+                s.k_integral += a * kk.iter().sum::<f64>() / kk.len() as f64;
+            }
+            s.area += a;
+        }
+    }
+    let fin = |(a, b): (f64, f64)| if a <= b { (a, b) } else { (0.0, 0.0) };
+    s.k = fin(s.k);
+    s.h = fin(s.h);
+    s
+}
+
+/// The STEP part of an `inspect` report.
+pub fn summarise_model(model: &Model, tol: &Tolerances) -> StepSummary {
+    // Faces that tessellate on their own: one failing face must not hide the others' figures.
+    let mut faces = Vec::with_capacity(model.faces.len());
+    for (i, f) in model.faces.iter().enumerate() {
+        let mut out = StepFace {
+            index: i,
+            entity: f.entity,
+            shell: f.shell,
+            surface: None,
+            area_mm2: None,
+            bbox_mm: None,
+            gaussian_curvature: None,
+            developable: None,
+            error: None,
+        };
+        let figures = (|| -> Result<(), String> {
+            let g = model.face(i).map_err(|e| e.to_string())?;
+            out.surface = Some(g.surface.name());
+            let t = Tessellation::new(model, &[i], tol, &TessOptions::DEFAULT)
+                .map_err(|e| e.to_string())?;
+            let s = sample(model, &t);
+            out.area_mm2 = Some(face_area(model, i).map_err(|e| e.to_string())?);
+            out.bbox_mm = Some([s.bbox.min.to_array(), s.bbox.max.to_array()]);
+            out.gaussian_curvature = Some(Range2 {
+                min: s.k.0,
+                max: s.k.1,
+            });
+            out.developable = Some(s.worst_scaled_k < DEVELOPABLE_SCALED_K);
+            Ok(())
+        })();
+        if let Err(e) = figures {
+            out.error = Some(e);
+        }
+        faces.push(out);
+    }
+    let edges = model
+        .edges
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            let (curve, length_mm, error) = match &e.geometry {
+                Ok(g) => {
+                    let c: &dyn flatcut_surface::ParamCurve = g.curve.as_ref();
+                    let (a, b) = (g.t0.min(g.t1), g.t0.max(g.t1));
+                    let len = flatcut_surface::curve::CurveExt::arclen_range(c, a, b, 1e-9);
+                    (Some(g.curve.name()), Some(len), None)
+                }
+                Err(err) => (None, None, Some(err.to_string())),
+            };
+            StepEdge {
+                index: i,
+                entity: e.entity,
+                curve,
+                length_mm,
+                faces: e.faces.clone(),
+                error,
+            }
+        })
+        .collect();
+    StepSummary {
+        unit: StepUnit {
+            name: model.units.length.clone(),
+            mm: model.units.mm,
+            stated: model.units.stated,
+        },
+        schemas: model.schemas.clone(),
+        shells: model
+            .shells
+            .iter()
+            .enumerate()
+            .map(|(i, s)| StepShell {
+                index: i,
+                entity: s.entity,
+                closed: s.closed,
+                faces: s.faces.clone(),
+            })
+            .collect(),
+        faces,
+        edges,
+    }
+}
+
+/// The summary of a piece made of STEP faces: exact area, curvature at the vertices of its
+/// faces' tessellation, developable when every face is (ruled developable surfaces by their
+/// kind, others by `max |K| · diag²`).
+pub fn summarise_piece(
+    name: &str,
+    quantity: u32,
+    sp: &StepPiece,
+    mesh: &TriMesh,
+    tol: &Tolerances,
+) -> PieceSummary {
+    let stats = MeshStats::of(mesh);
+    let area: f64 = sp
+        .faces
+        .iter()
+        .map(|&f| face_area(&sp.model, f).unwrap_or(0.0))
+        .sum();
+    let s = match Tessellation::new(&sp.model, &sp.faces, tol, &TessOptions::DEFAULT) {
+        Ok(t) => sample(&sp.model, &t),
+        Err(_) => Sampled::none(),
+    };
+    let bbox = s.bbox.union(&mesh.bbox());
+    PieceSummary {
+        name: name.to_string(),
+        kind: "step",
+        quantity,
+        area_mm2: area,
+        bbox_mm: [bbox.min.to_array(), bbox.max.to_array()],
+        gaussian_curvature: Range3 {
+            min: s.k.0,
+            max: s.k.1,
+            mean: if s.area > 0.0 {
+                s.k_integral / s.area
+            } else {
+                0.0
+            },
+        },
+        mean_curvature: Range2 {
+            min: s.h.0,
+            max: s.h.1,
+        },
+        developable: s.worst_scaled_k < DEVELOPABLE_SCALED_K,
+        developability_measure: s.worst_scaled_k,
+        patches: sp.faces.len(),
+        vertices: stats.vertices,
+        triangles: stats.triangles,
+        boundary_loops: stats.boundary_loops,
+        boundary_length_mm: stats.boundary_length,
+    }
+}
+
+impl std::fmt::Display for StepSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f)?;
+        let stated = if self.unit.stated {
+            ""
+        } else {
+            " (not stated; assumed)"
+        };
+        writeln!(
+            f,
+            "STEP model: unit {} ({} mm){stated}; schema {}",
+            self.unit.name,
+            self.unit.mm,
+            self.schemas.join(", ")
+        )?;
+        for s in &self.shells {
+            writeln!(
+                f,
+                "  shell {} (#{}, {}): {} face(s)",
+                s.index,
+                s.entity,
+                if s.closed { "closed" } else { "open" },
+                s.faces.len()
+            )?;
+        }
+        writeln!(f, "  faces")?;
+        for x in &self.faces {
+            match (
+                &x.error,
+                x.surface,
+                x.area_mm2,
+                x.bbox_mm,
+                &x.gaussian_curvature,
+            ) {
+                (None, Some(kind), Some(area), Some([lo, hi]), Some(k)) => writeln!(
+                    f,
+                    "    {:>4} #{:<7} {:<10} area {:>12.3} mm²  box {:.2} × {:.2} × {:.2} mm  K {:.3e} .. {:.3e}  developable {}",
+                    x.index,
+                    x.entity,
+                    kind,
+                    area,
+                    hi[0] - lo[0],
+                    hi[1] - lo[1],
+                    hi[2] - lo[2],
+                    k.min,
+                    k.max,
+                    if x.developable == Some(true) {
+                        "yes"
+                    } else {
+                        "no"
+                    }
+                )?,
+                (err, ..) => writeln!(
+                    f,
+                    "    {:>4} #{:<7} error: {}",
+                    x.index,
+                    x.entity,
+                    err.as_deref().unwrap_or("incomplete figures")
+                )?,
+            }
+        }
+        writeln!(f, "  edges")?;
+        for e in &self.edges {
+            let faces: Vec<String> = e.faces.iter().map(|x| x.to_string()).collect();
+            match (&e.error, e.curve, e.length_mm) {
+                (None, Some(c), Some(l)) => writeln!(
+                    f,
+                    "    {:>4} #{:<7} {:<9} {:>10.3} mm  faces {}",
+                    e.index,
+                    e.entity,
+                    c,
+                    l,
+                    faces.join(", ")
+                )?,
+                (err, ..) => writeln!(
+                    f,
+                    "    {:>4} #{:<7} error: {}",
+                    e.index,
+                    e.entity,
+                    err.as_deref().unwrap_or("incomplete figures")
+                )?,
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,166 @@
+//! The blocking sender: [`send_job`] runs the handshake (banner or soft reset, `$I`, `$$`,
+//! status, alarm-lock policy, travel check), an optional `$C` check pass, then streams the job
+//! with character counting while polling `?` at 5 Hz, honouring feed hold / resume / abort from
+//! a [`CancelToken`], journaling every acknowledged line, and stopping with a typed error that
+//! names the line and the code's meaning on `error:N`, `ALARM:N`, reset or hang-up.
+//!
+//! Which acknowledged lines have really *executed* is tracked conservatively (an `ok` only means
+//! "queued"): all acknowledged lines are done when the machine reports `Idle`; a line is done
+//! once more motion lines than the planner and segment buffers can hold were acknowledged after
+//! it; and after a stop, the reported position locates the line the machine was on.
+//!
+//! One idea per module: [`options`], [`control`] and [`progress`] are the API around a send;
+//! `session` is the connection, `handshake` connects, `resume` settles what an interrupted run
+//! left in doubt, `check` runs the checks before motion, `stream` streams, `tracker` keeps the
+//! books of what ran, `stops` stops a run, and [`send_job`] reads as handshake → check → stream
+//! → finish.
+
+mod check;
+pub mod control;
+mod error;
+mod handshake;
+pub mod options;
+pub mod progress;
+mod resume;
+mod session;
+mod stops;
+mod stream;
+mod tracker;
+
+pub use control::{CancelToken, Control};
+pub use error::{LineError, LineRef, SendError};
+pub use options::{PausePolicy, SendOptions};
+pub use progress::{Phase, Progress, SendReport};
+
+use crate::job::{Job, MachineLimits};
+use crate::journal::{Journal, JournalState};
+use check::{check_pass, check_travel};
+use session::Session;
+use std::time::{Duration, Instant};
+use stream::Stream;
+use tracker::Tracker;
+
+#[cfg(test)]
+use crate::transport::TransportError;
+#[cfg(test)]
+use resume::{Resolution, resolve_resume};
+#[cfg(test)]
+use std::path::PathBuf;
+
+/// GRBL's stepper segment buffer (`SEGMENT_BUFFER_SIZE 6`, `grbl/stepper.h`): prepared segments
+/// may belong to blocks already released from the planner, so that many extra lines may still be
+/// moving after the planner has room.
+const SEGMENT_BUFFER: usize = 6;
+/// Planner blocks on a 328p, used until `[OPT:]` says otherwise (`grbl/planner.h:27-31`).
+const DEFAULT_PLANNER_BLOCKS: usize = 15;
+/// Position match tolerance, mm: reports carry 3 decimals and a step is 0.004 mm at 250 steps/mm.
+const POSITION_TOL_MM: f64 = 0.01;
+/// `ALARM:3`: reset while in motion; GRBL's position may be off by the steps lost stopping.
+const ABORT_CYCLE_ALARM: u8 = 3;
+/// Longest single read wait, so control requests and polls stay responsive.
+const READ_SLICE: Duration = Duration::from_millis(20);
+/// Longest gap between two fsyncs of the journal while streaming. Every batch of records is
+/// written to the OS at once (it survives the sender being killed); the flush to the disk runs
+/// on a background thread at most this often, because an fsync takes milliseconds to tens of
+/// milliseconds and the link must not wait for it (at 115200 baud the 128-byte RX buffer
+/// drains in 11 ms). Every stop syncs in the foreground.
+const JOURNAL_FSYNC_INTERVAL: Duration = Duration::from_millis(250);
+/// How long a controller found moving when the sender connects may take to finish the motion it
+/// has queued (15 planner blocks) before the sender gives up waiting for it.
+const DRAIN_ON_CONNECT_LIMIT: Duration = Duration::from_secs(600);
+
+/// Runs a whole send: handshake, optional check pass, streaming with status polling and
+/// journaling, and the final wait for the machine to finish. See the module docs.
+///
+/// With `opts.resume`, the journal at `opts.journal` must belong to this job; the lines it does
+/// not record as executed are sent, each contiguous run preceded by a preamble restoring the
+/// modal state, pen/tool height and position of the job at that point.
+pub fn send_job(
+    transport: &mut dyn crate::transport::Transport,
+    job: &Job,
+    opts: &SendOptions,
+    observer: &mut dyn FnMut(&Progress),
+    cancel: &CancelToken,
+) -> Result<SendReport, SendError> {
+    let t0 = Instant::now();
+    // Journal first: refuse a wrong job before touching the machine.
+    let (mut journal, prior) = open_journal(job, opts)?;
+    let mut sess = Session::new(transport);
+    let mut progress = Progress::start(job);
+    observer(&progress);
+
+    let link = handshake::connect(&mut sess, opts)?;
+    let limits = MachineLimits::from_settings(&sess.settings);
+    if job.needs_laser_mode && !limits.laser_mode && !opts.force_laser {
+        return Err(SendError::LaserModeOff);
+    }
+    let plan = resume::settle(&mut sess, job, opts, prior, link, &mut journal)?;
+    if opts.check_travel {
+        check_travel(job, &limits, &sess.settings, sess.wco)?;
+    }
+    let timed = (limits != MachineLimits::DEFAULT).then(|| {
+        let mut j = job.clone();
+        j.retime(&limits);
+        j
+    });
+    let job_t = timed.as_ref().unwrap_or(job);
+    if opts.check {
+        progress.phase = Phase::Checking;
+        observer(&progress);
+        check_pass(&mut sess, job, opts)?;
+    }
+
+    let mut tracker = Tracker::new(job_t, &sess, plan.prior_done.as_deref());
+    let queued = stream::queue(&mut sess, job, &tracker, plan.resume_at);
+    let streamed = Stream::new(
+        &mut sess,
+        (job, job_t),
+        opts,
+        &mut tracker,
+        &mut journal,
+        &queued.preamble,
+    )
+    .run(&mut progress, observer, cancel)?;
+    let final_position = stream::finish(&mut sess, job, opts, queued.lines, &mut journal)?;
+
+    progress.complete(job);
+    observer(&progress);
+    Ok(SendReport {
+        version: sess.version.clone(),
+        rx_size: sess.s.rx_size(),
+        planner_blocks: sess.blocks,
+        settings: sess.settings.clone(),
+        lines_sent: queued.lines,
+        preamble_lines: queued.preamble.len(),
+        previously_done: tracker.previously_done,
+        stream_bytes: streamed.bytes,
+        stream_time: streamed.time,
+        total_time: t0.elapsed(),
+        max_in_flight_bytes: sess.s.max_in_flight_bytes(),
+        final_position,
+        estimated_time: job_t.total_time,
+        checked: opts.check,
+        notices: plan.notice.into_iter().collect(),
+    })
+}
+
+/// Opens the journal the options ask for: a new one, or the interrupted run's (which must
+/// belong to this job) together with what it says.
+fn open_journal(
+    job: &Job,
+    opts: &SendOptions,
+) -> Result<(Option<Journal>, Option<JournalState>), SendError> {
+    match (&opts.journal, opts.resume) {
+        (Some(p), true) => {
+            let (j, st) = Journal::resume(p, job)?;
+            Ok((Some(j), Some(st)))
+        }
+        (Some(p), false) => Ok((Some(Journal::create(p, job)?), None)),
+        (None, true) => Err(SendError::NoJournal),
+        (None, false) => Ok((None, None)),
+    }
+}
+
+#[cfg(test)]
+#[path = "../driver_tests.rs"]
+mod tests;

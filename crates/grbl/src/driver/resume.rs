@@ -1,0 +1,355 @@
+//! Settling a resume: which lines an interrupted run left in doubt, and where the machine stands
+//! on the job's path.
+
+use super::SendOptions;
+use super::error::SendError;
+use super::handshake::Link;
+use super::session::Session;
+use super::tracker::{dist, line_ref, seg_dist};
+use crate::job::Job;
+use crate::journal::{Journal, JournalState};
+use crate::transport::Transport;
+use std::collections::BTreeMap;
+
+/// What a resume sends.
+#[derive(Debug, Clone, Default)]
+pub(super) struct ResumePlan {
+    /// Per job line: done before this run (`None`: not a resume).
+    pub prior_done: Option<Vec<bool>>,
+    /// The first line to send, the work position to put the machine at for it, and whether
+    /// the machine must travel there (it may already stand there).
+    pub resume_at: Option<(usize, [f64; 3], bool)>,
+    /// How the machine position was re-established, and why.
+    pub notice: Option<String>,
+}
+
+/// Longest wait for a homing cycle's `ok`: at GRBL's default seek rate (500 mm/min) searching
+/// 1.5× a 1 m travel on each axis takes about 3 minutes.
+const HOMING_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(300);
+
+/// Settles what the interrupted run left in doubt, from the journal `prior` and the machine:
+/// its reported position is trusted only if the controller did not restart and is not in
+/// alarm (a reset in motion, ALARM:3, loses steps). Journals the resolution.
+pub(super) fn settle<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    job: &Job,
+    opts: &SendOptions,
+    prior: Option<JournalState>,
+    link: Link,
+    journal: &mut Option<Journal>,
+) -> Result<ResumePlan, SendError> {
+    let Some(mut st) = prior else {
+        return Ok(ResumePlan::default());
+    };
+    let restarted = link.restarted;
+    let trusted = !restarted && !link.unlocked && !sess.alarm_lock;
+    let here = if trusted { sess.work_position() } else { None };
+    let tol = position_tolerance(&sess.settings);
+    let rx = sess.s.rx_size();
+    if let Some(r) = resolve_resume(job, &st, opts.resume_from, here, rx, tol, restarted)? {
+        if let Some(j) = journal.as_mut() {
+            j.resolved(r.from, r.cut);
+            if let Some((k, p)) = r.partial {
+                j.partial(k, p);
+            }
+            j.sync()?;
+        }
+        for i in r.from..r.cut {
+            st.done[i] = true;
+        }
+        for d in st.done.iter_mut().skip(r.cut) {
+            *d = false;
+        }
+        st.partial = r.partial;
+    }
+    let notice = reestablish_position(sess, &st, link, opts)?;
+    if let Some((k, _)) = st.partial
+        && job.lines[k].before.incremental
+    {
+        return Err(SendError::ResumeUncertain {
+            from: line_ref(job, k),
+            to: line_ref(job, k),
+            reason: format!(
+                "the job stopped part-way through line {}, a relative (G91) move, which cannot be completed from the middle",
+                job.lines[k].source_line
+            ),
+        });
+    }
+    // Where the first line to send starts (or where the stopped line was left): a machine
+    // found standing there needs no travel, so nothing moves twice.
+    let mut resume_at = None;
+    if let Some(i0) = st.done.iter().position(|d| !d) {
+        let at = match st.partial {
+            Some((k, p)) if k == i0 => p,
+            _ => job.start_of(i0),
+        };
+        let there = here.is_some_and(|h| dist(h, at) <= tol);
+        if i0 > 0 || st.partial.is_some() || there {
+            resume_at = Some((i0, at, !there));
+        }
+    }
+    Ok(ResumePlan {
+        prior_done: Some(st.done),
+        resume_at,
+        notice,
+    })
+}
+
+/// Why the machine position cannot be trusted since the journal was written, if it cannot:
+/// the controller restarted (a banner at connect: power-up or the DTR reset of opening the
+/// port), was unlocked with `$X` without homing, or reset or alarmed during the interrupted run.
+fn position_lost(st: &JournalState, link: Link) -> Option<String> {
+    if link.restarted {
+        return Some("the controller restarted when the port was opened (or lost power)".into());
+    }
+    if link.unlocked {
+        return Some("the controller was in alarm and was unlocked with $X, not homed".into());
+    }
+    st.notes
+        .iter()
+        .find(|n| n.starts_with("ALARM:") || n.starts_with("unexpected reset"))
+        .map(|n| format!("the interrupted run stopped on \"{n}\""))
+}
+
+/// A resume on a controller whose position is lost first re-establishes it: homing (`$H`)
+/// where the machine homes (`$22=1`), else the operator's confirmation that the work origin is
+/// where it was. Returns what was done and why, for the report.
+fn reestablish_position<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    st: &JournalState,
+    link: Link,
+    opts: &SendOptions,
+) -> Result<Option<String>, SendError> {
+    let started = st.done.iter().any(|d| *d) || st.partial.is_some() || opts.resume_from.is_some();
+    let Some(why) = position_lost(st, link).filter(|_| started) else {
+        return Ok(None);
+    };
+    if sess.settings.get(&22).is_some_and(|v| *v != 0.0) {
+        sess.command_ok("$H", HOMING_TIMEOUT)?;
+        sess.alarm_lock = false;
+        let _ = sess.query_status(opts.command_timeout);
+        return Ok(Some(format!(
+            "homed the machine ($H) before resuming: {why}"
+        )));
+    }
+    if opts.origin_confirmed {
+        return Ok(Some(format!(
+            "resuming on the operator's word that the work origin is where it was: {why}"
+        )));
+    }
+    Err(SendError::PositionUnknown { why })
+}
+
+/// How a resume settles the lines an interrupted run left in doubt.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Resolution {
+    /// First line settled.
+    pub from: usize,
+    /// Lines `from..cut` executed; none from `cut` on.
+    pub cut: usize,
+    /// Line `cut` was stopped part-way, at this work position.
+    pub partial: Option<(usize, [f64; 3])>,
+}
+
+/// Where on line `i`'s path the work position `p` lies: `Some(true)` at its end, `Some(false)`
+/// strictly inside it (not at its start), `None` off it. Arcs are tested against their chords,
+/// which is where GRBL moves.
+fn locate_on_line(job: &Job, i: usize, p: [f64; 3], tol: f64) -> Option<bool> {
+    let l = &job.lines[i];
+    if !l.moves || l.length <= 0.0 {
+        return None;
+    }
+    let (a, b) = (job.start_of(i), job.end_of(i));
+    if dist(p, b) <= tol {
+        return Some(true);
+    }
+    if dist(p, a) <= tol {
+        return None;
+    }
+    let on = if l.arc.len() >= 2 {
+        l.arc.windows(2).any(|w| seg_dist(p, w[0], w[1]) <= tol)
+    } else {
+        seg_dist(p, a, b) <= tol
+    };
+    on.then_some(false)
+}
+
+/// The places in the job, among lines `range` (skipping those `skip` says), where the machine
+/// standing at work position `p` may be: `(cut, partial)` = every line before `cut` has run, and
+/// `partial` = line `cut` was stopped part-way at `p`. Candidates that touch (consecutive lines
+/// meeting at a vertex `p` lies within tolerance of, or endpoints separated only by lines that
+/// do not move) are one place in the job: for a stop inside a line the later line wins (finishing
+/// it from `p` leaves out at most the tolerance of the earlier one, and repeats nothing); for an
+/// endpoint the earlier one (the non-moving lines are sent again, which only re-applies modal
+/// state). More than one group means the path passes `p` more than once.
+pub(super) fn places_on_path(
+    job: &Job,
+    p: [f64; 3],
+    range: std::ops::RangeInclusive<usize>,
+    tol: f64,
+    skip: impl Fn(usize) -> bool,
+) -> Vec<(usize, Option<[f64; 3]>)> {
+    let first = *range.start();
+    let mut cuts: Vec<(usize, Option<[f64; 3]>)> = Vec::new();
+    let mut matched: Vec<usize> = Vec::new();
+    if dist(p, job.start_of(first)) <= tol {
+        cuts.push((first, None));
+    }
+    for i in range {
+        if skip(i) {
+            continue;
+        }
+        match locate_on_line(job, i, p, tol) {
+            Some(true) => cuts.push((i + 1, None)),
+            Some(false) => cuts.push((i, Some(p))),
+            None => continue,
+        }
+        matched.push(i);
+    }
+    let mut groups: Vec<Vec<(usize, Option<[f64; 3]>)>> = Vec::new();
+    for c in cuts {
+        let touches = groups.last().and_then(|g| g.last()).is_some_and(|last| {
+            (last.0..c.0).all(|l| {
+                let line = &job.lines[l];
+                !line.moves || line.length <= 0.0 || matched.contains(&l)
+            })
+        });
+        match groups.last_mut() {
+            Some(g) if touches => g.push(c),
+            _ => groups.push(vec![c]),
+        }
+    }
+    groups
+        .into_iter()
+        .filter_map(|g| {
+            if g.iter().any(|c| c.1.is_some()) {
+                g.last().copied()
+            } else {
+                g.first().copied()
+            }
+        })
+        .collect()
+}
+
+/// Settles a resume (see [`Resolution`]): the operator's `--resume-from`; or the machine's
+/// position `here` (only when it is trustworthy) matched against the job's own geometry over the
+/// window of lines that may have run after the journal lost track (acknowledged but not
+/// confirmed, plus what fitted in the `rx`-byte RX buffer behind them). `None`: the journal
+/// already says exactly what ran.
+pub(super) fn resolve_resume(
+    job: &Job,
+    st: &JournalState,
+    resume_from: Option<usize>,
+    here: Option<[f64; 3]>,
+    rx: usize,
+    tol: f64,
+    restarted: bool,
+) -> Result<Option<Resolution>, SendError> {
+    let n = job.len();
+    if let Some(k) = resume_from {
+        if k >= n {
+            return Err(SendError::ResumeFromOutOfRange { index: k, lines: n });
+        }
+        return Ok(Some(Resolution {
+            from: 0,
+            cut: k,
+            partial: None,
+        }));
+    }
+    let doubt = |a: usize, b: usize, reason: String| SendError::ResumeUncertain {
+        from: line_ref(job, a),
+        to: line_ref(job, b.min(n - 1)),
+        reason,
+    };
+    if let Some((a, b)) = st.uncertain {
+        return Err(doubt(
+            a,
+            b,
+            "the controller was reset while moving (ALARM:3), so the position it reported is not where the tool is".into(),
+        ));
+    }
+    let (Some(&first), Some(&last_acked)) = (st.unconfirmed.first(), st.unconfirmed.last()) else {
+        return Ok(None);
+    };
+    let upper = window_end(job, last_acked, rx);
+    let Some(p) = here else {
+        let why = if restarted {
+            "the controller restarted when the port was opened (or lost power), so its planner and position are gone"
+        } else {
+            "the controller is in alarm or gave no position, so its position is not trustworthy"
+        };
+        return Err(doubt(
+            first,
+            upper,
+            format!("the link dropped with lines queued, and {why}"),
+        ));
+    };
+    if let Some(i) =
+        (first..=upper).find(|&i| job.lines[i].moves && job.lines[i].before.incremental)
+    {
+        return Err(doubt(
+            first,
+            upper,
+            format!(
+                "line {} is a relative (G91) move, so a position cannot tell which of these lines ran",
+                job.lines[i].source_line
+            ),
+        ));
+    }
+    let groups = places_on_path(job, p, first..=upper, tol, |_| false);
+    let fmt = |p: [f64; 3]| format!("X{:.3} Y{:.3} Z{:.3}", p[0], p[1], p[2]);
+    match groups.as_slice() {
+        [(cut, partial)] => Ok(Some(Resolution {
+            from: first,
+            cut: *cut,
+            partial: partial.map(|q| (*cut, q)),
+        })),
+        [] => Err(doubt(
+            first,
+            upper,
+            format!(
+                "the machine stands at {} (work), which is on none of these lines",
+                fmt(p)
+            ),
+        )),
+        _ => Err(doubt(
+            first,
+            upper,
+            format!(
+                "the path passes the machine's position {} (work) {} times among these lines",
+                fmt(p),
+                groups.len()
+            ),
+        )),
+    }
+}
+
+/// The last line that may have reached the controller after `last_acked`: lines sent after the
+/// last acknowledged one are at most what the `rx`-byte RX buffer held.
+fn window_end(job: &Job, last_acked: usize, rx: usize) -> usize {
+    let mut upper = last_acked;
+    let mut bytes = 0;
+    while upper + 1 < job.len() {
+        bytes += job.lines[upper + 1].text.len() + 1;
+        if bytes > rx {
+            break;
+        }
+        upper += 1;
+    }
+    upper
+}
+
+/// Half a step on the coarsest axis plus the 3-decimal rounding of status reports: how far a
+/// reported position may sit from a programmed point that was reached.
+pub(super) fn position_tolerance(settings: &BTreeMap<u16, f64>) -> f64 {
+    let min_steps = (100..=102)
+        .filter_map(|n| settings.get(&n).copied())
+        .filter(|v| *v > 0.0 && v.is_finite())
+        .fold(f64::INFINITY, f64::min);
+    let half_step = if min_steps.is_finite() {
+        0.5 / min_steps
+    } else {
+        0.5 / 250.0
+    };
+    half_step + 0.0011
+}

@@ -1,0 +1,248 @@
+//! One connection to the controller: the streamer, the transport, and what the controller has
+//! said so far (status, offsets, settings, banners); plus the small waits every phase uses.
+
+use super::error::{LineRef, SendError};
+use super::{DEFAULT_PLANNER_BLOCKS, DRAIN_ON_CONNECT_LIMIT, READ_SLICE, SendOptions};
+use crate::journal::Journal;
+use crate::response::{MachineState, StatusReport};
+use crate::streamer::{Event, SendMode, Streamer, Tag};
+use crate::transport::{Transport, TransportError};
+use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
+
+/// The connection: transport, streamer and what the controller said.
+pub(super) struct Session<'a, T: Transport + ?Sized> {
+    pub(super) t: &'a mut T,
+    pub(super) s: Streamer,
+    pub(super) last_rx: Instant,
+    pub(super) status: Option<StatusReport>,
+    pub(super) status_seq: u64,
+    pub(super) wco: [f64; 3],
+    pub(super) report_inches: bool,
+    pub(super) version: String,
+    pub(super) blocks: usize,
+    pub(super) settings: BTreeMap<u16, f64>,
+    pub(super) messages: Vec<String>,
+    pub(super) alarm_lock: bool,
+    pub(super) setup_seq: u32,
+    /// Banners seen so far.
+    pub(super) resets: u64,
+    /// The last `[GC:...]` parser state (`$G`).
+    pub(super) last_gc: Option<String>,
+}
+
+impl<'a, T: Transport + ?Sized> Session<'a, T> {
+    /// A session on `t`, knowing nothing of the controller yet.
+    pub(super) fn new(t: &'a mut T) -> Self {
+        Session {
+            t,
+            s: Streamer::default(),
+            last_rx: Instant::now(),
+            status: None,
+            status_seq: 0,
+            wco: [0.0; 3],
+            report_inches: false,
+            version: String::new(),
+            blocks: DEFAULT_PLANNER_BLOCKS,
+            settings: BTreeMap::new(),
+            messages: Vec::new(),
+            alarm_lock: false,
+            setup_seq: 0,
+            resets: 0,
+            last_gc: None,
+        }
+    }
+
+    pub(super) fn write(&mut self) -> Result<(), TransportError> {
+        while let Some(bytes) = self.s.poll_transmit() {
+            self.t.write_all(&bytes)?;
+        }
+        Ok(())
+    }
+
+    pub(super) fn pump(&mut self, wait: Duration) -> Result<Vec<Event>, TransportError> {
+        self.write()?;
+        let mut buf = [0u8; 1024];
+        let n = self.t.read(&mut buf, wait)?;
+        if n == 0 {
+            return Ok(Vec::new());
+        }
+        self.last_rx = Instant::now();
+        let events = self.s.receive(&buf[..n]);
+        for e in &events {
+            match e {
+                Event::Status(st) => {
+                    if let Some(w) = st.wco {
+                        self.wco = w;
+                    }
+                    self.alarm_lock = st.state == MachineState::Alarm;
+                    self.status = Some(st.clone());
+                    self.status_seq += 1;
+                }
+                Event::Options { blocks, .. } => self.blocks = *blocks as usize,
+                Event::Setting(n, v) => {
+                    self.settings.insert(*n, *v);
+                    if *n == 13 {
+                        self.report_inches = *v != 0.0;
+                    }
+                }
+                Event::Message(m) => {
+                    if m.contains("unlock") {
+                        self.alarm_lock = true;
+                    }
+                    self.messages.push(m.clone());
+                }
+                Event::Alarm(_) => self.alarm_lock = true,
+                Event::Feedback(f) if f.starts_with("GC:") => self.last_gc = Some(f.clone()),
+                Event::Reset { version, .. } => {
+                    self.resets += 1;
+                    self.version = version.clone();
+                    self.wco = [0.0; 3];
+                }
+                _ => {}
+            }
+        }
+        Ok(events)
+    }
+
+    pub(super) fn wait_banner(&mut self, timeout: Duration) -> Result<bool, TransportError> {
+        let seen = self.resets;
+        self.wait_banner_after(seen, timeout)
+    }
+
+    /// Waits until more than `seen` banners have arrived (one may already have come in while
+    /// waiting for something else), then lets the push messages that follow it arrive.
+    pub(super) fn wait_banner_after(
+        &mut self,
+        seen: u64,
+        timeout: Duration,
+    ) -> Result<bool, TransportError> {
+        let until = Instant::now() + timeout;
+        while self.resets <= seen {
+            if Instant::now() >= until {
+                return Ok(false);
+            }
+            self.pump(READ_SLICE)?;
+        }
+        let settle = Instant::now() + Duration::from_millis(30);
+        while Instant::now() < settle {
+            self.pump(Duration::from_millis(10))?;
+        }
+        Ok(true)
+    }
+
+    /// Sends one command with send-response and waits for its answer.
+    pub(super) fn command(
+        &mut self,
+        text: &str,
+        timeout: Duration,
+    ) -> Result<Result<(), u8>, SendError> {
+        self.setup_seq += 1;
+        let tag = Tag::Setup(self.setup_seq);
+        self.s.push(tag, text, SendMode::SendResponse);
+        let until = Instant::now() + timeout;
+        while Instant::now() < until {
+            let evs = self.pump(READ_SLICE).map_err(|e| transport(e, None))?;
+            for e in evs {
+                match e {
+                    Event::Ack(t) if t == tag => return Ok(Ok(())),
+                    Event::Rejected(t, code) if t == tag => return Ok(Err(code)),
+                    Event::Reset { lost, .. } if lost.contains(&tag) => {
+                        // Re-send after an unexpected reset during the handshake.
+                        self.s.push(tag, text, SendMode::SendResponse);
+                    }
+                    _ => {}
+                }
+            }
+        }
+        Err(SendError::SetupTimeout {
+            command: text.into(),
+            waited: timeout,
+        })
+    }
+
+    pub(super) fn command_ok(&mut self, text: &str, timeout: Duration) -> Result<(), SendError> {
+        match self.command(text, timeout)? {
+            Ok(()) => Ok(()),
+            Err(code) => Err(SendError::SetupRejected {
+                command: text.into(),
+                code,
+            }),
+        }
+    }
+
+    /// Requests a status report and waits for it.
+    pub(super) fn query_status(
+        &mut self,
+        timeout: Duration,
+    ) -> Result<Option<StatusReport>, TransportError> {
+        let seq = self.status_seq;
+        self.s.realtime(b'?');
+        let until = Instant::now() + timeout;
+        let mut resend = Instant::now() + Duration::from_millis(250);
+        while Instant::now() < until {
+            self.pump(READ_SLICE)?;
+            if self.status_seq != seq {
+                return Ok(self.status.clone());
+            }
+            if Instant::now() > resend {
+                // A `?` right before or after a reset may go unanswered.
+                self.s.realtime(b'?');
+                resend = Instant::now() + Duration::from_millis(250);
+            }
+        }
+        Ok(None)
+    }
+
+    pub(super) fn work_position(&self) -> Option<[f64; 3]> {
+        let p = self.status.as_ref()?.work_position(self.wco)?;
+        let k = if self.report_inches { 25.4 } else { 1.0 };
+        Some([p[0] * k, p[1] * k, p[2] * k])
+    }
+}
+
+/// Stops a run: records why in the journal, makes the journal durable, and returns `err`.
+pub(super) fn stop_noted<T>(
+    journal: &mut Option<Journal>,
+    why: &str,
+    err: SendError,
+) -> Result<T, SendError> {
+    if let Some(j) = journal.as_mut() {
+        j.note(why);
+        j.sync()?;
+    }
+    Err(err)
+}
+
+pub(super) fn transport(source: TransportError, last_done: Option<LineRef>) -> SendError {
+    SendError::Transport { source, last_done }
+}
+
+/// Waits while the controller reports motion (`Run`, `Jog`, `Home`, a hold still braking): the
+/// planner it kept running while no host was connected must finish before anything resets it.
+pub(super) fn wait_until_still<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    opts: &SendOptions,
+) -> Result<(), TransportError> {
+    let until = Instant::now() + DRAIN_ON_CONNECT_LIMIT;
+    while Instant::now() < until {
+        match sess.query_status(Duration::from_millis(500))? {
+            Some(st)
+                if matches!(
+                    st.state,
+                    MachineState::Run
+                        | MachineState::Jog
+                        | MachineState::Home
+                        | MachineState::Hold { complete: false }
+                ) =>
+            {
+                let next = Instant::now() + opts.status_interval;
+                while Instant::now() < next {
+                    sess.pump(READ_SLICE)?;
+                }
+            }
+            _ => return Ok(()),
+        }
+    }
+    Ok(())
+}

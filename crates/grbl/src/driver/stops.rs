@@ -1,0 +1,366 @@
+//! How a run stops: on an alarm, an unexpected reset, a state nobody asked for, or the
+//! operator's abort. Each locates the machine on the path, journals why, and returns the error.
+
+use super::error::SendError;
+use super::session::{Session, transport};
+use super::tracker::Tracker;
+use super::{ABORT_CYCLE_ALARM, READ_SLICE, SendOptions};
+use crate::codes::{alarm_is_critical, alarm_meaning};
+use crate::job::Job;
+use crate::journal::Journal;
+use crate::response::MachineState;
+use crate::response::Response;
+use crate::streamer::{Event, Tag};
+use crate::transport::{Transport, TransportError};
+use std::time::{Duration, Instant};
+
+/// Stops because the machine is in a state this sender did not ask for.
+pub(super) fn stop_unexpected<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    job: &Job,
+    tracker: &mut Tracker,
+    journal: &mut Option<Journal>,
+) -> Result<SendError, SendError> {
+    sess.s.set_feeding(false);
+    sess.s.clear_queue();
+    // Where the machine stands tells which acknowledged lines it got through.
+    if let (Some(p), Some(upto)) = (sess.work_position(), tracker.last_sent) {
+        tracker.confirm_by_position(job, p, upto, journal);
+    }
+    let state = sess
+        .status
+        .as_ref()
+        .map(|s| s.state.name())
+        .unwrap_or_default();
+    if let Some(j) = journal.as_mut() {
+        j.note(&format!("stopped: unexpected state {state}"));
+        j.sync()?;
+    }
+    Ok(SendError::UnexpectedState {
+        state,
+        last_done: tracker.last_done(job),
+    })
+}
+
+/// Stops on `ALARM:N`: collects the answers to lines still in GRBL's buffer, resets a critical
+/// alarm (GRBL answers nothing else until then), and locates the machine on the path.
+pub(super) fn on_alarm<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    job: &Job,
+    code: u8,
+    rest: Vec<Event>,
+    opts: &SendOptions,
+    tracker: &mut Tracker,
+    journal: &mut Option<Journal>,
+) -> Result<SendError, SendError> {
+    sess.s.set_feeding(false);
+    sess.s.clear_queue();
+    if let Some(j) = journal.as_mut() {
+        j.note(&format!(
+            "ALARM:{code} {}",
+            alarm_meaning(code).unwrap_or("")
+        ));
+    }
+    // The `ok` of the line that raised it and `error:9`s for lines behind it may follow (some
+    // may already be in the batch that carried the alarm).
+    let settle = Instant::now() + Duration::from_millis(300);
+    let mut first = Some(rest);
+    while Instant::now() < settle {
+        let evs = match first.take() {
+            Some(r) => r,
+            None => match sess.pump(READ_SLICE) {
+                Ok(e) => e,
+                Err(e) => return Err(transport(e, tracker.last_done(job))),
+            },
+        };
+        for e in evs {
+            match e {
+                Event::Ack(Tag::Job(i)) => {
+                    if let Some(j) = journal.as_mut() {
+                        j.ack(i);
+                    }
+                    tracker.ack(job, i, journal);
+                }
+                Event::Rejected(Tag::Job(i), c) => {
+                    if let Some(j) = journal.as_mut() {
+                        j.reject(i, c);
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    if let Some(Tag::Job(i)) = sess.s.last_sent() {
+        tracker.last_sent = Some(tracker.last_sent.map_or(i, |l| l.max(i)));
+    }
+    if alarm_is_critical(code) {
+        // GRBL blocks everything until reset; position is reported after it.
+        sess.s.forget_in_flight();
+        sess.s.realtime(0x18);
+        let _ = sess.wait_banner(opts.banner_timeout);
+    }
+    if code == ABORT_CYCLE_ALARM {
+        // A reset in motion: steps were lost, so the reported position says nothing about which
+        // queued lines ran. Name the range in doubt instead of guessing.
+        if let (Some(&a), Some(b)) = (tracker.unconfirmed.front(), tracker.last_sent)
+            && let Some(j) = journal.as_mut()
+        {
+            j.uncertain(a, b.max(a));
+        }
+    } else if let Ok(Some(_)) = sess.query_status(Duration::from_millis(500))
+        && let (Some(p), Some(upto)) = (sess.work_position(), tracker.last_sent)
+    {
+        tracker.confirm_by_position(job, p, upto, journal);
+    }
+    if let Some(j) = journal.as_mut() {
+        j.sync()?;
+    }
+    Ok(SendError::Alarm {
+        code,
+        last_done: tracker.last_done(job),
+    })
+}
+
+/// Whether line `i` does the same thing right after a soft reset (GRBL's parser back at G0 G54
+/// G17 G21 G90 G94 M5 M9, no G92) as it would in the job: then a line that GRBL took in after
+/// resetting really ran as the job meant it.
+pub(super) fn same_after_reset(job: &Job, i: usize) -> bool {
+    let st = &job.lines[i].before;
+    let d = crate::job::ModalState::default();
+    let explicit_motion = job.lines[i].text.contains("G0")
+        || job.lines[i].text.contains("G1")
+        || st.motion == d.motion;
+    st.units == d.units
+        && st.incremental == d.incremental
+        && st.plane == d.plane
+        && st.wcs == d.wcs
+        && st.inverse_time == d.inverse_time
+        && st.spindle == d.spindle
+        && st.mist == d.mist
+        && st.flood == d.flood
+        && st.g92 == d.g92
+        && explicit_motion
+}
+
+/// Stops on an unexpected banner. GRBL cleared its RX buffer at the reset, but bytes still on
+/// the wire landed in the fresh buffer and ran: their answers arrive after the banner and belong
+/// to the newest lines that were in flight.
+pub(super) fn on_reset<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    job: &Job,
+    lost: Vec<Tag>,
+    rest: Vec<Event>,
+    tracker: &mut Tracker,
+    journal: &mut Option<Journal>,
+) -> Result<SendError, SendError> {
+    sess.s.set_feeding(false);
+    sess.s.clear_queue();
+    if let Some(Tag::Job(i)) = lost.iter().rev().find(|t| matches!(t, Tag::Job(_))) {
+        tracker.last_sent = Some(tracker.last_sent.map_or(*i, |l| l.max(*i)));
+    }
+    let late = match answers_after_reset(sess, rest) {
+        Ok(l) => l,
+        Err(e) => return Err(transport(e, tracker.last_done(job))),
+    };
+    let m = late.len().min(lost.len());
+    let mut ran_after_reset = 0;
+    for (k, (tag, r)) in lost[lost.len() - m..]
+        .iter()
+        .zip(&late[late.len() - m..])
+        .enumerate()
+    {
+        if let (Tag::Job(i), Response::Ok) = (tag, r) {
+            ran_after_reset += 1;
+            // The first of them may be the tail of a line the reset cut in half (GRBL then ran
+            // only a fragment): never count it, so it is re-sent whole.
+            if k > 0 && same_after_reset(job, *i) {
+                if let Some(j) = journal.as_mut() {
+                    j.ack(*i);
+                }
+                tracker.ack(job, *i, journal);
+            }
+        }
+    }
+    if let Some(j) = journal.as_mut() {
+        j.note(&format!(
+            "unexpected reset; {} line(s) in flight, {ran_after_reset} of them ran after the reset",
+            lost.len()
+        ));
+    }
+    // Wait for the motion those lines queued, then locate the machine.
+    let until = Instant::now() + Duration::from_secs(30);
+    while Instant::now() < until {
+        match sess.query_status(Duration::from_millis(500)) {
+            Ok(Some(st)) if st.state != MachineState::Run => break,
+            Ok(_) => {}
+            Err(e) => return Err(transport(e, tracker.last_done(job))),
+        }
+    }
+    if let (Some(p), Some(upto)) = (sess.work_position(), tracker.last_sent) {
+        tracker.confirm_by_position(job, p, upto, journal);
+    }
+    if let Some(j) = journal.as_mut() {
+        j.sync()?;
+    }
+    Ok(SendError::UnexpectedReset {
+        lost: lost.len() - ran_after_reset,
+        last_done: tracker.last_done(job),
+    })
+}
+
+/// Stops the machine without losing its position: feed hold, wait until it stands, locate it
+/// on the path, then a soft reset (no `ALARM:3` after a completed hold) that empties GRBL's
+/// buffers and switches spindle and coolant off.
+pub(super) fn stop_with_reset<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    job: &Job,
+    tracker: &mut Tracker,
+    journal: &mut Option<Journal>,
+) -> Result<(), SendError> {
+    // Feed hold first so the reset does not lose position (reset in motion = ALARM:3).
+    sess.s.set_feeding(false);
+    sess.s.clear_queue();
+    sess.s.realtime(b'!');
+    let until = Instant::now() + Duration::from_secs(10);
+    while Instant::now() < until {
+        match sess.query_status(Duration::from_millis(500)) {
+            Ok(Some(st))
+                if matches!(
+                    st.state,
+                    MachineState::Hold { complete: true }
+                        | MachineState::Idle
+                        | MachineState::Alarm
+                ) =>
+            {
+                break;
+            }
+            Ok(_) => {}
+            Err(e) => return Err(transport(e, tracker.last_done(job))),
+        }
+    }
+    if let Some(Tag::Job(i)) = sess.s.last_sent() {
+        tracker.last_sent = Some(tracker.last_sent.map_or(i, |l| l.max(i)));
+    }
+    if let (Some(p), Some(upto)) = (sess.work_position(), tracker.last_sent) {
+        tracker.confirm_by_position(job, p, upto, journal);
+    }
+    sess.s.forget_in_flight();
+    sess.s.realtime(0x18);
+    let _ = sess.wait_banner(Duration::from_secs(3));
+    if let Some(j) = journal.as_mut() {
+        j.note("stopped: feed hold, soft reset");
+        j.sync()?;
+    }
+    Ok(())
+}
+
+/// The operator's abort: feed hold, soft reset, tool off (confirmed by `$G`).
+pub(super) fn abort<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    job: &Job,
+    tracker: &mut Tracker,
+    journal: &mut Option<Journal>,
+) -> Result<SendError, SendError> {
+    stop_with_reset(sess, job, tracker, journal)?;
+    if let Some(j) = journal.as_mut() {
+        j.note("aborted by the user (feed hold, soft reset, tool off)");
+    }
+    let err = SendError::Aborted {
+        last_done: tracker.last_done(job),
+    };
+    Ok(with_tool_off(sess, journal, err))
+}
+
+/// The `ok`/`error` answers that arrived after an unexpected banner (some may already be in
+/// `rest`, the batch that carried it). A `$G` sentinel written after the banner is parsed after
+/// every byte already on the wire, so every answer before its `[GC:..]` answers a line that ran
+/// after the reset. It bypasses the streamer, whose FIFO no longer holds those lines.
+fn answers_after_reset<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    rest: Vec<Event>,
+) -> Result<Vec<Response>, TransportError> {
+    let mut late: Vec<Response> = rest
+        .into_iter()
+        .filter_map(|e| match e {
+            Event::Unmatched(r) => Some(r),
+            _ => None,
+        })
+        .collect();
+    sess.t.write_all(b"$G\n")?;
+    let until = Instant::now() + Duration::from_secs(2);
+    let mut sentinel_ok = false;
+    while Instant::now() < until {
+        for e in sess.pump(READ_SLICE)? {
+            match e {
+                Event::Unmatched(r) if !sentinel_ok => late.push(r),
+                Event::Feedback(f) if f.starts_with("GC:") => sentinel_ok = true,
+                Event::Unmatched(_) if sentinel_ok => return Ok(late),
+                _ => {}
+            }
+        }
+    }
+    Ok(late)
+}
+
+/// GRBL's parser-state words that mean the tool is off: spindle/laser (`M5`) and coolant or air
+/// assist (`M9`).
+const TOOL_OFF_WORDS: [&str; 2] = ["M5", "M9"];
+
+/// Turns the tool off after a stop and confirms it with `$G`: `M5` and `M9`, and `S0` in laser
+/// mode (so a later `M3` cannot relight the laser at the old power); a controller in alarm
+/// refuses G-code, but its reset already switched everything off, which `$G` shows. True when
+/// the parser state reads `M5 M9` (and `S0` in laser mode) afterwards.
+pub(super) fn tool_off<T: Transport + ?Sized>(sess: &mut Session<'_, T>) -> bool {
+    let laser = sess.settings.get(&32).is_some_and(|v| *v != 0.0);
+    let wait = Duration::from_secs(3);
+    sess.s.set_feeding(true);
+    if !sess.alarm_lock {
+        let words: &[&str] = if laser {
+            &["M5", "S0", "M9"]
+        } else {
+            &["M5", "M9"]
+        };
+        for w in words {
+            if !matches!(sess.command(w, wait), Ok(Ok(()))) {
+                return false;
+            }
+        }
+    }
+    sess.last_gc = None;
+    if !matches!(sess.command("$G", wait), Ok(Ok(()))) {
+        return false;
+    }
+    let Some(gc) = sess.last_gc.clone() else {
+        return false;
+    };
+    let has = |w: &str| {
+        gc.split_whitespace()
+            .any(|x| x.trim_start_matches("GC:") == w)
+    };
+    TOOL_OFF_WORDS.iter().all(|w| has(w)) && (!laser || has("S0"))
+}
+
+/// `err`, or — when the tool-off sequence after the stop could not be confirmed — `err` with
+/// that warning.
+pub(super) fn with_tool_off<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    journal: &mut Option<Journal>,
+    err: SendError,
+) -> SendError {
+    let ok = tool_off(sess);
+    if let Some(j) = journal.as_mut() {
+        j.note(if ok {
+            "tool off (M5 M9), confirmed by $G"
+        } else {
+            "tool off NOT confirmed by $G"
+        });
+        let _ = j.sync();
+    }
+    if ok {
+        err
+    } else {
+        SendError::ToolOffUnconfirmed {
+            cause: Box::new(err),
+        }
+    }
+}

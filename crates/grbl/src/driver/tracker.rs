@@ -1,0 +1,207 @@
+//! Which job lines are acknowledged and which are known executed in this run (an `ok` only means
+//! "queued"), and the geometry helpers that place the machine on the job's path.
+
+use super::SEGMENT_BUFFER;
+use super::error::LineRef;
+use super::resume::{places_on_path, position_tolerance};
+use super::session::Session;
+use crate::job::Job;
+use crate::journal::Journal;
+use crate::transport::Transport;
+use std::collections::VecDeque;
+
+pub(super) fn line_ref(job: &Job, i: usize) -> LineRef {
+    LineRef {
+        index: i,
+        source_line: job.lines[i].source_line,
+        text: job.lines[i].text.clone(),
+    }
+}
+
+/// Bookkeeping of which job lines are acknowledged / known executed in this run.
+pub(super) struct Tracker {
+    pub(super) done: Vec<bool>,
+    pub(super) acked: Vec<bool>,
+    /// Acked in this run, not yet known executed, in ack order.
+    pub(super) unconfirmed: VecDeque<usize>,
+    /// Motion lines acked after each unconfirmed one, counted implicitly by position.
+    pub(super) motion_after: VecDeque<usize>,
+    pub(super) capacity: usize,
+    pub(super) length_done: f64,
+    pub(super) time_done: f64,
+    /// Lines done before this run (not sent in it).
+    pub(super) prior_done: Vec<bool>,
+    /// Position match tolerance, mm.
+    pub(super) pos_tol: f64,
+    /// Highest job index handed to the port in this run.
+    pub(super) last_sent: Option<usize>,
+    /// Lines acknowledged (including earlier runs).
+    pub(super) acked_count: usize,
+    /// Lines known executed (including earlier runs).
+    pub(super) done_count: usize,
+    /// Estimated time of the whole job, s.
+    pub(super) time_total: f64,
+    /// Estimated time of the lines executed in this run, s.
+    pub(super) time_done_run: f64,
+    /// Lines done before this run (resume).
+    pub(super) previously_done: usize,
+}
+
+impl Tracker {
+    /// Books for a run of `job` (timed with the controller's settings) on the controller
+    /// `sess` talks to; `prior_done` marks the lines a resumed run found done.
+    pub(super) fn new<T: Transport + ?Sized>(
+        job: &Job,
+        sess: &Session<'_, T>,
+        prior_done: Option<&[bool]>,
+    ) -> Tracker {
+        let n = job.len();
+        let mut t = Tracker {
+            done: vec![false; n],
+            acked: vec![false; n],
+            unconfirmed: VecDeque::new(),
+            motion_after: VecDeque::new(),
+            capacity: sess.blocks + SEGMENT_BUFFER,
+            length_done: 0.0,
+            time_done: 0.0,
+            prior_done: prior_done.map_or_else(|| vec![false; n], <[bool]>::to_vec),
+            pos_tol: position_tolerance(&sess.settings),
+            last_sent: None,
+            acked_count: 0,
+            done_count: 0,
+            time_total: job.total_time,
+            time_done_run: 0.0,
+            previously_done: 0,
+        };
+        for i in (0..n).filter(|&i| t.prior_done[i]) {
+            t.done[i] = true;
+            t.acked[i] = true;
+            t.length_done += job.lines[i].length;
+            t.time_done += job.lines[i].time;
+            t.acked_count += 1;
+            t.done_count += 1;
+            t.previously_done += 1;
+        }
+        t
+    }
+
+    /// Line `i` was handed to the port.
+    pub(super) fn sent(&mut self, i: usize) {
+        self.last_sent = Some(self.last_sent.map_or(i, |l| l.max(i)));
+    }
+
+    /// Every acknowledged line has executed (the machine drained its planner).
+    pub(super) fn confirm_all(&mut self, job: &Job, journal: &mut Option<Journal>) {
+        let k = self.unconfirmed.len();
+        self.confirm(job, k, journal);
+    }
+
+    pub(super) fn confirm(&mut self, job: &Job, upto_count: usize, journal: &mut Option<Journal>) {
+        let mut last = None;
+        for _ in 0..upto_count.min(self.unconfirmed.len()) {
+            let Some(i) = self.unconfirmed.pop_front() else {
+                break;
+            };
+            self.motion_after.pop_front();
+            if !self.done[i] {
+                self.done[i] = true;
+                self.done_count += 1;
+                self.length_done += job.lines[i].length;
+                self.time_done += job.lines[i].time;
+                self.time_done_run += job.lines[i].time;
+            }
+            last = Some(last.map_or(i, |l: usize| l.max(i)));
+        }
+        if let (Some(k), Some(j)) = (last, journal.as_mut()) {
+            j.executed_through(k);
+        }
+    }
+
+    pub(super) fn ack(&mut self, job: &Job, i: usize, journal: &mut Option<Journal>) {
+        if !self.acked[i] {
+            self.acked_count += 1;
+        }
+        self.acked[i] = true;
+        let is_motion = job.lines[i].moves && job.lines[i].length > 0.0;
+        if is_motion {
+            for m in self.motion_after.iter_mut() {
+                *m += 1;
+            }
+        }
+        self.unconfirmed.push_back(i);
+        self.motion_after.push_back(0);
+        // Lines with more motion lines acknowledged after them than GRBL can hold are done.
+        let n = self
+            .motion_after
+            .iter()
+            .take_while(|&&m| m >= self.capacity)
+            .count();
+        if n > 0 {
+            self.confirm(job, n, journal);
+        }
+    }
+
+    /// Confirms every unconfirmed line with index below `bound`.
+    pub(super) fn confirm_below(&mut self, job: &Job, bound: usize, journal: &mut Option<Journal>) {
+        let c = self.unconfirmed.iter().take_while(|&&i| i < bound).count();
+        self.confirm(job, c, journal);
+    }
+
+    /// Confirms by the reported position `pos`: the first line sent in this run (up to index
+    /// `upto`, acknowledged or not) whose path contains `pos` is where the machine stopped;
+    /// every acknowledged line before it is done, and it too if `pos` is its end point. A stop
+    /// inside a line is journaled (`P`) so that a resume completes that line from there.
+    pub(super) fn confirm_by_position(
+        &mut self,
+        job: &Job,
+        pos: [f64; 3],
+        upto: usize,
+        journal: &mut Option<Journal>,
+    ) {
+        let Some(&first) = self.unconfirmed.front() else {
+            return;
+        };
+        let upto = upto.min(job.len().saturating_sub(1)).max(first);
+        let prior = &self.prior_done;
+        let places = places_on_path(job, pos, first..=upto, self.pos_tol, |i| prior[i]);
+        // Ambiguous (the path passes here twice): the earliest place confirms least.
+        let Some(&(cut, partial)) = places.first() else {
+            return;
+        };
+        self.confirm_below(job, cut, journal);
+        if cut < job.len()
+            && let Some(j) = journal.as_mut()
+        {
+            // The lines from `cut` on did not run (the stop flushed GRBL's planner): the resume
+            // continues line `cut` from where the machine stands.
+            j.partial(cut, partial.unwrap_or(pos));
+        }
+    }
+
+    pub(super) fn last_done(&self, job: &Job) -> Option<LineRef> {
+        // The last line executed, exactly: after a rejected line, the lines GRBL already held
+        // behind it ran too (the rejected one did not; its error names it).
+        let i = self.done.iter().rposition(|d| *d)?;
+        Some(line_ref(job, i))
+    }
+}
+
+pub(super) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+pub(super) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+pub(super) fn seg_dist(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
+    let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let ap = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
+    let l2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+    let t = if l2 > 0.0 {
+        ((ap[0] * ab[0] + ap[1] * ab[1] + ap[2] * ab[2]) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    dist(p, [a[0] + ab[0] * t, a[1] + ab[1] * t, a[2] + ab[2] * t])
+}

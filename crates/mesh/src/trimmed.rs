@@ -1,0 +1,1175 @@
+//! Tessellation of trimmed faces: a parametric surface restricted to the region its trim loops
+//! bound in (u, v) — the faces of CAD models (STEP).
+//!
+//! The loops are given as points with their (u, v), their exact 3D position and the caller's
+//! vertex id; the caller samples each edge curve once, so two faces sharing an edge get the same
+//! points and the same ids, and the shell welds crack-free. Boundary points are never moved and
+//! boundary segments never split here.
+//!
+//! Two methods:
+//! - **General** ([`TrimmedFace::ruled`] false): a constrained Delaunay triangulation (spade) of
+//!   the loops in the (u, v) plane scaled by the surface's mean speeds `|S_u|`, `|S_v|` (so the
+//!   Delaunay criterion sees roughly the surface metric), whose inside triangles (even–odd rule
+//!   across the constraint edges) are refined until each meets the chordal tolerance: deviation
+//!   at the centroid and at the midpoints of its interior edges (the surface point at the
+//!   interpolated (u, v) against the triangle point), and a normal turn of at most
+//!   [`crate::tessellate::MAX_NORMAL_TURN`] across it. A bad triangle gets a vertex at its
+//!   circumcentre (Delaunay refinement, which keeps triangles well shaped) or, where that falls
+//!   outside the face or on a boundary, at its centroid.
+//! - **Ruled** (true; the developable surfaces, whose lines `u = const` are straight and along
+//!   which the surface is flat): every triangle has its corners on two neighbouring rulings, so
+//!   each strip between rulings is planar and the mesh is exactly developable (it unfolds with
+//!   zero distortion). The rulings are the distinct `u` of the loop points: the caller puts a loop
+//!   point wherever a ruling crosses the boundary and adds rulings where the surface needs them
+//!   for the chordal tolerance. Between two rulings, the loop segments crossing the strip pair
+//!   up (even–odd) into trapezoids, triangulated by zipping the points on their two sides; points
+//!   are added along the rulings so triangles are not needles.
+//!
+//! Consecutive loop points with the same vertex id (a pole: a side of the parameter domain that
+//! collapses to one point, as at a cone's apex) become one vertex; triangles with two corners
+//! there are dropped.
+
+use std::collections::VecDeque;
+
+use flatcut_geom::{DVec2, DVec3, Tolerances};
+use flatcut_surface::ParamSurface;
+use spade::Triangulation as _;
+use spade::handles::{FixedFaceHandle, FixedVertexHandle, InnerTag};
+use spade::{ConstrainedDelaunayTriangulation, HasPosition, Point2, PositionInTriangulation};
+
+use crate::TriMesh;
+use crate::tessellate::TessOptions;
+
+/// Refinement rounds before giving up (each round refines every bad triangle once; the number of
+/// triangles grows geometrically, so 64 rounds is far beyond any tolerance reachable in f64).
+const MAX_ROUNDS: usize = 64;
+/// Triangles whose longest 3D edge is below this fraction of the chordal tolerance are not split
+/// further (round-off level; stops refinement at singular points).
+const MIN_EDGE_OVER_CHORD: f64 = 1e-3;
+/// A refined vertex closer than this fraction of its triangle's shortest edge (in the scaled
+/// plane) to the triangle's boundary is moved to the centroid instead (no slivers).
+const MIN_INSET: f64 = 0.05;
+/// Sample grid per side for the speeds and curvatures that scale the plane.
+const SPEED_SAMPLES: usize = 9;
+/// Largest ratio of wanted triangle lengths along u and along v (see [`plane_scale`]): long
+/// thin triangles follow a fillet, but never needles.
+const MAX_ANISOTROPY: f64 = 6.0;
+/// Points along a ruling are at most this many strip widths apart (ruled method).
+const RULING_ASPECT: f64 = 2.0;
+/// Two rulings closer than this fraction of the u range are one ruling (ruled method).
+const RULING_SNAP_REL: f64 = 1e-9;
+/// spade rejects coordinates of magnitude below its MIN_ALLOWED_VALUE (≈ 1e-142); smaller ones
+/// are rounded to zero.
+const TINY: f64 = 1e-100;
+/// Dunavant's 7-point degree-5 rule on a triangle: barycentric coordinates and weights.
+const DUNAVANT7: [([f64; 3], f64); 7] = [
+    ([1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0], 0.225),
+    (
+        [
+            0.059_715_871_789_770,
+            0.470_142_064_105_115,
+            0.470_142_064_105_115,
+        ],
+        0.132_394_152_788_506,
+    ),
+    (
+        [
+            0.470_142_064_105_115,
+            0.059_715_871_789_770,
+            0.470_142_064_105_115,
+        ],
+        0.132_394_152_788_506,
+    ),
+    (
+        [
+            0.470_142_064_105_115,
+            0.470_142_064_105_115,
+            0.059_715_871_789_770,
+        ],
+        0.132_394_152_788_506,
+    ),
+    (
+        [
+            0.797_426_985_353_087,
+            0.101_286_507_323_456,
+            0.101_286_507_323_456,
+        ],
+        0.125_939_180_544_827,
+    ),
+    (
+        [
+            0.101_286_507_323_456,
+            0.797_426_985_353_087,
+            0.101_286_507_323_456,
+        ],
+        0.125_939_180_544_827,
+    ),
+    (
+        [
+            0.101_286_507_323_456,
+            0.101_286_507_323_456,
+            0.797_426_985_353_087,
+        ],
+        0.125_939_180_544_827,
+    ),
+];
+/// Deepest subdivision of one triangle in the area quadrature (4^depth pieces at most); the
+/// triangles of a tessellation are small enough that one or two levels suffice.
+const AREA_MAX_DEPTH: u32 = 4;
+
+/// A point of a trim loop.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrimPoint {
+    /// Parameters on the face's surface.
+    pub uv: DVec2,
+    /// Exact 3D position (mm): the point of the edge curve, shared with the neighbouring face.
+    pub pos: DVec3,
+    /// The caller's vertex id: equal ids are one vertex of the shell.
+    pub vertex: u32,
+}
+
+/// A trimmed face: the surface and its closed trim loops (last point not repeated).
+#[derive(Clone, Copy, Debug)]
+pub struct TrimmedFace<'a> {
+    pub surface: &'a dyn ParamSurface,
+    pub loops: &'a [Vec<TrimPoint>],
+    /// The surface is developable with straight, flat lines `u = const`: mesh along them.
+    pub ruled: bool,
+}
+
+/// The mesh of one face: positions, triangles counter-clockwise in (u, v), `params` the (u, v)
+/// of every vertex; `vertex[i]` is the caller's id of a boundary vertex, `None` inside.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TrimmedMesh {
+    pub mesh: TriMesh,
+    pub vertex: Vec<Option<u32>>,
+}
+
+/// Why a trimmed face could not be tessellated.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum TrimError {
+    #[error("chordal tolerance must be finite and > 0 mm, got {0}")]
+    BadTolerance(f64),
+    #[error("trim loop {index} has fewer than 2 distinct points")]
+    ShortLoop { index: usize },
+    #[error("trim loop {index} has a non-finite (u, v) or point")]
+    NonFinite { index: usize },
+    #[error("the surface is not finite at (u, v) = ({u}, {v})")]
+    SurfaceNonFinite { u: f64, v: f64 },
+    #[error(
+        "the trim loops cross each other in (u, v) near ({u:.6}, {v:.6}): the face's boundary is not a valid region"
+    )]
+    LoopsCross { u: f64, v: f64 },
+    #[error(
+        "the face needs more than {limit} vertices at chordal tolerance {chord_mm} mm; raise the tolerance"
+    )]
+    TooManyVertices { limit: usize, chord_mm: f64 },
+}
+
+/// Working-plane vertex of the triangulation: scaled (u, v) and the local vertex index.
+#[derive(Clone, Copy, Debug)]
+struct Vx {
+    pos: Point2<f64>,
+    local: u32,
+}
+
+/// Marks a vertex spade inserted itself (never: we insert all vertices) or not yet indexed.
+const UNSET: u32 = u32::MAX;
+
+impl HasPosition for Vx {
+    type Scalar = f64;
+    fn position(&self) -> Point2<f64> {
+        self.pos
+    }
+}
+
+impl From<Point2<f64>> for Vx {
+    fn from(pos: Point2<f64>) -> Self {
+        Self { pos, local: UNSET }
+    }
+}
+
+type Cdt = ConstrainedDelaunayTriangulation<Vx>;
+
+/// Local vertices under construction: (u, v), 3D point, caller id.
+#[derive(Default)]
+struct Verts {
+    uv: Vec<DVec2>,
+    pos: Vec<DVec3>,
+    id: Vec<Option<u32>>,
+}
+
+impl Verts {
+    fn push(&mut self, uv: DVec2, pos: DVec3, id: Option<u32>) -> u32 {
+        self.uv.push(uv);
+        self.pos.push(pos);
+        self.id.push(id);
+        (self.uv.len() - 1) as u32
+    }
+}
+
+fn tiny0(x: f64) -> f64 {
+    if x.abs() < TINY { 0.0 } else { x }
+}
+
+/// Validates the loops and turns each into local vertex indices (consecutive points with the
+/// same id share one vertex); returns, per loop, `(local index, (u, v))` for every point.
+fn loop_vertices(
+    loops: &[Vec<TrimPoint>],
+    verts: &mut Verts,
+) -> Result<Vec<Vec<(u32, DVec2)>>, TrimError> {
+    let mut out = Vec::with_capacity(loops.len());
+    for (index, lp) in loops.iter().enumerate() {
+        if lp
+            .iter()
+            .any(|p| !(flatcut_geom::finite2(p.uv) && flatcut_geom::finite3(p.pos)))
+        {
+            return Err(TrimError::NonFinite { index });
+        }
+        let mut pts: Vec<(u32, DVec2)> = Vec::with_capacity(lp.len());
+        for (k, p) in lp.iter().enumerate() {
+            if let Some(&(_, last_uv)) = pts.last()
+                && last_uv == p.uv
+            {
+                continue;
+            }
+            let same_as_prev = k > 0 && lp[k - 1].vertex == p.vertex;
+            let local = if same_as_prev {
+                pts.last()
+                    .map_or_else(|| verts.push(p.uv, p.pos, Some(p.vertex)), |&(l, _)| l)
+            } else {
+                verts.push(p.uv, p.pos, Some(p.vertex))
+            };
+            pts.push((local, p.uv));
+        }
+        // The loop closes on itself: a last point equal to the first is dropped, and a last run
+        // with the first point's id joins the first vertex.
+        while pts.len() > 1 && pts[pts.len() - 1].1 == pts[0].1 {
+            pts.pop();
+        }
+        if let (Some(first), Some(last)) = (lp.first(), lp.last())
+            && lp.len() > 1
+            && first.vertex == last.vertex
+        {
+            let l0 = pts[0].0;
+            let mut k = pts.len();
+            while k > 1 && verts.id[pts[k - 1].0 as usize] == Some(first.vertex) {
+                pts[k - 1].0 = l0;
+                k -= 1;
+            }
+        }
+        let distinct = {
+            let mut ls: Vec<u32> = pts.iter().map(|p| p.0).collect();
+            ls.sort_unstable();
+            ls.dedup();
+            ls.len()
+        };
+        if pts.len() < 3 || distinct < 2 {
+            return Err(TrimError::ShortLoop { index });
+        }
+        out.push(pts);
+    }
+    Ok(out)
+}
+
+/// The scale of the working plane: `(s_u, s_v)` such that a unit step in the scaled plane is
+/// about one wanted triangle edge in either direction. An edge along u may be as long as the
+/// chordal tolerance (`√(8 tol / κ_u)` for the normal curvature κ_u along u) and the normal-turn
+/// limit (`θ / κ_u`) allow; the scale is the mean of `|S_u|` divided by that length (with the
+/// box's 3D size as the longest edge), likewise for v, and the ratio of the two directions'
+/// densities is kept within [`MAX_ANISOTROPY`]. So a fillet, curved across and nearly straight
+/// along, gets long thin triangles along it, as the tolerance allows; a plane gets the isotropic
+/// scaling of its speeds.
+fn plane_scale(s: &dyn ParamSurface, lo: DVec2, hi: DVec2, tol: f64, max_turn: f64) -> DVec2 {
+    let mut speed = DVec2::ZERO;
+    let mut density = DVec2::ZERO;
+    let mut size = flatcut_geom::Aabb3::EMPTY;
+    let mut n = 0usize;
+    let mut samples = Vec::with_capacity(SPEED_SAMPLES * SPEED_SAMPLES);
+    for i in 0..SPEED_SAMPLES {
+        for j in 0..SPEED_SAMPLES {
+            let t = DVec2::new(
+                (i as f64 + 0.5) / SPEED_SAMPLES as f64,
+                (j as f64 + 0.5) / SPEED_SAMPLES as f64,
+            );
+            let uv = lo + (hi - lo) * t;
+            let d = s.deriv2(uv.x, uv.y);
+            size.add(d.p);
+            samples.push(d);
+        }
+    }
+    let diag = size.diagonal();
+    let want = |kappa: f64| -> f64 {
+        let k = kappa.abs();
+        (8.0 * tol / k).sqrt().min(max_turn / k)
+    };
+    for d in &samples {
+        let (e, g) = (d.su.length(), d.sv.length());
+        let Some(nrm) = d.su.cross(d.sv).try_normalize() else {
+            continue;
+        };
+        if !(e.is_finite() && g.is_finite() && e > 0.0 && g > 0.0) {
+            continue;
+        }
+        let ku = d.suu.dot(nrm) / (e * e);
+        let kv = d.svv.dot(nrm) / (g * g);
+        let lu = want(ku).min(diag);
+        let lv = want(kv).min(diag);
+        if !(lu > 0.0 && lv > 0.0) {
+            continue;
+        }
+        speed += DVec2::new(e, g);
+        density += DVec2::new(e / lu, g / lv);
+        n += 1;
+    }
+    if n == 0 || !(speed.x > 0.0 && speed.y > 0.0) {
+        return DVec2::ONE;
+    }
+    // Density per unit parameter; its ratio to the speeds' ratio is the anisotropy.
+    let iso = speed / n as f64;
+    let dens = density / n as f64;
+    let r = ((dens.x / iso.x) / (dens.y / iso.y)).clamp(1.0 / MAX_ANISOTROPY, MAX_ANISOTROPY);
+    if !r.is_finite() {
+        return iso;
+    }
+    DVec2::new(iso.x * r.sqrt(), iso.y / r.sqrt())
+}
+
+fn bounds(loops: &[Vec<(u32, DVec2)>]) -> (DVec2, DVec2) {
+    let mut lo = DVec2::splat(f64::INFINITY);
+    let mut hi = DVec2::splat(f64::NEG_INFINITY);
+    for p in loops.iter().flatten() {
+        lo = lo.min(p.1);
+        hi = hi.max(p.1);
+    }
+    (lo, hi)
+}
+
+/// The constrained triangulation of the loops in the plane scaled by `scale`; returns the CDT and
+/// the CDT vertex of every local vertex inserted so far.
+fn loops_cdt(
+    loops: &[Vec<(u32, DVec2)>],
+    scale: DVec2,
+    nverts: usize,
+) -> Result<(Cdt, Vec<Option<FixedVertexHandle>>), TrimError> {
+    let mut cdt = Cdt::new();
+    let mut handle: Vec<Option<FixedVertexHandle>> = vec![None; nverts];
+    // One CDT vertex per loop point: pole runs share a local vertex but keep their own (u, v).
+    let mut loop_handles: Vec<Vec<FixedVertexHandle>> = Vec::with_capacity(loops.len());
+    for lp in loops {
+        let mut hs = Vec::with_capacity(lp.len());
+        for &(local, uv) in lp {
+            let w = uv * scale;
+            let h = cdt
+                .insert(Vx {
+                    pos: Point2::new(tiny0(w.x), tiny0(w.y)),
+                    local,
+                })
+                .map_err(|_| TrimError::NonFinite { index: 0 })?;
+            handle[local as usize].get_or_insert(h);
+            hs.push(h);
+        }
+        loop_handles.push(hs);
+    }
+    for (lp, hs) in loops.iter().zip(&loop_handles) {
+        for k in 0..hs.len() {
+            let (a, b) = (hs[k], hs[(k + 1) % hs.len()]);
+            if a == b || cdt.exists_constraint(a, b) {
+                continue;
+            }
+            if cdt.try_add_constraint(a, b).is_empty() {
+                let uv = 0.5 * (lp[k].1 + lp[(k + 1) % lp.len()].1);
+                return Err(TrimError::LoopsCross { u: uv.x, v: uv.y });
+            }
+        }
+    }
+    Ok((cdt, handle))
+}
+
+/// Inside flags of the CDT's inner faces: even–odd parity of constraint edges crossed from the
+/// outer face (breadth first, in face-index order, so deterministic).
+fn inside_faces(cdt: &Cdt) -> Vec<bool> {
+    let n = cdt.num_inner_faces() + 1;
+    let mut parity: Vec<Option<bool>> = vec![None; n];
+    let mut queue: VecDeque<FixedFaceHandle<InnerTag>> = VecDeque::new();
+    for e in cdt.convex_hull() {
+        // The hull edge has the outer face on its left; its reverse has an inner face.
+        if let Some(f) = e.rev().face().as_inner() {
+            let inside = cdt.is_constraint_edge(e.as_undirected().fix());
+            let idx = f.fix().index();
+            if parity[idx].is_none() {
+                parity[idx] = Some(inside);
+                queue.push_back(f.fix());
+            }
+        }
+    }
+    while let Some(f) = queue.pop_front() {
+        let here = parity[f.index()].unwrap_or(false);
+        for e in cdt.face(f).adjacent_edges() {
+            if let Some(g) = e.rev().face().as_inner() {
+                let idx = g.fix().index();
+                if parity[idx].is_none() {
+                    let crosses = cdt.is_constraint_edge(e.as_undirected().fix());
+                    parity[idx] = Some(here ^ crosses);
+                    queue.push_back(g.fix());
+                }
+            }
+        }
+    }
+    parity.into_iter().map(|p| p.unwrap_or(false)).collect()
+}
+
+/// Whether the triangle `[a, b, c]` (local vertices, at parameters `uv` — the triangle's own
+/// corners: a pole vertex has a different (u, v) in each triangle) needs refining, from its
+/// deviation from the surface and the turn of the normal across it.
+#[allow(clippy::too_many_arguments)]
+fn needs_refining(
+    s: &dyn ParamSurface,
+    verts: &Verts,
+    normals: &[Option<DVec3>],
+    tri: [u32; 3],
+    uv: [DVec2; 3],
+    boundary_edge: [bool; 3],
+    tol: f64,
+    min_edge: f64,
+    max_turn_cos: f64,
+) -> bool {
+    let p = tri.map(|i| verts.pos[i as usize]);
+    let longest = (p[1] - p[0])
+        .length()
+        .max((p[2] - p[1]).length())
+        .max((p[0] - p[2]).length());
+    if longest.is_nan() || longest < min_edge {
+        return false;
+    }
+    let dev = |w: [f64; 3]| {
+        let q = uv[0] * w[0] + uv[1] * w[1] + uv[2] * w[2];
+        let lin = p[0] * w[0] + p[1] * w[1] + p[2] * w[2];
+        s.eval(q.x, q.y).distance(lin)
+    };
+    if dev([1.0 / 3.0; 3]) > tol {
+        return true;
+    }
+    for k in 0..3 {
+        if boundary_edge[k] {
+            continue;
+        }
+        let mut w = [0.0; 3];
+        w[k] = 0.5;
+        w[(k + 1) % 3] = 0.5;
+        if dev(w) > tol {
+            return true;
+        }
+    }
+    let n = tri.map(|i| normals[i as usize]);
+    for k in 0..3 {
+        if let (Some(a), Some(b)) = (n[k], n[(k + 1) % 3])
+            && a.dot(b) < max_turn_cos
+        {
+            return true;
+        }
+    }
+    false
+}
+
+fn unit_normal(s: &dyn ParamSurface, uv: DVec2) -> Option<DVec3> {
+    let (_, su, sv) = s.deriv1(uv.x, uv.y);
+    su.cross(sv).try_normalize()
+}
+
+/// Tessellates a trimmed face to the chordal tolerance `tol.chord_mm`.
+pub fn tessellate_trimmed(
+    face: &TrimmedFace,
+    tol: &Tolerances,
+    opts: &TessOptions,
+) -> Result<TrimmedMesh, TrimError> {
+    if !(tol.chord_mm.is_finite() && tol.chord_mm > 0.0) {
+        return Err(TrimError::BadTolerance(tol.chord_mm));
+    }
+    let mut verts = Verts::default();
+    let loops = loop_vertices(face.loops, &mut verts)?;
+    let triangles = if face.ruled {
+        ruled_mesh(face.surface, &loops, &mut verts, tol, opts)?
+    } else {
+        cdt_mesh(face.surface, &loops, &mut verts, tol, opts)?
+    };
+    let mut mesh = TriMesh::new(verts.pos, triangles);
+    mesh.params = Some(verts.uv);
+    Ok(TrimmedMesh {
+        mesh,
+        vertex: verts.id,
+    })
+}
+
+/// The general method: CDT of the loops, refined to the tolerance.
+fn cdt_mesh(
+    s: &dyn ParamSurface,
+    loops: &[Vec<(u32, DVec2)>],
+    verts: &mut Verts,
+    tol: &Tolerances,
+    opts: &TessOptions,
+) -> Result<Vec<[u32; 3]>, TrimError> {
+    let (lo, hi) = bounds(loops);
+    let scale = plane_scale(s, lo, hi, tol.chord_mm, opts.max_normal_turn);
+    let (mut cdt, _) = loops_cdt(loops, scale, verts.uv.len())?;
+    let mut normals: Vec<Option<DVec3>> = verts.uv.iter().map(|&uv| unit_normal(s, uv)).collect();
+    let min_edge = (MIN_EDGE_OVER_CHORD * tol.chord_mm).max(4.0 * tol.weld_mm);
+    let max_turn_cos = opts.max_normal_turn.cos();
+    for _ in 0..MAX_ROUNDS {
+        let inside = inside_faces(&cdt);
+        // (preferred point, fallback: the bad triangle's centroid), scaled plane.
+        let mut todo: Vec<(DVec2, DVec2)> = Vec::new();
+        for f in cdt.inner_faces() {
+            if !inside[f.fix().index()] {
+                continue;
+            }
+            let vs = f.vertices();
+            let tri = vs.map(|v| v.data().local);
+            if tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0] {
+                continue;
+            }
+            let edges = f.adjacent_edges();
+            // adjacent_edges()[k] runs from vertex k to vertex k + 1.
+            let boundary = edges.map(|e| e.is_constraint_edge());
+            let uv = f.positions().map(|p| DVec2::new(p.x, p.y) / scale);
+            if !needs_refining(
+                s,
+                verts,
+                &normals,
+                tri,
+                uv,
+                boundary,
+                tol.chord_mm,
+                min_edge,
+                max_turn_cos,
+            ) {
+                continue;
+            }
+            let [a, b, c] = f.positions().map(|p| DVec2::new(p.x, p.y));
+            todo.push((refinement_point(&cdt, &inside, f.fix()), (a + b + c) / 3.0));
+        }
+        if todo.is_empty() {
+            break;
+        }
+        let before = verts.uv.len();
+        for (first, fallback) in todo {
+            // Points of one round can crowd each other (neighbouring triangles on one circle
+            // share their circumcentre): each goes in only with clearance in the triangulation
+            // as it stands, else its triangle's centroid, else not at all this round.
+            let Some(w) = [first, fallback].into_iter().find(|&w| clear(&cdt, w)) else {
+                continue;
+            };
+            let uv = w / scale;
+            let p = s.eval(uv.x, uv.y);
+            if !flatcut_geom::finite3(p) {
+                return Err(TrimError::SurfaceNonFinite { u: uv.x, v: uv.y });
+            }
+            if verts.uv.len() >= opts.max_vertices {
+                return Err(TrimError::TooManyVertices {
+                    limit: opts.max_vertices,
+                    chord_mm: tol.chord_mm,
+                });
+            }
+            let local = verts.uv.len() as u32;
+            let pos = Point2::new(tiny0(w.x), tiny0(w.y));
+            cdt.insert(Vx { pos, local })
+                .map_err(|_| TrimError::SurfaceNonFinite { u: uv.x, v: uv.y })?;
+            verts.push(uv, p, None);
+            normals.push(unit_normal(s, uv));
+        }
+        if verts.uv.len() == before {
+            break;
+        }
+    }
+    let inside = inside_faces(&cdt);
+    let mut tris = Vec::new();
+    for f in cdt.inner_faces() {
+        if !inside[f.fix().index()] {
+            continue;
+        }
+        let t = f.vertices().map(|v| v.data().local);
+        if t[0] != t[1] && t[1] != t[2] && t[2] != t[0] {
+            tris.push(t);
+        }
+    }
+    Ok(tris)
+}
+
+/// True when `w` lies strictly inside a face of the triangulation, at least [`MIN_INSET`] of
+/// that face's shortest side away from its sides.
+fn clear(cdt: &Cdt, w: DVec2) -> bool {
+    if !flatcut_geom::finite2(w) {
+        return false;
+    }
+    match cdt.locate(Point2::new(tiny0(w.x), tiny0(w.y))) {
+        PositionInTriangulation::OnFace(g) => {
+            let [p, q, r] = cdt.face(g).positions().map(|p| DVec2::new(p.x, p.y));
+            let shortest = (q - p).length().min((r - q).length()).min((p - r).length());
+            let inset = [(p, q), (q, r), (r, p)]
+                .iter()
+                .map(|&(x, y)| dist_to_segment(w, x, y))
+                .fold(f64::INFINITY, f64::min);
+            inset > MIN_INSET * shortest
+        }
+        _ => false,
+    }
+}
+
+/// Where to refine the inner face `f`: its circumcentre when that lies strictly inside an inside
+/// face and away from that face's sides, else its centroid (scaled plane coordinates).
+fn refinement_point(cdt: &Cdt, inside: &[bool], f: FixedFaceHandle<InnerTag>) -> DVec2 {
+    let face = cdt.face(f);
+    let [a, b, c] = face.positions().map(|p| DVec2::new(p.x, p.y));
+    let centroid = (a + b + c) / 3.0;
+    let cc = face.circumcenter();
+    let ccv = DVec2::new(cc.x, cc.y);
+    if !flatcut_geom::finite2(ccv) {
+        return centroid;
+    }
+    match cdt.locate(cc) {
+        PositionInTriangulation::OnFace(g) if inside[g.index()] => {
+            let [p, q, r] = cdt.face(g).positions().map(|p| DVec2::new(p.x, p.y));
+            let shortest = (q - p).length().min((r - q).length()).min((p - r).length());
+            let inset = [(p, q), (q, r), (r, p)]
+                .iter()
+                .map(|&(x, y)| dist_to_segment(ccv, x, y))
+                .fold(f64::INFINITY, f64::min);
+            // Do not cross a boundary to get there: the segment from the centroid must not cut a
+            // constraint edge (checked cheaply: the circumcentre's face must be reachable, which
+            // for a Delaunay face holds unless a constraint is in between).
+            if inset > MIN_INSET * shortest && !crosses_constraint(cdt, centroid, ccv) {
+                ccv
+            } else {
+                centroid
+            }
+        }
+        _ => centroid,
+    }
+}
+
+fn crosses_constraint(cdt: &Cdt, from: DVec2, to: DVec2) -> bool {
+    let (a, b) = (Point2::new(from.x, from.y), Point2::new(to.x, to.y));
+    spade::LineIntersectionIterator::new(cdt, a, b).any(|i| match i {
+        spade::Intersection::EdgeIntersection(e) => e.is_constraint_edge(),
+        spade::Intersection::EdgeOverlap(e) => e.is_constraint_edge(),
+        _ => false,
+    })
+}
+
+fn dist_to_segment(q: DVec2, a: DVec2, b: DVec2) -> f64 {
+    let ab = b - a;
+    let l2 = ab.length_squared();
+    if l2 == 0.0 {
+        return q.distance(a);
+    }
+    let t = ((q - a).dot(ab) / l2).clamp(0.0, 1.0);
+    q.distance(a + ab * t)
+}
+
+/// Even–odd test of a point against the loops (segments between consecutive points).
+fn inside_loops(loops: &[Vec<(u32, DVec2)>], q: DVec2) -> bool {
+    let mut inside = false;
+    for lp in loops {
+        for k in 0..lp.len() {
+            let (a, b) = (lp[k].1, lp[(k + 1) % lp.len()].1);
+            if (a.y > q.y) != (b.y > q.y) {
+                let x = a.x + (q.y - a.y) / (b.y - a.y) * (b.x - a.x);
+                if x > q.x {
+                    inside = !inside;
+                }
+            }
+        }
+    }
+    inside
+}
+
+/// A loop segment crossing one strip between rulings: its ends on the left and right ruling
+/// (local vertex, v).
+#[derive(Clone, Copy, Debug)]
+struct Crossing {
+    left: (u32, f64),
+    right: (u32, f64),
+}
+
+/// The ruled method (see the module documentation).
+fn ruled_mesh(
+    s: &dyn ParamSurface,
+    loops: &[Vec<(u32, DVec2)>],
+    verts: &mut Verts,
+    tol: &Tolerances,
+    opts: &TessOptions,
+) -> Result<Vec<[u32; 3]>, TrimError> {
+    let (lo, hi) = bounds(loops);
+    let snap = RULING_SNAP_REL * (hi.x - lo.x).abs().max(f64::MIN_POSITIVE);
+    // Rulings: the distinct u of the loop points.
+    let mut us: Vec<f64> = loops.iter().flatten().map(|p| p.1.x).collect();
+    us.sort_by(f64::total_cmp);
+    let mut rulings: Vec<f64> = Vec::new();
+    for u in us {
+        if rulings.last().is_none_or(|&r| u - r > snap) {
+            rulings.push(u);
+        }
+    }
+    let ruling_of = |u: f64| -> usize {
+        let k = rulings.partition_point(|&r| r < u - snap);
+        k.min(rulings.len() - 1)
+    };
+    // Loops with every segment split where it crosses a ruling (interpolated in (u, v); the
+    // caller normally puts loop points there already, so this is the exception).
+    let mut split: Vec<Vec<(u32, DVec2, usize)>> = Vec::with_capacity(loops.len());
+    for lp in loops {
+        let mut out = Vec::with_capacity(lp.len());
+        for k in 0..lp.len() {
+            let (la, a) = lp[k];
+            let (_, b) = lp[(k + 1) % lp.len()];
+            let (ra, rb) = (ruling_of(a.x), ruling_of(b.x));
+            out.push((la, a, ra));
+            let (step, n) = if rb > ra {
+                (1isize, rb - ra)
+            } else {
+                (-1isize, ra - rb)
+            };
+            for m in 1..n {
+                let r = (ra as isize + step * m as isize) as usize;
+                let t = (rulings[r] - a.x) / (b.x - a.x);
+                let uv = DVec2::new(rulings[r], a.y + t * (b.y - a.y));
+                let p = s.eval(uv.x, uv.y);
+                if !flatcut_geom::finite3(p) {
+                    return Err(TrimError::SurfaceNonFinite { u: uv.x, v: uv.y });
+                }
+                out.push((verts.push(uv, p, None), uv, r));
+            }
+        }
+        split.push(out);
+    }
+    // Points on each ruling: (v, local vertex), and which consecutive pairs are boundary segments.
+    let nr = rulings.len();
+    let mut on_ruling: Vec<Vec<(f64, u32)>> = vec![Vec::new(); nr];
+    let mut vertical: Vec<Vec<(u32, u32)>> = vec![Vec::new(); nr];
+    let mut crossings: Vec<Vec<Crossing>> = vec![Vec::new(); nr.saturating_sub(1)];
+    for lp in &split {
+        for k in 0..lp.len() {
+            let (la, a, ra) = lp[k];
+            let (lb, b, rb) = lp[(k + 1) % lp.len()];
+            on_ruling[ra].push((a.y, la));
+            if ra == rb {
+                if la != lb {
+                    vertical[ra].push((la.min(lb), la.max(lb)));
+                }
+            } else {
+                let (l, r) = if ra < rb {
+                    ((la, a.y), (lb, b.y))
+                } else {
+                    ((lb, b.y), (la, a.y))
+                };
+                crossings[ra.min(rb)].push(Crossing { left: l, right: r });
+            }
+        }
+    }
+    for pts in &mut on_ruling {
+        pts.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        pts.dedup_by(|x, y| x.1 == y.1);
+    }
+    // Strip widths (3D, at mid height) and the spacing of points along rulings.
+    let vmid = 0.5 * (lo.y + hi.y);
+    let mut widths: Vec<f64> = (0..nr.saturating_sub(1))
+        .map(|i| {
+            s.eval(rulings[i], vmid)
+                .distance(s.eval(rulings[i + 1], vmid))
+        })
+        .filter(|w| w.is_finite() && *w > 0.0)
+        .collect();
+    widths.sort_by(f64::total_cmp);
+    let typical = widths.get(widths.len() / 2).copied().unwrap_or(0.0);
+    let spacing = (RULING_ASPECT * typical).max(tol.chord_mm);
+    // Fill points on the inside intervals of every ruling.
+    for (r, pts) in on_ruling.iter_mut().enumerate() {
+        let u = rulings[r];
+        let mut added: Vec<(f64, u32)> = Vec::new();
+        for w in pts.windows(2) {
+            let ((v0, l0), (v1, l1)) = (w[0], w[1]);
+            if l0 == l1 || vertical[r].contains(&(l0.min(l1), l0.max(l1))) {
+                continue;
+            }
+            if !inside_loops(loops, DVec2::new(u, 0.5 * (v0 + v1))) {
+                continue;
+            }
+            let len = s.eval(u, v0).distance(s.eval(u, v1));
+            let n = (len / spacing).ceil();
+            if !(n.is_finite() && n >= 2.0) {
+                continue;
+            }
+            if verts.uv.len() + n as usize >= opts.max_vertices {
+                return Err(TrimError::TooManyVertices {
+                    limit: opts.max_vertices,
+                    chord_mm: tol.chord_mm,
+                });
+            }
+            for m in 1..n as usize {
+                let v = v0 + (v1 - v0) * m as f64 / n;
+                let p = s.eval(u, v);
+                if !flatcut_geom::finite3(p) {
+                    return Err(TrimError::SurfaceNonFinite { u, v });
+                }
+                added.push((v, verts.push(DVec2::new(u, v), p, None)));
+            }
+        }
+        pts.extend(added);
+        pts.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+    }
+    // Zip each trapezoid of each strip.
+    let mut tris: Vec<[u32; 3]> = Vec::new();
+    for (i, cs) in crossings.iter_mut().enumerate() {
+        cs.sort_by(|x, y| {
+            (x.left.1 + x.right.1)
+                .total_cmp(&(y.left.1 + y.right.1))
+                .then(x.left.1.total_cmp(&y.left.1))
+        });
+        for pair in cs.chunks_exact(2) {
+            let (bot, top) = (pair[0], pair[1]);
+            let chain = |pts: &[(f64, u32)], from: (u32, f64), to: (u32, f64)| -> Vec<u32> {
+                let (v0, v1) = (from.1.min(to.1), from.1.max(to.1));
+                let mut c: Vec<u32> = vec![from.0];
+                c.extend(
+                    pts.iter()
+                        .filter(|p| p.0 > v0 && p.0 < v1 && p.1 != from.0 && p.1 != to.0)
+                        .map(|p| p.1),
+                );
+                if to.0 != from.0 {
+                    c.push(to.0);
+                }
+                c
+            };
+            let left = chain(&on_ruling[i], bot.left, top.left);
+            let right = chain(&on_ruling[i + 1], bot.right, top.right);
+            zip(&left, &right, &verts.uv, &mut tris);
+        }
+    }
+    Ok(tris)
+}
+
+/// Triangulates the strip between the left chain and the right chain (both bottom to top),
+/// counter-clockwise in (u, v), skipping triangles with a repeated vertex.
+fn zip(left: &[u32], right: &[u32], uv: &[DVec2], out: &mut Vec<[u32; 3]>) {
+    let (mut i, mut j) = (0usize, 0usize);
+    let mut push = |t: [u32; 3]| {
+        if t[0] != t[1] && t[1] != t[2] && t[2] != t[0] {
+            out.push(t);
+        }
+    };
+    while i + 1 < left.len() || j + 1 < right.len() {
+        let advance_left = if i + 1 == left.len() {
+            false
+        } else if j + 1 == right.len() {
+            true
+        } else {
+            uv[left[i + 1] as usize].y <= uv[right[j + 1] as usize].y
+        };
+        if advance_left {
+            push([left[i], right[j], left[i + 1]]);
+            i += 1;
+        } else {
+            push([left[i], right[j], right[j + 1]]);
+            j += 1;
+        }
+    }
+}
+
+/// The area (mm²) of the trimmed face: ∬ |S_u × S_v| du dv over the region the loops bound,
+/// by adaptive Dunavant quadrature over the triangles in (u, v) of the face's tessellation at
+/// chordal tolerance `chord_mm` (small triangles, where the rule converges at once), to relative
+/// accuracy `rel` per triangle. The loops should follow the trim curves closely: the area between
+/// a loop chord and its curve is not counted.
+pub fn trimmed_area(
+    s: &dyn ParamSurface,
+    loops: &[Vec<TrimPoint>],
+    chord_mm: f64,
+    rel: f64,
+) -> Result<f64, TrimError> {
+    let tol = Tolerances::DEFAULT.with_chord_mm(chord_mm);
+    let m = tessellate_trimmed(
+        &TrimmedFace {
+            surface: s,
+            loops,
+            ruled: false,
+        },
+        &tol,
+        &TessOptions::DEFAULT,
+    )?;
+    let uv = m.mesh.params.as_deref().unwrap_or(&[]);
+    Ok(m.mesh
+        .triangles
+        .iter()
+        .map(|t| area_adaptive(s, t.map(|v| uv[v as usize]), rel, AREA_MAX_DEPTH))
+        .sum())
+}
+
+fn area_rule(s: &dyn ParamSurface, t: [DVec2; 3]) -> f64 {
+    let jac = 0.5 * (t[1] - t[0]).perp_dot(t[2] - t[0]).abs();
+    DUNAVANT7
+        .iter()
+        .map(|(b, w)| {
+            let q = t[0] * b[0] + t[1] * b[1] + t[2] * b[2];
+            let (_, su, sv) = s.deriv1(q.x, q.y);
+            let a = su.cross(sv).length();
+            w * if a.is_finite() { a } else { 0.0 }
+        })
+        .sum::<f64>()
+        * jac
+}
+
+fn area_adaptive(s: &dyn ParamSurface, t: [DVec2; 3], rel: f64, depth: u32) -> f64 {
+    let whole = area_rule(s, t);
+    let m = [
+        0.5 * (t[0] + t[1]),
+        0.5 * (t[1] + t[2]),
+        0.5 * (t[2] + t[0]),
+    ];
+    let kids = [
+        [t[0], m[0], m[2]],
+        [m[0], t[1], m[1]],
+        [m[2], m[1], t[2]],
+        [m[0], m[1], m[2]],
+    ];
+    let parts: f64 = kids.iter().map(|k| area_rule(s, *k)).sum();
+    if depth == 0 || (parts - whole).abs() <= rel * parts.abs() {
+        return parts;
+    }
+    kids.iter()
+        .map(|k| area_adaptive(s, *k, rel, depth - 1))
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::check_disk;
+    use flatcut_surface::curve::Frame;
+    use flatcut_surface::patch::Analytic;
+    use std::f64::consts::{PI, TAU};
+
+    /// A loop of points sampled on the surface along a closed (u, v) polyline, with ids from
+    /// `next` on.
+    fn sample_loop(
+        s: &dyn ParamSurface,
+        corners: &[DVec2],
+        per_side: usize,
+        next: &mut u32,
+    ) -> Vec<TrimPoint> {
+        let mut out = Vec::new();
+        for k in 0..corners.len() {
+            let (a, b) = (corners[k], corners[(k + 1) % corners.len()]);
+            for m in 0..per_side {
+                let uv = a + (b - a) * (m as f64 / per_side as f64);
+                out.push(TrimPoint {
+                    uv,
+                    pos: s.eval(uv.x, uv.y),
+                    vertex: *next,
+                });
+                *next += 1;
+            }
+        }
+        out
+    }
+
+    fn sphere() -> Analytic {
+        Analytic::sphere(Frame::WORLD, 40.0).unwrap()
+    }
+
+    /// Largest distance from the triangles (centroids, edge midpoints) to the sphere of radius
+    /// 40 about the origin: | |p| − R |, exact.
+    fn sphere_deviation(m: &TrimmedMesh) -> f64 {
+        let mut worst: f64 = 0.0;
+        for t in &m.mesh.triangles {
+            for w in [
+                [1.0 / 3.0; 3],
+                [0.5, 0.5, 0.0],
+                [0.0, 0.5, 0.5],
+                [0.5, 0.0, 0.5],
+            ] {
+                let lin = m.mesh.positions[t[0] as usize] * w[0]
+                    + m.mesh.positions[t[1] as usize] * w[1]
+                    + m.mesh.positions[t[2] as usize] * w[2];
+                worst = worst.max((lin.length() - 40.0).abs());
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn sphere_patch_with_a_hole_meets_the_tolerance_and_keeps_its_boundary() {
+        let s = sphere();
+        let mut id = 0;
+        let outer = sample_loop(
+            &s,
+            &[
+                DVec2::new(0.2, -0.6),
+                DVec2::new(2.0, -0.6),
+                DVec2::new(2.0, 0.8),
+                DVec2::new(0.2, 0.8),
+            ],
+            // 4 mm chords at most: their sagitta on the 40 mm sphere is below 0.05 mm.
+            30,
+            &mut id,
+        );
+        let mut hole: Vec<TrimPoint> = (0..24)
+            .map(|k| {
+                let a = TAU * k as f64 / 24.0;
+                let uv = DVec2::new(1.1 + 0.3 * a.cos(), 0.1 + 0.25 * a.sin());
+                id += 1;
+                TrimPoint {
+                    uv,
+                    pos: s.eval(uv.x, uv.y),
+                    vertex: id,
+                }
+            })
+            .collect();
+        hole.reverse();
+        let loops = vec![outer.clone(), hole.clone()];
+        let tol = Tolerances::DEFAULT.with_chord_mm(0.05);
+        let m = tessellate_trimmed(
+            &TrimmedFace {
+                surface: &s,
+                loops: &loops,
+                ruled: false,
+            },
+            &tol,
+            &TessOptions::DEFAULT,
+        )
+        .unwrap();
+        let dev = sphere_deviation(&m);
+        assert!(dev <= 0.05, "deviation {dev}");
+        // Every loop point is a vertex, with its id; boundary = the loops.
+        for p in outer.iter().chain(&hole) {
+            assert!(m.vertex.contains(&Some(p.vertex)));
+        }
+        let topo = crate::Topology::build(&m.mesh).unwrap();
+        assert_eq!(topo.boundary_loops.len(), 2);
+        let bnd: usize = topo.boundary_loops.iter().map(|l| l.len()).sum();
+        assert_eq!(bnd, outer.len() + hole.len());
+        // Area against the exact spherical zone minus the (approximately elliptical) hole.
+        let exact_outer = 40.0f64.powi(2) * 1.8 * (0.8f64.sin() - (-0.6f64).sin());
+        assert!(m.mesh.area() < exact_outer);
+    }
+
+    #[test]
+    fn exact_area_of_a_spherical_zone() {
+        let s = sphere();
+        let mut id = 0;
+        let lp = sample_loop(
+            &s,
+            &[
+                DVec2::new(0.0, -0.3),
+                DVec2::new(1.5, -0.3),
+                DVec2::new(1.5, 1.1),
+                DVec2::new(0.0, 1.1),
+            ],
+            8,
+            &mut id,
+        );
+        let a = trimmed_area(&s, &[lp], 0.01, 1e-12).unwrap();
+        let exact = 1600.0 * 1.5 * (1.1f64.sin() - (-0.3f64).sin());
+        assert!((a - exact).abs() < 1e-9 * exact, "{a} vs {exact}");
+    }
+
+    #[test]
+    fn ruled_cylinder_face_is_exactly_developable() {
+        let s = Analytic::cylinder(Frame::WORLD, 30.0).unwrap();
+        // A face under a sloping cut: bottom at v = 0, top v = 40 + 10 sin u, u in [0, 2]. Loop
+        // points on the rulings u_k on both bottom and top.
+        let n = 20;
+        let mut id = 0;
+        let mut lp = Vec::new();
+        for k in 0..=n {
+            let u = 2.0 * k as f64 / n as f64;
+            let uv = DVec2::new(u, 0.0);
+            lp.push(TrimPoint {
+                uv,
+                pos: s.eval(uv.x, uv.y),
+                vertex: id,
+            });
+            id += 1;
+        }
+        for k in (0..=n).rev() {
+            let u = 2.0 * k as f64 / n as f64;
+            let uv = DVec2::new(u, 40.0 + 10.0 * u.sin());
+            lp.push(TrimPoint {
+                uv,
+                pos: s.eval(uv.x, uv.y),
+                vertex: id,
+            });
+            id += 1;
+        }
+        let m = tessellate_trimmed(
+            &TrimmedFace {
+                surface: &s,
+                loops: &[lp],
+                ruled: true,
+            },
+            &Tolerances::DEFAULT,
+            &TessOptions::DEFAULT,
+        )
+        .unwrap();
+        let topo = check_disk(&m.mesh).unwrap();
+        assert_eq!(topo.boundary_loops.len(), 1);
+        // Exactly developable: the angles around every interior vertex sum to 2π.
+        let bnd = crate::stats::boundary_vertices(&m.mesh);
+        let mut sum = vec![0.0; m.mesh.positions.len()];
+        for (t, tri) in m.mesh.triangles.iter().enumerate() {
+            let p = m.mesh.corners(t);
+            for k in 0..3 {
+                sum[tri[k] as usize] +=
+                    (p[(k + 1) % 3] - p[k]).angle_between(p[(k + 2) % 3] - p[k]);
+            }
+        }
+        let interior: Vec<f64> = (0..sum.len())
+            .filter(|&v| !bnd[v])
+            .map(|v| (sum[v] - TAU).abs())
+            .collect();
+        assert!(!interior.is_empty());
+        assert!(
+            interior.iter().all(|d| *d < 1e-12),
+            "{:?}",
+            interior.iter().cloned().fold(0.0, f64::max)
+        );
+        // Orientation: counter-clockwise in (u, v).
+        let uv = m.mesh.params.as_ref().unwrap();
+        for t in &m.mesh.triangles {
+            let (a, b, c) = (uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
+            assert!((b - a).perp_dot(c - a) > 0.0);
+        }
+        // The area of the strips equals the polygon area in the unrolled plane.
+        let unrolled: f64 = 30.0 * 2.0 * 40.0 + 30.0 * 10.0 * (1.0 - 2.0f64.cos());
+        assert!((m.mesh.area() - unrolled).abs() < 0.02 * unrolled);
+        let _ = PI;
+    }
+
+    #[test]
+    fn crossing_loops_are_an_error() {
+        let s = Analytic::plane(Frame::WORLD);
+        let mk = |pts: &[(f64, f64)], base: u32| -> Vec<TrimPoint> {
+            pts.iter()
+                .enumerate()
+                .map(|(k, &(u, v))| TrimPoint {
+                    uv: DVec2::new(u, v),
+                    pos: s.eval(u, v),
+                    vertex: base + k as u32,
+                })
+                .collect()
+        };
+        let a = mk(&[(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0)], 0);
+        let b = mk(&[(5.0, 5.0), (15.0, 5.0), (15.0, 15.0), (5.0, 15.0)], 10);
+        let e = tessellate_trimmed(
+            &TrimmedFace {
+                surface: &s,
+                loops: &[a, b],
+                ruled: false,
+            },
+            &Tolerances::DEFAULT,
+            &TessOptions::DEFAULT,
+        )
+        .unwrap_err();
+        assert!(matches!(e, TrimError::LoopsCross { .. }), "{e}");
+    }
+}

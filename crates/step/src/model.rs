@@ -1,0 +1,639 @@
+//! The boundary representation a STEP file describes: shells of faces, each face a surface
+//! bounded by loops of oriented edges, each edge a curve between two vertices. Faces and edges
+//! are numbered from 0 in the order the shells list them; that number is how users select faces.
+//!
+//! Shells come from `MANIFOLD_SOLID_BREP` and `BREP_WITH_VOIDS` (closed), and
+//! `SHELL_BASED_SURFACE_MODEL` (open or closed); a file with none of these but loose
+//! `CLOSED_SHELL`/`OPEN_SHELL`s uses those. Lengths are converted to mm with the unit of the
+//! representation that holds the shell.
+//!
+//! A face or edge that cannot be used (an unsupported surface, a bad knot vector) keeps its
+//! number and its error, so the rest of the model still loads and other faces can be selected;
+//! asking for the bad one reports its error.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use flatcut_geom::{Aabb3, DVec3};
+use flatcut_surface::ParamCurve;
+use flatcut_surface::curve::nearest_from_samples;
+
+use crate::StepError;
+use crate::attrs::Attrs;
+use crate::file::{Instance, StepFile, Value};
+use crate::geom::{Curve, Surface};
+use crate::reader::{Reader, Space, Units};
+
+/// A vertex farther than this from its edge's curve makes the edge unusable (mm): CAD files
+/// keep vertices within micrometres; this catches wrong references, not sloppy tolerances.
+pub const VERTEX_ON_CURVE_MM: f64 = 0.1;
+/// Accuracy of locating a vertex on its curve (mm).
+const LOCATE_ACCURACY: f64 = 1e-10;
+/// Samples per curve span when locating a vertex on a spline or polyline.
+const LOCATE_SAMPLES_PER_SPAN: usize = 8;
+
+/// A shell: a connected set of faces (closed: bounds a solid).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Shell {
+    pub entity: u64,
+    pub closed: bool,
+    pub faces: Vec<usize>,
+}
+
+/// A vertex: its position in mm.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Vertex {
+    pub entity: u64,
+    pub point: DVec3,
+}
+
+/// One use of an edge in a loop: forward when the loop runs from the edge's start vertex to its
+/// end vertex.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EdgeUse {
+    pub edge: usize,
+    pub forward: bool,
+}
+
+/// A loop bounding a face (already oriented by the bound's orientation flag).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Bound {
+    pub entity: u64,
+    /// Declared as the outer bound (`FACE_OUTER_BOUND`).
+    pub outer: bool,
+    pub uses: Vec<EdgeUse>,
+    /// A `VERTEX_LOOP` (a degenerate bound at a single point, e.g. a cone's apex).
+    pub vertex: Option<usize>,
+}
+
+/// What a face is made of.
+#[derive(Clone, Debug)]
+pub struct FaceGeometry {
+    /// The instance number of the surface.
+    pub surface_entity: u64,
+    pub surface: Arc<Surface>,
+    /// The face normal is the surface normal `S_u × S_v` (else its opposite).
+    pub same_sense: bool,
+    pub bounds: Vec<Bound>,
+}
+
+/// A face of the model.
+#[derive(Clone, Debug)]
+pub struct Face {
+    pub entity: u64,
+    pub shell: usize,
+    /// The face's geometry, or why it cannot be used.
+    pub geometry: Result<FaceGeometry, StepError>,
+}
+
+/// A curve in a surface's parameter space that the file gives for an edge (a `PCURVE`).
+#[derive(Clone, Debug)]
+pub struct Pcurve {
+    pub surface_entity: u64,
+    pub curve: Arc<Curve>,
+}
+
+/// What an edge is made of: the part of `curve` from parameter `t0` (at `start`) to `t1` (at
+/// `end`); `t1 < t0` when the edge runs against the curve.
+#[derive(Clone, Debug)]
+pub struct EdgeGeometry {
+    pub curve: Arc<Curve>,
+    pub start: usize,
+    pub end: usize,
+    pub t0: f64,
+    pub t1: f64,
+    pub pcurves: Vec<Pcurve>,
+}
+
+/// An edge of the model and the faces whose loops use it (a face twice for a seam).
+#[derive(Clone, Debug)]
+pub struct Edge {
+    pub entity: u64,
+    pub geometry: Result<EdgeGeometry, StepError>,
+    pub faces: Vec<usize>,
+}
+
+/// A STEP model: shells, faces, edges and vertices in mm.
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// The schemas the file names (`CONFIG_CONTROL_DESIGN` = AP203, `AUTOMOTIVE_DESIGN` = AP214,
+    /// `AP242_MANAGED_MODEL_BASED_3D_ENGINEERING…` = AP242).
+    pub schemas: Vec<String>,
+    /// The length unit the file states (of the first shell's representation).
+    pub units: Units,
+    pub shells: Vec<Shell>,
+    pub faces: Vec<Face>,
+    pub edges: Vec<Edge>,
+    pub vertices: Vec<Vertex>,
+}
+
+/// Builds the model while walking the topology.
+struct Builder<'f> {
+    r: Reader<'f>,
+    faces: Vec<Face>,
+    edges: Vec<Edge>,
+    edge_of: BTreeMap<u64, usize>,
+    vertices: Vec<Vertex>,
+    vertex_of: BTreeMap<u64, Result<usize, StepError>>,
+}
+
+impl Model {
+    /// Reads a `.step`/`.stp` file.
+    pub fn read(path: &Path) -> Result<Model, StepError> {
+        Self::from_file(&StepFile::read(path)?)
+    }
+
+    /// Builds the model of an indexed file.
+    pub fn from_file(file: &StepFile) -> Result<Model, StepError> {
+        let mut b = Builder {
+            r: Reader::new(file),
+            faces: Vec::new(),
+            edges: Vec::new(),
+            edge_of: BTreeMap::new(),
+            vertices: Vec::new(),
+            vertex_of: BTreeMap::new(),
+        };
+        let tops = top_level_shells(file, &mut b.r)?;
+        if tops.is_empty() {
+            return Err(StepError::NoShells);
+        }
+        let contexts = representation_contexts(file, &mut b.r)?;
+        let fallback = unique_units(file, &mut b.r)?;
+        let mut shells = Vec::new();
+        let mut first_units = None;
+        let mut seen_faces = BTreeMap::new();
+        for (item, shell_ids) in tops {
+            let units = match contexts.get(&item) {
+                Some(&ctx) => b.r.context_units(ctx, item)?,
+                None => None,
+            }
+            .or_else(|| fallback.clone())
+            .unwrap_or_else(Units::assumed_mm);
+            b.r.mm = units.mm;
+            b.r.rad = units.rad;
+            first_units.get_or_insert(units);
+            for (sid, closed) in shell_ids {
+                let index = shells.len();
+                let faces = b.shell(sid, item, index, &mut seen_faces)?;
+                shells.push(Shell {
+                    entity: sid,
+                    closed,
+                    faces,
+                });
+            }
+        }
+        Ok(Model {
+            schemas: file.schemas.clone(),
+            units: first_units.unwrap_or_else(Units::assumed_mm),
+            shells,
+            faces: b.faces,
+            edges: b.edges,
+            vertices: b.vertices,
+        })
+    }
+
+    /// The geometry of face `index`, or its error.
+    pub fn face(&self, index: usize) -> Result<&FaceGeometry, StepError> {
+        let f = self.faces.get(index).ok_or(StepError::NoSuchFace {
+            index,
+            count: self.faces.len(),
+        })?;
+        f.geometry.as_ref().map_err(Clone::clone)
+    }
+
+    /// The bounding box of the vertices (mm).
+    pub fn vertex_bbox(&self) -> Aabb3 {
+        Aabb3::from_points(self.vertices.iter().map(|v| v.point))
+    }
+}
+
+/// The top-level shape items and their shells `(shell, closed)`, in item order.
+fn top_level_shells(
+    file: &StepFile,
+    r: &mut Reader,
+) -> Result<Vec<(u64, Vec<(u64, bool)>)>, StepError> {
+    let mut items: Vec<u64> = Vec::new();
+    for t in [
+        "MANIFOLD_SOLID_BREP",
+        "BREP_WITH_VOIDS",
+        "SHELL_BASED_SURFACE_MODEL",
+    ] {
+        items.extend(file.ids_of_type(t));
+    }
+    items.sort_unstable();
+    let mut out = Vec::new();
+    for item in items {
+        let shells = r.visit(item, item, |r, inst| {
+            let a = Attrs::of(inst, &inst.parts[0]);
+            let kind = a.name.to_ascii_uppercase();
+            let mut shells = Vec::new();
+            match kind.as_str() {
+                "MANIFOLD_SOLID_BREP" => shells.push((a.reference(1, "outer")?, true)),
+                "BREP_WITH_VOIDS" => {
+                    shells.push((a.reference(1, "outer")?, true));
+                    for v in a.refs(2, "voids")? {
+                        shells.push((v, true));
+                    }
+                }
+                _ => {
+                    for s in a.refs(1, "sbsm_boundary")? {
+                        let closed = r
+                            .file
+                            .type_of(s)
+                            .is_some_and(|t| t.eq_ignore_ascii_case("CLOSED_SHELL"));
+                        shells.push((s, closed));
+                    }
+                }
+            }
+            Ok(shells)
+        })?;
+        out.push((item, shells));
+    }
+    if out.is_empty() {
+        for (t, closed) in [("CLOSED_SHELL", true), ("OPEN_SHELL", false)] {
+            for s in file.ids_of_type(t) {
+                out.push((s, vec![(s, closed)]));
+            }
+        }
+        out.sort_by_key(|x| x.0);
+    }
+    Ok(out)
+}
+
+/// For each item of a shape representation, the representation's context.
+fn representation_contexts(
+    file: &StepFile,
+    r: &mut Reader,
+) -> Result<BTreeMap<u64, u64>, StepError> {
+    let mut out = BTreeMap::new();
+    let reps: Vec<u64> = [
+        "ADVANCED_BREP_SHAPE_REPRESENTATION",
+        "MANIFOLD_SURFACE_SHAPE_REPRESENTATION",
+        "SHAPE_REPRESENTATION",
+        "FACETED_BREP_SHAPE_REPRESENTATION",
+        "GEOMETRICALLY_BOUNDED_SURFACE_SHAPE_REPRESENTATION",
+    ]
+    .iter()
+    .flat_map(|t| file.ids_of_type(t).collect::<Vec<_>>())
+    .collect();
+    for rep in reps {
+        let pairs = r.visit(rep, rep, |_, inst| {
+            let a = Attrs::of(inst, &inst.parts[0]);
+            let items = a.refs(1, "items")?;
+            let ctx = a.reference(2, "context_of_items")?;
+            Ok(items.into_iter().map(|i| (i, ctx)).collect::<Vec<_>>())
+        })?;
+        for (i, c) in pairs {
+            out.entry(i).or_insert(c);
+        }
+    }
+    Ok(out)
+}
+
+/// The units of the file's only unit-bearing context, when there is exactly one distinct set.
+fn unique_units(file: &StepFile, r: &mut Reader) -> Result<Option<Units>, StepError> {
+    let mut found: Option<Units> = None;
+    for id in file.complex_ids().collect::<Vec<_>>() {
+        let is_ctx = r.visit(id, id, |_, inst| {
+            Ok(inst.part("GLOBAL_UNIT_ASSIGNED_CONTEXT").is_some())
+        })?;
+        if !is_ctx {
+            continue;
+        }
+        if let Some(u) = r.context_units(id, id)? {
+            match &found {
+                None => found = Some(u),
+                Some(f) if *f == u => {}
+                Some(_) => return Ok(None),
+            }
+        }
+    }
+    Ok(found)
+}
+
+/// Where on `curve` the edge from `p0` to `p1` lies: `(t0, t1)`.
+fn edge_range(
+    curve: &Curve,
+    p0: DVec3,
+    p1: DVec3,
+    closed: bool,
+    same_sense: bool,
+) -> Result<(f64, f64), String> {
+    use std::f64::consts::TAU;
+    let (t0, t1) = match curve {
+        Curve::Line(l) => (l.param_of(p0), l.param_of(p1)),
+        Curve::Conic(e) => {
+            let a0 = e.param_of(p0);
+            let a1 = e.param_of(p1);
+            let d = if same_sense { a1 - a0 } else { a0 - a1 };
+            let mut d = d.rem_euclid(TAU);
+            if closed || d == 0.0 {
+                d = TAU;
+            }
+            (a0, if same_sense { a0 + d } else { a0 - d })
+        }
+        _ => {
+            let (a, b) = curve.domain();
+            let ends_meet = curve.eval(a).distance(curve.eval(b)) <= VERTEX_ON_CURVE_MM * 1e-3;
+            if closed {
+                if !ends_meet {
+                    return Err(
+                        "the edge starts and ends at one vertex but its curve is open".into(),
+                    );
+                }
+                if same_sense { (a, b) } else { (b, a) }
+            } else {
+                let mut ts = Vec::new();
+                let mut br = curve.breakpoints();
+                if br.len() < 2 {
+                    br = vec![a, b];
+                }
+                for w in br.windows(2) {
+                    for k in 0..LOCATE_SAMPLES_PER_SPAN {
+                        ts.push(w[0] + (w[1] - w[0]) * k as f64 / LOCATE_SAMPLES_PER_SPAN as f64);
+                    }
+                }
+                ts.push(b);
+                let locate = |p: DVec3, at_start: bool| {
+                    let (t, _) = nearest_from_samples(curve, p, LOCATE_ACCURACY, &ts);
+                    // On a closed curve a vertex at the seam is both ends: pick by direction.
+                    if ends_meet && (curve.eval(a).distance(p) <= VERTEX_ON_CURVE_MM * 1e-3) {
+                        if same_sense == at_start { a } else { b }
+                    } else {
+                        t
+                    }
+                };
+                (locate(p0, true), locate(p1, false))
+            }
+        }
+    };
+    for (t, p, which) in [(t0, p0, "start"), (t1, p1, "end")] {
+        let d = curve.eval(t).distance(p);
+        if d.is_nan() || d > VERTEX_ON_CURVE_MM {
+            return Err(format!(
+                "its {which} vertex is {d:.3} mm from its {} (more than {VERTEX_ON_CURVE_MM} mm)",
+                curve.name()
+            ));
+        }
+    }
+    if t0 == t1 {
+        return Err("the edge has zero length on its curve".into());
+    }
+    Ok((t0, t1))
+}
+
+impl<'f> Builder<'f> {
+    fn shell(
+        &mut self,
+        sid: u64,
+        from: u64,
+        index: usize,
+        seen: &mut BTreeMap<u64, usize>,
+    ) -> Result<Vec<usize>, StepError> {
+        let face_ids = self.r.visit(sid, from, |_, inst| {
+            let a = Attrs::of(inst, &inst.parts[0]);
+            let t = a.name.to_ascii_uppercase();
+            if t != "CLOSED_SHELL" && t != "OPEN_SHELL" {
+                return Err(a.fail("expected CLOSED_SHELL or OPEN_SHELL"));
+            }
+            a.refs(1, "cfs_faces")
+        })?;
+        let mut out = Vec::with_capacity(face_ids.len());
+        for fid in face_ids {
+            if let Some(&k) = seen.get(&fid) {
+                out.push(k);
+                continue;
+            }
+            let k = self.faces.len();
+            seen.insert(fid, k);
+            // A face that cannot be read keeps its number and its error.
+            let geometry = self.face(fid, sid);
+            if let Ok(g) = &geometry {
+                for u in g.bounds.iter().flat_map(|b| &b.uses) {
+                    self.edges[u.edge].faces.push(k);
+                }
+            }
+            self.faces.push(Face {
+                entity: fid,
+                shell: index,
+                geometry,
+            });
+            out.push(k);
+        }
+        Ok(out)
+    }
+
+    fn face(&mut self, fid: u64, from: u64) -> Result<FaceGeometry, StepError> {
+        let (bounds, surf, same_sense) = self.r.visit(fid, from, |_, inst| {
+            let a = Attrs::of(inst, &inst.parts[0]);
+            let t = a.name.to_ascii_uppercase();
+            if inst.parts.len() != 1 || (t != "ADVANCED_FACE" && t != "FACE_SURFACE") {
+                return Err(StepError::entity(
+                    fid,
+                    &inst.type_name(),
+                    "not supported (faces must be ADVANCED_FACE or FACE_SURFACE)",
+                ));
+            }
+            Ok((
+                a.refs(1, "bounds")?,
+                a.reference(2, "face_geometry")?,
+                a.boolean(3, "same_sense")?,
+            ))
+        })?;
+        let surface = self.r.surface(surf, fid)?;
+        let mut out = Vec::with_capacity(bounds.len());
+        for b in bounds {
+            out.push(self.bound(b, fid)?);
+        }
+        Ok(FaceGeometry {
+            surface_entity: surf,
+            surface,
+            same_sense,
+            bounds: out,
+        })
+    }
+
+    fn bound(&mut self, bid: u64, fid: u64) -> Result<Bound, StepError> {
+        let (outer, lp, orientation) = self.r.visit(bid, fid, |_, inst| {
+            let a = Attrs::of(inst, &inst.parts[0]);
+            let t = a.name.to_ascii_uppercase();
+            if t != "FACE_OUTER_BOUND" && t != "FACE_BOUND" {
+                return Err(a.fail("expected FACE_OUTER_BOUND or FACE_BOUND"));
+            }
+            Ok((
+                t == "FACE_OUTER_BOUND",
+                a.reference(1, "bound")?,
+                a.boolean(2, "orientation")?,
+            ))
+        })?;
+        enum Loop {
+            Edges(Vec<u64>),
+            Vertex(u64),
+        }
+        let l = self.r.visit(lp, bid, |_, inst| {
+            let a = Attrs::of(inst, &inst.parts[0]);
+            match a.name.to_ascii_uppercase().as_str() {
+                "EDGE_LOOP" => Ok(Loop::Edges(a.refs(1, "edge_list")?)),
+                "VERTEX_LOOP" => Ok(Loop::Vertex(a.reference(1, "loop_vertex")?)),
+                _ => Err(StepError::entity(
+                    lp,
+                    &inst.type_name(),
+                    "not supported (loops must be EDGE_LOOP or VERTEX_LOOP)",
+                )),
+            }
+        })?;
+        let mut bound = Bound {
+            entity: bid,
+            outer,
+            uses: Vec::new(),
+            vertex: None,
+        };
+        match l {
+            Loop::Vertex(v) => bound.vertex = Some(self.vertex(v, lp)?),
+            Loop::Edges(oes) => {
+                for oe in oes {
+                    let (edge, forward) = self.r.visit(oe, lp, |_, inst| {
+                        let a = Reader::expect_simple(inst, "ORIENTED_EDGE")?;
+                        Ok((
+                            a.reference(3, "edge_element")?,
+                            a.boolean(4, "orientation")?,
+                        ))
+                    })?;
+                    let e = self.edge(edge, oe)?;
+                    bound.uses.push(EdgeUse { edge: e, forward });
+                }
+                if bound.uses.is_empty() {
+                    return Err(StepError::entity(lp, "EDGE_LOOP", "the loop has no edges"));
+                }
+                if !orientation {
+                    bound.uses.reverse();
+                    for u in &mut bound.uses {
+                        u.forward = !u.forward;
+                    }
+                }
+            }
+        }
+        Ok(bound)
+    }
+
+    fn vertex(&mut self, vid: u64, from: u64) -> Result<usize, StepError> {
+        if let Some(v) = self.vertex_of.get(&vid) {
+            return v.clone();
+        }
+        let r = self
+            .r
+            .visit(vid, from, |r, inst| {
+                let a = Reader::expect_simple(inst, "VERTEX_POINT")?;
+                r.point(a.reference(1, "vertex_geometry")?, vid)
+            })
+            .map(|point| {
+                self.vertices.push(Vertex { entity: vid, point });
+                self.vertices.len() - 1
+            });
+        self.vertex_of.insert(vid, r.clone());
+        r
+    }
+
+    /// The index of edge `#eid`, reading it the first time.
+    fn edge(&mut self, eid: u64, from: u64) -> Result<usize, StepError> {
+        if let Some(&e) = self.edge_of.get(&eid) {
+            return Ok(e);
+        }
+        // The edge must at least be an EDGE_CURVE to take a number.
+        let file = self.r.file;
+        match file.type_of(eid) {
+            Some(t) if t.eq_ignore_ascii_case("EDGE_CURVE") => {}
+            Some(t) => {
+                return Err(StepError::entity(
+                    eid,
+                    t,
+                    "not supported (edges must be EDGE_CURVE)",
+                ));
+            }
+            None if !file.contains(eid) => return Err(StepError::Dangling { from, to: eid }),
+            None => return Err(StepError::entity(eid, "(complex)", "expected EDGE_CURVE")),
+        }
+        let geometry = self.edge_geometry(eid, from);
+        let k = self.edges.len();
+        self.edges.push(Edge {
+            entity: eid,
+            geometry,
+            faces: Vec::new(),
+        });
+        self.edge_of.insert(eid, k);
+        Ok(k)
+    }
+
+    fn edge_geometry(&mut self, eid: u64, from: u64) -> Result<EdgeGeometry, StepError> {
+        let (v0, v1, gid, same_sense) = self.r.visit(eid, from, |_, inst| {
+            let a = Reader::expect_simple(inst, "EDGE_CURVE")?;
+            Ok((
+                a.reference(1, "edge_start")?,
+                a.reference(2, "edge_end")?,
+                a.reference(3, "edge_geometry")?,
+                a.boolean(4, "same_sense")?,
+            ))
+        })?;
+        let start = self.vertex(v0, eid)?;
+        let end = self.vertex(v1, eid)?;
+        let curve = self.r.curve(gid, eid, Space::Model)?;
+        let pcurves = self.pcurves(gid, eid);
+        let (p0, p1) = (self.vertices[start].point, self.vertices[end].point);
+        let (t0, t1) = edge_range(&curve, p0, p1, start == end, same_sense)
+            .map_err(|m| StepError::entity(eid, "EDGE_CURVE", m))?;
+        Ok(EdgeGeometry {
+            curve,
+            start,
+            end,
+            t0,
+            t1,
+            pcurves,
+        })
+    }
+
+    /// The pcurves of a `SURFACE_CURVE`/`SEAM_CURVE`, when they can be read (they only guide the
+    /// projection onto spline surfaces, so an unreadable one is left out).
+    fn pcurves(&mut self, gid: u64, eid: u64) -> Vec<Pcurve> {
+        let assoc: Vec<u64> = self
+            .r
+            .visit(gid, eid, |_, inst: &Instance| {
+                let a = Attrs::of(inst, &inst.parts[0]);
+                match a.name.to_ascii_uppercase().as_str() {
+                    "SURFACE_CURVE" | "SEAM_CURVE" | "INTERSECTION_CURVE" => Ok(a
+                        .list(2, "associated_geometry")?
+                        .iter()
+                        .filter_map(|v| match v {
+                            Value::Ref(r) => Some(*r),
+                            _ => None,
+                        })
+                        .collect()),
+                    _ => Ok(Vec::new()),
+                }
+            })
+            .unwrap_or_default();
+        let mut out = Vec::new();
+        for p in assoc {
+            if self
+                .r
+                .file
+                .type_of(p)
+                .is_some_and(|t| t.eq_ignore_ascii_case("PCURVE"))
+            {
+                let got = self.r.visit(p, gid, |r, inst| {
+                    let a = Attrs::of(inst, &inst.parts[0]);
+                    let s = a.reference(1, "basis_surface")?;
+                    let (_, uv) = r.pcurve(p, inst)?;
+                    Ok((s, uv))
+                });
+                if let Ok((surface_entity, curve)) = got {
+                    out.push(Pcurve {
+                        surface_entity,
+                        curve,
+                    });
+                }
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,158 @@
+//! Shells weld without cracks: the faces of a closed solid make one closed manifold mesh, an
+//! open shell's boundary is exactly its free edges, and developable faces are meshed exactly
+//! developable.
+
+mod common;
+
+use common::data_dir;
+use flatcut_geom::Tolerances;
+use flatcut_mesh::tessellate::TessOptions;
+use flatcut_mesh::{Topology, TriMesh};
+use flatcut_step::{Model, Tessellation};
+
+fn tessellate(name: &str, chord: f64) -> (Model, Tessellation) {
+    let model = Model::read(&data_dir().join(format!("{name}.step"))).unwrap();
+    let all: Vec<usize> = (0..model.faces.len()).collect();
+    let t = Tessellation::new(
+        &model,
+        &all,
+        &Tolerances::DEFAULT.with_chord_mm(chord),
+        &TessOptions::DEFAULT,
+    )
+    .unwrap();
+    (model, t)
+}
+
+#[test]
+fn closed_solids_weld_into_closed_manifold_meshes() {
+    for name in ["fillet_box", "bracket_inch"] {
+        for chord in [0.2, 0.05, 0.01] {
+            let (model, t) = tessellate(name, chord);
+            assert!(model.shells[0].closed);
+            let m = t.welded(None);
+            let topo = Topology::build(&m)
+                .unwrap_or_else(|e| panic!("{name} at {chord} mm: not manifold: {e}"));
+            assert!(
+                topo.boundary_loops.is_empty(),
+                "{name} at {chord} mm: {} boundary loops (cracks)",
+                topo.boundary_loops.len()
+            );
+            assert_eq!(topo.component_count, 1);
+            // Euler characteristic of the solid's surface: 2 for the box, 0 for the bracket's
+            // genus-2 surface (a hole and a slot through the plate).
+            let chi = m.positions.len() as i64 - topo.edges.len() as i64 + m.triangles.len() as i64;
+            let want = if name == "fillet_box" { 2 } else { -2 };
+            assert_eq!(chi, want, "{name}: Euler characteristic");
+            // Outward normals: the enclosed volume is positive.
+            let vol: f64 = (0..m.triangles.len())
+                .map(|k| {
+                    let [a, b, c] = m.corners(k);
+                    a.dot(b.cross(c)) / 6.0
+                })
+                .sum();
+            assert!(vol > 0.0, "{name}: volume {vol}");
+        }
+    }
+}
+
+/// Boundary edges of a mesh as sorted vertex pairs.
+fn boundary_edges(m: &TriMesh) -> Vec<(u32, u32)> {
+    let topo = Topology::build(m).unwrap();
+    let mut out: Vec<(u32, u32)> = topo
+        .edges
+        .iter()
+        .filter(|(_, e)| e.is_boundary())
+        .map(|(&k, _)| k)
+        .collect();
+    out.sort_unstable();
+    out
+}
+
+#[test]
+fn an_open_shell_is_bounded_exactly_by_its_free_edges() {
+    let (model, t) = tessellate("hull", 0.05);
+    let m = t.welded(None);
+    let welded_ids: Vec<u32> = {
+        // welded() keeps the used shell vertices in order; map shell id → welded index.
+        let mut used = vec![false; t.positions.len()];
+        for f in &t.faces {
+            for &g in &f.global {
+                used[g as usize] = true;
+            }
+        }
+        let mut k = 0;
+        used.iter()
+            .map(|&u| {
+                let id = k;
+                k += u32::from(u);
+                if u { id } else { u32::MAX }
+            })
+            .collect()
+    };
+    let mut free: Vec<(u32, u32)> = Vec::new();
+    for e in &t.edges {
+        if model.edges[e.edge].faces.len() == 1 {
+            for w in e.vertices.windows(2) {
+                let (a, b) = (welded_ids[w[0] as usize], welded_ids[w[1] as usize]);
+                free.push((a.min(b), a.max(b)));
+            }
+        }
+    }
+    free.sort_unstable();
+    assert_eq!(boundary_edges(&m), free);
+    // The four panels meet along three shared edges: keel and both chines.
+    assert_eq!(model.adjacency().len(), 3);
+    assert_eq!(Topology::build(&m).unwrap().component_count, 1);
+}
+
+/// The largest |2π − Σ angles| over the interior vertices of a mesh.
+fn worst_angle_defect(m: &TriMesh) -> f64 {
+    let topo = Topology::build(m).unwrap();
+    let mut on_boundary = vec![false; m.positions.len()];
+    for lp in &topo.boundary_loops {
+        for &v in lp {
+            on_boundary[v as usize] = true;
+        }
+    }
+    let mut sum = vec![0.0; m.positions.len()];
+    for (k, tri) in m.triangles.iter().enumerate() {
+        let p = m.corners(k);
+        for i in 0..3 {
+            sum[tri[i] as usize] += (p[(i + 1) % 3] - p[i]).angle_between(p[(i + 2) % 3] - p[i]);
+        }
+    }
+    (0..sum.len())
+        .filter(|&v| !on_boundary[v] && sum[v] > 0.0)
+        .map(|v| (sum[v] - std::f64::consts::TAU).abs())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn developable_faces_are_meshed_exactly_developable() {
+    for (name, chord) in [
+        ("cylinder", 0.05),
+        ("cone", 0.05),
+        ("extrusion", 0.05),
+        ("fillet_box", 0.02),
+    ] {
+        let (model, t) = tessellate(name, chord);
+        for fm in &t.faces {
+            let kind = model.face(fm.face).unwrap().surface.name();
+            if kind == "plane" {
+                continue;
+            }
+            assert!(
+                fm.ruled,
+                "{name} face {}: {kind} not meshed along rulings",
+                fm.face
+            );
+            let piece = t.piece_mesh(&model, &[fm.face]);
+            let d = worst_angle_defect(&piece);
+            assert!(
+                d < 1e-11,
+                "{name} face {} ({kind}): angle defect {d}",
+                fm.face
+            );
+        }
+    }
+}

@@ -1,0 +1,213 @@
+//! STEP models through the whole tool: `inspect` of a file in inches, developable faces and
+//! smooth groups that flatten with no distortion, a project whose design is a STEP file, and the
+//! bundled kayak skin.
+
+use std::path::{Path, PathBuf};
+
+use clap::Parser as _;
+use flatcut::flatten::{FlattenParams, Method};
+use flatcut::geom::Tolerances;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn data(name: &str) -> PathBuf {
+    root().join("crates/step/tests/data").join(name)
+}
+
+fn run_cli(args: &[&str]) -> std::process::ExitCode {
+    let cli =
+        flatcut_cli::Cli::try_parse_from(std::iter::once("flatcut").chain(args.iter().copied()))
+            .expect("valid arguments");
+    flatcut_cli::run(cli).expect("the command succeeds")
+}
+
+#[test]
+fn inspect_of_a_step_file_lists_faces_edges_and_its_unit() {
+    let r =
+        flatcut::inspect::inspect_file(&data("bracket_inch.step"), &Tolerances::DEFAULT).unwrap();
+    let j = serde_json::to_value(&r).unwrap();
+    assert_eq!(j["unit"]["name"], "inch");
+    assert_eq!(j["unit"]["mm"], 25.4);
+    let faces = j["faces"].as_array().unwrap();
+    let pieces = j["pieces"].as_array().unwrap();
+    assert_eq!((faces.len(), pieces.len()), (11, 11));
+    assert_eq!(j["edges"].as_array().unwrap().len(), 27);
+    // The plate's top: 3 × 1.5 in less a 0.5 in hole and a 0.75 × 0.5 in slot, in mm² (the hole
+    // is a fine polygon when the area is integrated: 1e-5 relative at most).
+    let top = (3.0 * 1.5 - std::f64::consts::PI * 0.25 * 0.25 - 0.75 * 0.5) * 25.4 * 25.4;
+    let found = faces
+        .iter()
+        .filter_map(|f| f["area_mm2"].as_f64())
+        .filter(|a| (a - top).abs() < 1e-5 * top)
+        .count();
+    assert_eq!(found, 2, "top and bottom faces of {top} mm²");
+    let piece_area: f64 = pieces.iter().map(|p| p["area_mm2"].as_f64().unwrap()).sum();
+    let face_area: f64 = faces.iter().map(|f| f["area_mm2"].as_f64().unwrap()).sum();
+    assert!((piece_area - face_area).abs() < 1e-9 * face_area);
+    // Every edge of the closed solid joins two faces; the hole's seam joins its face to itself.
+    for e in j["edges"].as_array().unwrap() {
+        assert_eq!(e["faces"].as_array().unwrap().len(), 2, "{e}");
+    }
+    assert!(faces.iter().all(|f| f["developable"] == true));
+    let text = r.to_string();
+    assert!(
+        text.contains("unit inch (25.4 mm)") && text.contains("cylinder"),
+        "{text}"
+    );
+}
+
+/// Flattens every piece of a design (or a STEP file) and returns (name, δ2 max) per piece.
+fn delta2(path: &Path) -> Vec<(String, f64)> {
+    let (_, pieces) = flatcut::pipeline::flatten_design(
+        path,
+        &Tolerances::DEFAULT,
+        &FlattenParams::new(Method::Isometric),
+        &mut |_, _, _| {},
+    )
+    .unwrap();
+    pieces
+        .iter()
+        .map(|p| {
+            let r = flatcut::pipeline::report_piece(&p.def.name, &p.mesh, &[], None, None).unwrap();
+            (p.def.name.clone(), r.delta2_max)
+        })
+        .collect()
+}
+
+#[test]
+fn developable_step_faces_flatten_without_distortion() {
+    for model in ["cylinder", "cone", "extrusion", "fillet_box"] {
+        for (name, d) in delta2(&data(&format!("{model}.step"))) {
+            assert!(d < 1e-8, "{model} {name}: δ2 max {d}");
+        }
+    }
+}
+
+#[test]
+fn smooth_faces_form_one_piece_that_still_unfolds_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = dir.path().join("design.toml");
+    std::fs::write(
+        &design,
+        format!(
+            "[[piece]]\nname = \"box\"\n[piece.surface]\ntype = \"step\"\nfile = {:?}\ngroup = \"smooth\"\n",
+            data("fillet_box.step")
+        ),
+    )
+    .unwrap();
+    let d = flatcut::design::Design::load(&design).unwrap();
+    // Seven faces: the fillet and the two planes it blends make one piece.
+    let groups: Vec<Vec<usize>> = d
+        .pieces
+        .iter()
+        .map(|p| match &p.surface {
+            flatcut::design::SurfaceDef::Step {
+                faces: flatcut::design::StepFaces::List(f),
+                ..
+            } => f.clone(),
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(groups.len(), 5, "{groups:?}");
+    let blended = d.pieces.iter().find(|p| match &p.surface {
+        flatcut::design::SurfaceDef::Step {
+            faces: flatcut::design::StepFaces::List(f),
+            ..
+        } => f.len() == 3,
+        _ => false,
+    });
+    let blended = blended.expect("one piece of three faces");
+    assert!(blended.name.starts_with("box-f"));
+    for (name, d2) in delta2(&design) {
+        assert!(d2 < 1e-8, "{name}: δ2 max {d2}");
+    }
+}
+
+#[test]
+fn a_project_whose_design_is_a_step_file_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let project = dir.path().join("project.toml");
+    std::fs::write(
+        &project,
+        format!(
+            "name = \"cone\"\ndesign = {:?}\nmethod = \"isometric\"\nseam_mm = 5.0\n[material]\nname = \"felt\"\n[sheet]\nwidth_mm = 600.0\nheight_mm = 400.0\n[machine]\nprofile = \"knife\"\n",
+            data("cone.step")
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let code = run_cli(&[
+        "run",
+        project.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--no-send",
+        "--quiet",
+    ]);
+    assert_eq!(
+        format!("{code:?}"),
+        format!("{:?}", std::process::ExitCode::SUCCESS)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    // The whole cone frustum, cut open along its seam edge, lies flat with no distortion.
+    assert!(
+        report[0]["delta2_max"].as_f64().unwrap() < 1e-8,
+        "{}",
+        report[0]
+    );
+    for f in ["pattern.svg", "layout-1.svg", "job-1.gcode"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+}
+
+#[test]
+fn the_kayak_skin_is_cut_from_its_cad_model() {
+    // Panel areas as OpenCASCADE gives them for patterns/kayak/hull.step (make.py).
+    let r = flatcut::inspect::inspect_file(
+        &root().join("patterns/kayak/design.toml"),
+        &Tolerances::DEFAULT.with_chord_mm(0.2),
+    )
+    .unwrap();
+    let want = [
+        ("bottom starboard", 598_571.4),
+        ("side starboard", 757_222.8),
+        ("bottom port", 598_571.4),
+        ("side port", 757_222.8),
+    ];
+    assert_eq!(r.pieces.len(), 4);
+    for (p, (name, area)) in r.pieces.iter().zip(want) {
+        assert_eq!(p.name, name);
+        assert!(
+            (p.area_mm2 - area).abs() < 1e-3 * area,
+            "{name}: {}",
+            p.area_mm2
+        );
+    }
+    let out = tempfile::tempdir().unwrap();
+    let p = root().join("patterns/kayak/project.toml");
+    let code = run_cli(&[
+        "run",
+        p.to_str().unwrap(),
+        "-o",
+        out.path().to_str().unwrap(),
+        "--no-send",
+        "--quiet",
+    ]);
+    assert_eq!(
+        format!("{code:?}"),
+        format!("{:?}", std::process::ExitCode::SUCCESS)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.path().join("report.json")).unwrap())
+            .unwrap();
+    for piece in report.as_array().unwrap() {
+        assert_eq!(piece["flipped"], 0);
+        assert!(piece["stretch_max_pct"].as_f64().unwrap() < 3.0, "{piece}");
+    }
+    for f in ["pattern.svg", "pattern.dxf", "layout-1.svg", "job-1.gcode"] {
+        assert!(out.path().join(f).is_file(), "{f}");
+    }
+}
