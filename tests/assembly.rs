@@ -8,6 +8,8 @@
 use std::path::Path;
 use std::process::{Command, ExitCode};
 
+use clap::Parser as _;
+
 use crate::dxf::python_with;
 use crate::pipeline::{root, run_cli, run_project};
 
@@ -137,6 +139,69 @@ fn every_bundled_folder_has_a_project_that_runs_within_its_limits() {
             "teapot"
         ]
     );
+}
+
+/// The sail project with its material's grain rule replaced by `rule`, its files named by
+/// absolute path, written to `dir`.
+fn sail_with_grain(dir: &Path, rule: &str) -> std::path::PathBuf {
+    let sail = root().join("patterns/sail");
+    let text = std::fs::read_to_string(sail.join("project.toml")).unwrap();
+    assert!(
+        text.contains("\ngrain = \"any\"\n"),
+        "the sail's material has grain = \"any\""
+    );
+    let text = text
+        .replace("\ngrain = \"any\"\n", &format!("\n{rule}\n"))
+        .replace(
+            "design = \"design.toml\"",
+            &format!("design = {:?}", sail.join("design.toml")),
+        )
+        .replace(
+            "profile = \"loft-cutter.toml\"",
+            &format!("profile = {:?}", sail.join("loft-cutter.toml")),
+        );
+    let path = dir.join("project.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn the_materials_grain_rule_decides_whether_the_sail_panel_may_lie_across() {
+    // The panel's warp runs across it (400 mm between the battens), so along the sheet's grain
+    // its 2.5 m length stands across the 2400 mm side: a woven cloth's rule (either way, or one
+    // way) cannot place it; the laminate's (`any`) turns it lengthwise.
+    for rule in ["grain = \"0,180\"", "grain = \"fixed\""] {
+        let dir = tempfile::tempdir().unwrap();
+        let project = sail_with_grain(dir.path(), rule);
+        let out = dir.path().join("out");
+        let args = [
+            "flatcut",
+            "run",
+            project.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--quiet",
+            "--no-send",
+            "--nest-iters",
+            "5",
+        ];
+        let err =
+            flatcut_cli::run(flatcut_cli::Cli::try_parse_from(args).unwrap()).expect_err(rule);
+        let err = format!("{err:#}");
+        assert!(
+            err.contains("panel") && err.contains("does not fit"),
+            "{rule}: {err}"
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let project = sail_with_grain(dir.path(), "grain = \"any\"");
+    let out = dir.path().join("out");
+    run_project(
+        project.to_str().unwrap(),
+        &out,
+        &["--no-send", "--nest-iters", "5"],
+    );
+    assert_eq!(json(&out.join("summary.json"))["unplaced"], 0);
 }
 
 /// A spherical cap of radius `r` and geodesic radius `alpha` as an OBJ (polar grid, `n` rings).

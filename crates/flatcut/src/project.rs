@@ -28,6 +28,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use flatcut_nest::GrainDirections;
+
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
@@ -46,37 +48,19 @@ pub struct Material {
     pub grain_tolerance_deg: Option<f64>,
 }
 
-/// A material's grain rule.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Grain {
-    /// Along the grain, one way only.
-    Fixed,
-    /// Along the grain either way.
-    #[default]
-    Reversible,
-    /// No grain to keep.
-    Any,
-}
-
-impl Grain {
-    /// Parses `"fixed"`, `"0,180"` and `"any"` (the project file's spellings).
-    pub fn parse(s: &str) -> Option<Self> {
-        match s.trim().to_ascii_lowercase().replace(' ', "").as_str() {
-            "fixed" | "0" => Some(Self::Fixed),
-            "0,180" | "reversible" => Some(Self::Reversible),
-            "any" => Some(Self::Any),
-            _ => None,
-        }
-    }
-}
-
 impl Material {
-    /// The grain rule (validated at load time).
-    pub fn grain_rule(&self) -> Grain {
+    /// The grain rule (validated at load time); the nesting's own type, so the project and
+    /// `flatcut nest --grain` read the same spellings.
+    pub fn grain_rule(&self) -> GrainDirections {
         self.grain
             .as_deref()
-            .and_then(Grain::parse)
+            .and_then(GrainDirections::parse)
             .unwrap_or_default()
+    }
+
+    /// How far a piece's grain line may turn off the material's grain (degrees; 0 by default).
+    pub fn grain_tolerance(&self) -> f64 {
+        self.grain_tolerance_deg.unwrap_or(0.0)
     }
 }
 
@@ -248,7 +232,7 @@ impl Project {
             }
         }
         if let Some(g) = &self.material.grain
-            && Grain::parse(g).is_none()
+            && GrainDirections::parse(g).is_none()
         {
             return Err(format!(
                 "[material] grain must be \"fixed\", \"0,180\" or \"any\", got \"{g}\""

@@ -361,15 +361,14 @@ fn nest_stage(
     obs: &mut dyn Observer,
 ) -> Result<(Layout, Stock), RunError> {
     let stock = stock(project)?;
-    let any_grain = project.material.grain_rule() == crate::project::Grain::Any;
     let groups: Vec<NestGroup> = pieces
         .iter()
         .map(|p| {
             let mut g = NestGroup::from_piece(p, p.label.quantity as usize, false);
-            if any_grain {
-                // The material has no grain to keep: the piece turns as any piece does.
-                g.grain_angle = None;
-            }
+            // The nesting keeps a grain line along the material's grain by the material's rule
+            // (one way, either way, or not at all) within its tolerance, mirrored copies too.
+            g.grain_directions = project.material.grain_rule();
+            g.grain_tolerance_deg = project.material.grain_tolerance();
             g
         })
         .collect();
