@@ -1,6 +1,7 @@
 //! Architecture invariants as ordinary tests: the crate graph keeps its promises (2D crates know
 //! nothing of 3D, the simulator shares no code with the sender or the G-code writer, only the
-//! binary uses `anyhow`), and every source file opens with a `//!` module doc.
+//! binary uses `anyhow`), every dependency is named by its sources, and every source file opens
+//! with a `//!` module doc.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -209,5 +210,79 @@ fn every_source_file_opens_with_a_module_doc() {
     assert!(
         missing.is_empty(),
         "files without a //! module doc: {missing:?}"
+    );
+}
+
+/// The text of every `.rs` file under the given directories of a package (missing ones skipped).
+fn sources(package: &Path, dirs: &[&str]) -> String {
+    let mut files = Vec::new();
+    for d in dirs {
+        let p = package.join(d);
+        if p.is_dir() {
+            rust_files(&p, &mut files);
+        } else if p.is_file() {
+            files.push(p);
+        }
+    }
+    files
+        .iter()
+        .map(|f| std::fs::read_to_string(f).unwrap())
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// Whether `ident` occurs as a whole word (a path segment, a `use`, an attribute) in `text`.
+fn mentions(text: &str, ident: &str) -> bool {
+    let is_word = |c: char| c.is_alphanumeric() || c == '_';
+    text.match_indices(ident).any(|(i, _)| {
+        let before = text[..i].chars().next_back();
+        let after = text[i + ident.len()..].chars().next();
+        !before.is_some_and(is_word) && !after.is_some_and(is_word)
+    })
+}
+
+#[test]
+fn every_dependency_is_used() {
+    // The root package holds the end-to-end tests; its own crates live elsewhere.
+    let mut packages: Vec<PathBuf> = std::fs::read_dir(root().join("crates"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.join("Cargo.toml").exists())
+        .collect();
+    packages.push(root().join("firmware-sim"));
+    packages.push(root());
+    let mut unused = Vec::new();
+    for p in &packages {
+        let v: toml::Value =
+            toml::from_str(&std::fs::read_to_string(p.join("Cargo.toml")).unwrap()).unwrap();
+        let main: &[&str] = if *p == root() {
+            &["src"]
+        } else {
+            &["src", "build.rs"]
+        };
+        let sections: [(&str, &[&str]); 2] = [
+            ("dependencies", main),
+            ("dev-dependencies", &["src", "tests", "benches", "examples"]),
+        ];
+        for (section, dirs) in sections {
+            let text = sources(p, dirs);
+            for name in v
+                .get(section)
+                .and_then(|d| d.as_table())
+                .into_iter()
+                .flatten()
+            {
+                let ident = name.0.replace('-', "_");
+                // A package's dev-dependency on itself (to switch on a test feature) is used.
+                let itself = v["package"]["name"].as_str() == Some(name.0.as_str());
+                if !itself && !mentions(&text, &ident) {
+                    unused.push(format!("{}: [{section}] {}", p.display(), name.0));
+                }
+            }
+        }
+    }
+    assert!(
+        unused.is_empty(),
+        "dependencies no source names: {unused:#?}"
     );
 }

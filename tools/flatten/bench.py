@@ -5,8 +5,8 @@ peak memory and δ2 (symmetric Dirichlet, scored by the bench's metrics.py for b
 usage: python bench.py --bench ../shared/bench [--flatcut LABEL=BIN]... [--threads N]
                        [--method isometric] [--no-slim] [--out DIR] MESH.obj...
 
-BIN is the `bench` example of crates/flatten
-(`cargo build --release -p flatcut-flatten --example bench` → target/release/examples/bench);
+BIN is the `flatten_bench` example of crates/flatten
+(`cargo build --release -p flatcut-flatten --example flatten_bench` → target/release/examples/flatten_bench);
 several `--flatcut` give several columns (e.g. two builds, or the same build with different
 thread counts via `--threads`). Each solve runs in its own process under /usr/bin/time, so the
 peak memory (max RSS) is that solve's. Prints a Markdown table; ratios are against SLIM's time

@@ -3,9 +3,9 @@
 strip-packing instances in ../shared/bench/nesting, same machine, same run, alternating runs.
 
     python tools/nest/bench_vs_sparrow.py --time 60 --seeds 0,1,2 [--instances trousers,shirts]
-        [--flatcut target/release/examples/bench] [--out results.jsonl]
+        [--flatcut target/release/examples/nest_bench] [--out results.jsonl]
 
-Build flatcut's runner first: cargo build --release -p flatcut-nest --example bench.
+Build flatcut's runner first: cargo build --release -p flatcut-nest --example nest_bench.
 Both utilizations are measured the same way: total piece area / (H x the strip length the pieces
 reach), the length being the largest x of the placed outlines (for sparrow, computed from its
 placements; its own figure, which uses its strip width, is reported too).
@@ -61,7 +61,7 @@ def main():
     ap.add_argument("--time", type=int, default=60)
     ap.add_argument("--seeds", default="0,1,2")
     ap.add_argument("--instances", default=",".join(ALL))
-    ap.add_argument("--flatcut", default=os.path.join(ROOT, "target", "release", "examples", "bench"))
+    ap.add_argument("--flatcut", default=os.path.join(ROOT, "target", "release", "examples", "nest_bench"))
     ap.add_argument("--python", default="/work/venv/bin/python")
     ap.add_argument("--out", default=None)
     a = ap.parse_args()

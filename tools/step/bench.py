@@ -15,7 +15,7 @@ Accuracy, per mesh, against OCCT's exact faces:
 Each model is also run by flatcut at a chordal tolerance equal to the worst deviation OCCT's mesh
 showed (`flatcut @ OCCT accuracy`): the time at equal accuracy. Prints one table; needs the
 flatcut example built (`cargo build --release -p flatcut-step
---example bench`) or builds it.
+--example step_bench`) or builds it.
 """
 
 import argparse
@@ -199,9 +199,9 @@ def main():
         plate = tmp / "plate198.step"
         make_models.write_step(make_models.many_faces(8), plate)
         models = [ROOT / "crates/step/tests/data/hull.step", plate]
-    subprocess.run(["cargo", "build", "--release", "-q", "-p", "flatcut-step", "--example", "bench"],
+    subprocess.run(["cargo", "build", "--release", "-q", "-p", "flatcut-step", "--example", "step_bench"],
                    cwd=ROOT, check=True)
-    exe = ROOT / "target/release/examples/bench"
+    exe = ROOT / "target/release/examples/step_bench"
     def ours(model, chord):
         out = subprocess.run(
             [str(exe), "--chord", str(chord), "--runs", str(args.runs), "--obj", str(tmp), str(model)],

@@ -1,4 +1,4 @@
-//! Triangle meshes in millimetres: the indexed [`TriMesh`], readers and writers (OBJ, STL, PLY),
+//! Triangle meshes in millimetres: the indexed [`TriMesh`], readers (OBJ, STL, PLY) and writers (OBJ, STL),
 //! topology (edges, boundary loops, components, manifold checks), tessellation of parametric
 //! surfaces and of trimmed faces (CAD models) to a chordal tolerance, geodesic distances, and the per-triangle distortion kernel
 //! shared by the flattener and the report.

@@ -1,5 +1,5 @@
 //! Runs the nester on a strip-packing benchmark instance and prints one JSON line:
-//! `cargo run --release -p flatcut-nest --example bench -- INSTANCE.json SECONDS [SEED [WORKERS]]`
+//! `cargo run --release -p flatcut-nest --example nest_bench -- INSTANCE.json SECONDS [SEED [WORKERS]]`
 //! (`SECONDS` may be `iters:N` for an iteration budget instead).
 
 use flatcut_nest::{NestOptions, Stock, load_bench_instance, nest};

@@ -3,7 +3,7 @@
 //! chordal tolerance, one JSON line per file; with `--obj DIR` the meshes are written as OBJ with
 //! one group per face (`g face<N>`) for the accuracy check.
 //!
-//! `cargo run --release -p flatcut-step --example bench -- [--chord 0.1] [--runs 5] [--obj DIR] FILE…`
+//! `cargo run --release -p flatcut-step --example step_bench -- [--chord 0.1] [--runs 5] [--obj DIR] FILE…`
 
 use std::fmt::Write as _;
 use std::path::PathBuf;

@@ -3,7 +3,7 @@
 //! warnings), writing the map as OBJ (`v` + `vt`) for the bench's `metrics.py`.
 //!
 //! ```text
-//! cargo run --release -p flatcut-flatten --example bench -- \
+//! cargo run --release -p flatcut-flatten --example flatten_bench -- \
 //!     [--method isometric] [--threads N] [--out DIR] [--time-limit S] [--trace] \
 //!     [--cap RINGS] MESH.obj…
 //! ```
