@@ -1230,14 +1230,14 @@ G1 X23.408 Y466.597
 M3 S0.000
 G4 P0.150
 (layer cut)
-(shade-1-notch-2#1)
+(shade-1-notch-top_ring_clip#1)
 G0 X466.177 Y237.654
 M3 S1000.000
 G4 P0.150
 G1 X466.120 Y233.655 F3000.000
 M3 S0.000
 G4 P0.150
-(shade-1-notch-1#1)
+(shade-1-notch-bottom_ring_clip#1)
 G0 X462.940 Y9.780
 M3 S1000.000
 G4 P0.150
