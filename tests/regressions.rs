@@ -356,3 +356,68 @@ fn item19_gcode_output_and_nest_dxf_have_help() {
         assert!(a.get_help().is_some(), "{sub} --{arg} has no help");
     }
 }
+
+/// The outer cut contours of a pattern SVG written by `pattern`, with the grain direction
+/// (degrees) of each piece that has one.
+fn pattern_pieces(design: &Path) -> Vec<(Vec<flatcut::geom::DVec2>, Option<f64>)> {
+    let d = tempfile::tempdir().unwrap();
+    let svg = d.path().join("p.svg");
+    run(&["pattern", p(design), "-o", p(&svg)]).unwrap();
+    let text = std::fs::read_to_string(&svg).unwrap();
+    let drawing = flatcut::pattern::svg::read_svg(
+        &text,
+        "p.svg",
+        0.01,
+        &flatcut::pattern::ColourTable::default(),
+    )
+    .unwrap()
+    .drawing;
+    drawing
+        .strokes
+        .iter()
+        .filter(|s| s.is_outer() && s.closed)
+        .map(|s| {
+            let grain = s
+                .piece
+                .and_then(|k| drawing.piece_info(k))
+                .and_then(|i| i.grain)
+                .map(|(a, b)| (b - a).y.atan2((b - a).x).to_degrees());
+            (s.points.clone(), grain)
+        })
+        .collect()
+}
+
+fn extent(pts: &[flatcut::geom::DVec2]) -> flatcut::geom::DVec2 {
+    let b = flatcut::geom::Aabb2::from_points(pts.iter().copied());
+    b.max - b.min
+}
+
+#[test]
+fn item15_the_sleeve_lies_with_its_grain_along_x() {
+    let pieces = pattern_pieces(&root().join("patterns/sleeve/design.toml"));
+    assert_eq!(pieces.len(), 1);
+    let (cut, grain) = &pieces[0];
+    // 2π·55 = 345.6 around plus 2 × 10 allowance, 500 long plus 2 × 10: the arm along the grain
+    let e = extent(cut);
+    assert!(
+        (e.x - 520.0).abs() < 0.5 && (e.y - 365.6).abs() < 0.5,
+        "sleeve cut line {:.1} × {:.1} mm",
+        e.x,
+        e.y
+    );
+    let g = grain.expect("the sleeve has a grain line");
+    assert!(g.abs() < 1e-6, "grain at {g}°");
+}
+
+#[test]
+fn item15_a_square_given_at_45_degrees_comes_out_square_to_the_axes() {
+    let pieces = pattern_pieces(&corpus("square-45.toml"));
+    assert_eq!(pieces.len(), 1);
+    let e = extent(&pieces[0].0);
+    assert!(
+        (e.x - 100.0).abs() < 0.05 && (e.y - 100.0).abs() < 0.05,
+        "square {:.3} × {:.3} mm",
+        e.x,
+        e.y
+    );
+}

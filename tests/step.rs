@@ -64,6 +64,7 @@ fn delta2(path: &Path) -> Vec<(String, f64)> {
         path,
         &Tolerances::DEFAULT,
         &FlattenParams::new(Method::Isometric),
+        None,
         &mut |_, _, _| {},
     )
     .unwrap();

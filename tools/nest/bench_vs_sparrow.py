@@ -62,7 +62,7 @@ def main():
     ap.add_argument("--seeds", default="0,1,2")
     ap.add_argument("--instances", default=",".join(ALL))
     ap.add_argument("--flatcut", default=os.path.join(ROOT, "target", "release", "examples", "nest_bench"))
-    ap.add_argument("--python", default="/work/venv/bin/python")
+    ap.add_argument("--python", default=sys.executable, help="a Python with spyrrow installed")
     ap.add_argument("--out", default=None)
     a = ap.parse_args()
     rows = []

@@ -64,7 +64,16 @@ pub fn exit_code(result: anyhow::Result<ExitCode>) -> ExitCode {
         Err(e) if stdout::is_closed(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprint!("{}", error_report(&e));
-            ExitCode::FAILURE
+            // Limits that no dart could meet are a limit exceeded, not a failure to run.
+            let out_of_limits = e.chain().any(|c| {
+                c.downcast_ref::<flatcut::pipeline::PipelineError>()
+                    .is_some_and(flatcut::darting::is_out_of_limits)
+            });
+            if out_of_limits {
+                ExitCode::from(EXIT_LIMIT)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
 }

@@ -15,6 +15,8 @@ pub const MAX_SECONDS: f64 = 86_400.0;
 pub const MAX_PNG_WIDTH: u32 = 16_384;
 /// Most iterations any iterative command accepts (`--iters`, `--max-iters`, `--nest-iters`).
 pub const MAX_ITERS: usize = 10_000_000;
+/// Most darts `--max-darts` accepts in one piece.
+pub const MAX_DARTS: usize = 1000;
 /// Largest percentage a stretch or compression limit may be.
 pub const MAX_PERCENT: f64 = 1000.0;
 
@@ -128,6 +130,12 @@ pub fn png_width(s: &str) -> Result<u32, String> {
 pub fn iterations(s: &str) -> Result<usize, String> {
     let most = format!("give at most {MAX_ITERS} iterations");
     whole(s, 0..=MAX_ITERS as u64, &most).map(|v| v as usize)
+}
+
+/// Most darts in a piece: 1 to `MAX_DARTS`.
+pub fn dart_count(s: &str) -> Result<usize, String> {
+    let most = format!("give 1 to {MAX_DARTS} darts");
+    whole(s, 1..=MAX_DARTS as u64, &most).map(|v| v as usize)
 }
 
 #[cfg(test)]

@@ -287,6 +287,15 @@ pub(crate) fn check_piece(p: &PieceDef, s: f64) -> Result<(), DesignError> {
             return Err(ctx.err(format!("mark '{}' has no points", m.name)));
         }
     }
+    for (k, region) in p.no_cut.iter().enumerate() {
+        check_points(&ctx, s, &format!("no_cut region {k}"), region)?;
+        if region.len() < 3 {
+            return Err(ctx.err(format!(
+                "no_cut region {k} has {} points; a region needs at least 3",
+                region.len()
+            )));
+        }
+    }
     if let Some(g) = &p.grain {
         check_points(&ctx, s, "grain", g)?;
         if g[0] == g[1] {

@@ -42,7 +42,9 @@ pub use build::PieceGeometry;
 pub use error::DesignError;
 pub use load::Design;
 pub use part::{JoinDef, JoinEdgeDef, LineDef, PartDef, PartPieceDef};
-pub use schema::{Blend, CurveDef, MarkDef, MarkKind, P3, PieceDef, SeamDef, SurfaceDef, Units};
+pub use schema::{
+    Blend, CurveDef, DartsDef, MarkDef, MarkKind, P3, PieceDef, SeamDef, SurfaceDef, Units,
+};
 pub use step::{StepFaces, StepGroup, StepModel, StepPiece};
 
 #[cfg(test)]

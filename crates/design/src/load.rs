@@ -69,6 +69,8 @@ impl Design {
                     grain: None,
                     seam_allowance_mm: None,
                     material: None,
+                    darts: None,
+                    no_cut: Vec::new(),
                     index: 0,
                     file: name,
                     mesh_scale: 1.0,

@@ -143,6 +143,8 @@ impl PartDef {
             index: self.index,
             file: self.file.clone(),
             mesh_scale: self.mesh_scale,
+            darts: None,
+            no_cut: Vec::new(),
         }
     }
 
@@ -164,6 +166,8 @@ impl PartDef {
             index: k,
             file: self.file.clone(),
             mesh_scale: self.mesh_scale,
+            darts: None,
+            no_cut: Vec::new(),
         }
     }
 }

@@ -239,6 +239,13 @@ pub struct PieceDef {
     pub seam_allowance_mm: Option<f64>,
     #[serde(default)]
     pub material: Option<String>,
+    /// `"auto"`: cut darts where the piece cannot meet its limits otherwise; `"off"`: never
+    /// (default: as the command line or project says).
+    #[serde(default)]
+    pub darts: Option<DartsDef>,
+    /// Regions no dart or cut may cross: polygons of points on the surface.
+    #[serde(default)]
+    pub no_cut: Vec<Vec<P3>>,
     /// Position in the file (0-based), set at load time.
     #[serde(skip)]
     pub index: usize,
@@ -265,6 +272,16 @@ impl PieceDef {
             .clone()
             .unwrap_or_else(|| ["L".to_string(), "R".to_string()])
     }
+}
+
+/// Whether darts are cut into a piece.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DartsDef {
+    /// Where the piece cannot meet its limits otherwise.
+    Auto,
+    /// Never.
+    Off,
 }
 
 pub(crate) fn unit_scale() -> f64 {

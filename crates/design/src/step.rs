@@ -199,6 +199,8 @@ pub(crate) fn design_pieces(path: &Path) -> Result<Vec<PieceDef>, DesignError> {
         grain: None,
         seam_allowance_mm: None,
         material: None,
+        darts: None,
+        no_cut: Vec::new(),
         index: 0,
         file: path.display().to_string(),
         mesh_scale: 1.0,

@@ -260,6 +260,31 @@ fn seams_in_uv_cut_a_closed_cylinder_open_along_a_generator() {
 }
 
 #[test]
+fn darts_and_no_cut_regions_are_read_and_scaled() {
+    let text = "units = \"cm\"\n[[piece]]\nname = \"cap\"\ndarts = \"auto\"\nno_cut = [[[0, 0, 1], [1, 0, 1], [0, 1, 1]]]\n[piece.surface]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n";
+    let d = Design::from_toml_str(text, "t.toml").unwrap();
+    let p = &d.pieces[0];
+    assert_eq!(p.darts, Some(crate::DartsDef::Auto));
+    assert_eq!(p.no_cut[0][1], [10.0, 0.0, 10.0]);
+    let bad = text.replace("darts = \"auto\"", "darts = \"sometimes\"");
+    let e = Design::from_toml_str(&bad, "t.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("sometimes"), "{e}");
+    let short = text.replace(
+        "[[[0, 0, 1], [1, 0, 1], [0, 1, 1]]]",
+        "[[[0, 0, 1], [1, 0, 1]]]",
+    );
+    let e = Design::from_toml_str(&short, "t.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no_cut region 0") && e.contains("at least 3"),
+        "{e}"
+    );
+}
+
+#[test]
 fn huge_bspline_counts_are_refused_before_any_allocation() {
     // 2^32 × 2^32 poles with 16 points: the default knots were built from the counts first.
     let e = err_toml(

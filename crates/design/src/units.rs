@@ -119,5 +119,8 @@ pub(crate) fn scale_piece(p: &mut PieceDef, s: f64) {
     if let Some(g) = &mut p.grain {
         g.iter_mut().for_each(|q| sp(q, s));
     }
+    for region in &mut p.no_cut {
+        region.iter_mut().for_each(|q| sp(q, s));
+    }
     p.mesh_scale = s;
 }

@@ -11,6 +11,7 @@ use flatcut_mesh::TriMesh;
 use flatcut_mesh::mating::MatingSeam;
 use flatcut_report::{MatingSeamReport, Report};
 
+use crate::darting::{self, DartSettings};
 use crate::pipeline::{self, FlatDesign, FlatNotch, FlatPiece, PipelineError};
 
 /// A flattened piece ready for the pattern: its mesh (with `flat`), its design entry when it came
@@ -30,13 +31,17 @@ pub struct Flat {
     pub notches: Vec<FlatNotch>,
     /// Absent when the map was read from a file rather than computed.
     pub info: Option<FlattenInfo>,
+    /// The darts cut into the piece to meet its limits.
+    pub darts: Vec<flatcut_darts::Dart>,
 }
 
-/// Stretch and compression limits in percent, checked by the report.
+/// Stretch and compression limits in percent, checked by the report, and whether darts may be
+/// cut to meet the flattening's limits (`None`: only where the design's piece asks for them).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Limits {
     pub stretch_pct: Option<f64>,
     pub compress_pct: Option<f64>,
+    pub darts: Option<DartSettings>,
 }
 
 /// Reads a mesh file; when it already carries a flat map (`vt`), returns it as one reported piece
@@ -61,6 +66,7 @@ pub fn read_flat_mesh(path: &Path, limits: Limits) -> Result<Option<Flat>, Pipel
         mirrored: 0,
         notches: Vec::new(),
         info: None,
+        darts: Vec::new(),
     }))
 }
 
@@ -73,7 +79,8 @@ pub fn flatten_and_report(
     limits: Limits,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Vec<Flat>, PipelineError> {
-    let FlatDesign { pieces, seams, .. } = pipeline::flatten_design(path, tol, params, progress)?;
+    let FlatDesign { pieces, seams, .. } =
+        pipeline::flatten_design(path, tol, params, limits.darts.as_ref(), progress)?;
     let mut flats = pieces
         .into_iter()
         .map(
@@ -82,15 +89,17 @@ pub fn flatten_and_report(
                  mesh,
                  info,
                  notches,
+                 darts,
              }| {
                 let marks: Vec<u32> = notches.iter().map(|n| n.vertex).collect();
-                let report = pipeline::report_piece(
+                let mut report = pipeline::report_piece(
                     &def.name,
                     &mesh,
                     &marks,
                     limits.stretch_pct,
                     limits.compress_pct,
                 )?;
+                report.darts = darting::dart_reports(&darts);
                 Ok(Flat {
                     name: def.name.clone(),
                     quantity: def.quantity,
@@ -100,6 +109,7 @@ pub fn flatten_and_report(
                     report,
                     notches,
                     info: Some(info),
+                    darts,
                 })
             },
         )

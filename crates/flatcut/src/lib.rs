@@ -41,6 +41,7 @@
 //! Start reading at [`run`], then [`pipeline`].
 
 pub mod check;
+pub mod darting;
 pub mod flat;
 pub mod inspect;
 pub mod inspect_step;
@@ -49,6 +50,7 @@ pub mod pipeline;
 pub mod project;
 pub mod run;
 
+pub use flatcut_darts as darts;
 pub use flatcut_design as design;
 pub use flatcut_flatten as flatten;
 pub use flatcut_gcode as gcode;

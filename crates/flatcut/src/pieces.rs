@@ -47,6 +47,7 @@ fn build_one(f: &Flat, name: &str, s: &PieceSettings) -> Result<Piece, PipelineE
     let ctx = PieceContext {
         def: f.def.as_ref(),
         report: Some(&f.report),
+        darts: &f.darts,
         seam_mm: s.seam_mm,
         size: String::new(),
         corner: s.corner,
@@ -56,11 +57,14 @@ fn build_one(f: &Flat, name: &str, s: &PieceSettings) -> Result<Piece, PipelineE
 }
 
 /// The mirror image of a flattened piece (x → −x in the plane), cut `mirrored` times: the other
-/// side of a pair. Marks, lines and the grain are carried through the mirrored map.
+/// side of a pair. Marks, lines, darts and the grain are carried through the mirrored map.
 pub fn mirror(f: &Flat) -> Flat {
     let mut g = f.clone();
     if let Some(flat) = &mut g.mesh.flat {
         flat.iter_mut().for_each(|q| q.x = -q.x);
+    }
+    for d in &mut g.darts {
+        d.drill_2d.x = -d.drill_2d.x;
     }
     if let Some(def) = &mut g.def {
         def.quantity = f.mirrored;

@@ -18,6 +18,8 @@ use flatcut_pattern::{
 };
 use flatcut_report::{Report, ReportError};
 
+use crate::darting::{self, DartSettings};
+
 /// Why a pipeline stage failed; every variant names the piece or file.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -38,6 +40,11 @@ pub enum PipelineError {
     Mesh(#[from] flatcut_mesh::MeshIoError),
     #[error("piece '{piece}': {reason}")]
     Piece { piece: String, reason: String },
+    #[error("piece '{piece}': {source}")]
+    Darts {
+        piece: String,
+        source: flatcut_darts::DartError,
+    },
     #[error(
         "{file}: pieces '{first}' and '{second}' would share the name '{safe}' in ids and file names; rename one of them"
     )]
@@ -92,6 +99,8 @@ pub struct FlatPiece {
     pub info: FlattenInfo,
     /// Its notches: the notches of its mating seams and its own notch marks.
     pub notches: Vec<FlatNotch>,
+    /// The darts cut into the piece to meet its limits (`mesh` is then cut along them).
+    pub darts: Vec<flatcut_darts::Dart>,
 }
 
 /// A design flattened: every piece (a `[[piece]]` or a region of a `[[part]]`) and the mating
@@ -110,6 +119,7 @@ pub fn flatten_design(
     path: &Path,
     tol: &Tolerances,
     params: &FlattenParams,
+    darts: Option<&DartSettings>,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<FlatDesign, PipelineError> {
     let design = Design::load(path)?;
@@ -158,22 +168,42 @@ pub fn flatten_design(
             }
         }
     }
+    let joined: Vec<bool> = (0..asm.pieces.len())
+        .map(|k| {
+            asm.seams
+                .iter()
+                .any(|s| s.sides.iter().any(|d| d.piece == k))
+        })
+        .collect();
     let pieces = asm
         .pieces
         .into_iter()
         .zip(flats)
         .zip(notches)
-        .map(|((p, f), notches)| {
-            let mut mesh = p.mesh;
-            mesh.flat = Some(f.uv);
-            FlatPiece {
-                def: p.def,
-                mesh,
-                info: f.info,
-                notches,
+        .zip(joined)
+        .map(|(((p, f), notches), joined)| {
+            if joined {
+                let mut info = f.info;
+                if darting::wanted(Some(&p.def), darts) {
+                    info.warnings.push(format!(
+                        "{}: no darts are cut into a piece joined to others by seams (a dart would move its seams); split it by a style line instead",
+                        p.def.name
+                    ));
+                }
+                let mut mesh = p.mesh;
+                mesh.flat = Some(f.uv);
+                Ok(FlatPiece {
+                    def: p.def,
+                    mesh,
+                    info,
+                    notches,
+                    darts: Vec::new(),
+                })
+            } else {
+                dart_if_wanted(p.def, p.mesh, f, notches, params, darts)
             }
         })
-        .collect();
+        .collect::<Result<Vec<_>, PipelineError>>()?;
     Ok(FlatDesign {
         design,
         pieces,
@@ -181,22 +211,52 @@ pub fn flatten_design(
     })
 }
 
-/// Flattens one piece's mesh.
-pub fn flatten_piece(
+/// A piece no seam joins, flattened: where it exceeds its limits and darts are wanted
+/// ([`darting::wanted`]), darted and flattened again with the limits held; its notches are found
+/// again in the darted mesh by their 3D position (the cut adds and splits vertices).
+fn dart_if_wanted(
     def: PieceDef,
-    mut mesh: TriMesh,
+    mesh: TriMesh,
+    f: flatcut_flatten::Flattening,
+    notches: Vec<FlatNotch>,
     params: &FlattenParams,
+    darts: Option<&DartSettings>,
 ) -> Result<FlatPiece, PipelineError> {
-    let f = flatcut_flatten::flatten(&mesh, params).map_err(|source| PipelineError::Flatten {
-        piece: def.name.clone(),
-        source,
-    })?;
-    mesh.flat = Some(f.uv);
+    let settings = darting::wanted(Some(&def), darts).then(|| darts.copied().unwrap_or_default());
+    let at: Vec<DVec3> = notches
+        .iter()
+        .map(|n| mesh.positions[n.vertex as usize])
+        .collect();
+    let (mesh, info, darts) = darting::finish(
+        &def.name,
+        Some(&def),
+        mesh,
+        f.uv,
+        f.info,
+        params,
+        settings.as_ref(),
+    )?;
+    let notches = if darts.is_empty() {
+        notches
+    } else {
+        notches
+            .into_iter()
+            .zip(at)
+            .filter_map(|(n, p)| {
+                let v = mesh.positions.iter().position(|q| q.distance(p) < 1e-9)?;
+                Some(FlatNotch {
+                    name: n.name,
+                    vertex: v as u32,
+                })
+            })
+            .collect()
+    };
     Ok(FlatPiece {
         def,
         mesh,
-        info: f.info,
-        notches: Vec::new(),
+        info,
+        notches,
+        darts,
     })
 }
 
@@ -275,6 +335,9 @@ fn signed_area(p: &[DVec2]) -> f64 {
 pub struct PieceContext<'a> {
     pub def: Option<&'a PieceDef>,
     pub report: Option<&'a Report>,
+    /// The piece's darts: their mouths get notches, their points drill marks and a fold arrow
+    /// says which way each is pressed.
+    pub darts: &'a [flatcut_darts::Dart],
     /// Seam allowance (mm) when the design gives none.
     pub seam_mm: Option<f64>,
     pub size: String,
@@ -289,8 +352,9 @@ const LINE_STEP_MM: f64 = 1.0;
 
 /// Builds the pattern piece of a flattened mesh: the flattened boundary is the sew line, notches
 /// sit on their boundary vertices (inserted where they are, never snapped), drill/reference
-/// points, stitch lines and the grain line are carried through the map, and the label carries
-/// the distortion summary.
+/// points, stitch lines and the grain line are carried through the map, the label carries the
+/// distortion summary, and the piece is turned with its grain along +x (without one, its
+/// minimum-area bounding box square to the axes, the longer side along x).
 pub fn piece_from_flat(
     name: &str,
     mesh: &TriMesh,
@@ -298,6 +362,7 @@ pub fn piece_from_flat(
     opts: &PieceOptions,
 ) -> Result<Piece, PipelineError> {
     let (outline, ids) = flat_boundary(name, mesh)?;
+    let (outline, ids) = bridge_darts(outline, ids, ctx.darts);
     let flat = mesh.flat.as_ref().expect("checked by flat_boundary");
     let mut input = PieceInput::new(name, outline);
     input.corner_style = ctx.corner;
@@ -403,6 +468,9 @@ pub fn piece_from_flat(
             distortion: None,
         };
     }
+    for d in ctx.darts {
+        dart_marks(&mut input, d, &ids, flat);
+    }
     if ctx.def.and_then(|d| d.seam_allowance_mm).is_none()
         && let Some(w) = ctx.seam_mm
     {
@@ -414,7 +482,109 @@ pub fn piece_from_flat(
             r.stretch_max_pct, r.compress_max_pct, r.delta2_mean
         ));
     }
+    // The flattening leaves the piece at the solver's rotation: turn it square (grain along +x,
+    // else its smallest bounding box) before it is built.
+    input.orient();
     Ok(Piece::build(&input, &opts)?)
+}
+
+/// Where a dart's fold arrow sits: this fraction of the way from the mouth to the point (at
+/// most [`FOLD_ARROW_DEPTH_MM`] in), reaching this fraction of the way to the first leg.
+const FOLD_ARROW_DEPTH: f64 = 0.25;
+const FOLD_ARROW_DEPTH_MM: f64 = 15.0;
+const FOLD_ARROW_REACH: f64 = 0.8;
+/// Half-width of the fold arrow's head relative to its length.
+const FOLD_HEAD: f64 = 0.3;
+
+/// The outline with every dart closed across its mouth: a folded dart's wedge stays in the
+/// piece (its legs are sewn, its intake folded), so the sew line runs straight from mouth to
+/// mouth and the legs are drawn inside.
+fn bridge_darts(
+    outline: Vec<DVec2>,
+    ids: Vec<u32>,
+    darts: &[flatcut_darts::Dart],
+) -> (Vec<DVec2>, Vec<u32>) {
+    let n = ids.len();
+    let mut drop = vec![false; n];
+    for d in darts {
+        let at = |v: u32| ids.iter().position(|&i| i == v);
+        let apex = *d.legs.sides[0].last().unwrap_or(&d.legs.sides[0][0]);
+        let (Some(i0), Some(i1), Some(ia)) =
+            (at(d.legs.sides[0][0]), at(d.legs.sides[1][0]), at(apex))
+        else {
+            continue;
+        };
+        // The stretch between the mouths that holds the point.
+        let ahead = |from: usize, to: usize| (to + n - from) % n;
+        let (from, to) = if ahead(i0, ia) < ahead(i0, i1) {
+            (i0, i1)
+        } else {
+            (i1, i0)
+        };
+        let mut k = (from + 1) % n;
+        while k != to {
+            drop[k] = true;
+            k = (k + 1) % n;
+        }
+    }
+    outline
+        .into_iter()
+        .zip(ids)
+        .zip(&drop)
+        .filter(|(_, d)| !**d)
+        .map(|(p, _)| p)
+        .unzip()
+}
+
+/// The point a fraction `f` along a polyline's length.
+fn along(line: &[DVec2], f: f64) -> DVec2 {
+    let total: f64 = line.windows(2).map(|w| w[0].distance(w[1])).sum();
+    let mut left = f.clamp(0.0, 1.0) * total;
+    for w in line.windows(2) {
+        let l = w[0].distance(w[1]);
+        if left <= l && l > 0.0 {
+            return w[0].lerp(w[1], left / l);
+        }
+        left -= l;
+    }
+    line.last().copied().unwrap_or(DVec2::ZERO)
+}
+
+/// A folded dart on the pattern: its legs as a sew line inside the piece (mouth, point, mouth),
+/// a notch at each leg's mouth, the drill mark short of its point, and the fold arrow inside
+/// the wedge pointing to the leg the intake is pressed towards (its first leg).
+fn dart_marks(input: &mut PieceInput, d: &flatcut_darts::Dart, ids: &[u32], flat: &[DVec2]) {
+    let legs = d.leg_polylines(flat);
+    let mut sew = legs[0].clone();
+    sew.extend(legs[1].iter().rev().skip(1));
+    input.sew_lines.push(sew);
+    for v in [d.legs.sides[0][0], d.legs.sides[1][0]] {
+        if let Some(k) = ids.iter().position(|&i| i == v) {
+            input.marks.push(Mark {
+                kind: MarkKind::Notch,
+                pos: input.outline[k],
+                boundary_index: Some(k),
+            });
+        }
+    }
+    input.marks.push(Mark {
+        kind: MarkKind::Drill,
+        pos: d.drill_2d,
+        boundary_index: None,
+    });
+    let depth = (FOLD_ARROW_DEPTH * d.leg_2d_mm[0]).min(FOLD_ARROW_DEPTH_MM);
+    let f = depth / d.leg_2d_mm[0].max(f64::MIN_POSITIVE);
+    let (q0, q1) = (along(&legs[0], f), along(&legs[1], f));
+    let c = 0.5 * (q0 + q1);
+    let len = FOLD_ARROW_REACH * c.distance(q0);
+    if len > 0.0 {
+        let dir = (q0 - c).normalize_or_zero();
+        let tip = c + dir * len;
+        let side = dir.perp() * (FOLD_HEAD * len);
+        let back = tip - dir * (FOLD_HEAD * len);
+        input.lines.push(vec![c, tip]);
+        input.lines.push(vec![back + side, tip, back - side]);
+    }
 }
 
 /// A rigid group of strokes nested as one item: a pattern piece's drawing in its own frame.
@@ -584,13 +754,8 @@ pub fn nest_groups_on_hides(
 
 fn place(d: &Drawing, pl: &Placement, instance: u32, item: u32) -> Drawing {
     let mut out = d.clone();
+    out.apply_placement(pl);
     for s in &mut out.strokes {
-        for p in &mut s.points {
-            *p = pl.apply(*p);
-        }
-        if pl.mirror && s.closed && s.points.len() > 1 {
-            s.points[1..].reverse();
-        }
         // Unique piece numbers per placed instance so the G-code writer keeps holes before their
         // outer contour per instance.
         s.piece = Some(item * 10_000 + instance);
@@ -599,7 +764,6 @@ fn place(d: &Drawing, pl: &Placement, instance: u32, item: u32) -> Drawing {
     out.pieces.truncate(1);
     for info in &mut out.pieces {
         info.piece = item * 10_000 + instance;
-        info.grain = info.grain.map(|(a, b)| (pl.apply(a), pl.apply(b)));
     }
     out
 }

@@ -6,6 +6,7 @@
 //! design = "design.toml"        # relative to the project file
 //! method = "developable"        # flattening method (default isometric)
 //! seam_mm = 10.0                # allowance where the design gives none
+//! darts = "auto"                # optional: cut darts where a piece exceeds the limits
 //! [material]
 //! name = "parchment"
 //! max_stretch_pct = 2.0
@@ -144,6 +145,9 @@ pub struct Project {
     pub method: Option<String>,
     #[serde(default)]
     pub seam_mm: Option<f64>,
+    /// `"auto"`: cut darts into the pieces that cannot meet the material's limits otherwise.
+    #[serde(default)]
+    pub darts: Option<flatcut_design::DartsDef>,
     pub material: Material,
     pub sheet: Sheet,
     pub machine: Machine,

@@ -183,8 +183,10 @@ mod tests {
             kind: StrokeKind::Internal,
             id: "zig".into(),
         }]);
-        let mut opts = GcodeOptions::default();
-        opts.reorder = false;
+        let opts = GcodeOptions {
+            reorder: false,
+            ..GcodeOptions::default()
+        };
         let text = plan(&d, &Profile::pen_hpgl(), &opts)
             .unwrap()
             .to_hpgl()

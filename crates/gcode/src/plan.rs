@@ -530,8 +530,10 @@ mod tests {
             id: "disc".into(),
         }]);
         for profile in [Profile::knife(), Profile::laser(), Profile::pen()] {
-            let mut opts = GcodeOptions::default();
-            opts.arcs = false;
+            let opts = GcodeOptions {
+                arcs: false,
+                ..GcodeOptions::default()
+            };
             let text = plan(&d, &profile, &opts).unwrap().to_gcode();
             let moves: Vec<&str> = text.lines().filter(|l| l.starts_with("G1 X")).collect();
             for w in moves.windows(2) {

@@ -477,7 +477,7 @@ impl Profile {
                 if !(k.overcut_mm.is_finite() && k.overcut_mm >= 0.0) {
                     return Err(self.invalid("knife.overcut_mm", k.overcut_mm, "must be >= 0"));
                 }
-                if !(k.z_down < k.z_up) {
+                if k.z_down.partial_cmp(&k.z_up) != Some(std::cmp::Ordering::Less) {
                     return Err(self.invalid("knife.z_down", k.z_down, "must be below z_up"));
                 }
             }
@@ -509,15 +509,15 @@ impl Profile {
                     reason: "layers are engrave, draw and cut",
                 });
             }
-            if let Some(f) = l.feed_mm_min {
-                if !pos(f) {
-                    return Err(self.invalid("layers.*.feed_mm_min", f, "must be > 0"));
-                }
+            if let Some(f) = l.feed_mm_min
+                && !pos(f)
+            {
+                return Err(self.invalid("layers.*.feed_mm_min", f, "must be > 0"));
             }
-            if let Some(p) = l.power_pct {
-                if !(p.is_finite() && (0.0..=100.0).contains(&p)) {
-                    return Err(self.invalid("layers.*.power_pct", p, "must be in [0, 100]"));
-                }
+            if let Some(p) = l.power_pct
+                && !(p.is_finite() && (0.0..=100.0).contains(&p))
+            {
+                return Err(self.invalid("layers.*.power_pct", p, "must be in [0, 100]"));
             }
             if let Some(t) = &l.tabs
                 && !(t.count <= 64 && t.width_mm.is_finite() && t.width_mm > 0.0)

@@ -9,7 +9,7 @@
 //! [`StrokeKind`] (what the line is on the pattern: boundary, notch, drill hole, grain line, …),
 //! so writers choose DXF layers and cut order from types, never from the stroke's id text.
 
-use crate::piece::LabelInfo;
+use crate::piece::{LabelInfo, Placement};
 use flatcut_geom::{Aabb2, DVec2};
 use serde::{Deserialize, Serialize};
 
@@ -125,6 +125,53 @@ impl Drawing {
 
     pub fn bbox(&self) -> Aabb2 {
         Aabb2::from_points(self.strokes.iter().flat_map(|s| s.points.iter().copied()))
+    }
+
+    /// Moves the drawing by a rigid placement: every point and grain line mapped, closed strokes
+    /// kept counter-clockwise under a mirror, and, under a mirror, each piece's text reflected in
+    /// place first so it reads rightly on the sheet rather than mirror-written.
+    pub fn apply_placement(&mut self, pl: &Placement) {
+        if pl.mirror {
+            self.reflect_text_in_place();
+        }
+        for s in &mut self.strokes {
+            for p in &mut s.points {
+                *p = pl.apply(*p);
+            }
+            if pl.mirror && s.closed && s.points.len() > 1 {
+                s.points[1..].reverse();
+            }
+        }
+        for info in &mut self.pieces {
+            info.grain = info.grain.map(|(a, b)| (pl.apply(a), pl.apply(b)));
+        }
+    }
+
+    /// Reflects each piece's text strokes about the vertical line through their middle
+    /// (x → 2c − x). A label is written upright in its piece's frame, so after this a mirrored
+    /// placement (x → −x) leaves it readable, in the same room.
+    fn reflect_text_in_place(&mut self) {
+        let mut pieces: Vec<Option<u32>> = Vec::new();
+        for s in self.strokes.iter().filter(|s| s.kind == StrokeKind::Text) {
+            if !pieces.contains(&s.piece) {
+                pieces.push(s.piece);
+            }
+        }
+        for piece in pieces {
+            let text = |s: &&mut Stroke| s.kind == StrokeKind::Text && s.piece == piece;
+            let (lo, hi) = self
+                .strokes
+                .iter_mut()
+                .filter(text)
+                .flat_map(|s| s.points.iter())
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                    (lo.min(p.x), hi.max(p.x))
+                });
+            let c2 = lo + hi;
+            for s in self.strokes.iter_mut().filter(text) {
+                s.points.iter_mut().for_each(|p| p.x = c2 - p.x);
+            }
+        }
     }
 
     /// Total length of the strokes on `layer`, in mm (closed strokes include their closing segment).

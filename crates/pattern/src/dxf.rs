@@ -278,7 +278,10 @@ pub fn write_pieces(placed: &[PlacedPiece], layers: DxfLayers, chord_tol: f64) -
             continue;
         };
         for it in &mut b.items {
+            // The piece's sew line (closed) is written as fitted; inner sew lines (dart legs,
+            // open) as drawn.
             if it.stroke.kind == StrokeKind::Sew
+                && it.stroke.closed
                 && let Some((pts, bulges)) = &sews[k]
             {
                 it.points = Some(pts.clone());

@@ -11,10 +11,10 @@ pub mod dxf;
 pub mod dxf_read;
 pub mod error;
 pub mod fit;
-pub mod font;
 pub mod io;
 pub mod piece;
 pub mod poly;
+pub mod room;
 pub mod seam;
 pub mod svg;
 

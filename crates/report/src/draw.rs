@@ -2,12 +2,12 @@
 //! column per input), a histogram, a PNG rendered from the same SVG by resvg, and a
 //! self-contained HTML page.
 //!
-//! Legend and titles are drawn with the pattern crate's single-stroke font as paths, so the SVG,
+//! Legend and titles are drawn with the single-stroke font (flatcut-font) as paths, so the SVG,
 //! the PNG and the browser show identical text without any font file.
 
+use flatcut_font as font;
 use flatcut_geom::{Aabb2, DVec2};
 use flatcut_mesh::TriMesh;
-use flatcut_pattern::font;
 use svg::Document;
 use svg::node::element::{Group, Path, Rectangle};
 
@@ -553,6 +553,17 @@ pub fn html_report(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
             }
             h.push_str("</table>\n");
         }
+        if !r.darts.is_empty() {
+            h.push_str("<h3>Darts</h3><table><tr><th>mouth 3D (mm)</th><th>point 3D (mm)</th><th>length mm</th><th>legs 2D mm</th><th>opening mm</th></tr>\n");
+            for d in &r.darts {
+                h.push_str(&format!(
+                    "<tr><td>({:.1}, {:.1}, {:.1})</td><td>({:.1}, {:.1}, {:.1})</td><td>{:.1}</td><td>{:.2} / {:.2}</td><td>{:.1}</td></tr>\n",
+                    d.start_3d[0], d.start_3d[1], d.start_3d[2], d.apex_3d[0], d.apex_3d[1], d.apex_3d[2],
+                    d.length_3d_mm, d.leg_2d_mm[0], d.leg_2d_mm[1], d.opening_mm
+                ));
+            }
+            h.push_str("</table>\n");
+        }
         let over = !c.report.regions.is_empty();
         h.push_str(if over {
             "<h3>Regions beyond the limits</h3>\n"
@@ -673,7 +684,16 @@ mod tests {
             wn < ANNOTATION_REF_W && ww > 4.0 * ANNOTATION_REF_W,
             "{wn} {ww}"
         );
-        assert!(hn <= 0.7 * TEXT_H + 1e-9, "nominal legend text {hn}");
+        // The measure's name at its nominal cap height (0.7 × TEXT_H): as tall as the font
+        // writes it there, parentheses included.
+        let name = Measure::Stretch.title();
+        let nominal =
+            text_height(&font::text_strokes(name, DVec2::ZERO, 0.7 * TEXT_H, DVec2::X).concat());
+        assert!(nominal > 0.7 * TEXT_H, "{nominal}");
+        assert!(
+            (hn - nominal).abs() < 0.01,
+            "nominal legend text {hn} vs {nominal}"
+        );
         // The wide drawing's annotations grow by its nominal width over the reference width, so
         // shrunk to the same page they read about as large (within the grown margins).
         let u = 2.0 * (800.0 + 2.0 * MARGIN) / ANNOTATION_REF_W;

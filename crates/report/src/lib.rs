@@ -10,11 +10,13 @@
 //! **Architecture invariant:** the per-face kernel is `flatcut_mesh::face_distortion`, the same the
 //! flattener uses, so the report and the optimiser can never disagree on a number.
 
+pub mod darts;
 pub mod draw;
 pub mod measure;
 pub mod per_face;
 pub mod seams;
 
+pub use darts::DartReport;
 pub use draw::{Column, heatmap_svg, histogram_svg, html_report, render_png};
 pub use measure::{
     BoundarySegment, FaceMeasure, Measure, Region, Report, ReportError, ReportOptions, Stats,

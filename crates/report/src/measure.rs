@@ -256,6 +256,9 @@ pub struct Report {
     /// The mating seams this piece takes part in (filled by whoever knows the other pieces: the
     /// seams of a design, or the coincident boundaries of several flattened meshes).
     pub mating_seams: Vec<crate::MatingSeamReport>,
+    /// The darts cut into the piece to meet the limits (absent when there are none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub darts: Vec<crate::DartReport>,
     #[serde(skip)]
     pub per_face: Vec<FaceMeasure>,
 }
@@ -487,6 +490,7 @@ impl Report {
             regions,
             hot_spots,
             mating_seams: Vec::new(),
+            darts: Vec::new(),
             per_face,
         })
     }

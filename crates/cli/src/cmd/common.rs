@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
+use flatcut::darting::DartSettings;
 use flatcut::flat::Limits;
 use flatcut::flatten::{FlattenHooks, FlattenParams, FlattenProgress, Method};
 use flatcut::geom::Tolerances;
@@ -37,6 +38,19 @@ pub struct FlattenArgs {
     /// offsets on them, in mm; beyond it the command exits with code 3.
     #[arg(long, default_value_t = flatcut::report::DEFAULT_SEAM_TOLERANCE_MM, value_name = "MM", value_parser = values::nonneg_mm)]
     pub seam_tolerance: f64,
+    /// `auto`: cut darts where a piece exceeds --max-stretch/--max-compress (the fewest darts
+    /// that bring every face within them), then flatten with the limits held.
+    #[arg(long, value_name = "MODE", value_parser = parse_darts)]
+    pub darts: Option<DartMode>,
+    /// Most darts in one piece.
+    #[arg(long, value_name = "N", default_value_t = DartSettings::default().max_darts, value_parser = values::dart_count)]
+    pub max_darts: usize,
+    /// Least distance between two darts (mm).
+    #[arg(long, value_name = "MM", default_value_t = DartSettings::default().min_spacing_mm, value_parser = values::nonneg_mm)]
+    pub dart_min_spacing: f64,
+    /// How far short of its point a dart's drill mark sits (mm).
+    #[arg(long, value_name = "MM", default_value_t = DartSettings::default().drill_offset_mm, value_parser = values::nonneg_mm)]
+    pub dart_drill: f64,
 }
 
 /// Shows a flattening's progress (stage, iteration of the cap, objective) as a bar on stderr
@@ -62,6 +76,20 @@ pub fn progress_hooks(hooks: FlattenHooks, len: usize) -> (FlattenHooks, indicat
         shown.set_message(format!("energy {:.6e}", p.energy));
     }));
     (hooks, bar)
+}
+
+/// `--darts`: when darts are cut.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DartMode {
+    /// Where a piece exceeds its limits.
+    Auto,
+}
+
+fn parse_darts(s: &str) -> Result<DartMode, String> {
+    match s {
+        "auto" => Ok(DartMode::Auto),
+        _ => Err(format!("unknown dart mode '{s}'; the mode is auto")),
+    }
 }
 
 pub fn parse_method(s: &str) -> Result<Method, String> {
@@ -98,6 +126,22 @@ impl FlattenArgs {
             p = p.with_max_iters(n);
         }
         Ok(p)
+    }
+
+    /// The dart settings when darts are asked for on the command line.
+    pub fn darts(&self) -> anyhow::Result<Option<DartSettings>> {
+        if self.darts != Some(DartMode::Auto) {
+            return Ok(None);
+        }
+        anyhow::ensure!(
+            self.max_stretch.is_some() || self.max_compress.is_some(),
+            "--darts auto needs --max-stretch and/or --max-compress: the limits the darts are for"
+        );
+        Ok(Some(DartSettings {
+            max_darts: self.max_darts,
+            min_spacing_mm: self.dart_min_spacing,
+            drill_offset_mm: self.dart_drill,
+        }))
     }
 
     pub fn tolerances(&self) -> anyhow::Result<Tolerances> {
@@ -178,6 +222,7 @@ pub fn load_flat(
     let limits = Limits {
         stretch_pct: limits.0,
         compress_pct: limits.1,
+        darts: fa.darts()?,
     };
     let t0 = std::time::Instant::now();
     let flats = flatcut::flat::load_flat(path, &tol, &params, limits, &mut |name, k, n| {

@@ -44,20 +44,29 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         let f = flatcut::flatten::flatten(&mesh, &params);
         bar.finish_and_clear();
         let f = f.map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?;
-        for w in &f.info.warnings {
+        let settings = a.flatten.darts()?;
+        let (darted, info, darts) =
+            flatcut::darting::finish(&name, None, mesh, f.uv, f.info, &params, settings.as_ref())
+                .map_err(|e| anyhow::Error::new(e).context(a.file.display().to_string()))?;
+        mesh = darted;
+        if !darts.is_empty() {
+            let total: f64 = darts.iter().map(|d| d.length_3d_mm).sum();
+            eprintln!("  {} darts, {total:.1} mm in all", darts.len());
+        }
+        for w in &info.warnings {
             eprintln!("warning: {w}");
         }
-        mesh.flat = Some(f.uv);
-        let report = flatcut::pipeline::report_piece(
+        let mut report = flatcut::pipeline::report_piece(
             &name,
             &mesh,
             &[],
             a.flatten.max_stretch,
             a.flatten.max_compress,
         )?;
+        report.darts = flatcut::darting::dart_reports(&darts);
         eprintln!(
             "  {} iterations, mean δ2 {:.6}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
-            f.info.iterations,
+            info.iterations,
             report.delta2_mean,
             report.stretch_max_pct,
             report.compress_max_pct,
@@ -71,7 +80,8 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             quantity: 1,
             mirrored: 0,
             notches: Vec::new(),
-            info: Some(f.info),
+            info: Some(info),
+            darts,
         }]
     } else {
         let limits = (a.flatten.max_stretch, a.flatten.max_compress);

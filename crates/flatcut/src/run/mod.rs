@@ -179,6 +179,8 @@ fn limits(project: &Project) -> Limits {
     Limits {
         stretch_pct: project.material.max_stretch_pct,
         compress_pct: project.material.max_compress_pct,
+        darts: (project.darts == Some(flatcut_design::DartsDef::Auto))
+            .then(crate::darting::DartSettings::default),
     }
 }
 

@@ -1,0 +1,223 @@
+//! Darts and splitting seams that bring a piece within its material's stretch and compression
+//! limits.
+//!
+//! A doubly curved piece cannot lie flat within a few percent of stretch; pattern makers cut
+//! darts (wedges from the outline to a point inside, sewn shut) or split the piece. [`place`]
+//! finds the fewest darts that let every face of the piece flatten within the limits, as short
+//! as the search resolves, and returns the cut piece flattened with the limits held as hard
+//! constraints ([`limits`]) and the two legs of every dart kept at equal 2D length edge by edge
+//! ([`solve`]).
+//!
+//! A dart is the geodesic that leaves the outline at right angles, cut along the mesh edges next
+//! to it ([`trace`]); darts never touch each other, the outline (except at their mouths), a seam,
+//! a mark or a `no_cut` region ([`keepout`]). How the count, the starts and the lengths are chosen
+//! is in [`mod@place`].
+//!
+//! **Architecture invariant:** the flattening itself is the flattener's (its kernel and its
+//! Newton solver); this crate decides where to cut and proves the limits with that solver.
+
+pub mod cut;
+pub mod embed;
+pub mod keepout;
+pub mod limits;
+pub mod place;
+pub mod relaxed;
+pub mod solve;
+pub mod trace;
+
+use flatcut_geom::{DVec2, DVec3};
+use flatcut_mesh::{TopologyError, TriMesh};
+
+pub use cut::{CutMesh, Legs};
+pub use keepout::KeepOut;
+pub use limits::Band;
+pub use place::place;
+
+/// What to place darts for.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct DartOptions {
+    /// The material limits every face must meet.
+    pub band: Band,
+    /// Most darts allowed.
+    pub max_darts: usize,
+    /// Least distance between the mouths of two darts and between a dart's point and another
+    /// dart (mm).
+    pub min_spacing_mm: f64,
+    /// How far short of the dart's point its drill mark sits (mm, along the dart).
+    pub drill_offset_mm: f64,
+    /// Vertices no dart may use (no_cut regions, marks); `None`: none.
+    pub keep_out: Option<KeepOut>,
+}
+
+impl DartOptions {
+    pub const DEFAULT_MAX_DARTS: usize = 24;
+    pub const DEFAULT_MIN_SPACING_MM: f64 = 10.0;
+    pub const DEFAULT_DRILL_OFFSET_MM: f64 = 5.0;
+
+    /// Darts for stretch and compression limits in percent, with the default count, spacing and
+    /// drill offset.
+    pub fn new(stretch_pct: Option<f64>, compress_pct: Option<f64>) -> Self {
+        Self {
+            band: Band::from_pct(stretch_pct, compress_pct),
+            max_darts: Self::DEFAULT_MAX_DARTS,
+            min_spacing_mm: Self::DEFAULT_MIN_SPACING_MM,
+            drill_offset_mm: Self::DEFAULT_DRILL_OFFSET_MM,
+            keep_out: None,
+        }
+    }
+
+    pub fn with_max_darts(mut self, n: usize) -> Self {
+        self.max_darts = n;
+        self
+    }
+
+    pub fn with_min_spacing_mm(mut self, mm: f64) -> Self {
+        self.min_spacing_mm = mm;
+        self
+    }
+
+    pub fn with_drill_offset_mm(mut self, mm: f64) -> Self {
+        self.drill_offset_mm = mm;
+        self
+    }
+
+    pub fn with_keep_out(mut self, k: KeepOut) -> Self {
+        self.keep_out = Some(k);
+        self
+    }
+}
+
+/// One dart of the result.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Dart {
+    /// The piece's vertices the dart is cut along, from its mouth on the outline to its point.
+    pub path: Vec<u32>,
+    /// Its two legs in the cut mesh (vertex paths from mouth to point).
+    pub legs: Legs,
+    pub start_3d: DVec3,
+    pub apex_3d: DVec3,
+    pub length_3d_mm: f64,
+    /// 2D length of each leg (mm).
+    pub leg_2d_mm: [f64; 2],
+    /// 2D width of the dart's mouth (mm).
+    pub opening_mm: f64,
+    /// The drill mark, on the dart a set distance short of its point: in 3D, and in the plane
+    /// (midway between the legs).
+    pub drill_3d: DVec3,
+    pub drill_2d: DVec2,
+}
+
+impl Dart {
+    /// A dart's measures in the map `x` of the cut mesh.
+    pub fn measure(mesh: &TriMesh, path: &[u32], legs: &Legs, x: &[DVec2], drill_mm: f64) -> Self {
+        let pos = |v: u32| mesh.positions[v as usize];
+        let cum: Vec<f64> = std::iter::once(0.0)
+            .chain(path.windows(2).scan(0.0, |acc, w| {
+                *acc += pos(w[0]).distance(pos(w[1]));
+                Some(*acc)
+            }))
+            .collect();
+        let length = cum.last().copied().unwrap_or(0.0);
+        // The drill mark: `drill_mm` before the point, at most halfway down the dart.
+        let s = (length - drill_mm).max(0.5 * length);
+        let j = cum
+            .partition_point(|&c| c < s)
+            .clamp(1, path.len().max(2) - 1);
+        let seg = (cum[j] - cum[j - 1]).max(f64::MIN_POSITIVE);
+        let f = ((s - cum[j - 1]) / seg).clamp(0.0, 1.0);
+        let drill_3d = pos(path[j - 1]).lerp(pos(path[j]), f);
+        let on_leg = |side: &[u32]| x[side[j - 1] as usize].lerp(x[side[j] as usize], f);
+        let drill_2d = 0.5 * (on_leg(&legs.sides[0]) + on_leg(&legs.sides[1]));
+        Self {
+            path: path.to_vec(),
+            legs: legs.clone(),
+            start_3d: pos(path[0]),
+            apex_3d: pos(*path.last().unwrap_or(&path[0])),
+            length_3d_mm: length,
+            leg_2d_mm: legs.lengths_2d(x),
+            opening_mm: x[legs.sides[0][0] as usize].distance(x[legs.sides[1][0] as usize]),
+            drill_3d,
+            drill_2d,
+        }
+    }
+
+    /// The two legs as 2D polylines from mouth to point.
+    pub fn leg_polylines(&self, x: &[DVec2]) -> [Vec<DVec2>; 2] {
+        self.legs
+            .sides
+            .clone()
+            .map(|s| s.iter().map(|&v| x[v as usize]).collect())
+    }
+}
+
+/// One count of darts the search tried.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Attempt {
+    pub darts: usize,
+    pub total_length_mm: f64,
+    /// Largest limit excess reached (log strain).
+    pub excess: f64,
+    pub feasible: bool,
+}
+
+/// A piece with its darts.
+#[derive(Clone, Debug)]
+pub struct Darted {
+    /// The piece cut along the darts, flattened (`flat` set).
+    pub mesh: TriMesh,
+    /// For every vertex of `mesh`, the piece's vertex it copies.
+    pub origin: Vec<u32>,
+    pub darts: Vec<Dart>,
+    /// Largest limit excess over the faces (log strain; negative within the limits).
+    pub excess: f64,
+    pub feasible: bool,
+    /// Where the largest excess is (3D).
+    pub worst_3d: DVec3,
+    /// Every count the search tried, in order.
+    pub attempts: Vec<Attempt>,
+}
+
+impl Darted {
+    /// Total 3D length of the darts (mm): the sewing work.
+    pub fn total_length_mm(&self) -> f64 {
+        self.darts.iter().map(|d| d.length_3d_mm).sum()
+    }
+}
+
+/// Why darts could not be placed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DartError {
+    #[error(transparent)]
+    Topology(#[from] TopologyError),
+    #[error("flattening the cut piece failed: {0}")]
+    Flatten(flatcut_flatten::FlattenError),
+    #[error("the limit solve failed: {0}")]
+    Limits(#[from] limits::LimitError),
+    #[error("the solver failed: {0}")]
+    Solver(String),
+    /// A placement that cannot be made (too many darts for the outline, a dart that cannot
+    /// leave it); the search tries another count.
+    #[error("{0}")]
+    Placement(String),
+    /// No darts within the options bring the piece within the limits.
+    #[error(
+        "the limits cannot be met with darts: {reason}; reached {:.2} % beyond the limits with {darts} darts, worst near ({:.2}, {:.2}, {:.2})",
+        excess_pct(*excess), at.x, at.y, at.z
+    )]
+    Infeasible {
+        darts: usize,
+        /// Largest limit excess reached (log strain).
+        excess: f64,
+        at: DVec3,
+        reason: String,
+    },
+    #[error("internal error (please report): {0}")]
+    Internal(String),
+}
+
+/// A log-strain excess as a percentage of stretch.
+pub fn excess_pct(e: f64) -> f64 {
+    (e.exp() - 1.0) * 100.0
+}

@@ -1,0 +1,90 @@
+//! The one place this crate drives the flattener's projected Newton solver, and the interface
+//! through which dart legs are kept at equal 2D lengths.
+//!
+//! Dart legs are a mating seam of one piece: the two copies of every cut edge must keep equal
+//! 2D lengths, so the legs can be sewn point to point. [`EdgePairs`] names those pairs; until the
+//! multi-piece flattening with seam-length equalities is available to call, they are held by
+//! the solver's edge-length terms with a common target per pair, renewed from the map between
+//! rounds (the targets converge to the pairs' shared length). Swapping in another seam solver
+//! changes [`newton`] only.
+
+use flatcut_flatten::nonlinear::kernel::{IsoEnergy, RestTri};
+use flatcut_flatten::nonlinear::newton::{self, Budget, EdgeTerms, MapProblem};
+use flatcut_geom::DVec2;
+
+/// Pairs of edges (vertex index pairs of the cut mesh) that must keep equal 2D lengths: the two
+/// copies of one cut edge, one on each leg of a dart.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EdgePairs {
+    pub pairs: Vec<[(usize, usize); 2]>,
+}
+
+impl EdgePairs {
+    /// The largest difference of 2D lengths within a pair (mm).
+    pub fn worst_mismatch(&self, x: &[DVec2]) -> f64 {
+        self.pairs
+            .iter()
+            .map(|[(a, b), (c, d)]| (x[*a].distance(x[*b]) - x[*c].distance(x[*d])).abs())
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Result of a Newton run.
+pub struct Run {
+    pub x: Vec<DVec2>,
+    pub iterations: usize,
+}
+
+/// Rounds of renewed pair targets.
+const PAIR_ROUNDS: usize = 3;
+/// Weight of the pair length terms (relative to the faces' densities; see `EdgeTerms`): a pair
+/// force of the order of a face's stress moves a target by 10⁻⁴ of its length per round.
+const PAIR_WEIGHT: f64 = 1e4;
+/// Newton decrement per mm² of surface below which a run has converged (as the flattener's own
+/// methods).
+const ABS_DECREMENT_PER_AREA: f64 = 1e-15;
+
+/// Runs projected Newton on `energy` from the flip-free map `x0` for at most `max_iters`
+/// iterations (per round when pairs are held), stopping when the energy falls by less than `rel`
+/// of itself in an iteration.
+pub fn newton<E: IsoEnergy + Copy>(
+    rest: &[RestTri],
+    n: usize,
+    energy: E,
+    x0: &[DVec2],
+    max_iters: usize,
+    pairs: Option<&EdgePairs>,
+    rel: f64,
+) -> Result<Run, String> {
+    let area: f64 = rest.iter().map(|r| r.area).sum();
+    let abs = ABS_DECREMENT_PER_AREA * area;
+    let pairs = pairs.filter(|p| !p.pairs.is_empty());
+    let Some(pairs) = pairs else {
+        let problem = MapProblem::new(rest, n, energy, None)?;
+        let (r, _) = newton::run(problem, x0, max_iters, rel, abs, &Budget::none("darts"))?;
+        return Ok(Run {
+            x: r.x,
+            iterations: r.iterations,
+        });
+    };
+    let mut x = x0.to_vec();
+    let mut iterations = 0;
+    for _ in 0..PAIR_ROUNDS {
+        let mut edges = Vec::with_capacity(2 * pairs.pairs.len());
+        for [(a, b), (c, d)] in &pairs.pairs {
+            let l = 0.5 * (x[*a].distance(x[*b]) + x[*c].distance(x[*d]));
+            edges.push((*a, *b, l));
+            edges.push((*c, *d, l));
+        }
+        let terms = EdgeTerms {
+            lambda: vec![0.0; edges.len()],
+            edges,
+            weight: PAIR_WEIGHT,
+        };
+        let problem = MapProblem::new(rest, n, energy, Some(terms))?;
+        let (r, _) = newton::run(problem, &x, max_iters, rel, abs, &Budget::none("darts"))?;
+        iterations += r.iterations;
+        x = r.x;
+    }
+    Ok(Run { x, iterations })
+}

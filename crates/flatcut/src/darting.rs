@@ -1,0 +1,168 @@
+//! Darts in the pipeline: when a flattened piece exceeds its limits and darts are asked for
+//! (`--darts auto`, or `darts = "auto"` in the project or the piece), the piece is cut by
+//! [`flatcut_darts::place`] and flattened again with the limits held; where no dart can bring it
+//! within them the pipeline fails with what was reached.
+//!
+//! What the design says about the piece keeps darts away: its `no_cut` regions, its marks
+//! (notches, drill and reference points, stitch and placement lines); its seams are already part
+//! of the outline.
+
+use flatcut_darts::{Dart, DartError, DartOptions, Darted, KeepOut};
+use flatcut_design::{DartsDef, MarkKind, PieceDef};
+use flatcut_flatten::{FlattenInfo, FlattenParams};
+use flatcut_geom::{DVec2, DVec3};
+use flatcut_mesh::TriMesh;
+use flatcut_report::DartReport;
+
+use crate::pipeline::PipelineError;
+
+/// How darts are placed when they are asked for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DartSettings {
+    /// Most darts in one piece.
+    pub max_darts: usize,
+    /// Least distance between two darts (mm).
+    pub min_spacing_mm: f64,
+    /// How far short of its point a dart's drill mark sits (mm).
+    pub drill_offset_mm: f64,
+}
+
+impl Default for DartSettings {
+    fn default() -> Self {
+        Self {
+            max_darts: DartOptions::DEFAULT_MAX_DARTS,
+            min_spacing_mm: DartOptions::DEFAULT_MIN_SPACING_MM,
+            drill_offset_mm: DartOptions::DEFAULT_DRILL_OFFSET_MM,
+        }
+    }
+}
+
+/// Radius (mm) around a point mark that darts keep clear of.
+const MARK_CLEARANCE_MM: f64 = 3.0;
+
+/// True when darts are to be tried for this piece: the piece says so, or the run does and the
+/// piece does not refuse.
+pub fn wanted(def: Option<&PieceDef>, run: Option<&DartSettings>) -> bool {
+    match def.and_then(|d| d.darts) {
+        Some(DartsDef::Auto) => true,
+        Some(DartsDef::Off) => false,
+        None => run.is_some(),
+    }
+}
+
+/// True when every face of the map is within the limits of `params`.
+pub fn within(mesh: &TriMesh, uv: &[DVec2], params: &FlattenParams) -> bool {
+    let band = flatcut_darts::Band::from_pct(params.max_stretch_pct, params.max_compress_pct);
+    (0..mesh.triangles.len()).all(|t| {
+        let c3 = mesh.corners(t);
+        let c2 = mesh.triangles[t].map(|v| uv[v as usize]);
+        flatcut_mesh::face_distortion(c3, c2)
+            .is_some_and(|d| !d.flipped() && band.excess(d.sigma1, d.sigma2) <= 0.0)
+    })
+}
+
+/// The vertices no dart may use, from the piece's design.
+pub fn keep_out(def: Option<&PieceDef>, mesh: &TriMesh) -> Result<KeepOut, PipelineError> {
+    let mut k = KeepOut::none(mesh);
+    let Some(def) = def else {
+        return Ok(k);
+    };
+    let err = |reason: String| PipelineError::Piece {
+        piece: def.name.clone(),
+        reason,
+    };
+    for (i, region) in def.no_cut.iter().enumerate() {
+        let pts: Vec<DVec3> = region.iter().map(|p| DVec3::from_array(*p)).collect();
+        k.block_region(mesh, &pts, i)
+            .map_err(|e| err(e.to_string()))?;
+    }
+    for m in &def.marks {
+        let pts: Vec<DVec3> = m.points.iter().map(|p| DVec3::from_array(*p)).collect();
+        match m.kind {
+            MarkKind::Line if pts.len() >= 2 => k
+                .block_line(mesh, &pts)
+                .map_err(|e| err(format!("mark '{}': {e}", m.name)))?,
+            _ => k.block_points(mesh, &pts, MARK_CLEARANCE_MM),
+        }
+    }
+    Ok(k)
+}
+
+/// Darts for a flattened piece (`mesh` with `uv`) that exceeds the limits of `params`; `None`
+/// when it is within them already. Fails when no darts bring it within them.
+pub fn dart_piece(
+    name: &str,
+    def: Option<&PieceDef>,
+    mesh: &TriMesh,
+    uv: &[DVec2],
+    params: &FlattenParams,
+    settings: &DartSettings,
+) -> Result<Option<Darted>, PipelineError> {
+    if params.max_stretch_pct.is_none() && params.max_compress_pct.is_none() {
+        return Ok(None);
+    }
+    if within(mesh, uv, params) {
+        return Ok(None);
+    }
+    let opts = DartOptions::new(params.max_stretch_pct, params.max_compress_pct)
+        .with_max_darts(settings.max_darts)
+        .with_min_spacing_mm(settings.min_spacing_mm)
+        .with_drill_offset_mm(settings.drill_offset_mm)
+        .with_keep_out(keep_out(def, mesh)?);
+    flatcut_darts::place(mesh, uv, &opts)
+        .map(Some)
+        .map_err(|source| PipelineError::Darts {
+            piece: name.to_string(),
+            source,
+        })
+}
+
+/// A flattened piece (`mesh` with its map `uv`) with darts when `settings` asks for them and the
+/// piece needs them: the mesh (cut along the darts when there are any) with `flat` set, the
+/// flattening's info (its limit warnings dropped when darts brought the piece within them) and
+/// the darts.
+pub fn finish(
+    name: &str,
+    def: Option<&PieceDef>,
+    mut mesh: TriMesh,
+    uv: Vec<DVec2>,
+    mut info: FlattenInfo,
+    params: &FlattenParams,
+    settings: Option<&DartSettings>,
+) -> Result<(TriMesh, FlattenInfo, Vec<Dart>), PipelineError> {
+    if let Some(settings) = settings
+        && let Some(d) = dart_piece(name, def, &mesh, &uv, params, settings)?
+    {
+        info.warnings.clear();
+        return Ok((d.mesh, info, d.darts));
+    }
+    mesh.flat = Some(uv);
+    Ok((mesh, info, Vec::new()))
+}
+
+/// The report's view of a piece's darts.
+pub fn dart_reports(darts: &[Dart]) -> Vec<DartReport> {
+    darts
+        .iter()
+        .map(|t| DartReport {
+            start_3d: t.start_3d.to_array(),
+            apex_3d: t.apex_3d.to_array(),
+            length_3d_mm: t.length_3d_mm,
+            leg_2d_mm: t.leg_2d_mm,
+            opening_mm: t.opening_mm,
+            drill_3d: t.drill_3d.to_array(),
+            drill_2d: t.drill_2d.to_array(),
+        })
+        .collect()
+}
+
+/// True when the error says the limits cannot be met with darts (the limit exit code's case).
+pub fn is_out_of_limits(e: &PipelineError) -> bool {
+    matches!(
+        e,
+        PipelineError::Darts {
+            source: DartError::Infeasible { .. },
+            ..
+        }
+    )
+}

@@ -1,0 +1,532 @@
+//! Automatic darts end to end on the bench meshes (../shared/bench/make_meshes.py, scaled to
+//! 100 mm): `flatcut flatten --darts auto` brings the shoe toe and a spherical cap within the
+//! limits asked. Every check reads the flat OBJ and measures it here, independently of the
+//! solver and of the report: each face's singular values within the limits and no flip, each
+//! dart's two legs walked along the flat outline (their lengths as reported and within 0.1 mm of
+//! each other), no two darts sharing a vertex, the outline simple, and no dart entering a
+//! `no_cut` region. Limits no dart can meet (0 % on a sphere) exit 3 and say what was reached.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+use clap::Parser as _;
+use flatcut::geom::{DVec2, DVec3};
+
+use crate::dxf::python_with;
+use crate::pipeline::{root, run_cli};
+
+/// Scale of the bench meshes (unit size) to mm.
+const SCALE_MM: f64 = 100.0;
+/// Pattern makers' tolerance on a dart's two legs in the flat piece (mm).
+const LEG_MATCH_MM: f64 = 0.1;
+/// Slack on the limits for rounding in the OBJ's printed coordinates.
+const LIMIT_SLACK: f64 = 1e-6;
+
+/// The 2k bench meshes, made once per run by the bench's generator (numpy), scaled to mm.
+fn bench_mesh(name: &str) -> Option<PathBuf> {
+    static DIR: OnceLock<Option<PathBuf>> = OnceLock::new();
+    let dir = DIR.get_or_init(|| {
+        let script = root().join("../shared/bench/make_meshes.py");
+        if !script.exists() {
+            eprintln!(
+                "SKIPPED: {} not found (../shared beside the repository)",
+                script.display()
+            );
+            return None;
+        }
+        let py = python_with("numpy")?;
+        let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("darts-bench");
+        let ok = Command::new(py)
+            .arg(&script)
+            .args(["--sizes", "2k", "--out"])
+            .arg(&dir)
+            .output()
+            .is_ok_and(|o| o.status.success());
+        assert!(ok, "the bench mesh generator failed");
+        Some(dir)
+    });
+    let dir = dir.as_ref()?;
+    let scaled = dir.join(format!("{name}_mm.obj"));
+    if !scaled.exists() {
+        let text = std::fs::read_to_string(dir.join(format!("{name}.obj"))).unwrap();
+        let mut out = String::new();
+        for line in text.lines() {
+            match line.strip_prefix("v ") {
+                Some(rest) => {
+                    let c: Vec<f64> = rest
+                        .split_whitespace()
+                        .map(|x| x.parse::<f64>().unwrap() * SCALE_MM)
+                        .collect();
+                    out.push_str(&format!("v {} {} {}\n", c[0], c[1], c[2]));
+                }
+                None => {
+                    out.push_str(line);
+                    out.push('\n');
+                }
+            }
+        }
+        std::fs::write(&scaled, out).unwrap();
+    }
+    Some(scaled)
+}
+
+/// A mesh as read from an OBJ: 3D positions, per-vertex UV when given, triangles.
+struct Obj {
+    v: Vec<DVec3>,
+    vt: Vec<DVec2>,
+    /// Per face: (vertex, uv) indices of its corners.
+    f: Vec<[(usize, usize); 3]>,
+}
+
+fn read_obj(path: &Path) -> Obj {
+    let text = std::fs::read_to_string(path).unwrap();
+    let (mut v, mut vt, mut f) = (Vec::new(), Vec::new(), Vec::new());
+    let nums = |s: &str| -> Vec<f64> { s.split_whitespace().map(|x| x.parse().unwrap()).collect() };
+    for line in text.lines() {
+        if let Some(r) = line.strip_prefix("v ") {
+            let c = nums(r);
+            v.push(DVec3::new(c[0], c[1], c[2]));
+        } else if let Some(r) = line.strip_prefix("vt ") {
+            let c = nums(r);
+            vt.push(DVec2::new(c[0], c[1]));
+        } else if let Some(r) = line.strip_prefix("f ") {
+            let c: Vec<(usize, usize)> = r
+                .split_whitespace()
+                .map(|t| {
+                    let mut it = t.split('/');
+                    let a: usize = it.next().unwrap().parse().unwrap();
+                    let b = it.next().and_then(|s| s.parse().ok()).unwrap_or(a);
+                    (a - 1, b - 1)
+                })
+                .collect();
+            assert_eq!(c.len(), 3, "triangles only: {line}");
+            f.push([c[0], c[1], c[2]]);
+        }
+    }
+    Obj { v, vt, f }
+}
+
+/// Singular values (s1 ≥ s2) and determinant sign of the map of one face from its 3D triangle to
+/// its flat triangle, by the closed form of a 2×2 matrix.
+fn face_sv(o: &Obj, t: &[(usize, usize); 3]) -> (f64, f64, f64) {
+    let [p0, p1, p2] = t.map(|c| o.v[c.0]);
+    let [q0, q1, q2] = t.map(|c| o.vt[c.1]);
+    let (e1, e2) = (p1 - p0, p2 - p0);
+    let x = e1.normalize();
+    let y = e1.cross(e2).cross(e1).normalize();
+    // P: the 3D edges in the triangle's own frame (columns); Q: the flat edges.
+    let (p11, p12, p22) = (e1.length(), e2.dot(x), e2.dot(y));
+    let (f1, f2) = (q1 - q0, q2 - q0);
+    // J = Q P⁻¹ with P = [[p11, p12], [0, p22]].
+    let a = f1.x / p11;
+    let c = f1.y / p11;
+    let b = (f2.x - a * p12) / p22;
+    let d = (f2.y - c * p12) / p22;
+    let t2 = a * a + b * b + c * c + d * d;
+    let det = a * d - b * c;
+    let root = (t2 * t2 - 4.0 * det * det).max(0.0).sqrt();
+    (
+        ((t2 + root) / 2.0).sqrt(),
+        ((t2 - root) / 2.0).max(0.0).sqrt(),
+        det,
+    )
+}
+
+/// Worst stretch and compression (percent) over the faces; panics on a flipped face.
+fn measured_limits(o: &Obj) -> (f64, f64) {
+    let svs: Vec<(f64, f64, f64)> = o.f.iter().map(|t| face_sv(o, t)).collect();
+    let sign = svs[0].2.signum();
+    assert!(
+        svs.iter().all(|s| s.2 * sign > 0.0),
+        "a flipped or degenerate face in the flat map"
+    );
+    let s1 = svs.iter().map(|s| s.0).fold(f64::MIN, f64::max);
+    let s2 = svs.iter().map(|s| s.1).fold(f64::MAX, f64::min);
+    ((s1 - 1.0) * 100.0, (1.0 - s2) * 100.0)
+}
+
+/// The outline of the flat mesh: next vertex along each boundary edge (face orientation).
+fn boundary_next(o: &Obj) -> std::collections::BTreeMap<usize, usize> {
+    let mut directed = std::collections::BTreeSet::new();
+    for t in &o.f {
+        for k in 0..3 {
+            directed.insert((t[k].0, t[(k + 1) % 3].0));
+        }
+    }
+    directed
+        .iter()
+        .filter(|(a, b)| !directed.contains(&(*b, *a)))
+        .map(|&(a, b)| (a, b))
+        .collect()
+}
+
+/// A dart as the report states it.
+struct ReportedDart {
+    start: DVec3,
+    apex: DVec3,
+    length_3d: f64,
+    legs: [f64; 2],
+}
+
+fn reported_darts(report: &serde_json::Value) -> Vec<ReportedDart> {
+    let p = |v: &serde_json::Value| {
+        DVec3::new(
+            v[0].as_f64().unwrap(),
+            v[1].as_f64().unwrap(),
+            v[2].as_f64().unwrap(),
+        )
+    };
+    report["darts"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .map(|d| ReportedDart {
+                    start: p(&d["start_3d"]),
+                    apex: p(&d["apex_3d"]),
+                    length_3d: d["length_3d_mm"].as_f64().unwrap(),
+                    legs: [
+                        d["leg_2d_mm"][0].as_f64().unwrap(),
+                        d["leg_2d_mm"][1].as_f64().unwrap(),
+                    ],
+                })
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// One leg walked along the flat outline from the dart's point to its mouth: its vertices, its
+/// 2D length and its 3D length.
+struct Leg {
+    verts: Vec<usize>,
+    len_2d: f64,
+    len_3d: f64,
+}
+
+/// Each dart's two legs, found on the flat outline: the outline vertex at the dart's point, then
+/// both ways along the outline to the first vertex at its mouth.
+fn walk_legs(o: &Obj, d: &ReportedDart) -> [Leg; 2] {
+    const AT: f64 = 1e-5;
+    let next = boundary_next(o);
+    let prev: std::collections::BTreeMap<usize, usize> =
+        next.iter().map(|(&a, &b)| (b, a)).collect();
+    let apexes: Vec<usize> = next
+        .keys()
+        .copied()
+        .filter(|&v| o.v[v].distance(d.apex) < AT)
+        .collect();
+    assert_eq!(
+        apexes.len(),
+        1,
+        "one outline vertex at the dart's point {:?}",
+        d.apex
+    );
+    let uv = |v: usize| o.vt[v];
+    let walk = |step: &std::collections::BTreeMap<usize, usize>| {
+        let mut verts = vec![apexes[0]];
+        let (mut len_2d, mut len_3d) = (0.0, 0.0);
+        loop {
+            let here = *verts.last().unwrap();
+            let there = step[&here];
+            len_2d += uv(here).distance(uv(there));
+            len_3d += o.v[here].distance(o.v[there]);
+            verts.push(there);
+            if o.v[there].distance(d.start) < AT {
+                break;
+            }
+            assert!(
+                verts.len() <= next.len(),
+                "the dart's mouth is not on the outline"
+            );
+        }
+        Leg {
+            verts,
+            len_2d,
+            len_3d,
+        }
+    };
+    [walk(&next), walk(&prev)]
+}
+
+fn segments_cross(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    let orient = |p: DVec2, q: DVec2, r: DVec2| (q - p).perp_dot(r - p);
+    let (d1, d2) = (orient(a, b, c), orient(a, b, d));
+    let (d3, d4) = (orient(c, d, a), orient(c, d, b));
+    d1 * d2 < 0.0 && d3 * d4 < 0.0
+}
+
+/// The flat outline as a polygon does not cross itself.
+fn assert_outline_simple(o: &Obj) {
+    let next = boundary_next(o);
+    let start = *next.keys().next().unwrap();
+    let mut ring = vec![start];
+    while next[ring.last().unwrap()] != start {
+        ring.push(next[ring.last().unwrap()]);
+        assert!(ring.len() <= next.len(), "the outline is not one loop");
+    }
+    assert_eq!(ring.len(), next.len(), "the flat piece has one outline");
+    let p: Vec<DVec2> = ring.iter().map(|&v| o.vt[v]).collect();
+    let n = p.len();
+    for i in 0..n {
+        for j in i + 2..n {
+            if (j + 1) % n == i {
+                continue;
+            }
+            assert!(
+                !segments_cross(p[i], p[(i + 1) % n], p[j], p[(j + 1) % n]),
+                "the flat outline crosses itself near {:?}",
+                p[i]
+            );
+        }
+    }
+}
+
+/// What one `flatten --darts auto` run gave, measured from its files.
+struct Darted {
+    stretch_pct: f64,
+    compress_pct: f64,
+    legs: Vec<[Leg; 2]>,
+    darts: Vec<ReportedDart>,
+}
+
+/// Checks a darted flat OBJ and its report against each other and the limits.
+fn check_darted(input: &Path, flat: &Path, report: &Path, stretch: f64, compress: f64) -> Darted {
+    let o = read_obj(flat);
+    assert_eq!(o.v.len(), o.vt.len(), "one UV per vertex");
+    let (s, c) = measured_limits(&o);
+    assert!(
+        s <= stretch + LIMIT_SLACK,
+        "stretch {s:.4}% beyond {stretch}%"
+    );
+    assert!(
+        c <= compress + LIMIT_SLACK,
+        "compression {c:.4}% beyond {compress}%"
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report).unwrap()).unwrap();
+    let darts = reported_darts(&r);
+    assert!(!darts.is_empty(), "darts were needed and none is reported");
+    // The input's outline: every dart leaves it, and its point lies inside the piece.
+    let inp = read_obj(input);
+    let rim: Vec<DVec3> = boundary_next(&inp).keys().map(|&v| inp.v[v]).collect();
+    let to_rim = |p: DVec3| rim.iter().map(|q| q.distance(p)).fold(f64::MAX, f64::min);
+    let mut legs = Vec::new();
+    for d in &darts {
+        assert!(
+            to_rim(d.start) < 1e-5,
+            "a dart's mouth {:?} is off the outline",
+            d.start
+        );
+        assert!(
+            to_rim(d.apex) > 1.0,
+            "a dart's point {:?} is on the outline",
+            d.apex
+        );
+        let l = walk_legs(&o, d);
+        for (k, leg) in l.iter().enumerate() {
+            assert!(
+                (leg.len_2d - d.legs[k]).abs() < 1e-4 || (leg.len_2d - d.legs[1 - k]).abs() < 1e-4,
+                "leg measured {} mm, reported {:?}",
+                leg.len_2d,
+                d.legs
+            );
+            assert!(
+                (leg.len_3d - d.length_3d).abs() < 1e-4,
+                "leg 3D {} vs {}",
+                leg.len_3d,
+                d.length_3d
+            );
+        }
+        assert!(
+            (l[0].len_2d - l[1].len_2d).abs() <= LEG_MATCH_MM,
+            "legs {} and {} mm differ by more than {LEG_MATCH_MM} mm",
+            l[0].len_2d,
+            l[1].len_2d
+        );
+        // The two legs are one cut: the same 3D points, point to mouth.
+        assert_eq!(l[0].verts.len(), l[1].verts.len());
+        for (a, b) in l[0].verts.iter().zip(&l[1].verts) {
+            assert!(o.v[*a].distance(o.v[*b]) < 1e-5, "the legs part in 3D");
+        }
+        legs.push(l);
+    }
+    // No two darts share a vertex (they would cross or touch).
+    for i in 0..legs.len() {
+        for j in i + 1..legs.len() {
+            let pts = |l: &[Leg; 2]| -> Vec<DVec3> { l[0].verts.iter().map(|&v| o.v[v]).collect() };
+            for p in pts(&legs[i]) {
+                for q in pts(&legs[j]) {
+                    assert!(p.distance(q) > 1e-5, "darts {i} and {j} meet at {p:?}");
+                }
+            }
+        }
+    }
+    assert_outline_simple(&o);
+    Darted {
+        stretch_pct: s,
+        compress_pct: c,
+        legs,
+        darts,
+    }
+}
+
+fn flatten_darts(input: &Path, out: &Path, extra: &[&str]) -> (PathBuf, PathBuf) {
+    let flat = out.join("flat.obj");
+    let report = out.join("r.json");
+    let mut args = vec![
+        "flatten",
+        input.to_str().unwrap(),
+        "--max-stretch",
+        "5",
+        "--max-compress",
+        "2",
+        "--darts",
+        "auto",
+        "-o",
+        flat.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let code = run_cli(&args);
+    assert_eq!(
+        format!("{code:?}"),
+        format!("{:?}", std::process::ExitCode::SUCCESS)
+    );
+    (flat, report)
+}
+
+#[test]
+fn darts_bring_the_shoe_toe_within_five_percent_stretch_and_two_compression() {
+    let Some(toe) = bench_mesh("toe_2k") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (flat, report) = flatten_darts(&toe, dir.path(), &[]);
+    let d = check_darted(&toe, &flat, &report, 5.0, 2.0);
+    // Without darts the toe is far beyond (47 % stretch): the darts did the work.
+    assert!(d.stretch_pct <= 5.0 + LIMIT_SLACK && d.compress_pct <= 2.0 + LIMIT_SLACK);
+    assert!(d.darts.len() <= 24);
+}
+
+#[test]
+fn darts_bring_a_spherical_cap_within_the_limits_and_keep_out_of_a_no_cut_region() {
+    let Some(cap) = bench_mesh("sphcap_a100_2k") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (flat, report) = flatten_darts(&cap, dir.path(), &[]);
+    let free = check_darted(&cap, &flat, &report, 5.0, 2.0);
+    // A cap is symmetric about its pole: the darts are alike and all point at it.
+    for d in &free.darts {
+        let radial = (d.start - d.apex).normalize();
+        assert!(d.start.z < d.apex.z, "a dart points away from the pole");
+        assert!(radial.z < 0.0);
+    }
+
+    // A no_cut square on the surface around the middle of the first dart: darts go elsewhere.
+    let first = &free.legs[0][0];
+    let o = read_obj(&flat);
+    let mid = o.v[first.verts[first.verts.len() / 2]];
+    let n = mid.normalize();
+    let u = n.cross(DVec3::Z).normalize();
+    let w = n.cross(u);
+    const HALF: f64 = 15.0;
+    let corner = |a: f64, b: f64| (mid + u * a + w * b).normalize() * SCALE_MM;
+    let square = [
+        corner(-HALF, -HALF),
+        corner(HALF, -HALF),
+        corner(HALF, HALF),
+        corner(-HALF, HALF),
+    ];
+    let pts: Vec<String> = square
+        .iter()
+        .map(|p| format!("[{}, {}, {}]", p.x, p.y, p.z))
+        .collect();
+    let design = dir.path().join("cap.toml");
+    std::fs::copy(&cap, dir.path().join("cap.obj")).unwrap();
+    std::fs::write(
+        &design,
+        format!(
+            "[[piece]]\nname = \"cap\"\ndarts = \"auto\"\nno_cut = [[{}]]\n[piece.surface]\ntype = \"mesh\"\nfile = \"cap.obj\"\n",
+            pts.join(", ")
+        ),
+    )
+    .unwrap();
+    let kept = dir.path().join("kept");
+    std::fs::create_dir_all(&kept).unwrap();
+    let (flat2, report2) = flatten_darts(&design, &kept, &[]);
+    let d2 = check_darted(&cap, &flat2, &report2, 5.0, 2.0);
+    // In the square's tangent frame no dart segment enters the square.
+    let o2 = read_obj(&flat2);
+    let local = |p: DVec3| DVec2::new((p - mid).dot(u), (p - mid).dot(w));
+    let inside = |q: DVec2| q.x.abs() < HALF && q.y.abs() < HALF;
+    let sq: Vec<DVec2> = [(-HALF, -HALF), (HALF, -HALF), (HALF, HALF), (-HALF, HALF)]
+        .iter()
+        .map(|&(a, b)| DVec2::new(a, b))
+        .collect();
+    for l in &d2.legs {
+        for s in l[0].verts.windows(2) {
+            let (p, q) = (o2.v[s[0]], o2.v[s[1]]);
+            if p.dot(n) <= 0.0 || q.dot(n) <= 0.0 {
+                continue;
+            }
+            let (a, b) = (local(p), local(q));
+            assert!(
+                !inside(a) && !inside(b),
+                "a dart enters the no_cut region at {p:?}"
+            );
+            for k in 0..4 {
+                assert!(
+                    !segments_cross(a, b, sq[k], sq[(k + 1) % 4]),
+                    "a dart crosses the no_cut region's edge near {p:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn limits_no_dart_can_meet_exit_3_and_say_what_was_reached() {
+    let Some(cap) = bench_mesh("sphcap_a100_2k") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let flat = dir.path().join("flat.obj");
+    let args = [
+        "flatcut",
+        "flatten",
+        cap.to_str().unwrap(),
+        "--max-stretch",
+        "0",
+        "--max-compress",
+        "0",
+        "--darts",
+        "auto",
+        "-o",
+        flat.to_str().unwrap(),
+    ];
+    let cli = flatcut_cli::Cli::try_parse_from(args).expect("valid arguments");
+    let result = flatcut_cli::run(cli);
+    let text = match &result {
+        Ok(code) => panic!("a sphere cannot lie flat within 0 %, yet the run ended {code:?}"),
+        Err(e) => format!("{e:#}"),
+    };
+    assert!(
+        text.contains("cannot be met")
+            && text.contains("reached")
+            && text.contains("beyond the limits"),
+        "{text}"
+    );
+    assert_eq!(
+        format!("{:?}", flatcut_cli::exit_code(result)),
+        format!(
+            "{:?}",
+            std::process::ExitCode::from(flatcut_cli::EXIT_LIMIT)
+        )
+    );
+    assert!(
+        !flat.exists(),
+        "no flat OBJ is written when the limits are not met"
+    );
+}
