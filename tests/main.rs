@@ -1,6 +1,7 @@
 //! End-to-end tests of flatcut: one test binary with a module tree (architecture rules, the
 //! command line, the pipeline against the simulated controller, STEP models in).
 
+mod assembly;
 mod darts;
 mod dxf;
 mod fuzz;

@@ -317,11 +317,13 @@ fn item14_svg_colours_text_fills_and_sizes_are_mapped_or_named() {
 
 #[test]
 fn item16_nesting_from_pattern_svgs_keeps_grain_and_quantity() {
+    // The helmet's caps are [[piece]]s with grain lines (the shoe is now a part, whose pieces
+    // are not in `design.pieces`).
     let d = tempfile::tempdir().unwrap();
     let svg = d.path().join("shoe.svg");
     run(&[
         "pattern",
-        p(&root().join("patterns/shoe/design.toml")),
+        p(&root().join("patterns/helmet/design.toml")),
         "-o",
         p(&svg),
     ])
@@ -335,7 +337,8 @@ fn item16_nesting_from_pattern_svgs_keeps_grain_and_quantity() {
     )
     .unwrap();
     let groups = flatcut::pipeline::NestGroup::from_drawing("shoe.svg", &import.drawing);
-    let design = flatcut::design::Design::load(&root().join("patterns/shoe/design.toml")).unwrap();
+    let design =
+        flatcut::design::Design::load(&root().join("patterns/helmet/design.toml")).unwrap();
     assert_eq!(groups.len(), design.pieces.len());
     for (g, def) in groups.iter().zip(&design.pieces) {
         assert_eq!(g.quantity, def.quantity as usize, "{}", g.name);

@@ -60,7 +60,7 @@ fn inspect_of_a_step_file_lists_faces_edges_and_its_unit() {
 
 /// Flattens every piece of a design (or a STEP file) and returns (name, δ2 max) per piece.
 fn delta2(path: &Path) -> Vec<(String, f64)> {
-    let (_, pieces) = flatcut::pipeline::flatten_design(
+    let flat = flatcut::pipeline::flatten_design(
         path,
         &Tolerances::DEFAULT,
         &FlattenParams::new(Method::Isometric),
@@ -68,7 +68,7 @@ fn delta2(path: &Path) -> Vec<(String, f64)> {
         &mut |_, _, _| {},
     )
     .unwrap();
-    pieces
+    flat.pieces
         .iter()
         .map(|p| {
             let r = flatcut::pipeline::report_piece(&p.def.name, &p.mesh, &[], None, None).unwrap();

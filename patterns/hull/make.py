@@ -36,7 +36,8 @@ units = "mm"
 
 [[piece]]
 name = "side plate"
-quantity = 2   # port and starboard (mirrored)
+pairs = 1   # port and starboard: as drawn and mirrored
+pair_labels = ["PORT", "STARBOARD"]
 material = "6 mm marine plywood"
 seam_allowance_mm = 0   # plates are butted and glassed, not sewn
 grain = [{p3([300, 560, 60])}, {p3([1500, 600, 100])}]   # face veneer fore and aft

@@ -100,6 +100,108 @@ def main():
         + "# The lid with its knob (8 patches).\n"
         + piece("lid", [("lid", LID)], patches, verts)
     )
+    (HERE / "cosy.toml").write_text(cosy(patches, verts))
+
+
+def bezier_point(idx, verts, u, v):
+    """The point (u, v) of a bicubic patch given by its 16 vertex indices (rows along u)."""
+
+    def b(t):
+        return [(1 - t) ** 3, 3 * t * (1 - t) ** 2, 3 * t * t * (1 - t), t**3]
+
+    bu, bv = b(u), b(v)
+    return [
+        sum(bu[i] * bv[j] * verts[idx[4 * i + j]][k] for i in range(4) for j in range(4))
+        for k in range(3)
+    ]
+
+
+def p3(p):
+    return "[" + ", ".join(f"{c:.6f}".rstrip("0").rstrip(".") for c in p) + "]"
+
+
+# The pot's profile (radius, height), from the rim's inner edge over the rolled lip and down the
+# side to the bottom centre: the meridians of the style lines.
+# Over the lip the points are the rim patch's side curve at t = 1/4, 1/2, 3/4.
+PROFILE = [
+    (1.4, 2.4),
+    (1.380469, 2.473828),
+    (1.403125, 2.4984375),
+    (1.449219, 2.473828),
+    (1.5, 2.4),
+    (2.0, 1.35),
+    (2.0, 0.9),
+    (1.5, 0.15),
+]
+
+
+def meridian(deg):
+    import math
+
+    a = math.radians(deg)
+    return [[r * math.cos(a), r * math.sin(a), z] for r, z in PROFILE]
+
+
+def cosy(patches, verts):
+    """A felt tea cosy: the pot (rim, body and bottom) as one part cut into eight gores by
+    meridian style lines from the rim to the bottom centre."""
+    import math
+
+    out = [
+        HEADER.rstrip("\n"),
+        "# A felt tea cosy: the pot (rim, body and bottom, 16 patches) as one part, cut by eight",
+        "# meridian style lines from the rim over the lip to the bottom centre into eight gores.",
+        "",
+        "[[part]]",
+        'name = "teapot"',
+        "[part.surface]",
+        'type = "patches"',
+    ]
+    for gname, grp in [("rim", RIM), ("body", BODY), ("bottom", BOTTOM)]:
+        for p in grp:
+            out.append(
+                patch_toml(patches[p], verts, f"{gname} (data-set patch {p})")
+                .replace("[[piece.surface.patches]]", "[[part.surface.patches]]")
+                .rstrip("\n")
+            )
+    centre = [0, 0, 0]
+
+    def line(name, pts, notches):
+        out.extend(
+            [
+                "",
+                "[[part.line]]",
+                f'name = "{name}"',
+                "points = [" + ", ".join(p3(q) for q in pts) + "]",
+                "notches = [" + ", ".join(p3(q) for q in notches) + "]",
+            ]
+        )
+
+    # One meridian through the bottom centre (from 90° round to 270°); the others end on it.
+    line("pot 90-270", meridian(90) + [centre] + list(reversed(meridian(270))), [])
+    for deg in (0, 45, 135, 180, 225, 315):
+        m = meridian(deg)
+        line(f"pot {deg}", m + [centre], [m[5]])
+    def piece(name, at, grain):
+        out.extend(
+            [
+                "",
+                "[[part.piece]]",
+                f'name = "{name}"',
+                f"at = {p3(at)}",
+                'material = "felt"',
+                "seam_allowance_mm = 5",
+                f"grain = [{p3(grain[0])}, {p3(grain[1])}]",
+            ]
+        )
+
+    for k, deg in enumerate((22.5, 67.5, 112.5, 157.5, 202.5, 247.5, 292.5, 337.5)):
+        a = math.radians(deg)
+        at = [2.0 * math.cos(a), 2.0 * math.sin(a), 1.1]
+        top = [1.6 * math.cos(a), 1.6 * math.sin(a), 2.2]
+        low = [1.6 * math.cos(a), 1.6 * math.sin(a), 0.3]
+        piece(f"gore {k + 1}", at, [low, top])
+    return "\n".join(out) + "\n"
 
 
 if __name__ == "__main__":

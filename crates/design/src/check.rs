@@ -239,6 +239,30 @@ pub(crate) fn check_piece(p: &PieceDef, s: f64) -> Result<(), DesignError> {
             p.quantity
         )));
     }
+    match p.pairs {
+        Some(n) if n == 0 || n > MAX_QUANTITY => {
+            return Err(ctx.err(format!(
+                "pairs must be between 1 and {MAX_QUANTITY}, got {n}"
+            )));
+        }
+        Some(_) if p.quantity != 1 => {
+            return Err(ctx.err(
+                "give quantity or pairs, not both (pairs = N cuts N as drawn and N mirrored)"
+                    .into(),
+            ));
+        }
+        _ => {}
+    }
+    if let Some(l) = &p.pair_labels {
+        if p.pairs.is_none() {
+            return Err(ctx.err("pair_labels needs pairs".into()));
+        }
+        if l.iter().any(|s| s.trim().is_empty()) || l[0] == l[1] {
+            return Err(ctx.err(format!(
+                "pair_labels must be two different non-empty labels, got {l:?}"
+            )));
+        }
+    }
     if let Some(a) = p.seam_allowance_mm
         && !(a.is_finite() && a >= 0.0 && limits::in_range(a))
     {

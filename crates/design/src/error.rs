@@ -24,8 +24,22 @@ pub enum DesignError {
         col: usize,
         msg: String,
     },
-    #[error("{file}: the design has no [[piece]]")]
+    #[error("{file}: the design has no [[piece]] and no [[part]]")]
     NoPieces { file: String },
+    #[error("{file}: part {index} '{part}': {msg}")]
+    Part {
+        file: String,
+        index: usize,
+        part: String,
+        msg: String,
+    },
+    #[error("{file}: join {index} '{join}': {msg}")]
+    Join {
+        file: String,
+        index: usize,
+        join: String,
+        msg: String,
+    },
     #[error("{file}: piece {index} '{piece}': {msg}")]
     Piece {
         file: String,

@@ -26,21 +26,28 @@
 //! **Architecture invariant:** this crate only translates the file into surfaces and meshes; all
 //! geometry lives in flatcut-surface and flatcut-mesh.
 
+mod assemble;
 mod build;
 mod check;
 mod error;
+mod join;
 mod load;
+mod part;
 mod schema;
 mod step;
 mod units;
 
+pub use assemble::{AssembledPiece, Assembly};
 pub use build::PieceGeometry;
 pub use error::DesignError;
 pub use load::Design;
+pub use part::{JoinDef, JoinEdgeDef, LineDef, PartDef, PartPieceDef};
 pub use schema::{
     Blend, CurveDef, DartsDef, MarkDef, MarkKind, P3, PieceDef, SeamDef, SurfaceDef, Units,
 };
 pub use step::{StepFaces, StepGroup, StepModel, StepPiece};
 
+#[cfg(test)]
+mod part_tests;
 #[cfg(test)]
 mod tests;

@@ -5,9 +5,10 @@ use std::path::Path;
 use flatcut_mesh::io::is_mesh_path;
 
 use crate::check::check_piece;
+use crate::part::{check_join, check_part, scale_join, scale_part};
 use crate::schema::DesignFile;
 use crate::units::scale_piece;
-use crate::{DesignError, PieceDef, SurfaceDef, Units};
+use crate::{DesignError, JoinDef, PartDef, PieceDef, SurfaceDef, Units};
 
 /// A loaded design: pieces with every length in mm.
 #[derive(Clone, Debug, PartialEq)]
@@ -15,6 +16,10 @@ pub struct Design {
     /// Units the file was written in (lengths are already converted).
     pub units: Units,
     pub pieces: Vec<PieceDef>,
+    /// Surfaces cut into pieces by style lines.
+    pub parts: Vec<PartDef>,
+    /// Mating seams between edges of separate pieces.
+    pub joins: Vec<JoinDef>,
     /// Name of the source (file path or the name given to `from_*_str`).
     pub source: String,
 }
@@ -36,6 +41,8 @@ impl Design {
             return Ok(Design {
                 units: Units::Mm,
                 pieces: crate::step::design_pieces(path)?,
+                parts: Vec::new(),
+                joins: Vec::new(),
                 source: name,
             });
         }
@@ -53,6 +60,9 @@ impl Design {
                 pieces: vec![PieceDef {
                     name: stem,
                     quantity: 1,
+                    pairs: None,
+                    mirrored: 0,
+                    pair_labels: None,
                     surface: SurfaceDef::Mesh { file },
                     seams: Vec::new(),
                     marks: Vec::new(),
@@ -65,6 +75,8 @@ impl Design {
                     file: name,
                     mesh_scale: 1.0,
                 }],
+                parts: Vec::new(),
+                joins: Vec::new(),
                 source: path.display().to_string(),
             });
         }
@@ -110,7 +122,7 @@ impl Design {
     }
 
     fn finish(f: DesignFile, name: &str) -> Result<Design, DesignError> {
-        if f.pieces.is_empty() {
+        if f.pieces.is_empty() && f.parts.is_empty() {
             return Err(DesignError::NoPieces {
                 file: name.to_string(),
             });
@@ -121,13 +133,33 @@ impl Design {
             p.index = i;
             p.file = name.to_string();
             check_piece(p, s)?;
+            p.resolve_pairs();
             if s != 1.0 {
                 scale_piece(p, s);
+            }
+        }
+        let mut parts = f.parts;
+        for (i, p) in parts.iter_mut().enumerate() {
+            p.index = i;
+            p.file = name.to_string();
+            check_part(p, s)?;
+            if s != 1.0 {
+                scale_part(p, s);
+            }
+        }
+        let mut joins = f.joins;
+        for (i, j) in joins.iter_mut().enumerate() {
+            j.index = i;
+            check_join(name, j, s)?;
+            if s != 1.0 {
+                scale_join(j, s);
             }
         }
         Ok(Design {
             units: f.units,
             pieces,
+            parts,
+            joins,
             source: name.to_string(),
         })
     }

@@ -206,7 +206,7 @@ pub struct MarkDef {
     pub points: Vec<P3>,
 }
 
-fn one() -> u32 {
+pub(crate) fn one() -> u32 {
     1
 }
 
@@ -215,9 +215,18 @@ fn one() -> u32 {
 #[serde(deny_unknown_fields)]
 pub struct PieceDef {
     pub name: String,
-    /// How many to cut (default 1).
+    /// How many to cut as drawn (default 1; `pairs` when given).
     #[serde(default = "one")]
     pub quantity: u32,
+    /// `pairs = N`: N as drawn and N mirrored (left and right); sets `quantity` and `mirrored`.
+    #[serde(default)]
+    pub pairs: Option<u32>,
+    /// How many mirror images to cut besides (set from `pairs` at load time).
+    #[serde(skip)]
+    pub mirrored: u32,
+    /// What the labels of a pair say: as drawn, then mirrored (default "L", "R").
+    #[serde(default)]
+    pub pair_labels: Option<[String; 2]>,
     pub surface: SurfaceDef,
     #[serde(default)]
     pub seams: Vec<SeamDef>,
@@ -248,6 +257,23 @@ pub struct PieceDef {
     pub mesh_scale: f64,
 }
 
+impl PieceDef {
+    /// Turns `pairs = N` into N as drawn and N mirrored (after the checks).
+    pub(crate) fn resolve_pairs(&mut self) {
+        if let Some(n) = self.pairs {
+            self.quantity = n;
+            self.mirrored = n;
+        }
+    }
+
+    /// The labels of a pair's two sides (as drawn, mirrored).
+    pub fn pair_labels(&self) -> [String; 2] {
+        self.pair_labels
+            .clone()
+            .unwrap_or_else(|| ["L".to_string(), "R".to_string()])
+    }
+}
+
 /// Whether darts are cut into a piece.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -258,7 +284,7 @@ pub enum DartsDef {
     Off,
 }
 
-fn unit_scale() -> f64 {
+pub(crate) fn unit_scale() -> f64 {
     1.0
 }
 
@@ -269,4 +295,8 @@ pub(crate) struct DesignFile {
     pub(crate) units: Units,
     #[serde(default, rename = "piece")]
     pub(crate) pieces: Vec<PieceDef>,
+    #[serde(default, rename = "part")]
+    pub(crate) parts: Vec<crate::PartDef>,
+    #[serde(default, rename = "join")]
+    pub(crate) joins: Vec<crate::JoinDef>,
 }

@@ -185,6 +185,9 @@ pub(crate) fn design_pieces(path: &Path) -> Result<Vec<PieceDef>, DesignError> {
     let piece = PieceDef {
         name: stem,
         quantity: 1,
+        pairs: None,
+        mirrored: 0,
+        pair_labels: None,
         surface: SurfaceDef::Step {
             file,
             faces: StepFaces::default(),

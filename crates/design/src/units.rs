@@ -2,7 +2,7 @@
 
 use crate::{CurveDef, P3, PieceDef, SeamDef, SurfaceDef};
 
-fn sp(p: &mut P3, s: f64) {
+pub(crate) fn sp(p: &mut P3, s: f64) {
     for x in p.iter_mut() {
         *x *= s;
     }

@@ -123,7 +123,7 @@ fn every_pattern_folder_has_a_design_and_notes() {
         assert!(dir(n).join("design.toml").is_file(), "{n}/design.toml");
         assert!(dir(n).join("NOTES.md").is_file(), "{n}/NOTES.md");
         let d = load(n, "design.toml");
-        assert!(!d.pieces.is_empty());
+        assert!(!d.pieces.is_empty() || !d.parts.is_empty(), "{n}");
     }
     assert!(root.join("README.md").is_file());
 }
@@ -198,7 +198,12 @@ fn sail_panel_is_a_cone_between_its_battens() {
 fn hull_plate_is_the_conic_development_of_its_chines() {
     let d = load("hull", "design.toml");
     let p = &d.pieces[0];
-    assert_eq!((d.pieces.len(), p.quantity), (1, 2));
+    // Port and starboard: one as drawn and one mirrored.
+    assert_eq!((d.pieces.len(), p.quantity, p.mirrored), (1, 1, 1));
+    assert_eq!(
+        p.pair_labels(),
+        ["PORT".to_string(), "STARBOARD".to_string()]
+    );
     // The construction of patterns/hull/make.py: sheer = A + K (chine − A).
     let chine = [
         DVec3::new(0.0, 520.0, 0.0),
@@ -268,47 +273,87 @@ fn helmet_is_doubly_curved_and_darts_keep_it_a_disk() {
 }
 
 #[test]
-fn shoe_vamp_and_quarter_share_their_seam_and_notches() {
+fn shoe_upper_is_one_surface_cut_into_four_pieces_by_its_style_lines() {
     let d = load("shoe", "design.toml");
-    assert_eq!(d.pieces.len(), 2);
-    let (vamp, quarter) = (&d.pieces[0], &d.pieces[1]);
-    assert_eq!((vamp.name.as_str(), vamp.quantity), ("vamp", 2));
-    assert_eq!((quarter.name.as_str(), quarter.quantity), ("quarter", 4));
-    let mv = mesh("shoe", vamp);
-    let mq = mesh("shoe", quarter);
-    for (p, m) in [(vamp, &mv), (quarter, &mq)] {
-        assert_eq!(p.material.as_deref(), Some("leather"));
-        assert_eq!(p.seam_allowance_mm, Some(8.0));
-        assert!(p.grain.is_some());
-        assert!(max_scaled_k("shoe", p) > DOUBLY_CURVED_MIN, "{}", p.name);
-        assert_disk(&p.name, m);
+    assert!(d.pieces.is_empty());
+    assert_eq!(d.parts.len(), 1);
+    let part = &d.parts[0];
+    let lines: Vec<&str> = part.lines.iter().map(|l| l.name.as_str()).collect();
+    assert_eq!(lines, ["toe-cap", "vamp-lateral", "vamp-medial", "back"]);
+    let a = d.assemble(&dir("shoe"), &tol()).unwrap();
+    let names: Vec<&str> = a.pieces.iter().map(|p| p.def.name.as_str()).collect();
+    assert_eq!(
+        names,
+        ["toe cap", "vamp", "lateral quarter", "medial quarter"]
+    );
+    for p in &a.pieces {
+        // A pair of shoes: each piece as drawn (left) and mirrored (right).
+        assert_eq!((p.def.quantity, p.def.mirrored), (1, 1), "{}", p.def.name);
+        assert_eq!(p.def.material.as_deref(), Some("leather"));
+        assert_eq!(p.def.seam_allowance_mm, Some(8.0));
+        assert!(p.def.grain.is_some());
+        assert_disk(&p.def.name, &p.mesh);
     }
-    // The notches are the same 3D points on both pieces and lie on both surfaces.
-    let notches = |p: &PieceDef| -> Vec<DVec3> {
-        p.marks
-            .iter()
-            .filter(|m| m.kind == flatcut_design::MarkKind::Notch)
-            .map(|m| DVec3::from_array(m.points[0]))
-            .collect()
+    // The upper is doubly curved, and the pieces cover it exactly.
+    let upper = PieceDef {
+        name: "upper".into(),
+        ..a.pieces[0].def.clone()
     };
-    let (nv, nq) = (notches(vamp), notches(quarter));
-    assert_eq!(nv.len(), 3);
-    assert_eq!(nv, nq);
-    for n in &nv {
-        assert!(
-            nearest_vertex_distance(&mv, *n) < 3.0,
-            "notch {n} off the vamp"
-        );
-        assert!(
-            nearest_vertex_distance(&mq, *n) < 3.0,
-            "notch {n} off the quarter"
-        );
+    assert!(max_scaled_k("shoe", &upper) > DOUBLY_CURVED_MIN);
+    let whole = mesh("shoe", &upper);
+    let sum: f64 = a.pieces.iter().map(|p| p.mesh.area()).sum();
+    assert!(
+        (sum - whole.area()).abs() < 1e-9 * whole.area(),
+        "{sum} vs {}",
+        whole.area()
+    );
+    // Four mating seams between the right pieces, both sides at the same 3D points.
+    let mut seams: Vec<(String, [&str; 2], usize)> = a
+        .seams
+        .iter()
+        .map(|s| {
+            let mut pieces = [0, 1].map(|k| names[s.sides[k].piece]);
+            pieces.sort_unstable();
+            (s.name.clone(), pieces, s.notches.len())
+        })
+        .collect();
+    seams.sort();
+    assert_eq!(
+        seams,
+        [
+            ("back".to_string(), ["lateral quarter", "medial quarter"], 2),
+            ("toe-cap".to_string(), ["toe cap", "vamp"], 3),
+            ("vamp-lateral".to_string(), ["lateral quarter", "vamp"], 3),
+            ("vamp-medial".to_string(), ["medial quarter", "vamp"], 3),
+        ]
+    );
+    for s in &a.seams {
+        let pts = |k: usize| -> Vec<DVec3> {
+            let side = &s.sides[k];
+            side.vertices
+                .iter()
+                .map(|&v| a.pieces[side.piece].mesh.positions[v as usize])
+                .collect()
+        };
+        assert_eq!(pts(0), pts(1), "{}", s.name);
+        // Each notch is exactly at its 3D point.
+        let line = part.lines.iter().find(|l| l.name == s.name).unwrap();
+        for (n, want) in s.notches.iter().zip(&line.notches) {
+            let got = pts(0)[n.index];
+            assert!(
+                nearest_vertex_distance(&whole, DVec3::from_array(*want)) < 5.0
+                    && got.distance(DVec3::from_array(*want)) < CHORD_MM + 1e-3,
+                "{}: notch {} at {got}",
+                s.name,
+                n.name
+            );
+        }
     }
     // A size-42 last: ~270 mm long overall, ~100 mm wide across the vamp.
-    let (bv, bq) = (mv.bbox(), mq.bbox());
-    let length = bv.max.x.max(bq.max.x) - bv.min.x.min(bq.min.x);
+    let bb = whole.bbox();
+    let length = bb.max.x - bb.min.x;
     assert!((255.0..285.0).contains(&length), "length {length}");
-    let width = bv.max.y - bv.min.y;
+    let width = bb.max.y - bb.min.y;
     assert!((90.0..110.0).contains(&width), "width {width}");
 }
 

@@ -8,20 +8,27 @@ use flatcut_design::PieceDef;
 use flatcut_flatten::{FlattenInfo, FlattenParams};
 use flatcut_geom::Tolerances;
 use flatcut_mesh::TriMesh;
-use flatcut_report::Report;
+use flatcut_mesh::mating::MatingSeam;
+use flatcut_report::{MatingSeamReport, Report};
 
 use crate::darting::{self, DartSettings};
-use crate::pipeline::{self, FlatPiece, PipelineError};
+use crate::pipeline::{self, FlatDesign, FlatNotch, FlatPiece, PipelineError};
 
 /// A flattened piece ready for the pattern: its mesh (with `flat`), its design entry when it came
-/// from a design, its distortion report and how the flattening went.
+/// from a design, its distortion report (with the mating seams it takes part in) and how the
+/// flattening went.
 #[derive(Clone, Debug)]
 pub struct Flat {
     pub name: String,
     pub def: Option<PieceDef>,
     pub mesh: TriMesh,
     pub report: Report,
+    /// How many to cut as drawn.
     pub quantity: u32,
+    /// How many mirror images to cut besides (`pairs`).
+    pub mirrored: u32,
+    /// Its notches as boundary vertices of `mesh`.
+    pub notches: Vec<FlatNotch>,
     /// Absent when the map was read from a file rather than computed.
     pub info: Option<FlattenInfo>,
     /// The darts cut into the piece to meet its limits.
@@ -56,6 +63,8 @@ pub fn read_flat_mesh(path: &Path, limits: Limits) -> Result<Option<Flat>, Pipel
         mesh,
         report,
         quantity: 1,
+        mirrored: 0,
+        notches: Vec::new(),
         info: None,
         darts: Vec::new(),
     }))
@@ -70,20 +79,19 @@ pub fn flatten_and_report(
     limits: Limits,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Vec<Flat>, PipelineError> {
-    let (_, pieces) = pipeline::flatten_design(path, tol, params, limits.darts.as_ref(), progress)?;
-    pieces
+    let FlatDesign { pieces, seams, .. } =
+        pipeline::flatten_design(path, tol, params, limits.darts.as_ref(), progress)?;
+    let mut flats = pieces
         .into_iter()
         .map(
             |FlatPiece {
                  def,
                  mesh,
                  info,
+                 notches,
                  darts,
              }| {
-                let boundary = pipeline::flat_boundary(&def.name, &mesh)
-                    .map(|b| b.1)
-                    .unwrap_or_default();
-                let marks = pipeline::notch_vertices(&def, &mesh, &boundary);
+                let marks: Vec<u32> = notches.iter().map(|n| n.vertex).collect();
                 let mut report = pipeline::report_piece(
                     &def.name,
                     &mesh,
@@ -95,14 +103,97 @@ pub fn flatten_and_report(
                 Ok(Flat {
                     name: def.name.clone(),
                     quantity: def.quantity,
+                    mirrored: def.mirrored,
                     def: Some(def),
                     mesh,
                     report,
+                    notches,
                     info: Some(info),
                     darts,
                 })
             },
         )
+        .collect::<Result<Vec<Flat>, PipelineError>>()?;
+    attach_seams(&mut flats, &seams);
+    Ok(flats)
+}
+
+/// Measures every mating seam and lists it in the reports of the pieces on its sides.
+pub fn attach_seams(flats: &mut [Flat], seams: &[MatingSeam]) {
+    let all: Vec<usize> = (0..flats.len()).collect();
+    attach_seams_among(flats, &all, seams);
+}
+
+/// [`attach_seams`] for seams whose sides index `idx` (piece k of a seam is `flats[idx[k]]`).
+fn attach_seams_among(flats: &mut [Flat], idx: &[usize], seams: &[MatingSeam]) {
+    let reports: Vec<(usize, usize, MatingSeamReport)> = {
+        let meshes: Vec<&TriMesh> = idx.iter().map(|&k| &flats[k].mesh).collect();
+        let names: Vec<&str> = idx.iter().map(|&k| flats[k].name.as_str()).collect();
+        seams
+            .iter()
+            .filter_map(|s| {
+                let r = flatcut_report::measure_seam(s, &meshes, &names)?;
+                Some((idx[s.sides[0].piece], idx[s.sides[1].piece], r))
+            })
+            .collect()
+    };
+    for (a, b, r) in reports {
+        if a != b {
+            flats[b].report.mating_seams.push(r.clone());
+        }
+        flats[a].report.mating_seams.push(r);
+    }
+}
+
+/// Pairs flattened meshes read from files (no design) by their coincident boundary vertices (the
+/// `OUT-<piece>.obj` files of one split surface carry a seam's vertices at identical
+/// coordinates on both sides) and lists each such seam in both pieces' reports.
+pub fn pair_coincident(flats: &mut [Flat]) {
+    let idx: Vec<usize> = (0..flats.len())
+        .filter(|&k| flats[k].def.is_none())
+        .collect();
+    let seams = {
+        let meshes: Vec<&TriMesh> = idx.iter().map(|&k| &flats[k].mesh).collect();
+        let names: Vec<&str> = idx.iter().map(|&k| flats[k].name.as_str()).collect();
+        flatcut_mesh::mating::coincident_seams(&meshes, &names)
+    };
+    attach_seams_among(flats, &idx, &seams);
+}
+
+/// The mating seams of the pieces (each once, in the order of the pieces that list them).
+pub fn mating_seams(flats: &[Flat]) -> Vec<MatingSeamReport> {
+    let mut out: Vec<MatingSeamReport> = Vec::new();
+    for f in flats {
+        for s in &f.report.mating_seams {
+            if !out.iter().any(|o| o.name == s.name && o.pieces == s.pieces) {
+                out.push(s.clone());
+            }
+        }
+    }
+    out
+}
+
+/// One line per mating seam whose sides (or a notch's offsets) differ by more than
+/// `tolerance_mm` in the plane.
+pub fn seams_over(flats: &[Flat], tolerance_mm: f64) -> Vec<String> {
+    mating_seams(flats)
+        .iter()
+        .filter(|s| s.worst_mm() > tolerance_mm)
+        .map(|s| {
+            format!(
+                "mating seam '{}' ({} / {}): the sides differ by {:.3} mm in length ({:.2} / {:.2} mm), notches by up to {:.3} mm (tolerance {tolerance_mm} mm)",
+                s.name,
+                s.pieces[0],
+                s.pieces[1],
+                s.mismatch_mm,
+                s.length_2d_mm[0],
+                s.length_2d_mm[1],
+                s.notches
+                    .iter()
+                    .map(|n| (n.offset_mm[0] - n.offset_mm[1]).abs())
+                    .fold(0.0, f64::max)
+            )
+        })
         .collect()
 }
 

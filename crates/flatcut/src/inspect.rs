@@ -81,7 +81,8 @@ pub struct InspectReport {
     pub step: Option<crate::inspect_step::StepSummary>,
 }
 
-/// Loads a design or mesh file and summarises every piece.
+/// Loads a design or mesh file and summarises every piece (a part's too: the regions between its
+/// style lines).
 pub fn inspect_file(path: &Path, tol: &Tolerances) -> Result<InspectReport, DesignError> {
     let design = Design::load(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
@@ -95,6 +96,14 @@ pub fn inspect_file(path: &Path, tol: &Tolerances) -> Result<InspectReport, Desi
             }
             g => summarise(&def.name, def.quantity, g, &mesh),
         });
+    }
+    if !design.parts.is_empty() {
+        // A part's pieces are regions of its surface: summarised as the meshes they are.
+        let asm = design.assemble(base, tol)?;
+        for p in asm.pieces.iter().filter(|p| p.part.is_some()) {
+            let geom = PieceGeometry::Mesh(p.mesh.clone());
+            pieces.push(summarise(&p.def.name, p.def.quantity, &geom, &p.mesh));
+        }
     }
     // A STEP file: the model the pieces were expanded from.
     let step = design.pieces.iter().find_map(|p| match &p.surface {

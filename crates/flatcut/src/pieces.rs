@@ -25,22 +25,54 @@ impl Default for PieceSettings {
     }
 }
 
-/// Builds the pattern piece of each flattened piece.
+/// Builds the pattern pieces of the flattened pieces: one per piece, and for a piece cut in
+/// pairs (`pairs = N`) two — as drawn and mirrored, their labels saying which (`QUARTER L`,
+/// `QUARTER R`, or the design's `pair_labels`). Each piece's label says how many to cut
+/// (`label.quantity`).
 pub fn build_pieces(flats: &[Flat], s: &PieceSettings) -> Result<Vec<Piece>, PipelineError> {
-    flats
-        .iter()
-        .map(|f| {
-            let ctx = PieceContext {
-                def: f.def.as_ref(),
-                report: Some(&f.report),
-                darts: &f.darts,
-                seam_mm: s.seam_mm,
-                size: String::new(),
-                corner: s.corner,
-            };
-            pipeline::piece_from_flat(&f.name, &f.mesh, &ctx, &s.options)
-        })
-        .collect()
+    let mut out = Vec::with_capacity(flats.len());
+    for f in flats {
+        let Some(def) = f.def.as_ref().filter(|_| f.mirrored > 0) else {
+            out.push(build_one(f, &f.name, s)?);
+            continue;
+        };
+        let [drawn, mirrored] = def.pair_labels();
+        out.push(build_one(f, &format!("{} {drawn}", f.name), s)?);
+        out.push(build_one(&mirror(f), &format!("{} {mirrored}", f.name), s)?);
+    }
+    Ok(out)
+}
+
+fn build_one(f: &Flat, name: &str, s: &PieceSettings) -> Result<Piece, PipelineError> {
+    let ctx = PieceContext {
+        def: f.def.as_ref(),
+        report: Some(&f.report),
+        darts: &f.darts,
+        seam_mm: s.seam_mm,
+        size: String::new(),
+        corner: s.corner,
+        notches: &f.notches,
+    };
+    pipeline::piece_from_flat(name, &f.mesh, &ctx, &s.options)
+}
+
+/// The mirror image of a flattened piece (x → −x in the plane), cut `mirrored` times: the other
+/// side of a pair. Marks, lines, darts and the grain are carried through the mirrored map.
+pub fn mirror(f: &Flat) -> Flat {
+    let mut g = f.clone();
+    if let Some(flat) = &mut g.mesh.flat {
+        flat.iter_mut().for_each(|q| q.x = -q.x);
+    }
+    for d in &mut g.darts {
+        d.drill_2d.x = -d.drill_2d.x;
+    }
+    if let Some(def) = &mut g.def {
+        def.quantity = f.mirrored;
+        def.mirrored = 0;
+    }
+    g.quantity = f.mirrored;
+    g.mirrored = 0;
+    g
 }
 
 /// Gap between pieces laid out in a row (mm).

@@ -8,6 +8,7 @@ use flatcut_design::{Design, DesignError, MarkKind as DesignMark, PieceDef};
 use flatcut_flatten::{FlattenError, FlattenInfo, FlattenParams};
 use flatcut_geom::{DVec2, DVec3, Tolerances};
 use flatcut_mesh::TriMesh;
+use flatcut_mesh::mating::MatingSeam;
 use flatcut_nest::{
     GrainDirections, Hide, NestError, NestItem, NestOptions, NestProgress, NestResult, Rotations,
     Stock,
@@ -61,18 +62,32 @@ pub enum PipelineError {
 /// no design, so the design must say which is which.
 pub fn check_unique_names(design: &Design) -> Result<(), PipelineError> {
     let mut seen: std::collections::BTreeMap<String, &str> = Default::default();
-    for p in &design.pieces {
-        let safe = flatcut_pattern::safe_name(&p.name);
-        if let Some(first) = seen.insert(safe.clone(), &p.name) {
+    let names = design.pieces.iter().map(|p| p.name.as_str()).chain(
+        design
+            .parts
+            .iter()
+            .flat_map(|p| p.pieces.iter().map(|q| q.name.as_str())),
+    );
+    for name in names {
+        let safe = flatcut_pattern::safe_name(name);
+        if let Some(first) = seen.insert(safe.clone(), name) {
             return Err(PipelineError::NameClash {
                 file: design.source.clone(),
                 first: first.to_string(),
-                second: p.name.clone(),
+                second: name.to_string(),
                 safe,
             });
         }
     }
     Ok(())
+}
+
+/// A notch of a piece: a boundary vertex of its mesh, exactly where the notch is, and its name
+/// (a mating seam's notch `line n`, or the design's notch mark).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FlatNotch {
+    pub name: String,
+    pub vertex: u32,
 }
 
 /// A piece of a design, cut along its seams and flattened: `mesh.flat` holds the 2D position of
@@ -82,44 +97,136 @@ pub struct FlatPiece {
     pub def: PieceDef,
     pub mesh: TriMesh,
     pub info: FlattenInfo,
+    /// Its notches: the notches of its mating seams and its own notch marks.
+    pub notches: Vec<FlatNotch>,
     /// The darts cut into the piece to meet its limits (`mesh` is then cut along them).
     pub darts: Vec<flatcut_darts::Dart>,
 }
 
-/// Loads a design (or a mesh file) and flattens every piece; `progress(piece, index, count)` is
-/// called before each piece.
+/// A design flattened: every piece (a `[[piece]]` or a region of a `[[part]]`) and the mating
+/// seams between them (sides index `pieces`).
+#[derive(Clone, Debug)]
+pub struct FlatDesign {
+    pub design: Design,
+    pub pieces: Vec<FlatPiece>,
+    pub seams: Vec<MatingSeam>,
+}
+
+/// Loads a design (or a mesh file), builds its pieces and seams, and flattens them, the pieces
+/// joined by seams together ([`flatcut_flatten::assembly`]); `progress(piece, index, count)` is
+/// called for each piece before the solve.
 pub fn flatten_design(
     path: &Path,
     tol: &Tolerances,
     params: &FlattenParams,
     darts: Option<&DartSettings>,
     progress: &mut dyn FnMut(&str, usize, usize),
-) -> Result<(Design, Vec<FlatPiece>), PipelineError> {
+) -> Result<FlatDesign, PipelineError> {
     let design = Design::load(path)?;
     check_unique_names(&design)?;
     let base = path.parent().unwrap_or(Path::new("."));
-    let mut out = Vec::new();
-    for (k, def) in design.pieces.iter().enumerate() {
-        progress(&def.name, k, design.pieces.len());
-        let mesh = def.mesh(base, tol)?;
-        out.push(flatten_piece(def.clone(), mesh, params, darts)?);
+    let asm = design.assemble(base, tol)?;
+    for (k, p) in asm.pieces.iter().enumerate() {
+        progress(&p.def.name, k, asm.pieces.len());
     }
-    Ok((design, out))
+    let meshes: Vec<&TriMesh> = asm.pieces.iter().map(|p| &p.mesh).collect();
+    let flats =
+        flatcut_flatten::assembly::flatten_assembly(&meshes, &asm.seams, params).map_err(|e| {
+            match e {
+                flatcut_flatten::assembly::AssemblyError::Piece { piece, source } => {
+                    PipelineError::Flatten {
+                        piece: asm.pieces[piece].def.name.clone(),
+                        source,
+                    }
+                }
+                other => PipelineError::Piece {
+                    piece: design.source.clone(),
+                    reason: other.to_string(),
+                },
+            }
+        })?;
+    let mut notches: Vec<Vec<FlatNotch>> = asm
+        .pieces
+        .iter()
+        .map(|p| {
+            p.notch_marks
+                .iter()
+                .map(|(name, vertex)| FlatNotch {
+                    name: name.clone(),
+                    vertex: *vertex,
+                })
+                .collect()
+        })
+        .collect();
+    for s in &asm.seams {
+        for side in &s.sides {
+            for n in &s.notches {
+                notches[side.piece].push(FlatNotch {
+                    name: n.name.clone(),
+                    vertex: side.vertices[n.index],
+                });
+            }
+        }
+    }
+    let joined: Vec<bool> = (0..asm.pieces.len())
+        .map(|k| {
+            asm.seams
+                .iter()
+                .any(|s| s.sides.iter().any(|d| d.piece == k))
+        })
+        .collect();
+    let pieces = asm
+        .pieces
+        .into_iter()
+        .zip(flats)
+        .zip(notches)
+        .zip(joined)
+        .map(|(((p, f), notches), joined)| {
+            if joined {
+                let mut info = f.info;
+                if darting::wanted(Some(&p.def), darts) {
+                    info.warnings.push(format!(
+                        "{}: no darts are cut into a piece joined to others by seams (a dart would move its seams); split it by a style line instead",
+                        p.def.name
+                    ));
+                }
+                let mut mesh = p.mesh;
+                mesh.flat = Some(f.uv);
+                Ok(FlatPiece {
+                    def: p.def,
+                    mesh,
+                    info,
+                    notches,
+                    darts: Vec::new(),
+                })
+            } else {
+                dart_if_wanted(p.def, p.mesh, f, notches, params, darts)
+            }
+        })
+        .collect::<Result<Vec<_>, PipelineError>>()?;
+    Ok(FlatDesign {
+        design,
+        pieces,
+        seams: asm.seams,
+    })
 }
 
-/// Flattens one piece's mesh; where it exceeds its limits and darts are wanted
-/// ([`darting::wanted`]), the piece is darted and flattened with the limits held.
-pub fn flatten_piece(
+/// A piece no seam joins, flattened: where it exceeds its limits and darts are wanted
+/// ([`darting::wanted`]), darted and flattened again with the limits held; its notches are found
+/// again in the darted mesh by their 3D position (the cut adds and splits vertices).
+fn dart_if_wanted(
     def: PieceDef,
     mesh: TriMesh,
+    f: flatcut_flatten::Flattening,
+    notches: Vec<FlatNotch>,
     params: &FlattenParams,
     darts: Option<&DartSettings>,
 ) -> Result<FlatPiece, PipelineError> {
-    let f = flatcut_flatten::flatten(&mesh, params).map_err(|source| PipelineError::Flatten {
-        piece: def.name.clone(),
-        source,
-    })?;
     let settings = darting::wanted(Some(&def), darts).then(|| darts.copied().unwrap_or_default());
+    let at: Vec<DVec3> = notches
+        .iter()
+        .map(|n| mesh.positions[n.vertex as usize])
+        .collect();
     let (mesh, info, darts) = darting::finish(
         &def.name,
         Some(&def),
@@ -129,10 +236,26 @@ pub fn flatten_piece(
         params,
         settings.as_ref(),
     )?;
+    let notches = if darts.is_empty() {
+        notches
+    } else {
+        notches
+            .into_iter()
+            .zip(at)
+            .filter_map(|(n, p)| {
+                let v = mesh.positions.iter().position(|q| q.distance(p) < 1e-9)?;
+                Some(FlatNotch {
+                    name: n.name,
+                    vertex: v as u32,
+                })
+            })
+            .collect()
+    };
     Ok(FlatPiece {
         def,
         mesh,
         info,
+        notches,
         darts,
     })
 }
@@ -207,26 +330,6 @@ fn signed_area(p: &[DVec2]) -> f64 {
         * 0.5
 }
 
-/// The 3D positions of a piece's notch marks, as mesh boundary vertices (nearest).
-pub fn notch_vertices(def: &PieceDef, mesh: &TriMesh, boundary: &[u32]) -> Vec<u32> {
-    let mut out = Vec::new();
-    for m in def.marks.iter().filter(|m| m.kind == DesignMark::Notch) {
-        for p in &m.points {
-            let p = DVec3::from_array(*p);
-            if let Some(&v) = boundary.iter().min_by(|&&a, &&b| {
-                mesh.positions[a as usize]
-                    .distance(p)
-                    .total_cmp(&mesh.positions[b as usize].distance(p))
-            }) {
-                out.push(v);
-            }
-        }
-    }
-    out.sort_unstable();
-    out.dedup();
-    out
-}
-
 /// What a pattern piece is built with beyond the flattened mesh.
 #[derive(Clone, Debug, Default)]
 pub struct PieceContext<'a> {
@@ -239,17 +342,19 @@ pub struct PieceContext<'a> {
     pub seam_mm: Option<f64>,
     pub size: String,
     pub corner: flatcut_pattern::CornerStyle,
+    /// The piece's notches as boundary vertices (exact positions; named on mating seams).
+    pub notches: &'a [FlatNotch],
 }
 
 /// Longest step (mm) between samples of a stitch or placement line carried into the plane:
 /// fine enough that the drawn line follows the map's bending within a pen width.
 const LINE_STEP_MM: f64 = 1.0;
 
-/// Builds the pattern piece of a flattened mesh: the flattened boundary is the sew line, notch
-/// marks sit on their nearest boundary vertex, drill/reference points, stitch lines and the grain
-/// line are carried through the map, the label carries the distortion summary, and the piece is
-/// turned with its grain along +x (without one, its minimum-area bounding box square to the axes,
-/// the longer side along x).
+/// Builds the pattern piece of a flattened mesh: the flattened boundary is the sew line, notches
+/// sit on their boundary vertices (inserted where they are, never snapped), drill/reference
+/// points, stitch lines and the grain line are carried through the map, the label carries the
+/// distortion summary, and the piece is turned with its grain along +x (without one, its
+/// minimum-area bounding box square to the axes, the longer side along x).
 pub fn piece_from_flat(
     name: &str,
     mesh: &TriMesh,
@@ -262,26 +367,28 @@ pub fn piece_from_flat(
     let mut input = PieceInput::new(name, outline);
     input.corner_style = ctx.corner;
     let mut opts = *opts;
+    for n in ctx.notches {
+        let k = ids
+            .iter()
+            .position(|&v| v == n.vertex)
+            .ok_or_else(|| PipelineError::Piece {
+                piece: name.into(),
+                reason: format!("notch '{}' is not on the piece's outline", n.name),
+            })?;
+        input.mark_names.resize(input.marks.len(), String::new());
+        input.mark_names.push(n.name.clone());
+        input.marks.push(Mark {
+            kind: MarkKind::Notch,
+            pos: input.outline[k],
+            boundary_index: Some(k),
+        });
+    }
     if let Some(def) = ctx.def {
         for mark in &def.marks {
             let pts: Vec<DVec3> = mark.points.iter().map(|p| DVec3::from_array(*p)).collect();
             match mark.kind {
-                DesignMark::Notch => {
-                    for p in &pts {
-                        let k = (0..ids.len())
-                            .min_by(|&a, &b| {
-                                mesh.positions[ids[a] as usize]
-                                    .distance(*p)
-                                    .total_cmp(&mesh.positions[ids[b] as usize].distance(*p))
-                            })
-                            .unwrap_or(0);
-                        input.marks.push(Mark {
-                            kind: MarkKind::Notch,
-                            pos: input.outline[k],
-                            boundary_index: Some(k),
-                        });
-                    }
-                }
+                // Notch marks are boundary vertices of the mesh already (`ctx.notches`).
+                DesignMark::Notch => {}
                 DesignMark::Line if pts.len() >= 2 => {
                     // Stitch and placement lines follow the surface: each 3D segment is
                     // subdivided and every sample carried by its nearest surface point, so the

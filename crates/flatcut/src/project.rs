@@ -11,6 +11,8 @@
 //! name = "parchment"
 //! max_stretch_pct = 2.0
 //! max_compress_pct = 0.0
+//! grain = "0,180"               # "fixed" (one way), "0,180" (either way, default) or "any"
+//! grain_tolerance_deg = 0.0     # how far a piece's grain line may turn off the material's
 //! [sheet]
 //! width_mm = 600.0              # sheets of width × height, or
 //! height_mm = 400.0
@@ -27,6 +29,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use flatcut_nest::GrainDirections;
+
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
@@ -35,6 +39,30 @@ pub struct Material {
     pub max_stretch_pct: Option<f64>,
     #[serde(default)]
     pub max_compress_pct: Option<f64>,
+    /// The material's grain rule for pieces with a grain line: `"fixed"` (along the grain one
+    /// way), `"0,180"` (either way; the default) or `"any"` (no grain: pieces turn freely in
+    /// quarter turns).
+    #[serde(default)]
+    pub grain: Option<String>,
+    /// How far a piece's grain line may turn off the material's grain (degrees).
+    #[serde(default)]
+    pub grain_tolerance_deg: Option<f64>,
+}
+
+impl Material {
+    /// The grain rule (validated at load time); the nesting's own type, so the project and
+    /// `flatcut nest --grain` read the same spellings.
+    pub fn grain_rule(&self) -> GrainDirections {
+        self.grain
+            .as_deref()
+            .and_then(GrainDirections::parse)
+            .unwrap_or_default()
+    }
+
+    /// How far a piece's grain line may turn off the material's grain (degrees; 0 by default).
+    pub fn grain_tolerance(&self) -> f64 {
+        self.grain_tolerance_deg.unwrap_or(0.0)
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -206,6 +234,20 @@ impl Project {
             if v.is_some_and(|v| !(v.is_finite() && (0.0..100.0).contains(&v))) {
                 return Err(format!("[material] {k} must be a percentage in [0, 100)"));
             }
+        }
+        if let Some(g) = &self.material.grain
+            && GrainDirections::parse(g).is_none()
+        {
+            return Err(format!(
+                "[material] grain must be \"fixed\", \"0,180\" or \"any\", got \"{g}\""
+            ));
+        }
+        if self
+            .material
+            .grain_tolerance_deg
+            .is_some_and(|v| !(v.is_finite() && (0.0..=90.0).contains(&v)))
+        {
+            return Err("[material] grain_tolerance_deg must be an angle in [0, 90]".into());
         }
         if self
             .seam_mm

@@ -16,8 +16,10 @@
 //! ([`FlattenParams::time_limit`], [`FlattenHooks`]).
 
 pub mod arap;
+pub mod assembly;
 pub mod conformal_boundary;
 pub mod developable;
+pub mod limits;
 pub mod lscm;
 pub mod marks;
 pub mod method;

@@ -411,14 +411,21 @@ pub const DEFAULT_PX_PER_MM: f64 = 10.0;
 /// Largest PNG rendered (pixels): 16 megapixels, 64 MB of RGBA.
 pub const MAX_PNG_PIXELS: f64 = 16.0e6;
 
+/// Longest side of a PNG rendered by default (pixels): a 2.5 m sail panel at the default
+/// resolution would need 25,000 pixels a side (gigabytes); larger drawings get fewer pixels per
+/// mm instead.
+pub const MAX_DEFAULT_SIDE_PX: f64 = 4096.0;
+
 /// Renders an SVG (ours) to PNG bytes with resvg, `width_px` wide (height in proportion).
 pub fn render_png(svg: &str, width_px: Option<u32>) -> Result<Vec<u8>, ReportError> {
     use resvg::{tiny_skia, usvg};
     let tree = usvg::Tree::from_str(svg, &usvg::Options::default())
         .map_err(|e| ReportError::Render(e.to_string()))?;
     let size = tree.size();
+    let longest = size.width().max(size.height()) as f64;
     let w = width_px.map_or(
-        size.width() as f64 * DEFAULT_PX_PER_MM / (96.0 / 25.4),
+        size.width() as f64
+            * (DEFAULT_PX_PER_MM / (96.0 / 25.4)).min(MAX_DEFAULT_SIDE_PX / longest),
         |w| w as f64,
     );
     // A drawing metres long at the default density would need gigabytes of pixels: the image is
@@ -518,6 +525,31 @@ pub fn html_report(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
                     s.length_2d_mm,
                     s.relative_error * 100.0
                 ));
+            }
+            h.push_str("</table>\n");
+        }
+        if !r.mating_seams.is_empty() {
+            h.push_str("<h3>Mating seams</h3><table><tr><th>seam</th><th>pieces</th><th>3D mm</th><th>2D mm</th><th>mismatch mm</th></tr>\n");
+            for s in &r.mating_seams {
+                h.push_str(&format!(
+                    "<tr><td>{}</td><td>{} / {}</td><td>{:.2}</td><td>{:.3} / {:.3}</td><td>{:.4}</td></tr>\n",
+                    esc(&s.name),
+                    esc(&s.pieces[0]),
+                    esc(&s.pieces[1]),
+                    s.length_3d_mm,
+                    s.length_2d_mm[0],
+                    s.length_2d_mm[1],
+                    s.mismatch_mm
+                ));
+                for n in &s.notches {
+                    h.push_str(&format!(
+                        "<tr><td>notch {}</td><td></td><td></td><td>{:.3} / {:.3}</td><td>{:.4}</td></tr>\n",
+                        esc(&n.name),
+                        n.offset_mm[0],
+                        n.offset_mm[1],
+                        (n.offset_mm[0] - n.offset_mm[1]).abs()
+                    ));
+                }
             }
             h.push_str("</table>\n");
         }

@@ -14,6 +14,7 @@ pub mod darts;
 pub mod draw;
 pub mod measure;
 pub mod per_face;
+pub mod seams;
 
 pub use darts::DartReport;
 pub use draw::{Column, heatmap_svg, histogram_svg, html_report, render_png};
@@ -21,3 +22,4 @@ pub use measure::{
     BoundarySegment, FaceMeasure, Measure, Region, Report, ReportError, ReportOptions, Stats,
 };
 pub use per_face::{FaceRow, ReportWithFaces, per_face_rows, with_faces};
+pub use seams::{DEFAULT_SEAM_TOLERANCE_MM, MatingSeamReport, NotchOffset, measure_seam};

@@ -253,6 +253,9 @@ pub struct Report {
     /// the surface area most stretched and the 1 % most compressed, worst first (at most
     /// [`MAX_HOT_SPOTS`]); empty for a map without measurable distortion.
     pub hot_spots: Vec<Region>,
+    /// The mating seams this piece takes part in (filled by whoever knows the other pieces: the
+    /// seams of a design, or the coincident boundaries of several flattened meshes).
+    pub mating_seams: Vec<crate::MatingSeamReport>,
     /// The darts cut into the piece to meet the limits (absent when there are none).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub darts: Vec<crate::DartReport>,
@@ -486,6 +489,7 @@ impl Report {
             boundary_segments,
             regions,
             hot_spots,
+            mating_seams: Vec::new(),
             darts: Vec::new(),
             per_face,
         })

@@ -1633,14 +1633,14 @@ G1 X23.098 Y466.016
 M3 S0.000
 G4 P0.150
 (layer cut)
-(shade-1-notch-2#1)
+(shade-1-notch-top_ring_clip#1)
 G0 X465.867 Y237.073
 M3 S1000.000
 G4 P0.150
 G1 X465.810 Y233.073 F3000.000
 M3 S0.000
 G4 P0.150
-(shade-1-notch-1#1)
+(shade-1-notch-bottom_ring_clip#1)
 G0 X462.630 Y9.198
 M3 S1000.000
 G4 P0.150

@@ -34,6 +34,10 @@ pub struct FlattenArgs {
     /// Time limit of the flattening of one piece in seconds: when it runs out, the best flip-free map found so far is used, with a warning.
     #[arg(long, value_name = "S", value_parser = values::seconds)]
     pub flatten_time: Option<std::time::Duration>,
+    /// Largest difference between the two flat sides of a mating seam, or between a notch's
+    /// offsets on them, in mm; beyond it the command exits with code 3.
+    #[arg(long, default_value_t = flatcut::report::DEFAULT_SEAM_TOLERANCE_MM, value_name = "MM", value_parser = values::nonneg_mm)]
+    pub seam_tolerance: f64,
     /// `auto`: cut darts where a piece exceeds --max-stretch/--max-compress (the fewest darts
     /// that bring every face within them), then flatten with the limits held.
     #[arg(long, value_name = "MODE", value_parser = parse_darts)]
@@ -256,6 +260,67 @@ pub fn load_flat(
         }
     }
     Ok(flats)
+}
+
+/// Prints, on stderr, every region beyond the material limits (where on the 3D surface and by
+/// how much), every mating seam beyond `seam_tolerance` mm and, with `flips`, every piece with
+/// flipped faces; true when there is any, for the caller to exit with [`crate::EXIT_LIMIT`].
+pub fn report_limits(flats: &[Flat], seam_tolerance: f64, flips: bool) -> bool {
+    let mut over = false;
+    for f in flats {
+        if flips && f.report.flipped > 0 {
+            eprintln!(
+                "{}: {} flipped faces (the pattern folds over itself)",
+                f.name, f.report.flipped
+            );
+            over = true;
+        }
+        for r in &f.report.regions {
+            over = true;
+            eprintln!(
+                "{}: {} {:.2}% over {:.1} mm² at 3D ({:.1}, {:.1}, {:.1}) / 2D ({:.1}, {:.1})",
+                f.name,
+                r.kind,
+                r.worst_pct,
+                r.area_mm2,
+                r.centroid_3d[0],
+                r.centroid_3d[1],
+                r.centroid_3d[2],
+                r.centroid_2d[0],
+                r.centroid_2d[1]
+            );
+        }
+    }
+    for line in flatcut::flat::seams_over(flats, seam_tolerance) {
+        eprintln!("{line}");
+        over = true;
+    }
+    over
+}
+
+/// Prints every mating seam: its sides' flat lengths against 3D and its notches' offsets.
+pub fn print_seams(flats: &[Flat]) -> anyhow::Result<()> {
+    for s in flatcut::flat::mating_seams(flats) {
+        crate::outln!(
+            "mating seam '{}' ({} / {}): 3D {:.2} mm, flat {:.3} / {:.3} mm, mismatch {:.4} mm",
+            s.name,
+            s.pieces[0],
+            s.pieces[1],
+            s.length_3d_mm,
+            s.length_2d_mm[0],
+            s.length_2d_mm[1],
+            s.mismatch_mm
+        );
+        for n in &s.notches {
+            crate::outln!(
+                "  notch '{}': {:.3} / {:.3} mm from the seam's start",
+                n.name,
+                n.offset_mm[0],
+                n.offset_mm[1]
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Builds the pattern piece of each flattened piece.

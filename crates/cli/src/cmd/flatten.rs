@@ -1,5 +1,7 @@
 //! `flatcut flatten FILE --method M -o flat.obj [--report report.json]`: one OBJ per piece with
-//! the input's 3D vertices (`v`), one UV per vertex in mm (`vt`) and `f a/a b/b c/c`.
+//! the input's 3D vertices (`v`), one UV per vertex in mm (`vt`) and `f a/a b/b c/c`. Exits with
+//! code 3 (outputs written) when a material limit (`--max-stretch`, `--max-compress`) is broken
+//! or a mating seam's sides differ by more than `--seam-tolerance`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -54,7 +56,13 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         for w in &info.warnings {
             eprintln!("warning: {w}");
         }
-        let mut report = flatcut::pipeline::report_piece(&name, &mesh, &[], None, None)?;
+        let mut report = flatcut::pipeline::report_piece(
+            &name,
+            &mesh,
+            &[],
+            a.flatten.max_stretch,
+            a.flatten.max_compress,
+        )?;
         report.darts = flatcut::darting::dart_reports(&darts);
         eprintln!(
             "  {} iterations, mean δ2 {:.6}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
@@ -70,12 +78,16 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             mesh,
             report,
             quantity: 1,
+            mirrored: 0,
+            notches: Vec::new(),
             info: Some(info),
             darts,
         }]
     } else {
-        common::load_flat(&a.file, &a.flatten, (None, None), true)?
+        let limits = (a.flatten.max_stretch, a.flatten.max_compress);
+        common::load_flat(&a.file, &a.flatten, limits, true)?
     };
+    let seam_tolerance = a.flatten.seam_tolerance;
     let mut out = OutputSet::new();
     let several = flats.len() > 1;
     let mut reports = Vec::new();
@@ -108,6 +120,12 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     out.commit()?;
     for l in lines {
         crate::outln!("{l}");
+    }
+    common::print_seams(&flats)?;
+    // The outputs are written either way, so the user can see what breaks the limits.
+    if common::report_limits(&flats, seam_tolerance, false) {
+        eprintln!("material limits or seam tolerance exceeded");
+        return Ok(ExitCode::from(crate::EXIT_LIMIT));
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -29,7 +29,8 @@ pub struct Args {
     /// Heat map as PNG, rendered from the same SVG.
     #[arg(long)]
     pub png: Option<PathBuf>,
-    /// Width of the PNG in pixels (default: 10 pixels per mm, at most 16384).
+    /// Width of the PNG in pixels (default: 10 pixels per mm, the longest side at most 4096;
+    /// at most 16384).
     #[arg(long, value_parser = values::png_width)]
     pub png_width: Option<u32>,
     /// Self-contained HTML report.
@@ -79,6 +80,8 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             flats.push(flat);
         }
     }
+    // Flattened meshes of one split surface pair up by their seams' shared coordinates.
+    flatcut::flat::pair_coincident(&mut flats);
     for f in &flats {
         let r = &f.report;
         crate::outln!("{}", f.name);
@@ -166,33 +169,11 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         )?;
     }
     out.commit()?;
-    let mut over = false;
-    for f in &flats {
-        if f.report.flipped > 0 {
-            eprintln!(
-                "{}: {} flipped faces (the pattern folds over itself)",
-                f.name, f.report.flipped
-            );
-            over = true;
-        }
-        for r in &f.report.regions {
-            over = true;
-            eprintln!(
-                "{}: {} {:.2}% over {:.1} mm² at 3D ({:.1}, {:.1}, {:.1}) / 2D ({:.1}, {:.1})",
-                f.name,
-                r.kind,
-                r.worst_pct,
-                r.area_mm2,
-                r.centroid_3d[0],
-                r.centroid_3d[1],
-                r.centroid_3d[2],
-                r.centroid_2d[0],
-                r.centroid_2d[1]
-            );
-        }
-    }
-    if over && (a.limit_stretch.is_some() || a.limit_compress.is_some()) {
-        eprintln!("material limits exceeded");
+    common::print_seams(&flats)?;
+    let limits_given = a.limit_stretch.is_some() || a.limit_compress.is_some();
+    let over = common::report_limits(&flats, a.flatten.seam_tolerance, limits_given);
+    if over {
+        eprintln!("material limits or seam tolerance exceeded");
         return Ok(ExitCode::from(crate::EXIT_LIMIT));
     }
     Ok(ExitCode::SUCCESS)

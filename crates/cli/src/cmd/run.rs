@@ -36,6 +36,10 @@ pub struct Args {
     /// Nesting iterations.
     #[arg(long, default_value_t = RunOptions::DEFAULT_NEST_ITERS, value_parser = crate::values::iterations)]
     pub nest_iters: usize,
+    /// Largest difference between the two flat sides of a mating seam, or between a notch's
+    /// offsets on them, in mm; beyond it the run counts as beyond its limits (exit code 3).
+    #[arg(long, default_value_t = flatcut::report::DEFAULT_SEAM_TOLERANCE_MM, value_name = "MM", value_parser = crate::values::nonneg_mm)]
+    pub seam_tolerance: f64,
     #[command(flatten)]
     pub stream: StreamArgs,
 }
@@ -47,7 +51,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(common::file_safe(&proj.name)));
-    let mut opts = RunOptions::default().with_nest_iters(a.nest_iters);
+    let mut opts = RunOptions::default()
+        .with_nest_iters(a.nest_iters)
+        .with_seam_tolerance_mm(a.seam_tolerance);
     let flatten_bar = (!a.stream.quiet).then(|| {
         let (hooks, bar) = common::progress_hooks(opts.flatten_hooks.clone(), 1);
         opts = opts.clone().with_flatten_hooks(hooks);
@@ -90,12 +96,17 @@ fn send_stage(
     };
     if a.no_send {
         started(log, "skipped (--no-send)");
-        return Ok((Vec::new(), ExitCode::SUCCESS));
+        let exit = if outputs.limits_exceeded() {
+            ExitCode::from(crate::EXIT_LIMIT)
+        } else {
+            ExitCode::SUCCESS
+        };
+        return Ok((Vec::new(), exit));
     }
     if outputs.limits_exceeded() && !a.force {
         started(
             log,
-            "skipped, the material limits are exceeded (see above; --force streams anyway)",
+            "skipped, the material limits or the seam tolerance are exceeded (see above; --force streams anyway)",
         );
         return Ok((Vec::new(), ExitCode::from(crate::EXIT_LIMIT)));
     }
@@ -189,14 +200,31 @@ fn print_summary(
         "compr.%"
     );
     for p in &o.summary.pieces {
+        let qty = if p.mirrored > 0 {
+            format!("{}+{}", p.quantity, p.mirrored)
+        } else {
+            p.quantity.to_string()
+        };
         crate::outln!(
             "{:<20} {:>4} {:>12.0} {:>10.5} {:>10.2} {:>10.2}",
             p.name,
-            p.quantity,
+            qty,
             p.area_mm2,
             p.delta2_mean,
             p.stretch_max_pct,
             p.compress_max_pct
+        );
+    }
+    for m in &o.summary.mating_seams {
+        crate::outln!(
+            "seam {:<15} {} / {}: flat {:.2} / {:.2} mm (3D {:.2}), mismatch {:.3} mm",
+            m.name,
+            m.pieces[0],
+            m.pieces[1],
+            m.length_2d_mm[0],
+            m.length_2d_mm[1],
+            m.length_3d_mm,
+            m.worst_mm()
         );
     }
     let s = &o.summary;

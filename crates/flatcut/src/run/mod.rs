@@ -42,6 +42,9 @@ pub struct RunOptions {
     pub nest_iters: usize,
     /// Chordal tolerance of the tessellation (mm).
     pub chord_mm: f64,
+    /// Largest difference between the two sides of a mating seam, or between a notch's offsets
+    /// on them (mm), before the run counts as beyond its limits.
+    pub seam_tolerance_mm: f64,
     /// Progress callback and cancel flag handed to every piece's flattening.
     pub flatten_hooks: FlattenHooks,
 }
@@ -57,6 +60,11 @@ impl RunOptions {
         self
     }
 
+    pub fn with_seam_tolerance_mm(mut self, mm: f64) -> Self {
+        self.seam_tolerance_mm = mm;
+        self
+    }
+
     pub fn with_flatten_hooks(mut self, hooks: FlattenHooks) -> Self {
         self.flatten_hooks = hooks;
         self
@@ -68,6 +76,7 @@ impl Default for RunOptions {
         Self {
             nest_iters: Self::DEFAULT_NEST_ITERS,
             chord_mm: Self::DEFAULT_CHORD_MM,
+            seam_tolerance_mm: flatcut_report::DEFAULT_SEAM_TOLERANCE_MM,
             flatten_hooks: FlattenHooks::default(),
         }
     }
@@ -103,13 +112,13 @@ pub fn run_project(
         flatten_stage(project, opts, obs, &mut files)
     })?;
     let limits_exceeded = timed(obs, Stage::Report, "", |obs| {
-        report_stage(&flats, obs, &mut files)
+        report_stage(&flats, opts, obs, &mut files)
     })?;
     let pieces = timed(obs, Stage::Pattern, "", |_| {
         pattern_stage(project, &flats, &mut files)
     })?;
     let (layout, stock) = timed(obs, Stage::Nest, "", |obs| {
-        nest_stage(project, &flats, &pieces, opts, obs)
+        nest_stage(project, &pieces, opts, obs)
     })?;
     let (profile, sheets) = timed(obs, Stage::Gcode, "", |_| {
         gcode_stage(project, &layout, stock, &mut files)
@@ -223,9 +232,10 @@ fn flatten_stage(
 const WARNED_REGIONS: usize = 5;
 
 /// Distortion report: JSON, heat map (SVG, PNG) and the HTML page; returns one line per region
-/// beyond the material limits.
+/// beyond the material limits and per mating seam whose sides differ beyond the tolerance.
 fn report_stage(
     flats: &[Flat],
+    opts: &RunOptions,
     obs: &mut dyn Observer,
     files: &mut Vec<OutputFile>,
 ) -> Result<Vec<String>, RunError> {
@@ -278,6 +288,13 @@ fn report_stage(
                 ),
             });
         }
+    }
+    for line in flat::seams_over(flats, opts.seam_tolerance_mm) {
+        obs.event(&Event::Warning {
+            stage: Stage::Report,
+            message: &line,
+        });
+        over.push(line);
     }
     Ok(over)
 }
@@ -337,10 +354,10 @@ pub fn stock(project: &Project) -> Result<Stock, RunError> {
     }
 }
 
-/// Nests every piece, as many times as its quantity, on the project's stock.
+/// Nests every piece (both sides of a pair), as many times as its label says, on the project's
+/// stock.
 fn nest_stage(
     project: &Project,
-    flats: &[Flat],
     pieces: &[Piece],
     opts: &RunOptions,
     obs: &mut dyn Observer,
@@ -348,8 +365,14 @@ fn nest_stage(
     let stock = stock(project)?;
     let groups: Vec<NestGroup> = pieces
         .iter()
-        .zip(flats)
-        .map(|(p, f)| NestGroup::from_piece(p, f.quantity as usize, false))
+        .map(|p| {
+            let mut g = NestGroup::from_piece(p, p.label.quantity as usize, false);
+            // The nesting keeps a grain line along the material's grain by the material's rule
+            // (one way, either way, or not at all) within its tolerance, mirrored copies too.
+            g.grain_directions = project.material.grain_rule();
+            g.grain_tolerance_deg = project.material.grain_tolerance();
+            g
+        })
         .collect();
     let nopts = NestOptions::DEFAULT
         .with_spacing(project.sheet.spacing_mm)
@@ -431,6 +454,7 @@ fn summarise(
         est_time_s: sheets.iter().map(|s| s.summary.est_time_s).sum(),
         gcode_lines: sheets.iter().map(|s| s.summary.lines).sum(),
         limits_exceeded,
+        mating_seams: flat::mating_seams(flats),
         pieces: flats
             .iter()
             .map(|f| PieceSummary {
@@ -438,6 +462,7 @@ fn summarise(
                 compress_max_pct: f.report.compress_max_pct,
                 delta2_mean: f.report.delta2_mean,
                 name: f.name.clone(),
+                mirrored: f.mirrored,
                 quantity: f.quantity,
                 stretch_max_pct: f.report.stretch_max_pct,
             })

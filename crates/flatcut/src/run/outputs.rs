@@ -34,6 +34,8 @@ pub struct PieceSummary {
     pub area_mm2: f64,
     pub compress_max_pct: f64,
     pub delta2_mean: f64,
+    /// Mirror images cut besides (`pairs`).
+    pub mirrored: u32,
     pub name: String,
     pub quantity: u32,
     pub stretch_max_pct: f64,
@@ -45,8 +47,11 @@ pub struct RunSummary {
     pub cut_length_mm: f64,
     pub est_time_s: f64,
     pub gcode_lines: usize,
-    /// One line per region beyond the material limits.
+    /// One line per region beyond the material limits and per mating seam beyond the seam
+    /// tolerance.
     pub limits_exceeded: Vec<String>,
+    /// Every mating seam: its sides' flat lengths and its notches' offsets.
+    pub mating_seams: Vec<flatcut_report::MatingSeamReport>,
     pub pieces: Vec<PieceSummary>,
     pub project: String,
     pub sheets: usize,

@@ -1,5 +1,5 @@
 //! The nonlinear, flip-free methods: isometric (δ2), conformal (δ1), min-max (δ0) and
-//! boundary-isometric (Duncan's f1), with material stretch limits.
+//! boundary-isometric (Duncan's f1); isometric with material stretch limits ([`crate::limits`]).
 //!
 //! All of them start from a flip-free map (LSCM when it is flip-free for isometric, else Tutte,
 //! [`init`]) and keep every iterate flip-free
@@ -17,19 +17,16 @@ pub mod spd;
 use std::time::Instant;
 
 use flatcut_geom::DVec2;
-use flatcut_mesh::{Topology, TriMesh, face_distortion};
+use flatcut_mesh::{Topology, TriMesh};
 
+use crate::limits::{Limits, OnePiece};
 use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
-use kernel::{IsoEnergy, Mips, RestTri, SymDirichlet, WithLimits};
+use kernel::{IsoEnergy, Mips, RestTri, SymDirichlet};
 use newton::{Budget, EarlyStop};
 
 /// Newton decrement (energy units per mm² of surface) below which a solve has converged: far
 /// below any distortion a pattern maker can see (δ2 ~ 1e-12).
-const ABS_DECREMENT_PER_AREA: f64 = 1e-15;
-/// Stiffness schedule of the material-limit penalty (relative to the δ2 density).
-const LIMIT_STIFFNESS: [f64; 3] = [10.0, 1e2, 1e3];
-/// Slack on a material limit before a violation is reported (0.05 % of stretch).
-const LIMIT_REPORT_SLACK: f64 = 5e-4;
+pub(crate) const ABS_DECREMENT_PER_AREA: f64 = 1e-15;
 
 /// Solves one of the nonlinear methods (`Isometric`, `Conformal`, `Minmax`, `BoundaryIsometric`).
 pub fn solve(
@@ -130,37 +127,21 @@ pub(crate) fn isometric(
     };
     let mut early = run.early;
     let mut x = run.x;
-    let s_max = params.max_stretch_pct.map(|p| 1.0 + p / 100.0);
-    let s_min = params.max_compress_pct.map(|p| 1.0 - p / 100.0);
-    if s_max.is_some() || s_min.is_some() {
-        let (s_max, s_min) = (s_max.unwrap_or(f64::INFINITY), s_min.unwrap_or(0.0));
-        if s_max.is_nan() || s_max < 1.0 || s_min.is_nan() || s_min > 1.0 {
-            return Err(FlattenError::Internal(format!(
-                "material limits must allow the identity (σ ≤ {s_max}, σ ≥ {s_min})"
-            )));
-        }
-        // A finite-stiffness penalty settles slightly beyond its bounds: aim inside the limits
-        // by LIMIT_MARGIN of their width so the result meets the limits themselves.
-        let aim_max = 1.0 + (s_max - 1.0) * (1.0 - LIMIT_MARGIN);
-        let aim_min = 1.0 - (1.0 - s_min) * (1.0 - LIMIT_MARGIN);
-        for k in LIMIT_STIFFNESS {
-            if early.is_some() {
-                break;
-            }
-            let e = WithLimits {
-                inner: SymDirichlet,
-                s_max: aim_max,
-                s_min: aim_min,
-                k,
-            };
-            let r = newton_solve(rest, n, e, &x, params, Method::Isometric, budget)?;
-            info.iterations += r.iterations;
-            early = r.early;
-            x = r.x;
-        }
+    if let Some(limits) = Limits::of(params)? {
+        let mut one = OnePiece {
+            rest,
+            n,
+            params,
+            budget,
+            early: None,
+        };
+        let r = crate::limits::enforce(&mut one, rest, x, limits)?;
+        info.iterations += r.iterations;
+        early = early.or(one.early);
+        x = r.x;
         info.final_energy = mean_density(rest, &x, &SymDirichlet);
         info.warnings
-            .extend(limit_violations(mesh, &x, s_max, s_min));
+            .extend(crate::limits::violations(mesh, &x, limits));
     }
     if early == Some(EarlyStop::TimeLimit) {
         info.warnings
@@ -168,9 +149,6 @@ pub(crate) fn isometric(
     }
     Ok(Flattening { uv: x, info })
 }
-
-/// Fraction of a material limit's width kept as a margin by the penalty (see `isometric`).
-const LIMIT_MARGIN: f64 = 0.1;
 
 /// Duncan's conformal distortion δ1 via the MIPS energy, scaled to the 3D area.
 fn conformal(
@@ -208,61 +186,6 @@ pub(crate) fn total_area(rest: &[RestTri]) -> f64 {
 pub(crate) fn mean_density<E: IsoEnergy>(rest: &[RestTri], x: &[DVec2], e: &E) -> f64 {
     let s: f64 = rest.iter().map(|r| kernel::tri_energy(e, r, x)).sum();
     s / total_area(rest)
-}
-
-/// Reports where the material limits are not met: counts, the worst triangle of each kind and
-/// where it is on the 3D surface.
-fn limit_violations(mesh: &TriMesh, x: &[DVec2], s_max: f64, s_min: f64) -> Vec<String> {
-    let mut worst_stretch: Option<(usize, f64)> = None;
-    let mut worst_compress: Option<(usize, f64)> = None;
-    let (mut n_stretch, mut n_compress) = (0usize, 0usize);
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        let c3 = mesh.corners(t);
-        let c2 = tri.map(|v| x[v as usize]);
-        let Some(d) = face_distortion(c3, c2) else {
-            continue;
-        };
-        if d.sigma1 > s_max + LIMIT_REPORT_SLACK {
-            n_stretch += 1;
-            if worst_stretch.is_none_or(|(_, s)| d.sigma1 > s) {
-                worst_stretch = Some((t, d.sigma1));
-            }
-        }
-        if d.sigma2 < s_min - LIMIT_REPORT_SLACK {
-            n_compress += 1;
-            if worst_compress.is_none_or(|(_, s)| d.sigma2 < s) {
-                worst_compress = Some((t, d.sigma2));
-            }
-        }
-    }
-    let mut w = Vec::new();
-    let at = |t: usize| {
-        let c = mesh.corners(t);
-        (c[0] + c[1] + c[2]) / 3.0
-    };
-    if let Some((t, s)) = worst_stretch {
-        let p = at(t);
-        w.push(format!(
-            "max stretch {:.2}% not met on {n_stretch} triangles; worst: triangle {t} near ({:.2}, {:.2}, {:.2}) stretches {:.2}%",
-            (s_max - 1.0) * 100.0,
-            p.x,
-            p.y,
-            p.z,
-            (s - 1.0) * 100.0
-        ));
-    }
-    if let Some((t, s)) = worst_compress {
-        let p = at(t);
-        w.push(format!(
-            "max compression {:.2}% not met on {n_compress} triangles; worst: triangle {t} near ({:.2}, {:.2}, {:.2}) compresses {:.2}%",
-            (1.0 - s_min) * 100.0,
-            p.x,
-            p.y,
-            p.z,
-            (1.0 - s) * 100.0
-        ));
-    }
-    w
 }
 
 /// Refuses a result with a non-finite coordinate or an inverted triangle.

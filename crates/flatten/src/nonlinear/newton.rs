@@ -27,14 +27,14 @@ use crate::{FlattenHooks, FlattenProgress};
 
 /// Fraction of the distance to the first inversion taken as the largest trial step
 /// (SLIM uses 0.8; closer than that, the barrier makes the energy explode anyway).
-const INVERSION_STEP_FRACTION: f64 = 0.9;
+pub(crate) const INVERSION_STEP_FRACTION: f64 = 0.9;
 /// Armijo sufficient-decrease constant.
-const ARMIJO_C: f64 = 1e-4;
+pub(crate) const ARMIJO_C: f64 = 1e-4;
 /// Backtracking halvings before the line search gives up (step 2⁻⁶⁰ is below round-off).
-const MAX_HALVINGS: usize = 60;
+pub(crate) const MAX_HALVINGS: usize = 60;
 /// Diagonal regularisation relative to the mean Hessian diagonal: removes the rigid-motion null
 /// space of the projected Hessian without changing the step measurably.
-const REG_REL: f64 = 1e-9;
+pub(crate) const REG_REL: f64 = 1e-9;
 /// Triangles per block of the parallel passes. Fixed (not derived from the thread count) so that
 /// every partial sum, and therefore every bit of the result, is the same with any number of
 /// threads.

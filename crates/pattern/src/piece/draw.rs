@@ -39,7 +39,12 @@ impl Piece {
             s.push(mk(StrokeKind::Drill, pts, true, format!("drill-{}", k + 1)));
         }
         for (k, nt) in self.notches.iter().enumerate() {
-            let what = format!("notch-{}", k + 1);
+            // A named notch (a mating seam's) says which: `notch-<seam>_<n>`, with the name's
+            // dashes and spaces as underscores so the id still splits into piece and notch.
+            let what = match self.notch_names.get(k).filter(|n| !n.is_empty()) {
+                Some(n) => format!("notch-{}", super::safe_name(n).replace('-', "_")),
+                None => format!("notch-{}", k + 1),
+            };
             s.push(mk(StrokeKind::Notch, nt.clone(), false, what));
         }
         s.push(mk(

@@ -11,6 +11,8 @@ use flatcut_geom::DVec2;
 pub(super) struct PlacedMarks {
     /// Notch strokes (open polylines through the allowance).
     pub notches: Vec<Vec<DVec2>>,
+    /// The name of each notch (empty when unnamed), in the order of `notches`.
+    pub notch_names: Vec<String>,
     /// Drill holes: centre and diameter.
     pub drills: Vec<(DVec2, f64)>,
     /// Reference points.
@@ -29,6 +31,7 @@ pub(super) fn place_marks(
 ) -> Result<PlacedMarks, PatternError> {
     let mut out = PlacedMarks {
         notches: Vec::new(),
+        notch_names: Vec::new(),
         drills: Vec::new(),
         points: Vec::new(),
     };
@@ -39,6 +42,8 @@ pub(super) fn place_marks(
                     .map(|i| outline.points[i])
                     .unwrap_or(m.pos);
                 out.notches.push(notch(sew, cut, v, opts));
+                out.notch_names
+                    .push(input.mark_names.get(k).cloned().unwrap_or_default());
             }
             MarkKind::Drill => {
                 if !poly::contains(sew, m.pos) {

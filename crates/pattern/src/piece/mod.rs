@@ -88,6 +88,10 @@ pub struct PieceInput {
     pub seam_widths: Vec<f64>,
     pub corner_style: CornerStyle,
     pub label: LabelInfo,
+    /// Names of the notch marks, by mark index (a mating seam's notch carries the seam's name
+    /// into the notch's id); marks past its end, and empty names, are unnamed.
+    #[serde(default)]
+    pub mark_names: Vec<String>,
 }
 
 impl PieceInput {
@@ -108,6 +112,7 @@ impl PieceInput {
             grain: None,
             seam_widths: Vec::new(),
             corner_style: CornerStyle::default(),
+            mark_names: Vec::new(),
         }
     }
 }
@@ -222,6 +227,8 @@ pub struct Piece {
     pub cut: Vec<DVec2>,
     /// Notch strokes (open polylines cut through the allowance).
     pub notches: Vec<Vec<DVec2>>,
+    /// The name of each notch (empty when unnamed), in the order of `notches`.
+    pub notch_names: Vec<String>,
     /// Drill holes: centre and diameter.
     pub drills: Vec<(DVec2, f64)>,
     /// Reference points (drawn crosses).
@@ -315,6 +322,7 @@ impl Piece {
             sew_polyline: sew.polyline,
             cut,
             notches: placed.notches,
+            notch_names: placed.notch_names,
             drills: placed.drills,
             points: placed.points,
             lines,

@@ -1,0 +1,298 @@
+//! The pieces of a design with their 3D meshes, and the mating seams between them: `[[piece]]`s
+//! as they are (cut open along their own seams), each `[[part]]` split along its style lines into
+//! the regions its `[[part.piece]]`s name, and the `[[join]]`s between piece edges.
+//!
+//! Every line between two regions is a mating seam named after the line (a line crossed by
+//! another becomes several seams, `name-1`, `name-2`, … in the line's direction); its notches
+//! are named `line 1`, `line 2`, … in the order given. A region that no piece names, or a piece
+//! that names no region, is an error that says where.
+
+use std::path::Path;
+
+use flatcut_geom::{DVec3, Tolerances};
+use flatcut_mesh::joins::boundary_vertex;
+use flatcut_mesh::lines::{LineSpec, OFF_SURFACE_REL, embed_lines};
+use flatcut_mesh::mating::{MatingSeam, SeamNotch, SeamSide};
+use flatcut_mesh::nearest::Bvh;
+use flatcut_mesh::regions::split_along_lines;
+use flatcut_mesh::{TriMesh, check_disk};
+
+use crate::{Design, DesignError, PartDef, PieceDef};
+
+/// A piece to cut, with the mesh its flattening starts from.
+#[derive(Clone, Debug)]
+pub struct AssembledPiece {
+    pub def: PieceDef,
+    /// The part it was cut from (`None` for a `[[piece]]`).
+    pub part: Option<String>,
+    pub mesh: TriMesh,
+    /// The piece's notch marks (`kind = "notch"`) as boundary vertices of `mesh`, inserted
+    /// exactly where each mark's point falls on the boundary: (mark name, vertex).
+    pub notch_marks: Vec<(String, u32)>,
+}
+
+/// Every piece of a design and the mating seams between them (sides index `pieces`).
+#[derive(Clone, Debug)]
+pub struct Assembly {
+    pub pieces: Vec<AssembledPiece>,
+    pub seams: Vec<MatingSeam>,
+}
+
+impl Design {
+    /// Builds every piece's mesh and the mating seams (mesh files resolved against `base_dir`,
+    /// surfaces tessellated to `tol`).
+    pub fn assemble(&self, base_dir: &Path, tol: &Tolerances) -> Result<Assembly, DesignError> {
+        let mut out = Assembly {
+            pieces: Vec::new(),
+            seams: Vec::new(),
+        };
+        for def in &self.pieces {
+            out.pieces.push(AssembledPiece {
+                def: def.clone(),
+                part: None,
+                mesh: def.mesh(base_dir, tol)?,
+                notch_marks: Vec::new(),
+            });
+        }
+        for part in &self.parts {
+            split_part(part, base_dir, tol, &mut out)?;
+        }
+        for p in &mut out.pieces {
+            place_notch_marks(p)?;
+        }
+        for (k, p) in out.pieces.iter().enumerate() {
+            if let Some(j) = out.pieces[..k]
+                .iter()
+                .position(|q| q.def.name == p.def.name)
+            {
+                let whose = |q: &AssembledPiece| match &q.part {
+                    Some(part) => format!("part '{part}'"),
+                    None => "a [[piece]]".to_string(),
+                };
+                return Err(DesignError::Part {
+                    file: self.source.clone(),
+                    index: self.parts.len(),
+                    part: p.part.clone().unwrap_or_default(),
+                    msg: format!(
+                        "two pieces are named '{}' ({} and {}): piece names must differ, they name the outputs",
+                        p.def.name,
+                        whose(&out.pieces[j]),
+                        whose(p)
+                    ),
+                });
+            }
+        }
+        for j in &self.joins {
+            let seam = crate::join::join_seam(&self.source, j, &mut out.pieces)?;
+            out.seams.push(seam);
+        }
+        Ok(out)
+    }
+}
+
+/// The message of an error about a part's surface, without the "piece i 'name': " context.
+fn bare(e: DesignError) -> String {
+    match e {
+        DesignError::Piece { msg, .. } => msg,
+        DesignError::Surface { source, .. } => source.to_string(),
+        DesignError::Mesh { source, .. } => source.to_string(),
+        DesignError::Tessellation { source, .. } => source.to_string(),
+        other => other.to_string(),
+    }
+}
+
+/// Names line `k` in a message of the mesh crate that says "line k".
+fn named(msg: String, k: usize, part: &PartDef) -> String {
+    let name = part.lines.get(k).map_or("", |l| l.name.as_str());
+    msg.replacen(&format!("line {k}"), &format!("line {k} '{name}'"), 1)
+}
+
+/// Splits a part along its style lines into its pieces and seams.
+fn split_part(
+    part: &PartDef,
+    base_dir: &Path,
+    tol: &Tolerances,
+    out: &mut Assembly,
+) -> Result<(), DesignError> {
+    let surface = part
+        .surface_piece()
+        .mesh(base_dir, tol)
+        .map_err(|e| part.err(bare(e)))?;
+    let specs: Vec<LineSpec> = part
+        .lines
+        .iter()
+        .map(|l| LineSpec {
+            points: l.points.iter().map(|p| DVec3::from_array(*p)).collect(),
+            notches: l.notches.iter().map(|p| DVec3::from_array(*p)).collect(),
+        })
+        .collect();
+    let embedded = embed_lines(&surface, &specs).map_err(|e| {
+        let k = match &e {
+            flatcut_mesh::lines::LineError::TooShort { line }
+            | flatcut_mesh::lines::LineError::OffSurface { line, .. }
+            | flatcut_mesh::lines::LineError::NotchOffLine { line, .. }
+            | flatcut_mesh::lines::LineError::LooseEnd { line, .. }
+            | flatcut_mesh::lines::LineError::LeavesSurface { line, .. }
+            | flatcut_mesh::lines::LineError::Lost { line, .. } => *line,
+            _ => 0,
+        };
+        part.err(named(e.to_string(), k, part))
+    })?;
+    let split = split_along_lines(&embedded.mesh, &embedded.lines).map_err(|e| {
+        let k = match &e {
+            flatcut_mesh::regions::RegionError::NotAnEdge { line, .. }
+            | flatcut_mesh::regions::RegionError::AlongBoundary { line, .. } => *line,
+            _ => 0,
+        };
+        part.err(named(e.to_string(), k, part))
+    })?;
+    // Which piece names which region.
+    let mesh = &embedded.mesh;
+    let bvh = Bvh::new(&mesh.positions, &mesh.triangles);
+    let far = OFF_SURFACE_REL * mesh.bbox().diagonal();
+    let mut piece_of_region: Vec<Option<usize>> = vec![None; split.regions.len()];
+    for (k, p) in part.pieces.iter().enumerate() {
+        let at = DVec3::from_array(p.at);
+        let (f, _, d) = bvh
+            .nearest(&mesh.positions, &mesh.triangles, at)
+            .ok_or_else(|| part.err("the surface has no triangles".into()))?;
+        if d > far {
+            return Err(part.err(format!(
+                "piece {k} '{}': `at` ({:.2}, {:.2}, {:.2}) is {d:.2} mm from the surface",
+                p.name, at.x, at.y, at.z
+            )));
+        }
+        let r = split.region_of_face[f] as usize;
+        if let Some(j) = piece_of_region[r] {
+            return Err(part.err(format!(
+                "pieces {j} '{}' and {k} '{}' name the same region (near ({:.1}, {:.1}, {:.1})): a style line between them is missing or does not close",
+                part.pieces[j].name, p.name, at.x, at.y, at.z
+            )));
+        }
+        piece_of_region[r] = Some(k);
+    }
+    if let Some(r) = piece_of_region.iter().position(Option::is_none) {
+        let reg = &split.regions[r];
+        let c = inner_point(&reg.mesh);
+        let mut around: Vec<&str> = split
+            .seams
+            .iter()
+            .filter(|s| s.sides.iter().any(|x| x.piece == r))
+            .map(|s| part.lines[s.line].name.as_str())
+            .collect();
+        around.dedup();
+        return Err(part.err(format!(
+            "the region near ({:.1}, {:.1}, {:.1}) ({:.0} mm², bounded by line(s) {}) is named by no [[part.piece]]: add one with `at` inside it",
+            c.x,
+            c.y,
+            c.z,
+            reg.mesh.area(),
+            if around.is_empty() {
+                "none".to_string()
+            } else {
+                around.join(", ")
+            }
+        )));
+    }
+    // The pieces, in the part's order.
+    let first = out.pieces.len();
+    let mut index_of_region = vec![0usize; split.regions.len()];
+    let mut region_of_piece = vec![0usize; part.pieces.len()];
+    for (r, k) in piece_of_region.iter().enumerate() {
+        let k = k.expect("every region is named");
+        region_of_piece[k] = r;
+        index_of_region[r] = first + k;
+    }
+    for (k, &r) in region_of_piece.iter().enumerate() {
+        let mut def = part.piece_def(k);
+        def.resolve_pairs();
+        let reg = &split.regions[r];
+        check_disk(&reg.mesh).map_err(|e| {
+            part.err(format!(
+                "piece {k} '{}': its region is not a disk ({e}); add a style line that cuts it open",
+                def.name
+            ))
+        })?;
+        out.pieces.push(AssembledPiece {
+            def,
+            part: Some(part.name.clone()),
+            mesh: reg.mesh.clone(),
+            notch_marks: Vec::new(),
+        });
+    }
+    // The seams: one per stretch of a line between two regions.
+    for (k, line) in part.lines.iter().enumerate() {
+        let runs: Vec<_> = split.seams.iter().filter(|s| s.line == k).collect();
+        for (i, run) in runs.iter().enumerate() {
+            let name = if runs.len() == 1 {
+                line.name.clone()
+            } else {
+                format!("{}-{}", line.name, i + 1)
+            };
+            let path = &embedded.lines[k];
+            let mut notches = Vec::new();
+            for (j, &nv) in embedded.notches[k].iter().enumerate() {
+                if let Some(at) = run.path_index.iter().position(|&p| path[p] == nv) {
+                    notches.push(SeamNotch {
+                        name: format!("{} {}", line.name, j + 1),
+                        index: at,
+                    });
+                }
+            }
+            out.seams.push(MatingSeam {
+                name,
+                sides: run.sides.clone().map(|s| SeamSide {
+                    piece: index_of_region[s.piece],
+                    vertices: s.vertices,
+                }),
+                notches,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Inserts the piece's notch marks as boundary vertices, each exactly where its point falls.
+fn place_notch_marks(p: &mut AssembledPiece) -> Result<(), DesignError> {
+    let tol = OFF_SURFACE_REL * p.mesh.bbox().diagonal();
+    for m in p
+        .def
+        .marks
+        .iter()
+        .filter(|m| m.kind == crate::MarkKind::Notch)
+    {
+        for q in &m.points {
+            let what = format!("notch mark '{}'", m.name);
+            let v =
+                boundary_vertex(&mut p.mesh, DVec3::from_array(*q), tol, &what).map_err(|e| {
+                    DesignError::Piece {
+                        file: p.def.file.clone(),
+                        index: p.def.index,
+                        piece: p.def.name.clone(),
+                        msg: e.to_string(),
+                    }
+                })?;
+            p.notch_marks.push((m.name.clone(), v));
+        }
+    }
+    Ok(())
+}
+
+/// A point of the mesh near the middle of its surface: the vertex nearest to the area-weighted
+/// centroid (the centroid itself may lie off a curved or non-convex region).
+fn inner_point(m: &TriMesh) -> DVec3 {
+    let mut c = DVec3::ZERO;
+    let mut area = 0.0;
+    for t in 0..m.triangles.len() {
+        let a = m.triangle_area(t);
+        let [p, q, r] = m.corners(t);
+        c += (p + q + r) / 3.0 * a;
+        area += a;
+    }
+    let c = if area > 0.0 { c / area } else { c };
+    m.positions
+        .iter()
+        .copied()
+        .min_by(|a, b| a.distance(c).total_cmp(&b.distance(c)))
+        .unwrap_or(c)
+}

@@ -1,0 +1,300 @@
+//! Parts and joins: one surface cut into pieces by style lines (`[[part]]`), and mating seams
+//! declared between edges of separate pieces (`[[join]]`). The schema, its checks and its unit
+//! scaling; building the pieces and seams is [`crate::assemble`].
+//!
+//! ```toml
+//! [[part]]
+//! name = "upper"
+//! [part.surface]                 # any surface type
+//! type = "patches"
+//! ...
+//! [[part.line]]                  # a style line: points projected onto the surface, joined along it
+//! name = "vamp-quarter"
+//! points = [[x, y, z], ...]      # ends on the surface boundary or on another line
+//! notches = [[x, y, z], ...]     # optional: notches on this line, shared by both sides
+//! [[part.piece]]
+//! name = "vamp"
+//! at = [x, y, z]                 # a point inside the region: names it
+//! pairs = 1                      # or quantity = 2
+//! seam_allowance_mm = 8          # and material, grain, marks as in [[piece]]
+//!
+//! [[join]]                       # a mating seam between edges of separate pieces
+//! name = "back"
+//! a = { piece = "quarter", from = [x, y, z], to = [x, y, z] }
+//! b = { piece = "counter", from = [x, y, z], to = [x, y, z] }
+//! notches = [[x, y, z]]
+//! ```
+
+use flatcut_geom::limits;
+use serde::Deserialize;
+
+use crate::check::check_piece;
+use crate::units::{scale_piece, sp};
+use crate::{DesignError, MarkDef, P3, PieceDef, SurfaceDef};
+
+/// One surface cut into pieces by style lines.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartDef {
+    pub name: String,
+    pub surface: SurfaceDef,
+    #[serde(default, rename = "line")]
+    pub lines: Vec<LineDef>,
+    #[serde(rename = "piece")]
+    pub pieces: Vec<PartPieceDef>,
+    /// Position among the parts (0-based), set at load time.
+    #[serde(skip)]
+    pub index: usize,
+    /// The file the part came from, for error messages.
+    #[serde(skip)]
+    pub file: String,
+    /// Millimetres per design unit, applied to a mesh file when it is read.
+    #[serde(skip, default = "crate::schema::unit_scale")]
+    pub mesh_scale: f64,
+}
+
+/// A style line on a part's surface.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LineDef {
+    pub name: String,
+    /// Points on (or near) the surface, in order; joined along the surface.
+    pub points: Vec<P3>,
+    /// Notch positions on the line, shared by the pieces on both sides.
+    #[serde(default)]
+    pub notches: Vec<P3>,
+}
+
+/// A piece of a part: the region around `at`, with the keys of a `[[piece]]`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartPieceDef {
+    pub name: String,
+    /// A point inside the region (on or near the surface).
+    pub at: P3,
+    #[serde(default = "crate::schema::one")]
+    pub quantity: u32,
+    #[serde(default)]
+    pub pairs: Option<u32>,
+    #[serde(default)]
+    pub pair_labels: Option<[String; 2]>,
+    #[serde(default)]
+    pub marks: Vec<MarkDef>,
+    #[serde(default)]
+    pub grain: Option<[P3; 2]>,
+    #[serde(default)]
+    pub seam_allowance_mm: Option<f64>,
+    #[serde(default)]
+    pub material: Option<String>,
+}
+
+/// A mating seam between two boundary stretches of pieces (of any part or `[[piece]]`).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JoinDef {
+    pub name: String,
+    pub a: JoinEdgeDef,
+    pub b: JoinEdgeDef,
+    /// Notches on the seam: each is placed on both edges at its nearest point.
+    #[serde(default)]
+    pub notches: Vec<P3>,
+    /// Position among the joins (0-based), set at load time.
+    #[serde(skip)]
+    pub index: usize,
+}
+
+/// One edge of a join: the stretch of a piece's boundary from `from` to `to` (the shorter way
+/// round, or the way through `via`).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JoinEdgeDef {
+    pub piece: String,
+    pub from: P3,
+    pub to: P3,
+    #[serde(default)]
+    pub via: Option<P3>,
+}
+
+impl PartDef {
+    /// An error about this part.
+    pub(crate) fn err(&self, msg: String) -> DesignError {
+        DesignError::Part {
+            file: self.file.clone(),
+            index: self.index,
+            part: self.name.clone(),
+            msg,
+        }
+    }
+
+    /// The part's surface as a piece of its own (for building and tessellating it).
+    pub(crate) fn surface_piece(&self) -> PieceDef {
+        PieceDef {
+            name: self.name.clone(),
+            quantity: 1,
+            pairs: None,
+            mirrored: 0,
+            pair_labels: None,
+            surface: self.surface.clone(),
+            seams: Vec::new(),
+            marks: Vec::new(),
+            grain: None,
+            seam_allowance_mm: None,
+            material: None,
+            index: self.index,
+            file: self.file.clone(),
+            mesh_scale: self.mesh_scale,
+            darts: None,
+            no_cut: Vec::new(),
+        }
+    }
+
+    /// The piece definition of piece `k` (its surface is the part's; its mesh is its region).
+    pub fn piece_def(&self, k: usize) -> PieceDef {
+        let p = &self.pieces[k];
+        PieceDef {
+            name: p.name.clone(),
+            quantity: p.quantity,
+            pairs: p.pairs,
+            mirrored: 0,
+            pair_labels: p.pair_labels.clone(),
+            surface: self.surface.clone(),
+            seams: Vec::new(),
+            marks: p.marks.clone(),
+            grain: p.grain,
+            seam_allowance_mm: p.seam_allowance_mm,
+            material: p.material.clone(),
+            index: k,
+            file: self.file.clone(),
+            mesh_scale: self.mesh_scale,
+            darts: None,
+            no_cut: Vec::new(),
+        }
+    }
+}
+
+/// Checks a parsed part (design units, `s` mm per unit): its surface, lines and pieces.
+pub(crate) fn check_part(p: &PartDef, s: f64) -> Result<(), DesignError> {
+    if p.pieces.is_empty() {
+        return Err(p.err("it has no [[part.piece]]".into()));
+    }
+    for (k, l) in p.lines.iter().enumerate() {
+        let what = format!("line {k} '{}'", l.name);
+        if let Some(i) = out_of_range(&l.points, s) {
+            return Err(p.err(format!(
+                "{what}: point {i} has a coordinate that is not finite or beyond ±{:e} mm",
+                limits::MAX_COORD_MM
+            )));
+        }
+        if let Some(i) = out_of_range(&l.notches, s) {
+            return Err(p.err(format!(
+                "{what}: notch {i} has a coordinate that is not finite or beyond ±{:e} mm",
+                limits::MAX_COORD_MM
+            )));
+        }
+        if l.points.len() < 2 {
+            return Err(p.err(format!("{what}: a line needs at least two points")));
+        }
+        if let Some(j) = p.lines[..k].iter().position(|o| o.name == l.name) {
+            return Err(p.err(format!("{what}: line {j} has the same name")));
+        }
+    }
+    for k in 0..p.pieces.len() {
+        let def = p.piece_def(k);
+        check_piece(&def, s)
+            .map_err(|e| p.err(format!("piece {k} '{}': {}", def.name, strip_context(&e))))?;
+        if out_of_range(&[p.pieces[k].at], s).is_some() {
+            return Err(p.err(format!(
+                "piece {k} '{}': `at` has a coordinate that is not finite or beyond ±{:e} mm",
+                def.name,
+                limits::MAX_COORD_MM
+            )));
+        }
+        if let Some(j) = p.pieces[..k].iter().position(|o| o.name == def.name) {
+            return Err(p.err(format!(
+                "piece {k} '{}': piece {j} has the same name",
+                def.name
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The index of the first point with a coordinate not finite or out of range in mm (`s` mm per
+/// design unit).
+fn out_of_range(pts: &[P3], s: f64) -> Option<usize> {
+    pts.iter()
+        .position(|p| !p.iter().all(|x| limits::in_range(x * s)))
+}
+
+/// The message of a piece error without its "file: piece i 'name': " prefix.
+fn strip_context(e: &DesignError) -> String {
+    match e {
+        DesignError::Piece { msg, .. } => msg.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// Checks a parsed join (design units, `s` mm per unit).
+pub(crate) fn check_join(file: &str, j: &JoinDef, s: f64) -> Result<(), DesignError> {
+    let err = |msg: String| DesignError::Join {
+        file: file.to_string(),
+        index: j.index,
+        join: j.name.clone(),
+        msg,
+    };
+    for (side, e) in [("a", &j.a), ("b", &j.b)] {
+        let mut pts = vec![e.from, e.to];
+        pts.extend(e.via);
+        if out_of_range(&pts, s).is_some() {
+            return Err(err(format!(
+                "{side}: a point has a coordinate that is not finite or beyond ±{:e} mm",
+                limits::MAX_COORD_MM
+            )));
+        }
+        if e.from == e.to {
+            return Err(err(format!("{side}: `from` and `to` coincide")));
+        }
+    }
+    if out_of_range(&j.notches, s).is_some() {
+        return Err(err(format!(
+            "a notch has a coordinate that is not finite or beyond ±{:e} mm",
+            limits::MAX_COORD_MM
+        )));
+    }
+    Ok(())
+}
+
+/// Scales a part's lengths by `s` (design units → mm).
+pub(crate) fn scale_part(p: &mut PartDef, s: f64) {
+    let mut surf = p.surface_piece();
+    scale_piece(&mut surf, s);
+    p.surface = surf.surface;
+    p.mesh_scale = s;
+    for l in &mut p.lines {
+        l.points
+            .iter_mut()
+            .chain(l.notches.iter_mut())
+            .for_each(|q| sp(q, s));
+    }
+    for k in &mut p.pieces {
+        sp(&mut k.at, s);
+        for m in &mut k.marks {
+            m.points.iter_mut().for_each(|q| sp(q, s));
+        }
+        if let Some(g) = &mut k.grain {
+            g.iter_mut().for_each(|q| sp(q, s));
+        }
+    }
+}
+
+/// Scales a join's points by `s`.
+pub(crate) fn scale_join(j: &mut JoinDef, s: f64) {
+    for e in [&mut j.a, &mut j.b] {
+        sp(&mut e.from, s);
+        sp(&mut e.to, s);
+        if let Some(v) = &mut e.via {
+            sp(v, s);
+        }
+    }
+    j.notches.iter_mut().for_each(|q| sp(q, s));
+}
