@@ -126,29 +126,17 @@ mod tests {
     use flatcut_surface::{Domain2, ParamSurface, SurfaceDerivs};
 
     fn grid(n: usize, h: f64, jitter: bool) -> TriMesh {
-        let mut p = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                // Deterministic jitter makes the triangles irregular (some obtuse).
-                let (dx, dy) = if jitter && i > 0 && j > 0 && i < n && j < n {
-                    let s = ((i * 7 + j * 13) % 11) as f64 / 11.0 - 0.5;
-                    let t = ((i * 5 + j * 3) % 7) as f64 / 7.0 - 0.5;
-                    (0.35 * h * s, 0.35 * h * t)
-                } else {
-                    (0.0, 0.0)
-                };
-                p.push(DVec3::new(i as f64 * h + dx, j as f64 * h + dy, 0.0));
-            }
-        }
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        let mut t = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        TriMesh::new(p, t)
+        crate::test_grid::grid_mesh(n, n, |i, j| {
+            // Deterministic jitter makes the triangles irregular (some obtuse).
+            let (dx, dy) = if jitter && i > 0 && j > 0 && i < n && j < n {
+                let s = ((i * 7 + j * 13) % 11) as f64 / 11.0 - 0.5;
+                let t = ((i * 5 + j * 3) % 7) as f64 / 7.0 - 0.5;
+                (0.35 * h * s, 0.35 * h * t)
+            } else {
+                (0.0, 0.0)
+            };
+            DVec3::new(i as f64 * h + dx, j as f64 * h + dy, 0.0)
+        })
     }
 
     #[test]

@@ -19,6 +19,8 @@ pub mod regions;
 pub mod seams;
 pub mod stats;
 pub mod tessellate;
+#[cfg(test)]
+mod test_grid;
 pub mod topology;
 pub mod trimesh;
 pub mod trimmed;

@@ -401,21 +401,7 @@ mod tests {
     use flatcut_geom::DVec3;
 
     fn grid(n: usize) -> TriMesh {
-        let mut p = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                p.push(DVec3::new(i as f64, j as f64, 0.0));
-            }
-        }
-        let mut t = Vec::new();
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        for j in 0..n {
-            for i in 0..n {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        TriMesh::new(p, t)
+        crate::test_grid::grid_mesh(n, n, |i, j| DVec3::new(i as f64, j as f64, 0.0))
     }
 
     #[test]

@@ -7,56 +7,24 @@ use crate::{Topology, check_disk};
 /// An n × n grid of `size` mm squares in the plane z = 0, jittered so that lines do not run
 /// through vertices by accident; triangles CCW from +z.
 fn plane(n: usize, size: f64) -> TriMesh {
-    let mut p = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            let inner = i > 0 && i < n && j > 0 && j < n;
-            let jit = if inner {
-                0.17 * ((i * 7 + j * 13) as f64).sin()
-            } else {
-                0.0
-            };
-            p.push(DVec3::new(
-                (i as f64 + jit) * size,
-                (j as f64 - 0.6 * jit) * size,
-                0.0,
-            ));
-        }
-    }
-    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    let mut t = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    TriMesh::new(p, t)
+    crate::test_grid::grid_mesh(n, n, |i, j| {
+        let inner = i > 0 && i < n && j > 0 && j < n;
+        let jit = if inner {
+            0.17 * ((i * 7 + j * 13) as f64).sin()
+        } else {
+            0.0
+        };
+        DVec3::new((i as f64 + jit) * size, (j as f64 - 0.6 * jit) * size, 0.0)
+    })
 }
 
 /// Half a cylinder of radius `r` around the z axis (y ≥ 0), height `h`, `nu` × `nv` quads.
 fn half_cylinder(r: f64, h: f64, nu: usize, nv: usize) -> TriMesh {
-    let mut p = Vec::new();
-    for j in 0..=nv {
-        for i in 0..=nu {
-            let a = std::f64::consts::PI * i as f64 / nu as f64;
-            p.push(DVec3::new(
-                r * a.cos(),
-                r * a.sin(),
-                h * j as f64 / nv as f64,
-            ));
-        }
-    }
-    let id = |i: usize, j: usize| (j * (nu + 1) + i) as u32;
-    let mut t = Vec::new();
-    for j in 0..nv {
-        for i in 0..nu {
-            // Outward normal: the quad (i, j) → (i+1, j) → (i+1, j+1) runs CCW seen from outside.
-            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    TriMesh::new(p, t)
+    // Outward normal: the quad (i, j) → (i+1, j) → (i+1, j+1) runs CCW seen from outside.
+    crate::test_grid::grid_mesh(nu, nv, |i, j| {
+        let a = std::f64::consts::PI * i as f64 / nu as f64;
+        DVec3::new(r * a.cos(), r * a.sin(), h * j as f64 / nv as f64)
+    })
 }
 
 fn spec(points: &[[f64; 3]], notches: &[[f64; 3]]) -> LineSpec {
