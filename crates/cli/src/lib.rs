@@ -88,7 +88,23 @@ pub fn error_report(e: &anyhow::Error) -> String {
             said.push_str(&format!("  caused by: {text}\n"));
         }
     }
+    if let Some(h) = hint(e) {
+        said.push_str(&format!("  hint: {h}\n"));
+    }
     said
+}
+
+/// The command-line flag that answers an error the libraries state as a condition.
+fn hint(e: &anyhow::Error) -> Option<&'static str> {
+    use flatcut::flatten::FlattenError;
+    e.chain()
+        .find_map(|c| c.downcast_ref::<FlattenError>())
+        .and_then(|f| match f {
+            FlattenError::NotDevelopable { .. } => {
+                Some("--method isometric flattens any surface with the least distortion")
+            }
+            _ => None,
+        })
 }
 
 /// Runs a parsed command.
@@ -139,5 +155,27 @@ mod tests {
             super::error_report(&e),
             "error: cannot flatten d.toml\n  caused by: piece 'a': vertex 3 is out of range\n"
         );
+    }
+
+    #[test]
+    fn a_surface_that_is_not_developable_is_told_the_method_that_flattens_it() {
+        let e = anyhow::Error::new(flatcut::flatten::FlattenError::NotDevelopable {
+            max_abs_k: 1e-3,
+            angle_defect: 0.1,
+            vertex: 3,
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+        })
+        .context("cannot flatten d.toml");
+        let r = super::error_report(&e);
+        assert!(
+            r.ends_with(
+                "  hint: --method isometric flattens any surface with the least distortion\n"
+            ),
+            "{r}"
+        );
+        let other = anyhow::Error::from(Outer(Inner));
+        assert!(!super::error_report(&other).contains("hint"));
     }
 }

@@ -140,7 +140,7 @@ pub fn conformal_boundary(
     let flips = count_flips(&mesh.triangles, &uv);
     if flips > 0 {
         warnings.push(format!(
-            "conformal-boundary: {flips} triangle(s) flipped by the harmonic extension; use --method isometric"
+            "conformal-boundary: {flips} triangle(s) flipped by the harmonic extension; the isometric method is flip-free"
         ));
     }
     let miss = fit_rigid_to_pins(&mut uv, &params.pins);

@@ -47,7 +47,7 @@ pub fn lscm(mesh: &TriMesh, topo: &Topology, pins: &[Pin]) -> Result<Flattening,
     let flips = crate::ops::count_flips(&mesh.triangles, &uv);
     if flips > 0 {
         warnings.push(format!(
-            "lscm: {flips} triangle(s) flipped (first: {}); try --method isometric, which is flip-free",
+            "lscm: {flips} triangle(s) flipped (first: {}); the isometric method is flip-free",
             crate::ops::first_flip(&mesh.triangles, &uv).unwrap_or(0)
         ));
     }

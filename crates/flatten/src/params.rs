@@ -209,7 +209,7 @@ pub enum FlattenError {
     Topology(#[from] TopologyError),
     /// `developable` was asked for a surface that is not developable.
     #[error(
-        "the surface is not developable: largest |K| = {max_abs_k:.3e} /mm² (angle defect {angle_defect:.3e} rad) at vertex {vertex} ({x:.3}, {y:.3}, {z:.3}); use --method isometric"
+        "the surface is not developable: largest |K| = {max_abs_k:.3e} /mm² (angle defect {angle_defect:.3e} rad) at vertex {vertex} ({x:.3}, {y:.3}, {z:.3}); the isometric method flattens it with the least distortion"
     )]
     NotDevelopable {
         max_abs_k: f64,
