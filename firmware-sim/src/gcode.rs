@@ -1,5 +1,7 @@
 //! The g-code parser of GRBL 1.1h (`gcode.c`): word import, modal groups, the error checks in GRBL's order,
-//! and the execution plan of a valid block as a list of [`Action`]s for the protocol loop.
+//! and the execution plan of a valid block as a list of [`Action`]s for the protocol loop. This file holds the
+//! parser's types and [`execute`], which runs the steps of `gc_execute_line` in order: `import` (STEP 2),
+//! `check` (STEP 3) and `plan` (STEP 4).
 //!
 //! Written here rather than taken from a g-code crate because the point of the simulator is to reproduce GRBL's
 //! exact acceptance rules and error numbers (e.g. `G2` with an R that is too small → `error:34`), which general
@@ -7,6 +9,10 @@
 
 use crate::settings::{N_AXIS, Settings};
 use crate::status::Status;
+
+mod check;
+mod import;
+mod plan;
 
 /// Millimetres per inch (`MM_PER_INCH`).
 pub const MM_PER_INCH: f64 = 25.4;
@@ -376,820 +382,96 @@ pub struct Context<'a> {
     pub check_mode: bool,
 }
 
-/// Parses and plans one pre-processed line (upper-case, no spaces/comments). `jog` is true for `$J=` lines
-/// (the line passed is the part after `$J=`).
-pub fn execute(line: &[u8], jog: bool, ctx: &mut Context<'_>) -> Result<Vec<Action>, Status> {
-    let st = &*ctx.gc;
-    let mut motion = if jog { Motion::Linear } else { st.motion };
-    let mut inverse_time = if jog { false } else { st.inverse_time };
-    let mut inches = st.inches;
-    let mut incremental = st.incremental;
-    let mut plane = st.plane;
-    let mut coord_select = st.coord_select;
-    let mut flow = Flow::Running;
-    let mut spindle = st.spindle;
-    let mut flood = st.flood;
-    let mut mist = st.mist;
-    let mut tlo_mode: Option<bool> = None; // Some(true) = G43.1, Some(false) = G49
-    let mut non_modal = NonModal::None;
-    let mut axis_command = AxisCommand::None;
-    let mut command_words = 0u32;
-    let mut value_words = 0u16;
-    let mut axis_words = 0u8;
-    let mut ijk_words = 0u8;
-    let mut xyz = [0.0f64; N_AXIS];
-    let mut ijk = [0.0f64; N_AXIS];
-    let (mut f, mut l, mut n, mut p, mut r, mut s, mut t) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-
-    // STEP 2: import words.
-    let mut pos = 0;
-    while pos < line.len() {
-        let letter = line[pos];
-        if !letter.is_ascii_uppercase() {
-            return Err(Status::ExpectedCommandLetter);
-        }
-        pos += 1;
-        let value = read_float(line, &mut pos).ok_or(Status::BadNumberFormat)?;
-        let int_value = value.trunc() as i64;
-        let mut mantissa = ((value - int_value as f64) * 100.0).round() as i64;
-        match letter {
-            b'G' => {
-                let group;
-                match int_value {
-                    10 | 28 | 30 | 92 | 4 | 53 => {
-                        if matches!(int_value, 10 | 28 | 30 | 92) && mantissa == 0 {
-                            if axis_command != AxisCommand::None {
-                                return Err(Status::AxisCommandConflict);
-                            }
-                            axis_command = AxisCommand::NonModal;
-                        }
-                        group = G_NONMODAL;
-                        non_modal = match (int_value, mantissa) {
-                            (4, _) => NonModal::Dwell,
-                            (10, _) => NonModal::SetCoordData,
-                            (53, _) => NonModal::AbsoluteOverride,
-                            (28, 0) => NonModal::GoHome0,
-                            (28, 10) => NonModal::SetHome0,
-                            (30, 0) => NonModal::GoHome1,
-                            (30, 10) => NonModal::SetHome1,
-                            (92, 0) => NonModal::SetCoordOffset,
-                            (92, 10) => NonModal::ResetCoordOffset,
-                            _ => return Err(Status::UnsupportedCommand),
-                        };
-                        if matches!(int_value, 28 | 30 | 92) {
-                            mantissa = 0;
-                        }
-                    }
-                    0..=3 | 38 | 80 => {
-                        if int_value != 80 {
-                            if axis_command != AxisCommand::None {
-                                return Err(Status::AxisCommandConflict);
-                            }
-                            axis_command = AxisCommand::MotionMode;
-                        }
-                        group = G_MOTION;
-                        motion = match int_value {
-                            0 => Motion::Seek,
-                            1 => Motion::Linear,
-                            2 => Motion::Cw,
-                            3 => Motion::Ccw,
-                            80 => Motion::None,
-                            _ => {
-                                if !matches!(mantissa, 20 | 30 | 40 | 50) {
-                                    return Err(Status::UnsupportedCommand);
-                                }
-                                let k = (mantissa / 10) as u8;
-                                mantissa = 0;
-                                Motion::Probe(k)
-                            }
-                        };
-                    }
-                    17..=19 => {
-                        group = G_PLANE;
-                        plane = (int_value - 17) as u8;
-                    }
-                    90 | 91 => {
-                        if mantissa == 0 {
-                            group = G_DISTANCE;
-                            incremental = int_value == 91;
-                        } else {
-                            group = G_ARC_DISTANCE;
-                            if mantissa != 10 || int_value == 90 {
-                                return Err(Status::UnsupportedCommand);
-                            }
-                            mantissa = 0;
-                        }
-                    }
-                    93 | 94 => {
-                        group = G_FEED_MODE;
-                        inverse_time = int_value == 93;
-                    }
-                    20 | 21 => {
-                        group = G_UNITS;
-                        inches = int_value == 20;
-                    }
-                    40 => group = G_CUTTER,
-                    43 | 49 => {
-                        group = G_TLO;
-                        if axis_command != AxisCommand::None {
-                            return Err(Status::AxisCommandConflict);
-                        }
-                        axis_command = AxisCommand::ToolLengthOffset;
-                        if int_value == 49 {
-                            tlo_mode = Some(false);
-                        } else if mantissa == 10 {
-                            tlo_mode = Some(true);
-                        } else {
-                            return Err(Status::UnsupportedCommand);
-                        }
-                        mantissa = 0;
-                    }
-                    54..=59 => {
-                        group = G_COORD;
-                        coord_select = (int_value - 54) as usize;
-                    }
-                    61 => {
-                        group = G_CONTROL;
-                        if mantissa != 0 {
-                            return Err(Status::UnsupportedCommand);
-                        }
-                    }
-                    _ => return Err(Status::UnsupportedCommand),
-                }
-                if mantissa > 0 {
-                    return Err(Status::CommandValueNotInteger);
-                }
-                if command_words & group != 0 {
-                    return Err(Status::ModalGroupViolation);
-                }
-                command_words |= group;
-            }
-            b'M' => {
-                if mantissa > 0 {
-                    return Err(Status::CommandValueNotInteger);
-                }
-                let group;
-                match int_value {
-                    0 | 1 | 2 | 30 => {
-                        group = M_STOP;
-                        flow = match int_value {
-                            0 => Flow::Paused,
-                            1 => Flow::Running, // M1 optional stop is not supported: ignored.
-                            2 => Flow::End,
-                            _ => Flow::EndRewind,
-                        };
-                    }
-                    3..=5 => {
-                        group = M_SPINDLE;
-                        spindle = match int_value {
-                            3 => Spindle::Cw,
-                            4 => Spindle::Ccw,
-                            _ => Spindle::Off,
-                        };
-                    }
-                    8 | 9 => {
-                        group = M_COOLANT;
-                        if int_value == 8 {
-                            flood = true;
-                        } else {
-                            flood = false;
-                            mist = false;
-                        }
-                    }
-                    _ => return Err(Status::UnsupportedCommand),
-                }
-                if command_words & group != 0 {
-                    return Err(Status::ModalGroupViolation);
-                }
-                command_words |= group;
-            }
-            _ => {
-                let bit = match letter {
-                    b'F' => {
-                        f = value;
-                        W_F
-                    }
-                    b'I' => {
-                        ijk[0] = value;
-                        ijk_words |= 1;
-                        W_I
-                    }
-                    b'J' => {
-                        ijk[1] = value;
-                        ijk_words |= 2;
-                        W_J
-                    }
-                    b'K' => {
-                        ijk[2] = value;
-                        ijk_words |= 4;
-                        W_K
-                    }
-                    b'L' => {
-                        l = value;
-                        W_L
-                    }
-                    b'N' => {
-                        n = value.trunc();
-                        W_N
-                    }
-                    b'P' => {
-                        p = value;
-                        W_P
-                    }
-                    b'R' => {
-                        r = value;
-                        W_R
-                    }
-                    b'S' => {
-                        s = value;
-                        W_S
-                    }
-                    b'T' => {
-                        if value > MAX_TOOL_NUMBER {
-                            return Err(Status::MaxValueExceeded);
-                        }
-                        t = value;
-                        W_T
-                    }
-                    b'X' => {
-                        xyz[0] = value;
-                        axis_words |= 1;
-                        W_X
-                    }
-                    b'Y' => {
-                        xyz[1] = value;
-                        axis_words |= 2;
-                        W_Y
-                    }
-                    b'Z' => {
-                        xyz[2] = value;
-                        axis_words |= 4;
-                        W_Z
-                    }
-                    _ => return Err(Status::UnsupportedCommand),
-                };
-                if value_words & bit != 0 {
-                    return Err(Status::WordRepeated);
-                }
-                if bit & (W_F | W_N | W_P | W_T | W_S) != 0 && value < 0.0 {
-                    return Err(Status::NegativeValue);
-                }
-                value_words |= bit;
-            }
-        }
-    }
-
-    // STEP 3: error checks.
-    if axis_words != 0 && axis_command == AxisCommand::None {
-        axis_command = AxisCommand::MotionMode;
-    }
-    if value_words & W_N != 0 && n > MAX_LINE_NUMBER {
-        return Err(Status::InvalidLineNumber);
-    }
-    // Feed rate.
-    if jog {
-        if value_words & W_F == 0 {
-            return Err(Status::UndefinedFeedRate);
-        }
-        if inches {
-            f *= MM_PER_INCH;
-        }
-    } else if inverse_time {
-        if axis_command == AxisCommand::MotionMode
-            && !matches!(motion, Motion::None | Motion::Seek)
-            && value_words & W_F == 0
-        {
-            return Err(Status::UndefinedFeedRate);
-        }
-    } else if !st.inverse_time {
-        if value_words & W_F != 0 {
-            if inches {
-                f *= MM_PER_INCH;
-            }
-        } else {
-            f = st.feed;
-        }
-    }
-    // Switching from G93 to G94 takes F as given, without the inch conversion (as `gcode.c` does).
-    if value_words & W_S == 0 {
-        s = st.spindle_speed;
-    }
-    // Dwell.
-    if non_modal == NonModal::Dwell {
-        if value_words & W_P == 0 {
-            return Err(Status::ValueWordMissing);
-        }
-        value_words &= !W_P;
-    }
-    let (axis_0, axis_1, axis_linear) = plane_axes(plane);
-    if inches {
-        for i in 0..N_AXIS {
-            if axis_words & (1 << i) != 0 {
-                xyz[i] *= MM_PER_INCH;
-            }
-        }
-    }
-    // Tool length offset.
-    let mut tool_length_offset = st.tool_length_offset;
-    if axis_command == AxisCommand::ToolLengthOffset {
-        match tlo_mode {
-            Some(true) => {
-                if axis_words ^ 4 != 0 {
-                    return Err(Status::G43DynamicAxisError);
-                }
-                tool_length_offset = xyz[2];
-            }
-            _ => tool_length_offset = 0.0,
-        }
-    } else if tlo_mode == Some(false) {
-        tool_length_offset = 0.0;
-    }
-    // Work coordinate system of the block.
-    let mut block_coord_system = st.coord_system;
-    if command_words & G_COORD != 0 {
-        block_coord_system = ctx.persist.coord[coord_select];
-    }
-    // Non-modal actions.
-    let mut coord_data_write: Option<(usize, [f64; N_AXIS])> = None;
-    let mut coord_offset = st.coord_offset;
-    let mut go_home: Option<[f64; N_AXIS]> = None;
-    match non_modal {
-        NonModal::SetCoordData => {
-            if axis_words == 0 {
-                return Err(Status::NoAxisWords);
-            }
-            if value_words & (W_P | W_L) == 0 {
-                return Err(Status::ValueWordMissing);
-            }
-            let p_int = p.trunc() as usize;
-            if p_int > 6 {
-                return Err(Status::UnsupportedCoordSys);
-            }
-            let lv = l.trunc() as i64;
-            if lv != 20 {
-                if lv == 2 {
-                    if value_words & W_R != 0 {
-                        return Err(Status::UnsupportedCommand);
-                    }
-                } else {
-                    return Err(Status::UnsupportedCommand);
-                }
-            }
-            value_words &= !(W_L | W_P);
-            let idx = if p_int > 0 { p_int - 1 } else { coord_select };
-            let mut data = ctx.persist.coord[idx];
-            for i in 0..N_AXIS {
-                if axis_words & (1 << i) != 0 {
-                    if lv == 20 {
-                        data[i] = st.position[i] - coord_offset[i] - xyz[i];
-                        if i == 2 {
-                            data[i] -= tool_length_offset;
-                        }
-                    } else {
-                        data[i] = xyz[i];
-                    }
-                }
-            }
-            coord_data_write = Some((idx, data));
-        }
-        NonModal::SetCoordOffset => {
-            for i in 0..N_AXIS {
-                if axis_words & (1 << i) != 0 {
-                    coord_offset[i] = st.position[i] - block_coord_system[i] - xyz[i];
-                    if i == 2 {
-                        coord_offset[i] -= tool_length_offset;
-                    }
-                }
-            }
-        }
-        NonModal::ResetCoordOffset => coord_offset = [0.0; N_AXIS],
-        _ => {
-            if axis_command != AxisCommand::ToolLengthOffset && axis_words != 0 {
-                for i in 0..N_AXIS {
-                    if axis_words & (1 << i) == 0 {
-                        xyz[i] = st.position[i];
-                    } else if non_modal != NonModal::AbsoluteOverride {
-                        if incremental {
-                            xyz[i] += st.position[i];
-                        } else {
-                            xyz[i] += block_coord_system[i] + coord_offset[i];
-                            if i == 2 {
-                                xyz[i] += tool_length_offset;
-                            }
-                        }
-                    }
-                }
-            }
-            match non_modal {
-                NonModal::GoHome0 | NonModal::GoHome1 => {
-                    go_home = Some(if non_modal == NonModal::GoHome0 {
-                        ctx.persist.g28
-                    } else {
-                        ctx.persist.g30
-                    });
-                    if axis_words == 0 {
-                        axis_command = AxisCommand::None;
-                    }
-                }
-                NonModal::SetHome0 | NonModal::SetHome1 => {}
-                NonModal::AbsoluteOverride if !matches!(motion, Motion::Seek | Motion::Linear) => {
-                    return Err(Status::G53InvalidMotionMode);
-                }
-                _ => {}
-            }
-        }
-    }
-    // Motion checks.
-    let mut arc: Option<([f64; N_AXIS], f64, bool)> = None; // (ijk offsets mm, radius, clockwise)
-    if motion == Motion::None {
-        if axis_words != 0 {
-            return Err(Status::AxisWordsExist);
-        }
-    } else if axis_command == AxisCommand::MotionMode {
-        if motion == Motion::Seek {
-            if axis_words == 0 {
-                axis_command = AxisCommand::None;
-            }
-        } else {
-            if f == 0.0 {
-                return Err(Status::UndefinedFeedRate);
-            }
-            match motion {
-                Motion::Linear if axis_words == 0 => {
-                    axis_command = AxisCommand::None;
-                }
-                Motion::Cw | Motion::Ccw => {
-                    if axis_words == 0 {
-                        return Err(Status::NoAxisWords);
-                    }
-                    if axis_words & ((1 << axis_0) | (1 << axis_1)) == 0 {
-                        return Err(Status::NoAxisWordsInPlane);
-                    }
-                    let mut x = xyz[axis_0] - st.position[axis_0];
-                    let mut y = xyz[axis_1] - st.position[axis_1];
-                    let radius;
-                    if value_words & W_R != 0 {
-                        value_words &= !W_R;
-                        if st.position == xyz {
-                            return Err(Status::InvalidTarget);
-                        }
-                        if inches {
-                            r *= MM_PER_INCH;
-                        }
-                        let mut h = 4.0 * r * r - x * x - y * y;
-                        if h < 0.0 {
-                            return Err(Status::ArcRadiusError);
-                        }
-                        h = -h.sqrt() / x.hypot(y);
-                        if motion == Motion::Ccw {
-                            h = -h;
-                        }
-                        if r < 0.0 {
-                            h = -h;
-                            r = -r;
-                        }
-                        ijk[axis_0] = 0.5 * (x - y * h);
-                        ijk[axis_1] = 0.5 * (y + x * h);
-                        radius = r;
-                    } else {
-                        if ijk_words & ((1 << axis_0) | (1 << axis_1)) == 0 {
-                            return Err(Status::NoOffsetsInPlane);
-                        }
-                        value_words &= !(W_I | W_J | W_K);
-                        if inches {
-                            for v in &mut ijk {
-                                *v *= MM_PER_INCH;
-                            }
-                        }
-                        x -= ijk[axis_0];
-                        y -= ijk[axis_1];
-                        let target_r = x.hypot(y);
-                        radius = ijk[axis_0].hypot(ijk[axis_1]);
-                        let delta_r = (target_r - radius).abs();
-                        if delta_r > ARC_RADIUS_SLACK_MM
-                            && (delta_r > ARC_RADIUS_MAX_ERROR_MM
-                                || delta_r > ARC_RADIUS_REL_ERROR * radius)
-                        {
-                            return Err(Status::InvalidTarget);
-                        }
-                    }
-                    arc = Some((ijk, radius, motion == Motion::Cw));
-                }
-                Motion::Probe(_) if st.position == xyz => {
-                    return Err(Status::InvalidTarget);
-                }
-                _ => {}
-            }
-        }
-    }
-    // Unused words.
-    value_words &= !(W_N | W_F | W_S | W_T);
-    if axis_command != AxisCommand::None {
-        value_words &= !(W_X | W_Y | W_Z);
-    }
-    if value_words != 0 {
-        return Err(Status::UnusedWords);
-    }
-    if jog {
-        if command_words & !(G_DISTANCE | G_UNITS | G_NONMODAL) != 0 {
-            return Err(Status::InvalidJogCommand);
-        }
-        if !matches!(non_modal, NonModal::None | NonModal::AbsoluteOverride) {
-            return Err(Status::InvalidJogCommand);
-        }
-    }
-
-    // STEP 4: commit and plan. Nothing below fails.
-    let laser = ctx.settings.laser_mode;
-    let mut actions = Vec::new();
-    let gc = &mut *ctx.gc;
-    if jog {
-        // A jog leaves the parser modes alone (`jog_execute`); only the position follows.
-        if axis_words != 0 {
-            actions.push(Action::Motion(MotionCmd {
-                name: "JOG".into(),
-                moves: vec![LineMove {
-                    target: xyz,
-                    rapid: false,
-                    feed: f,
-                    inverse_time: false,
-                    jog: true,
-                }],
-                arc_center: None,
-                feed: f,
-                laser_off: true,
-            }));
-            gc.position = xyz;
-        }
-        return Ok(actions);
-    }
-    let motion_in_block = axis_command == AxisCommand::MotionMode
-        && matches!(motion, Motion::Linear | Motion::Cw | Motion::Ccw);
-    gc.inverse_time = inverse_time;
-    gc.feed = f;
-    // Spindle speed: a sync in GRBL unless laser mode and the block moves.
-    if gc.spindle_speed != s {
-        if gc.spindle != Spindle::Off && spindle == gc.spindle && !(laser && motion_in_block) {
-            actions.push(Action::Sync);
-            actions.push(Action::Spindle(gc.spindle, s));
-        }
-        gc.spindle_speed = s;
-    }
-    if value_words & W_T != 0 || t != 0.0 {
-        gc.tool = t as u8;
-    }
-    if gc.spindle != spindle {
-        actions.push(Action::Sync);
-        actions.push(Action::Spindle(spindle, gc.spindle_speed));
-        gc.spindle = spindle;
-    }
-    if gc.flood != flood || gc.mist != mist {
-        actions.push(Action::Sync);
-        actions.push(Action::Coolant(flood, mist));
-        gc.flood = flood;
-        gc.mist = mist;
-    }
-    if non_modal == NonModal::Dwell {
-        actions.push(Action::Sync);
-        actions.push(Action::Dwell(p));
-    }
-    gc.plane = plane;
-    gc.inches = inches;
-    if (axis_command == AxisCommand::ToolLengthOffset || tlo_mode.is_some())
-        && gc.tool_length_offset != tool_length_offset
-    {
-        gc.tool_length_offset = tool_length_offset;
-        actions.push(Action::WcoChanged);
-    }
-    if gc.coord_select != coord_select
-        || command_words & G_COORD != 0 && gc.coord_system != block_coord_system
-    {
-        gc.coord_select = coord_select;
-        gc.coord_system = block_coord_system;
-        actions.push(Action::WcoChanged);
-    }
-    gc.incremental = incremental;
-    let rapid_feed = 0.0;
-    match non_modal {
-        NonModal::SetCoordData => {
-            let (idx, data) = coord_data_write.unwrap_or((0, [0.0; N_AXIS]));
-            actions.push(Action::Sync);
-            actions.push(Action::EepromWrite(COORD_RECORD_BYTES)); // EEPROM write syncs the buffer (FORCE_BUFFER_SYNC_DURING_EEPROM_WRITE)
-            ctx.persist.coord[idx] = data;
-            if idx == gc.coord_select {
-                gc.coord_system = data;
-                actions.push(Action::WcoChanged);
-            }
-        }
-        NonModal::GoHome0 | NonModal::GoHome1 => {
-            let name = if non_modal == NonModal::GoHome0 {
-                "G28"
-            } else {
-                "G30"
-            };
-            if axis_command != AxisCommand::None {
-                actions.push(Action::Motion(MotionCmd {
-                    name: name.into(),
-                    moves: vec![LineMove {
-                        target: xyz,
-                        rapid: true,
-                        feed: rapid_feed,
-                        inverse_time: false,
-                        jog: false,
-                    }],
-                    arc_center: None,
-                    feed: rapid_feed,
-                    laser_off: true,
-                }));
-            }
-            let home = go_home.unwrap_or(gc.position);
-            actions.push(Action::Motion(MotionCmd {
-                name: name.into(),
-                moves: vec![LineMove {
-                    target: home,
-                    rapid: true,
-                    feed: rapid_feed,
-                    inverse_time: false,
-                    jog: false,
-                }],
-                arc_center: None,
-                feed: rapid_feed,
-                laser_off: true,
-            }));
-            gc.position = home;
-        }
-        NonModal::SetHome0 => {
-            actions.push(Action::Sync);
-            actions.push(Action::EepromWrite(COORD_RECORD_BYTES));
-            ctx.persist.g28 = ctx.machine_position;
-        }
-        NonModal::SetHome1 => {
-            actions.push(Action::Sync);
-            actions.push(Action::EepromWrite(COORD_RECORD_BYTES));
-            ctx.persist.g30 = ctx.machine_position;
-        }
-        NonModal::SetCoordOffset | NonModal::ResetCoordOffset => {
-            gc.coord_offset = coord_offset;
-            actions.push(Action::WcoChanged);
-        }
-        _ => {}
-    }
-    gc.motion = motion;
-    if motion != Motion::None && axis_command == AxisCommand::MotionMode {
-        let start = gc.position;
-        let laser_off = laser && !motion_in_block;
-        match motion {
-            Motion::Seek => actions.push(Action::Motion(MotionCmd {
-                name: "G0".into(),
-                moves: vec![LineMove {
-                    target: xyz,
-                    rapid: true,
-                    feed: 0.0,
-                    inverse_time: false,
-                    jog: false,
-                }],
-                arc_center: None,
-                feed: 0.0,
-                laser_off,
-            })),
-            Motion::Linear | Motion::Probe(_) => {
-                actions.push(Action::Motion(MotionCmd {
-                    name: motion.name(),
-                    moves: vec![LineMove {
-                        target: xyz,
-                        rapid: false,
-                        feed: f,
-                        inverse_time,
-                        jog: false,
-                    }],
-                    arc_center: None,
-                    feed: if inverse_time { 0.0 } else { f },
-                    laser_off,
-                }));
-                if let Motion::Probe(k) = motion {
-                    actions.push(Action::ProbeEnd(k));
-                }
-            }
-            Motion::Cw | Motion::Ccw => {
-                let (off, radius, cw) = arc.unwrap_or(([0.0; N_AXIS], 0.0, true));
-                let (moves, center) = arc_moves(
-                    start,
-                    xyz,
-                    off,
-                    radius,
-                    (axis_0, axis_1, axis_linear),
-                    cw,
-                    ctx.settings.arc_tolerance,
-                    f,
-                    inverse_time,
-                );
-                actions.push(Action::Motion(MotionCmd {
-                    name: motion.name(),
-                    moves,
-                    arc_center: Some(center),
-                    feed: if inverse_time { 0.0 } else { f },
-                    laser_off,
-                }));
-            }
-            Motion::None => {}
-        }
-        gc.position = xyz;
-    }
-    match flow {
-        Flow::Paused => {
-            actions.push(Action::Sync);
-            actions.push(Action::Pause);
-        }
-        Flow::End | Flow::EndRewind => {
-            actions.push(Action::Sync);
-            gc.motion = Motion::Linear;
-            gc.plane = 0;
-            gc.incremental = false;
-            gc.inverse_time = false;
-            // GRBL 1.1h resets only modal groups 1, 2, 3, 5, 7, 12 and M7-M9 at program end
-            // (`gcode.c`): the G92 offset, the tool length offset and F, S, T stay.
-            gc.coord_select = 0;
-            gc.spindle = Spindle::Off;
-            gc.flood = false;
-            gc.mist = false;
-            if !ctx.check_mode {
-                gc.coord_system = ctx.persist.coord[0];
-                actions.push(Action::WcoChanged);
-                actions.push(Action::Spindle(Spindle::Off, 0.0));
-                actions.push(Action::Coolant(false, false));
-            }
-            actions.push(Action::RestoreOverrides);
-            actions.push(Action::Message("Pgm End"));
-        }
-        Flow::Running => {}
-    }
-    Ok(actions)
+/// The block being parsed (`gc_block` of GRBL), carried from the word import through the checks to the plan.
+/// The modes start as the parser state's; the checks turn the words into machine millimetres.
+struct Block {
+    /// A `$J=` line.
+    jog: bool,
+    /// Group 1.
+    motion: Motion,
+    /// G93.
+    inverse_time: bool,
+    /// G20.
+    inches: bool,
+    /// G91.
+    incremental: bool,
+    /// 0 = G17, 1 = G18, 2 = G19.
+    plane: u8,
+    /// 0..=5 for G54..G59.
+    coord_select: usize,
+    /// M0/M2/M30 of this block (program flow is not modal).
+    flow: Flow,
+    /// M3/M4/M5.
+    spindle: Spindle,
+    /// M8.
+    flood: bool,
+    /// M7.
+    mist: bool,
+    /// `Some(true)` = G43.1, `Some(false)` = G49.
+    tlo_mode: Option<bool>,
+    /// Group 0.
+    non_modal: NonModal,
+    /// Which command the axis words belong to.
+    axis_command: AxisCommand,
+    /// Modal groups seen (`G_*`, `M_*` bits).
+    command_words: u32,
+    /// Value words seen and not yet used (`W_*` bits).
+    value_words: u16,
+    /// Axis words seen (bit i = axis i).
+    axis_words: u8,
+    /// I/J/K words seen (bit i = axis i).
+    ijk_words: u8,
+    /// X/Y/Z as given, then the target in machine mm.
+    xyz: [f64; N_AXIS],
+    /// I/J/K as given, then the arc centre offset in mm.
+    ijk: [f64; N_AXIS],
+    /// F, then the block's feed in mm/min (or 1/min in G93).
+    f: f64,
+    /// L.
+    l: f64,
+    /// N.
+    n: f64,
+    /// P.
+    p: f64,
+    /// R.
+    r: f64,
+    /// S (modal: the parser's unless the block gives one).
+    s: f64,
+    /// T.
+    t: f64,
+    /// Tool length offset after the block, mm.
+    tool_length_offset: f64,
+    /// Work coordinate system of the block (G54..G59 data), mm.
+    coord_system: [f64; N_AXIS],
+    /// G92 offset after the block, mm.
+    coord_offset: [f64; N_AXIS],
+    /// G10 write: (G54..G59 index, data).
+    coord_data_write: Option<(usize, [f64; N_AXIS])>,
+    /// G28/G30 stored position to go to.
+    go_home: Option<[f64; N_AXIS]>,
+    /// Arc: (centre offset mm, radius mm, clockwise).
+    arc: Option<([f64; N_AXIS], f64, bool)>,
 }
 
-/// `mc_arc`: chords of an arc within `$12` of the true circle, ending exactly at the target.
-fn arc_moves(
-    position: [f64; N_AXIS],
-    target: [f64; N_AXIS],
-    offset: [f64; N_AXIS],
-    radius: f64,
-    (a0, a1, al): (usize, usize, usize),
-    clockwise: bool,
-    arc_tolerance: f64,
-    feed: f64,
-    inverse_time: bool,
-) -> (Vec<LineMove>, [f64; N_AXIS]) {
-    let c0 = position[a0] + offset[a0];
-    let c1 = position[a1] + offset[a1];
-    let mut center = position;
-    center[a0] = c0;
-    center[a1] = c1;
-    let r0 = -offset[a0];
-    let r1 = -offset[a1];
-    let rt0 = target[a0] - c0;
-    let rt1 = target[a1] - c1;
-    let mut angular = (r0 * rt1 - r1 * rt0).atan2(r0 * rt0 + r1 * rt1);
-    if clockwise {
-        if angular >= -ARC_ANGULAR_TRAVEL_EPSILON {
-            angular -= 2.0 * std::f64::consts::PI;
-        }
-    } else if angular <= ARC_ANGULAR_TRAVEL_EPSILON {
-        angular += 2.0 * std::f64::consts::PI;
-    }
-    let tol = arc_tolerance.max(1e-6);
-    let denom = (tol * (2.0 * radius - tol)).max(1e-12).sqrt();
-    let segments = ((0.5 * angular * radius).abs() / denom).floor().min(1.0e6) as usize;
-    let mut moves = Vec::with_capacity(segments.max(1));
-    let (seg_feed, seg_inverse) = if inverse_time && segments > 0 {
-        (feed * segments as f64, true)
-    } else {
-        (feed, inverse_time)
-    };
-    if segments > 0 {
-        let theta = angular / segments as f64;
-        let lin = (target[al] - position[al]) / segments as f64;
-        for i in 1..segments {
-            let (sn, cs) = (theta * i as f64).sin_cos();
-            let mut p = position;
-            p[a0] = c0 + r0 * cs - r1 * sn;
-            p[a1] = c1 + r0 * sn + r1 * cs;
-            p[al] = position[al] + lin * i as f64;
-            moves.push(LineMove {
-                target: p,
-                rapid: false,
-                feed: seg_feed,
-                inverse_time: seg_inverse,
-                jog: false,
-            });
-        }
-    }
-    moves.push(LineMove {
-        target,
-        rapid: false,
-        feed: seg_feed,
-        inverse_time: seg_inverse,
-        jog: false,
-    });
-    (moves, center)
+/// Parses and plans one pre-processed line (upper-case, no spaces/comments). `jog` is true for `$J=` lines
+/// (the line passed is the part after `$J=`). The steps and their order are those of `gc_execute_line`, so a
+/// line with several errors reports the one GRBL reports.
+pub fn execute(line: &[u8], jog: bool, ctx: &mut Context<'_>) -> Result<Vec<Action>, Status> {
+    let st = &*ctx.gc;
+    // STEP 2: import words.
+    let mut block = Block::import(line, jog, st)?;
+    // STEP 3: error checks, each group in GRBL's order.
+    block.check_line_number()?;
+    block.check_feed_and_units(st)?;
+    block.check_dwell()?;
+    block.check_tool_length_offset()?;
+    block.select_coordinate_system(ctx.persist);
+    block.check_non_modal(st, ctx.persist)?;
+    block.check_motion(st)?;
+    block.check_unused_words()?;
+    block.check_jog()?;
+    // STEP 4: commit and plan. Nothing below fails.
+    Ok(block.plan_actions(ctx))
 }
 
 #[cfg(test)]
