@@ -8,6 +8,8 @@
 use flatcut_font as font;
 use flatcut_geom::{Aabb2, DVec2};
 use flatcut_mesh::TriMesh;
+use std::collections::BTreeMap;
+
 use svg::Document;
 use svg::node::element::{Group, Path, Rectangle};
 
@@ -210,33 +212,47 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
         let range = scale(c, m);
         let mut g = Group::new().set("id", format!("piece-{k}"));
         let flat = c.mesh.flat.as_ref();
-        for (t, tri) in c.mesh.triangles.iter().enumerate() {
-            let Some(flat) = flat else { break };
-            let f = &c.report.per_face[t];
-            let fill = if f.flipped {
-                FLIPPED.to_string()
-            } else {
-                colour(m, m.drawn(f), range)
+        if let Some(flat) = flat {
+            let fill_of = |t: usize| {
+                let f = &c.report.per_face[t];
+                if f.flipped {
+                    FLIPPED.to_string()
+                } else {
+                    colour(m, m.drawn(f), range)
+                }
             };
-            let q: Vec<DVec2> = tri.iter().map(|&v| map(flat[v as usize])).collect();
-            g = g.add(
-                Path::new()
-                    .set(
-                        "d",
-                        format!(
-                            "M{} {} L{} {} L{} {} Z",
-                            n(q[0].x),
-                            n(q[0].y),
-                            n(q[1].x),
-                            n(q[1].y),
-                            n(q[2].x),
-                            n(q[2].y)
-                        ),
-                    )
-                    .set("fill", fill.clone())
-                    .set("stroke", fill)
-                    .set("stroke-width", 0.05),
-            );
+            let tri_d = |tri: &[u32; 3]| {
+                let q: Vec<DVec2> = tri.iter().map(|&v| map(flat[v as usize])).collect();
+                format!(
+                    "M{} {} L{} {} L{} {} Z",
+                    n(q[0].x),
+                    n(q[0].y),
+                    n(q[1].x),
+                    n(q[1].y),
+                    n(q[2].x),
+                    n(q[2].y)
+                )
+            };
+            if c.mesh.triangles.len() <= MAX_FACE_ELEMENTS {
+                for (t, tri) in c.mesh.triangles.iter().enumerate() {
+                    let fill = fill_of(t);
+                    g = g.add(face_path(tri_d(tri), fill));
+                }
+            } else {
+                // One path per colour: a renderer's element limit is not reached by a mesh of
+                // millions of faces, and the picture is the same.
+                let mut by_fill: BTreeMap<String, String> = BTreeMap::new();
+                for (t, tri) in c.mesh.triangles.iter().enumerate() {
+                    let d = by_fill.entry(fill_of(t)).or_default();
+                    if !d.is_empty() {
+                        d.push(' ');
+                    }
+                    d.push_str(&tri_d(tri));
+                }
+                for (fill, d) in by_fill {
+                    g = g.add(face_path(d, fill));
+                }
+            }
         }
         if glyphs && let Some(flat) = flat {
             let spacing = (b.width().max(b.height()) / 30.0).max(1.0);
@@ -285,6 +301,19 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
         x0 += col_w[k];
     }
     doc.to_string()
+}
+
+/// Faces drawn as one element each up to this many per piece; beyond, one element per colour.
+pub const MAX_FACE_ELEMENTS: usize = 100_000;
+
+/// A filled face (or faces) of one colour, stroked in the same colour so no hairline shows
+/// between neighbours.
+fn face_path(d: String, fill: String) -> Path {
+    Path::new()
+        .set("d", d)
+        .set("fill", fill.clone())
+        .set("stroke", fill)
+        .set("stroke-width", 0.05)
 }
 
 /// A colour bar at `at` (SVG frame, mm), `bar_w` long, with five ticks, the measure's title and
@@ -718,6 +747,55 @@ mod tests {
         for p in &pw[1..8] {
             assert!(xmax(p) <= 0.5 * ww + 1e-6);
         }
+    }
+
+    #[test]
+    fn a_piece_of_more_faces_than_elements_is_drawn_one_path_per_colour_and_renders() {
+        // 240 × 240 quads: 115,200 faces, stretched along x by 0 % at the bottom to 10 % at the top.
+        let k = 240;
+        let mut p = Vec::new();
+        for j in 0..=k {
+            for i in 0..=k {
+                p.push(DVec3::new(i as f64, j as f64, 0.0));
+            }
+        }
+        let id = |i: usize, j: usize| (j * (k + 1) + i) as u32;
+        let mut t = Vec::new();
+        for j in 0..k {
+            for i in 0..k {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let mut m = TriMesh::new(p, t);
+        m.flat = Some(
+            m.positions
+                .iter()
+                .map(|q| DVec2::new(q.x * (1.0 + 0.1 * q.y / k as f64), q.y))
+                .collect(),
+        );
+        assert!(m.triangles.len() > MAX_FACE_ELEMENTS);
+        let r = Report::compute("big", &m, &ReportOptions::default()).unwrap();
+        let cols = [Column {
+            title: "BIG".into(),
+            mesh: &m,
+            report: &r,
+        }];
+        let svg = heatmap_svg(&cols, Measure::Stretch, false);
+        let piece = svg.split("id=\"piece-0\"").nth(1).unwrap();
+        let piece = piece.split("</g>").next().unwrap();
+        let elements = piece.matches("<path").count();
+        let fills: std::collections::BTreeSet<&str> =
+            piece.split("fill=\"").skip(1).map(|s| &s[..7]).collect();
+        // Several colours (the stretch varies), one element each, every face drawn.
+        assert!(
+            fills.len() > 5 && elements == fills.len(),
+            "{elements} elements, {} fills",
+            fills.len()
+        );
+        assert_eq!(piece.matches('Z').count(), m.triangles.len());
+        let png = render_png(&svg, Some(600)).unwrap();
+        assert!(png.starts_with(b"\x89PNG"));
     }
 
     #[test]
