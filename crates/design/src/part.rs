@@ -129,22 +129,9 @@ impl PartDef {
     /// The part's surface as a piece of its own (for building and tessellating it).
     pub(crate) fn surface_piece(&self) -> PieceDef {
         PieceDef {
-            name: self.name.clone(),
-            quantity: 1,
-            pairs: None,
-            mirrored: 0,
-            pair_labels: None,
-            surface: self.surface.clone(),
-            seams: Vec::new(),
-            marks: Vec::new(),
-            grain: None,
-            seam_allowance_mm: None,
-            material: None,
             index: self.index,
-            file: self.file.clone(),
             mesh_scale: self.mesh_scale,
-            darts: None,
-            no_cut: Vec::new(),
+            ..PieceDef::of_surface(self.name.clone(), self.surface.clone(), self.file.clone())
         }
     }
 
@@ -152,22 +139,16 @@ impl PartDef {
     pub fn piece_def(&self, k: usize) -> PieceDef {
         let p = &self.pieces[k];
         PieceDef {
-            name: p.name.clone(),
             quantity: p.quantity,
             pairs: p.pairs,
-            mirrored: 0,
             pair_labels: p.pair_labels.clone(),
-            surface: self.surface.clone(),
-            seams: Vec::new(),
             marks: p.marks.clone(),
             grain: p.grain,
             seam_allowance_mm: p.seam_allowance_mm,
             material: p.material.clone(),
             index: k,
-            file: self.file.clone(),
             mesh_scale: self.mesh_scale,
-            darts: None,
-            no_cut: Vec::new(),
+            ..PieceDef::of_surface(p.name.clone(), self.surface.clone(), self.file.clone())
         }
     }
 }

@@ -258,6 +258,29 @@ pub struct PieceDef {
 }
 
 impl PieceDef {
+    /// One piece of `surface` with every per-piece setting at its default (one copy, no seams,
+    /// marks or grain): how a mesh or STEP file, or a part's whole surface, becomes a piece.
+    pub(crate) fn of_surface(name: String, surface: SurfaceDef, file: String) -> PieceDef {
+        PieceDef {
+            name,
+            quantity: 1,
+            pairs: None,
+            mirrored: 0,
+            pair_labels: None,
+            surface,
+            seams: Vec::new(),
+            marks: Vec::new(),
+            grain: None,
+            seam_allowance_mm: None,
+            material: None,
+            darts: None,
+            no_cut: Vec::new(),
+            index: 0,
+            file,
+            mesh_scale: 1.0,
+        }
+    }
+
     /// Turns `pairs = N` into N as drawn and N mirrored (after the checks).
     pub(crate) fn resolve_pairs(&mut self) {
         if let Some(n) = self.pairs {

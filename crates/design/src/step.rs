@@ -182,29 +182,16 @@ pub(crate) fn design_pieces(path: &Path) -> Result<Vec<PieceDef>, DesignError> {
         .file_name()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let piece = PieceDef {
-        name: stem,
-        quantity: 1,
-        pairs: None,
-        mirrored: 0,
-        pair_labels: None,
-        surface: SurfaceDef::Step {
+    let piece = PieceDef::of_surface(
+        stem,
+        SurfaceDef::Step {
             file,
             faces: StepFaces::default(),
             group: StepGroup::Face,
             model: None,
         },
-        seams: Vec::new(),
-        marks: Vec::new(),
-        grain: None,
-        seam_allowance_mm: None,
-        material: None,
-        darts: None,
-        no_cut: Vec::new(),
-        index: 0,
-        file: path.display().to_string(),
-        mesh_scale: 1.0,
-    };
+        path.display().to_string(),
+    );
     expand(vec![piece], path.parent().unwrap_or(Path::new(".")))
 }
 
