@@ -658,3 +658,105 @@ fn feeds_over_the_controllers_max_rates_are_warned_before_streaming() {
     assert!(took >= 1.2 - 1e-6, "{took} s");
     assert!(rep.estimated_time >= 1.2 + 1.5, "{}", rep.estimated_time);
 }
+
+/// Long strokes along Y, each ending at an X with a first decimal digit: losing that digit on
+/// the link moves a stroke's end by 0.8 mm across its direction, a line that still parses and
+/// runs elsewhere.
+fn long_strokes(n: usize) -> String {
+    let mut s = String::from("G21 G90\nG1 F1200\n");
+    for i in 0..n {
+        let y = if i % 2 == 0 { 40 } else { 0 };
+        s.push_str(&format!("G1 X{:.1} Y{y}\n", 2.8 + 2.0 * i as f64));
+    }
+    s
+}
+
+/// Issue 14, item 4: a line damaged on the link that still parses (`--drop-digit-at`, one digit
+/// lost: `X40.8` ran as `X40.`) is caught while it runs, by the reported position leaving the
+/// job's path; the run stops (feed hold, soft reset, tool off) naming the lines, the expected
+/// and the reported position, and a resume asks where to continue. The same job undamaged
+/// runs to the end without a false alarm.
+#[test]
+fn a_line_damaged_on_the_link_stops_the_run_naming_the_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let job = Job::parse(&long_strokes(12)).unwrap();
+    let k = 6;
+    let cfg = SimConfig::default().with_time_scale(6.0);
+    // Undamaged: complete, and tells which received line is job line k.
+    let clean = spawn(cfg.clone());
+    run(&clean, &job, &opts()).expect("an undamaged run passes the position checks");
+    let trace = clean.stop().trace;
+    assert_trace_is_job(&job, &trace);
+    let n = trace
+        .iter()
+        .find(|s| s.text == job.lines[k].text)
+        .map(|s| s.line)
+        .unwrap();
+    let jp = dir.path().join("damaged.journal");
+    let sim = spawn(cfg.with_faults(Faults {
+        drop_digit_at_line: Some(n),
+        ..Faults::default()
+    }));
+    let e = match run(&sim, &job, &opts().with_journal(&jp)) {
+        Err(e) => e,
+        Ok(_) => {
+            let t: Vec<(u32, String, [f64; 3])> = sim
+                .stop()
+                .trace
+                .iter()
+                .map(|s| (s.line, s.text.clone(), s.to))
+                .collect();
+            panic!("not caught; line {n}; trace {t:?}");
+        }
+    };
+    let SendError::OffPath {
+        from,
+        to,
+        expected,
+        reported,
+        tolerance,
+        ..
+    } = &e
+    else {
+        panic!("{e}");
+    };
+    assert!(from.index <= k && k <= to.index, "{e}");
+    let off = ((expected[0] - reported[0]).powi(2) + (expected[1] - reported[1]).powi(2)).sqrt();
+    assert!(off > *tolerance && off <= 0.81, "{e}");
+    let msg = e.to_string();
+    assert!(
+        msg.contains(&format!("lines {} to {}", from.source_line, to.source_line))
+            && msg.contains("tool off"),
+        "{msg}"
+    );
+    let report = sim.stop();
+    // Job line 6 is `G1X10.8Y40`: it ran as `G1X10.Y40`.
+    assert_eq!(job.lines[k].text, "G1X10.8Y40");
+    assert!(
+        report.trace.iter().any(|s| s.text == "G1X10.Y40"),
+        "the damaged line ran"
+    );
+    // The machine stopped where it was found: the strokes after the damaged one did not all run.
+    assert!(report.trace.len() < 12, "{}", report.trace.len());
+    let st = Journal::read(&jp).unwrap();
+    assert!(
+        st.notes
+            .iter()
+            .any(|n| n == "tool off (M5 M9), confirmed by $G"),
+        "{:?}",
+        st.notes
+    );
+    // Which lines ran as written is not known: a resume names them and asks.
+    let sim2 = spawn(SimConfig::default().with_instant_motion(true));
+    let o = opts()
+        .with_journal(&jp)
+        .with_resume(true)
+        .with_origin_confirmed(true);
+    let e2 = run(&sim2, &job, &o).unwrap_err();
+    assert!(
+        matches!(&e2, SendError::ResumeUncertain { from: f, reason, .. }
+            if f.index == from.index && reason.contains("left the job's path")),
+        "{e2}"
+    );
+    sim2.stop();
+}

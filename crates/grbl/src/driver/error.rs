@@ -24,6 +24,10 @@ impl fmt::Display for LineRef {
     }
 }
 
+fn fmt_pos(p: [f64; 3]) -> String {
+    format!("X{:.3} Y{:.3} Z{:.3}", p[0], p[1], p[2])
+}
+
 fn opt_line(l: &Option<LineRef>) -> String {
     match l {
         Some(l) => l.to_string(),
@@ -198,6 +202,26 @@ pub enum SendError {
         expected: [f64; 3],
         /// Reported work position, mm.
         actual: [f64; 3],
+    },
+    /// During the run the machine was found off the job's path: a line damaged on the link
+    /// (GRBL's link has no checksum) that still parsed ran somewhere else.
+    #[error(
+        "the machine left the job's path while running lines {} to {}: it reported work position {} where the nearest point of those lines is {} ({:.3} mm away, more than the tolerance of {tolerance:.3} mm); a line was probably damaged on the link and ran elsewhere. Stopped: feed hold, soft reset, tool off. Last line known executed: {}",
+        from.source_line, to.source_line, fmt_pos(*reported), fmt_pos(*expected), super::tracker::dist(*reported, *expected), opt_line(last_done)
+    )]
+    OffPath {
+        /// First line of the stretch the machine could have been on.
+        from: LineRef,
+        /// Last line of that stretch.
+        to: LineRef,
+        /// Nearest point of that stretch, work coordinates (mm).
+        expected: [f64; 3],
+        /// Reported work position, mm.
+        reported: [f64; 3],
+        /// Tolerance, mm.
+        tolerance: f64,
+        /// Last line known executed.
+        last_done: Option<LineRef>,
     },
     /// The machine stayed in a state this sender did not ask for (a hold nobody released, check
     /// mode): lines it acknowledges there are not being cut.

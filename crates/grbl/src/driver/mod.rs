@@ -12,7 +12,7 @@
 //! One idea per module: [`options`], [`control`] and [`progress`] are the API around a send;
 //! `session` is the connection, `handshake` connects, `resume` settles what an interrupted run
 //! left in doubt, `check` runs the checks before motion, `stream` streams, `tracker` keeps the
-//! books of what ran, `stops` stops a run, and [`send_job`] reads as handshake → check → stream
+//! books of what ran, `watch` checks the reported position against the job's path, `stops` stops a run, and [`send_job`] reads as handshake → check → stream
 //! → finish.
 
 mod check;
@@ -27,6 +27,7 @@ mod session;
 mod stops;
 mod stream;
 mod tracker;
+mod watch;
 
 pub use control::{CancelToken, Control};
 pub use error::{LineError, LineRef, SendError};

@@ -5,6 +5,7 @@ use super::SendOptions;
 use super::error::SendError;
 use super::handshake::Link;
 use super::session::Session;
+use super::stops::OFF_PATH_NOTE;
 use super::tracker::{dist, line_ref, seg_dist};
 use crate::job::Job;
 use crate::journal::{Journal, JournalState};
@@ -269,11 +270,14 @@ pub(super) fn resolve_resume(
         reason,
     };
     if let Some((a, b)) = st.uncertain {
-        return Err(doubt(
-            a,
-            b,
-            "the controller was reset while moving (ALARM:3), so the position it reported is not where the tool is".into(),
-        ));
+        let off_path = st.notes.iter().rev().find(|n| n.starts_with(OFF_PATH_NOTE));
+        let reason = match off_path {
+            Some(n) => format!(
+                "the interrupted run stopped because {n}: a line damaged on the link ran elsewhere, and which of these lines ran as written is not known"
+            ),
+            None => "the controller was reset while moving (ALARM:3), so the position it reported is not where the tool is".into(),
+        };
+        return Err(doubt(a, b, reason));
     }
     let (Some(&first), Some(&last_acked)) = (st.unconfirmed.first(), st.unconfirmed.last()) else {
         return Ok(None);
