@@ -678,3 +678,83 @@ fn run_uses_the_projects_device() {
     let e = run(&zero).expect_err("baud = 0 is refused");
     assert!(format!("{e:#}").contains("[device] baud = 0"), "{e:#}");
 }
+
+/// Issue 14, item 4: a correct run is never stopped by the position checks: the lampshade's
+/// plotter job (2,000 lines), streamed with motion in time so that every status report lands
+/// mid-path, runs to the end.
+#[test]
+fn the_lampshade_job_passes_the_position_checks_without_a_false_alarm() {
+    let dir = tempfile::tempdir().unwrap();
+    let job_path = crate::pipeline::root().join("patterns/golden/lampshade/job-1.gcode");
+    let a = StreamArgs::default()
+        .with_sim_speed(100.0)
+        .with_quiet(true)
+        .with_journal(dir.path().join("job.journal"));
+    let out = stream_file(&job_path, &a).unwrap_or_else(|e| panic!("{e:#}"));
+    let job = Job::parse(&std::fs::read_to_string(&job_path).unwrap()).unwrap();
+    assert_eq!(out.report.lines_sent, job.len());
+    assert!(out.sim_time.unwrap() > 10.0, "motion ran in time");
+}
+
+/// Issue 14, item 4: `flatcut send` over a link that loses a digit of one line stops with a
+/// failing exit code, and its message names the lines, the reported and the expected position.
+#[test]
+fn a_damaged_line_fails_the_send_naming_the_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let job_path = dir.path().join("strokes.gcode");
+    std::fs::write(&job_path, flatcut_testkit::jobs::long_strokes(12)).unwrap();
+    let job = Job::parse(&std::fs::read_to_string(&job_path).unwrap()).unwrap();
+    let journal = dir.path().join("strokes.journal");
+    let journal_s = journal.display().to_string();
+    let job_s = job_path.display().to_string();
+    let argv = |extra: &[&str]| {
+        let mut v = vec![
+            "flatcut",
+            "send",
+            &job_s,
+            "-q",
+            "--sim-speed",
+            "6",
+            "--journal",
+            &journal_s,
+        ];
+        v.extend_from_slice(extra);
+        v.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    // Undamaged, with the trace telling which received line is job line 6.
+    let trace = dir.path().join("clean.jsonl");
+    let trace_s = trace.display().to_string();
+    let cli = parse_command_line(argv(&["--sim-trace", &trace_s])).unwrap();
+    flatcut_cli::run(cli).unwrap_or_else(|e| panic!("{e:#}"));
+    let n = read_trace(&trace)
+        .iter()
+        .find(|s| s.text == job.lines[6].text)
+        .map(|s| s.line)
+        .unwrap()
+        .to_string();
+    let cli = parse_command_line(argv(&["--sim-drop-digit-at", &n])).unwrap();
+    let e = flatcut_cli::run(cli).expect_err("the damaged line stops the send");
+    let report = flatcut_cli::error_report(&e);
+    assert_ne!(
+        flatcut_cli::exit_code(Err(e)),
+        std::process::ExitCode::SUCCESS
+    );
+    // Job line 6 is line 8 of the file.
+    assert!(
+        report.contains("the machine left the job's path while running lines "),
+        "{report}"
+    );
+    let (from, to) = report
+        .split("while running lines ")
+        .nth(1)
+        .and_then(|r| r.split_once(':'))
+        .and_then(|(r, _)| r.split_once(" to "))
+        .map(|(a, b)| (a.parse::<usize>().unwrap(), b.parse::<usize>().unwrap()))
+        .unwrap();
+    assert!(from <= 8 && 8 <= to, "{report}");
+    assert!(
+        report.contains("reported work position X") && report.contains("tool off"),
+        "{report}"
+    );
+    assert!(report.contains("--resume-from"), "{report}");
+}

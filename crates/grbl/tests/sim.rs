@@ -659,18 +659,6 @@ fn feeds_over_the_controllers_max_rates_are_warned_before_streaming() {
     assert!(rep.estimated_time >= 1.2 + 1.5, "{}", rep.estimated_time);
 }
 
-/// Long strokes along Y, each ending at an X with a first decimal digit: losing that digit on
-/// the link moves a stroke's end by 0.8 mm across its direction, a line that still parses and
-/// runs elsewhere.
-fn long_strokes(n: usize) -> String {
-    let mut s = String::from("G21 G90\nG1 F1200\n");
-    for i in 0..n {
-        let y = if i % 2 == 0 { 40 } else { 0 };
-        s.push_str(&format!("G1 X{:.1} Y{y}\n", 2.8 + 2.0 * i as f64));
-    }
-    s
-}
-
 /// Issue 14, item 4: a line damaged on the link that still parses (`--drop-digit-at`, one digit
 /// lost: `X40.8` ran as `X40.`) is caught while it runs, by the reported position leaving the
 /// job's path; the run stops (feed hold, soft reset, tool off) naming the lines, the expected
@@ -679,7 +667,7 @@ fn long_strokes(n: usize) -> String {
 #[test]
 fn a_line_damaged_on_the_link_stops_the_run_naming_the_lines() {
     let dir = tempfile::tempdir().unwrap();
-    let job = Job::parse(&long_strokes(12)).unwrap();
+    let job = Job::parse(&jobs::long_strokes(12)).unwrap();
     let k = 6;
     let cfg = SimConfig::default().with_time_scale(6.0);
     // Undamaged: complete, and tells which received line is job line k.

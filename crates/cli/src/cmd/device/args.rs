@@ -50,6 +50,10 @@ pub struct StreamArgs {
     /// be read.
     #[arg(long)]
     pub discard_offsets: bool,
+    /// Stop the job when a status report places the machine farther than this from the stretch
+    /// of the job's path it can be on (a line damaged on the link runs elsewhere), mm.
+    #[arg(long, value_name = "MM", default_value_t = flatcut_grbl::SendOptions::DEFAULT_POSITION_TOLERANCE, value_parser = crate::values::positive_mm)]
+    pub position_tolerance: f64,
     /// Stream a laser job (its header says it needs `$32=1`) to a controller with `$32=0`.
     #[arg(skip)]
     pub force_laser: bool,
@@ -84,6 +88,9 @@ pub struct StreamArgs {
     /// Embedded simulator raises `ALARM:CODE` when its N-th line executes (fault injection).
     #[arg(long, hide = true, value_name = "N[:CODE]")]
     pub sim_alarm_at: Option<String>,
+    /// Embedded simulator loses a digit of its N-th line (fault injection).
+    #[arg(long, hide = true, value_name = "N")]
+    pub sim_drop_digit_at: Option<u32>,
     /// Embedded simulator hangs up when its N-th line arrives (fault injection).
     #[arg(long, hide = true, value_name = "N")]
     pub sim_hangup_at: Option<u32>,
@@ -103,6 +110,7 @@ impl Default for StreamArgs {
             resume_from: None,
             origin_confirmed: false,
             discard_offsets: false,
+            position_tolerance: flatcut_grbl::SendOptions::DEFAULT_POSITION_TOLERANCE,
             on_pause: None,
             force_laser: false,
             journal: None,
@@ -117,6 +125,7 @@ impl Default for StreamArgs {
             sim_alarm_at: None,
             sim_hangup_at: None,
             sim_reset_at: None,
+            sim_drop_digit_at: None,
         }
     }
 }

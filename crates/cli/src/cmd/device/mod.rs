@@ -120,6 +120,7 @@ pub fn stream_text_with_control(
         .with_journal(&journal)
         .with_origin_confirmed(args.origin_confirmed)
         .with_discard_offsets(args.discard_offsets)
+        .with_position_tolerance(Some(args.position_tolerance))
         .with_on_pause(args.pause_policy())
         .with_force_laser(args.force_laser);
 
