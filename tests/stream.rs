@@ -758,3 +758,60 @@ fn a_damaged_line_fails_the_send_naming_the_lines() {
     );
     assert!(report.contains("--resume-from"), "{report}");
 }
+
+/// Environment variable naming the working directory of [`resume_without_a_terminal_child`].
+const NO_TERMINAL_CHILD_ENV: &str = "FLATCUT_NO_TERMINAL_CHILD_DIR";
+
+/// The resuming half of [`a_resume_without_a_terminal_or_the_flag_refuses`], run in a child
+/// process whose stdin is not a terminal. Without the variable set it does nothing.
+#[test]
+fn resume_without_a_terminal_child() {
+    let Some(dir) = std::env::var_os(NO_TERMINAL_CHILD_ENV) else {
+        return;
+    };
+    let dir = PathBuf::from(dir);
+    let job = dir.join("job.gcode");
+    std::fs::write(&job, pattern_job(2)).unwrap();
+    let a = StreamArgs::default()
+        .with_sim_instant(true)
+        .with_quiet(true)
+        .with_journal(dir.join("job.journal"));
+    let mut failing = a.clone();
+    failing.sim_error_at = Some("40".into());
+    stream_file(&job, &failing).expect_err("the injected error stops the first run");
+    // The embedded simulator starts afresh (a restart), and it does not home.
+    let e = stream_file(&job, &a.with_resume(true)).expect_err("nobody confirmed the origin");
+    eprintln!("CHILD-ERROR: {e:#}");
+}
+
+/// Issue 14, item 2: without a terminal to ask on and without `--origin-confirmed`, a resume on a
+/// controller whose position is unknown refuses, as before the prompt existed.
+#[test]
+fn a_resume_without_a_terminal_or_the_flag_refuses() {
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(std::env::current_exe().unwrap())
+        .args([
+            "stream::resume_without_a_terminal_child",
+            "--exact",
+            "--nocapture",
+            "--test-threads=1",
+        ])
+        .env(NO_TERMINAL_CHILD_ENV, dir.path())
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "child failed: {stderr}");
+    assert!(
+        stderr.contains(
+            "CHILD-ERROR: cannot resume: the controller restarted when the port was opened"
+        ) && stderr.contains("nobody confirmed that its work origin is where it was")
+            && stderr.contains("--origin-confirmed"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("[y/N]"),
+        "asked without a terminal: {stderr}"
+    );
+}

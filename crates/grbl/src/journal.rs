@@ -9,6 +9,8 @@
 //! F <wcs> <gx> <gy> <gz> <x> <y> <z>
 //!                         where the job started: in G<wcs>, with G92 offset (gx, gy, gz), at
 //!                         work position (x, y, z) (mm); the first one counts
+//! O <x> <y> <z>           machine coordinates of the job's work origin (work zero) when it
+//!                         started; the first one counts
 //! A <index>               line <index> (0-based job line) was answered `ok`
 //! E <index> <code>        line <index> was answered `error:<code>` (it did not run)
 //! X <index>               every line acknowledged in this run with index <= <index> has executed
@@ -106,6 +108,8 @@ pub struct JournalState {
     pub uncertain: Option<(usize, usize)>,
     /// Where the job started (its frame on the controller), if recorded.
     pub start: Option<JobStart>,
+    /// Machine coordinates of the work origin when the job started, if recorded.
+    pub origin: Option<[f64; 3]>,
 }
 
 impl JournalState {
@@ -255,6 +259,7 @@ impl Journal {
             partial: None,
             uncertain: None,
             start: None,
+            origin: None,
         };
         // Acks of the current run not yet confirmed, kept sorted by arrival (= index order
         // within a run except across resume gaps).
@@ -382,6 +387,15 @@ impl Journal {
                         position: [v[3], v[4], v[5]],
                     });
                 }
+                "O" => {
+                    let mut w = rest.unwrap_or("").split_whitespace();
+                    let o = [
+                        coord(n, w.next())?,
+                        coord(n, w.next())?,
+                        coord(n, w.next())?,
+                    ];
+                    st.origin.get_or_insert(o);
+                }
                 "N" => st.notes.push(rest.unwrap_or("").to_string()),
                 "D" => st.finished = true,
                 _ => return Err(bad(n, &format!("unknown record '{kind}'"))),
@@ -447,6 +461,12 @@ impl Journal {
             "F {} {} {} {} {} {} {}\n",
             s.wcs, g[0], g[1], g[2], p[0], p[1], p[2]
         ));
+    }
+
+    /// Records the machine coordinates of the job's work origin when it started.
+    pub fn origin(&mut self, m: [f64; 3]) {
+        self.buf
+            .push_str(&format!("O {} {} {}\n", m[0], m[1], m[2]));
     }
 
     /// Records a note (single line).

@@ -24,7 +24,8 @@ pub mod streamer;
 pub mod transport;
 
 pub use driver::{
-    CancelToken, Control, PausePolicy, Progress, SendError, SendOptions, SendReport, send_job,
+    CancelToken, Control, Operator, OriginQuestion, PausePolicy, Progress, Question, SendError,
+    SendOptions, SendReport, send_job,
 };
 pub use job::{FeedClamp, Job, JobError, JobLine, JobStart, MachineLimits, ModalState};
 pub use journal::{Journal, JournalError, JournalState};

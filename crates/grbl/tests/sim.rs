@@ -559,6 +559,76 @@ fn resume_after_a_controller_restart_homes_or_needs_the_operators_word() {
     assert!(Journal::read(&jp).unwrap().finished);
 }
 
+/// Issue 14, item 2: without `--origin-confirmed`, a resume on a restarted controller that does
+/// not home asks the operator (what the journal says the work origin was, why the position is
+/// unknown); "no" refuses with nothing moved and the tool off, "yes" resumes.
+#[test]
+fn resume_after_a_restart_asks_the_operator_and_moves_only_on_yes() {
+    use std::sync::{Arc, Mutex};
+    let dir = tempfile::tempdir().unwrap();
+    let jp = dir.path().join("j.journal");
+    let job = Job::parse(&zigzag(120)).unwrap();
+    let first = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_faults(Faults {
+                error_at_line: Some((60, 33)),
+                ..Faults::default()
+            }),
+    );
+    run(&first, &job, &opts().with_journal(&jp)).unwrap_err();
+    first.stop();
+    assert_eq!(Journal::read(&jp).unwrap().origin, Some([0.0; 3]));
+    let asked: Arc<Mutex<Vec<String>>> = Arc::default();
+    let operator = |yes: bool| {
+        let asked = asked.clone();
+        flatcut_grbl::Operator::new(move |q| {
+            asked.lock().unwrap().push(format!("{q}\n{}", q.prompt()));
+            yes
+        })
+    };
+    let resume = opts().with_journal(&jp).with_resume(true);
+    let no = spawn(SimConfig::default().with_instant_motion(true));
+    let e = run(
+        &no,
+        &job,
+        &resume.clone().with_operator(Some(operator(false))),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e, SendError::OriginNotConfirmed { why } if why.contains("restarted")),
+        "{e}"
+    );
+    assert!(e.to_string().contains("nothing moved, tool off"), "{e}");
+    assert!(no.stop().trace.is_empty(), "nothing moved");
+    let q = asked.lock().unwrap().pop().expect("the operator was asked");
+    assert!(
+        q.contains("not known: the controller restarted")
+            && q.contains(
+                "its work origin (G54 zero) was at machine X0.000 Y0.000 Z0.000 (journal)"
+            )
+            && q.contains("The job continues with line ")
+            && q.ends_with("Is the work origin where it was? [y/N] "),
+        "{q}"
+    );
+    let st = Journal::read(&jp).unwrap();
+    assert!(
+        st.notes
+            .iter()
+            .any(|n| n == "tool off (M5 M9), confirmed by $G"),
+        "{:?}",
+        st.notes
+    );
+    let yes = spawn(SimConfig::default().with_instant_motion(true));
+    let rep = run(&yes, &job, &resume.with_operator(Some(operator(true)))).expect("resumed");
+    assert_notice(&rep, |n| {
+        n.starts_with("resuming on the operator's word, asked")
+    });
+    assert!(!yes.stop().trace.is_empty());
+    assert!(Journal::read(&jp).unwrap().finished);
+    assert_eq!(asked.lock().unwrap().len(), 1);
+}
+
 /// Issue 14, item 5: the soft reset at connection clears G92 and returns to G54 (GRBL 1.1h's
 /// `gc_init`); the sender reads `$#` and `$G` first and puts the operator's frame back, says
 /// so, and leaves it cleared only when told to.

@@ -260,6 +260,15 @@ pub enum SendError {
         /// Why the position is lost.
         why: String,
     },
+    /// The controller restarted or lost its position, it does not home, and the operator,
+    /// asked, did not confirm that the work origin is where it was. Nothing moved.
+    #[error(
+        "cannot resume: {why}, and the operator did not confirm that the work origin is where it was; nothing moved, tool off"
+    )]
+    OriginNotConfirmed {
+        /// Why the position is lost.
+        why: String,
+    },
     /// A stop whose tool-off sequence could not be confirmed.
     #[error(
         "{cause}. WARNING: the tool-off sequence (M5 M9) could not be confirmed with $G: check that the spindle, laser and air are off"

@@ -16,6 +16,7 @@
 //! → finish.
 
 mod check;
+pub mod confirm;
 pub mod control;
 mod error;
 mod frame;
@@ -29,6 +30,7 @@ mod stream;
 mod tracker;
 mod watch;
 
+pub use confirm::{Operator, OriginQuestion, Question};
 pub use control::{CancelToken, Control};
 pub use error::{LineError, LineRef, SendError};
 pub use options::{PausePolicy, SendOptions};
@@ -108,6 +110,8 @@ pub fn send_job(
             };
             if let Some(j) = journal.as_mut() {
                 j.start(&s);
+                let o = link.frame.origin_of(s.wcs);
+                j.origin([o[0] + s.g92[0], o[1] + s.g92[1], o[2] + s.g92[2]]);
             }
             s
         }

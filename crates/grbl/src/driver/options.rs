@@ -1,5 +1,6 @@
 //! [`SendOptions`]: timeouts, policies and resume choices of one send.
 
+use super::confirm::Operator;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -53,6 +54,9 @@ pub struct SendOptions {
     /// Stop when a status report places the machine farther than this (mm) from the stretch of
     /// the job's path it can be on (see `watch`); `None`: do not watch.
     pub position_tolerance: Option<f64>,
+    /// Who answers what only the operator can (a terminal prompt); `None`: nobody, so the
+    /// send refuses where it would have to ask.
+    pub operator: Option<Operator>,
 }
 
 /// What to do when the job pauses itself with `M0` (GRBL 1.1h ignores `M1`, and `M2`/`M30` end
@@ -118,6 +122,12 @@ impl SendOptions {
     /// Sets [`SendOptions::position_tolerance`].
     pub fn with_position_tolerance(mut self, mm: Option<f64>) -> Self {
         self.position_tolerance = mm;
+        self
+    }
+
+    /// Sets [`SendOptions::operator`].
+    pub fn with_operator(mut self, o: Option<Operator>) -> Self {
+        self.operator = o;
         self
     }
 
@@ -224,6 +234,7 @@ impl Default for SendOptions {
             force_laser: false,
             discard_offsets: false,
             position_tolerance: Some(SendOptions::DEFAULT_POSITION_TOLERANCE),
+            operator: None,
         }
     }
 }

@@ -78,7 +78,7 @@ pub(super) fn explain(
             "Choose what a program pause does with --on-pause resume|abort|wait, or run on a terminal to be asked."
                 .to_string(),
         ),
-        SendError::PositionUnknown { .. } => Some(
+        SendError::PositionUnknown { .. } | SendError::OriginNotConfirmed { .. } => Some(
             "Home the machine, or set its work origin back where it was, then resume with --origin-confirmed (on a terminal, the resume asks)."
                 .to_string(),
         ),

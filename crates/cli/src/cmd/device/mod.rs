@@ -8,7 +8,7 @@
 //! `flatcut-grbl`; this module is only terminal, files and process plumbing.
 
 //!
-//! One concern per module: `args` (the flags), `embedded` (the simulator as the device),
+//! One concern per module: `args` (the flags), `ask` (the sender's questions at the terminal), `embedded` (the simulator as the device),
 //! `display` (the progress display), `printer` (the thread that writes it), `signals` (Ctrl-C, SIGTERM, SIGHUP and the prompt),
 //! `explain` (what a stopped send tells the operator); this module streams.
 
@@ -19,6 +19,7 @@ use flatcut_firmware_sim::{PtySim, SimStats, TraceSegment};
 use flatcut_grbl::{Control, Job, SendOptions, SendReport};
 
 mod args;
+mod ask;
 mod display;
 mod embedded;
 mod explain;
