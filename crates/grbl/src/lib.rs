@@ -18,6 +18,7 @@ pub mod driver;
 mod fake;
 pub mod hpgl;
 pub mod job;
+pub mod job_edit;
 pub mod journal;
 pub mod response;
 pub mod streamer;
@@ -28,6 +29,7 @@ pub use driver::{
     SendOptions, SendReport, send_job,
 };
 pub use job::{FeedClamp, Job, JobError, JobLine, JobStart, MachineLimits, ModalState};
+pub use job_edit::JobChanges;
 pub use journal::{Journal, JournalError, JournalState};
 pub use response::{MachineState, Response, StatusReport, parse_response};
 pub use streamer::{Event, Streamer, Tag};

@@ -818,3 +818,162 @@ fn a_line_damaged_on_the_link_stops_the_run_naming_the_lines() {
     );
     sim2.stop();
 }
+
+/// Issue 14, item 5: a job stopped by a bad line continues after the file is fixed: the resume
+/// shows what changed and the last line executed, refuses until the change is accepted (the
+/// operator's "yes", or the option), then sends the fixed line and what had not run, never a
+/// line that had. The stop names the last line executed exactly: the last the machine ran.
+#[test]
+fn an_edited_job_resumes_after_its_fix_only_when_accepted() {
+    use std::sync::{Arc, Mutex};
+    let dir = tempfile::tempdir().unwrap();
+    let jp = dir.path().join("j.journal");
+    let text = zigzag(120);
+    let job = Job::parse(&text).unwrap();
+    let first = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_faults(Faults {
+                error_at_line: Some((60, 33)),
+                ..Faults::default()
+            }),
+    );
+    let e = run(&first, &job, &opts().with_journal(&jp)).unwrap_err();
+    let r1 = first.stop().trace;
+    let SendError::LineRejected { error, last_done } = &e else {
+        panic!("{e}");
+    };
+    // Exactly the last line the machine ran (lines GRBL held behind the rejected one ran too).
+    let last = last_done.as_ref().expect("lines ran");
+    assert_eq!(
+        r1.last().map(|s| s.text.as_str()),
+        Some(last.text.as_str()),
+        "{e}"
+    );
+    assert!(last.index > error.line.index, "{e}");
+    assert!(
+        e.to_string()
+            .contains(&format!("last line known executed: {last}")),
+        "{e}"
+    );
+    // The fix: the rejected line written another way (the same move).
+    let bad = error.line.source_line;
+    let fixed: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i + 1 == bad {
+                format!("{}\n", l.replacen(" Y", "0 Y", 1))
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    let job2 = Job::parse(&fixed).unwrap();
+    assert_ne!(job2.lines[error.line.index].text, error.line.text);
+    let asked: Arc<Mutex<Vec<String>>> = Arc::default();
+    let operator = |yes: bool| {
+        let asked = asked.clone();
+        flatcut_grbl::Operator::new(move |q| {
+            asked.lock().unwrap().push(format!("{q}\n{}", q.prompt()));
+            yes
+        })
+    };
+    let resume = opts()
+        .with_journal(&jp)
+        .with_resume(true)
+        .with_origin_confirmed(true);
+    // Refused, nothing sent: without an operator, and when the operator says no.
+    let sim = spawn(SimConfig::default().with_instant_motion(true));
+    for o in [None, Some(operator(false))] {
+        let e = run(&sim, &job2, &resume.clone().with_operator(o)).unwrap_err();
+        assert!(matches!(e, SendError::JobChanged { .. }), "{e}");
+        let msg = e.to_string();
+        for want in [
+            format!("Changed: line {bad} of the journal's job became line {bad} of this file:"),
+            format!("  - {bad}: {}", error.line.text),
+            format!("  + {bad}: {}", job2.lines[error.line.index].text),
+            format!(
+                "Last line executed: line {} ({})",
+                last.source_line, last.text
+            ),
+            format!("The resume continues at line {bad} "),
+        ] {
+            assert!(msg.contains(&want), "{want:?} not in {msg}");
+        }
+    }
+    let q = asked.lock().unwrap().pop().expect("the operator was asked");
+    assert!(q.ends_with("Resume the changed job? [y/N] "), "{q}");
+    assert_eq!(sim.stop().stats.lines_received, 0, "nothing was sent");
+    // Accepted by the operator: the fixed line and the lines that had not run are sent.
+    let sim = spawn(SimConfig::default().with_instant_motion(true));
+    let st = Journal::read(&jp).unwrap();
+    let rep = run(
+        &sim,
+        &job2,
+        &resume.clone().with_operator(Some(operator(true))),
+    )
+    .unwrap();
+    assert_eq!(rep.previously_done, st.done_count());
+    assert_notice(&rep, |n| n.starts_with("resumed an edited job."));
+    let r2 = sim.stop().trace;
+    assert!(
+        r2.iter()
+            .any(|s| s.text == job2.lines[error.line.index].text)
+    );
+    assert_exactly_once(&job2, &[&r1, &r2]);
+    assert!(Journal::read(&jp).unwrap().finished);
+}
+
+/// Issue 14, item 5: an edit of a line that already ran cannot be resumed by guessing: the
+/// resume asks for the line to continue from, and runs from it when told.
+#[test]
+fn an_edit_where_the_job_already_ran_needs_the_line_to_continue_from() {
+    let dir = tempfile::tempdir().unwrap();
+    let jp = dir.path().join("j.journal");
+    let text = zigzag(80);
+    let job = Job::parse(&text).unwrap();
+    let first = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_faults(Faults {
+                error_at_line: Some((60, 33)),
+                ..Faults::default()
+            }),
+    );
+    run(&first, &job, &opts().with_journal(&jp)).unwrap_err();
+    first.stop();
+    // Line 10 of the file (long done) is changed.
+    let edited: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i + 1 == 10 {
+                format!("{l} S0\n")
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    let job2 = Job::parse(&edited).unwrap();
+    let resume = opts()
+        .with_journal(&jp)
+        .with_resume(true)
+        .with_origin_confirmed(true)
+        .with_accept_changed_job(true);
+    let sim = spawn(SimConfig::default().with_instant_motion(true));
+    let e = run(&sim, &job2, &resume).unwrap_err();
+    assert!(matches!(e, SendError::JobChangedWhereItRan { .. }), "{e}");
+    assert!(
+        e.to_string()
+            .contains("executed line(s) were changed (from line 10)"),
+        "{e}"
+    );
+    let from = job2.lines.iter().position(|l| l.source_line == 70).unwrap();
+    let rep = run(&sim, &job2, &resume.with_resume_from(Some(from))).unwrap();
+    assert_eq!(rep.previously_done, from);
+    let r2 = sim.stop().trace;
+    assert!(r2.iter().any(|s| s.text == job2.lines[from].text));
+    assert!(!r2.iter().any(|s| s.text == job2.lines[from - 1].text));
+    assert!(Journal::read(&jp).unwrap().finished);
+}

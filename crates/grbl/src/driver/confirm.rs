@@ -3,6 +3,7 @@
 //! [`Operator`] in [`super::SendOptions::operator`]. Without one, the sender refuses, as it does
 //! when nobody is there.
 
+use crate::job_edit::JobChanges;
 use std::fmt;
 use std::sync::Arc;
 
@@ -12,6 +13,8 @@ use std::sync::Arc;
 pub enum Question {
     /// Resume on a controller whose position is lost and which does not home.
     Origin(OriginQuestion),
+    /// Resume a job file edited after its journal was written.
+    ChangedJob(Box<JobChanges>),
 }
 
 /// Why a resume needs the operator's word on the work origin, and what the journal says.
@@ -67,6 +70,7 @@ impl Question {
     pub fn prompt(&self) -> &'static str {
         match self {
             Question::Origin(_) => "Is the work origin where it was? [y/N] ",
+            Question::ChangedJob(_) => "Resume the changed job? [y/N] ",
         }
     }
 }
@@ -75,6 +79,7 @@ impl fmt::Display for Question {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Question::Origin(q) => q.fmt(f),
+            Question::ChangedJob(c) => c.fmt(f),
         }
     }
 }

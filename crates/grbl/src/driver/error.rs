@@ -1,6 +1,7 @@
 //! Why a send stopped: [`SendError`], with the line references its messages name.
 
 use crate::codes::{alarm_is_critical, describe_alarm, error_meaning};
+use crate::job_edit::JobChanges;
 use crate::journal::JournalError;
 use crate::transport::TransportError;
 use std::fmt;
@@ -268,6 +269,19 @@ pub enum SendError {
     OriginNotConfirmed {
         /// Why the position is lost.
         why: String,
+    },
+    /// The job file was edited after its journal was written, and nobody accepted resuming it.
+    #[error("{changes}\nRefusing to resume the changed job without confirmation; nothing was sent")]
+    JobChanged {
+        /// What changed.
+        changes: Box<JobChanges>,
+    },
+    /// The job file was edited where the journal's job had already run (or had lines in
+    /// doubt): only the operator can say which line to continue from.
+    #[error("{changes}\nRefusing to guess where to continue the changed job; nothing was sent")]
+    JobChangedWhereItRan {
+        /// What changed.
+        changes: Box<JobChanges>,
     },
     /// A stop whose tool-off sequence could not be confirmed.
     #[error(

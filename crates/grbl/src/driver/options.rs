@@ -57,6 +57,9 @@ pub struct SendOptions {
     /// Who answers what only the operator can (a terminal prompt); `None`: nobody, so the
     /// send refuses where it would have to ask.
     pub operator: Option<Operator>,
+    /// With `resume`: resume a job file edited after its journal was written (the change is
+    /// shown in the report); otherwise only the operator's "yes" allows it.
+    pub accept_changed_job: bool,
 }
 
 /// What to do when the job pauses itself with `M0` (GRBL 1.1h ignores `M1`, and `M2`/`M30` end
@@ -128,6 +131,12 @@ impl SendOptions {
     /// Sets [`SendOptions::operator`].
     pub fn with_operator(mut self, o: Option<Operator>) -> Self {
         self.operator = o;
+        self
+    }
+
+    /// Sets [`SendOptions::accept_changed_job`].
+    pub fn with_accept_changed_job(mut self, on: bool) -> Self {
+        self.accept_changed_job = on;
         self
     }
 
@@ -235,6 +244,7 @@ impl Default for SendOptions {
             discard_offsets: false,
             position_tolerance: Some(SendOptions::DEFAULT_POSITION_TOLERANCE),
             operator: None,
+            accept_changed_job: false,
         }
     }
 }

@@ -41,6 +41,11 @@ pub struct StreamArgs {
     /// (one that homes, `$22=1`, is homed with `$H` instead).
     #[arg(long)]
     pub origin_confirmed: bool,
+    /// With --resume: resume a job file edited after its journal was written (a bad line fixed);
+    /// the change is shown first. Without it the resume asks on a terminal, and refuses without
+    /// one. Lines already executed never run again unless --resume-from says so.
+    #[arg(long)]
+    pub accept_changed_job: bool,
     /// When the job pauses itself (M0): abort, resume, or wait for the operator. Default: ask
     /// on a terminal, abort without one.
     #[arg(long, value_enum, value_name = "POLICY")]
@@ -109,6 +114,7 @@ impl Default for StreamArgs {
             resume: false,
             resume_from: None,
             origin_confirmed: false,
+            accept_changed_job: false,
             discard_offsets: false,
             position_tolerance: flatcut_grbl::SendOptions::DEFAULT_POSITION_TOLERANCE,
             on_pause: None,
@@ -162,6 +168,11 @@ impl StreamArgs {
     /// Sets [`StreamArgs::origin_confirmed`].
     pub fn with_origin_confirmed(mut self, on: bool) -> Self {
         self.origin_confirmed = on;
+        self
+    }
+    /// Sets [`StreamArgs::accept_changed_job`].
+    pub fn with_accept_changed_job(mut self, on: bool) -> Self {
+        self.accept_changed_job = on;
         self
     }
     /// Sets [`StreamArgs::unlock`].

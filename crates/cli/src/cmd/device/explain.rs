@@ -86,6 +86,12 @@ pub(super) fn explain(
             "A line was probably damaged on the link (GRBL's link has no checksum): check the cable, its shielding and the baud rate. Look at the work, then continue with --resume-from LINE, for example the first line of the range: flatcut send {name}{port} --resume-from {}",
             from.source_line
         )),
+        SendError::JobChanged { .. } => Some(format!(
+            "If the change is meant (a bad line fixed), resume with --accept-changed-job (on a terminal, the resume asks): flatcut send {name}{port} --resume --accept-changed-job"
+        )),
+        SendError::JobChangedWhereItRan { .. } => Some(format!(
+            "Look at the work, then continue from the first line to cut of the edited file: flatcut send {name}{port} --resume-from LINE --accept-changed-job"
+        )),
         SendError::ResumeFromOutOfRange { .. } => {
             Some("--resume-from takes a line number of the file that has a line to send.".to_string())
         }

@@ -120,6 +120,7 @@ pub fn stream_text_with_control(
         .with_resume_from(resume_from)
         .with_journal(&journal)
         .with_origin_confirmed(args.origin_confirmed)
+        .with_accept_changed_job(args.accept_changed_job)
         .with_discard_offsets(args.discard_offsets)
         .with_position_tolerance(Some(args.position_tolerance))
         .with_on_pause(args.pause_policy())
