@@ -767,20 +767,13 @@ fn a_line_damaged_on_the_link_stops_the_run_naming_the_lines() {
             panic!("not caught; line {n}; trace {t:?}");
         }
     };
-    let SendError::OffPath {
-        from,
-        to,
-        expected,
-        reported,
-        tolerance,
-        ..
-    } = &e
-    else {
+    let SendError::OffPath(off) = &e else {
         panic!("{e}");
     };
+    let (from, to, expected, reported) = (&off.from, &off.to, off.expected, off.reported);
     assert!(from.index <= k && k <= to.index, "{e}");
-    let off = ((expected[0] - reported[0]).powi(2) + (expected[1] - reported[1]).powi(2)).sqrt();
-    assert!(off > *tolerance && off <= 0.81, "{e}");
+    let dev = ((expected[0] - reported[0]).powi(2) + (expected[1] - reported[1]).powi(2)).sqrt();
+    assert!(dev > off.tolerance && dev <= 0.81, "{e}");
     let msg = e.to_string();
     assert!(
         msg.contains(&format!("lines {} to {}", from.source_line, to.source_line))

@@ -36,6 +36,39 @@ fn opt_line(l: &Option<LineRef>) -> String {
     }
 }
 
+/// Where the machine was found off the job's path during a run (see [`SendError::OffPath`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OffPath {
+    /// First line of the stretch the machine could have been on.
+    pub from: LineRef,
+    /// Last line of that stretch.
+    pub to: LineRef,
+    /// Nearest point of that stretch, work coordinates (mm).
+    pub expected: [f64; 3],
+    /// Reported work position, mm.
+    pub reported: [f64; 3],
+    /// Tolerance, mm.
+    pub tolerance: f64,
+    /// Last line known executed.
+    pub last_done: Option<LineRef>,
+}
+
+impl fmt::Display for OffPath {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "the machine left the job's path while running lines {} to {}: it reported work position {} where the nearest point of those lines is {} ({:.3} mm away, more than the tolerance of {:.3} mm); a line was probably damaged on the link and ran elsewhere. Stopped: feed hold, soft reset, tool off. Last line known executed: {}",
+            self.from.source_line,
+            self.to.source_line,
+            fmt_pos(self.reported),
+            fmt_pos(self.expected),
+            super::tracker::dist(self.reported, self.expected),
+            self.tolerance,
+            opt_line(&self.last_done)
+        )
+    }
+}
+
 /// A rejected line found by the check pass or while streaming.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LineError {
@@ -206,24 +239,8 @@ pub enum SendError {
     },
     /// During the run the machine was found off the job's path: a line damaged on the link
     /// (GRBL's link has no checksum) that still parsed ran somewhere else.
-    #[error(
-        "the machine left the job's path while running lines {} to {}: it reported work position {} where the nearest point of those lines is {} ({:.3} mm away, more than the tolerance of {tolerance:.3} mm); a line was probably damaged on the link and ran elsewhere. Stopped: feed hold, soft reset, tool off. Last line known executed: {}",
-        from.source_line, to.source_line, fmt_pos(*reported), fmt_pos(*expected), super::tracker::dist(*reported, *expected), opt_line(last_done)
-    )]
-    OffPath {
-        /// First line of the stretch the machine could have been on.
-        from: LineRef,
-        /// Last line of that stretch.
-        to: LineRef,
-        /// Nearest point of that stretch, work coordinates (mm).
-        expected: [f64; 3],
-        /// Reported work position, mm.
-        reported: [f64; 3],
-        /// Tolerance, mm.
-        tolerance: f64,
-        /// Last line known executed.
-        last_done: Option<LineRef>,
-    },
+    #[error("{0}")]
+    OffPath(Box<OffPath>),
     /// The machine stayed in a state this sender did not ask for (a hold nobody released, check
     /// mode): lines it acknowledges there are not being cut.
     #[error(

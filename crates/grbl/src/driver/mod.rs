@@ -32,7 +32,7 @@ mod watch;
 
 pub use confirm::{Operator, OriginQuestion, Question};
 pub use control::{CancelToken, Control};
-pub use error::{LineError, LineRef, SendError};
+pub use error::{LineError, LineRef, OffPath, SendError};
 pub use options::{PausePolicy, SendOptions};
 pub use progress::{Phase, Progress, SendReport};
 

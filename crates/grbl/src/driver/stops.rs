@@ -4,7 +4,7 @@
 use super::error::SendError;
 use super::session::{Session, transport};
 use super::tracker::{Tracker, line_ref};
-use super::watch::OffPath;
+use super::watch::Deviation;
 use super::{ABORT_CYCLE_ALARM, READ_SLICE, SendOptions};
 use crate::codes::{alarm_is_critical, alarm_meaning};
 use crate::job::Job;
@@ -296,7 +296,7 @@ pub(super) fn stop_off_path<T: Transport + ?Sized>(
     job: &Job,
     tracker: &mut Tracker,
     journal: &mut Option<Journal>,
-    off: OffPath,
+    off: Deviation,
     tolerance: f64,
 ) -> Result<SendError, SendError> {
     hold_still(sess, job, tracker)?;
@@ -312,14 +312,14 @@ pub(super) fn stop_off_path<T: Transport + ?Sized>(
         j.uncertain(off.from, to);
     }
     reset_held(sess, journal)?;
-    let err = SendError::OffPath {
+    let err = SendError::OffPath(Box::new(super::error::OffPath {
         from: line_ref(job, off.from),
         to: line_ref(job, off.to),
         expected: off.expected,
         reported: off.reported,
         tolerance,
         last_done: tracker.last_done(job),
-    };
+    }));
     Ok(with_tool_off(sess, journal, err))
 }
 

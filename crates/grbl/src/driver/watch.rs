@@ -11,7 +11,7 @@ use crate::response::MachineState;
 
 /// The machine found off the job's path.
 #[derive(Debug, Clone, PartialEq)]
-pub(super) struct OffPath {
+pub(super) struct Deviation {
     /// First line of the stretch the machine may have been on (0-based job index).
     pub from: usize,
     /// Last line of that stretch.
@@ -43,7 +43,7 @@ pub(super) fn off_path(
     wpos: [f64; 3],
     tol: f64,
     preamble_first: bool,
-) -> Option<OffPath> {
+) -> Option<Deviation> {
     let lo = tracker.first_open();
     let hi = tracker.last_sent?;
     if lo >= job.len() {
@@ -86,7 +86,7 @@ pub(super) fn off_path(
             }
         }
     }
-    (best.0 > tol).then(|| OffPath {
+    (best.0 > tol).then(|| Deviation {
         from: lo,
         to: hi,
         expected: [best.1[0] - g[0], best.1[1] - g[1], best.1[2] - g[2]],

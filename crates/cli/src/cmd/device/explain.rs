@@ -82,9 +82,9 @@ pub(super) fn explain(
             "Home the machine, or set its work origin back where it was, then resume with --origin-confirmed (on a terminal, the resume asks)."
                 .to_string(),
         ),
-        SendError::OffPath { from, .. } => Some(format!(
+        SendError::OffPath(off) => Some(format!(
             "A line was probably damaged on the link (GRBL's link has no checksum): check the cable, its shielding and the baud rate. Look at the work, then continue with --resume-from LINE, for example the first line of the range: flatcut send {name}{port} --resume-from {}",
-            from.source_line
+            off.from.source_line
         )),
         SendError::JobChanged { .. } => Some(format!(
             "If the change is meant (a bad line fixed), resume with --accept-changed-job (on a terminal, the resume asks): flatcut send {name}{port} --resume --accept-changed-job"
