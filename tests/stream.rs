@@ -815,3 +815,47 @@ fn a_resume_without_a_terminal_or_the_flag_refuses() {
         "asked without a terminal: {stderr}"
     );
 }
+
+/// Issue 14, item 5: `flatcut send --resume --accept-changed-job` continues a job whose bad line
+/// was fixed in the file after the stop, and says that it resumed an edited job.
+#[test]
+fn a_fixed_job_file_resumes_with_accept_changed_job() {
+    let c = case(3);
+    let mut a = args(&c);
+    a.sim_error_at = Some("60:33".into());
+    let e = stream_file(&c.job_path, &a).unwrap_err();
+    let typed = e.downcast_ref::<StreamError>().expect("a StreamError");
+    let SendError::LineRejected { error, .. } = typed.send_error() else {
+        panic!("{e:#}");
+    };
+    let bad = error.line.source_line;
+    let text = std::fs::read_to_string(&c.job_path).unwrap();
+    let fixed: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i + 1 == bad {
+                format!("{l} (fixed)\n")
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    std::fs::write(&c.job_path, fixed).unwrap();
+    let out = stream_file(
+        &c.job_path,
+        &args(&c)
+            .with_resume(true)
+            .with_origin_confirmed(true)
+            .with_accept_changed_job(true),
+    )
+    .unwrap_or_else(|e| panic!("{e:#}"));
+    assert!(out.report.previously_done > 0);
+    let summary = flatcut_cli::cmd::send::summary(&out);
+    assert!(
+        summary.contains("note: resumed an edited job.")
+            && summary.contains("The lines to send are the same; only comments"),
+        "{summary}"
+    );
+    assert!(Journal::read(&c.journal).unwrap().finished);
+}

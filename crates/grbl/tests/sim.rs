@@ -384,6 +384,22 @@ fn refuses_to_resume_another_job() {
     let sim = spawn(SimConfig::default().with_instant_motion(true));
     run(&sim, &job, &opts().with_journal(&jp)).unwrap();
     let other = Job::parse(&zigzag(11)).unwrap();
+    // The journal keeps the lines' texts: the refusal shows the change (here, lines appended).
+    let e = run(&sim, &other, &opts().with_journal(&jp).with_resume(true)).unwrap_err();
+    assert!(matches!(e, SendError::JobChanged { .. }), "{e}");
+    assert!(
+        e.to_string()
+            .contains("Refusing to resume the changed job without confirmation"),
+        "{e}"
+    );
+    // A journal that does not keep them (written before it did) is another job.
+    let text = std::fs::read_to_string(&jp).unwrap();
+    let old: String = text
+        .lines()
+        .filter(|l| !l.starts_with("T "))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(&jp, old).unwrap();
     let e = run(&sim, &other, &opts().with_journal(&jp).with_resume(true)).unwrap_err();
     assert!(e.to_string().contains("different job"), "{e}");
 }
