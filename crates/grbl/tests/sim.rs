@@ -10,6 +10,7 @@ use flatcut_testkit::trace::{
     assert_exactly_once, assert_exactly_once_except, assert_trace_is_job, close,
 };
 use std::collections::BTreeSet;
+use std::sync::Arc;
 use std::time::Duration;
 
 /// A pen-plotter job of `n` zig-zag strokes with unique line texts, X on the step grid.
@@ -575,15 +576,21 @@ fn resume_after_a_controller_restart_homes_or_needs_the_operators_word() {
     assert!(Journal::read(&jp).unwrap().finished);
 }
 
-/// Issue 14, item 2: without `--origin-confirmed`, a resume on a restarted controller that does
-/// not home asks the operator (what the journal says the work origin was, why the position is
-/// unknown); "no" refuses with nothing moved and the tool off, "yes" resumes.
-#[test]
-fn resume_after_a_restart_asks_the_operator_and_moves_only_on_yes() {
-    use std::sync::{Arc, Mutex};
-    let dir = tempfile::tempdir().unwrap();
-    let jp = dir.path().join("j.journal");
-    let job = Job::parse(&zigzag(120)).unwrap();
+/// The questions an [`answering`] operator was asked, with their prompts.
+type Asked = std::sync::Arc<std::sync::Mutex<Vec<String>>>;
+
+/// An operator that answers every question with `yes`, noting it in `asked`.
+fn answering(asked: &Asked, yes: bool) -> flatcut_grbl::Operator {
+    let asked = asked.clone();
+    flatcut_grbl::Operator::new(move |q| {
+        asked.lock().unwrap().push(format!("{q}\n{}", q.prompt()));
+        yes
+    })
+}
+
+/// Runs `job` journaled at `jp` on a controller that rejects its 60th line (`error:33`):
+/// the stop, and what the machine ran.
+fn stopped_by_a_bad_line(job: &Job, jp: &std::path::Path) -> (SendError, Vec<TraceSegment>) {
     let first = spawn(
         SimConfig::default()
             .with_instant_motion(true)
@@ -592,17 +599,22 @@ fn resume_after_a_restart_asks_the_operator_and_moves_only_on_yes() {
                 ..Faults::default()
             }),
     );
-    run(&first, &job, &opts().with_journal(&jp)).unwrap_err();
-    first.stop();
+    let e = run(&first, job, &opts().with_journal(jp)).unwrap_err();
+    (e, first.stop().trace)
+}
+
+/// Issue 14, item 2: without `--origin-confirmed`, a resume on a restarted controller that does
+/// not home asks the operator (what the journal says the work origin was, why the position is
+/// unknown); "no" refuses with nothing moved and the tool off, "yes" resumes.
+#[test]
+fn resume_after_a_restart_asks_the_operator_and_moves_only_on_yes() {
+    let dir = tempfile::tempdir().unwrap();
+    let jp = dir.path().join("j.journal");
+    let job = Job::parse(&zigzag(120)).unwrap();
+    stopped_by_a_bad_line(&job, &jp);
     assert_eq!(Journal::read(&jp).unwrap().origin, Some([0.0; 3]));
-    let asked: Arc<Mutex<Vec<String>>> = Arc::default();
-    let operator = |yes: bool| {
-        let asked = asked.clone();
-        flatcut_grbl::Operator::new(move |q| {
-            asked.lock().unwrap().push(format!("{q}\n{}", q.prompt()));
-            yes
-        })
-    };
+    let asked: Asked = Arc::default();
+    let operator = |yes: bool| answering(&asked, yes);
     let resume = opts().with_journal(&jp).with_resume(true);
     let no = spawn(SimConfig::default().with_instant_motion(true));
     let e = run(
@@ -834,21 +846,11 @@ fn a_line_damaged_on_the_link_stops_the_run_naming_the_lines() {
 /// line that had. The stop names the last line executed exactly: the last the machine ran.
 #[test]
 fn an_edited_job_resumes_after_its_fix_only_when_accepted() {
-    use std::sync::{Arc, Mutex};
     let dir = tempfile::tempdir().unwrap();
     let jp = dir.path().join("j.journal");
     let text = zigzag(120);
     let job = Job::parse(&text).unwrap();
-    let first = spawn(
-        SimConfig::default()
-            .with_instant_motion(true)
-            .with_faults(Faults {
-                error_at_line: Some((60, 33)),
-                ..Faults::default()
-            }),
-    );
-    let e = run(&first, &job, &opts().with_journal(&jp)).unwrap_err();
-    let r1 = first.stop().trace;
+    let (e, r1) = stopped_by_a_bad_line(&job, &jp);
     let SendError::LineRejected { error, last_done } = &e else {
         panic!("{e}");
     };
@@ -880,14 +882,8 @@ fn an_edited_job_resumes_after_its_fix_only_when_accepted() {
         .collect();
     let job2 = Job::parse(&fixed).unwrap();
     assert_ne!(job2.lines[error.line.index].text, error.line.text);
-    let asked: Arc<Mutex<Vec<String>>> = Arc::default();
-    let operator = |yes: bool| {
-        let asked = asked.clone();
-        flatcut_grbl::Operator::new(move |q| {
-            asked.lock().unwrap().push(format!("{q}\n{}", q.prompt()));
-            yes
-        })
-    };
+    let asked: Asked = Arc::default();
+    let operator = |yes: bool| answering(&asked, yes);
     let resume = opts()
         .with_journal(&jp)
         .with_resume(true)
@@ -942,16 +938,7 @@ fn an_edit_where_the_job_already_ran_needs_the_line_to_continue_from() {
     let jp = dir.path().join("j.journal");
     let text = zigzag(80);
     let job = Job::parse(&text).unwrap();
-    let first = spawn(
-        SimConfig::default()
-            .with_instant_motion(true)
-            .with_faults(Faults {
-                error_at_line: Some((60, 33)),
-                ..Faults::default()
-            }),
-    );
-    run(&first, &job, &opts().with_journal(&jp)).unwrap_err();
-    first.stop();
+    stopped_by_a_bad_line(&job, &jp);
     // Line 10 of the file (long done) is changed.
     let edited: String = text
         .lines()
