@@ -576,6 +576,17 @@ fn resume_after_a_controller_restart_homes_or_needs_the_operators_word() {
     assert!(Journal::read(&jp).unwrap().finished);
 }
 
+/// The journal at `jp` records a tool-off sequence confirmed by `$G`.
+fn assert_tool_off_journaled(jp: &std::path::Path) {
+    let notes = Journal::read(jp).unwrap().notes;
+    assert!(
+        notes
+            .iter()
+            .any(|n| n == "tool off (M5 M9), confirmed by $G"),
+        "{notes:?}"
+    );
+}
+
 /// The questions an [`answering`] operator was asked, with their prompts.
 type Asked = std::sync::Arc<std::sync::Mutex<Vec<String>>>;
 
@@ -639,14 +650,7 @@ fn resume_after_a_restart_asks_the_operator_and_moves_only_on_yes() {
             && q.ends_with("Is the work origin where it was? [y/N] "),
         "{q}"
     );
-    let st = Journal::read(&jp).unwrap();
-    assert!(
-        st.notes
-            .iter()
-            .any(|n| n == "tool off (M5 M9), confirmed by $G"),
-        "{:?}",
-        st.notes
-    );
+    assert_tool_off_journaled(&jp);
     let yes = spawn(SimConfig::default().with_instant_motion(true));
     let rep = run(&yes, &job, &resume.with_operator(Some(operator(true)))).expect("resumed");
     assert_notice(&rep, |n| {
@@ -817,14 +821,7 @@ fn a_line_damaged_on_the_link_stops_the_run_naming_the_lines() {
     );
     // The machine stopped where it was found: the strokes after the damaged one did not all run.
     assert!(report.trace.len() < 12, "{}", report.trace.len());
-    let st = Journal::read(&jp).unwrap();
-    assert!(
-        st.notes
-            .iter()
-            .any(|n| n == "tool off (M5 M9), confirmed by $G"),
-        "{:?}",
-        st.notes
-    );
+    assert_tool_off_journaled(&jp);
     // Which lines ran as written is not known: a resume names them and asks.
     let sim2 = spawn(SimConfig::default().with_instant_motion(true));
     let o = opts()
