@@ -859,3 +859,108 @@ fn a_fixed_job_file_resumes_with_accept_changed_job() {
     );
     assert!(Journal::read(&c.journal).unwrap().finished);
 }
+
+/// Environment variable naming the working directory of [`resume_at_a_terminal_child`].
+const TERMINAL_CHILD_ENV: &str = "FLATCUT_TERMINAL_CHILD_DIR";
+
+/// The resuming half of [`the_terminal_prompt_resumes_on_yes_and_refuses_otherwise`], run in a
+/// child process whose stdin is a pseudo-terminal. Without the variable set it does nothing.
+#[test]
+fn resume_at_a_terminal_child() {
+    let Some(dir) = std::env::var_os(TERMINAL_CHILD_ENV) else {
+        return;
+    };
+    let dir = PathBuf::from(dir);
+    let a = StreamArgs::default()
+        .with_sim_instant(true)
+        .with_quiet(true)
+        .with_journal(dir.join("job.journal"))
+        .with_resume(true);
+    match stream_file(&dir.join("job.gcode"), &a) {
+        Ok(out) => eprintln!("CHILD-OK: {}", flatcut_cli::cmd::send::summary(&out)),
+        Err(e) => eprintln!("CHILD-ERROR: {e:#}"),
+    }
+}
+
+/// Runs [`resume_at_a_terminal_child`] in `dir` with a pseudo-terminal as stdin, answers its
+/// question with `answer`, and returns what it printed on stderr.
+fn resume_at_a_terminal(dir: &Path, answer: &str) -> String {
+    use std::io::{Read, Write};
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let pty = nix::pty::openpty(None, None).unwrap();
+    let mut child = Command::new(std::env::current_exe().unwrap())
+        .args([
+            "stream::resume_at_a_terminal_child",
+            "--exact",
+            "--nocapture",
+            "--test-threads=1",
+        ])
+        .env(TERMINAL_CHILD_ENV, dir)
+        .stdin(Stdio::from(pty.slave))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = child.stderr.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel::<Vec<u8>>();
+    let reader = std::thread::spawn(move || {
+        let mut buf = [0u8; 4096];
+        while let Ok(n) = stderr.read(&mut buf) {
+            if n == 0 || tx.send(buf[..n].to_vec()).is_err() {
+                break;
+            }
+        }
+    });
+    let mut said = String::new();
+    let t0 = Instant::now();
+    while !said.contains("[y/N]") && t0.elapsed() < Duration::from_secs(60) {
+        if let Ok(b) = rx.recv_timeout(Duration::from_millis(100)) {
+            said.push_str(&String::from_utf8_lossy(&b));
+        }
+    }
+    assert!(said.contains("[y/N]"), "never asked: {said}");
+    let mut master = std::fs::File::from(pty.master);
+    master.write_all(answer.as_bytes()).unwrap();
+    let status = child.wait().unwrap();
+    reader.join().unwrap();
+    said.extend(
+        rx.try_iter()
+            .map(|b| String::from_utf8_lossy(&b).into_owned()),
+    );
+    assert!(status.success(), "child failed: {said}");
+    said
+}
+
+/// Issue 14, item 2: on a terminal, a resume whose machine position is unknown says why and
+/// where the journal put the work origin, asks "Is the work origin where it was? [y/N]", and
+/// resumes on `y`; any other answer refuses with nothing moved and the tool off.
+#[test]
+fn the_terminal_prompt_resumes_on_yes_and_refuses_otherwise() {
+    let c = case(2);
+    let mut a = args(&c);
+    a.sim_error_at = Some("40".into());
+    stream_file(&c.job_path, &a).expect_err("the injected error stops the first run");
+    let said = resume_at_a_terminal(&c.root, "no\n");
+    assert!(
+        said.contains("The machine position is not known: the controller restarted")
+            && said.contains(
+                "its work origin (G54 zero) was at machine X0.000 Y0.000 Z0.000 (journal)"
+            )
+            && said.contains("Is the work origin where it was? [y/N] "),
+        "{said}"
+    );
+    assert!(
+        said.contains("CHILD-ERROR: cannot resume: the controller restarted")
+            && said.contains("the operator did not confirm that the work origin is where it was; nothing moved, tool off"),
+        "{said}"
+    );
+    assert!(!Journal::read(&c.journal).unwrap().finished);
+    let said = resume_at_a_terminal(&c.root, "y\n");
+    assert!(
+        said.contains("CHILD-OK: ")
+            && said.contains("note: resuming on the operator's word, asked at the start"),
+        "{said}"
+    );
+    assert!(Journal::read(&c.journal).unwrap().finished);
+}
