@@ -139,9 +139,7 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
         // (the machine steps along a staircase around the programmed line).
         let watch_tol = opts
             .position_tolerance
-            .filter(|_| {
-                !job_uses_unknown_moves(job) && !job.lines.iter().any(|l| l.text.contains("G43"))
-            })
+            .filter(|_| !job_uses_unknown_moves(job))
             .map(|t| t + 2.0 * tracker.pos_tol);
         Stream {
             bytes_before: sess.s.bytes_written(),
