@@ -970,3 +970,37 @@ fn an_edit_where_the_job_already_ran_needs_the_line_to_continue_from() {
     assert!(!r2.iter().any(|s| s.text == job2.lines[from - 1].text));
     assert!(Journal::read(&jp).unwrap().finished);
 }
+
+/// Issue 14, item 4: arcs run as GRBL's chords, which the sender's model reproduces, so status
+/// reports taken mid-arc never stop a correct run: full circles and half circles, both ways,
+/// with motion in time.
+#[test]
+fn arcs_pass_the_position_checks_without_a_false_alarm() {
+    let mut text = String::from("G21 G90\nG0 X10 Y0\nG1 F2400\n");
+    for k in 0..4 {
+        let r = 10.0 + 4.0 * f64::from(k);
+        text.push_str(&format!(
+            "G1 X{r} Y0\nG2 X-{r} Y0 I-{r} J0\nG2 X{r} Y0 I{r} J0\n"
+        ));
+        text.push_str(&format!("G3 X{r} Y0 I-{r} J0\n"));
+    }
+    let job = Job::parse(&text).unwrap();
+    let sim = spawn(
+        SimConfig::default()
+            .with_time_scale(8.0)
+            .with_setting(110, 3000.0)
+            .with_setting(111, 3000.0),
+    );
+    let mut reports = 0;
+    let rep =
+        flatcut_testkit::pty::send_with(sim.path(), &job, &opts(), &CancelToken::new(), &mut |p| {
+            if p.state == Some(flatcut_grbl::MachineState::Run) {
+                reports += 1;
+            }
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(rep.lines_sent, job.len());
+    // Every move ran: the rapid, three of the four G1s (the first is already there) and 12 arcs.
+    assert_eq!(sim.stop().trace.len(), 16);
+    assert!(reports > 10, "status reports while moving: {reports}");
+}
