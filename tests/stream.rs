@@ -517,6 +517,16 @@ fn stream_arguments_defaults_hidden_faults_and_bad_port() {
     assert!(format!("{e:#}").contains("--sim-error-at 0"), "{e:#}");
 }
 
+/// A command running the test `name` of this binary alone (its output shown), with the
+/// environment variable `env` naming `dir`: the half of a test that must run in a process of
+/// its own (a signal, another stdin).
+fn child_test(name: &str, env: &str, dir: &Path) -> std::process::Command {
+    let mut c = std::process::Command::new(std::env::current_exe().unwrap());
+    c.args([name, "--exact", "--nocapture", "--test-threads=1"])
+        .env(env, dir);
+    c
+}
+
 /// Environment variable naming the working directory of [`sigterm_child_process`].
 const SIGTERM_CHILD_ENV: &str = "FLATCUT_SIGTERM_CHILD_DIR";
 
@@ -559,22 +569,19 @@ fn sighup_aborts_with_the_tool_off() {
 }
 
 fn signal_aborts_with_the_tool_off(signal: &str) {
-    use std::process::{Command, Stdio};
+    use std::process::Stdio;
     use std::time::{Duration, Instant};
     let dir = tempfile::tempdir().unwrap();
-    let child = Command::new(std::env::current_exe().unwrap())
-        .args([
-            "stream::sigterm_child_process",
-            "--exact",
-            "--nocapture",
-            "--test-threads=1",
-        ])
-        .env(SIGTERM_CHILD_ENV, dir.path())
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let child = child_test(
+        "stream::sigterm_child_process",
+        SIGTERM_CHILD_ENV,
+        dir.path(),
+    )
+    .stdin(Stdio::null())
+    .stdout(Stdio::piped())
+    .stderr(Stdio::piped())
+    .spawn()
+    .unwrap();
     let journal = dir.path().join("job.journal");
     let t0 = Instant::now();
     let streaming = loop {
@@ -589,7 +596,7 @@ fn signal_aborts_with_the_tool_off(signal: &str) {
         }
         std::thread::sleep(Duration::from_millis(20));
     };
-    let killed = Command::new("kill")
+    let killed = std::process::Command::new("kill")
         .args([signal, &child.id().to_string()])
         .status()
         .unwrap();
@@ -788,19 +795,16 @@ fn resume_without_a_terminal_child() {
 /// controller whose position is unknown refuses, as before the prompt existed.
 #[test]
 fn a_resume_without_a_terminal_or_the_flag_refuses() {
-    use std::process::{Command, Stdio};
+    use std::process::Stdio;
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::new(std::env::current_exe().unwrap())
-        .args([
-            "stream::resume_without_a_terminal_child",
-            "--exact",
-            "--nocapture",
-            "--test-threads=1",
-        ])
-        .env(NO_TERMINAL_CHILD_ENV, dir.path())
-        .stdin(Stdio::null())
-        .output()
-        .unwrap();
+    let out = child_test(
+        "stream::resume_without_a_terminal_child",
+        NO_TERMINAL_CHILD_ENV,
+        dir.path(),
+    )
+    .stdin(Stdio::null())
+    .output()
+    .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "child failed: {stderr}");
     assert!(
@@ -886,22 +890,19 @@ fn resume_at_a_terminal_child() {
 /// question with `answer`, and returns what it printed on stderr.
 fn resume_at_a_terminal(dir: &Path, answer: &str) -> String {
     use std::io::{Read, Write};
-    use std::process::{Command, Stdio};
+    use std::process::Stdio;
     use std::time::{Duration, Instant};
     let pty = nix::pty::openpty(None, None).unwrap();
-    let mut child = Command::new(std::env::current_exe().unwrap())
-        .args([
-            "stream::resume_at_a_terminal_child",
-            "--exact",
-            "--nocapture",
-            "--test-threads=1",
-        ])
-        .env(TERMINAL_CHILD_ENV, dir)
-        .stdin(Stdio::from(pty.slave))
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = child_test(
+        "stream::resume_at_a_terminal_child",
+        TERMINAL_CHILD_ENV,
+        dir,
+    )
+    .stdin(Stdio::from(pty.slave))
+    .stdout(Stdio::null())
+    .stderr(Stdio::piped())
+    .spawn()
+    .unwrap();
     let mut stderr = child.stderr.take().unwrap();
     let (tx, rx) = std::sync::mpsc::channel::<Vec<u8>>();
     let reader = std::thread::spawn(move || {
