@@ -66,6 +66,13 @@ impl SymTriplets {
         }
     }
 
+    /// Reserves room for `extra` more entries.
+    pub fn reserve(&mut self, extra: usize) {
+        self.rows.reserve_exact(extra);
+        self.cols.reserve_exact(extra);
+        self.vals.reserve_exact(extra);
+    }
+
     /// Number of triplets (before duplicates are summed).
     pub fn len(&self) -> usize {
         self.vals.len()
