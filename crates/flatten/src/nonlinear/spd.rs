@@ -1,7 +1,8 @@
 //! A symmetric positive-definite sparse system with a fixed pattern for the Newton steps: the
 //! values live in CSC order (upper triangle, rows ≤ column) so that the per-triangle Hessians are
 //! scattered straight into precomputed slots, and the factorisation is the crate's one sparse
-//! Cholesky, [`crate::sparse::SpdSolver`] (faer, AMD ordering, symbolic factorisation computed
+//! Cholesky, [`crate::sparse::SpdSolver`] (faer; AMD, or nested dissection of the vertex graph
+//! from [`crate::sparse::NESTED_DISSECTION_FROM`] vertices; symbolic factorisation computed
 //! once and reused for every step, sequential `Par::Seq`: faster on small machines and
 //! bit-for-bit deterministic, crates.md §3).
 //!
