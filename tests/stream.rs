@@ -517,6 +517,16 @@ fn stream_arguments_defaults_hidden_faults_and_bad_port() {
     assert!(format!("{e:#}").contains("--sim-error-at 0"), "{e:#}");
 }
 
+/// A command running the test `name` of this binary alone (its output shown), with the
+/// environment variable `env` naming `dir`: the half of a test that must run in a process of
+/// its own (a signal, another stdin).
+fn child_test(name: &str, env: &str, dir: &Path) -> std::process::Command {
+    let mut c = std::process::Command::new(std::env::current_exe().unwrap());
+    c.args([name, "--exact", "--nocapture", "--test-threads=1"])
+        .env(env, dir);
+    c
+}
+
 /// Environment variable naming the working directory of [`sigterm_child_process`].
 const SIGTERM_CHILD_ENV: &str = "FLATCUT_SIGTERM_CHILD_DIR";
 
@@ -559,22 +569,19 @@ fn sighup_aborts_with_the_tool_off() {
 }
 
 fn signal_aborts_with_the_tool_off(signal: &str) {
-    use std::process::{Command, Stdio};
+    use std::process::Stdio;
     use std::time::{Duration, Instant};
     let dir = tempfile::tempdir().unwrap();
-    let child = Command::new(std::env::current_exe().unwrap())
-        .args([
-            "stream::sigterm_child_process",
-            "--exact",
-            "--nocapture",
-            "--test-threads=1",
-        ])
-        .env(SIGTERM_CHILD_ENV, dir.path())
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let child = child_test(
+        "stream::sigterm_child_process",
+        SIGTERM_CHILD_ENV,
+        dir.path(),
+    )
+    .stdin(Stdio::null())
+    .stdout(Stdio::piped())
+    .stderr(Stdio::piped())
+    .spawn()
+    .unwrap();
     let journal = dir.path().join("job.journal");
     let t0 = Instant::now();
     let streaming = loop {
@@ -589,7 +596,7 @@ fn signal_aborts_with_the_tool_off(signal: &str) {
         }
         std::thread::sleep(Duration::from_millis(20));
     };
-    let killed = Command::new("kill")
+    let killed = std::process::Command::new("kill")
         .args([signal, &child.id().to_string()])
         .status()
         .unwrap();
@@ -677,4 +684,284 @@ fn run_uses_the_projects_device() {
     let zero = lampshade_project(dir.path(), "[device]\nbaud = 0\n");
     let e = run(&zero).expect_err("baud = 0 is refused");
     assert!(format!("{e:#}").contains("[device] baud = 0"), "{e:#}");
+}
+
+/// Issue 14, item 4: a correct run is never stopped by the position checks: the lampshade's
+/// plotter job (2,000 lines), streamed with motion in time so that every status report lands
+/// mid-path, runs to the end.
+#[test]
+fn the_lampshade_job_passes_the_position_checks_without_a_false_alarm() {
+    let dir = tempfile::tempdir().unwrap();
+    let job_path = crate::pipeline::root().join("patterns/golden/lampshade/job-1.gcode");
+    let a = StreamArgs::default()
+        .with_sim_speed(100.0)
+        .with_quiet(true)
+        .with_journal(dir.path().join("job.journal"));
+    let out = stream_file(&job_path, &a).unwrap_or_else(|e| panic!("{e:#}"));
+    let job = Job::parse(&std::fs::read_to_string(&job_path).unwrap()).unwrap();
+    assert_eq!(out.report.lines_sent, job.len());
+    assert!(out.sim_time.unwrap() > 10.0, "motion ran in time");
+}
+
+/// Issue 14, item 4: `flatcut send` over a link that loses a digit of one line stops with a
+/// failing exit code, and its message names the lines, the reported and the expected position.
+#[test]
+fn a_damaged_line_fails_the_send_naming_the_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let job_path = dir.path().join("strokes.gcode");
+    std::fs::write(&job_path, flatcut_testkit::jobs::long_strokes(12)).unwrap();
+    let job = Job::parse(&std::fs::read_to_string(&job_path).unwrap()).unwrap();
+    let journal = dir.path().join("strokes.journal");
+    let journal_s = journal.display().to_string();
+    let job_s = job_path.display().to_string();
+    let argv = |extra: &[&str]| {
+        let mut v = vec![
+            "flatcut",
+            "send",
+            &job_s,
+            "-q",
+            "--sim-speed",
+            "6",
+            "--journal",
+            &journal_s,
+        ];
+        v.extend_from_slice(extra);
+        v.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    // Undamaged, with the trace telling which received line is job line 6.
+    let trace = dir.path().join("clean.jsonl");
+    let trace_s = trace.display().to_string();
+    let cli = parse_command_line(argv(&["--sim-trace", &trace_s])).unwrap();
+    flatcut_cli::run(cli).unwrap_or_else(|e| panic!("{e:#}"));
+    let n = read_trace(&trace)
+        .iter()
+        .find(|s| s.text == job.lines[6].text)
+        .map(|s| s.line)
+        .unwrap()
+        .to_string();
+    let cli = parse_command_line(argv(&["--sim-drop-digit-at", &n])).unwrap();
+    let e = flatcut_cli::run(cli).expect_err("the damaged line stops the send");
+    let report = flatcut_cli::error_report(&e);
+    assert_ne!(
+        flatcut_cli::exit_code(Err(e)),
+        std::process::ExitCode::SUCCESS
+    );
+    // Job line 6 is line 8 of the file.
+    assert!(
+        report.contains("the machine left the job's path while running lines "),
+        "{report}"
+    );
+    let (from, to) = report
+        .split("while running lines ")
+        .nth(1)
+        .and_then(|r| r.split_once(':'))
+        .and_then(|(r, _)| r.split_once(" to "))
+        .map(|(a, b)| (a.parse::<usize>().unwrap(), b.parse::<usize>().unwrap()))
+        .unwrap();
+    assert!(from <= 8 && 8 <= to, "{report}");
+    assert!(
+        report.contains("reported work position X") && report.contains("tool off"),
+        "{report}"
+    );
+    assert!(report.contains("--resume-from"), "{report}");
+}
+
+/// Environment variable naming the working directory of [`resume_without_a_terminal_child`].
+const NO_TERMINAL_CHILD_ENV: &str = "FLATCUT_NO_TERMINAL_CHILD_DIR";
+
+/// The resuming half of [`a_resume_without_a_terminal_or_the_flag_refuses`], run in a child
+/// process whose stdin is not a terminal. Without the variable set it does nothing.
+#[test]
+fn resume_without_a_terminal_child() {
+    let Some(dir) = std::env::var_os(NO_TERMINAL_CHILD_ENV) else {
+        return;
+    };
+    let dir = PathBuf::from(dir);
+    let job = dir.join("job.gcode");
+    std::fs::write(&job, pattern_job(2)).unwrap();
+    let a = StreamArgs::default()
+        .with_sim_instant(true)
+        .with_quiet(true)
+        .with_journal(dir.join("job.journal"));
+    let mut failing = a.clone();
+    failing.sim_error_at = Some("40".into());
+    stream_file(&job, &failing).expect_err("the injected error stops the first run");
+    // The embedded simulator starts afresh (a restart), and it does not home.
+    let e = stream_file(&job, &a.with_resume(true)).expect_err("nobody confirmed the origin");
+    eprintln!("CHILD-ERROR: {e:#}");
+}
+
+/// Issue 14, item 2: without a terminal to ask on and without `--origin-confirmed`, a resume on a
+/// controller whose position is unknown refuses, as before the prompt existed.
+#[test]
+fn a_resume_without_a_terminal_or_the_flag_refuses() {
+    use std::process::Stdio;
+    let dir = tempfile::tempdir().unwrap();
+    let out = child_test(
+        "stream::resume_without_a_terminal_child",
+        NO_TERMINAL_CHILD_ENV,
+        dir.path(),
+    )
+    .stdin(Stdio::null())
+    .output()
+    .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "child failed: {stderr}");
+    assert!(
+        stderr.contains(
+            "CHILD-ERROR: cannot resume: the controller restarted when the port was opened"
+        ) && stderr.contains("nobody confirmed that its work origin is where it was")
+            && stderr.contains("--origin-confirmed"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("[y/N]"),
+        "asked without a terminal: {stderr}"
+    );
+}
+
+/// Issue 14, item 5: `flatcut send --resume --accept-changed-job` continues a job whose bad line
+/// was fixed in the file after the stop, and says that it resumed an edited job.
+#[test]
+fn a_fixed_job_file_resumes_with_accept_changed_job() {
+    let c = case(3);
+    let mut a = args(&c);
+    a.sim_error_at = Some("60:33".into());
+    let e = stream_file(&c.job_path, &a).unwrap_err();
+    let typed = e.downcast_ref::<StreamError>().expect("a StreamError");
+    let SendError::LineRejected { error, .. } = typed.send_error() else {
+        panic!("{e:#}");
+    };
+    let bad = error.line.source_line;
+    let text = std::fs::read_to_string(&c.job_path).unwrap();
+    let fixed: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i + 1 == bad {
+                format!("{l} (fixed)\n")
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    std::fs::write(&c.job_path, fixed).unwrap();
+    let out = stream_file(
+        &c.job_path,
+        &args(&c)
+            .with_resume(true)
+            .with_origin_confirmed(true)
+            .with_accept_changed_job(true),
+    )
+    .unwrap_or_else(|e| panic!("{e:#}"));
+    assert!(out.report.previously_done > 0);
+    let summary = flatcut_cli::cmd::send::summary(&out);
+    assert!(
+        summary.contains("note: resumed an edited job.")
+            && summary.contains("The lines to send are the same; only comments"),
+        "{summary}"
+    );
+    assert!(Journal::read(&c.journal).unwrap().finished);
+}
+
+/// Environment variable naming the working directory of [`resume_at_a_terminal_child`].
+const TERMINAL_CHILD_ENV: &str = "FLATCUT_TERMINAL_CHILD_DIR";
+
+/// The resuming half of [`the_terminal_prompt_resumes_on_yes_and_refuses_otherwise`], run in a
+/// child process whose stdin is a pseudo-terminal. Without the variable set it does nothing.
+#[test]
+fn resume_at_a_terminal_child() {
+    let Some(dir) = std::env::var_os(TERMINAL_CHILD_ENV) else {
+        return;
+    };
+    let dir = PathBuf::from(dir);
+    let a = StreamArgs::default()
+        .with_sim_instant(true)
+        .with_quiet(true)
+        .with_journal(dir.join("job.journal"))
+        .with_resume(true);
+    match stream_file(&dir.join("job.gcode"), &a) {
+        Ok(out) => eprintln!("CHILD-OK: {}", flatcut_cli::cmd::send::summary(&out)),
+        Err(e) => eprintln!("CHILD-ERROR: {e:#}"),
+    }
+}
+
+/// Runs [`resume_at_a_terminal_child`] in `dir` with a pseudo-terminal as stdin, answers its
+/// question with `answer`, and returns what it printed on stderr.
+fn resume_at_a_terminal(dir: &Path, answer: &str) -> String {
+    use std::io::{Read, Write};
+    use std::process::Stdio;
+    use std::time::{Duration, Instant};
+    let pty = nix::pty::openpty(None, None).unwrap();
+    let mut child = child_test(
+        "stream::resume_at_a_terminal_child",
+        TERMINAL_CHILD_ENV,
+        dir,
+    )
+    .stdin(Stdio::from(pty.slave))
+    .stdout(Stdio::null())
+    .stderr(Stdio::piped())
+    .spawn()
+    .unwrap();
+    let mut stderr = child.stderr.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel::<Vec<u8>>();
+    let reader = std::thread::spawn(move || {
+        let mut buf = [0u8; 4096];
+        while let Ok(n) = stderr.read(&mut buf) {
+            if n == 0 || tx.send(buf[..n].to_vec()).is_err() {
+                break;
+            }
+        }
+    });
+    let mut said = String::new();
+    let t0 = Instant::now();
+    while !said.contains("[y/N]") && t0.elapsed() < Duration::from_secs(60) {
+        if let Ok(b) = rx.recv_timeout(Duration::from_millis(100)) {
+            said.push_str(&String::from_utf8_lossy(&b));
+        }
+    }
+    assert!(said.contains("[y/N]"), "never asked: {said}");
+    let mut master = std::fs::File::from(pty.master);
+    master.write_all(answer.as_bytes()).unwrap();
+    let status = child.wait().unwrap();
+    reader.join().unwrap();
+    said.extend(
+        rx.try_iter()
+            .map(|b| String::from_utf8_lossy(&b).into_owned()),
+    );
+    assert!(status.success(), "child failed: {said}");
+    said
+}
+
+/// Issue 14, item 2: on a terminal, a resume whose machine position is unknown says why and
+/// where the journal put the work origin, asks "Is the work origin where it was? [y/N]", and
+/// resumes on `y`; any other answer refuses with nothing moved and the tool off.
+#[test]
+fn the_terminal_prompt_resumes_on_yes_and_refuses_otherwise() {
+    let c = case(2);
+    let mut a = args(&c);
+    a.sim_error_at = Some("40".into());
+    stream_file(&c.job_path, &a).expect_err("the injected error stops the first run");
+    let said = resume_at_a_terminal(&c.root, "no\n");
+    assert!(
+        said.contains("The machine position is not known: the controller restarted")
+            && said.contains(
+                "its work origin (G54 zero) was at machine X0.000 Y0.000 Z0.000 (journal)"
+            )
+            && said.contains("Is the work origin where it was? [y/N] "),
+        "{said}"
+    );
+    assert!(
+        said.contains("CHILD-ERROR: cannot resume: the controller restarted")
+            && said.contains("the operator did not confirm that the work origin is where it was; nothing moved, tool off"),
+        "{said}"
+    );
+    assert!(!Journal::read(&c.journal).unwrap().finished);
+    let said = resume_at_a_terminal(&c.root, "y\n");
+    assert!(
+        said.contains("CHILD-OK: ")
+            && said.contains("note: resuming on the operator's word, asked at the start"),
+        "{said}"
+    );
+    assert!(Journal::read(&c.journal).unwrap().finished);
 }

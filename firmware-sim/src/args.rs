@@ -65,6 +65,10 @@ pub struct SimArgs {
     /// Hang up (close the device) when the N-th line arrives.
     #[arg(long, value_name = "N")]
     pub hangup_at: Option<u32>,
+    /// Lose one digit of the N-th received line (the first after its decimal point), so that it
+    /// still parses and moves elsewhere.
+    #[arg(long, value_name = "N")]
+    pub drop_digit_at: Option<u32>,
     /// Seed of the fault-injection generator.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -94,6 +98,7 @@ impl Default for SimArgs {
             alarm_at: None,
             reset_at: None,
             hangup_at: None,
+            drop_digit_at: None,
             seed: 0,
             no_dtr_reset: false,
         }
@@ -201,6 +206,7 @@ impl SimArgs {
                 .transpose()?,
             reset_at_line: self.reset_at,
             hangup_at_line: self.hangup_at,
+            drop_digit_at_line: self.drop_digit_at,
         })
     }
 

@@ -95,6 +95,10 @@ pub struct Faults {
     /// Close the device (port hang-up) right after the n-th line arrives (that line and the bytes already in
     /// the RX ring still run).
     pub hangup_at_line: Option<u32>,
+    /// Lose one digit of the n-th line on the link: the first digit after its first decimal point (else its
+    /// last digit), so `X156.169` arrives as `X156.69`, a line that still parses and runs elsewhere.
+    #[serde(default)]
+    pub drop_digit_at_line: Option<u32>,
 }
 
 /// Simulator configuration. `Default` is GRBL 1.1h on an Uno at 115200 baud with real-time motion.

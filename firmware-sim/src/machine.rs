@@ -1006,13 +1006,16 @@ impl Grbl {
     }
 
     fn end_of_line(&mut self) {
-        let line = std::mem::take(&mut self.line);
+        let mut line = std::mem::take(&mut self.line);
         let overflow = self.line_overflow;
         self.comment_paren = false;
         self.comment_semi = false;
         self.line_overflow = false;
         self.lines_received += 1;
         let n = self.lines_received;
+        if self.faults.drop_digit_at_line == Some(n) {
+            drop_a_digit(&mut line);
+        }
         if self.faults.reset_at_line == Some(n) {
             self.soft_reset();
             return;
@@ -1588,3 +1591,16 @@ pub fn is_realtime(b: u8) -> bool {
 
 /// The sans-IO core under its other common name.
 pub type Machine = Grbl;
+
+/// The fault `drop_digit_at_line`: removes the first digit after the line's first decimal point, else its last
+/// digit.
+fn drop_a_digit(line: &mut Vec<u8>) {
+    let after_point = line.iter().position(|&c| c == b'.').and_then(|p| {
+        line.get(p + 1)
+            .filter(|c| c.is_ascii_digit())
+            .map(|_| p + 1)
+    });
+    if let Some(k) = after_point.or_else(|| line.iter().rposition(u8::is_ascii_digit)) {
+        line.remove(k);
+    }
+}

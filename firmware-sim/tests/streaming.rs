@@ -165,6 +165,30 @@ fn fault_error_at_line() {
 }
 
 #[test]
+fn fault_drop_digit_at_line_runs_a_damaged_line_that_still_parses() {
+    let mut g = faulty(Faults {
+        drop_digit_at_line: Some(2),
+        ..Faults::default()
+    });
+    let out = feed(&mut g, "G0 X1.5\nG0 X156.169\nG0 X7\nG0 Y12\n");
+    assert_eq!(out, "ok\r\nok\r\nok\r\nok\r\n");
+    // On the 250 steps/mm grid: 156.69 runs as the nearest step, 156.692.
+    let xs: Vec<f64> = g.trace().iter().map(|s| s.to[0]).collect();
+    let want = [1.5, 156.69, 7.0, 7.0];
+    assert!(
+        xs.len() == 4 && xs.iter().zip(want).all(|(x, w)| (x - w).abs() < 0.0025),
+        "{xs:?}"
+    );
+    // Without a decimal point the last digit goes: Y12 arrives as Y1.
+    let mut g = faulty(Faults {
+        drop_digit_at_line: Some(1),
+        ..Faults::default()
+    });
+    feed(&mut g, "G0 Y12\n");
+    assert_eq!(g.trace()[0].to[1], 1.0);
+}
+
+#[test]
 fn fault_reset_at_line() {
     let mut g = faulty(Faults {
         reset_at_line: Some(2),

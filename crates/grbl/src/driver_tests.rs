@@ -511,6 +511,8 @@ fn state_with_unconfirmed(job: &Job, unconfirmed: Vec<usize>) -> JournalState {
         partial: None,
         uncertain: None,
         start: None,
+        origin: None,
+        texts: Vec::new(),
     }
 }
 

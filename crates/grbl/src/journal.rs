@@ -5,10 +5,15 @@
 //! Format (one record per line, `#` lines are comments):
 //! ```text
 //! flatcut-journal 1 <job hash, 16 hex digits> <line count>
+//! T <index> <line> <text> the text of job line <index> (file line <line>), as sent; one per line
+//!                         after the header, so that a resume of an edited file can show and
+//!                         map what changed
 //! R <run number>          a send run starts (acks and confirmations below belong to it)
 //! F <wcs> <gx> <gy> <gz> <x> <y> <z>
 //!                         where the job started: in G<wcs>, with G92 offset (gx, gy, gz), at
 //!                         work position (x, y, z) (mm); the first one counts
+//! O <x> <y> <z>           machine coordinates of the job's work origin (work zero) when it
+//!                         started; the first one counts
 //! A <index>               line <index> (0-based job line) was answered `ok`
 //! E <index> <code>        line <index> was answered `error:<code>` (it did not run)
 //! X <index>               every line acknowledged in this run with index <= <index> has executed
@@ -106,6 +111,10 @@ pub struct JournalState {
     pub uncertain: Option<(usize, usize)>,
     /// Where the job started (its frame on the controller), if recorded.
     pub start: Option<JobStart>,
+    /// Machine coordinates of the work origin when the job started, if recorded.
+    pub origin: Option<[f64; 3]>,
+    /// Per job line: (file line, text sent), if recorded (empty otherwise).
+    pub texts: Vec<(usize, String)>,
 }
 
 impl JournalState {
@@ -156,6 +165,15 @@ impl Drop for Syncer {
     }
 }
 
+/// The journal's first records: the header and every line's text.
+fn header(job: &Job) -> String {
+    let mut h = format!("{MAGIC} {VERSION} {:016x} {}\n", job.hash, job.len());
+    for (i, l) in job.lines.iter().enumerate() {
+        h.push_str(&format!("T {i} {} {}\n", l.source_line, l.text));
+    }
+    h
+}
+
 fn io_err(path: &Path) -> impl Fn(std::io::Error) -> JournalError + '_ {
     move |source| JournalError::Io {
         path: path.to_path_buf(),
@@ -175,13 +193,78 @@ impl Journal {
             dirty: false,
             syncer: None,
         };
-        j.buf.push_str(&format!(
-            "{MAGIC} {VERSION} {:016x} {}\nR 1\n",
-            job.hash,
-            job.len()
-        ));
+        j.buf.push_str(&header(job));
+        j.buf.push_str("R 1\n");
         j.sync()?;
         Ok(j)
+    }
+
+    /// Resumes an edited `job` with the journal at `path`, written for the job before the edit
+    /// (`st`, with `changes` between the two): rewrites the journal for the edited job, its
+    /// lines' records mapped onto the new lines (records of lines inside the changed stretch
+    /// are dropped: those lines are new), with a note of the change, then resumes it as
+    /// [`Journal::resume`] does. The rewrite replaces the file at once (write, then rename).
+    pub fn resume_edited(
+        path: impl AsRef<Path>,
+        job: &Job,
+        st: &JournalState,
+        changes: &crate::job_edit::JobChanges,
+    ) -> Result<(Journal, JournalState), JournalError> {
+        let path = path.as_ref();
+        let m = |i: usize| changes.map(i);
+        let mut t = header(job);
+        t.push_str("R 1\n");
+        if let Some(s) = &st.start {
+            let (g, p) = (s.g92, s.position);
+            t.push_str(&format!(
+                "F {} {} {} {} {} {} {}\n",
+                s.wcs, g[0], g[1], g[2], p[0], p[1], p[2]
+            ));
+        }
+        if let Some(o) = st.origin {
+            t.push_str(&format!("O {} {} {}\n", o[0], o[1], o[2]));
+        }
+        for n in &st.notes {
+            t.push_str(&format!("N {n}\n"));
+        }
+        let done = changes.map_done(&st.done);
+        for (i, _) in done.iter().enumerate().filter(|(_, d)| **d) {
+            t.push_str(&format!("A {i}\n"));
+        }
+        if let Some(last) = done.iter().rposition(|d| *d) {
+            t.push_str(&format!("X {last}\n"));
+        }
+        // What a run left in doubt stays in doubt, in a run of its own.
+        t.push_str("R 2\n");
+        for k in st.unconfirmed.iter().filter_map(|&i| m(i)) {
+            t.push_str(&format!("A {k}\n"));
+        }
+        if let Some((k, p)) = st.partial
+            && let Some(k) = m(k)
+        {
+            t.push_str(&format!("P {k} {} {} {}\n", p[0], p[1], p[2]));
+        }
+        if let Some((a, b)) = st.uncertain
+            && let (Some(a), Some(b)) = (m(a), m(b.min(st.lines - 1)))
+        {
+            t.push_str(&format!("Q {a} {b}\n"));
+        }
+        let summary = changes.to_string().replace('\n', " / ");
+        t.push_str(&format!(
+            "N job edited after this journal was written: {summary}\n"
+        ));
+        let tmp = path.with_extension("journal-edit.tmp");
+        let write = || -> std::io::Result<()> {
+            let mut f = File::create(&tmp)?;
+            f.write_all(t.as_bytes())?;
+            f.sync_all()?;
+            std::fs::rename(&tmp, path)
+        };
+        if let Err(e) = write() {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(io_err(path)(e));
+        }
+        Journal::resume(path, job)
     }
 
     /// Opens an existing journal to resume `job`: checks that it was written for the same job,
@@ -255,6 +338,8 @@ impl Journal {
             partial: None,
             uncertain: None,
             start: None,
+            origin: None,
+            texts: Vec::new(),
         };
         // Acks of the current run not yet confirmed, kept sorted by arrival (= index order
         // within a run except across resume gaps).
@@ -382,6 +467,27 @@ impl Journal {
                         position: [v[3], v[4], v[5]],
                     });
                 }
+                "O" => {
+                    let mut w = rest.unwrap_or("").split_whitespace();
+                    let o = [
+                        coord(n, w.next())?,
+                        coord(n, w.next())?,
+                        coord(n, w.next())?,
+                    ];
+                    st.origin.get_or_insert(o);
+                }
+                "T" => {
+                    let mut w = rest.unwrap_or("").splitn(3, ' ');
+                    let i = index(n, w.next())?;
+                    let line: usize = w
+                        .next()
+                        .and_then(|s| s.parse().ok())
+                        .ok_or_else(|| bad(n, "missing file line"))?;
+                    if i != st.texts.len() {
+                        return Err(bad(n, "line texts out of order"));
+                    }
+                    st.texts.push((line, w.next().unwrap_or("").to_string()));
+                }
                 "N" => st.notes.push(rest.unwrap_or("").to_string()),
                 "D" => st.finished = true,
                 _ => return Err(bad(n, &format!("unknown record '{kind}'"))),
@@ -447,6 +553,12 @@ impl Journal {
             "F {} {} {} {} {} {} {}\n",
             s.wcs, g[0], g[1], g[2], p[0], p[1], p[2]
         ));
+    }
+
+    /// Records the machine coordinates of the job's work origin when it started.
+    pub fn origin(&mut self, m: [f64; 3]) {
+        self.buf
+            .push_str(&format!("O {} {} {}\n", m[0], m[1], m[2]));
     }
 
     /// Records a note (single line).

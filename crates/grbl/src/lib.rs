@@ -18,15 +18,18 @@ pub mod driver;
 mod fake;
 pub mod hpgl;
 pub mod job;
+pub mod job_edit;
 pub mod journal;
 pub mod response;
 pub mod streamer;
 pub mod transport;
 
 pub use driver::{
-    CancelToken, Control, PausePolicy, Progress, SendError, SendOptions, SendReport, send_job,
+    CancelToken, Control, Operator, OriginQuestion, PausePolicy, Progress, Question, SendError,
+    SendOptions, SendReport, send_job,
 };
 pub use job::{FeedClamp, Job, JobError, JobLine, JobStart, MachineLimits, ModalState};
+pub use job_edit::JobChanges;
 pub use journal::{Journal, JournalError, JournalState};
 pub use response::{MachineState, Response, StatusReport, parse_response};
 pub use streamer::{Event, Streamer, Tag};

@@ -10,6 +10,7 @@ use flatcut_testkit::trace::{
     assert_exactly_once, assert_exactly_once_except, assert_trace_is_job, close,
 };
 use std::collections::BTreeSet;
+use std::sync::Arc;
 use std::time::Duration;
 
 /// A pen-plotter job of `n` zig-zag strokes with unique line texts, X on the step grid.
@@ -384,6 +385,22 @@ fn refuses_to_resume_another_job() {
     let sim = spawn(SimConfig::default().with_instant_motion(true));
     run(&sim, &job, &opts().with_journal(&jp)).unwrap();
     let other = Job::parse(&zigzag(11)).unwrap();
+    // The journal keeps the lines' texts: the refusal shows the change (here, lines appended).
+    let e = run(&sim, &other, &opts().with_journal(&jp).with_resume(true)).unwrap_err();
+    assert!(matches!(e, SendError::JobChanged { .. }), "{e}");
+    assert!(
+        e.to_string()
+            .contains("Refusing to resume the changed job without confirmation"),
+        "{e}"
+    );
+    // A journal that does not keep them (written before it did) is another job.
+    let text = std::fs::read_to_string(&jp).unwrap();
+    let old: String = text
+        .lines()
+        .filter(|l| !l.starts_with("T "))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(&jp, old).unwrap();
     let e = run(&sim, &other, &opts().with_journal(&jp).with_resume(true)).unwrap_err();
     assert!(e.to_string().contains("different job"), "{e}");
 }
@@ -559,6 +576,91 @@ fn resume_after_a_controller_restart_homes_or_needs_the_operators_word() {
     assert!(Journal::read(&jp).unwrap().finished);
 }
 
+/// The journal at `jp` records a tool-off sequence confirmed by `$G`.
+fn assert_tool_off_journaled(jp: &std::path::Path) {
+    let notes = Journal::read(jp).unwrap().notes;
+    assert!(
+        notes
+            .iter()
+            .any(|n| n == "tool off (M5 M9), confirmed by $G"),
+        "{notes:?}"
+    );
+}
+
+/// The questions an [`answering`] operator was asked, with their prompts.
+type Asked = std::sync::Arc<std::sync::Mutex<Vec<String>>>;
+
+/// An operator that answers every question with `yes`, noting it in `asked`.
+fn answering(asked: &Asked, yes: bool) -> flatcut_grbl::Operator {
+    let asked = asked.clone();
+    flatcut_grbl::Operator::new(move |q| {
+        asked.lock().unwrap().push(format!("{q}\n{}", q.prompt()));
+        yes
+    })
+}
+
+/// Runs `job` journaled at `jp` on a controller that rejects its 60th line (`error:33`):
+/// the stop, and what the machine ran.
+fn stopped_by_a_bad_line(job: &Job, jp: &std::path::Path) -> (SendError, Vec<TraceSegment>) {
+    let first = spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_faults(Faults {
+                error_at_line: Some((60, 33)),
+                ..Faults::default()
+            }),
+    );
+    let e = run(&first, job, &opts().with_journal(jp)).unwrap_err();
+    (e, first.stop().trace)
+}
+
+/// Issue 14, item 2: without `--origin-confirmed`, a resume on a restarted controller that does
+/// not home asks the operator (what the journal says the work origin was, why the position is
+/// unknown); "no" refuses with nothing moved and the tool off, "yes" resumes.
+#[test]
+fn resume_after_a_restart_asks_the_operator_and_moves_only_on_yes() {
+    let dir = tempfile::tempdir().unwrap();
+    let jp = dir.path().join("j.journal");
+    let job = Job::parse(&zigzag(120)).unwrap();
+    stopped_by_a_bad_line(&job, &jp);
+    assert_eq!(Journal::read(&jp).unwrap().origin, Some([0.0; 3]));
+    let asked: Asked = Arc::default();
+    let operator = |yes: bool| answering(&asked, yes);
+    let resume = opts().with_journal(&jp).with_resume(true);
+    let no = spawn(SimConfig::default().with_instant_motion(true));
+    let e = run(
+        &no,
+        &job,
+        &resume.clone().with_operator(Some(operator(false))),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e, SendError::OriginNotConfirmed { why } if why.contains("restarted")),
+        "{e}"
+    );
+    assert!(e.to_string().contains("nothing moved, tool off"), "{e}");
+    assert!(no.stop().trace.is_empty(), "nothing moved");
+    let q = asked.lock().unwrap().pop().expect("the operator was asked");
+    assert!(
+        q.contains("not known: the controller restarted")
+            && q.contains(
+                "its work origin (G54 zero) was at machine X0.000 Y0.000 Z0.000 (journal)"
+            )
+            && q.contains("The job continues with line ")
+            && q.ends_with("Is the work origin where it was? [y/N] "),
+        "{q}"
+    );
+    assert_tool_off_journaled(&jp);
+    let yes = spawn(SimConfig::default().with_instant_motion(true));
+    let rep = run(&yes, &job, &resume.with_operator(Some(operator(true)))).expect("resumed");
+    assert_notice(&rep, |n| {
+        n.starts_with("resuming on the operator's word, asked")
+    });
+    assert!(!yes.stop().trace.is_empty());
+    assert!(Journal::read(&jp).unwrap().finished);
+    assert_eq!(asked.lock().unwrap().len(), 1);
+}
+
 /// Issue 14, item 5: the soft reset at connection clears G92 and returns to G54 (GRBL 1.1h's
 /// `gc_init`); the sender reads `$#` and `$G` first and puts the operator's frame back, says
 /// so, and leaves it cleared only when told to.
@@ -657,4 +759,248 @@ fn feeds_over_the_controllers_max_rates_are_warned_before_streaming() {
     let took = x.t_end - x.t_start;
     assert!(took >= 1.2 - 1e-6, "{took} s");
     assert!(rep.estimated_time >= 1.2 + 1.5, "{}", rep.estimated_time);
+}
+
+/// Issue 14, item 4: a line damaged on the link that still parses (`--drop-digit-at`, one digit
+/// lost: `X40.8` ran as `X40.`) is caught while it runs, by the reported position leaving the
+/// job's path; the run stops (feed hold, soft reset, tool off) naming the lines, the expected
+/// and the reported position, and a resume asks where to continue. The same job undamaged
+/// runs to the end without a false alarm.
+#[test]
+fn a_line_damaged_on_the_link_stops_the_run_naming_the_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let job = Job::parse(&jobs::long_strokes(12)).unwrap();
+    let k = 6;
+    let cfg = SimConfig::default().with_time_scale(6.0);
+    // Undamaged: complete, and tells which received line is job line k.
+    let clean = spawn(cfg.clone());
+    run(&clean, &job, &opts()).expect("an undamaged run passes the position checks");
+    let trace = clean.stop().trace;
+    assert_trace_is_job(&job, &trace);
+    let n = trace
+        .iter()
+        .find(|s| s.text == job.lines[k].text)
+        .map(|s| s.line)
+        .unwrap();
+    let jp = dir.path().join("damaged.journal");
+    let sim = spawn(cfg.with_faults(Faults {
+        drop_digit_at_line: Some(n),
+        ..Faults::default()
+    }));
+    let e = match run(&sim, &job, &opts().with_journal(&jp)) {
+        Err(e) => e,
+        Ok(_) => {
+            let t: Vec<(u32, String, [f64; 3])> = sim
+                .stop()
+                .trace
+                .iter()
+                .map(|s| (s.line, s.text.clone(), s.to))
+                .collect();
+            panic!("not caught; line {n}; trace {t:?}");
+        }
+    };
+    let SendError::OffPath(off) = &e else {
+        panic!("{e}");
+    };
+    let (from, to, expected, reported) = (&off.from, &off.to, off.expected, off.reported);
+    assert!(from.index <= k && k <= to.index, "{e}");
+    let dev = ((expected[0] - reported[0]).powi(2) + (expected[1] - reported[1]).powi(2)).sqrt();
+    assert!(dev > off.tolerance && dev <= 0.81, "{e}");
+    let msg = e.to_string();
+    assert!(
+        msg.contains(&format!("lines {} to {}", from.source_line, to.source_line))
+            && msg.contains("tool off"),
+        "{msg}"
+    );
+    let report = sim.stop();
+    // Job line 6 is `G1X10.8Y40`: it ran as `G1X10.Y40`.
+    assert_eq!(job.lines[k].text, "G1X10.8Y40");
+    assert!(
+        report.trace.iter().any(|s| s.text == "G1X10.Y40"),
+        "the damaged line ran"
+    );
+    // The machine stopped where it was found: the strokes after the damaged one did not all run.
+    assert!(report.trace.len() < 12, "{}", report.trace.len());
+    assert_tool_off_journaled(&jp);
+    // Which lines ran as written is not known: a resume names them and asks.
+    let sim2 = spawn(SimConfig::default().with_instant_motion(true));
+    let o = opts()
+        .with_journal(&jp)
+        .with_resume(true)
+        .with_origin_confirmed(true);
+    let e2 = run(&sim2, &job, &o).unwrap_err();
+    assert!(
+        matches!(&e2, SendError::ResumeUncertain { from: f, reason, .. }
+            if f.index == from.index && reason.contains("left the job's path")),
+        "{e2}"
+    );
+    sim2.stop();
+}
+
+/// Issue 14, item 5: a job stopped by a bad line continues after the file is fixed: the resume
+/// shows what changed and the last line executed, refuses until the change is accepted (the
+/// operator's "yes", or the option), then sends the fixed line and what had not run, never a
+/// line that had. The stop names the last line executed exactly: the last the machine ran.
+#[test]
+fn an_edited_job_resumes_after_its_fix_only_when_accepted() {
+    let dir = tempfile::tempdir().unwrap();
+    let jp = dir.path().join("j.journal");
+    let text = zigzag(120);
+    let job = Job::parse(&text).unwrap();
+    let (e, r1) = stopped_by_a_bad_line(&job, &jp);
+    let SendError::LineRejected { error, last_done } = &e else {
+        panic!("{e}");
+    };
+    // Exactly the last line the machine ran (lines GRBL held behind the rejected one ran too).
+    let last = last_done.as_ref().expect("lines ran");
+    assert_eq!(
+        r1.last().map(|s| s.text.as_str()),
+        Some(last.text.as_str()),
+        "{e}"
+    );
+    assert!(last.index > error.line.index, "{e}");
+    assert!(
+        e.to_string()
+            .contains(&format!("last line known executed: {last}")),
+        "{e}"
+    );
+    // The fix: the rejected line written another way (the same move).
+    let bad = error.line.source_line;
+    let fixed: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i + 1 == bad {
+                format!("{}\n", l.replacen(" Y", "0 Y", 1))
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    let job2 = Job::parse(&fixed).unwrap();
+    assert_ne!(job2.lines[error.line.index].text, error.line.text);
+    let asked: Asked = Arc::default();
+    let operator = |yes: bool| answering(&asked, yes);
+    let resume = opts()
+        .with_journal(&jp)
+        .with_resume(true)
+        .with_origin_confirmed(true);
+    // Refused, nothing sent: without an operator, and when the operator says no.
+    let sim = spawn(SimConfig::default().with_instant_motion(true));
+    for o in [None, Some(operator(false))] {
+        let e = run(&sim, &job2, &resume.clone().with_operator(o)).unwrap_err();
+        assert!(matches!(e, SendError::JobChanged { .. }), "{e}");
+        let msg = e.to_string();
+        for want in [
+            format!("Changed: line {bad} of the journal's job became line {bad} of this file:"),
+            format!("  - {bad}: {}", error.line.text),
+            format!("  + {bad}: {}", job2.lines[error.line.index].text),
+            format!(
+                "Last line executed: line {} ({})",
+                last.source_line, last.text
+            ),
+            format!("The resume continues at line {bad} "),
+        ] {
+            assert!(msg.contains(&want), "{want:?} not in {msg}");
+        }
+    }
+    let q = asked.lock().unwrap().pop().expect("the operator was asked");
+    assert!(q.ends_with("Resume the changed job? [y/N] "), "{q}");
+    assert_eq!(sim.stop().stats.lines_received, 0, "nothing was sent");
+    // Accepted by the operator: the fixed line and the lines that had not run are sent.
+    let sim = spawn(SimConfig::default().with_instant_motion(true));
+    let st = Journal::read(&jp).unwrap();
+    let rep = run(
+        &sim,
+        &job2,
+        &resume.clone().with_operator(Some(operator(true))),
+    )
+    .unwrap();
+    assert_eq!(rep.previously_done, st.done_count());
+    assert_notice(&rep, |n| n.starts_with("resumed an edited job."));
+    let r2 = sim.stop().trace;
+    assert!(
+        r2.iter()
+            .any(|s| s.text == job2.lines[error.line.index].text)
+    );
+    assert_exactly_once(&job2, &[&r1, &r2]);
+    assert!(Journal::read(&jp).unwrap().finished);
+}
+
+/// Issue 14, item 5: an edit of a line that already ran cannot be resumed by guessing: the
+/// resume asks for the line to continue from, and runs from it when told.
+#[test]
+fn an_edit_where_the_job_already_ran_needs_the_line_to_continue_from() {
+    let dir = tempfile::tempdir().unwrap();
+    let jp = dir.path().join("j.journal");
+    let text = zigzag(80);
+    let job = Job::parse(&text).unwrap();
+    stopped_by_a_bad_line(&job, &jp);
+    // Line 10 of the file (long done) is changed.
+    let edited: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i + 1 == 10 {
+                format!("{l} S0\n")
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    let job2 = Job::parse(&edited).unwrap();
+    let resume = opts()
+        .with_journal(&jp)
+        .with_resume(true)
+        .with_origin_confirmed(true)
+        .with_accept_changed_job(true);
+    let sim = spawn(SimConfig::default().with_instant_motion(true));
+    let e = run(&sim, &job2, &resume).unwrap_err();
+    assert!(matches!(e, SendError::JobChangedWhereItRan { .. }), "{e}");
+    assert!(
+        e.to_string()
+            .contains("executed line(s) were changed (from line 10)"),
+        "{e}"
+    );
+    let from = job2.lines.iter().position(|l| l.source_line == 70).unwrap();
+    let rep = run(&sim, &job2, &resume.with_resume_from(Some(from))).unwrap();
+    assert_eq!(rep.previously_done, from);
+    let r2 = sim.stop().trace;
+    assert!(r2.iter().any(|s| s.text == job2.lines[from].text));
+    assert!(!r2.iter().any(|s| s.text == job2.lines[from - 1].text));
+    assert!(Journal::read(&jp).unwrap().finished);
+}
+
+/// Issue 14, item 4: arcs run as GRBL's chords, which the sender's model reproduces, so status
+/// reports taken mid-arc never stop a correct run: full circles and half circles, both ways,
+/// with motion in time.
+#[test]
+fn arcs_pass_the_position_checks_without_a_false_alarm() {
+    let mut text = String::from("G21 G90\nG0 X10 Y0\nG1 F2400\n");
+    for k in 0..4 {
+        let r = 10.0 + 4.0 * f64::from(k);
+        text.push_str(&format!(
+            "G1 X{r} Y0\nG2 X-{r} Y0 I-{r} J0\nG2 X{r} Y0 I{r} J0\n"
+        ));
+        text.push_str(&format!("G3 X{r} Y0 I-{r} J0\n"));
+    }
+    let job = Job::parse(&text).unwrap();
+    let sim = spawn(
+        SimConfig::default()
+            .with_time_scale(8.0)
+            .with_setting(110, 3000.0)
+            .with_setting(111, 3000.0),
+    );
+    let mut reports = 0;
+    let rep =
+        flatcut_testkit::pty::send_with(sim.path(), &job, &opts(), &CancelToken::new(), &mut |p| {
+            if p.state == Some(flatcut_grbl::MachineState::Run) {
+                reports += 1;
+            }
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(rep.lines_sent, job.len());
+    // Every move ran: the rapid, three of the four G1s (the first is already there) and 12 arcs.
+    assert_eq!(sim.stop().trace.len(), 16);
+    assert!(reports > 10, "status reports while moving: {reports}");
 }

@@ -54,3 +54,15 @@ pub fn pattern_job(pieces: usize) -> String {
     s.push_str("G0 X0 Y0\nM2\n");
     s
 }
+
+/// Long strokes along Y, each ending at an X with a first decimal digit: losing that digit on
+/// the link moves a stroke's end by 0.8 mm across its direction, a line that still parses and
+/// runs elsewhere.
+pub fn long_strokes(n: usize) -> String {
+    let mut s = String::from("G21 G90\nG1 F1200\n");
+    for i in 0..n {
+        let y = if i % 2 == 0 { 40 } else { 0 };
+        s.push_str(&format!("G1 X{:.1} Y{y}\n", 2.8 + 2.0 * i as f64));
+    }
+    s
+}

@@ -11,13 +11,15 @@ use crate::transport::Transport;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-/// G28/G30/G53 and `$` motion (homing, jog) go to places this model does not track.
+/// G28/G30/G53, probing (G38.x stops where the probe touches) and `$` motion (homing, jog) go
+/// to places this model does not track; so does a tool length offset (G43.1), which moves the
+/// reported work position.
 pub(super) fn job_uses_unknown_moves(job: &Job) -> bool {
     job.lines.iter().any(|l| {
         l.kind != LineKind::Gcode
-            || l.text.contains("G28")
-            || l.text.contains("G30")
-            || l.text.contains("G53")
+            || ["G28", "G30", "G53", "G38", "G43"]
+                .iter()
+                .any(|g| l.text.contains(g))
     })
 }
 

@@ -1,6 +1,7 @@
 //! Why a send stopped: [`SendError`], with the line references its messages name.
 
 use crate::codes::{alarm_is_critical, describe_alarm, error_meaning};
+use crate::job_edit::JobChanges;
 use crate::journal::JournalError;
 use crate::transport::TransportError;
 use std::fmt;
@@ -24,10 +25,47 @@ impl fmt::Display for LineRef {
     }
 }
 
+fn fmt_pos(p: [f64; 3]) -> String {
+    format!("X{:.3} Y{:.3} Z{:.3}", p[0], p[1], p[2])
+}
+
 fn opt_line(l: &Option<LineRef>) -> String {
     match l {
         Some(l) => l.to_string(),
         None => "none".into(),
+    }
+}
+
+/// Where the machine was found off the job's path during a run (see [`SendError::OffPath`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OffPath {
+    /// First line of the stretch the machine could have been on.
+    pub from: LineRef,
+    /// Last line of that stretch.
+    pub to: LineRef,
+    /// Nearest point of that stretch, work coordinates (mm).
+    pub expected: [f64; 3],
+    /// Reported work position, mm.
+    pub reported: [f64; 3],
+    /// Tolerance, mm.
+    pub tolerance: f64,
+    /// Last line known executed.
+    pub last_done: Option<LineRef>,
+}
+
+impl fmt::Display for OffPath {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "the machine left the job's path while running lines {} to {}: it reported work position {} where the nearest point of those lines is {} ({:.3} mm away, more than the tolerance of {:.3} mm); a line was probably damaged on the link and ran elsewhere. Stopped: feed hold, soft reset, tool off. Last line known executed: {}",
+            self.from.source_line,
+            self.to.source_line,
+            fmt_pos(self.reported),
+            fmt_pos(self.expected),
+            super::tracker::dist(self.reported, self.expected),
+            self.tolerance,
+            opt_line(&self.last_done)
+        )
     }
 }
 
@@ -199,6 +237,10 @@ pub enum SendError {
         /// Reported work position, mm.
         actual: [f64; 3],
     },
+    /// During the run the machine was found off the job's path: a line damaged on the link
+    /// (GRBL's link has no checksum) that still parsed ran somewhere else.
+    #[error("{0}")]
+    OffPath(Box<OffPath>),
     /// The machine stayed in a state this sender did not ask for (a hold nobody released, check
     /// mode): lines it acknowledges there are not being cut.
     #[error(
@@ -235,6 +277,28 @@ pub enum SendError {
     PositionUnknown {
         /// Why the position is lost.
         why: String,
+    },
+    /// The controller restarted or lost its position, it does not home, and the operator,
+    /// asked, did not confirm that the work origin is where it was. Nothing moved.
+    #[error(
+        "cannot resume: {why}, and the operator did not confirm that the work origin is where it was; nothing moved, tool off"
+    )]
+    OriginNotConfirmed {
+        /// Why the position is lost.
+        why: String,
+    },
+    /// The job file was edited after its journal was written, and nobody accepted resuming it.
+    #[error("{changes}\nRefusing to resume the changed job without confirmation; nothing was sent")]
+    JobChanged {
+        /// What changed.
+        changes: Box<JobChanges>,
+    },
+    /// The job file was edited where the journal's job had already run (or had lines in
+    /// doubt): only the operator can say which line to continue from.
+    #[error("{changes}\nRefusing to guess where to continue the changed job; nothing was sent")]
+    JobChangedWhereItRan {
+        /// What changed.
+        changes: Box<JobChanges>,
     },
     /// A stop whose tool-off sequence could not be confirmed.
     #[error(

@@ -12,10 +12,11 @@
 //! One idea per module: [`options`], [`control`] and [`progress`] are the API around a send;
 //! `session` is the connection, `handshake` connects, `resume` settles what an interrupted run
 //! left in doubt, `check` runs the checks before motion, `stream` streams, `tracker` keeps the
-//! books of what ran, `stops` stops a run, and [`send_job`] reads as handshake → check → stream
+//! books of what ran, `watch` checks the reported position against the job's path, `stops` stops a run, and [`send_job`] reads as handshake → check → stream
 //! → finish.
 
 mod check;
+pub mod confirm;
 pub mod control;
 mod error;
 mod frame;
@@ -27,13 +28,16 @@ mod session;
 mod stops;
 mod stream;
 mod tracker;
+mod watch;
 
+pub use confirm::{Operator, OriginQuestion, Question};
 pub use control::{CancelToken, Control};
-pub use error::{LineError, LineRef, SendError};
+pub use error::{LineError, LineRef, OffPath, SendError};
 pub use options::{PausePolicy, SendOptions};
 pub use progress::{Phase, Progress, SendReport};
 
 use crate::job::{Job, JobStart, MachineLimits};
+use crate::job_edit::JobChanges;
 use crate::journal::{Journal, JournalState};
 use check::{check_pass, check_travel};
 use session::Session;
@@ -85,7 +89,7 @@ pub fn send_job(
 ) -> Result<SendReport, SendError> {
     let t0 = Instant::now();
     // Journal first: refuse a wrong job before touching the machine.
-    let (mut journal, prior) = open_journal(job, opts)?;
+    let (mut journal, prior, edited) = open_journal(job, opts)?;
     let mut sess = Session::new(transport);
     let mut progress = Progress::start(job);
     observer(&progress);
@@ -107,12 +111,20 @@ pub fn send_job(
             };
             if let Some(j) = journal.as_mut() {
                 j.start(&s);
+                let o = link.frame.origin_of(s.wcs);
+                j.origin([o[0] + s.g92[0], o[1] + s.g92[1], o[2] + s.g92[2]]);
             }
             s
         }
     };
     let job = &job.rebased(&start, &limits);
     let mut notices: Vec<String> = link.frame_notice.iter().cloned().collect();
+    notices.extend(edited.map(|c| {
+        format!(
+            "resumed an edited job. {}",
+            c.to_string().replace('\n', " ")
+        )
+    }));
     // GRBL clamps a feed over an axis's max rate without a word: say so before anything runs.
     notices.extend(job.feed_clamps(&limits).iter().map(ToString::to_string));
     let plan = resume::settle(&mut sess, job, opts, prior, &link, &mut journal)?;
@@ -167,21 +179,47 @@ pub fn send_job(
     })
 }
 
-/// Opens the journal the options ask for: a new one, or the interrupted run's (which must
-/// belong to this job) together with what it says.
-fn open_journal(
-    job: &Job,
-    opts: &SendOptions,
-) -> Result<(Option<Journal>, Option<JournalState>), SendError> {
-    match (&opts.journal, opts.resume) {
-        (Some(p), true) => {
-            let (j, st) = Journal::resume(p, job)?;
-            Ok((Some(j), Some(st)))
-        }
-        (Some(p), false) => Ok((Some(Journal::create(p, job)?), None)),
-        (None, true) => Err(SendError::NoJournal),
-        (None, false) => Ok((None, None)),
+/// The journal of a send, what it said before this run, and what changed in the job since
+/// it was written (an edited job).
+type Opened = (
+    Option<Journal>,
+    Option<JournalState>,
+    Option<Box<JobChanges>>,
+);
+
+/// Opens the journal the options ask for: a new one, or the interrupted run's together with
+/// what it says. The interrupted run's journal must belong to this job, or to this file before
+/// an edit that the options or the operator accept (see [`JobChanges`]).
+fn open_journal(job: &Job, opts: &SendOptions) -> Result<Opened, SendError> {
+    let p = match (&opts.journal, opts.resume) {
+        (Some(p), true) => p,
+        (Some(p), false) => return Ok((Some(Journal::create(p, job)?), None, None)),
+        (None, true) => return Err(SendError::NoJournal),
+        (None, false) => return Ok((None, None, None)),
+    };
+    let st = Journal::read(p)?;
+    let changes = (st.hash != job.hash || st.lines != job.len())
+        .then(|| JobChanges::between(&st, job))
+        .flatten();
+    let Some(changes) = changes else {
+        // The same job, or a journal that does not record its lines (refused as another job).
+        let (j, st) = Journal::resume(p, job)?;
+        return Ok((Some(j), Some(st), None));
+    };
+    let changes = Box::new(changes);
+    if changes.needs_resume_line() && opts.resume_from.is_none() {
+        return Err(SendError::JobChangedWhereItRan { changes });
     }
+    let asked = || {
+        opts.operator
+            .as_ref()
+            .is_some_and(|o| o.confirms(&Question::ChangedJob(changes.clone())))
+    };
+    if !opts.accept_changed_job && !asked() {
+        return Err(SendError::JobChanged { changes });
+    }
+    let (j, st) = Journal::resume_edited(p, job, &st, &changes)?;
+    Ok((Some(j), Some(st), Some(changes)))
 }
 
 #[cfg(test)]

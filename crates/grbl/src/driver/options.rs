@@ -1,5 +1,6 @@
 //! [`SendOptions`]: timeouts, policies and resume choices of one send.
 
+use super::confirm::Operator;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -50,6 +51,15 @@ pub struct SendOptions {
     /// Do not put back the work frame (G55..G59, G92, G43.1) that the soft reset at connection
     /// clears: the job runs in G54 without G92.
     pub discard_offsets: bool,
+    /// Stop when a status report places the machine farther than this (mm) from the stretch of
+    /// the job's path it can be on (see `watch`); `None`: do not watch.
+    pub position_tolerance: Option<f64>,
+    /// Who answers what only the operator can (a terminal prompt); `None`: nobody, so the
+    /// send refuses where it would have to ask.
+    pub operator: Option<Operator>,
+    /// With `resume`: resume a job file edited after its journal was written (the change is
+    /// shown in the report); otherwise only the operator's "yes" allows it.
+    pub accept_changed_job: bool,
 }
 
 /// What to do when the job pauses itself with `M0` (GRBL 1.1h ignores `M1`, and `M2`/`M30` end
@@ -80,6 +90,11 @@ impl SendOptions {
     /// Default observer interval: 20 updates a second is smooth for a progress bar.
     pub const DEFAULT_PROGRESS_INTERVAL: Duration = Duration::from_millis(50);
 
+    /// Default position tolerance while running, mm: 12.5 steps at GRBL's default 250 steps/mm,
+    /// far above a status report's rounding and a step's granularity, far below a damaged
+    /// digit's error.
+    pub const DEFAULT_POSITION_TOLERANCE: f64 = 0.05;
+
     /// Sets [`SendOptions::resume_from`] (and `resume`).
     pub fn with_resume_from(mut self, index: Option<usize>) -> Self {
         self.resume_from = index;
@@ -104,6 +119,24 @@ impl SendOptions {
     /// Sets [`SendOptions::force_laser`].
     pub fn with_force_laser(mut self, on: bool) -> Self {
         self.force_laser = on;
+        self
+    }
+
+    /// Sets [`SendOptions::position_tolerance`].
+    pub fn with_position_tolerance(mut self, mm: Option<f64>) -> Self {
+        self.position_tolerance = mm;
+        self
+    }
+
+    /// Sets [`SendOptions::operator`].
+    pub fn with_operator(mut self, o: Option<Operator>) -> Self {
+        self.operator = o;
+        self
+    }
+
+    /// Sets [`SendOptions::accept_changed_job`].
+    pub fn with_accept_changed_job(mut self, on: bool) -> Self {
+        self.accept_changed_job = on;
         self
     }
 
@@ -209,6 +242,9 @@ impl Default for SendOptions {
             origin_confirmed: false,
             force_laser: false,
             discard_offsets: false,
+            position_tolerance: Some(SendOptions::DEFAULT_POSITION_TOLERANCE),
+            operator: None,
+            accept_changed_job: false,
         }
     }
 }

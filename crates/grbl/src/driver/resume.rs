@@ -2,9 +2,11 @@
 //! on the job's path.
 
 use super::SendOptions;
+use super::confirm::{OriginQuestion, Question};
 use super::error::SendError;
 use super::handshake::Link;
 use super::session::Session;
+use super::stops::{OFF_PATH_NOTE, with_tool_off};
 use super::tracker::{dist, line_ref, seg_dist};
 use crate::job::Job;
 use crate::journal::{Journal, JournalState};
@@ -69,7 +71,14 @@ pub(super) fn settle<T: Transport + ?Sized>(
         }
         st.partial = r.partial;
     }
-    let notice = reestablish_position(sess, &st, link, opts)?;
+    let notice = match reestablish_position(sess, job, &st, link, opts) {
+        Ok(n) => n,
+        // Nothing moved; the tool is switched off all the same, as on every stop.
+        Err(e @ (SendError::PositionUnknown { .. } | SendError::OriginNotConfirmed { .. })) => {
+            return Err(with_tool_off(sess, journal, e));
+        }
+        Err(e) => return Err(e),
+    };
     if let Some((k, _)) = st.partial
         && job.lines[k].before.incremental
     {
@@ -123,6 +132,7 @@ fn position_lost(st: &JournalState, link: &Link) -> Option<String> {
 /// where it was. Returns what was done and why, for the report.
 fn reestablish_position<T: Transport + ?Sized>(
     sess: &mut Session<'_, T>,
+    job: &Job,
     st: &JournalState,
     link: &Link,
     opts: &SendOptions,
@@ -144,7 +154,35 @@ fn reestablish_position<T: Transport + ?Sized>(
             "resuming on the operator's word that the work origin is where it was: {why}"
         )));
     }
-    Err(SendError::PositionUnknown { why })
+    let Some(operator) = &opts.operator else {
+        return Err(SendError::PositionUnknown { why });
+    };
+    let wcs = st.start.map_or(link.frame.wcs, |s| s.wcs);
+    let (o, g92) = (link.frame.origin_of(wcs), link.frame.g92);
+    let q = Question::Origin(OriginQuestion {
+        why: why.clone(),
+        wcs,
+        journal_origin: st.origin,
+        controller_origin: [o[0] + g92[0], o[1] + g92[1], o[2] + g92[2]],
+        resume_at: st.done.iter().position(|d| !d).map(|i| {
+            let at = match st.partial {
+                Some((k, p)) if k == i => p,
+                _ => job.start_of(i),
+            };
+            let g = job.lines[i].before.g92;
+            (
+                job.lines[i].source_line,
+                [at[0] - g[0], at[1] - g[1], at[2] - g[2]],
+            )
+        }),
+    });
+    if operator.confirms(&q) {
+        Ok(Some(format!(
+            "resuming on the operator's word, asked at the start, that the work origin is where it was: {why}"
+        )))
+    } else {
+        Err(SendError::OriginNotConfirmed { why })
+    }
 }
 
 /// How a resume settles the lines an interrupted run left in doubt.
@@ -269,11 +307,14 @@ pub(super) fn resolve_resume(
         reason,
     };
     if let Some((a, b)) = st.uncertain {
-        return Err(doubt(
-            a,
-            b,
-            "the controller was reset while moving (ALARM:3), so the position it reported is not where the tool is".into(),
-        ));
+        let off_path = st.notes.iter().rev().find(|n| n.starts_with(OFF_PATH_NOTE));
+        let reason = match off_path {
+            Some(n) => format!(
+                "the interrupted run stopped because {n}: a line damaged on the link ran elsewhere, and which of these lines ran as written is not known"
+            ),
+            None => "the controller was reset while moving (ALARM:3), so the position it reported is not where the tool is".into(),
+        };
+        return Err(doubt(a, b, reason));
     }
     let (Some(&first), Some(&last_acked)) = (st.unconfirmed.first(), st.unconfirmed.last()) else {
         return Ok(None);

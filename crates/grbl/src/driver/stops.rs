@@ -3,7 +3,8 @@
 
 use super::error::SendError;
 use super::session::{Session, transport};
-use super::tracker::Tracker;
+use super::tracker::{Tracker, line_ref};
+use super::watch::Deviation;
 use super::{ABORT_CYCLE_ALARM, READ_SLICE, SendOptions};
 use crate::codes::{alarm_is_critical, alarm_meaning};
 use crate::job::Job;
@@ -231,7 +232,20 @@ pub(super) fn stop_with_reset<T: Transport + ?Sized>(
     tracker: &mut Tracker,
     journal: &mut Option<Journal>,
 ) -> Result<(), SendError> {
-    // Feed hold first so the reset does not lose position (reset in motion = ALARM:3).
+    hold_still(sess, job, tracker)?;
+    if let (Some(p), Some(upto)) = (sess.work_position(), tracker.last_sent) {
+        tracker.confirm_by_position(job, p, upto, journal);
+    }
+    reset_held(sess, journal)
+}
+
+/// Feed hold (so that a reset does not lose the position: a reset in motion is `ALARM:3`),
+/// then waits until the machine stands.
+fn hold_still<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    job: &Job,
+    tracker: &mut Tracker,
+) -> Result<(), SendError> {
     sess.s.set_feeding(false);
     sess.s.clear_queue();
     sess.s.realtime(b'!');
@@ -255,9 +269,14 @@ pub(super) fn stop_with_reset<T: Transport + ?Sized>(
     if let Some(Tag::Job(i)) = sess.s.last_sent() {
         tracker.last_sent = Some(tracker.last_sent.map_or(i, |l| l.max(i)));
     }
-    if let (Some(p), Some(upto)) = (sess.work_position(), tracker.last_sent) {
-        tracker.confirm_by_position(job, p, upto, journal);
-    }
+    Ok(())
+}
+
+/// The soft reset after a completed hold: empties GRBL's buffers, spindle and coolant off.
+fn reset_held<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    journal: &mut Option<Journal>,
+) -> Result<(), SendError> {
     sess.s.forget_in_flight();
     sess.s.realtime(0x18);
     let _ = sess.wait_banner(Duration::from_secs(3));
@@ -267,6 +286,46 @@ pub(super) fn stop_with_reset<T: Transport + ?Sized>(
     }
     Ok(())
 }
+
+/// Stops because the machine was found off the job's path (a line damaged on the link ran
+/// elsewhere): feed hold, soft reset, tool off. Its position says nothing about which lines of
+/// the stretch ran as written, so the journal marks them in doubt and a resume asks for the
+/// line to continue from.
+pub(super) fn stop_off_path<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    job: &Job,
+    tracker: &mut Tracker,
+    journal: &mut Option<Journal>,
+    off: Deviation,
+    tolerance: f64,
+) -> Result<SendError, SendError> {
+    hold_still(sess, job, tracker)?;
+    let to = tracker.last_sent.unwrap_or(off.to).max(off.to);
+    if let Some(j) = journal.as_mut() {
+        j.note(&format!(
+            "{OFF_PATH_NOTE} while running lines {} to {}: reported {:?}, expected {:?}",
+            job.lines[off.from].source_line,
+            job.lines[off.to].source_line,
+            off.reported,
+            off.expected
+        ));
+        j.uncertain(off.from, to);
+    }
+    reset_held(sess, journal)?;
+    let err = SendError::OffPath(Box::new(super::error::OffPath {
+        from: line_ref(job, off.from),
+        to: line_ref(job, off.to),
+        expected: off.expected,
+        reported: off.reported,
+        tolerance,
+        last_done: tracker.last_done(job),
+    }));
+    Ok(with_tool_off(sess, journal, err))
+}
+
+/// How the journal's note of an off-path stop begins (a resume names it as the reason the
+/// lines are in doubt).
+pub(super) const OFF_PATH_NOTE: &str = "the machine left the job's path";
 
 /// The operator's abort: feed hold, soft reset, tool off (confirmed by `$G`).
 pub(super) fn abort<T: Transport + ?Sized>(

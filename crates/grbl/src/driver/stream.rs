@@ -7,8 +7,11 @@ use super::check::job_uses_unknown_moves;
 use super::error::{LineError, SendError};
 use super::progress::{Phase, Progress, eta};
 use super::session::{Session, stop_noted, transport};
-use super::stops::{abort, on_alarm, on_reset, stop_unexpected, stop_with_reset, with_tool_off};
+use super::stops::{
+    abort, on_alarm, on_reset, stop_off_path, stop_unexpected, stop_with_reset, with_tool_off,
+};
 use super::tracker::{Tracker, add, dist, line_ref};
+use super::watch::{off_path, state_on_path};
 use super::{
     CancelToken, JOURNAL_FSYNC_INTERVAL, POSITION_TOL_MM, PausePolicy, READ_SLICE, SendOptions,
 };
@@ -112,6 +115,9 @@ pub(super) struct Stream<'s, 'a, T: Transport + ?Sized> {
     synced: bool,
     /// The job line whose `M0` holds the machine, and whether it was resumed already.
     paused: Option<(usize, bool)>,
+    /// The position tolerance (mm) when the reported position is checked against the job's
+    /// path; `None` when it is not (not asked, or a job moving where this model cannot follow).
+    watch_tol: Option<f64>,
 }
 
 /// Tag of the `G4 P0.01` the sender appends to find out that the planner is empty: GRBL answers
@@ -129,6 +135,12 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
         preamble: &'s [String],
     ) -> Self {
         let now = Instant::now();
+        // Tolerance: the operator's, plus a step on the coarsest axis and the report's rounding
+        // (the machine steps along a staircase around the programmed line).
+        let watch_tol = opts
+            .position_tolerance
+            .filter(|_| !job_uses_unknown_moves(job))
+            .map(|t| t + 2.0 * tracker.pos_tol);
         Stream {
             bytes_before: sess.s.bytes_written(),
             sess,
@@ -151,6 +163,7 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
             last_fsync: now,
             synced: false,
             paused: None,
+            watch_tol,
         }
     }
 
@@ -290,11 +303,35 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
                     }
                     progress.state = Some(st.state);
                     progress.position = self.sess.work_position();
+                    self.watch(st.state)?;
                 }
                 _ => {}
             }
         }
         Ok(acked_any)
+    }
+
+    /// Checks a status report's position against the stretch of the job's path the machine can
+    /// be on, and stops the run when it is off it (see `watch`). Not after a rejected line: the
+    /// lines GRBL runs behind it start from where the rejected one did not go.
+    fn watch(&mut self, state: MachineState) -> Result<(), SendError> {
+        let Some(tol) = self.watch_tol else {
+            return Ok(());
+        };
+        if self.failure.is_some() || !state_on_path(state) {
+            return Ok(());
+        }
+        let Some(p) = self.sess.work_position() else {
+            return Ok(());
+        };
+        let preamble_first = !self.preamble.is_empty();
+        match off_path(self.job, self.tracker, p, tol, preamble_first) {
+            None => Ok(()),
+            Some(off) => {
+                let err = stop_off_path(self.sess, self.job, self.tracker, self.journal, off, tol);
+                Err(err?)
+            }
+        }
     }
 
     /// The job line whose `M0` holds the machine: the oldest line in flight (GRBL keeps an

@@ -45,6 +45,12 @@ pub(super) struct Tracker {
     pub(super) time_done_run: f64,
     /// Lines done before this run (resume).
     pub(super) previously_done: usize,
+    /// Every line before this index is done (see [`Tracker::first_open`]).
+    open_from: usize,
+    /// Shortest motion certain to take a step on some axis, mm: GRBL drops a move of zero
+    /// steps without using a planner block, so shorter lines must not count towards the
+    /// planner's capacity.
+    min_motion: f64,
 }
 
 impl Tracker {
@@ -72,6 +78,8 @@ impl Tracker {
             time_total: job.total_time,
             time_done_run: 0.0,
             previously_done: 0,
+            open_from: 0,
+            min_motion: min_motion(&sess.settings),
         };
         for i in (0..n).filter(|&i| t.prior_done[i]) {
             t.done[i] = true;
@@ -122,7 +130,7 @@ impl Tracker {
             self.acked_count += 1;
         }
         self.acked[i] = true;
-        let is_motion = job.lines[i].moves && job.lines[i].length > 0.0;
+        let is_motion = job.lines[i].moves && job.lines[i].length >= self.min_motion;
         if is_motion {
             for m in self.motion_after.iter_mut() {
                 *m += 1;
@@ -178,12 +186,31 @@ impl Tracker {
         }
     }
 
+    /// The first line not known executed (the job's length when all are).
+    pub(super) fn first_open(&mut self) -> usize {
+        while self.done.get(self.open_from).is_some_and(|d| *d) {
+            self.open_from += 1;
+        }
+        self.open_from
+    }
+
     pub(super) fn last_done(&self, job: &Job) -> Option<LineRef> {
         // The last line executed, exactly: after a rejected line, the lines GRBL already held
         // behind it ran too (the rejected one did not; its error names it).
         let i = self.done.iter().rposition(|d| *d)?;
         Some(line_ref(job, i))
     }
+}
+
+/// A line at least this long moves some axis by at least one step (its longest component is at
+/// least its length / √3), so GRBL plans it; `$100-$102` (default 250 steps/mm).
+fn min_motion(settings: &std::collections::BTreeMap<u16, f64>) -> f64 {
+    let coarsest_step = (100..=102)
+        .map(|n| settings.get(&n).copied().unwrap_or(250.0))
+        .filter(|v| *v > 0.0 && v.is_finite())
+        .map(|v| 1.0 / v)
+        .fold(0.0, f64::max);
+    3f64.sqrt() * coarsest_step
 }
 
 pub(super) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -195,6 +222,11 @@ pub(super) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 pub(super) fn seg_dist(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
+    dist(p, nearest_on_segment(p, a, b))
+}
+
+/// The point of segment `a`–`b` nearest to `p`.
+pub(super) fn nearest_on_segment(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
     let ap = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
     let l2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
@@ -203,5 +235,5 @@ pub(super) fn seg_dist(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
     } else {
         0.0
     };
-    dist(p, [a[0] + ab[0] * t, a[1] + ab[1] * t, a[2] + ab[2] * t])
+    [a[0] + ab[0] * t, a[1] + ab[1] * t, a[2] + ab[2] * t]
 }

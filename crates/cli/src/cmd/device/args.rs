@@ -41,6 +41,11 @@ pub struct StreamArgs {
     /// (one that homes, `$22=1`, is homed with `$H` instead).
     #[arg(long)]
     pub origin_confirmed: bool,
+    /// With --resume: resume a job file edited after its journal was written (a bad line fixed);
+    /// the change is shown first. Without it the resume asks on a terminal, and refuses without
+    /// one. Lines already executed never run again unless --resume-from says so.
+    #[arg(long)]
+    pub accept_changed_job: bool,
     /// When the job pauses itself (M0): abort, resume, or wait for the operator. Default: ask
     /// on a terminal, abort without one.
     #[arg(long, value_enum, value_name = "POLICY")]
@@ -50,6 +55,10 @@ pub struct StreamArgs {
     /// be read.
     #[arg(long)]
     pub discard_offsets: bool,
+    /// Stop the job when a status report places the machine farther than this from the stretch
+    /// of the job's path it can be on (a line damaged on the link runs elsewhere), mm.
+    #[arg(long, value_name = "MM", default_value_t = flatcut_grbl::SendOptions::DEFAULT_POSITION_TOLERANCE, value_parser = crate::values::positive_mm)]
+    pub position_tolerance: f64,
     /// Stream a laser job (its header says it needs `$32=1`) to a controller with `$32=0`.
     #[arg(skip)]
     pub force_laser: bool,
@@ -84,6 +93,9 @@ pub struct StreamArgs {
     /// Embedded simulator raises `ALARM:CODE` when its N-th line executes (fault injection).
     #[arg(long, hide = true, value_name = "N[:CODE]")]
     pub sim_alarm_at: Option<String>,
+    /// Embedded simulator loses a digit of its N-th line (fault injection).
+    #[arg(long, hide = true, value_name = "N")]
+    pub sim_drop_digit_at: Option<u32>,
     /// Embedded simulator hangs up when its N-th line arrives (fault injection).
     #[arg(long, hide = true, value_name = "N")]
     pub sim_hangup_at: Option<u32>,
@@ -102,7 +114,9 @@ impl Default for StreamArgs {
             resume: false,
             resume_from: None,
             origin_confirmed: false,
+            accept_changed_job: false,
             discard_offsets: false,
+            position_tolerance: flatcut_grbl::SendOptions::DEFAULT_POSITION_TOLERANCE,
             on_pause: None,
             force_laser: false,
             journal: None,
@@ -117,6 +131,7 @@ impl Default for StreamArgs {
             sim_alarm_at: None,
             sim_hangup_at: None,
             sim_reset_at: None,
+            sim_drop_digit_at: None,
         }
     }
 }
@@ -153,6 +168,11 @@ impl StreamArgs {
     /// Sets [`StreamArgs::origin_confirmed`].
     pub fn with_origin_confirmed(mut self, on: bool) -> Self {
         self.origin_confirmed = on;
+        self
+    }
+    /// Sets [`StreamArgs::accept_changed_job`].
+    pub fn with_accept_changed_job(mut self, on: bool) -> Self {
+        self.accept_changed_job = on;
         self
     }
     /// Sets [`StreamArgs::unlock`].

@@ -74,7 +74,7 @@ pub(super) fn run_send(
             plain_interval: PLAIN_PROGRESS_INTERVAL,
             notices: !args.quiet,
             eta_scale,
-            prompting,
+            prompting: prompting.clone(),
         },
         Box::new(std::io::stderr()),
     );
@@ -88,6 +88,11 @@ pub(super) fn run_send(
         }
         printer.show(p);
     };
+    // Asked when the sender needs the operator's word (the flag that gives it was absent).
+    let opts =
+        &opts
+            .clone()
+            .with_operator(super::ask::terminal_operator(&bar, interactive, &prompting));
     let result = flatcut_grbl::send_job(transport, job, opts, &mut observer, cancel);
     printer.finish();
     if let Ok(i) = interrupts {

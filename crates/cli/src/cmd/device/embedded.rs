@@ -34,6 +34,7 @@ pub(super) fn sim_config(job: &Job, args: &StreamArgs) -> anyhow::Result<SimConf
                 .transpose()?,
             hangup_at_line: args.sim_hangup_at,
             reset_at_line: args.sim_reset_at,
+            drop_digit_at_line: args.sim_drop_digit_at,
             ..Faults::default()
         });
     let flags = SimArgs {

@@ -51,11 +51,11 @@ pub(super) fn explain(
             | SendError::Aborted { .. }
             | SendError::UnexpectedState { .. }
     );
+    let port = match &args.port {
+        Some(p) => format!(" --port {p}"),
+        None => String::new(),
+    };
     if let SendError::ResumeUncertain { from, .. } = &e {
-        let port = match &args.port {
-            Some(p) => format!(" --port {p}"),
-            None => String::new(),
-        };
         let hint = format!(
             "Resume explicitly from the first line to cut with --resume-from LINE (a line number of the file). For example, if line {} never started: flatcut send {name}{port} --resume-from {}",
             from.source_line, from.source_line
@@ -78,10 +78,20 @@ pub(super) fn explain(
             "Choose what a program pause does with --on-pause resume|abort|wait, or run on a terminal to be asked."
                 .to_string(),
         ),
-        SendError::PositionUnknown { .. } => Some(
+        SendError::PositionUnknown { .. } | SendError::OriginNotConfirmed { .. } => Some(
             "Home the machine, or set its work origin back where it was, then resume with --origin-confirmed (on a terminal, the resume asks)."
                 .to_string(),
         ),
+        SendError::OffPath(off) => Some(format!(
+            "A line was probably damaged on the link (GRBL's link has no checksum): check the cable, its shielding and the baud rate. Look at the work, then continue with --resume-from LINE, for example the first line of the range: flatcut send {name}{port} --resume-from {}",
+            off.from.source_line
+        )),
+        SendError::JobChanged { .. } => Some(format!(
+            "If the change is meant (a bad line fixed), resume with --accept-changed-job (on a terminal, the resume asks): flatcut send {name}{port} --resume --accept-changed-job"
+        )),
+        SendError::JobChangedWhereItRan { .. } => Some(format!(
+            "Look at the work, then continue from the first line to cut of the edited file: flatcut send {name}{port} --resume-from LINE --accept-changed-job"
+        )),
         SendError::ResumeFromOutOfRange { .. } => {
             Some("--resume-from takes a line number of the file that has a line to send.".to_string())
         }
@@ -98,10 +108,6 @@ pub(super) fn explain(
         });
     }
     let hint = resumable.then(|| {
-        let port = match &args.port {
-            Some(p) => format!(" --port {p}"),
-            None => String::new(),
-        };
         let journal_flag = match &args.journal {
             Some(p) => format!(" --journal {}", p.display()),
             None => String::new(),

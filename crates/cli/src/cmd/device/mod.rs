@@ -8,7 +8,7 @@
 //! `flatcut-grbl`; this module is only terminal, files and process plumbing.
 
 //!
-//! One concern per module: `args` (the flags), `embedded` (the simulator as the device),
+//! One concern per module: `args` (the flags), `ask` (the sender's questions at the terminal), `embedded` (the simulator as the device),
 //! `display` (the progress display), `printer` (the thread that writes it), `signals` (Ctrl-C, SIGTERM, SIGHUP and the prompt),
 //! `explain` (what a stopped send tells the operator); this module streams.
 
@@ -19,6 +19,7 @@ use flatcut_firmware_sim::{PtySim, SimStats, TraceSegment};
 use flatcut_grbl::{Control, Job, SendOptions, SendReport};
 
 mod args;
+mod ask;
 mod display;
 mod embedded;
 mod explain;
@@ -119,7 +120,9 @@ pub fn stream_text_with_control(
         .with_resume_from(resume_from)
         .with_journal(&journal)
         .with_origin_confirmed(args.origin_confirmed)
+        .with_accept_changed_job(args.accept_changed_job)
         .with_discard_offsets(args.discard_offsets)
+        .with_position_tolerance(Some(args.position_tolerance))
         .with_on_pause(args.pause_policy())
         .with_force_laser(args.force_laser);
 
