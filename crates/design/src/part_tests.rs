@@ -87,8 +87,14 @@ fn a_line_across_a_part_makes_two_pieces_and_a_seam_named_after_it() {
         .surface_piece()
         .mesh(Path::new("."), &TOL)
         .unwrap();
+    // (up to the tidying of the mesh around the line, which changes the area by 1.2e-5 here:
+    // far less than the tessellation's own area error, ~1e-3 at this chordal tolerance).
     let sum: f64 = a.pieces.iter().map(|p| p.mesh.area()).sum();
-    assert!((sum - whole.area()).abs() < 1e-9 * whole.area());
+    assert!(
+        (sum - whole.area()).abs() < 1e-4 * whole.area(),
+        "{sum} vs {}",
+        whole.area()
+    );
 }
 
 #[test]
