@@ -124,11 +124,19 @@ fn split_part(
     let specs: Vec<LineSpec> = part
         .lines
         .iter()
-        .map(|l| LineSpec {
-            points: l.points.iter().map(|p| DVec3::from_array(*p)).collect(),
-            notches: l.notches.iter().map(|p| DVec3::from_array(*p)).collect(),
+        .enumerate()
+        .map(|(k, l)| {
+            let points = match l.edge {
+                Some(e) => crate::step::edge_points(&part.surface_piece(), base_dir, tol, e)
+                    .map_err(|m| part.err(format!("line {k} '{}': {m}", l.name)))?,
+                None => l.points.iter().map(|p| DVec3::from_array(*p)).collect(),
+            };
+            Ok(LineSpec {
+                points,
+                notches: l.notches.iter().map(|p| DVec3::from_array(*p)).collect(),
+            })
         })
-        .collect();
+        .collect::<Result<_, DesignError>>()?;
     let embedded = embed_lines(&surface, &specs).map_err(|e| {
         let k = match &e {
             flatcut_mesh::lines::LineError::TooShort { line }

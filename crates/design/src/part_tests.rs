@@ -225,3 +225,22 @@ fn notch_marks_become_boundary_vertices_exactly_where_they_are() {
     assert!(p.mesh.positions[*v as usize].distance(DVec3::new(33.3, 0.0, 0.0)) < 1e-9);
     flatcut_mesh::check_disk(&p.mesh).unwrap();
 }
+
+#[test]
+fn a_line_named_by_a_step_edge_needs_a_step_surface_and_no_points() {
+    let piece = format!("[[part.piece]]\nname = \"all\"\nat = {}\n", on(40.0, 50.0));
+    let text = sheet("[[part.line]]\nname = \"keel\"\nedge = 12\n", &piece);
+    let e = Design::from_toml_str(&text, "t.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("`edge` names an edge of a STEP model"), "{e}");
+    let both = format!(
+        "[[part.line]]\nname = \"keel\"\nedge = 12\npoints = [{}, {}]\n",
+        on(80.0, 0.0),
+        on(80.0, 100.0)
+    );
+    let e = Design::from_toml_str(&sheet(&both, &piece), "t.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("either `points` or `edge`"), "{e}");
+}

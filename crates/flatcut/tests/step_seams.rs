@@ -111,3 +111,76 @@ fn the_edges_a_step_models_pieces_share_are_seams_of_equal_length_as_long_as_occ
         );
     }
 }
+
+#[test]
+fn a_step_edge_named_as_a_style_line_splits_a_part_along_it() {
+    // The keel (#206, between faces 0 and 2) cuts the hull's skin into starboard and port.
+    let text = r#"
+[[part]]
+name = "skin"
+[part.surface]
+type = "step"
+file = "hull.step"
+[[part.line]]
+name = "keel"
+edge = 206
+[[part.piece]]
+name = "starboard"
+at = [450, 15.032, 4.381]
+[[part.piece]]
+name = "port"
+at = [450, -15.032, 4.381]
+"#;
+    let d = Design::from_toml_str(text, "skin.toml").unwrap();
+    let tol = Tolerances::DEFAULT;
+    let a = d.assemble(&data(""), &tol).unwrap();
+    let names: Vec<&str> = a.pieces.iter().map(|p| p.def.name.as_str()).collect();
+    assert_eq!(names, ["starboard", "port"]);
+    assert_eq!(a.seams.len(), 1);
+    let s = &a.seams[0];
+    assert_eq!(s.name, "keel");
+    let meshes: Vec<&TriMesh> = a.pieces.iter().map(|p| &p.mesh).collect();
+    let pts3 = s.points_3d(0, &meshes);
+    // The keel from stem to stern, as long as OCCT's edge to the chordal tolerance.
+    let &(l_occt, e0, e1) = occt_edges()
+        .iter()
+        .find(|(l, ..)| (l - 901.8484).abs() < 1e-3)
+        .unwrap();
+    let ends = [pts3[0], pts3[pts3.len() - 1]];
+    assert!(
+        (ends[0].distance(e0) < 1e-6 && ends[1].distance(e1) < 1e-6)
+            || (ends[0].distance(e1) < 1e-6 && ends[1].distance(e0) < 1e-6),
+        "{ends:?}"
+    );
+    assert!(pts3.iter().all(|p| p.y.abs() < 1e-9), "on the keel, y = 0");
+    let l3 = length(&pts3, DVec3::distance);
+    assert!(
+        l3 <= l_occt + 1e-6 && l_occt - l3 < tol.chord_mm,
+        "{l3} vs {l_occt}"
+    );
+    let flats =
+        flatten_assembly(&meshes, &a.seams, &FlattenParams::new(Method::Isometric)).unwrap();
+    let flat = |k: usize| {
+        let side = &s.sides[k];
+        let pts: Vec<_> = side
+            .vertices
+            .iter()
+            .map(|&v| flats[side.piece].uv[v as usize])
+            .collect();
+        length(&pts, |p, q| p.distance(q))
+    };
+    assert!(
+        (flat(0) - flat(1)).abs() < 0.01,
+        "{} vs {}",
+        flat(0),
+        flat(1)
+    );
+    // A line naming an edge the model does not have says so.
+    let bad = text.replace("edge = 206", "edge = 207");
+    let e = Design::from_toml_str(&bad, "skin.toml")
+        .unwrap()
+        .assemble(&data(""), &tol)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("#207 is not an edge"), "{e}");
+}
