@@ -26,10 +26,10 @@ use super::Edit;
 /// removes is collapsed (a triangle with such an edge has an angle of at most ~14°).
 pub const COLLAPSE_REL: f64 = 0.25;
 /// Largest angle (degrees) between the normal of a triangle a change makes and the normals of
-/// the triangles it replaces; also the largest turn of the boundary at a boundary vertex that
-/// may be removed.
+/// the triangles it replaces.
 pub const MAX_TURN_DEG: f64 = 10.0;
-/// Largest turn of the boundary (degrees) at a boundary vertex that may be removed.
+/// Largest turn of the boundary (degrees) at a boundary vertex that may be removed (into its
+/// neighbour along the boundary): the outline moves by less than 1 % of the collapsed edge.
 const MAX_BOUNDARY_TURN_DEG: f64 = 1.0;
 /// Smallest rise of the smallest angle (degrees) for a flip to be made: no flip back and forth.
 const MIN_GAIN_DEG: f64 = 0.1;
