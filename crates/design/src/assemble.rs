@@ -5,7 +5,8 @@
 //! Every line between two regions is a mating seam named after the line (a line crossed by
 //! another becomes several seams, `name-1`, `name-2`, … in the line's direction); its notches
 //! are named `line 1`, `line 2`, … in the order given. A region that no piece names, or a piece
-//! that names no region, is an error that says where.
+//! that names no region, is an error that says where. Pieces expanded from one STEP model are
+//! joined along the edges their faces share ([`crate::step_seams`]).
 
 use std::path::Path;
 
@@ -54,6 +55,8 @@ impl Design {
                 notch_marks: Vec::new(),
             });
         }
+        // Found before the notch marks split the pieces' boundaries one side at a time.
+        let step_joins = crate::step_seams::shared_edge_joins(&out.pieces, self.joins.len());
         for part in &self.parts {
             split_part(part, base_dir, tol, &mut out)?;
         }
@@ -82,7 +85,7 @@ impl Design {
                 });
             }
         }
-        for j in &self.joins {
+        for j in self.joins.iter().chain(&step_joins) {
             let seam = crate::join::join_seam(&self.source, j, &mut out.pieces)?;
             out.seams.push(seam);
         }
@@ -121,11 +124,19 @@ fn split_part(
     let specs: Vec<LineSpec> = part
         .lines
         .iter()
-        .map(|l| LineSpec {
-            points: l.points.iter().map(|p| DVec3::from_array(*p)).collect(),
-            notches: l.notches.iter().map(|p| DVec3::from_array(*p)).collect(),
+        .enumerate()
+        .map(|(k, l)| {
+            let points = match l.edge {
+                Some(e) => crate::step::edge_points(&part.surface_piece(), base_dir, tol, e)
+                    .map_err(|m| part.err(format!("line {k} '{}': {m}", l.name)))?,
+                None => l.points.iter().map(|p| DVec3::from_array(*p)).collect(),
+            };
+            Ok(LineSpec {
+                points,
+                notches: l.notches.iter().map(|p| DVec3::from_array(*p)).collect(),
+            })
         })
-        .collect();
+        .collect::<Result<_, DesignError>>()?;
     let embedded = embed_lines(&surface, &specs).map_err(|e| {
         let k = match &e {
             flatcut_mesh::lines::LineError::TooShort { line }

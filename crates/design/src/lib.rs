@@ -35,6 +35,7 @@ mod load;
 mod part;
 mod schema;
 mod step;
+mod step_seams;
 mod units;
 
 pub use assemble::{AssembledPiece, Assembly};

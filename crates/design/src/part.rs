@@ -59,7 +59,12 @@ pub struct PartDef {
 pub struct LineDef {
     pub name: String,
     /// Points on (or near) the surface, in order; joined along the surface.
+    #[serde(default)]
     pub points: Vec<P3>,
+    /// Instead of points: the STEP entity number of an `EDGE_CURVE` of the part's `step`
+    /// surface (as `flatcut inspect model.step` lists it); the line is that edge.
+    #[serde(default)]
+    pub edge: Option<u64>,
     /// Notch positions on the line, shared by the pieces on both sides.
     #[serde(default)]
     pub notches: Vec<P3>,
@@ -172,8 +177,22 @@ pub(crate) fn check_part(p: &PartDef, s: f64) -> Result<(), DesignError> {
                 limits::MAX_COORD_MM
             )));
         }
-        if l.points.len() < 2 {
-            return Err(p.err(format!("{what}: a line needs at least two points")));
+        match (l.edge, l.points.len()) {
+            (Some(_), 0) if matches!(p.surface, SurfaceDef::Step { .. }) => {}
+            (Some(_), 0) => {
+                return Err(p.err(format!(
+                    "{what}: `edge` names an edge of a STEP model; the part's surface is not `type = \"step\"`"
+                )));
+            }
+            (Some(_), _) => {
+                return Err(p.err(format!("{what}: give either `points` or `edge`, not both")));
+            }
+            (None, n) if n < 2 => {
+                return Err(p.err(format!(
+                    "{what}: a line needs at least two points (or `edge = N`, an edge of a STEP surface)"
+                )));
+            }
+            (None, _) => {}
         }
         if let Some(j) = p.lines[..k].iter().position(|o| o.name == l.name) {
             return Err(p.err(format!("{what}: line {j} has the same name")));

@@ -87,8 +87,14 @@ fn a_line_across_a_part_makes_two_pieces_and_a_seam_named_after_it() {
         .surface_piece()
         .mesh(Path::new("."), &TOL)
         .unwrap();
+    // (up to the tidying of the mesh around the line, which changes the area by 1.2e-5 here:
+    // far less than the tessellation's own area error, ~1e-3 at this chordal tolerance).
     let sum: f64 = a.pieces.iter().map(|p| p.mesh.area()).sum();
-    assert!((sum - whole.area()).abs() < 1e-9 * whole.area());
+    assert!(
+        (sum - whole.area()).abs() < 1e-4 * whole.area(),
+        "{sum} vs {}",
+        whole.area()
+    );
 }
 
 #[test]
@@ -218,4 +224,23 @@ fn notch_marks_become_boundary_vertices_exactly_where_they_are() {
     assert_eq!(name, "n");
     assert!(p.mesh.positions[*v as usize].distance(DVec3::new(33.3, 0.0, 0.0)) < 1e-9);
     flatcut_mesh::check_disk(&p.mesh).unwrap();
+}
+
+#[test]
+fn a_line_named_by_a_step_edge_needs_a_step_surface_and_no_points() {
+    let piece = format!("[[part.piece]]\nname = \"all\"\nat = {}\n", on(40.0, 50.0));
+    let text = sheet("[[part.line]]\nname = \"keel\"\nedge = 12\n", &piece);
+    let e = Design::from_toml_str(&text, "t.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("`edge` names an edge of a STEP model"), "{e}");
+    let both = format!(
+        "[[part.line]]\nname = \"keel\"\nedge = 12\npoints = [{}, {}]\n",
+        on(80.0, 0.0),
+        on(80.0, 100.0)
+    );
+    let e = Design::from_toml_str(&sheet(&both, &piece), "t.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("either `points` or `edge`"), "{e}");
 }

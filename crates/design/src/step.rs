@@ -19,7 +19,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use flatcut_geom::Tolerances;
+use flatcut_geom::{DVec3, Tolerances};
 use flatcut_mesh::TriMesh;
 use flatcut_mesh::tessellate::TessOptions;
 use flatcut_step::{Model, StepError, Tessellation};
@@ -215,4 +215,27 @@ pub(crate) fn build(p: &PieceDef, base_dir: &Path) -> Result<StepPiece, DesignEr
             .map_err(|e| ctx.err(format!("step: face {f}: {e}")))?;
     }
     Ok(StepPiece { model, faces })
+}
+
+/// The polyline of the edge with STEP entity number `entity` as the surface of `p` (a `step`
+/// surface) is meshed to `tol`: the vertices both its faces share.
+pub(crate) fn edge_points(
+    p: &PieceDef,
+    base_dir: &Path,
+    tol: &Tolerances,
+    entity: u64,
+) -> Result<Vec<DVec3>, String> {
+    let sp = build(p, base_dir).map_err(|e| e.to_string())?;
+    let index = sp
+        .model
+        .edges
+        .iter()
+        .position(|e| e.entity == entity)
+        .ok_or_else(|| {
+            format!("#{entity} is not an edge of the model (`flatcut inspect` lists its edges)")
+        })?;
+    let t = Tessellation::new(&sp.model, &sp.faces, tol, &TessOptions::DEFAULT)
+        .map_err(|e| e.to_string())?;
+    t.edge_polyline(index)
+        .ok_or_else(|| format!("edge #{entity} bounds none of the chosen faces"))
 }

@@ -294,7 +294,8 @@ fn shoe_upper_is_one_surface_cut_into_four_pieces_by_its_style_lines() {
         assert!(p.def.grain.is_some());
         assert_disk(&p.def.name, &p.mesh);
     }
-    // The upper is doubly curved, and the pieces cover it exactly.
+    // The upper is doubly curved, and the pieces cover it (up to the tidying of the mesh around
+    // the style lines: 0.11 mm² of 39,792 mm², far below the tessellation's own area error).
     let upper = PieceDef {
         name: "upper".into(),
         ..a.pieces[0].def.clone()
@@ -303,7 +304,7 @@ fn shoe_upper_is_one_surface_cut_into_four_pieces_by_its_style_lines() {
     let whole = mesh("shoe", &upper);
     let sum: f64 = a.pieces.iter().map(|p| p.mesh.area()).sum();
     assert!(
-        (sum - whole.area()).abs() < 1e-9 * whole.area(),
+        (sum - whole.area()).abs() < 1e-5 * whole.area(),
         "{sum} vs {}",
         whole.area()
     );

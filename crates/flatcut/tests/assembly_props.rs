@@ -136,9 +136,19 @@ fn random_style_lines_on_bundled_surfaces_give_seams_that_match() {
             let split = split_along_lines(&e.mesh, &e.lines).unwrap();
             let meshes: Vec<TriMesh> = split.regions.iter().map(|r| r.mesh.clone()).collect();
             let area: f64 = meshes.iter().map(TriMesh::area).sum();
+            // The regions tile the part exactly; the part is the surface with the mesh around
+            // the line tidied, which moves it by far less than its chordal tolerance: at a chord
+            // of size/600 on these surfaces (radii of a third of the size or more) the
+            // tessellation's own area error is ~3e-3; the tidying changes the area by < 1e-4.
             assert!(
-                (area - m.area()).abs() < 1e-9 * m.area(),
+                (area - e.mesh.area()).abs() < 1e-9 * m.area(),
                 "{folder}: areas {area} vs {}",
+                e.mesh.area()
+            );
+            assert!(
+                (e.mesh.area() - m.area()).abs() < 1e-4 * m.area(),
+                "{folder}: areas {} vs {}",
+                e.mesh.area(),
                 m.area()
             );
             if let Some(err) = split

@@ -118,10 +118,15 @@ fn a_cap_split_by_a_line_flattens_into_two_pieces_whose_seam_matches() {
     );
     let (l1, l2) = (arc(&a1)[a1.len() - 1], arc(&b1)[b1.len() - 1]);
     assert!((l1 - l2).abs() > 0.1, "alone: {l1} vs {l2}");
-    // The pieces' 3D areas add up to the part's.
+    // The pieces' 3D areas add up to the part's (up to the tidying of the mesh beside the line,
+    // which changes the area by far less than the tessellation's own area error).
     let area3: f64 = meshes.iter().map(TriMesh::area).sum();
     let cap = testmesh::spherical_cap(100.0, 0.9, 24);
-    assert!((area3 - cap.area()).abs() < 1e-9 * cap.area());
+    assert!(
+        (area3 - cap.area()).abs() < 1e-4 * cap.area(),
+        "{area3} vs {}",
+        cap.area()
+    );
 }
 
 #[test]

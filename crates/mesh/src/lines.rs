@@ -10,7 +10,9 @@
 //! [`SNAP_REL`] of an edge's length to one of its ends goes through that vertex instead of
 //! splitting the edge next to it (no sliver triangles), unless the line would then fold back onto
 //! itself or run along the boundary or another line; every other crossing splits the edge.
-//! The surface itself never moves: new vertices lie on the old edges and faces.
+//! New vertices lie on the old edges and faces; then the mesh around the lines is made
+//! well-shaped again ([`tidy`]: short edges collapsed, edges flipped), moving the surface by far
+//! less than its chordal tolerance and keeping every end and notch exactly.
 //!
 //! Notches are extra points of their line, inserted exactly where they project (never snapped to
 //! a vertex), so both regions beside the line carry the notch at the same vertex.
@@ -162,10 +164,13 @@ pub fn embed_lines(mesh: &TriMesh, specs: &[LineSpec]) -> Result<Embedded, LineE
             return Err(first_loose.expect("an untraced line failed its end check"));
         }
     }
+    tidy::tidy(&mut ed, &notch_vertices, mesh.positions.len());
+    let (pos, tris, map) = tidy::compact(&ed);
+    let renumber = |l: &Vec<u32>| l.iter().map(|&v| map[v as usize]).collect();
     Ok(Embedded {
-        mesh: TriMesh::new(ed.pos, ed.tris),
-        lines: ed.lines,
-        notches: notch_vertices,
+        mesh: TriMesh::new(pos, tris),
+        lines: ed.lines.iter().map(renumber).collect(),
+        notches: notch_vertices.iter().map(renumber).collect(),
     })
 }
 
@@ -518,6 +523,14 @@ impl Edit {
         v
     }
 
+    /// Removes face `f` (its slot stays, with no corners).
+    fn remove_face(&mut self, f: u32) {
+        for v in self.tris[f as usize] {
+            self.vf[v as usize].retain(|&g| g != f);
+        }
+        self.tris[f as usize] = [u32::MAX; 3];
+    }
+
     /// Splits face `f` at `p` (inside it) into three.
     fn split_face(&mut self, f: u32, p: DVec3) -> u32 {
         let v = self.add_vertex(p);
@@ -755,3 +768,4 @@ impl Edit {
 
 #[cfg(test)]
 mod tests;
+mod tidy;

@@ -109,6 +109,50 @@ pub(crate) fn clean_outline(pts: &[DVec2], what: &str) -> Result<Vec<DVec2>, Str
     Ok(out)
 }
 
+/// Points of an outline closer than this to the line through their neighbours are dropped
+/// before a second try when the collision engine rejects an outline (mm): far below any
+/// cutting precision.
+const THIN_MM: f64 = 0.005;
+
+/// Imports an item into the collision engine. The engine inflates the outline by half the
+/// spacing (geo's buffer) and rounds it to f32; runs of nearly collinear points a few
+/// hundredths of a millimetre apart (a seam allowance's mitred corners, a flattened style
+/// line's vertices) can come out of that as a self-intersecting polygon, which it rejects. Then
+/// the outline is thinned (Ramer–Douglas–Peucker, geo's, at [`THIN_MM`]) and imported again.
+fn import_thinned(importer: &Importer, mut ext: ExtItem, id: usize) -> Result<Arc<Item>, String> {
+    match importer.import_item(&ext, id) {
+        Ok(item) => Ok(item),
+        Err(first) => {
+            use geo::Simplify;
+            let ExtShape::SimplePolygon(ExtSPolygon(pts)) = &ext.shape else {
+                return Err(first.to_string());
+            };
+            let ring: geo::LineString<f64> = pts
+                .iter()
+                .chain(pts.first())
+                .map(|&(x, y)| geo::Coord {
+                    x: f64::from(x),
+                    y: f64::from(y),
+                })
+                .collect();
+            let mut thin: Vec<(f32, f32)> = ring
+                .simplify(THIN_MM)
+                .0
+                .iter()
+                .map(|c| (c.x as f32, c.y as f32))
+                .collect();
+            thin.pop();
+            if thin.len() < 3 {
+                return Err(first.to_string());
+            }
+            ext.shape = ExtShape::SimplePolygon(ExtSPolygon(thin));
+            importer
+                .import_item(&ext, id)
+                .map_err(|_| first.to_string())
+        }
+    }
+}
+
 /// Quadtree depth: leaves about the size of a typical piece. Deeper trees cost more to walk
 /// than they save on the few dozen to few hundred pieces of a nesting (measured on the ESICUP
 /// instances: depth 2 ran 10–15 % faster than 4 there).
@@ -283,8 +327,7 @@ impl Problem {
                     )),
                     min_quality: Some(min_quality),
                 };
-                let jitem = importer
-                    .import_item(&ext, kinds.len())
+                let jitem = import_thinned(&importer, ext, kinds.len())
                     .map_err(|e| bad(format!("rejected by the collision engine: {e}")))?;
                 let cb = jitem.shape_cd().bbox();
                 let min_dim = cb.width().min(cb.height());
@@ -354,5 +397,55 @@ impl Problem {
             .iter()
             .map(|(k, _)| self.kinds[*k as usize].area)
             .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The shoe quarter's outline that the engine rejected once inflated by half of a 3 mm
+    /// spacing: imported as it is it fails, thinned it goes in, as large as it is.
+    #[test]
+    fn an_outline_the_engine_rejects_goes_in_thinned() {
+        let text = include_str!("../tests/data/shoe-quarter-outline.txt");
+        let pts: Vec<DVec2> = text
+            .lines()
+            .filter(|l| !l.starts_with('#'))
+            .map(|l| {
+                let v: Vec<f64> = l.split(' ').map(|x| x.parse().unwrap()).collect();
+                DVec2::new(v[0], v[1])
+            })
+            .collect();
+        let bb = flatcut_geom::Aabb2::from_points(pts.iter().copied());
+        let c = 0.5 * (bb.min + bb.max);
+        let ext = ExtItem {
+            id: 0,
+            orientation: ExtOrientation {
+                rotation: ExtRotation::Continuous {},
+                reflection_axes: vec![],
+            },
+            shape: ExtShape::SimplePolygon(ExtSPolygon(
+                pts.iter()
+                    .map(|p| ((p.x - c.x) as f32, (p.y - c.y) as f32))
+                    .collect(),
+            )),
+            min_quality: Some(0),
+        };
+        let importer = Importer::new(
+            cde_config(quadtree_depth(600.0, 200.0)),
+            Some(SIMPLIFY_TOLERANCE),
+            Some(NARROW_CONCAVITY),
+        )
+        .with_min_item_separation(3.0)
+        .unwrap();
+        assert!(importer.import_item(&ext, 0).is_err(), "the premise");
+        let item = import_thinned(&importer, ext, 0).unwrap();
+        // The collision shape is the outline inflated by 1.5 mm: its box 3 mm larger.
+        let b = item.shape_cd().bbox();
+        let (w, h) = (f64::from(b.width()), f64::from(b.height()));
+        let size = bb.max - bb.min;
+        assert!((w - size.x - 3.0).abs() < 0.05, "{w} vs {}", size.x);
+        assert!((h - size.y - 3.0).abs() < 0.05, "{h} vs {}", size.y);
     }
 }

@@ -195,7 +195,7 @@ pub fn allowance(
         if area > HOLE_AREA_EPS {
             let c = h.iter().copied().sum::<DVec2>() / h.len() as f64;
             return Err(SeamFailure::TooLarge(format!(
-                "the allowance closes over a concave opening and traps a hole of {area:.1} mm² near ({:.1}, {:.1}) mm",
+                "the allowance closes over a concave opening and traps a hole of {area:.1} mm² near ({:.1}, {:.1}) mm; {ADVICE}",
                 c.x, c.y
             )));
         }
@@ -214,6 +214,10 @@ pub fn allowance(
     validate(sew, widths, &cut, tol, mitre_limit)?;
     Ok(SeamResult { cut })
 }
+
+/// What to do about an allowance that does not fit (the positions in the messages are the
+/// piece's own pattern coordinates, as in its SVG).
+const ADVICE: &str = "give this piece a narrower seam allowance (its `seam_allowance_mm` in the design, or the command's seam width), or widen the piece there";
 
 /// The allowance of an edge must not reach across the piece: the outward normal from each
 /// edge's midpoint must not meet the sew line again within the edge's width. Where it does,
@@ -239,7 +243,7 @@ fn check_crossing(sew: &[DVec2], widths: &[f64], tol: f64) -> Result<(), SeamFai
         if let Some(s) = poly::ray_hit(sew, start, nrm).filter(|s| *s < w - tol) {
             let q = start + nrm * s;
             return Err(SeamFailure::TooLarge(format!(
-                "the {w:.1} mm allowance of the seam near ({:.1}, {:.1}) mm runs across the piece, meeting the sew line again at ({:.1}, {:.1}) mm",
+                "the {w:.1} mm allowance of the seam near ({:.1}, {:.1}) mm runs across the piece, meeting the sew line again {s:.1} mm away at ({:.1}, {:.1}) mm; {ADVICE}",
                 m.x, m.y, q.x, q.y
             )));
         }
@@ -405,7 +409,10 @@ mod tests {
             DEFAULT_MITRE_LIMIT,
             1e-6,
         ) {
-            Err(SeamFailure::TooLarge(msg)) => assert!(msg.contains("across the piece"), "{msg}"),
+            Err(SeamFailure::TooLarge(msg)) => assert!(
+                msg.contains("across the piece") && msg.contains("narrower seam allowance"),
+                "{msg}"
+            ),
             other => panic!("expected TooLarge, got {other:?}"),
         }
         // a 1 mm allowance keeps the slot open
