@@ -433,7 +433,7 @@ pub fn piece_from_flat(
                 }
             }
         }
-        if let Some([a, b]) = def.grain {
+        if let Some([a, b]) = def.grain.as_ref().and_then(|g| g.line()).copied() {
             // A grain line is a direction drawn near the surface: points off the surface are
             // carried by their nearest vertex rather than refused.
             let (a, b) = (DVec3::from_array(a), DVec3::from_array(b));
