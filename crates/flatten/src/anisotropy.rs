@@ -4,6 +4,7 @@
 //! read by `flatcut-design`; this crate takes the numbers only.
 
 use flatcut_geom::{DVec2, DVec3};
+pub use flatcut_mesh::grain_strain::{ByDirection, DirectionalLimits};
 
 /// Stiffness of a woven, knitted or fibrous sheet relative to an isotropic one: 1, 1, 1 is
 /// Duncan's Green–Lagrange deviation (Poisson's ratio 0); a woven fabric has a shear stiffness
@@ -39,28 +40,6 @@ impl Stiffness {
         }
         Ok(())
     }
-}
-
-/// Limits in percent along the warp, across it (the weft) and on the 45° bias.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ByDirection {
-    pub along: f64,
-    pub across: f64,
-    pub bias: f64,
-}
-
-impl ByDirection {
-    /// The smallest of the three.
-    pub fn min(&self) -> f64 {
-        self.along.min(self.across).min(self.bias)
-    }
-}
-
-/// A material's stretch and compression limits per direction (percent).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DirectionalLimits {
-    pub stretch_pct: ByDirection,
-    pub compress_pct: ByDirection,
 }
 
 /// Where the warp runs.

@@ -153,7 +153,7 @@ fn auto_grain_on_an_elliptic_bowl_finds_the_direction_its_limits_prefer_and_is_d
             .enumerate()
             .map(|(t, tri)| {
                 let g = grain_strain(mesh.corners(t), tri2(uv, *tri), DVec2::X).unwrap();
-                flatcut_flatten::nonlinear::grain::strain_excess(&g, &limits)
+                g.excess(&limits)
             })
             .fold(f64::NEG_INFINITY, f64::max)
     };

@@ -14,7 +14,30 @@
 
 use glam::{DMat2, DVec2, DVec3};
 
+use crate::TriMesh;
 use crate::distortion::local_frame;
+
+/// Limits in percent along the warp, across it (the weft) and on the 45° bias.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ByDirection {
+    pub along: f64,
+    pub across: f64,
+    pub bias: f64,
+}
+
+impl ByDirection {
+    /// The smallest of the three.
+    pub fn min(&self) -> f64 {
+        self.along.min(self.across).min(self.bias)
+    }
+}
+
+/// A material's stretch and compression limits per direction (percent).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectionalLimits {
+    pub stretch_pct: ByDirection,
+    pub compress_pct: ByDirection,
+}
 
 /// One triangle's strain in the material's directions.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -39,6 +62,45 @@ impl GrainStrain {
     pub fn bias_share_parts(&self) -> (f64, f64) {
         let shear = 2.0 * self.e_ab * self.e_ab;
         (shear, self.e_aa * self.e_aa + self.e_bb * self.e_bb + shear)
+    }
+}
+
+impl GrainStrain {
+    /// Stretch in percent (positive part) along, across and on the bias.
+    pub fn stretch_pct(&self) -> ByDirection {
+        let p = |s: f64| ((s - 1.0) * 100.0).max(0.0);
+        ByDirection {
+            along: p(self.along),
+            across: p(self.across),
+            bias: p(self.bias_max),
+        }
+    }
+
+    /// Compression in percent (positive part) along, across and on the bias.
+    pub fn compress_pct(&self) -> ByDirection {
+        let p = |s: f64| ((1.0 - s) * 100.0).max(0.0);
+        ByDirection {
+            along: p(self.along),
+            across: p(self.across),
+            bias: p(self.bias_min),
+        }
+    }
+
+    /// The largest excess over the limits of the warp, weft or bias strain, in percentage
+    /// points (negative: within them by that margin).
+    pub fn excess(&self, l: &DirectionalLimits) -> f64 {
+        let over = |s: f64, lim: f64| (s - 1.0) * 100.0 - lim;
+        let under = |s: f64, lim: f64| (1.0 - s) * 100.0 - lim;
+        [
+            over(self.along, l.stretch_pct.along),
+            over(self.across, l.stretch_pct.across),
+            over(self.bias_max, l.stretch_pct.bias),
+            under(self.along, l.compress_pct.along),
+            under(self.across, l.compress_pct.across),
+            under(self.bias_min, l.compress_pct.bias),
+        ]
+        .into_iter()
+        .fold(f64::NEG_INFINITY, f64::max)
     }
 }
 
@@ -89,6 +151,48 @@ pub fn grain_strain_of(j: DMat2, u: DVec2) -> Option<GrainStrain> {
 /// unit pattern grain `u`; `None` for a degenerate triangle or image.
 pub fn grain_strain(tri3: [DVec3; 3], tri2: [DVec2; 3], u: DVec2) -> Option<GrainStrain> {
     grain_strain_of(triangle_jacobian(tri3, tri2)?, u)
+}
+
+/// The pattern direction of the 3D direction `d` in the map `uv` of `mesh`: the area-weighted
+/// mean image of its projection on every triangle, unit length (`None` where `d` is normal to
+/// the whole surface or the map is degenerate).
+pub fn pattern_direction(mesh: &TriMesh, uv: &[DVec2], d: DVec3) -> Option<DVec2> {
+    let mut s = DVec2::ZERO;
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        let c = mesh.corners(t);
+        let (Some((_, ex, ey)), Some(j)) = (
+            local_frame(c[0], c[1], c[2]),
+            triangle_jacobian(c, tri.map(|v| uv[v as usize])),
+        ) else {
+            continue;
+        };
+        let area = 0.5 * (c[1] - c[0]).cross(c[2] - c[0]).length();
+        s += area * (j * DVec2::new(d.dot(ex), d.dot(ey)));
+    }
+    let l = s.length();
+    (l.is_finite() && l > 0.0).then(|| s / l)
+}
+
+/// The 3D direction of the warp that runs along the pattern direction `u` in the map `uv` of
+/// `mesh`: the area-weighted mean of J⁻¹u (normalised per triangle), unit length.
+pub fn surface_direction(mesh: &TriMesh, uv: &[DVec2], u: DVec2) -> Option<DVec3> {
+    let mut s = DVec3::ZERO;
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        let c = mesh.corners(t);
+        let (Some((_, ex, ey)), Some(j)) = (
+            local_frame(c[0], c[1], c[2]),
+            triangle_jacobian(c, tri.map(|v| uv[v as usize])),
+        ) else {
+            continue;
+        };
+        let Some(a) = warp_in_frame(j, u) else {
+            continue;
+        };
+        let area = 0.5 * (c[1] - c[0]).cross(c[2] - c[0]).length();
+        s += area * (ex * a.x + ey * a.y);
+    }
+    let l = s.length();
+    (l.is_finite() && l > 0.0).then(|| s / l)
 }
 
 #[cfg(test)]

@@ -15,8 +15,7 @@
 //! order, ties to the smaller angle.
 
 use flatcut_geom::{DVec2, DVec3};
-use flatcut_mesh::distortion::local_frame;
-use flatcut_mesh::grain_strain::{GrainStrain, grain_strain_of, warp_in_frame};
+use flatcut_mesh::grain_strain::{GrainStrain, grain_strain_of, pattern_direction, warp_in_frame};
 use flatcut_mesh::{Topology, TriMesh};
 
 use super::kernel::{RestTri, SymDirichlet};
@@ -64,18 +63,27 @@ pub(crate) fn orthotropic(
     let mut iterations = iso.iterations;
     let mut early = iso.early;
     let start = iso.x;
-    let solve_at = |angle: f64| -> Result<Solved, FlattenError> {
-        solve_with_grain(rest, n, &aniso, &start, grain_dir(angle), params, budget)
+    let solve = |from: &[DVec2], u: DVec2, passes: usize| -> Result<Solved, FlattenError> {
+        solve_with_grain(rest, n, &aniso, from, u, passes, params, budget)
     };
     let best = match aniso.grain {
-        Grain::Angle(a) => solve_at(a)?,
-        Grain::Direction(d) => solve_at(direction_angle(mesh, rest, &start, d)?)?,
+        Grain::Angle(a) => solve(&start, grain_dir(a), FRAME_PASSES)?,
+        Grain::Direction(d) => solve(
+            &start,
+            grain_dir(direction_angle(mesh, &start, d)?),
+            FRAME_PASSES,
+        )?,
         Grain::Auto => {
             let score = |s: &Solved| match &aniso.limits {
                 Some(l) => limit_excess(rest, &s.x, s.warp, l),
                 None => s.energy,
             };
-            search_angle(|a| solve_at(a).map(|s| (score(&s), s)))?.1
+            // Angles are compared after one pass; the chosen one gets the others from its map.
+            let first = search_angle(|a| solve(&start, grain_dir(a), 1).map(|s| (score(&s), s)))?.1;
+            let rest_passes = solve(&first.x, first.warp, FRAME_PASSES - 1)?;
+            iterations += first.iterations;
+            early = early.or(first.early);
+            rest_passes
         }
     };
     iterations += best.iterations;
@@ -105,20 +113,22 @@ struct Solved {
     early: Option<EarlyStop>,
 }
 
-/// Solves the orthotropic energy from the isometric map `start` with the warp along `u` there.
+/// Solves the orthotropic energy from the map `start` with the warp along `u` there, taking the
+/// warp from the map and solving again `passes` times.
 fn solve_with_grain(
     rest: &[RestTri],
     n: usize,
     aniso: &Anisotropy,
     start: &[DVec2],
     u: DVec2,
+    passes: usize,
     params: &FlattenParams,
     budget: &Budget,
 ) -> Result<Solved, FlattenError> {
     let energy = Orthotropic::new(aniso.stiffness);
     let (mut x, mut u, mut iterations, mut early, mut e) =
         (start.to_vec(), u, 0, None, f64::INFINITY);
-    for _ in 0..FRAME_PASSES {
+    for _ in 0..passes {
         let warp = warps(rest, &x, u)?;
         let frames = grain_frames(rest, &warp);
         let run = newton_solve(&frames, n, energy, &x, params, Method::Orthotropic, budget)?;
@@ -159,29 +169,15 @@ fn mean_image(frames: &[RestTri], x: &[DVec2]) -> DVec2 {
     s.normalize_or(DVec2::X)
 }
 
-/// The pattern angle of the 3D grain direction `d` in map `x`: the area-weighted mean image of
-/// its projection on every triangle.
-fn direction_angle(
-    mesh: &TriMesh,
-    rest: &[RestTri],
-    x: &[DVec2],
-    d: DVec3,
-) -> Result<f64, FlattenError> {
-    let mut s = DVec2::ZERO;
-    for (t, r) in rest.iter().enumerate() {
-        let c = mesh.corners(t);
-        let Some((_, ex, ey)) = local_frame(c[0], c[1], c[2]) else {
-            continue;
-        };
-        s += r.area * (r.jacobian(x) * DVec2::new(d.dot(ex), d.dot(ey)));
-    }
-    if !(s.length() > 0.0) || !s.is_finite() {
-        return Err(FlattenError::Anisotropy(format!(
+/// The pattern angle of the 3D grain direction `d` in map `x`.
+fn direction_angle(mesh: &TriMesh, x: &[DVec2], d: DVec3) -> Result<f64, FlattenError> {
+    let u = pattern_direction(mesh, x, d).ok_or_else(|| {
+        FlattenError::Anisotropy(format!(
             "the grain direction ({}, {}, {}) is normal to the whole surface",
             d.x, d.y, d.z
-        )));
-    }
-    Ok(s.y.atan2(s.x))
+        ))
+    })?;
+    Ok(u.y.atan2(u.x))
 }
 
 /// Turns the map about the origin so that the pattern direction `u` becomes +x.
@@ -205,26 +201,10 @@ pub fn limit_excess(rest: &[RestTri], x: &[DVec2], u: DVec2, l: &DirectionalLimi
     grain_strains(rest, x, u)
         .iter()
         .map(|g| match g {
-            Some(g) => strain_excess(g, l),
+            Some(g) => g.excess(l),
             None => f64::INFINITY,
         })
         .fold(f64::NEG_INFINITY, f64::max)
-}
-
-/// One triangle's largest excess over the limits, in percentage points.
-pub fn strain_excess(g: &GrainStrain, l: &DirectionalLimits) -> f64 {
-    let over = |s: f64, lim: f64| (s - 1.0) * 100.0 - lim;
-    let under = |s: f64, lim: f64| (1.0 - s) * 100.0 - lim;
-    [
-        over(g.along, l.stretch_pct.along),
-        over(g.across, l.stretch_pct.across),
-        over(g.bias_max, l.stretch_pct.bias),
-        under(g.along, l.compress_pct.along),
-        under(g.across, l.compress_pct.across),
-        under(g.bias_min, l.compress_pct.bias),
-    ]
-    .into_iter()
-    .fold(f64::NEG_INFINITY, f64::max)
 }
 
 /// Minimises `f` over angles in [0, π): [`AUTO_SAMPLES`] samples, then golden-section search in
