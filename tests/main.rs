@@ -6,6 +6,7 @@ mod darts;
 mod dxf;
 mod fuzz;
 mod hpgl;
+mod material;
 mod nest;
 mod pipeline;
 mod regressions;

@@ -13,7 +13,7 @@ use flatcut_flatten::anisotropy::{Anisotropy, ByDirection, DirectionalLimits, Gr
 use flatcut_flatten::{FlattenParams, Flattening, Method};
 use flatcut_geom::{DVec2, DVec3};
 use flatcut_mesh::TriMesh;
-use flatcut_mesh::grain_strain::{pattern_direction, surface_direction};
+use flatcut_mesh::grain_strain::{central_face, centroid, pattern_direction_near, warp_at};
 use flatcut_report::GrainReport;
 
 use crate::pipeline::PipelineError;
@@ -73,7 +73,7 @@ pub fn anisotropy(m: &MaterialSpec, grain: Option<&GrainDef>) -> Anisotropy {
         },
         limits: Some(limits(m)),
         grain: match grain.and_then(GrainDef::line) {
-            Some([a, b]) => Grain::Direction(DVec3::from_array(*b) - DVec3::from_array(*a)),
+            Some([a, b]) => Grain::Line([DVec3::from_array(*a), DVec3::from_array(*b)]),
             None => Grain::Auto,
         },
     }
@@ -126,8 +126,15 @@ pub fn carry_over(
     before: (&TriMesh, &[DVec2]),
     after: (&TriMesh, &[DVec2]),
 ) -> PieceGrain {
-    let dir = surface_direction(before.0, before.1, g.pattern_dir)
-        .and_then(|d| pattern_direction(after.0, after.1, d))
+    // The warp where the old piece's centre was, found again in the new map there.
+    let dir = central_face(before.0)
+        .and_then(|t| {
+            Some((
+                warp_at(before.0, before.1, g.pattern_dir, t)?,
+                centroid(before.0, t),
+            ))
+        })
+        .and_then(|(d, at)| pattern_direction_near(after.0, after.1, d, at, 0.0))
         .unwrap_or(g.pattern_dir);
     PieceGrain {
         pattern_dir: dir,

@@ -45,9 +45,10 @@ impl Stiffness {
 /// Where the warp runs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Grain {
-    /// Along this 3D direction (the design's grain line): its mean image in the isotropic
-    /// flattening becomes the pattern's grain.
-    Direction(DVec3),
+    /// Along the design's grain line, from its first point to its second (on or near the
+    /// surface): its image where it is drawn, in the isotropic flattening, becomes the
+    /// pattern's grain.
+    Line([DVec3; 2]),
     /// Along this direction of the pattern plane (radians from +x of the isotropic flattening).
     Angle(f64),
     /// Chosen by the flattening: the angle whose map exceeds the limits least.

@@ -63,10 +63,12 @@ fn cylinder() -> TriMesh {
 #[test]
 fn a_cylinder_flattens_exactly_with_the_grain_along_or_across_its_axis() {
     let mesh = cylinder();
-    // Across: the circumferential direction at the middle of the arc (60°).
-    let across = DVec3::new(-60f64.to_radians().sin(), 60f64.to_radians().cos(), 0.0);
-    for (name, dir) in [("along", DVec3::Z), ("across", across)] {
-        let f = flatten(&mesh, &params(WOVEN, Grain::Direction(dir), None)).unwrap();
+    // Drawn at the middle of the arc (60°), half way up; across: the circumferential direction.
+    let (s, c) = 60f64.to_radians().sin_cos();
+    let at = DVec3::new(30.0 * c, 30.0 * s, 25.0);
+    let across = 10.0 * DVec3::new(-s, c, 0.0);
+    for (name, dir) in [("along", 10.0 * DVec3::Z), ("across", across)] {
+        let f = flatten(&mesh, &params(WOVEN, Grain::Line([at, at + dir]), None)).unwrap();
         let (d2, flipped) = worst_delta2(&mesh, &f.uv);
         assert!(!flipped, "{name}: flipped");
         assert!(d2 < 1e-10, "{name}: δ2 = {d2:e}");
@@ -89,7 +91,8 @@ fn a_cylinder_flattens_exactly_with_the_grain_along_or_across_its_axis() {
 #[test]
 fn on_a_spherical_cap_a_woven_material_takes_its_strain_on_the_bias() {
     let mesh = spherical_cap(50.0, 0.7, 14);
-    let grain = Grain::Direction(DVec3::X);
+    let pole = DVec3::new(0.0, 0.0, 50.0);
+    let grain = Grain::Line([pole, pole + 10.0 * DVec3::X]);
     let iso = flatten(&mesh, &params(Stiffness::ISOTROPIC, grain, None)).unwrap();
     let woven = flatten(&mesh, &params(WOVEN, grain, None)).unwrap();
     for f in [&iso, &woven] {
@@ -165,7 +168,10 @@ fn auto_grain_on_an_elliptic_bowl_finds_the_direction_its_limits_prefer_and_is_d
             &mesh,
             &params(
                 WOVEN,
-                Grain::Direction(DVec3::new(r.cos(), r.sin(), 0.0)),
+                Grain::Line([
+                    DVec3::new(0.0, 0.0, 50.0),
+                    DVec3::new(10.0 * r.cos(), 10.0 * r.sin(), 50.0),
+                ]),
                 Some(limits),
             ),
         )

@@ -153,46 +153,74 @@ pub fn grain_strain(tri3: [DVec3; 3], tri2: [DVec2; 3], u: DVec2) -> Option<Grai
     grain_strain_of(triangle_jacobian(tri3, tri2)?, u)
 }
 
-/// The pattern direction of the 3D direction `d` in the map `uv` of `mesh`: the area-weighted
-/// mean image of its projection on every triangle, unit length (`None` where `d` is normal to
-/// the whole surface or the map is degenerate).
-pub fn pattern_direction(mesh: &TriMesh, uv: &[DVec2], d: DVec3) -> Option<DVec2> {
-    let mut s = DVec2::ZERO;
-    for (t, tri) in mesh.triangles.iter().enumerate() {
+/// The pattern direction of the 3D direction `d` drawn at `centre` in the map `uv` of `mesh`:
+/// the area-weighted mean image of its projection on the faces whose centroids lie within
+/// `radius` of `centre` (the nearest face when none does), unit length; `None` where `d` is
+/// normal to the surface there or the map is degenerate. Local, because on a closed or wrapped
+/// piece a fixed 3D vector's projections cancel over the whole surface.
+pub fn pattern_direction_near(
+    mesh: &TriMesh,
+    uv: &[DVec2],
+    d: DVec3,
+    centre: DVec3,
+    radius: f64,
+) -> Option<DVec2> {
+    let image = |t: usize| -> Option<DVec2> {
         let c = mesh.corners(t);
-        let (Some((_, ex, ey)), Some(j)) = (
-            local_frame(c[0], c[1], c[2]),
-            triangle_jacobian(c, tri.map(|v| uv[v as usize])),
-        ) else {
-            continue;
-        };
+        let (_, ex, ey) = local_frame(c[0], c[1], c[2])?;
+        let j = triangle_jacobian(c, mesh.triangles[t].map(|v| uv[v as usize]))?;
         let area = 0.5 * (c[1] - c[0]).cross(c[2] - c[0]).length();
-        s += area * (j * DVec2::new(d.dot(ex), d.dot(ey)));
-    }
+        Some(area * (j * DVec2::new(d.dot(ex), d.dot(ey))))
+    };
+    let near: Vec<usize> = (0..mesh.triangles.len())
+        .filter(|&t| centroid(mesh, t).distance(centre) <= radius)
+        .collect();
+    let faces = if near.is_empty() {
+        nearest_face(mesh, centre).into_iter().collect()
+    } else {
+        near
+    };
+    let s: DVec2 = faces.into_iter().filter_map(image).sum();
     let l = s.length();
     (l.is_finite() && l > 0.0).then(|| s / l)
 }
 
-/// The 3D direction of the warp that runs along the pattern direction `u` in the map `uv` of
-/// `mesh`: the area-weighted mean of J⁻¹u (normalised per triangle), unit length.
-pub fn surface_direction(mesh: &TriMesh, uv: &[DVec2], u: DVec2) -> Option<DVec3> {
-    let mut s = DVec3::ZERO;
-    for (t, tri) in mesh.triangles.iter().enumerate() {
+/// The centroid of face `t`.
+pub fn centroid(mesh: &TriMesh, t: usize) -> DVec3 {
+    let c = mesh.corners(t);
+    (c[0] + c[1] + c[2]) / 3.0
+}
+
+/// The face whose centroid is nearest to `p` (the first of equals); `None` for no faces.
+pub fn nearest_face(mesh: &TriMesh, p: DVec3) -> Option<usize> {
+    (0..mesh.triangles.len()).min_by(|&a, &b| {
+        centroid(mesh, a)
+            .distance_squared(p)
+            .total_cmp(&centroid(mesh, b).distance_squared(p))
+    })
+}
+
+/// The face nearest to the area-weighted centroid of the surface: where a piece's grain is
+/// stated when no grain line is drawn.
+pub fn central_face(mesh: &TriMesh) -> Option<usize> {
+    let (mut s, mut w) = (DVec3::ZERO, 0.0);
+    for t in 0..mesh.triangles.len() {
         let c = mesh.corners(t);
-        let (Some((_, ex, ey)), Some(j)) = (
-            local_frame(c[0], c[1], c[2]),
-            triangle_jacobian(c, tri.map(|v| uv[v as usize])),
-        ) else {
-            continue;
-        };
-        let Some(a) = warp_in_frame(j, u) else {
-            continue;
-        };
-        let area = 0.5 * (c[1] - c[0]).cross(c[2] - c[0]).length();
-        s += area * (ex * a.x + ey * a.y);
+        let a = 0.5 * (c[1] - c[0]).cross(c[2] - c[0]).length();
+        s += a * centroid(mesh, t);
+        w += a;
     }
-    let l = s.length();
-    (l.is_finite() && l > 0.0).then(|| s / l)
+    nearest_face(mesh, if w > 0.0 { s / w } else { DVec3::ZERO })
+}
+
+/// The 3D direction (unit) of the warp that runs along the pattern direction `u`, in face `t`
+/// of the map `uv` of `mesh`.
+pub fn warp_at(mesh: &TriMesh, uv: &[DVec2], u: DVec2, t: usize) -> Option<DVec3> {
+    let c = mesh.corners(t);
+    let (_, ex, ey) = local_frame(c[0], c[1], c[2])?;
+    let j = triangle_jacobian(c, mesh.triangles[t].map(|v| uv[v as usize]))?;
+    let a = warp_in_frame(j, u)?;
+    Some(ex * a.x + ey * a.y)
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@
 
 use flatcut_geom::DVec2;
 use flatcut_mesh::TriMesh;
-use flatcut_mesh::grain_strain::{DirectionalLimits, grain_strain, surface_direction};
+use flatcut_mesh::grain_strain::{DirectionalLimits, central_face, grain_strain, warp_at};
 use serde::Serialize;
 
 /// The grain section of a piece's report (flattened into the report's JSON).
@@ -16,7 +16,7 @@ pub struct GrainReport {
     pub material: String,
     /// True when the grain was chosen by the flattening (`grain = "auto"` or no grain given).
     pub grain_auto: bool,
-    /// The warp's direction on the surface (area-weighted mean, unit).
+    /// The warp's direction on the surface (unit) in the face nearest the piece's centroid.
     pub grain_3d: [f64; 3],
     pub stretch_max_pct_along: f64,
     pub stretch_max_pct_across: f64,
@@ -52,7 +52,7 @@ impl GrainReport {
         let mut r = GrainReport {
             material: material.to_string(),
             grain_auto,
-            grain_3d: surface_direction(mesh, uv, u)?.to_array(),
+            grain_3d: warp_at(mesh, uv, u, central_face(mesh)?)?.to_array(),
             stretch_max_pct_along: 0.0,
             stretch_max_pct_across: 0.0,
             stretch_max_pct_bias: 0.0,

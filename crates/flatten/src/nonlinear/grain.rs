@@ -15,7 +15,9 @@
 //! order, ties to the smaller angle.
 
 use flatcut_geom::{DVec2, DVec3};
-use flatcut_mesh::grain_strain::{GrainStrain, grain_strain_of, pattern_direction, warp_in_frame};
+use flatcut_mesh::grain_strain::{
+    GrainStrain, grain_strain_of, pattern_direction_near, warp_in_frame,
+};
 use flatcut_mesh::{Topology, TriMesh};
 
 use super::kernel::{RestTri, SymDirichlet};
@@ -68,9 +70,9 @@ pub(crate) fn orthotropic(
     };
     let best = match aniso.grain {
         Grain::Angle(a) => solve(&start, grain_dir(a), FRAME_PASSES)?,
-        Grain::Direction(d) => solve(
+        Grain::Line(l) => solve(
             &start,
-            grain_dir(direction_angle(mesh, &start, d)?),
+            grain_dir(line_angle(mesh, &start, l)?),
             FRAME_PASSES,
         )?,
         Grain::Auto => {
@@ -169,12 +171,13 @@ fn mean_image(frames: &[RestTri], x: &[DVec2]) -> DVec2 {
     s.normalize_or(DVec2::X)
 }
 
-/// The pattern angle of the 3D grain direction `d` in map `x`.
-fn direction_angle(mesh: &TriMesh, x: &[DVec2], d: DVec3) -> Result<f64, FlattenError> {
-    let u = pattern_direction(mesh, x, d).ok_or_else(|| {
+/// The pattern angle of the grain line `[a, b]` in map `x`, measured where it is drawn.
+fn line_angle(mesh: &TriMesh, x: &[DVec2], [a, b]: [DVec3; 2]) -> Result<f64, FlattenError> {
+    let d = b - a;
+    let u = pattern_direction_near(mesh, x, d, 0.5 * (a + b), d.length()).ok_or_else(|| {
         FlattenError::Anisotropy(format!(
-            "the grain direction ({}, {}, {}) is normal to the whole surface",
-            d.x, d.y, d.z
+            "the grain line from ({}, {}, {}) to ({}, {}, {}) is normal to the surface where it is drawn",
+            a.x, a.y, a.z, b.x, b.y, b.z
         ))
     })?;
     Ok(u.y.atan2(u.x))
