@@ -20,10 +20,10 @@ use flatcut_mesh::grain_strain::{
 };
 use flatcut_mesh::{Topology, TriMesh};
 
-use super::kernel::{RestTri, SymDirichlet};
+use super::kernel::RestTri;
 use super::newton::{Budget, EarlyStop};
 use super::orthotropic::{Orthotropic, grain_frames};
-use super::{init, newton_solve, time_limit_warning};
+use super::{isometric_run, newton_solve, time_limit_warning};
 use crate::anisotropy::{Anisotropy, DirectionalLimits, Grain, grain_dir};
 use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
 
@@ -52,16 +52,7 @@ pub(crate) fn orthotropic(
         .validate()
         .map_err(FlattenError::Anisotropy)?;
     let n = mesh.positions.len();
-    let x0 = init::lscm_or_tutte(mesh, topo)?;
-    let iso = newton_solve(
-        rest,
-        n,
-        SymDirichlet,
-        &x0,
-        params,
-        Method::Orthotropic,
-        budget,
-    )?;
+    let iso = isometric_run(mesh, topo, rest, params, Method::Orthotropic, budget)?;
     let mut iterations = iso.iterations;
     let mut early = iso.early;
     let start = iso.x;

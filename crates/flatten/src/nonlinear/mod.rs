@@ -113,16 +113,7 @@ pub(crate) fn isometric(
     budget: &Budget,
 ) -> Result<Flattening, FlattenError> {
     let n = mesh.positions.len();
-    let x0 = init::lscm_or_tutte(mesh, topo)?;
-    let run = newton_solve(
-        rest,
-        n,
-        SymDirichlet,
-        &x0,
-        params,
-        Method::Isometric,
-        budget,
-    )?;
+    let run = isometric_run(mesh, topo, rest, params, Method::Isometric, budget)?;
     let mut info = FlattenInfo {
         iterations: run.iterations,
         final_energy: run.energy / total_area(rest),
@@ -151,6 +142,27 @@ pub(crate) fn isometric(
             .push(time_limit_warning(Method::Isometric, info.iterations));
     }
     Ok(Flattening { uv: x, info })
+}
+
+/// The unconstrained δ2 solve from LSCM (or Tutte where LSCM flips), for `method`'s messages.
+pub(crate) fn isometric_run(
+    mesh: &TriMesh,
+    topo: &Topology,
+    rest: &[RestTri],
+    params: &FlattenParams,
+    method: Method,
+    budget: &Budget,
+) -> Result<newton::NewtonRun, FlattenError> {
+    let x0 = init::lscm_or_tutte(mesh, topo)?;
+    newton_solve(
+        rest,
+        mesh.positions.len(),
+        SymDirichlet,
+        &x0,
+        params,
+        method,
+        budget,
+    )
 }
 
 /// Duncan's conformal distortion δ1 via the MIPS energy, scaled to the 3D area.
