@@ -2,6 +2,7 @@
 //! command line, the pipeline against the simulated controller, STEP models in).
 
 mod assembly;
+mod dart_drawing;
 mod darts;
 mod dxf;
 mod fuzz;
