@@ -26,6 +26,7 @@ pub mod marks;
 pub mod method;
 pub mod nonlinear;
 pub(crate) mod ops;
+pub(crate) mod ordering;
 pub mod params;
 pub(crate) mod sparse;
 /// Generated test surfaces (caps, cylinders, cones, saddles): for this crate's tests, benches

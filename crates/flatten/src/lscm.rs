@@ -88,7 +88,7 @@ pub fn solve_pinned(
         x[2 * v as usize + 1] = p.y;
     }
     let cot = corner_cotans(&mesh.positions, &mesh.triangles);
-    let mut q = QuadraticBuilder::new(&fixed, 6 * mesh.triangles.len());
+    let mut q = QuadraticBuilder::new(&fixed, 6 * mesh.triangles.len()).dofs_per_vertex(2);
     for (tri, c) in mesh.triangles.iter().zip(&cot) {
         for k in 0..3 {
             let (a, b) = (tri[(k + 1) % 3] as usize, tri[(k + 2) % 3] as usize);

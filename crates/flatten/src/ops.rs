@@ -6,7 +6,7 @@ use flatcut_geom::{DVec2, DVec3};
 use flatcut_mesh::{Topology, TriMesh};
 
 use crate::FlattenError;
-use crate::sparse::{SpdSolver, SymTriplets};
+use crate::sparse::{Ordering, SpdSolver, SymPattern, SymTriplets};
 
 /// Interior angle at each corner of each triangle (radians), corner `k` at `triangles[t][k]`.
 pub fn corner_angles(mesh: &TriMesh) -> Vec<[f64; 3]> {
@@ -129,6 +129,9 @@ pub struct QuadraticBuilder {
     /// Diagonal of `Q_ff`, summed as it comes: a third of the entries of a Laplacian, which
     /// would otherwise each be a triplet (the memory peak of LSCM on large meshes).
     diag: Vec<f64>,
+    /// Consecutive dofs that belong to one mesh vertex (1, or 2 for u and v), for the
+    /// fill-reducing ordering.
+    dofs_per_vertex: u32,
 }
 
 impl QuadraticBuilder {
@@ -150,7 +153,17 @@ impl QuadraticBuilder {
             free,
             coupling: Vec::new(),
             triplets,
+            dofs_per_vertex: 1,
         }
+    }
+
+    /// Declares that dofs `k·i … k·i + k − 1` belong to vertex `i` (u and v of a map: `k = 2`),
+    /// so that the factorisation orders vertices rather than single dofs.
+    pub fn dofs_per_vertex(mut self, k: u32) -> Self {
+        self.dofs_per_vertex = k.max(1);
+        // Room for the structural zeros `build` adds, so that they never grow the triplets.
+        self.triplets.reserve(self.free.len());
+        self
     }
 
     /// Adds `v` to `Q[i][j]` and, when `i ≠ j`, to `Q[j][i]`.
@@ -181,7 +194,22 @@ impl QuadraticBuilder {
                 "{stage}: every unknown is fixed"
             )));
         }
-        let solver = SpdSolver::from_triplets(&self.triplets, stage)?;
+        let k = self.dofs_per_vertex;
+        // For nested dissection, a structural zero between the dofs of one vertex: u and v of a
+        // vertex are not coupled in LSCM, so without it they are never one supernode and the
+        // factor falls apart into one-column supernodes (4× slower at 1M faces). AMD orders
+        // better without it.
+        let n_vertices = (self.free_index.len() as u32).div_ceil(k) as usize;
+        let nd = Ordering::for_nodes(n_vertices) == Ordering::NestedDissection;
+        for i in (1..self.free.len()).filter(|_| nd && k > 1) {
+            if self.free[i] / k == self.free[i - 1] / k {
+                self.triplets.add(i, i - 1, 0.0);
+            }
+        }
+        let node_of = self.free.iter().map(|&d| d / k).collect();
+        let pattern = SymPattern::new(&self.triplets, stage)?.with_nodes(node_of, n_vertices)?;
+        let mut solver = SpdSolver::new(pattern, stage)?;
+        solver.factor(self.triplets.values())?;
         Ok(Reduced {
             free: self.free,
             coupling: self.coupling,

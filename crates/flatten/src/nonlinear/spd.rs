@@ -1,7 +1,8 @@
 //! A symmetric positive-definite sparse system with a fixed pattern for the Newton steps: the
 //! values live in CSC order (upper triangle, rows ≤ column) so that the per-triangle Hessians are
 //! scattered straight into precomputed slots, and the factorisation is the crate's one sparse
-//! Cholesky, [`crate::sparse::SpdSolver`] (faer, AMD ordering, symbolic factorisation computed
+//! Cholesky, [`crate::sparse::SpdSolver`] (faer; AMD, or nested dissection of the vertex graph
+//! from [`crate::sparse::NESTED_DISSECTION_FROM`] vertices; symbolic factorisation computed
 //! once and reused for every step, sequential `Par::Seq`: faster on small machines and
 //! bit-for-bit deterministic, crates.md §3).
 //!
@@ -42,7 +43,7 @@ impl SpdSystem {
             col_ptr[c + 1] += col_ptr[c];
         }
         let row_idx = entries.iter().map(|e| e.0).collect();
-        Self::from_csc(n, col_ptr, row_idx)
+        Self::from_csc(n, col_ptr, row_idx, None)
     }
 
     /// The pattern of 2×2 blocks over `n_vertices` vertices (dofs 2v, 2v + 1): one block for
@@ -84,19 +85,30 @@ impl SpdSystem {
             start = end;
         }
         drop(pairs);
-        Self::from_csc(n, col_ptr, row_idx)
+        let node_of = (0..n as u32).map(|i| i / 2).collect();
+        Self::from_csc(n, col_ptr, row_idx, Some((node_of, n_vertices)))
     }
 
     /// The system of the upper-triangle CSC pattern `col_ptr`/`row_idx`, whose diagonal is
-    /// stored (last in each column).
-    fn from_csc(n: usize, col_ptr: Vec<usize>, row_idx: Vec<usize>) -> Result<Self, String> {
+    /// stored (last in each column); `nodes` groups the unknowns by mesh vertex for the ordering.
+    fn from_csc(
+        n: usize,
+        col_ptr: Vec<usize>,
+        row_idx: Vec<usize>,
+        nodes: Option<(Vec<u32>, usize)>,
+    ) -> Result<Self, String> {
         let diag: Vec<usize> = (0..n).map(|c| col_ptr[c + 1].saturating_sub(1)).collect();
         if (0..n).any(|c| col_ptr[c + 1] == col_ptr[c] || row_idx[diag[c]] != c) {
             return Err("the pattern lacks a diagonal entry".into());
         }
         let nnz = row_idx.len();
-        let pattern =
+        let mut pattern =
             SymPattern::from_upper_csc(n, col_ptr, row_idx, "newton").map_err(|e| e.to_string())?;
+        if let Some((node_of, n_nodes)) = nodes {
+            pattern = pattern
+                .with_nodes(node_of, n_nodes)
+                .map_err(|e| e.to_string())?;
+        }
         let solver = SpdSolver::new(pattern, "newton").map_err(|e| e.to_string())?;
         Ok(Self {
             n,

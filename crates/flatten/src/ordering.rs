@@ -1,0 +1,532 @@
+//! Nested-dissection fill-reducing ordering for the sparse Cholesky factorisations of mesh
+//! systems.
+//!
+//! The matrices of this crate live on the graph of a triangulated disk, a planar graph. For
+//! planar graphs nested dissection (George 1973; Lipton, Rose & Tarjan 1979) bounds the fill of
+//! the Cholesky factor by O(n log n) and its work by O(n^1.5); minimum-degree orderings such as
+//! faer's AMD have no such bound. On triangulated grids this ordering's fill is 13 % below AMD's
+//! at 200k–360k vertices and above it below ~60k (`sparse::NESTED_DISSECTION_FROM`). The
+//! separators come from breadth-first level structures (George & Liu's automatic nested
+//! dissection): from a pseudo-peripheral node, the BFS levels of a planar mesh are arcs of
+//! O(√n) nodes, and the level that splits the region in two balanced halves with the fewest
+//! nodes is the separator. The halves are ordered first, recursively, the separator last;
+//! regions of at most [`LEAF_NODES`] nodes are ordered by faer's AMD.
+//!
+//! Written here (not taken from a library) because faer 0.24 ships only AMD/COLAMD, and the Rust
+//! bindings of METIS compile its C sources, which this pure-Rust crate does not take on; the
+//! algorithm is ~250 lines. It is sequential and uses no hashing,
+//! so the ordering, and with it every bit of every factorisation, is the same on every run.
+//!
+//! The ordering works on a quotient graph: unknowns that belong to one mesh vertex (its u and v
+//! coordinates) form one node, so the graph is the mesh's vertex graph, half or a quarter the
+//! size of the matrix graph, and the unknowns of a node are eliminated together.
+
+/// Regions of at most this many nodes are not dissected further: their fill is bounded by a
+/// dense block of this size, and splitting them would cost more than it saves.
+const LEAF_NODES: usize = 256;
+/// Breadth-first sweeps spent looking for a pseudo-peripheral start node (each moves to a node of
+/// the last level; two or three suffice on meshes).
+const PERIPHERAL_SWEEPS: usize = 4;
+/// Each side of a separator must hold at least this fraction of its region's nodes.
+const MIN_BALANCE: f64 = 0.3;
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::SymbolicSparseColMatRef;
+use faer::sparse::linalg::amd;
+
+/// An undirected graph in compressed adjacency form (each edge stored in both directions, no
+/// self-loops, neighbours sorted).
+#[derive(Clone, Debug)]
+pub struct Graph {
+    ptr: Vec<usize>,
+    adj: Vec<u32>,
+}
+
+impl Graph {
+    /// The quotient graph of the symmetric pattern given by one triangle in compressed-column
+    /// form (`col_ptr`, `row_idx`, either triangle): unknown `i` belongs to node `node_of[i]`
+    /// (`< n_nodes`), and two nodes are adjacent when any of their unknowns are coupled.
+    pub fn quotient(col_ptr: &[usize], row_idx: &[usize], node_of: &[u32], n_nodes: usize) -> Self {
+        let n = col_ptr.len().saturating_sub(1);
+        let edges = || {
+            (0..n).flat_map(move |c| {
+                row_idx[col_ptr[c]..col_ptr[c + 1]]
+                    .iter()
+                    .map(move |&r| (node_of[r], node_of[c]))
+                    .filter(|(a, b)| a != b)
+            })
+        };
+        let mut ptr = vec![0usize; n_nodes + 1];
+        for (a, b) in edges() {
+            ptr[a as usize + 1] += 1;
+            ptr[b as usize + 1] += 1;
+        }
+        for i in 0..n_nodes {
+            ptr[i + 1] += ptr[i];
+        }
+        let mut fill = ptr.clone();
+        let mut adj = vec![0u32; ptr[n_nodes]];
+        for (a, b) in edges() {
+            adj[fill[a as usize]] = b;
+            fill[a as usize] += 1;
+            adj[fill[b as usize]] = a;
+            fill[b as usize] += 1;
+        }
+        drop(fill);
+        // Sort and deduplicate each list in place, compacting as we go.
+        let mut out = 0;
+        let mut start = 0;
+        for v in 0..n_nodes {
+            let end = ptr[v + 1];
+            adj[start..end].sort_unstable();
+            ptr[v] = out;
+            let mut last = None;
+            for k in start..end {
+                let w = adj[k];
+                if last != Some(w) {
+                    adj[out] = w;
+                    out += 1;
+                    last = Some(w);
+                }
+            }
+            start = end;
+        }
+        ptr[n_nodes] = out;
+        adj.truncate(out);
+        adj.shrink_to_fit();
+        Self { ptr, adj }
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.ptr.len() - 1
+    }
+
+    fn neighbours(&self, v: u32) -> &[u32] {
+        &self.adj[self.ptr[v as usize]..self.ptr[v as usize + 1]]
+    }
+}
+
+/// A region still to be ordered: its nodes and the first position they take.
+struct Region {
+    id: u32,
+    nodes: Vec<u32>,
+    first: usize,
+}
+
+/// Scratch state of the dissection: which region each node is in and its BFS level.
+struct Dissection<'g> {
+    g: &'g Graph,
+    region: Vec<u32>,
+    level: Vec<u32>,
+    queue: Vec<u32>,
+    /// Index of each node within the leaf being ordered (scratch of [`Self::order_leaf`]).
+    local: Vec<u32>,
+    next_id: u32,
+}
+
+const UNSEEN: u32 = u32::MAX;
+
+impl Dissection<'_> {
+    /// Breadth-first search from `root` inside region `id`: fills `queue` with the nodes reached
+    /// in BFS order and `level` with their distances; returns the number of levels.
+    fn bfs(&mut self, id: u32, root: u32) -> u32 {
+        self.queue.clear();
+        self.queue.push(root);
+        self.level[root as usize] = 0;
+        let mut head = 0;
+        while head < self.queue.len() {
+            let v = self.queue[head];
+            head += 1;
+            let lv = self.level[v as usize];
+            for &w in self.g.neighbours(v) {
+                if self.region[w as usize] == id && self.level[w as usize] == UNSEEN {
+                    self.level[w as usize] = lv + 1;
+                    self.queue.push(w);
+                }
+            }
+        }
+        self.queue.last().map_or(0, |&v| self.level[v as usize] + 1)
+    }
+
+    fn clear_levels(&mut self) {
+        for &v in &self.queue {
+            self.level[v as usize] = UNSEEN;
+        }
+    }
+
+    /// A BFS from a pseudo-peripheral node of the component of `nodes[0]` (the level structure
+    /// stays in `queue`/`level`); returns the number of levels.
+    fn peripheral_bfs(&mut self, id: u32, start: u32) -> u32 {
+        let mut depth = self.bfs(id, start);
+        for _ in 0..PERIPHERAL_SWEEPS {
+            let last = depth - 1;
+            let g = self.g;
+            let Some(&cand) = self
+                .queue
+                .iter()
+                .rev()
+                .take_while(|&&v| self.level[v as usize] == last)
+                .min_by_key(|&&v| (g.neighbours(v).len(), v))
+            else {
+                break;
+            };
+            self.clear_levels();
+            let d = self.bfs(id, cand);
+            // The level structure now in `queue`/`level` is the one from `cand`: report its
+            // depth even when it is not deeper, and stop.
+            let deeper = d > depth;
+            depth = d;
+            if !deeper {
+                break;
+            }
+        }
+        depth
+    }
+
+    fn new_id(&mut self) -> u32 {
+        self.next_id += 1;
+        self.next_id
+    }
+
+    /// Splits `r` into the regions to order before it; writes the nodes it places (a leaf, or a
+    /// separator) into `order`.
+    fn split(&mut self, r: Region, order: &mut [u32]) -> Vec<Region> {
+        let n = r.nodes.len();
+        if n <= LEAF_NODES {
+            self.order_leaf(&r, order);
+            return Vec::new();
+        }
+        let depth = self.peripheral_bfs(r.id, r.nodes[0]);
+        if self.queue.len() < n {
+            // Disconnected: the component found and the rest are independent regions.
+            let comp = std::mem::take(&mut self.queue);
+            let (a, b) = (self.new_id(), self.new_id());
+            for &v in &comp {
+                self.region[v as usize] = a;
+                self.level[v as usize] = UNSEEN;
+            }
+            let rest: Vec<u32> = r
+                .nodes
+                .iter()
+                .copied()
+                .filter(|&v| self.region[v as usize] == r.id)
+                .collect();
+            for &v in &rest {
+                self.region[v as usize] = b;
+            }
+            let first_rest = r.first + comp.len();
+            return vec![
+                Region {
+                    id: a,
+                    nodes: comp,
+                    first: r.first,
+                },
+                Region {
+                    id: b,
+                    nodes: rest,
+                    first: first_rest,
+                },
+            ];
+        }
+        let Some(m) = self.separator_level(depth as usize) else {
+            // No level splits the region in balanced parts (a near-clique): order it as it is.
+            self.clear_levels();
+            self.order_leaf(&r, order);
+            return Vec::new();
+        };
+        let m = m as u32;
+        let (below, above) = (self.new_id(), self.new_id());
+        let (mut a, mut b, mut sep) = (Vec::new(), Vec::new(), Vec::new());
+        for &v in &self.queue {
+            let l = self.level[v as usize];
+            if l < m || (l == m && !self.touches_level(v, r.id, m + 1)) {
+                a.push(v);
+            } else if l == m {
+                sep.push(v);
+            } else {
+                b.push(v);
+            }
+        }
+        self.clear_levels();
+        for &v in &a {
+            self.region[v as usize] = below;
+        }
+        for &v in &b {
+            self.region[v as usize] = above;
+        }
+        let sep_first = r.first + a.len() + b.len();
+        order[sep_first..sep_first + sep.len()].copy_from_slice(&sep);
+        for &v in &sep {
+            self.region[v as usize] = UNSEEN;
+        }
+        let first_b = r.first + a.len();
+        vec![
+            Region {
+                id: below,
+                nodes: a,
+                first: r.first,
+            },
+            Region {
+                id: above,
+                nodes: b,
+                first: first_b,
+            },
+        ]
+    }
+
+    /// Orders a region that is not dissected further by minimum degree (faer's AMD on its
+    /// subgraph). A plain breadth-first order of the leaves gave about 10 % more fill and, worse,
+    /// no supernodes: every leaf column became its own one-column supernode and the numeric
+    /// factorisation ran 4× slower than with AMD alone.
+    fn order_leaf(&mut self, r: &Region, order: &mut [u32]) {
+        let n = r.nodes.len();
+        for (k, &v) in r.nodes.iter().enumerate() {
+            self.local[v as usize] = k as u32;
+        }
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0usize);
+        for &v in &r.nodes {
+            row_idx.extend(
+                self.g
+                    .neighbours(v)
+                    .iter()
+                    .filter(|&&w| self.region[w as usize] == r.id)
+                    .map(|&w| self.local[w as usize] as usize),
+            );
+            let start = col_ptr[col_ptr.len() - 1];
+            row_idx[start..].sort_unstable();
+            col_ptr.push(row_idx.len());
+        }
+        let (mut perm, mut perm_inv) = (vec![0usize; n], vec![0usize; n]);
+        let nnz = row_idx.len();
+        let graph = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
+        let mut mem = MemBuffer::new(amd::order_scratch::<usize>(n, nnz));
+        let amd_ok = amd::order(
+            &mut perm,
+            &mut perm_inv,
+            graph,
+            amd::Control::default(),
+            MemStack::new(&mut mem),
+        )
+        .is_ok();
+        for k in 0..n {
+            let local = if amd_ok { perm[k] } else { k };
+            order[r.first + k] = r.nodes[local];
+        }
+    }
+
+    /// True when `v` has a neighbour in region `id` at BFS level `l`.
+    fn touches_level(&self, v: u32, id: u32, l: u32) -> bool {
+        self.g
+            .neighbours(v)
+            .iter()
+            .any(|&w| self.region[w as usize] == id && self.level[w as usize] == l)
+    }
+
+    /// The level whose nodes touching the next level form the smallest separator with at least
+    /// [`MIN_BALANCE`] of the region on each side (`None` if no level qualifies).
+    fn separator_level(&self, depth: usize) -> Option<usize> {
+        if depth < 3 {
+            return None;
+        }
+        let id = self.region[self.queue[0] as usize];
+        let mut count = vec![0usize; depth];
+        let mut sep = vec![0usize; depth];
+        for &v in &self.queue {
+            let l = self.level[v as usize] as usize;
+            count[l] += 1;
+            if l + 1 < depth && self.touches_level(v, id, l as u32 + 1) {
+                sep[l] += 1;
+            }
+        }
+        let n = self.queue.len();
+        let min_side = (MIN_BALANCE * n as f64).ceil() as usize;
+        let mut before = 0;
+        let mut best: Option<(usize, usize)> = None;
+        for m in 0..depth {
+            let below = before + count[m] - sep[m];
+            let above = n - before - count[m];
+            before += count[m];
+            if m == 0 || m + 1 >= depth || below < min_side || above < min_side {
+                continue;
+            }
+            if best.is_none_or(|(s, _)| sep[m] < s) {
+                best = Some((sep[m], m));
+            }
+        }
+        best.map(|(_, m)| m)
+    }
+}
+
+/// The nested-dissection elimination order of `g`: `order[k]` is the node eliminated k-th.
+pub fn nested_dissection(g: &Graph) -> Vec<u32> {
+    let n = g.len();
+    let mut order = vec![0u32; n];
+    let mut d = Dissection {
+        g,
+        region: vec![0; n],
+        level: vec![UNSEEN; n],
+        queue: Vec::new(),
+        local: vec![0; n],
+        next_id: 0,
+    };
+    let mut stack = vec![Region {
+        id: 0,
+        nodes: (0..n as u32).collect(),
+        first: 0,
+    }];
+    while let Some(r) = stack.pop() {
+        stack.extend(d.split(r, &mut order));
+    }
+    order
+}
+
+/// The elimination order of the unknowns: nodes in `node_order`, the unknowns of one node
+/// together in increasing index. Every unknown appears once (`node_of[i] < node_order.len()`).
+pub fn expand(node_order: &[u32], node_of: &[u32]) -> Vec<usize> {
+    let n_nodes = node_order.len();
+    let mut ptr = vec![0usize; n_nodes + 1];
+    for &v in node_of {
+        ptr[v as usize + 1] += 1;
+    }
+    for i in 0..n_nodes {
+        ptr[i + 1] += ptr[i];
+    }
+    let mut members = vec![0usize; node_of.len()];
+    let mut fill = ptr.clone();
+    for (i, &v) in node_of.iter().enumerate() {
+        members[fill[v as usize]] = i;
+        fill[v as usize] += 1;
+    }
+    node_order
+        .iter()
+        .flat_map(|&v| {
+            members[ptr[v as usize]..ptr[v as usize + 1]]
+                .iter()
+                .copied()
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The 5-point grid graph on `w × h` nodes, upper triangle in compressed-column form.
+    fn grid(w: usize, h: usize) -> (Vec<usize>, Vec<usize>) {
+        let mut col_ptr = vec![0];
+        let mut row_idx = Vec::new();
+        for c in 0..w * h {
+            let (x, y) = (c % w, c / w);
+            if y > 0 {
+                row_idx.push(c - w);
+            }
+            if x > 0 {
+                row_idx.push(c - 1);
+            }
+            row_idx.push(c);
+            col_ptr.push(row_idx.len());
+        }
+        (col_ptr, row_idx)
+    }
+
+    #[test]
+    fn quotient_merges_unknowns_and_drops_self_loops() {
+        // Two unknowns per node on a path of three nodes: 0-1-2.
+        let node_of = [0, 0, 1, 1, 2, 2];
+        // Upper triangle: (0,1) inside node 0, (1,2) and (0,3) between nodes 0 and 1, (3,4)
+        // between 1 and 2, plus the diagonal.
+        let col_ptr = vec![0, 1, 3, 5, 7, 9, 10];
+        let row_idx = vec![0, 0, 1, 1, 2, 0, 3, 3, 4, 5];
+        let g = Graph::quotient(&col_ptr, &row_idx, &node_of, 3);
+        assert_eq!(g.neighbours(0), &[1]);
+        assert_eq!(g.neighbours(1), &[0, 2]);
+        assert_eq!(g.neighbours(2), &[1]);
+    }
+
+    #[test]
+    fn dissection_is_a_permutation_with_a_separator_last() {
+        let (w, h) = (40, 30);
+        let (col_ptr, row_idx) = grid(w, h);
+        let node_of: Vec<u32> = (0..(w * h) as u32).collect();
+        let g = Graph::quotient(&col_ptr, &row_idx, &node_of, w * h);
+        let order = nested_dissection(&g);
+        let mut seen = vec![false; w * h];
+        for &v in &order {
+            assert!(!seen[v as usize], "node {v} twice");
+            seen[v as usize] = true;
+        }
+        assert!(seen.iter().all(|&s| s));
+        // The last nodes form the top separator: removing them disconnects the grid into two
+        // parts, each at least MIN_BALANCE of it. Find the separator as the nodes placed after
+        // the last node that is adjacent to a node of the other half: here, check the cut
+        // directly on the first half of the order versus the rest.
+        let pos: Vec<usize> = {
+            let mut p = vec![0; w * h];
+            for (k, &v) in order.iter().enumerate() {
+                p[v as usize] = k;
+            }
+            p
+        };
+        // Nodes of part A (placed first) never touch part B except through separator nodes,
+        // which come after both: so every edge between two nodes placed before the separator
+        // joins nodes on the same side. A separator of a 40 × 30 grid found by BFS levels is at
+        // most a diagonal, ≤ 31 + 30 nodes.
+        let n = w * h;
+        let sep_len = (1..=61)
+            .find(|&s| {
+                let cut = n - s;
+                // Split the first `cut` nodes into connected groups; they must be ≥ 2 groups.
+                let mut comp = vec![usize::MAX; n];
+                let mut groups = 0;
+                for start in 0..n {
+                    if pos[start] >= cut || comp[start] != usize::MAX {
+                        continue;
+                    }
+                    groups += 1;
+                    let mut st = vec![start];
+                    comp[start] = groups;
+                    while let Some(v) = st.pop() {
+                        for &u in g.neighbours(v as u32) {
+                            let u = u as usize;
+                            if pos[u] < cut && comp[u] == usize::MAX {
+                                comp[u] = groups;
+                                st.push(u);
+                            }
+                        }
+                    }
+                }
+                groups >= 2
+            })
+            .expect("the last ≤ 61 nodes separate the grid");
+        assert!(sep_len <= 61, "separator of {sep_len} nodes");
+    }
+
+    #[test]
+    fn expand_keeps_the_unknowns_of_a_node_together() {
+        let node_of = [1, 0, 1, 2, 0];
+        assert_eq!(expand(&[2, 0, 1], &node_of), vec![3, 1, 4, 0, 2]);
+    }
+
+    #[test]
+    fn disconnected_graphs_are_ordered_whole() {
+        // Two grids side by side with no edge between them.
+        let (cp, ri) = grid(20, 20);
+        let mut col_ptr = cp.clone();
+        let mut row_idx = ri.clone();
+        let off = 400;
+        for c in 0..400 {
+            for &r in &ri[cp[c]..cp[c + 1]] {
+                row_idx.push(r + off);
+            }
+            col_ptr.push(row_idx.len());
+        }
+        let node_of: Vec<u32> = (0..800).collect();
+        let g = Graph::quotient(&col_ptr, &row_idx, &node_of, 800);
+        let mut order = nested_dissection(&g);
+        order.sort_unstable();
+        assert_eq!(order, (0..800).collect::<Vec<u32>>());
+    }
+}
