@@ -2,10 +2,12 @@
 //! command line, the pipeline against the simulated controller, STEP models in).
 
 mod assembly;
+mod dart_drawing;
 mod darts;
 mod dxf;
 mod fuzz;
 mod hpgl;
+mod material;
 mod nest;
 mod pipeline;
 mod regressions;

@@ -65,6 +65,7 @@ fn delta2(path: &Path) -> Vec<(String, f64)> {
         &Tolerances::DEFAULT,
         &FlattenParams::new(Method::Isometric),
         None,
+        None,
         &mut |_, _, _| {},
     )
     .unwrap();

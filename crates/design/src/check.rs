@@ -5,7 +5,7 @@
 use flatcut_geom::limits::{self, MAX_CONTROL_POINTS, MAX_DEGREE, MAX_QUANTITY};
 
 use crate::error::Ctx;
-use crate::{CurveDef, DesignError, P3, PieceDef, SeamDef, SurfaceDef};
+use crate::{CurveDef, DesignError, GrainDef, P3, PieceDef, SeamDef, SurfaceDef};
 
 /// Every coordinate finite and within range once converted to mm (`s` mm per design unit).
 fn check_points(ctx: &Ctx, s: f64, what: &str, pts: &[P3]) -> Result<(), DesignError> {
@@ -296,7 +296,7 @@ pub(crate) fn check_piece(p: &PieceDef, s: f64) -> Result<(), DesignError> {
             )));
         }
     }
-    if let Some(g) = &p.grain {
+    if let Some(g) = p.grain.as_ref().and_then(GrainDef::line) {
         check_points(&ctx, s, "grain", g)?;
         if g[0] == g[1] {
             return Err(ctx.err("grain: the two points coincide (no direction)".into()));

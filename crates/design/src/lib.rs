@@ -32,6 +32,7 @@ mod check;
 mod error;
 mod join;
 mod load;
+pub mod material;
 mod part;
 mod schema;
 mod step;
@@ -44,7 +45,8 @@ pub use error::DesignError;
 pub use load::Design;
 pub use part::{JoinDef, JoinEdgeDef, LineDef, PartDef, PartPieceDef};
 pub use schema::{
-    Blend, CurveDef, DartsDef, MarkDef, MarkKind, P3, PieceDef, SeamDef, SurfaceDef, Units,
+    Blend, CurveDef, DartsDef, GrainDef, MarkDef, MarkKind, P3, PieceDef, SeamDef, SurfaceDef,
+    Units,
 };
 pub use step::{StepFaces, StepGroup, StepModel, StepPiece};
 

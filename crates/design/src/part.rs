@@ -30,7 +30,7 @@ use serde::Deserialize;
 
 use crate::check::check_piece;
 use crate::units::{scale_piece, sp};
-use crate::{DesignError, MarkDef, P3, PieceDef, SurfaceDef};
+use crate::{DesignError, GrainDef, MarkDef, P3, PieceDef, SurfaceDef};
 
 /// One surface cut into pieces by style lines.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -86,11 +86,13 @@ pub struct PartPieceDef {
     #[serde(default)]
     pub marks: Vec<MarkDef>,
     #[serde(default)]
-    pub grain: Option<[P3; 2]>,
+    pub grain: Option<GrainDef>,
     #[serde(default)]
     pub seam_allowance_mm: Option<f64>,
     #[serde(default)]
     pub material: Option<String>,
+    #[serde(default)]
+    pub material_properties: Option<String>,
 }
 
 /// A mating seam between two boundary stretches of pieces (of any part or `[[piece]]`).
@@ -151,6 +153,7 @@ impl PartDef {
             grain: p.grain,
             seam_allowance_mm: p.seam_allowance_mm,
             material: p.material.clone(),
+            material_properties: p.material_properties.clone(),
             index: k,
             mesh_scale: self.mesh_scale,
             ..PieceDef::of_surface(p.name.clone(), self.surface.clone(), self.file.clone())
@@ -281,7 +284,7 @@ pub(crate) fn scale_part(p: &mut PartDef, s: f64) {
         for m in &mut k.marks {
             m.points.iter_mut().for_each(|q| sp(q, s));
         }
-        if let Some(g) = &mut k.grain {
+        if let Some(g) = k.grain.as_mut().and_then(GrainDef::line_mut) {
             g.iter_mut().for_each(|q| sp(q, s));
         }
     }

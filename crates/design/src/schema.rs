@@ -210,6 +210,50 @@ pub(crate) fn one() -> u32 {
     1
 }
 
+/// A piece's grain: a line of two points on the surface (the warp runs from the first to the
+/// second), or `"auto"`: the flattening chooses the direction that exceeds the material's limits
+/// least.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GrainDef {
+    Line([P3; 2]),
+    Auto,
+}
+
+impl GrainDef {
+    /// The grain line, if one is drawn.
+    pub fn line(&self) -> Option<&[P3; 2]> {
+        match self {
+            GrainDef::Line(l) => Some(l),
+            GrainDef::Auto => None,
+        }
+    }
+
+    pub(crate) fn line_mut(&mut self) -> Option<&mut [P3; 2]> {
+        match self {
+            GrainDef::Line(l) => Some(l),
+            GrainDef::Auto => None,
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for GrainDef {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Line([P3; 2]),
+            Word(String),
+        }
+        match Raw::deserialize(d) {
+            Ok(Raw::Line(l)) => Ok(GrainDef::Line(l)),
+            Ok(Raw::Word(w)) if w == "auto" => Ok(GrainDef::Auto),
+            _ => Err(serde::de::Error::custom(
+                "grain: expected two points [[x, y, z], [x, y, z]] or \"auto\"",
+            )),
+        }
+    }
+}
+
 /// One piece of a design.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -232,13 +276,19 @@ pub struct PieceDef {
     pub seams: Vec<SeamDef>,
     #[serde(default)]
     pub marks: Vec<MarkDef>,
-    /// Grain direction: from the first point to the second (on or near the surface).
+    /// Grain direction: from the first point to the second (on or near the surface), or
+    /// `"auto"`.
     #[serde(default)]
-    pub grain: Option<[P3; 2]>,
+    pub grain: Option<GrainDef>,
     #[serde(default)]
     pub seam_allowance_mm: Option<f64>,
+    /// The material's name as printed on the pattern piece (a label only).
     #[serde(default)]
     pub material: Option<String>,
+    /// A bundled material (`leather`, `woven-cotton`, …) or a material file relative to the
+    /// design: its limits per direction and stiffness drive the orthotropic flattening.
+    #[serde(default)]
+    pub material_properties: Option<String>,
     /// `"auto"`: cut darts where the piece cannot meet its limits otherwise; `"off"`: never
     /// (default: as the command line or project says).
     #[serde(default)]
@@ -273,6 +323,7 @@ impl PieceDef {
             grain: None,
             seam_allowance_mm: None,
             material: None,
+            material_properties: None,
             darts: None,
             no_cut: Vec::new(),
             index: 0,

@@ -149,7 +149,11 @@ pub(crate) fn expand(pieces: Vec<PieceDef>, base_dir: &Path) -> Result<Vec<Piece
             StepGroup::Smooth => model.smooth_groups(&chosen),
         };
         let several = groups.len() > 1;
-        if several && (!p.seams.is_empty() || !p.marks.is_empty() || p.grain.is_some()) {
+        if several
+            && (!p.seams.is_empty()
+                || !p.marks.is_empty()
+                || p.grain.is_some_and(|g| g.line().is_some()))
+        {
             return Err(ctx.err(format!(
                 "step: the faces make {} pieces, but seams, marks and grain need one piece: choose faces that form one",
                 groups.len()

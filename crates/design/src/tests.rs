@@ -103,7 +103,7 @@ fn units_are_converted_once_at_load() {
             radius: 500.0
         }
     );
-    assert_eq!(p.grain.unwrap()[1], [1000.0, 0.0, 0.0]);
+    assert_eq!(p.grain.unwrap().line().unwrap()[1], [1000.0, 0.0, 0.0]);
     assert_eq!(p.marks[0].points[0], [500.0, 0.0, 0.0]);
     assert_eq!(p.quantity, 1);
 }
@@ -331,4 +331,21 @@ fn coordinates_beyond_the_sane_range_are_refused_in_mm() {
     assert!(Design::from_toml_str(ok, "ok.toml").is_ok());
     let e = err_toml(&format!("units = \"m\"\n{ok}"));
     assert!(e.contains("beyond"), "{e}");
+}
+
+#[test]
+fn grain_is_a_line_or_auto_and_material_properties_name_a_material() {
+    let text = |grain: &str| {
+        format!(
+            "[[piece]]\nname = \"p\"\ngrain = {grain}\nmaterial = \"cotton, white\"\nmaterial_properties = \"woven-cotton\"\n[piece.surface]\ntype = \"sphere\"\ncenter = [0, 0, 1]\nradius = 0.5\n"
+        )
+    };
+    let d = Design::from_toml_str(&text("\"auto\""), "m.toml").unwrap();
+    let p = &d.pieces[0];
+    assert_eq!(p.grain, Some(crate::GrainDef::Auto));
+    assert_eq!(p.material_properties.as_deref(), Some("woven-cotton"));
+    let e = Design::from_toml_str(&text("\"sideways\""), "m.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("m.toml") && e.contains("\"auto\""), "{e}");
 }

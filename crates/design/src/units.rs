@@ -1,6 +1,6 @@
 //! Unit conversion: every length of a parsed piece scaled from design units to mm, once, at load.
 
-use crate::{CurveDef, P3, PieceDef, SeamDef, SurfaceDef};
+use crate::{CurveDef, GrainDef, P3, PieceDef, SeamDef, SurfaceDef};
 
 pub(crate) fn sp(p: &mut P3, s: f64) {
     for x in p.iter_mut() {
@@ -116,7 +116,7 @@ pub(crate) fn scale_piece(p: &mut PieceDef, s: f64) {
     for m in &mut p.marks {
         m.points.iter_mut().for_each(|q| sp(q, s));
     }
-    if let Some(g) = &mut p.grain {
+    if let Some(g) = p.grain.as_mut().and_then(GrainDef::line_mut) {
         g.iter_mut().for_each(|q| sp(q, s));
     }
     for region in &mut p.no_cut {

@@ -13,6 +13,7 @@ use flatcut_report::{MatingSeamReport, Report};
 
 use crate::darting::{self, DartSettings};
 use crate::pipeline::{self, FlatDesign, FlatNotch, FlatPiece, PipelineError};
+use flatcut_design::material::MaterialSpec;
 
 /// A flattened piece ready for the pattern: its mesh (with `flat`), its design entry when it came
 /// from a design, its distortion report (with the mating seams it takes part in) and how the
@@ -37,16 +38,19 @@ pub struct Flat {
 
 /// Stretch and compression limits in percent, checked by the report, and whether darts may be
 /// cut to meet the flattening's limits (`None`: only where the design's piece asks for them).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Limits {
     pub stretch_pct: Option<f64>,
     pub compress_pct: Option<f64>,
     pub darts: Option<DartSettings>,
+    /// The material of every piece that names none itself: its limits per direction and its
+    /// stiffness drive the orthotropic flattening ([`crate::material`]).
+    pub material: Option<MaterialSpec>,
 }
 
 /// Reads a mesh file; when it already carries a flat map (`vt`), returns it as one reported piece
 /// named after the file. `Ok(None)`: the file is a 3D mesh that still needs flattening.
-pub fn read_flat_mesh(path: &Path, limits: Limits) -> Result<Option<Flat>, PipelineError> {
+pub fn read_flat_mesh(path: &Path, limits: &Limits) -> Result<Option<Flat>, PipelineError> {
     let mesh = flatcut_mesh::read_mesh(path)?;
     if mesh.flat.is_none() {
         return Ok(None);
@@ -79,8 +83,14 @@ pub fn flatten_and_report(
     limits: Limits,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Vec<Flat>, PipelineError> {
-    let FlatDesign { pieces, seams, .. } =
-        pipeline::flatten_design(path, tol, params, limits.darts.as_ref(), progress)?;
+    let FlatDesign { pieces, seams, .. } = pipeline::flatten_design(
+        path,
+        tol,
+        params,
+        limits.darts.as_ref(),
+        limits.material.as_ref(),
+        progress,
+    )?;
     let mut flats = pieces
         .into_iter()
         .map(
@@ -90,6 +100,7 @@ pub fn flatten_and_report(
                  info,
                  notches,
                  darts,
+                 grain,
              }| {
                 let marks: Vec<u32> = notches.iter().map(|n| n.vertex).collect();
                 let mut report = pipeline::report_piece(
@@ -100,6 +111,9 @@ pub fn flatten_and_report(
                     limits.compress_pct,
                 )?;
                 report.darts = darting::dart_reports(&darts);
+                report.grain = grain
+                    .as_ref()
+                    .and_then(|g| crate::material::report(g, &mesh));
                 Ok(Flat {
                     name: def.name.clone(),
                     quantity: def.quantity,
@@ -206,7 +220,7 @@ pub fn load_flat(
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Vec<Flat>, PipelineError> {
     if flatcut_mesh::io::is_mesh_path(path)
-        && let Some(f) = read_flat_mesh(path, limits)?
+        && let Some(f) = read_flat_mesh(path, &limits)?
     {
         return Ok(vec![f]);
     }

@@ -45,6 +45,7 @@ pub mod darting;
 pub mod flat;
 pub mod inspect;
 pub mod inspect_step;
+pub mod material;
 pub mod pieces;
 pub mod pipeline;
 pub mod project;

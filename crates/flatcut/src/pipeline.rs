@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use flatcut_design::material::MaterialSpec;
 use flatcut_design::{Design, DesignError, MarkKind as DesignMark, PieceDef};
 use flatcut_flatten::{FlattenError, FlattenInfo, FlattenParams};
 use flatcut_geom::{DVec2, DVec3, Tolerances};
@@ -101,6 +102,8 @@ pub struct FlatPiece {
     pub notches: Vec<FlatNotch>,
     /// The darts cut into the piece to meet its limits (`mesh` is then cut along them).
     pub darts: Vec<flatcut_darts::Dart>,
+    /// Its material and grain, when it has a material ([`crate::material`]).
+    pub grain: Option<crate::material::PieceGrain>,
 }
 
 /// A design flattened: every piece (a `[[piece]]` or a region of a `[[part]]`) and the mating
@@ -120,6 +123,7 @@ pub fn flatten_design(
     tol: &Tolerances,
     params: &FlattenParams,
     darts: Option<&DartSettings>,
+    material: Option<&MaterialSpec>,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<FlatDesign, PipelineError> {
     let design = Design::load(path)?;
@@ -182,8 +186,15 @@ pub fn flatten_design(
         .zip(notches)
         .zip(joined)
         .map(|(((p, f), notches), joined)| {
+            let piece_material = crate::material::of_piece(&p.def, base, material)?;
             if joined {
                 let mut info = f.info;
+                if piece_material.is_some() {
+                    info.warnings.push(format!(
+                        "{}: a piece joined to others by seams is flattened with them by the isotropic energy; its material's limits are not checked per direction",
+                        p.def.name
+                    ));
+                }
                 if darting::wanted(Some(&p.def), darts) {
                     info.warnings.push(format!(
                         "{}: no darts are cut into a piece joined to others by seams (a dart would move its seams); split it by a style line instead",
@@ -198,9 +209,15 @@ pub fn flatten_design(
                     info,
                     notches,
                     darts: Vec::new(),
+                    grain: None,
                 })
+            } else if let Some(m) = piece_material {
+                let (f, grain) =
+                    crate::material::flatten(&p.def.name, &p.mesh, params, &m, p.def.grain.as_ref())?;
+                let dart_params = crate::material::dart_params(params, &m);
+                dart_if_wanted(p.def, p.mesh, f, notches, &dart_params, darts, Some(grain))
             } else {
-                dart_if_wanted(p.def, p.mesh, f, notches, params, darts)
+                dart_if_wanted(p.def, p.mesh, f, notches, params, darts, None)
             }
         })
         .collect::<Result<Vec<_>, PipelineError>>()?;
@@ -221,7 +238,9 @@ fn dart_if_wanted(
     notches: Vec<FlatNotch>,
     params: &FlattenParams,
     darts: Option<&DartSettings>,
+    grain: Option<crate::material::PieceGrain>,
 ) -> Result<FlatPiece, PipelineError> {
+    let before = grain.as_ref().map(|_| (mesh.clone(), f.uv.clone()));
     let settings = darting::wanted(Some(&def), darts).then(|| darts.copied().unwrap_or_default());
     let at: Vec<DVec3> = notches
         .iter()
@@ -251,12 +270,20 @@ fn dart_if_wanted(
             })
             .collect()
     };
+    let grain = match (grain, before) {
+        (Some(g), Some((m0, uv0))) if !darts.is_empty() => {
+            let uv = mesh.flat.as_deref().unwrap_or_default();
+            Some(crate::material::carry_over(&g, (&m0, &uv0), (&mesh, uv)))
+        }
+        (g, _) => g,
+    };
     Ok(FlatPiece {
         def,
         mesh,
         info,
         notches,
         darts,
+        grain,
     })
 }
 
@@ -433,7 +460,7 @@ pub fn piece_from_flat(
                 }
             }
         }
-        if let Some([a, b]) = def.grain {
+        if let Some([a, b]) = def.grain.as_ref().and_then(|g| g.line()).copied() {
             // A grain line is a direction drawn near the surface: points off the surface are
             // carried by their nearest vertex rather than refused.
             let (a, b) = (DVec3::from_array(a), DVec3::from_array(b));

@@ -13,6 +13,8 @@
 //! max_compress_pct = 0.0
 //! grain = "0,180"               # "fixed" (one way), "0,180" (either way, default) or "any"
 //! grain_tolerance_deg = 0.0     # how far a piece's grain line may turn off the material's
+//! # properties = "leather"      # optional: a bundled material or a material file: limits along,
+//!                               # across and on the bias drive the orthotropic flattening
 //! [sheet]
 //! width_mm = 600.0              # sheets of width × height, or
 //! height_mm = 400.0
@@ -47,6 +49,13 @@ pub struct Material {
     /// How far a piece's grain line may turn off the material's grain (degrees).
     #[serde(default)]
     pub grain_tolerance_deg: Option<f64>,
+    /// A bundled material (`leather`, `woven-cotton`, …) or a material file (relative to the
+    /// project): its limits per direction and stiffness ([`flatcut_design::material`]).
+    #[serde(default)]
+    pub properties: Option<String>,
+    /// The material `properties` names, read at load time.
+    #[serde(skip)]
+    pub spec: Option<flatcut_design::material::MaterialSpec>,
 }
 
 impl Material {
@@ -201,8 +210,20 @@ impl Project {
             }
         })?;
         proj.dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        proj.validate()
-            .map_err(|message| ProjectError::Invalid { path: p, message })?;
+        proj.validate().map_err(|message| ProjectError::Invalid {
+            path: p.clone(),
+            message,
+        })?;
+        if let Some(spec) = &proj.material.properties {
+            proj.material.spec = Some(
+                flatcut_design::material::MaterialSpec::load(spec, Some(&proj.dir)).map_err(
+                    |e| ProjectError::Invalid {
+                        path: p,
+                        message: format!("[material] properties: {e}"),
+                    },
+                )?,
+            );
+        }
         Ok(proj)
     }
 

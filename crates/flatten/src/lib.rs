@@ -15,6 +15,7 @@
 //! result. Long solves report progress, honour a time limit and can be cancelled
 //! ([`FlattenParams::time_limit`], [`FlattenHooks`]).
 
+pub mod anisotropy;
 pub mod arap;
 pub mod assembly;
 pub mod conformal_boundary;
@@ -52,9 +53,11 @@ pub fn flatten(mesh: &TriMesh, params: &FlattenParams) -> Result<Flattening, Fla
     let topo = check_disk(mesh)?;
     validate_pins(mesh, &params.pins)?;
     match params.method {
-        Method::Isometric | Method::Conformal | Method::Minmax | Method::BoundaryIsometric => {
-            nonlinear::solve(mesh, &topo, params)
-        }
+        Method::Isometric
+        | Method::Conformal
+        | Method::Minmax
+        | Method::BoundaryIsometric
+        | Method::Orthotropic => nonlinear::solve(mesh, &topo, params),
         Method::Lscm => lscm::lscm(mesh, &topo, &params.pins),
         Method::ConformalBoundary => conformal_boundary::conformal_boundary(mesh, &topo, params),
         Method::Developable => developable::developable(mesh, &topo, params),

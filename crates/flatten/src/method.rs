@@ -22,10 +22,13 @@ pub enum Method {
     Minmax,
     /// Duncan's f1: every boundary edge keeps its length, the interior minimizes Σ(λi − 1)².
     BoundaryIsometric,
+    /// The Green strain in the material's grain frame weighted by its stiffness along, across
+    /// and in shear (a woven fabric takes its strain on the bias), flip-free; needs a material.
+    Orthotropic,
 }
 
 impl Method {
-    pub const ALL: [Method; 8] = [
+    pub const ALL: [Method; 9] = [
         Method::Isometric,
         Method::Conformal,
         Method::Lscm,
@@ -34,6 +37,7 @@ impl Method {
         Method::Developable,
         Method::Minmax,
         Method::BoundaryIsometric,
+        Method::Orthotropic,
     ];
 
     /// The command-line name.
@@ -47,6 +51,7 @@ impl Method {
             Method::Developable => "developable",
             Method::Minmax => "minmax",
             Method::BoundaryIsometric => "boundary-isometric",
+            Method::Orthotropic => "orthotropic",
         }
     }
 

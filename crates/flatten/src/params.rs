@@ -39,6 +39,8 @@ pub struct FlattenParams {
     pub time_limit: Option<Duration>,
     /// Progress callback and cancel flag of the iterative methods.
     pub hooks: FlattenHooks,
+    /// The material of the orthotropic method: stiffness, directional limits, grain.
+    pub anisotropy: Option<crate::anisotropy::Anisotropy>,
 }
 
 impl FlattenParams {
@@ -59,6 +61,7 @@ impl FlattenParams {
             developable_tolerance: Self::DEFAULT_DEVELOPABLE_TOLERANCE,
             time_limit: None,
             hooks: FlattenHooks::default(),
+            anisotropy: None,
         }
     }
 
@@ -97,6 +100,11 @@ impl FlattenParams {
 
     pub fn with_hooks(mut self, hooks: FlattenHooks) -> Self {
         self.hooks = hooks;
+        self
+    }
+
+    pub fn with_anisotropy(mut self, a: Option<crate::anisotropy::Anisotropy>) -> Self {
+        self.anisotropy = a;
         self
     }
 }
@@ -231,6 +239,9 @@ pub enum FlattenError {
     /// The method did not reach a valid (finite, flip-free) result.
     #[error("{method} did not converge: {reason}")]
     NoConvergence { method: Method, reason: String },
+    /// The orthotropic method's material or grain cannot be used.
+    #[error("orthotropic: {0}")]
+    Anisotropy(String),
     /// A bug in flatcut: please report it.
     #[error("internal error (please report): {0}")]
     Internal(String),

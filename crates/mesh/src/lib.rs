@@ -9,6 +9,7 @@
 pub mod disk;
 pub mod distortion;
 pub mod geodesic;
+pub mod grain_strain;
 pub mod grid;
 pub mod io;
 pub mod joins;

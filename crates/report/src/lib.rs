@@ -12,12 +12,14 @@
 
 pub mod darts;
 pub mod draw;
+pub mod grain;
 pub mod measure;
 pub mod per_face;
 pub mod seams;
 
 pub use darts::DartReport;
 pub use draw::{Column, heatmap_svg, histogram_svg, html_report, render_png};
+pub use grain::GrainReport;
 pub use measure::{
     BoundarySegment, FaceMeasure, Measure, Region, Report, ReportError, ReportOptions, Stats,
 };

@@ -259,6 +259,9 @@ pub struct Report {
     /// The darts cut into the piece to meet the limits (absent when there are none).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub darts: Vec<crate::DartReport>,
+    /// The strain along the material's grain and its limits per direction (with a material).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub grain: Option<crate::GrainReport>,
     #[serde(skip)]
     pub per_face: Vec<FaceMeasure>,
 }
@@ -491,13 +494,16 @@ impl Report {
             hot_spots,
             mating_seams: Vec::new(),
             darts: Vec::new(),
+            grain: None,
             per_face,
         })
     }
 
     /// True when no region exceeds the limits asked for and no face is flipped.
     pub fn within_limits(&self) -> bool {
-        self.regions.is_empty() && self.flipped == 0
+        self.regions.is_empty()
+            && self.flipped == 0
+            && self.grain.as_ref().is_none_or(crate::GrainReport::within)
     }
 
     /// Area-weighted statistics of a measure.

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use flatcut::darting::DartSettings;
+use flatcut::design::material::MaterialSpec;
 use flatcut::flat::Limits;
 use flatcut::flatten::{FlattenHooks, FlattenParams, FlattenProgress, Method};
 use flatcut::geom::Tolerances;
@@ -16,7 +17,7 @@ use crate::values;
 /// Flattening options shared by the commands that flatten.
 #[derive(Debug, Clone, clap::Args)]
 pub struct FlattenArgs {
-    /// Flattening method: isometric, conformal, lscm, conformal-boundary, arap, developable, minmax, boundary-isometric.
+    /// Flattening method: isometric, conformal, lscm, conformal-boundary, arap, developable, minmax, boundary-isometric, orthotropic (needs --material; chosen by it).
     #[arg(long, default_value = "isometric", value_parser = parse_method)]
     pub method: Method,
     /// Largest allowed stretch in percent (principal stretch).
@@ -51,6 +52,23 @@ pub struct FlattenArgs {
     /// How far short of its point a dart's drill mark sits (mm).
     #[arg(long, value_name = "MM", default_value_t = DartSettings::default().drill_offset_mm, value_parser = values::nonneg_mm)]
     pub dart_drill: f64,
+    /// The material of pieces that name none: leather, woven-cotton, canvas, knit,
+    /// carbon-prepreg, sailcloth, or a material file (TOML). Flattens with the orthotropic
+    /// energy along each piece's grain (chosen when the piece has none) and checks the limits
+    /// along, across and on the bias.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub material: Option<String>,
+}
+
+impl FlattenArgs {
+    /// The `--material`, read.
+    pub fn material(&self) -> anyhow::Result<Option<MaterialSpec>> {
+        self.material
+            .as_deref()
+            .map(|m| MaterialSpec::load(m, None))
+            .transpose()
+            .map_err(anyhow::Error::from)
+    }
 }
 
 /// Shows a flattening's progress (stage, iteration of the cap, objective) as a bar on stderr
@@ -223,19 +241,16 @@ pub fn load_flat(
         stretch_pct: limits.0,
         compress_pct: limits.1,
         darts: fa.darts()?,
+        material: fa.material()?,
     };
     let t0 = std::time::Instant::now();
+    let method = match &limits.material {
+        Some(m) => format!("{} for {}", Method::Orthotropic, m.name),
+        None => params.method.to_string(),
+    };
     let flats = flatcut::flat::load_flat(path, &tol, &params, limits, &mut |name, k, n| {
         if verbose {
-            bar.suspend(|| {
-                eprintln!(
-                    "flattening piece {}/{} '{}' ({})",
-                    k + 1,
-                    n,
-                    name,
-                    params.method
-                )
-            });
+            bar.suspend(|| eprintln!("flattening piece {}/{} '{}' ({})", k + 1, n, name, method));
         }
     });
     bar.finish_and_clear();
@@ -257,6 +272,9 @@ pub fn load_flat(
                 r.compress_max_pct,
                 t0.elapsed().as_secs_f64()
             );
+            if let Some(g) = &r.grain {
+                eprintln!("{}", grain_line(g));
+            }
         }
     }
     Ok(flats)
@@ -390,3 +408,25 @@ pub fn sibling(path: &Path, suffix: &str) -> PathBuf {
 }
 
 pub use flatcut::run::file_safe;
+
+/// One line on a piece's material: where its grain runs (and whether it was chosen), its
+/// largest stretch and compression along, across and on the bias, and the faces over the
+/// material's limits.
+pub fn grain_line(g: &flatcut::report::GrainReport) -> String {
+    format!(
+        "  material {}: grain{} along ({:.3}, {:.3}, {:.3}); stretch/compression max along {:.2}/{:.2}%, across {:.2}/{:.2}%, bias {:.2}/{:.2}%; bias share of the strain {:.2}; {} faces over the material's limits",
+        g.material,
+        if g.grain_auto { " (chosen)" } else { "" },
+        g.grain_3d[0],
+        g.grain_3d[1],
+        g.grain_3d[2],
+        g.stretch_max_pct_along,
+        g.compress_max_pct_along,
+        g.stretch_max_pct_across,
+        g.compress_max_pct_across,
+        g.stretch_max_pct_bias,
+        g.compress_max_pct_bias,
+        g.bias_strain_share,
+        g.faces_over_material_limits
+    )
+}

@@ -35,20 +35,54 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "mesh".into());
         let (params, bar) = common::with_progress_bar(a.flatten.params()?);
+        let material = a.flatten.material()?;
         eprintln!(
             "flattening '{name}' ({} faces) with {}",
             mesh.triangles.len(),
-            params.method
+            match &material {
+                Some(m) => format!("{} for {}", flatcut::flatten::Method::Orthotropic, m.name),
+                None => params.method.to_string(),
+            }
         );
         let t0 = std::time::Instant::now();
-        let f = flatcut::flatten::flatten(&mesh, &params);
+        let (f, grain) = match &material {
+            Some(m) => {
+                let (f, g) = flatcut::material::flatten(&name, &mesh, &params, m, None)
+                    .map_err(|e| anyhow::Error::new(e).context(a.file.display().to_string()))?;
+                (f, Some(g))
+            }
+            None => (
+                flatcut::flatten::flatten(&mesh, &params)
+                    .map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?,
+                None,
+            ),
+        };
         bar.finish_and_clear();
-        let f = f.map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?;
         let settings = a.flatten.darts()?;
-        let (darted, info, darts) =
-            flatcut::darting::finish(&name, None, mesh, f.uv, f.info, &params, settings.as_ref())
-                .map_err(|e| anyhow::Error::new(e).context(a.file.display().to_string()))?;
+        let dart_params = match &material {
+            Some(m) => flatcut::material::dart_params(&params, m),
+            None => params.clone(),
+        };
+        let before = (mesh.clone(), f.uv.clone());
+        let (darted, info, darts) = flatcut::darting::finish(
+            &name,
+            None,
+            mesh,
+            f.uv,
+            f.info,
+            &dart_params,
+            settings.as_ref(),
+        )
+        .map_err(|e| anyhow::Error::new(e).context(a.file.display().to_string()))?;
         mesh = darted;
+        let grain = grain.map(|g| {
+            if darts.is_empty() {
+                g
+            } else {
+                let uv = mesh.flat.as_deref().unwrap_or_default();
+                flatcut::material::carry_over(&g, (&before.0, &before.1), (&mesh, uv))
+            }
+        });
         if !darts.is_empty() {
             let total: f64 = darts.iter().map(|d| d.length_3d_mm).sum();
             eprintln!("  {} darts, {total:.1} mm in all", darts.len());
@@ -64,6 +98,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             a.flatten.max_compress,
         )?;
         report.darts = flatcut::darting::dart_reports(&darts);
+        report.grain = grain
+            .as_ref()
+            .and_then(|g| flatcut::material::report(g, &mesh));
         eprintln!(
             "  {} iterations, mean δ2 {:.6}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
             info.iterations,
@@ -72,6 +109,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             report.compress_max_pct,
             t0.elapsed().as_secs_f64()
         );
+        if let Some(g) = &report.grain {
+            eprintln!("{}", common::grain_line(g));
+        }
         vec![common::Flat {
             name,
             def: None,

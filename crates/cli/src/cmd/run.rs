@@ -40,13 +40,21 @@ pub struct Args {
     /// offsets on them, in mm; beyond it the run counts as beyond its limits (exit code 3).
     #[arg(long, default_value_t = flatcut::report::DEFAULT_SEAM_TOLERANCE_MM, value_name = "MM", value_parser = crate::values::nonneg_mm)]
     pub seam_tolerance: f64,
+    /// The material of pieces that name none, in place of the project's `[material]
+    /// properties`: a bundled material (leather, woven-cotton, canvas, knit, carbon-prepreg,
+    /// sailcloth) or a material file.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub material: Option<String>,
     #[command(flatten)]
     pub stream: StreamArgs,
 }
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let t0 = Instant::now();
-    let proj = Project::load(&a.project)?;
+    let mut proj = Project::load(&a.project)?;
+    if let Some(m) = &a.material {
+        proj.material.spec = Some(flatcut::design::material::MaterialSpec::load(m, None)?);
+    }
     let out = a
         .output
         .clone()

@@ -251,14 +251,15 @@ pub struct GuardedGreen {
 }
 
 impl GuardedGreen {
-    fn b(&self, s: f64) -> f64 {
+    /// The guard on one principal stretch (its derivatives below).
+    pub(crate) fn b(&self, s: f64) -> f64 {
         if s >= self.floor {
             return 0.0;
         }
         let u = (self.floor - self.collapse) / (s - self.collapse) - 1.0;
         self.k * u * u
     }
-    fn db(&self, s: f64) -> f64 {
+    pub(crate) fn db(&self, s: f64) -> f64 {
         if s >= self.floor {
             return 0.0;
         }
@@ -266,7 +267,7 @@ impl GuardedGreen {
         let u = w / d - 1.0;
         -2.0 * self.k * u * w / (d * d)
     }
-    fn d2b(&self, s: f64) -> f64 {
+    pub(crate) fn d2b(&self, s: f64) -> f64 {
         if s >= self.floor {
             return 0.0;
         }
@@ -395,9 +396,34 @@ pub enum Projection {
     Raw,
 }
 
+/// A per-triangle energy the projected Newton minimises: an isotropic Ψ(σ1, σ2) (every
+/// [`IsoEnergy`]) or one that depends on the directions of the map too (the orthotropic energy,
+/// [`super::orthotropic`]).
+pub trait TriEnergy: Sync {
+    /// The area-weighted energy of one triangle (+∞ where a barrier sees an inverted one).
+    fn tri_energy(&self, r: &RestTri, x: &[DVec2]) -> f64;
+    /// Energy, gradient and Hessian projected by `proj` (`None` skips it) of one triangle.
+    fn tri_eval(&self, r: &RestTri, x: &[DVec2], proj: Option<Projection>) -> TriEval;
+}
+
+impl<E: IsoEnergy> TriEnergy for E {
+    fn tri_energy(&self, r: &RestTri, x: &[DVec2]) -> f64 {
+        iso_tri_energy(self, r, x)
+    }
+    fn tri_eval(&self, r: &RestTri, x: &[DVec2], proj: Option<Projection>) -> TriEval {
+        iso_tri_eval(self, r, x, proj)
+    }
+}
+
 /// Evaluates the area-weighted energy of one triangle only (`None` if not finite).
 #[inline]
-pub fn tri_energy<E: IsoEnergy>(e: &E, r: &RestTri, x: &[DVec2]) -> f64 {
+pub fn tri_energy<E: TriEnergy>(e: &E, r: &RestTri, x: &[DVec2]) -> f64 {
+    e.tri_energy(r, x)
+}
+
+/// [`tri_energy`] of an isotropic energy.
+#[inline]
+fn iso_tri_energy<E: IsoEnergy>(e: &E, r: &RestTri, x: &[DVec2]) -> f64 {
     let f = r.jacobian(x);
     let det = f.determinant();
     if (det.is_nan() || det <= 0.0) && e.is_barrier() {
@@ -408,12 +434,22 @@ pub fn tri_energy<E: IsoEnergy>(e: &E, r: &RestTri, x: &[DVec2]) -> f64 {
 }
 
 /// Full evaluation of one triangle with the clamped Hessian; `with_hess` = false skips it.
-pub fn tri_eval<E: IsoEnergy>(e: &E, r: &RestTri, x: &[DVec2], with_hess: bool) -> TriEval {
+pub fn tri_eval<E: TriEnergy>(e: &E, r: &RestTri, x: &[DVec2], with_hess: bool) -> TriEval {
     tri_eval_projected(e, r, x, with_hess.then_some(Projection::Clamp))
 }
 
 /// Full evaluation of one triangle with its Hessian projected by `proj` (`None` skips it).
-pub fn tri_eval_projected<E: IsoEnergy>(
+pub fn tri_eval_projected<E: TriEnergy>(
+    e: &E,
+    r: &RestTri,
+    x: &[DVec2],
+    proj: Option<Projection>,
+) -> TriEval {
+    e.tri_eval(r, x, proj)
+}
+
+/// [`tri_eval_projected`] of an isotropic energy.
+fn iso_tri_eval<E: IsoEnergy>(
     e: &E,
     r: &RestTri,
     x: &[DVec2],
@@ -534,7 +570,7 @@ fn smallest_positive_root(a: f64, b: f64, c: f64) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use flatcut_geom::DVec3;
 
@@ -566,7 +602,9 @@ mod tests {
         }
     }
 
-    fn check_fd<E: IsoEnergy>(e: &E) {
+    /// Checks the gradient and the Hessian of `e` against central differences at a stretched,
+    /// sheared and rotated map of one triangle (where the exact Hessian is positive definite).
+    pub(crate) fn check_fd<E: TriEnergy>(e: &E) {
         let (_, r) = tri_mesh();
         let r = r[0];
         // A stretched (σ > 1), sheared and rotated image of the rest triangle: every eigenvalue

@@ -8,10 +8,12 @@
 //! the 3D area (the only free parameter of a conformal map's scale).
 
 pub mod boundary;
+pub mod grain;
 pub mod init;
 pub mod kernel;
 pub mod minmax;
 pub mod newton;
+pub mod orthotropic;
 pub mod spd;
 
 use std::time::Instant;
@@ -21,7 +23,7 @@ use flatcut_mesh::{Topology, TriMesh};
 
 use crate::limits::{Limits, OnePiece};
 use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
-use kernel::{IsoEnergy, Mips, RestTri, SymDirichlet};
+use kernel::{IsoEnergy, Mips, RestTri, SymDirichlet, TriEnergy};
 use newton::{Budget, EarlyStop};
 
 /// Newton decrement (energy units per mm² of surface) below which a solve has converged: far
@@ -51,6 +53,7 @@ pub fn solve(
             boundary::boundary_isometric(mesh, topo, &rest, params, &budget)?
         }
         Method::Minmax => minmax::minmax(mesh, topo, &rest, params, &budget)?,
+        Method::Orthotropic => grain::orthotropic(mesh, topo, &rest, params, &budget)?,
         m => {
             return Err(FlattenError::Internal(format!(
                 "method {m} is not a nonlinear method"
@@ -64,7 +67,7 @@ pub fn solve(
 
 /// Runs projected Newton on `energy` from `x0`. A cancelled run is an error; a run stopped by
 /// the time limit returns its last (flip-free) iterate with `early` set.
-pub(crate) fn newton_solve<E: IsoEnergy>(
+pub(crate) fn newton_solve<E: TriEnergy>(
     rest: &[RestTri],
     n: usize,
     energy: E,
@@ -110,16 +113,7 @@ pub(crate) fn isometric(
     budget: &Budget,
 ) -> Result<Flattening, FlattenError> {
     let n = mesh.positions.len();
-    let x0 = init::lscm_or_tutte(mesh, topo)?;
-    let run = newton_solve(
-        rest,
-        n,
-        SymDirichlet,
-        &x0,
-        params,
-        Method::Isometric,
-        budget,
-    )?;
+    let run = isometric_run(mesh, topo, rest, params, Method::Isometric, budget)?;
     let mut info = FlattenInfo {
         iterations: run.iterations,
         final_energy: run.energy / total_area(rest),
@@ -148,6 +142,27 @@ pub(crate) fn isometric(
             .push(time_limit_warning(Method::Isometric, info.iterations));
     }
     Ok(Flattening { uv: x, info })
+}
+
+/// The unconstrained δ2 solve from LSCM (or Tutte where LSCM flips), for `method`'s messages.
+pub(crate) fn isometric_run(
+    mesh: &TriMesh,
+    topo: &Topology,
+    rest: &[RestTri],
+    params: &FlattenParams,
+    method: Method,
+    budget: &Budget,
+) -> Result<newton::NewtonRun, FlattenError> {
+    let x0 = init::lscm_or_tutte(mesh, topo)?;
+    newton_solve(
+        rest,
+        mesh.positions.len(),
+        SymDirichlet,
+        &x0,
+        params,
+        method,
+        budget,
+    )
 }
 
 /// Duncan's conformal distortion δ1 via the MIPS energy, scaled to the 3D area.

@@ -20,7 +20,7 @@ use flatcut_geom::DVec2;
 use rayon::prelude::*;
 
 use super::kernel::{
-    IsoEnergy, Projection, RestTri, TriEval, max_step_tri, tri_energy, tri_eval_projected,
+    Projection, RestTri, TriEnergy, TriEval, max_step_tri, tri_energy, tri_eval_projected,
 };
 use super::spd::SpdSystem;
 use crate::{FlattenHooks, FlattenProgress};
@@ -123,7 +123,7 @@ fn slots_for(sys: &SpdSystem, dofs: &[usize]) -> Vec<u32> {
     out
 }
 
-impl<'a, E: IsoEnergy> MapProblem<'a, E> {
+impl<'a, E: TriEnergy> MapProblem<'a, E> {
     /// Builds the problem and the symbolic factorisation for `n` vertices.
     pub fn new(
         rest: &'a [RestTri],
@@ -381,7 +381,7 @@ impl ProjectedNewton {
 
 type NState = IterState<Vec<f64>, (), (), (), (), f64>;
 
-impl<E: IsoEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
+impl<E: TriEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
     fn name(&self) -> &str {
         "flip-free projected Newton"
     }
@@ -512,7 +512,7 @@ impl<E: IsoEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
 /// direction (`None` if the system could not be solved). A projected Hessian is only positive
 /// semi-definite (rigid motions), so a small diagonal shift is added and raised until the
 /// factorisation succeeds; the unprojected one gets one try.
-fn newton_direction<E: IsoEnergy>(
+fn newton_direction<E: TriEnergy>(
     p: &mut MapProblem<'_, E>,
     x: &[DVec2],
     proj: Projection,
@@ -557,7 +557,7 @@ const MAX_DOUBLINGS: usize = 30;
 /// lets Newton grow a crushed triangle by only a third per step (the model underestimates the
 /// decrease), and doubling covers in one step what would otherwise take many. Returns the step,
 /// the new map and its energy, or `None` if no step decreases the energy enough.
-fn line_search<E: IsoEnergy>(
+fn line_search<E: TriEnergy>(
     p: &MapProblem<'_, E>,
     x: &[DVec2],
     d: &[DVec2],
@@ -621,7 +621,7 @@ pub struct NewtonRun {
 }
 
 /// Runs projected Newton from the flip-free map `x0`.
-pub fn run<'a, E: IsoEnergy>(
+pub fn run<'a, E: TriEnergy>(
     problem: MapProblem<'a, E>,
     x0: &[DVec2],
     max_iters: usize,

@@ -1,0 +1,254 @@
+//! The orthotropic flattening (`--method orthotropic`): where the grain runs on every triangle,
+//! the solve of [`Orthotropic`] from the isometric map, and `grain = "auto"`.
+//!
+//! The warp is a straight thread of the cut piece: a direction u of the pattern plane. On the
+//! surface it runs along J⁻¹u in each triangle (J: the triangle's map), so the solve starts from
+//! the isometric (δ2) map, takes each triangle's warp from it ([`grain_frames`]) and minimises
+//! the orthotropic energy; the warp directions are then taken again from that result and the
+//! energy minimised once more, so the frames agree with the map they measure to the order of
+//! its strain. The result is turned so that the warp runs along +x (the pattern's grain line).
+//!
+//! `Grain::Auto` samples [`AUTO_SAMPLES`] warp angles over half a turn (a thread has no sign),
+//! then narrows the best bracket by golden-section search to [`AUTO_TOLERANCE_RAD`]; each angle
+//! is scored by the largest excess over the material's limits of any triangle's warp, weft or
+//! bias strain (the energy when no limits are given). Deterministic: fixed samples, fixed
+//! order, ties to the smaller angle.
+
+use flatcut_geom::{DVec2, DVec3};
+use flatcut_mesh::grain_strain::{
+    GrainStrain, grain_strain_of, pattern_direction_near, warp_in_frame,
+};
+use flatcut_mesh::{Topology, TriMesh};
+
+use super::kernel::RestTri;
+use super::newton::{Budget, EarlyStop};
+use super::orthotropic::{Orthotropic, grain_frames};
+use super::{isometric_run, newton_solve, time_limit_warning};
+use crate::anisotropy::{Anisotropy, DirectionalLimits, Grain, grain_dir};
+use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
+
+/// Warp angles sampled over [0, π) before the golden-section search of `Grain::Auto`.
+pub const AUTO_SAMPLES: usize = 12;
+/// Width of the angle bracket (radians, ≈ 0.25°) at which the golden-section search stops.
+pub const AUTO_TOLERANCE_RAD: f64 = 0.0044;
+/// Passes of "warp from the map, then solve" (see the module's documentation).
+const FRAME_PASSES: usize = 2;
+
+/// The orthotropic flattening of `mesh` with `params.anisotropy`, the warp along +x.
+pub(crate) fn orthotropic(
+    mesh: &TriMesh,
+    topo: &Topology,
+    rest: &[RestTri],
+    params: &FlattenParams,
+    budget: &Budget,
+) -> Result<Flattening, FlattenError> {
+    let aniso = params.anisotropy.ok_or_else(|| {
+        FlattenError::Anisotropy(
+            "the orthotropic method needs a material (stiffness and grain)".into(),
+        )
+    })?;
+    aniso
+        .stiffness
+        .validate()
+        .map_err(FlattenError::Anisotropy)?;
+    let n = mesh.positions.len();
+    let iso = isometric_run(mesh, topo, rest, params, Method::Orthotropic, budget)?;
+    let mut iterations = iso.iterations;
+    let mut early = iso.early;
+    let start = iso.x;
+    let solve = |from: &[DVec2], u: DVec2, passes: usize| -> Result<Solved, FlattenError> {
+        solve_with_grain(rest, n, &aniso, from, u, passes, params, budget)
+    };
+    let best = match aniso.grain {
+        Grain::Angle(a) => solve(&start, grain_dir(a), FRAME_PASSES)?,
+        Grain::Line(l) => solve(
+            &start,
+            grain_dir(line_angle(mesh, &start, l)?),
+            FRAME_PASSES,
+        )?,
+        Grain::Auto => {
+            let score = |s: &Solved| match &aniso.limits {
+                Some(l) => limit_excess(rest, &s.x, s.warp, l),
+                None => s.energy,
+            };
+            // Angles are compared after one pass; the chosen one gets the others from its map.
+            let first = search_angle(|a| solve(&start, grain_dir(a), 1).map(|s| (score(&s), s)))?.1;
+            let rest_passes = solve(&first.x, first.warp, FRAME_PASSES - 1)?;
+            iterations += first.iterations;
+            early = early.or(first.early);
+            rest_passes
+        }
+    };
+    iterations += best.iterations;
+    early = early.or(best.early);
+    let mut x = best.x;
+    turn_warp_to_x(&mut x, best.warp);
+    let mut warnings = Vec::new();
+    if early == Some(EarlyStop::TimeLimit) {
+        warnings.push(time_limit_warning(Method::Orthotropic, iterations));
+    }
+    Ok(Flattening {
+        info: FlattenInfo {
+            iterations,
+            final_energy: best.energy / super::total_area(rest),
+            warnings,
+        },
+        uv: x,
+    })
+}
+
+/// One orthotropic solve: the map, its energy, the pattern direction of its warp.
+struct Solved {
+    x: Vec<DVec2>,
+    energy: f64,
+    warp: DVec2,
+    iterations: usize,
+    early: Option<EarlyStop>,
+}
+
+/// Solves the orthotropic energy from the map `start` with the warp along `u` there, taking the
+/// warp from the map and solving again `passes` times.
+fn solve_with_grain(
+    rest: &[RestTri],
+    n: usize,
+    aniso: &Anisotropy,
+    start: &[DVec2],
+    u: DVec2,
+    passes: usize,
+    params: &FlattenParams,
+    budget: &Budget,
+) -> Result<Solved, FlattenError> {
+    let energy = Orthotropic::new(aniso.stiffness);
+    let (mut x, mut u, mut iterations, mut early, mut e) =
+        (start.to_vec(), u, 0, None, f64::INFINITY);
+    for _ in 0..passes {
+        let warp = warps(rest, &x, u)?;
+        let frames = grain_frames(rest, &warp);
+        let run = newton_solve(&frames, n, energy, &x, params, Method::Orthotropic, budget)?;
+        iterations += run.iterations;
+        early = early.or(run.early);
+        e = run.energy;
+        u = mean_image(&frames, &run.x);
+        x = run.x;
+    }
+    Ok(Solved {
+        x,
+        energy: e,
+        warp: u,
+        iterations,
+        early,
+    })
+}
+
+/// Each triangle's warp in its rest frame for the pattern grain `u` of map `x`.
+fn warps(rest: &[RestTri], x: &[DVec2], u: DVec2) -> Result<Vec<DVec2>, FlattenError> {
+    rest.iter()
+        .enumerate()
+        .map(|(t, r)| {
+            warp_in_frame(r.jacobian(x), u).ok_or_else(|| FlattenError::NoConvergence {
+                method: Method::Orthotropic,
+                reason: format!("triangle {t} is degenerate in the map the grain is taken from"),
+            })
+        })
+        .collect()
+}
+
+/// The area-weighted mean direction of the images of the frames' x axes (the warp) in map `x`.
+fn mean_image(frames: &[RestTri], x: &[DVec2]) -> DVec2 {
+    let s: DVec2 = frames
+        .iter()
+        .map(|r| r.area * r.jacobian(x).x_axis.normalize_or_zero())
+        .sum();
+    s.normalize_or(DVec2::X)
+}
+
+/// The pattern angle of the grain line `[a, b]` in map `x`, measured where it is drawn.
+fn line_angle(mesh: &TriMesh, x: &[DVec2], [a, b]: [DVec3; 2]) -> Result<f64, FlattenError> {
+    let d = b - a;
+    let u = pattern_direction_near(mesh, x, d, 0.5 * (a + b), d.length()).ok_or_else(|| {
+        FlattenError::Anisotropy(format!(
+            "the grain line from ({}, {}, {}) to ({}, {}, {}) is normal to the surface where it is drawn",
+            a.x, a.y, a.z, b.x, b.y, b.z
+        ))
+    })?;
+    Ok(u.y.atan2(u.x))
+}
+
+/// Turns the map about the origin so that the pattern direction `u` becomes +x.
+fn turn_warp_to_x(x: &mut [DVec2], u: DVec2) {
+    let rot = flatcut_geom::DMat2::from_angle(-u.y.atan2(u.x));
+    for p in x.iter_mut() {
+        *p = rot * *p;
+    }
+}
+
+/// The strain of every triangle of map `x` in the material's directions for the grain `u`.
+pub fn grain_strains(rest: &[RestTri], x: &[DVec2], u: DVec2) -> Vec<Option<GrainStrain>> {
+    rest.iter()
+        .map(|r| grain_strain_of(r.jacobian(x), u))
+        .collect()
+}
+
+/// The largest excess (percentage points) of any triangle's warp, weft or bias strain over the
+/// limits; negative when every triangle is within them (by the smallest margin).
+pub fn limit_excess(rest: &[RestTri], x: &[DVec2], u: DVec2, l: &DirectionalLimits) -> f64 {
+    grain_strains(rest, x, u)
+        .iter()
+        .map(|g| match g {
+            Some(g) => g.excess(l),
+            None => f64::INFINITY,
+        })
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// Minimises `f` over angles in [0, π): [`AUTO_SAMPLES`] samples, then golden-section search in
+/// the bracket around the best sample. Returns the best angle's score and value.
+pub fn search_angle<T, E>(mut f: impl FnMut(f64) -> Result<(f64, T), E>) -> Result<(f64, T), E> {
+    let step = std::f64::consts::PI / AUTO_SAMPLES as f64;
+    let (s0, v0) = f(0.0)?;
+    let mut best = (0.0, s0, v0);
+    for i in 1..AUTO_SAMPLES {
+        let a = i as f64 * step;
+        let (s, v) = f(a)?;
+        if s < best.1 {
+            best = (a, s, v);
+        }
+    }
+    let a0 = best.0;
+    let inv_phi = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut lo, mut hi) = (a0 - step, a0 + step);
+    let mut c = hi - inv_phi * (hi - lo);
+    let mut d = lo + inv_phi * (hi - lo);
+    let (mut fc, vc) = f(c)?;
+    let (mut fd, vd) = f(d)?;
+    for (a, s, v) in [(c, fc, vc), (d, fd, vd)] {
+        if s < best.1 {
+            best = (a, s, v);
+        }
+    }
+    while hi - lo > AUTO_TOLERANCE_RAD {
+        let next = if fc <= fd {
+            hi = d;
+            d = c;
+            fd = fc;
+            c = hi - inv_phi * (hi - lo);
+            c
+        } else {
+            lo = c;
+            c = d;
+            fc = fd;
+            d = lo + inv_phi * (hi - lo);
+            d
+        };
+        let (s, v) = f(next)?;
+        if next == c {
+            fc = s;
+        } else {
+            fd = s;
+        }
+        if s < best.1 {
+            best = (next, s, v);
+        }
+    }
+    Ok((best.1, best.2))
+}

@@ -1,0 +1,144 @@
+//! Darts as drawn: `flatcut pattern --darts auto` on a spherical cap writes a DXF whose darts,
+//! read back with the project's own AAMA reader, are there as the pattern maker expects: each
+//! dart is one open sew line (its two legs, of equal length within 0.1 mm as drawn), and its
+//! drill mark sits inside the piece the default 5 mm short of the point where the legs meet.
+
+use std::f64::consts::TAU;
+
+use flatcut::geom::DVec2;
+use flatcut::pattern::StrokeKind;
+
+use crate::pipeline::run_cli;
+
+/// A spherical cap (sphere radius `r`, geodesic radius `alpha`, `rings` rings of 6k vertices)
+/// as OBJ text.
+fn cap_obj(r: f64, alpha: f64, rings: usize) -> String {
+    let mut out = format!("v 0 0 {r}\n");
+    let mut start = vec![1usize];
+    for k in 1..=rings {
+        start.push(start[k - 1] + if k == 1 { 1 } else { 6 * (k - 1) });
+        let rho = alpha * k as f64 / rings as f64;
+        for j in 0..6 * k {
+            let phi = TAU * j as f64 / (6 * k) as f64;
+            out.push_str(&format!(
+                "v {} {} {}\n",
+                r * rho.sin() * phi.cos(),
+                r * rho.sin() * phi.sin(),
+                r * rho.cos()
+            ));
+        }
+    }
+    // Ring k has 6k vertices; sector s of ring k−1 (k−1 vertices) and of ring k (k vertices).
+    for k in 1..=rings {
+        let (a0, b0) = (start[k - 1], start[k]);
+        let (ma, mb) = (if k == 1 { 1 } else { 6 * (k - 1) }, 6 * k);
+        let (mut i, mut j) = (0usize, 0usize);
+        while i < ma || j < mb {
+            let next = |n: usize, m: usize| (n + 1) as f64 / m as f64;
+            let advance_a = ma > 1 && (j == mb || (i < ma && next(i, ma) <= next(j, mb)));
+            let ai = a0 + i % ma;
+            let bj = b0 + j % mb;
+            if advance_a {
+                out.push_str(&format!("f {ai} {bj} {}\n", a0 + (i + 1) % ma));
+                i += 1;
+            } else {
+                out.push_str(&format!("f {ai} {bj} {}\n", b0 + (j + 1) % mb));
+                j += 1;
+                if ma == 1 && j == mb {
+                    i = ma;
+                }
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn darts_in_the_dxf_are_sew_legs_meeting_near_a_drill_mark() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("cap.obj");
+    std::fs::write(&obj, cap_obj(50.0, 1.0, 12)).unwrap();
+    let (svg, dxf) = (dir.path().join("p.svg"), dir.path().join("p.dxf"));
+    let code = run_cli(&[
+        "pattern",
+        obj.to_str().unwrap(),
+        "-o",
+        svg.to_str().unwrap(),
+        "--dxf",
+        dxf.to_str().unwrap(),
+        "--max-stretch",
+        "3",
+        "--max-compress",
+        "3",
+        "--darts",
+        "auto",
+    ]);
+    assert_eq!(
+        format!("{code:?}"),
+        format!("{:?}", std::process::ExitCode::SUCCESS)
+    );
+    let text = std::fs::read_to_string(&dxf).unwrap();
+    let d = flatcut::pattern::dxf_read::read_dxf(&text, 0.01)
+        .unwrap()
+        .drawing;
+    let of = |k: StrokeKind| d.strokes.iter().filter(move |s| s.kind == k);
+    let drills: Vec<DVec2> = of(StrokeKind::Drill)
+        .map(|s| s.points.iter().copied().sum::<DVec2>() / s.points.len() as f64)
+        .collect();
+    assert!(!drills.is_empty(), "no drill marks read back");
+    // A dart's sew line is one open polyline: one leg from the mouth to the point, the other
+    // back to the other side of the mouth.
+    let darts: Vec<&Vec<DVec2>> = of(StrokeKind::Sew)
+        .filter(|s| !s.closed)
+        .map(|s| &s.points)
+        .collect();
+    assert_eq!(darts.len(), drills.len(), "one sew line per drill mark");
+    let boundary: Vec<&Vec<DVec2>> = of(StrokeKind::Boundary).map(|s| &s.points).collect();
+    assert_eq!(boundary.len(), 1, "one piece");
+    let length = |p: &[DVec2]| p.windows(2).map(|w| w[0].distance(w[1])).sum::<f64>();
+    for (i, p) in drills.iter().enumerate() {
+        assert!(
+            inside(boundary[0], *p),
+            "drill {i} at {p} is outside the piece"
+        );
+        // The sew line whose point (the vertex farthest from its mouth) is nearest this drill.
+        let (apex_d, legs) = darts
+            .iter()
+            .map(|line| {
+                let mouth = 0.5 * (line[0] + line[line.len() - 1]);
+                let k = (0..line.len())
+                    .max_by(|&a, &b| line[a].distance(mouth).total_cmp(&line[b].distance(mouth)))
+                    .unwrap();
+                (
+                    line[k].distance(*p),
+                    [length(&line[..=k]), length(&line[k..])],
+                )
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .unwrap();
+        // The drill mark sits the default 5 mm short of the point (along the dart's middle).
+        assert!(
+            (apex_d - 5.0).abs() < 1.0,
+            "drill {i}: {apex_d} mm from the point"
+        );
+        assert!(
+            (legs[0] - legs[1]).abs() < 0.1,
+            "dart {i}: legs {legs:?} differ by more than 0.1 mm"
+        );
+    }
+    let svg_text = std::fs::read_to_string(&svg).unwrap();
+    assert!(svg_text.contains("<svg"), "an SVG is written");
+    eprintln!("{} darts' drill marks read back from the DXF", drills.len());
+}
+
+/// Point in polygon (even-odd).
+fn inside(poly: &[DVec2], p: DVec2) -> bool {
+    let mut c = false;
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) * (b.x - a.x) / (b.y - a.y) {
+            c = !c;
+        }
+    }
+    c
+}

@@ -1,0 +1,154 @@
+//! Materials end to end: `flatcut flatten --material` and a piece's `material_properties`
+//! flatten with the orthotropic energy and report the strain along, across and on the bias. A
+//! cylinder sleeve is developable whichever way its grain runs, so with the grain along its axis
+//! or around it every direction's strain is zero (read back from the flat OBJ and measured here,
+//! independently of the report); `grain = "auto"` says it chose; a bad material file is refused
+//! naming the file, the key and what is wrong.
+
+use std::path::Path;
+
+use clap::Parser as _;
+use flatcut::geom::{DVec2, DVec3};
+use flatcut::mesh::grain_strain::grain_strain;
+
+use crate::pipeline::run_cli;
+
+/// The sleeve of `crates/design/examples/cylinder.toml` with a grain and a material.
+fn sleeve(dir: &Path, grain: &str, material: &str) -> std::path::PathBuf {
+    let p = dir.join(format!("sleeve-{}.toml", grain.len()));
+    std::fs::write(
+        &p,
+        format!(
+            "[[piece]]\nname = \"sleeve\"\ngrain = {grain}\n{material}[piece.surface]\ntype = \"cylinder\"\nbase = [0, 0, 0]\nradius = 30\nheight = 80\n"
+        ),
+    )
+    .unwrap();
+    p
+}
+
+fn flatten(design: &Path, out: &Path, extra: &[&str]) -> (serde_json::Value, String) {
+    let obj = out.with_extension("obj");
+    let report = out.with_extension("json");
+    let mut args = vec![
+        "flatten",
+        design.to_str().unwrap(),
+        "-o",
+        obj.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let code = run_cli(&args);
+    assert_eq!(
+        format!("{code:?}"),
+        format!("{:?}", std::process::ExitCode::SUCCESS)
+    );
+    let r = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    (r, std::fs::read_to_string(&obj).unwrap())
+}
+
+/// Largest |stretch − 1| of any thread (warp along +x of the flat map, weft, both biases),
+/// measured from the OBJ's `v`, `vt` and `f a/a b/b c/c`.
+fn worst_thread_strain(obj: &str) -> f64 {
+    let (mut v, mut vt, mut worst) = (Vec::new(), Vec::new(), 0f64);
+    let nums = |s: &str| -> Vec<f64> { s.split_whitespace().map(|x| x.parse().unwrap()).collect() };
+    for line in obj.lines() {
+        if let Some(r) = line.strip_prefix("v ") {
+            let c = nums(r);
+            v.push(DVec3::new(c[0], c[1], c[2]));
+        } else if let Some(r) = line.strip_prefix("vt ") {
+            let c = nums(r);
+            vt.push(DVec2::new(c[0], c[1]));
+        } else if let Some(r) = line.strip_prefix("f ") {
+            let idx: Vec<usize> = r
+                .split_whitespace()
+                .map(|c| c.split('/').next().unwrap().parse::<usize>().unwrap() - 1)
+                .collect();
+            let t3 = [v[idx[0]], v[idx[1]], v[idx[2]]];
+            let t2 = [vt[idx[0]], vt[idx[1]], vt[idx[2]]];
+            let g = grain_strain(t3, t2, DVec2::X).unwrap();
+            for s in [g.along, g.across, g.bias_max, g.bias_min] {
+                worst = worst.max((s - 1.0).abs());
+            }
+        }
+    }
+    worst
+}
+
+#[test]
+fn a_sleeve_flattens_exactly_with_its_grain_along_or_around_it() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, grain) in [
+        ("along", "[[30, 0, 10], [30, 0, 70]]"),
+        ("around", "[[30, 0, 40], [30, 10, 40]]"),
+    ] {
+        let design = sleeve(dir.path(), grain, "");
+        let (r, obj) = flatten(
+            &design,
+            &dir.path().join(name),
+            &["--material", "woven-cotton"],
+        );
+        assert_eq!(r["material"], "woven-cotton", "{name}");
+        assert_eq!(r["grain_auto"], false, "{name}");
+        for k in [
+            "stretch_max_pct_along",
+            "stretch_max_pct_across",
+            "stretch_max_pct_bias",
+            "compress_max_pct_along",
+            "compress_max_pct_across",
+            "compress_max_pct_bias",
+        ] {
+            let v = r[k].as_f64().unwrap();
+            assert!(v < 1e-3, "{name}: {k} = {v}");
+        }
+        assert_eq!(r["faces_over_material_limits"], 0, "{name}");
+        assert_eq!(r["limit_stretch_pct_bias"], 15.0);
+        // The grain on the surface is the one drawn.
+        let g = &r["grain_3d"];
+        let axial = g[2].as_f64().unwrap().abs();
+        let want = if name == "along" { 1.0 } else { 0.0 };
+        assert!((axial - want).abs() < 1e-3, "{name}: grain {g}");
+        // Measured from the OBJ: every thread keeps its length (warp along +x).
+        let w = worst_thread_strain(&obj);
+        assert!(w < 1e-5, "{name}: {w}");
+    }
+}
+
+#[test]
+fn a_pieces_own_material_and_auto_grain_are_used_and_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = sleeve(dir.path(), "\"auto\"", "material_properties = \"canvas\"\n");
+    let (r, _) = flatten(&design, &dir.path().join("auto"), &[]);
+    assert_eq!(r["material"], "canvas");
+    assert_eq!(r["grain_auto"], true);
+    assert_eq!(r["faces_over_material_limits"], 0);
+}
+
+#[test]
+fn a_bad_material_file_names_the_file_the_key_and_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = dir.path().join("soft.toml");
+    std::fs::write(
+        &m,
+        "name = \"soft\"\n[stretch_max_pct]\nalong = 1\nacross = 1\nbias = -4\n[compress_max_pct]\nalong = 1\nacross = 1\nbias = 1\n",
+    )
+    .unwrap();
+    let design = sleeve(dir.path(), "\"auto\"", "");
+    let obj = dir.path().join("x.obj");
+    let cli = flatcut_cli::Cli::try_parse_from([
+        "flatcut",
+        "flatten",
+        design.to_str().unwrap(),
+        "-o",
+        obj.to_str().unwrap(),
+        "--material",
+        m.to_str().unwrap(),
+    ])
+    .unwrap();
+    let e = format!("{:#}", flatcut_cli::run(cli).unwrap_err());
+    assert!(
+        e.contains("soft.toml") && e.contains("stretch_max_pct.bias") && e.contains("-4"),
+        "{e}"
+    );
+    assert!(!obj.exists(), "no output on error");
+}
