@@ -152,3 +152,43 @@ fn a_bad_material_file_names_the_file_the_key_and_what_is_wrong() {
     );
     assert!(!obj.exists(), "no output on error");
 }
+
+#[test]
+fn a_piece_over_its_materials_limits_exits_3_and_says_by_how_much() {
+    // A dome 100 mm across and 30 mm high cannot lie flat within 0.5 % in every direction; the flat
+    // outputs are written and the exit code says the limits are broken.
+    let dir = tempfile::tempdir().unwrap();
+    let m = dir.path().join("stiff.toml");
+    std::fs::write(
+        &m,
+        "name = \"stiff\"\n[stretch_max_pct]\nalong = 0.5\nacross = 0.5\nbias = 0.5\n[compress_max_pct]\nalong = 0.5\nacross = 0.5\nbias = 0.5\n",
+    )
+    .unwrap();
+    let design = dir.path().join("cap.toml");
+    std::fs::write(
+        &design,
+        "[[piece]]\nname = \"cap\"\ngrain = \"auto\"\n[piece.surface]\ntype = \"bezier\"\ndegree = [2, 2]\npoints = [[0, 0, 0], [0, 50, 0], [0, 100, 0], [50, 0, 0], [50, 50, 60], [50, 100, 0], [100, 0, 0], [100, 50, 0], [100, 100, 0]]\n",
+    )
+    .unwrap();
+    let obj = dir.path().join("cap.obj");
+    let report = dir.path().join("cap.json");
+    let code = run_cli(&[
+        "flatten",
+        design.to_str().unwrap(),
+        "-o",
+        obj.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+        "--material",
+        m.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        format!("{code:?}"),
+        format!("{:?}", std::process::ExitCode::from(3))
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert!(r["faces_over_material_limits"].as_u64().unwrap() > 0, "{r}");
+    assert!(r["material_excess_pct"].as_f64().unwrap() > 0.0, "{r}");
+    assert!(obj.exists(), "the outputs are written either way");
+}

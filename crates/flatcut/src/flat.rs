@@ -187,6 +187,44 @@ pub fn mating_seams(flats: &[Flat]) -> Vec<MatingSeamReport> {
     out
 }
 
+/// One line per piece whose strain along, across or on the bias of its grain breaks its
+/// material's limits (a piece flattened with a material file).
+pub fn materials_over(flats: &[Flat]) -> Vec<String> {
+    flats
+        .iter()
+        .filter_map(|f| {
+            f.report
+                .grain
+                .as_ref()
+                .filter(|g| !g.within())
+                .map(|g| (f, g))
+        })
+        .map(|(f, g)| {
+            format!(
+                "{}: {} faces over {}'s limits, by up to {:.2} points (stretch/compression % along \
+                 {:.2}/{:.2} of {:.1}/{:.1}, across {:.2}/{:.2} of {:.1}/{:.1}, bias {:.2}/{:.2} \
+                 of {:.1}/{:.1})",
+                f.name,
+                g.faces_over_material_limits,
+                g.material,
+                g.material_excess_pct,
+                g.stretch_max_pct_along,
+                g.compress_max_pct_along,
+                g.limit_stretch_pct_along,
+                g.limit_compress_pct_along,
+                g.stretch_max_pct_across,
+                g.compress_max_pct_across,
+                g.limit_stretch_pct_across,
+                g.limit_compress_pct_across,
+                g.stretch_max_pct_bias,
+                g.compress_max_pct_bias,
+                g.limit_stretch_pct_bias,
+                g.limit_compress_pct_bias,
+            )
+        })
+        .collect()
+}
+
 /// One line per mating seam whose sides (or a notch's offsets) differ by more than
 /// `tolerance_mm` in the plane.
 pub fn seams_over(flats: &[Flat], tolerance_mm: f64) -> Vec<String> {

@@ -309,7 +309,10 @@ pub fn report_limits(flats: &[Flat], seam_tolerance: f64, flips: bool) -> bool {
             );
         }
     }
-    for line in flatcut::flat::seams_over(flats, seam_tolerance) {
+    for line in flatcut::flat::materials_over(flats)
+        .into_iter()
+        .chain(flatcut::flat::seams_over(flats, seam_tolerance))
+    {
         eprintln!("{line}");
         over = true;
     }

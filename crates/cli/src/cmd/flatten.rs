@@ -1,7 +1,7 @@
 //! `flatcut flatten FILE --method M -o flat.obj [--report report.json]`: one OBJ per piece with
 //! the input's 3D vertices (`v`), one UV per vertex in mm (`vt`) and `f a/a b/b c/c`. Exits with
-//! code 3 (outputs written) when a material limit (`--max-stretch`, `--max-compress`) is broken
-//! or a mating seam's sides differ by more than `--seam-tolerance`.
+//! code 3 (outputs written) when a material limit (`--max-stretch`, `--max-compress`, or a `--material` file's limits along,
+//! across or on the bias) is broken or a mating seam's sides differ by more than `--seam-tolerance`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;

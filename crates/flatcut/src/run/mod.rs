@@ -290,7 +290,10 @@ fn report_stage(
             });
         }
     }
-    for line in flat::seams_over(flats, opts.seam_tolerance_mm) {
+    for line in flat::materials_over(flats)
+        .into_iter()
+        .chain(flat::seams_over(flats, opts.seam_tolerance_mm))
+    {
         obs.event(&Event::Warning {
             stage: Stage::Report,
             message: &line,
