@@ -26,6 +26,21 @@ fn sleeve(dir: &Path, grain: &str, material: &str) -> std::path::PathBuf {
     p
 }
 
+/// A material file `NAME.toml` in `dir` with the stretch limits along, across and on the bias, and
+/// one compression limit for every direction.
+fn material_file(dir: &Path, name: &str, stretch: [f64; 3], compress: f64) -> std::path::PathBuf {
+    let p = dir.join(format!("{name}.toml"));
+    let [a, b, c] = stretch;
+    std::fs::write(
+        &p,
+        format!(
+            "name = \"{name}\"\n[stretch_max_pct]\nalong = {a}\nacross = {b}\nbias = {c}\n[compress_max_pct]\nalong = {compress}\nacross = {compress}\nbias = {compress}\n"
+        ),
+    )
+    .unwrap();
+    p
+}
+
 fn flatten(design: &Path, out: &Path, extra: &[&str]) -> (serde_json::Value, String) {
     let obj = out.with_extension("obj");
     let report = out.with_extension("json");
@@ -127,12 +142,7 @@ fn a_pieces_own_material_and_auto_grain_are_used_and_said() {
 #[test]
 fn a_bad_material_file_names_the_file_the_key_and_what_is_wrong() {
     let dir = tempfile::tempdir().unwrap();
-    let m = dir.path().join("soft.toml");
-    std::fs::write(
-        &m,
-        "name = \"soft\"\n[stretch_max_pct]\nalong = 1\nacross = 1\nbias = -4\n[compress_max_pct]\nalong = 1\nacross = 1\nbias = 1\n",
-    )
-    .unwrap();
+    let m = material_file(dir.path(), "soft", [1.0, 1.0, -4.0], 1.0);
     let design = sleeve(dir.path(), "\"auto\"", "");
     let obj = dir.path().join("x.obj");
     let cli = flatcut_cli::Cli::try_parse_from([
@@ -158,12 +168,7 @@ fn a_piece_over_its_materials_limits_exits_3_and_says_by_how_much() {
     // A dome 100 mm across and 30 mm high cannot lie flat within 0.5 % in every direction; the flat
     // outputs are written and the exit code says the limits are broken.
     let dir = tempfile::tempdir().unwrap();
-    let m = dir.path().join("stiff.toml");
-    std::fs::write(
-        &m,
-        "name = \"stiff\"\n[stretch_max_pct]\nalong = 0.5\nacross = 0.5\nbias = 0.5\n[compress_max_pct]\nalong = 0.5\nacross = 0.5\nbias = 0.5\n",
-    )
-    .unwrap();
+    let m = material_file(dir.path(), "stiff", [0.5; 3], 0.5);
     let design = dir.path().join("cap.toml");
     std::fs::write(
         &design,
