@@ -43,11 +43,21 @@ fn binary_serves_a_client_and_writes_traces_on_sigterm() {
         .timeout(Duration::from_millis(20))
         .open()
         .unwrap();
-    port.write_all(b"M3 S800\nG1 X2 Y2 F3000\nG1 X0\nG1 X0 Y0\n")
-        .unwrap();
+    // Opening the port resets the board like an Uno's DTR pulse: bytes sent before its banner are lost, so a
+    // client waits for the banner before it writes.
     let mut acc = String::new();
     let t0 = Instant::now();
     let mut buf = [0u8; 256];
+    while !acc.contains("for help]\r\n") && t0.elapsed() < Duration::from_secs(5) {
+        if let Ok(n) = port.read(&mut buf) {
+            acc.push_str(&String::from_utf8_lossy(&buf[..n]));
+        }
+    }
+    assert!(acc.contains("for help]\r\n"), "{acc:?}");
+    port.write_all(b"M3 S800\nG1 X2 Y2 F3000\nG1 X0\nG1 X0 Y0\n")
+        .unwrap();
+    acc.clear();
+    let t0 = Instant::now();
     while acc.matches("ok\r\n").count() + acc.matches("error:").count() < 4
         && t0.elapsed() < Duration::from_secs(5)
     {
