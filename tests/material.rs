@@ -197,3 +197,78 @@ fn a_piece_over_its_materials_limits_exits_3_and_says_by_how_much() {
     assert!(r["material_excess_pct"].as_f64().unwrap() > 0.0, "{r}");
     assert!(obj.exists(), "the outputs are written either way");
 }
+
+/// A grain the flattening chose is drawn: the sleeve's pattern (a 188.5 × 80 mm rectangle) gets
+/// a grain line along the warp, and the piece is turned with it along +x. The warp makes the
+/// angle with the sleeve's axis that `grain_3d` in the report makes with it (the sleeve is
+/// developable, so every grain ties at zero strain and the chosen one may lie on a helix), so
+/// the rectangle's 80 mm sides make that angle with +x.
+#[test]
+fn an_auto_grain_is_drawn_as_the_pieces_grain_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = sleeve(dir.path(), "\"auto\"", "material_properties = \"canvas\"\n");
+    let (r, _) = flatten(&design, &dir.path().join("auto"), &[]);
+    let cos_axis = r["grain_3d"][2].as_f64().unwrap().abs();
+    let svg = dir.path().join("sleeve.svg");
+    let code = run_cli(&[
+        "pattern",
+        design.to_str().unwrap(),
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        format!("{code:?}"),
+        format!("{:?}", std::process::ExitCode::SUCCESS)
+    );
+    let text = std::fs::read_to_string(&svg).unwrap();
+    let attr = |key: &str| -> String {
+        text.split(key)
+            .nth(1)
+            .and_then(|s| s.split('"').nth(1))
+            .unwrap_or_else(|| panic!("no {key} in the pattern"))
+            .to_string()
+    };
+    let deg: f64 = attr("data-flatcut-grain-deg=").parse().unwrap();
+    assert!(
+        deg.abs() < 0.01 || (deg.abs() - 180.0).abs() < 0.01,
+        "{deg}"
+    );
+    let line: Vec<f64> = numbers(&attr("id=\"sleeve-1-grain\" points="));
+    assert!(
+        (line[1] - line[3]).abs() < 1e-3,
+        "grain line {line:?} not along +x"
+    );
+    // The sew line's corners; its 80 mm sides run along the sleeve's axis.
+    let d = numbers(
+        &text
+            .split("id=\"sleeve-1-sew\"")
+            .next()
+            .unwrap()
+            .rsplit("d=\"")
+            .next()
+            .unwrap(),
+    );
+    let corners: Vec<[f64; 2]> = d.chunks(2).take(4).map(|p| [p[0], p[1]]).collect();
+    let axial: Vec<f64> = (0..4)
+        .filter_map(|k| {
+            let (a, b) = (corners[k], corners[(k + 1) % 4]);
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let len = dx.hypot(dy);
+            ((len - 80.0).abs() < 0.5).then_some(dx.abs() / len)
+        })
+        .collect();
+    assert_eq!(axial.len(), 2, "sew line corners {corners:?}");
+    for c in axial {
+        assert!(
+            (c - cos_axis).abs() < 0.01,
+            "axis at cos {c} to +x, grain at cos {cos_axis} to the axis"
+        );
+    }
+}
+
+/// The numbers of an SVG attribute value, in order.
+fn numbers(s: &str) -> Vec<f64> {
+    s.split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
+        .filter_map(|t| t.parse().ok())
+        .collect()
+}

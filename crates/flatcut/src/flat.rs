@@ -34,6 +34,8 @@ pub struct Flat {
     pub info: Option<FlattenInfo>,
     /// The darts cut into the piece to meet its limits.
     pub darts: Vec<flatcut_darts::Dart>,
+    /// Its material and the warp's direction in its map, when it was flattened for a material.
+    pub grain: Option<crate::material::PieceGrain>,
 }
 
 /// Stretch and compression limits in percent, checked by the report, and whether darts may be
@@ -71,6 +73,7 @@ pub fn read_flat_mesh(path: &Path, limits: &Limits) -> Result<Option<Flat>, Pipe
         notches: Vec::new(),
         info: None,
         darts: Vec::new(),
+        grain: None,
     }))
 }
 
@@ -124,6 +127,7 @@ pub fn flatten_and_report(
                     notches,
                     info: Some(info),
                     darts,
+                    grain,
                 })
             },
         )

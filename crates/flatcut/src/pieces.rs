@@ -52,6 +52,7 @@ fn build_one(f: &Flat, name: &str, s: &PieceSettings) -> Result<Piece, PipelineE
         size: String::new(),
         corner: s.corner,
         notches: &f.notches,
+        grain_dir: f.grain.as_ref().map(|g| g.pattern_dir),
     };
     pipeline::piece_from_flat(name, &f.mesh, &ctx, &s.options)
 }
@@ -65,6 +66,9 @@ pub fn mirror(f: &Flat) -> Flat {
     }
     for d in &mut g.darts {
         d.drill_2d.x = -d.drill_2d.x;
+    }
+    if let Some(grain) = &mut g.grain {
+        grain.pattern_dir.x = -grain.pattern_dir.x;
     }
     if let Some(def) = &mut g.def {
         def.quantity = f.mirrored;

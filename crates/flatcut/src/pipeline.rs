@@ -371,6 +371,10 @@ pub struct PieceContext<'a> {
     pub corner: flatcut_pattern::CornerStyle,
     /// The piece's notches as boundary vertices (exact positions; named on mating seams).
     pub notches: &'a [FlatNotch],
+    /// The warp's direction in the flat map of a piece flattened for its material: drawn as
+    /// the grain line (through the piece's middle) when the design draws none, as for a grain
+    /// the flattening chose (`grain = "auto"`).
+    pub grain_dir: Option<DVec2>,
 }
 
 /// Longest step (mm) between samples of a stitch or placement line carried into the plane:
@@ -494,6 +498,11 @@ pub fn piece_from_flat(
             quantity: def.quantity,
             distortion: None,
         };
+    }
+    if input.grain.is_none()
+        && let Some(d) = ctx.grain_dir
+    {
+        input.grain = flatcut_pattern::piece::grain_line_along(&input.outline, d);
     }
     for d in ctx.darts {
         dart_marks(&mut input, d, &ids, flat);

@@ -122,6 +122,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             notches: Vec::new(),
             info: Some(info),
             darts,
+            grain,
         }]
     } else {
         let limits = (a.flatten.max_stretch, a.flatten.max_compress);

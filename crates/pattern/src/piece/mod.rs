@@ -9,6 +9,7 @@
 
 mod allowance;
 mod draw;
+mod grain_line;
 mod label;
 #[cfg(test)]
 mod label_tests;
@@ -21,6 +22,7 @@ mod sew;
 #[cfg(test)]
 mod tests;
 
+pub use grain_line::grain_line_along;
 pub use orient::orientation;
 pub use placement::{PlacedPiece, Placement};
 
