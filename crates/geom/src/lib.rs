@@ -9,6 +9,7 @@
 pub mod aabb;
 pub mod limits;
 pub mod num;
+pub mod polygon;
 pub mod tol;
 
 pub use aabb::{Aabb2, Aabb3};

@@ -10,20 +10,7 @@ pub fn signed_area(p: &[DVec2]) -> f64 {
     (0..n).map(|i| p[i].perp_dot(p[(i + 1) % n])).sum::<f64>() * 0.5
 }
 
-/// Even-odd point-in-polygon test.
-pub fn contains(poly: &[DVec2], q: DVec2) -> bool {
-    let n = poly.len();
-    let mut inside = false;
-    let mut j = n.wrapping_sub(1);
-    for i in 0..n {
-        let (a, b) = (poly[i], poly[j]);
-        if (a.y > q.y) != (b.y > q.y) && q.x < (b.x - a.x) * (q.y - a.y) / (b.y - a.y) + a.x {
-            inside = !inside;
-        }
-        j = i;
-    }
-    inside
-}
+pub use flatcut_geom::polygon::contains;
 
 /// Distance from `q` to the segment `a`–`b` and the parameter of the nearest point.
 pub fn seg_nearest(a: DVec2, b: DVec2, q: DVec2) -> (f64, f64) {
@@ -153,23 +140,7 @@ pub fn nearest_on_closed(p: &[DVec2], q: DVec2) -> (usize, f64, DVec2, f64) {
 
 /// First crossing of the ray `o + s·dir` (s > 0) with a closed polyline: the smallest s.
 pub fn ray_hit(poly: &[DVec2], o: DVec2, dir: DVec2) -> Option<f64> {
-    let n = poly.len();
-    let mut best: Option<f64> = None;
-    for i in 0..n {
-        let (a, b) = (poly[i], poly[(i + 1) % n]);
-        let s = b - a;
-        let den = dir.perp_dot(s);
-        if den.abs() < 1e-15 {
-            continue;
-        }
-        let qp = a - o;
-        let t = qp.perp_dot(s) / den;
-        let u = qp.perp_dot(dir) / den;
-        if t > 0.0 && (0.0..=1.0).contains(&u) && best.is_none_or(|bb| t < bb) {
-            best = Some(t);
-        }
-    }
-    best
+    flatcut_geom::polygon::ray_hit(poly, o, dir).map(|h| h.t)
 }
 
 #[cfg(test)]

@@ -25,7 +25,7 @@ pub fn grain_line_along(outline: &[DVec2], dir: DVec2) -> Option<(DVec2, DVec2)>
         let behind = poly::ray_hit(outline, p, -d)?;
         Some((p - d * behind, p + d * ahead))
     };
-    let centre = area_centroid(outline)?;
+    let centre = flatcut_geom::polygon::area_centroid(outline)?;
     let (a, b) = if poly::contains(outline, centre) {
         chord(centre)?
     } else {
@@ -48,20 +48,6 @@ pub fn grain_line_along(outline: &[DVec2], dir: DVec2) -> Option<(DVec2, DVec2)>
     };
     let (mid, half) = ((a + b) * 0.5, (b - a) * 0.5 * CHORD_SHARE);
     (half.length() > 0.0).then(|| (mid - half, mid + half))
-}
-
-/// The area centroid of a simple polygon.
-fn area_centroid(p: &[DVec2]) -> Option<DVec2> {
-    let n = p.len();
-    let mut c = DVec2::ZERO;
-    let mut twice_area = 0.0;
-    for i in 0..n {
-        let (a, b) = (p[i], p[(i + 1) % n]);
-        let w = a.perp_dot(b);
-        twice_area += w;
-        c += (a + b) * w;
-    }
-    (twice_area.abs() > 0.0).then(|| c / (3.0 * twice_area))
 }
 
 /// A point inside `outline` on the line `base + s·d`: the midpoint of the first span the line
