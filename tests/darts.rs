@@ -530,3 +530,123 @@ fn limits_no_dart_can_meet_exit_3_and_say_what_was_reached() {
         "no flat OBJ is written when the limits are not met"
     );
 }
+
+/// The bench's saddle at 3 %/3 %: no dart can help (its flat piece is too short at the rim), and
+/// the error says so and names `--split auto`; with `--split auto` it is cut in parts, each
+/// within the limits as measured here from its OBJ, sewn along seams whose coincident edges
+/// have equal flat lengths (read from the two OBJs), with balance notches at equal offsets on
+/// both sides (report).
+#[test]
+fn a_saddle_no_dart_can_help_is_split_into_parts_that_sew_together() {
+    let Some(saddle) = bench_mesh("saddle_2k") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let flat = dir.path().join("flat.obj");
+    let report = dir.path().join("flat.json");
+    let mut args = vec![
+        "flatcut",
+        "flatten",
+        saddle.to_str().unwrap(),
+        "--max-stretch",
+        "3",
+        "--max-compress",
+        "3",
+        "--darts",
+        "auto",
+        "-o",
+        flat.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ];
+    let darts_only = flatcut_cli::run(flatcut_cli::Cli::try_parse_from(&args).unwrap());
+    let text = format!("{:#}", darts_only.expect_err("no dart can help a saddle"));
+    assert!(
+        text.contains("no dart can help") && text.contains("--split auto"),
+        "{text}"
+    );
+    args.extend(["--split", "auto"]);
+    let code = flatcut_cli::run(flatcut_cli::Cli::try_parse_from(&args).unwrap()).unwrap();
+    assert_eq!(
+        format!("{code:?}"),
+        format!("{:?}", std::process::ExitCode::SUCCESS)
+    );
+    let parts: Vec<Obj> = (1..)
+        .map(|k| dir.path().join(format!("flat-saddle_2k_mm-{k}.obj")))
+        .take_while(|p| p.exists())
+        .map(|p| read_obj(&p))
+        .collect();
+    assert!(
+        parts.len() >= 2,
+        "{:?}",
+        std::fs::read_dir(dir.path()).unwrap().collect::<Vec<_>>()
+    );
+    for (k, o) in parts.iter().enumerate() {
+        let (s, c) = measured_limits(o);
+        assert!(
+            s <= 3.0 + LIMIT_SLACK && c <= 3.0 + LIMIT_SLACK,
+            "part {k}: {s} % / {c} %"
+        );
+    }
+    // Edges on both sides of a seam: the same two 3D points, the same flat length.
+    let mut sewn = 0;
+    for i in 0..parts.len() {
+        for j in i + 1..parts.len() {
+            let (a, b) = (&parts[i], &parts[j]);
+            let (na, nb) = (boundary_next(a), boundary_next(b));
+            let at = |o: &Obj, p: DVec3| o.v.iter().position(|q| *q == p);
+            for (&u, &w) in &na {
+                let (Some(x), Some(y)) = (at(b, a.v[u]), at(b, a.v[w])) else {
+                    continue;
+                };
+                if nb.get(&y) != Some(&x) {
+                    continue;
+                }
+                let uv = |o: &Obj, v: usize| {
+                    o.f.iter()
+                        .flatten()
+                        .find(|c| c.0 == v)
+                        .map(|c| o.vt[c.1])
+                        .unwrap()
+                };
+                let (la, lb) = (uv(a, u).distance(uv(a, w)), uv(b, x).distance(uv(b, y)));
+                assert!((la - lb).abs() < 1e-5, "parts {i}/{j}: {la} vs {lb}");
+                sewn += 1;
+            }
+        }
+    }
+    assert!(sewn > 10, "{sewn} sewn edges");
+    let reports: Vec<serde_json::Value> =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let seam = &reports[0]["mating_seams"][0];
+    assert!(seam["mismatch_mm"].as_f64().unwrap() < 1e-6, "{seam}");
+    let notches = seam["notches"].as_array().unwrap();
+    assert_eq!(notches.len(), 2, "{seam}");
+    for n in notches {
+        let o = &n["offset_mm"];
+        assert!(
+            (o[0].as_f64().unwrap() - o[1].as_f64().unwrap()).abs() < 1e-6,
+            "{n}"
+        );
+    }
+}
+
+#[test]
+fn split_without_limits_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let flat = dir.path().join("flat.obj");
+    let design = root().join("crates/design/examples/cylinder.toml");
+    let cli = flatcut_cli::Cli::try_parse_from([
+        "flatcut",
+        "flatten",
+        design.to_str().unwrap(),
+        "--split",
+        "auto",
+        "-o",
+        flat.to_str().unwrap(),
+    ])
+    .unwrap();
+    let text = format!("{:#}", flatcut_cli::run(cli).expect_err("refused"));
+    assert!(text.contains("--split auto needs --max-stretch"), "{text}");
+    assert!(!flat.exists());
+}

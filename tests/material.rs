@@ -240,8 +240,7 @@ fn an_auto_grain_is_drawn_as_the_pieces_grain_line() {
     );
     // The sew line's corners; its 80 mm sides run along the sleeve's axis.
     let d = numbers(
-        &text
-            .split("id=\"sleeve-1-sew\"")
+        text.split("id=\"sleeve-1-sew\"")
             .next()
             .unwrap()
             .rsplit("d=\"")

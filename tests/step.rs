@@ -66,6 +66,7 @@ fn delta2(path: &Path) -> Vec<(String, f64)> {
         &FlattenParams::new(Method::Isometric),
         None,
         None,
+        None,
         &mut |_, _, _| {},
     )
     .unwrap();

@@ -17,6 +17,8 @@ pub const MAX_PNG_WIDTH: u32 = 16_384;
 pub const MAX_ITERS: usize = 10_000_000;
 /// Most darts `--max-darts` accepts in one piece.
 pub const MAX_DARTS: usize = 1000;
+/// Most parts a piece may be split into: each cut is a few flattenings of the piece.
+pub const MAX_SPLIT_PIECES: usize = 64;
 /// Largest percentage a stretch or compression limit may be.
 pub const MAX_PERCENT: f64 = 1000.0;
 
@@ -130,6 +132,12 @@ pub fn png_width(s: &str) -> Result<u32, String> {
 pub fn iterations(s: &str) -> Result<usize, String> {
     let most = format!("give at most {MAX_ITERS} iterations");
     whole(s, 0..=MAX_ITERS as u64, &most).map(|v| v as usize)
+}
+
+/// Most parts a split piece may become: 2 to `MAX_SPLIT_PIECES`.
+pub fn piece_count(s: &str) -> Result<usize, String> {
+    let most = format!("give 2 to {MAX_SPLIT_PIECES} parts");
+    whole(s, 2..=MAX_SPLIT_PIECES as u64, &most).map(|v| v as usize)
 }
 
 /// Most darts in a piece: 1 to `MAX_DARTS`.

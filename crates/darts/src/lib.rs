@@ -23,6 +23,7 @@ pub mod limits;
 pub mod place;
 pub mod relaxed;
 pub mod solve;
+pub mod split;
 pub mod trace;
 
 use flatcut_geom::{DVec2, DVec3};

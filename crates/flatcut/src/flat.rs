@@ -36,6 +36,9 @@ pub struct Flat {
     pub darts: Vec<flatcut_darts::Dart>,
     /// Its material and the warp's direction in its map, when it was flattened for a material.
     pub grain: Option<crate::material::PieceGrain>,
+    /// The grain's direction in the map of a piece without a material whose grain line cannot
+    /// be drawn from the design (a part of a split piece).
+    pub grain_dir: Option<flatcut_geom::DVec2>,
 }
 
 /// Stretch and compression limits in percent, checked by the report, and whether darts may be
@@ -45,6 +48,9 @@ pub struct Limits {
     pub stretch_pct: Option<f64>,
     pub compress_pct: Option<f64>,
     pub darts: Option<DartSettings>,
+    /// Whether pieces that darts cannot bring within the limits are split into parts sewn
+    /// together ([`crate::splitting`]).
+    pub split: Option<crate::splitting::SplitSettings>,
     /// The material of every piece that names none itself: its limits per direction and its
     /// stiffness drive the orthotropic flattening ([`crate::material`]).
     pub material: Option<MaterialSpec>,
@@ -74,6 +80,7 @@ pub fn read_flat_mesh(path: &Path, limits: &Limits) -> Result<Option<Flat>, Pipe
         info: None,
         darts: Vec::new(),
         grain: None,
+        grain_dir: None,
     }))
 }
 
@@ -91,6 +98,7 @@ pub fn flatten_and_report(
         tol,
         params,
         limits.darts.as_ref(),
+        limits.split.as_ref(),
         limits.material.as_ref(),
         progress,
     )?;
@@ -104,6 +112,7 @@ pub fn flatten_and_report(
                  notches,
                  darts,
                  grain,
+                 grain_dir,
              }| {
                 let marks: Vec<u32> = notches.iter().map(|n| n.vertex).collect();
                 let mut report = pipeline::report_piece(
@@ -128,6 +137,7 @@ pub fn flatten_and_report(
                     info: Some(info),
                     darts,
                     grain,
+                    grain_dir,
                 })
             },
         )

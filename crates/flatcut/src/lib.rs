@@ -50,6 +50,7 @@ pub mod pieces;
 pub mod pipeline;
 pub mod project;
 pub mod run;
+pub mod splitting;
 
 pub use flatcut_darts as darts;
 pub use flatcut_design as design;

@@ -52,7 +52,7 @@ fn build_one(f: &Flat, name: &str, s: &PieceSettings) -> Result<Piece, PipelineE
         size: String::new(),
         corner: s.corner,
         notches: &f.notches,
-        grain_dir: f.grain.as_ref().map(|g| g.pattern_dir),
+        grain_dir: f.grain_dir.or(f.grain.as_ref().map(|g| g.pattern_dir)),
     };
     pipeline::piece_from_flat(name, &f.mesh, &ctx, &s.options)
 }
@@ -69,6 +69,9 @@ pub fn mirror(f: &Flat) -> Flat {
     }
     if let Some(grain) = &mut g.grain {
         grain.pattern_dir.x = -grain.pattern_dir.x;
+    }
+    if let Some(d) = &mut g.grain_dir {
+        d.x = -d.x;
     }
     if let Some(def) = &mut g.def {
         def.quantity = f.mirrored;

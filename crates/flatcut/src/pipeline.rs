@@ -104,6 +104,9 @@ pub struct FlatPiece {
     pub darts: Vec<flatcut_darts::Dart>,
     /// Its material and grain, when it has a material ([`crate::material`]).
     pub grain: Option<crate::material::PieceGrain>,
+    /// The grain's direction in the flat map of a piece without a material whose grain line
+    /// cannot be drawn from the design (a part of a split piece).
+    pub grain_dir: Option<DVec2>,
 }
 
 /// A design flattened: every piece (a `[[piece]]` or a region of a `[[part]]`) and the mating
@@ -123,6 +126,7 @@ pub fn flatten_design(
     tol: &Tolerances,
     params: &FlattenParams,
     darts: Option<&DartSettings>,
+    split: Option<&crate::splitting::SplitSettings>,
     material: Option<&MaterialSpec>,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<FlatDesign, PipelineError> {
@@ -179,6 +183,7 @@ pub fn flatten_design(
                 .any(|s| s.sides.iter().any(|d| d.piece == k))
         })
         .collect();
+    let joined_copy = joined.clone();
     let pieces = asm
         .pieces
         .into_iter()
@@ -210,22 +215,106 @@ pub fn flatten_design(
                     notches,
                     darts: Vec::new(),
                     grain: None,
+                    grain_dir: None,
                 })
-            } else if let Some(m) = piece_material {
-                let (f, grain) =
-                    crate::material::flatten(&p.def.name, &p.mesh, params, &m, p.def.grain.as_ref())?;
-                let dart_params = crate::material::dart_params(params, &m);
-                dart_if_wanted(p.def, p.mesh, f, notches, &dart_params, darts, Some(grain))
             } else {
-                dart_if_wanted(p.def, p.mesh, f, notches, params, darts, None)
+                let (f, grain, limits) = match &piece_material {
+                    Some(m) => {
+                        let (f, g) = crate::material::flatten(
+                            &p.def.name,
+                            &p.mesh,
+                            params,
+                            m,
+                            p.def.grain.as_ref(),
+                        )?;
+                        (f, Some(g), crate::material::dart_params(params, m))
+                    }
+                    None => (f, None, params.clone()),
+                };
+                // Darts first; where they cannot help and splitting is asked for, the piece
+                // goes on whole to be split.
+                let whole = split.is_some().then(|| {
+                    let mut mesh = p.mesh.clone();
+                    mesh.flat = Some(f.uv.clone());
+                    FlatPiece {
+                        def: p.def.clone(),
+                        mesh,
+                        info: f.info.clone(),
+                        notches: notches.clone(),
+                        darts: Vec::new(),
+                        grain: grain.clone(),
+                        grain_dir: None,
+                    }
+                });
+                match dart_if_wanted(p.def, p.mesh, f, notches, &limits, darts, grain) {
+                    Err(e) if darting::is_out_of_limits(&e) => whole.ok_or(e),
+                    r => r,
+                }
             }
         })
         .collect::<Result<Vec<_>, PipelineError>>()?;
+    let (pieces, seams) = match split {
+        Some(s) => split_where_wanted(pieces, asm.seams, &joined_copy, params, s, |def| {
+            crate::material::of_piece(def, base, material)
+        })?,
+        None => (pieces, asm.seams),
+    };
     Ok(FlatDesign {
         design,
         pieces,
-        seams: asm.seams,
+        seams,
     })
+}
+
+/// Splits every piece no seam joins that is beyond its limits ([`crate::splitting`]); the parts
+/// take the piece's place in the order, and the seams' piece indices follow.
+fn split_where_wanted(
+    pieces: Vec<FlatPiece>,
+    mut seams: Vec<MatingSeam>,
+    joined: &[bool],
+    params: &FlattenParams,
+    settings: &crate::splitting::SplitSettings,
+    material_of: impl Fn(&PieceDef) -> Result<Option<MaterialSpec>, PipelineError>,
+) -> Result<(Vec<FlatPiece>, Vec<MatingSeam>), PipelineError> {
+    let mut out: Vec<FlatPiece> = Vec::with_capacity(pieces.len());
+    let mut index = Vec::with_capacity(pieces.len());
+    let mut new_seams = Vec::new();
+    for (piece, &joined) in pieces.into_iter().zip(joined) {
+        index.push(out.len());
+        if joined {
+            out.push(piece);
+            continue;
+        }
+        let limits = match material_of(&piece.def)? {
+            Some(m) => crate::material::dart_params(params, &m),
+            None => params.clone(),
+        };
+        let parts = crate::splitting::split_piece(piece, &limits, settings)?;
+        let base = out.len();
+        new_seams.extend(parts.seams.into_iter().map(|mut s| {
+            s.sides.iter_mut().for_each(|side| side.piece += base);
+            s
+        }));
+        out.extend(parts.pieces);
+    }
+    for s in &mut seams {
+        s.sides
+            .iter_mut()
+            .for_each(|side| side.piece = index[side.piece]);
+    }
+    seams.extend(new_seams);
+    let mut names = std::collections::BTreeSet::new();
+    for p in &out {
+        if !names.insert(p.def.name.as_str()) {
+            return Err(PipelineError::Piece {
+                piece: p.def.name.clone(),
+                reason:
+                    "a part of a split piece takes the name of another piece; rename that piece"
+                        .into(),
+            });
+        }
+    }
+    Ok((out, seams))
 }
 
 /// A piece no seam joins, flattened: where it exceeds its limits and darts are wanted
@@ -284,6 +373,7 @@ fn dart_if_wanted(
         notches,
         darts,
         grain,
+        grain_dir: None,
     })
 }
 

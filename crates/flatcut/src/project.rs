@@ -7,6 +7,7 @@
 //! method = "developable"        # flattening method (default isometric)
 //! seam_mm = 10.0                # allowance where the design gives none
 //! darts = "auto"                # optional: cut darts where a piece exceeds the limits
+//! split = "auto"                # optional: split a piece darts cannot bring within them
 //! [material]
 //! name = "parchment"
 //! max_stretch_pct = 2.0
@@ -157,6 +158,10 @@ pub struct Project {
     /// `"auto"`: cut darts into the pieces that cannot meet the material's limits otherwise.
     #[serde(default)]
     pub darts: Option<flatcut_design::DartsDef>,
+    /// `"auto"`: split the pieces that darts (when asked for) cannot bring within the material's
+    /// limits into parts sewn together.
+    #[serde(default)]
+    pub split: Option<flatcut_design::DartsDef>,
     pub material: Material,
     pub sheet: Sheet,
     pub machine: Machine,

@@ -11,6 +11,7 @@ use flatcut::flatten::{FlattenHooks, FlattenParams, FlattenProgress, Method};
 use flatcut::geom::Tolerances;
 use flatcut::pattern::{CornerStyle, NotchStyle, Piece, PieceOptions};
 use flatcut::pieces::PieceSettings;
+use flatcut::splitting::SplitSettings;
 
 use crate::values;
 
@@ -52,6 +53,14 @@ pub struct FlattenArgs {
     /// How far short of its point a dart's drill mark sits (mm).
     #[arg(long, value_name = "MM", default_value_t = DartSettings::default().drill_offset_mm, value_parser = values::nonneg_mm)]
     pub dart_drill: f64,
+    /// `auto`: split a piece that exceeds --max-stretch/--max-compress, and that darts (when
+    /// asked for too) cannot bring within them, into parts sewn together along new seams (with
+    /// balance notches), every part within the limits.
+    #[arg(long, value_name = "MODE", value_parser = parse_darts)]
+    pub split: Option<DartMode>,
+    /// Most parts one piece may be split into.
+    #[arg(long, value_name = "N", default_value_t = SplitSettings::default().max_pieces, value_parser = values::piece_count)]
+    pub max_pieces: usize,
     /// The material of pieces that name none: leather, woven-cotton, canvas, knit,
     /// carbon-prepreg, sailcloth, or a material file (TOML). Flattens with the orthotropic
     /// energy along each piece's grain (chosen when the piece has none) and checks the limits
@@ -162,6 +171,20 @@ impl FlattenArgs {
         }))
     }
 
+    /// The split settings when splitting is asked for on the command line.
+    pub fn split(&self) -> anyhow::Result<Option<SplitSettings>> {
+        if self.split != Some(DartMode::Auto) {
+            return Ok(None);
+        }
+        anyhow::ensure!(
+            self.max_stretch.is_some() || self.max_compress.is_some(),
+            "--split auto needs --max-stretch and/or --max-compress: the limits the parts are for"
+        );
+        Ok(Some(SplitSettings {
+            max_pieces: self.max_pieces,
+        }))
+    }
+
     pub fn tolerances(&self) -> anyhow::Result<Tolerances> {
         anyhow::ensure!(
             self.chord.is_finite() && self.chord > 0.0,
@@ -241,6 +264,7 @@ pub fn load_flat(
         stretch_pct: limits.0,
         compress_pct: limits.1,
         darts: fa.darts()?,
+        split: fa.split()?,
         material: fa.material()?,
     };
     let t0 = std::time::Instant::now();

@@ -25,8 +25,9 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
-    // A mesh that already carries `vt` is flattened again from its 3D shape.
-    let flats = if common::is_mesh(&a.file) {
+    // A mesh that already carries `vt` is flattened again from its 3D shape. A mesh that may be
+    // split into several pieces goes the way of a design's pieces.
+    let flats = if common::is_mesh(&a.file) && a.flatten.split.is_none() {
         let mut mesh = flatcut::mesh::read_mesh(&a.file).map_err(anyhow::Error::from)?;
         mesh.flat = None;
         let name = a
@@ -123,6 +124,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             info: Some(info),
             darts,
             grain,
+            grain_dir: None,
         }]
     } else {
         let limits = (a.flatten.max_stretch, a.flatten.max_compress);

@@ -181,6 +181,8 @@ fn limits(project: &Project) -> Limits {
         compress_pct: project.material.max_compress_pct,
         darts: (project.darts == Some(flatcut_design::DartsDef::Auto))
             .then(crate::darting::DartSettings::default),
+        split: (project.split == Some(flatcut_design::DartsDef::Auto))
+            .then(crate::splitting::SplitSettings::default),
         material: project.material.spec.clone(),
     }
 }

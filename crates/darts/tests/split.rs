@@ -1,0 +1,190 @@
+//! Splitting seams, checked independently of the crate's own measures: on a saddle, where no
+//! dart can help (the flat piece is too short at the rim), the parts are each within the limits
+//! (principal stretches computed here from the 3D triangles and the maps), unflipped, disks that
+//! tile the piece, and sewn along seams whose two sides have equal flat lengths edge by edge; a
+//! developable piece within the limits is not cut; limits no split can meet are reported, not
+//! faked.
+
+use flatcut_darts::limits::Band;
+use flatcut_darts::split::{SplitOptions, split};
+use flatcut_flatten::testmesh::{cylinder_patch, saddle, spherical_cap};
+use flatcut_flatten::{FlattenParams, Method, flatten};
+use flatcut_geom::{DVec2, DVec3};
+use flatcut_mesh::{Topology, TriMesh, check_disk};
+
+/// Principal stretches (σ1 ≥ σ2) and the sign of the map's orientation of triangle `t`.
+fn stretches(mesh: &TriMesh, x: &[DVec2], t: usize) -> (f64, f64, f64) {
+    let [a, b, c] = mesh.triangles[t].map(|v| mesh.positions[v as usize]);
+    let [p, q, r] = mesh.triangles[t].map(|v| x[v as usize]);
+    // An orthonormal frame of the 3D triangle: e1 along ab, e2 in its plane.
+    let e1 = (b - a).normalize();
+    let n = (b - a).cross(c - a);
+    let e2 = n.cross(e1).normalize();
+    let (u1, u2) = (
+        DVec2::new((b - a).dot(e1), (b - a).dot(e2)),
+        DVec2::new((c - a).dot(e1), (c - a).dot(e2)),
+    );
+    let (w1, w2) = (q - p, r - p);
+    // J [u1 u2] = [w1 w2]
+    let det_u = u1.perp_dot(u2);
+    let j = [
+        [
+            (w1.x * u2.y - w2.x * u1.y) / det_u,
+            (w2.x * u1.x - w1.x * u2.x) / det_u,
+        ],
+        [
+            (w1.y * u2.y - w2.y * u1.y) / det_u,
+            (w2.y * u1.x - w1.y * u2.x) / det_u,
+        ],
+    ];
+    let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+    let fro2 = j[0][0].powi(2) + j[0][1].powi(2) + j[1][0].powi(2) + j[1][1].powi(2);
+    let disc = (fro2 * fro2 - 4.0 * det * det).max(0.0).sqrt();
+    let s1 = ((fro2 + disc) / 2.0).sqrt();
+    let s2 = ((fro2 - disc) / 2.0).max(0.0).sqrt();
+    (s1, s2, det)
+}
+
+fn isometric(mesh: &TriMesh) -> Vec<DVec2> {
+    flatten(mesh, &FlattenParams::new(Method::Isometric))
+        .unwrap()
+        .uv
+}
+
+fn options(pct: f64, max_pieces: usize) -> SplitOptions {
+    SplitOptions {
+        band: Band::from_pct(Some(pct), Some(pct)),
+        max_pieces,
+    }
+}
+
+#[test]
+fn a_saddle_is_split_into_parts_within_the_limits_that_sew_back_together() {
+    let mesh = saddle(200.0, 24);
+    let x0 = isometric(&mesh);
+    let pct = 3.0;
+    // Beyond the limits whole.
+    let worst = (0..mesh.triangles.len())
+        .map(|t| {
+            let (s1, s2, _) = stretches(&mesh, &x0, t);
+            (s1 - 1.0).max(1.0 - s2)
+        })
+        .fold(0.0, f64::max);
+    assert!(worst > 0.04, "the whole saddle flattens within {worst}");
+    let params = FlattenParams::new(Method::Isometric);
+    let s = split(&mesh, &x0, &params, &options(pct, 8)).unwrap();
+    assert!(s.feasible, "excess {}", s.excess);
+    assert!(
+        s.pieces.len() >= 2 && s.pieces.len() <= 8,
+        "{} parts",
+        s.pieces.len()
+    );
+    assert_eq!(s.cuts.len(), s.pieces.len() - 1);
+    let (hi, lo) = (1.0 + pct / 100.0, 1.0 - pct / 100.0);
+    let mut area = 0.0;
+    for (k, p) in s.pieces.iter().enumerate() {
+        check_disk(p).unwrap_or_else(|e| panic!("part {k}: {e}"));
+        let x = p.flat.as_deref().unwrap();
+        for t in 0..p.triangles.len() {
+            let (s1, s2, det) = stretches(p, x, t);
+            assert!(det > 0.0, "part {k} face {t} flipped");
+            assert!(
+                s1 <= hi + 1e-9 && s2 >= lo - 1e-9,
+                "part {k} face {t}: {s1} {s2}"
+            );
+        }
+        area += p.area();
+    }
+    assert!(
+        (area - mesh.area()).abs() < 1e-6 * mesh.area(),
+        "{area} vs {}",
+        mesh.area()
+    );
+    // Every seam: its sides' edges equally long in the plane, one to one, at equal 3D points.
+    assert!(!s.seams.is_empty());
+    let mut sewn = 0.0;
+    for seam in &s.seams {
+        let [a, b] = &seam.sides;
+        let (xa, xb) = (
+            s.pieces[a.piece].flat.as_deref().unwrap(),
+            s.pieces[b.piece].flat.as_deref().unwrap(),
+        );
+        assert_eq!(a.vertices.len(), b.vertices.len());
+        for k in 1..a.vertices.len() {
+            let (pa, pb) = (a.vertices[k - 1] as usize, a.vertices[k] as usize);
+            let (qa, qb) = (b.vertices[k - 1] as usize, b.vertices[k] as usize);
+            assert_eq!(
+                s.pieces[a.piece].positions[pa],
+                s.pieces[b.piece].positions[qa]
+            );
+            let (la, lb) = (xa[pa].distance(xa[pb]), xb[qa].distance(xb[qb]));
+            assert!(
+                (la - lb).abs() < 1e-6,
+                "seam {}: edge {k} {la} vs {lb}",
+                seam.name
+            );
+            sewn += s.pieces[a.piece].positions[pa].distance(s.pieces[a.piece].positions[pb]);
+        }
+    }
+    assert!(
+        (sewn - s.total_cut_mm()).abs() < 1e-6 * sewn,
+        "{sewn} vs {}",
+        s.total_cut_mm()
+    );
+    // Each cut runs from the piece's outline to its outline.
+    let topo = Topology::build(&mesh).unwrap();
+    let rim: Vec<[DVec3; 2]> = topo.boundary_loops[0]
+        .iter()
+        .zip(topo.boundary_loops[0].iter().cycle().skip(1))
+        .map(|(&a, &b)| [mesh.positions[a as usize], mesh.positions[b as usize]])
+        .collect();
+    let off_rim = |p: DVec3| {
+        rim.iter()
+            .map(|[a, b]| {
+                let d = *b - *a;
+                let t = ((p - *a).dot(d) / d.length_squared()).clamp(0.0, 1.0);
+                (*a + d * t).distance(p)
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    let first = &s.cuts[0];
+    assert!(off_rim(first[0]) < 1e-6 && off_rim(*first.last().unwrap()) < 1e-6);
+    eprintln!(
+        "saddle: {} parts, {:.1} mm of seams, worst whole {:.2} %",
+        s.pieces.len(),
+        s.total_cut_mm(),
+        100.0 * worst
+    );
+}
+
+#[test]
+fn a_developable_piece_within_the_limits_is_not_cut() {
+    let mesh = cylinder_patch(40.0, 2.0, 80.0, 16, 12);
+    let x0 = isometric(&mesh);
+    let s = split(
+        &mesh,
+        &x0,
+        &FlattenParams::new(Method::Isometric),
+        &options(1.0, 8),
+    )
+    .unwrap();
+    assert!(s.feasible);
+    assert_eq!(s.pieces.len(), 1);
+    assert!(s.cuts.is_empty() && s.seams.is_empty());
+}
+
+#[test]
+fn limits_no_split_meets_are_reported_with_what_was_reached() {
+    let mesh = spherical_cap(50.0, 1.0, 10);
+    let x0 = isometric(&mesh);
+    let s = split(
+        &mesh,
+        &x0,
+        &FlattenParams::new(Method::Isometric),
+        &options(0.0, 2),
+    )
+    .unwrap();
+    assert!(!s.feasible);
+    assert!(s.excess > 0.0);
+    assert!(s.pieces.len() <= 2);
+}

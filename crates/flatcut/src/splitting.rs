@@ -1,0 +1,230 @@
+//! Pieces split by seams where darts cannot bring them within their limits (`--split auto`).
+//! Where the cuts go is [`flatcut_darts::split`]'s; here each part becomes a piece of the
+//! pattern: named `<piece>-1`, `<piece>-2`, … (numbered as the cuts made them), with its share of
+//! the piece's marks and notches, the piece's grain, and two balance notches on every new seam at
+//! a third and two thirds of its length, so the sewer matches the parts point to point.
+
+use flatcut_darts::DartError;
+use flatcut_darts::split::{SplitOptions, split};
+use flatcut_design::{MarkDef, PieceDef};
+use flatcut_flatten::FlattenParams;
+use flatcut_geom::DVec3;
+use flatcut_mesh::TriMesh;
+use flatcut_mesh::grain_strain::{central_face, centroid, pattern_direction_near};
+use flatcut_mesh::mating::{MatingSeam, SeamNotch, arc_lengths};
+
+use crate::darting;
+use crate::pipeline::{FlatNotch, FlatPiece, PipelineError};
+
+/// How pieces are split when asked for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SplitSettings {
+    /// Most parts one piece may become.
+    pub max_pieces: usize,
+}
+
+impl Default for SplitSettings {
+    fn default() -> Self {
+        Self {
+            max_pieces: SplitOptions::DEFAULT_MAX_PIECES,
+        }
+    }
+}
+
+/// Where the balance notches of a new seam sit, as fractions of its length.
+const BALANCE_NOTCHES: [f64; 2] = [1.0 / 3.0, 2.0 / 3.0];
+
+/// A piece split into parts and the seams between them (sides index `pieces`).
+#[derive(Clone, Debug)]
+pub struct SplitPieces {
+    pub pieces: Vec<FlatPiece>,
+    pub seams: Vec<MatingSeam>,
+    /// Total 3D length of the cuts (mm).
+    pub cut_mm: f64,
+}
+
+/// Splits a flattened piece that is beyond the limits of `params` (a piece within them, or
+/// already darted, comes back whole). Fails, as darts do, when no split into at most
+/// `settings.max_pieces` parts brings every face within the limits.
+pub fn split_piece(
+    piece: FlatPiece,
+    params: &FlattenParams,
+    settings: &SplitSettings,
+) -> Result<SplitPieces, PipelineError> {
+    let whole = |piece| SplitPieces {
+        pieces: vec![piece],
+        seams: Vec::new(),
+        cut_mm: 0.0,
+    };
+    let limited = params.max_stretch_pct.is_some() || params.max_compress_pct.is_some();
+    let Some(uv) = piece.mesh.flat.clone() else {
+        return Ok(whole(piece));
+    };
+    if !limited || !piece.darts.is_empty() || darting::within(&piece.mesh, &uv, params) {
+        return Ok(whole(piece));
+    }
+    let name = piece.def.name.clone();
+    let opts = SplitOptions {
+        band: flatcut_darts::Band::from_pct(params.max_stretch_pct, params.max_compress_pct),
+        max_pieces: settings.max_pieces,
+    };
+    let s = split(&piece.mesh, &uv, params, &opts).map_err(|source| PipelineError::Darts {
+        piece: name.clone(),
+        source,
+    })?;
+    if !s.feasible {
+        return Err(PipelineError::Darts {
+            piece: name,
+            source: DartError::Infeasible {
+                darts: 0,
+                excess: s.excess,
+                at: s.worst_3d,
+                reason: format!(
+                    "no split into at most {} parts brought every face within them",
+                    settings.max_pieces
+                ),
+            },
+        });
+    }
+    let cut_mm = s.total_cut_mm();
+    let grain_3d = grain_direction(&piece);
+    let mut parts: Vec<FlatPiece> = s
+        .pieces
+        .iter()
+        .enumerate()
+        .map(|(k, mesh)| part(&piece, k, mesh, &s.pieces, grain_3d))
+        .collect();
+    let mut seams = s.seams;
+    for seam in &mut seams {
+        seam.name = format!("{name} {}", seam.name);
+        let pts = seam.points_3d(0, &s.pieces.iter().collect::<Vec<_>>());
+        let cum = arc_lengths(&pts, |a, b| a.distance(*b));
+        let total = cum.last().copied().unwrap_or(0.0);
+        for (j, f) in BALANCE_NOTCHES.iter().enumerate() {
+            let index = cum
+                .iter()
+                .enumerate()
+                .min_by(|a, b| (a.1 - f * total).abs().total_cmp(&(b.1 - f * total).abs()))
+                .map_or(0, |(i, _)| i);
+            if index == 0 || index + 1 >= cum.len() {
+                continue;
+            }
+            let notch = format!("{} {}", seam.name, j + 1);
+            for side in &seam.sides {
+                parts[side.piece].notches.push(FlatNotch {
+                    name: notch.clone(),
+                    vertex: side.vertices[index],
+                });
+            }
+            seam.notches.push(SeamNotch { name: notch, index });
+        }
+    }
+    Ok(SplitPieces {
+        pieces: parts,
+        seams,
+        cut_mm,
+    })
+}
+
+/// The 3D grain of a piece: its material's warp where the flattening chose or followed one, else
+/// the direction of the design's grain line.
+fn grain_direction(piece: &FlatPiece) -> Option<DVec3> {
+    if let Some(g) = &piece.grain {
+        let uv = piece.mesh.flat.as_deref()?;
+        let t = central_face(&piece.mesh)?;
+        return flatcut_mesh::grain_strain::warp_at(&piece.mesh, uv, g.pattern_dir, t);
+    }
+    let [a, b] = piece.def.grain.as_ref()?.line().copied()?;
+    (DVec3::from_array(b) - DVec3::from_array(a)).try_normalize()
+}
+
+/// Part `k` of a split piece as a piece of its own.
+fn part(
+    piece: &FlatPiece,
+    k: usize,
+    mesh: &TriMesh,
+    all: &[TriMesh],
+    grain_3d: Option<DVec3>,
+) -> FlatPiece {
+    let mut def: PieceDef = piece.def.clone();
+    def.name = format!("{}-{}", piece.def.name, k + 1);
+    def.marks = piece
+        .def
+        .marks
+        .iter()
+        .flat_map(|m| marks_on(m, k, all))
+        .collect();
+    // The grain is a direction on a part: drawn through its middle (`grain_dir`), since the
+    // piece's grain line may lie on another part.
+    def.grain = None;
+    let uv = mesh.flat.as_deref().unwrap_or_default();
+    let grain_dir = grain_3d.and_then(|d| {
+        let t = central_face(mesh)?;
+        pattern_direction_near(mesh, uv, d, centroid(mesh, t), 0.0)
+    });
+    let notches = piece
+        .notches
+        .iter()
+        .filter_map(|n| {
+            let p = piece.mesh.positions[n.vertex as usize];
+            let v = mesh.positions.iter().position(|q| *q == p)?;
+            Some(FlatNotch {
+                name: n.name.clone(),
+                vertex: v as u32,
+            })
+        })
+        .collect();
+    let mut info = piece.info.clone();
+    info.warnings.clear();
+    FlatPiece {
+        def,
+        mesh: mesh.clone(),
+        info,
+        notches,
+        darts: Vec::new(),
+        grain: piece.grain.clone().map(|mut g| {
+            g.pattern_dir = grain_dir.unwrap_or(g.pattern_dir);
+            g
+        }),
+        grain_dir: grain_dir.filter(|_| piece.grain.is_none()),
+    }
+}
+
+/// The stretches of mark `m` that lie on part `k` (each point goes to the part whose surface is
+/// nearest it; a line crossing a cut becomes one line per part it crosses).
+fn marks_on(m: &MarkDef, k: usize, all: &[TriMesh]) -> Vec<MarkDef> {
+    let owner = |p: &[f64; 3]| {
+        let p = DVec3::from_array(*p);
+        (0..all.len())
+            .min_by(|&a, &b| nearest(&all[a], p).total_cmp(&nearest(&all[b], p)))
+            .unwrap_or(0)
+    };
+    let mut out: Vec<MarkDef> = Vec::new();
+    let mut run: Vec<[f64; 3]> = Vec::new();
+    for p in &m.points {
+        if owner(p) == k {
+            run.push(*p);
+        } else if !run.is_empty() {
+            out.push(MarkDef {
+                points: std::mem::take(&mut run),
+                ..m.clone()
+            });
+        }
+    }
+    if !run.is_empty() {
+        out.push(MarkDef {
+            points: run,
+            ..m.clone()
+        });
+    }
+    out
+}
+
+/// Distance from `p` to the mesh's nearest vertex (a part's surface is fine against its
+/// neighbour's: the cut between them is the only place both are near).
+fn nearest(mesh: &TriMesh, p: DVec3) -> f64 {
+    mesh.positions
+        .iter()
+        .map(|q| q.distance_squared(p))
+        .fold(f64::INFINITY, f64::min)
+}
