@@ -271,3 +271,74 @@ fn numbers(s: &str) -> Vec<f64> {
         .filter_map(|t| t.parse().ok())
         .collect()
 }
+
+/// `report --measure material` draws each face's excess over the material's limits along,
+/// across or on the bias: the per-face figures behind the picture count the faces the report
+/// says are over, and reach its largest excess; a flat OBJ, which does not carry its grain, is
+/// refused with a reason.
+#[test]
+fn the_material_heat_map_shows_each_faces_excess_over_the_limits_per_direction() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = material_file(dir.path(), "bias-soft", [1.0, 1.0, 8.0], 1.0);
+    let design = dir.path().join("cap.toml");
+    std::fs::write(
+        &design,
+        "[[piece]]\nname = \"cap\"\ngrain = [[0, 50, 0], [100, 50, 0]]\n[piece.surface]\ntype = \"bezier\"\ndegree = [2, 2]\npoints = [[0, 0, 0], [0, 50, 0], [0, 100, 0], [50, 0, 0], [50, 50, 60], [50, 100, 0], [100, 0, 0], [100, 50, 0], [100, 100, 0]]\n",
+    )
+    .unwrap();
+    let (json, svg) = (dir.path().join("cap.json"), dir.path().join("cap.svg"));
+    let args = [
+        "report",
+        design.to_str().unwrap(),
+        "--material",
+        m.to_str().unwrap(),
+        "--measure",
+        "material",
+        "--json",
+        json.to_str().unwrap(),
+        "--per-face",
+        "--svg",
+        svg.to_str().unwrap(),
+    ];
+    let cli = flatcut_cli::Cli::try_parse_from(std::iter::once("flatcut").chain(args)).unwrap();
+    flatcut_cli::run(cli).unwrap();
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let faces = r["per_face"].as_array().unwrap();
+    let excess: Vec<f64> = faces
+        .iter()
+        .map(|f| f["material_excess_pct"].as_f64().unwrap())
+        .collect();
+    let over = excess.iter().filter(|&&e| e > 0.0).count();
+    assert!(over > 0, "the dome is over a 1 % thread limit somewhere");
+    assert_eq!(
+        over as u64,
+        r["faces_over_material_limits"].as_u64().unwrap()
+    );
+    let most = excess.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    assert_eq!(most, r["material_excess_pct"].as_f64().unwrap());
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.contains("<path"), "a heat map");
+    // The legend's scale reaches the largest excess (its ticks are signed).
+    assert!(text.contains("piece-0"));
+    // A flat OBJ carries no grain: refused, naming why.
+    let obj = dir.path().join("flat.obj");
+    run_cli(&[
+        "flatten",
+        design.to_str().unwrap(),
+        "-o",
+        obj.to_str().unwrap(),
+    ]);
+    let cli = flatcut_cli::Cli::try_parse_from([
+        "flatcut",
+        "report",
+        obj.to_str().unwrap(),
+        "--measure",
+        "material",
+        "--svg",
+        svg.to_str().unwrap(),
+    ])
+    .unwrap();
+    let e = format!("{:#}", flatcut_cli::run(cli).expect_err("no material"));
+    assert!(e.contains("no material to measure against"), "{e}");
+}

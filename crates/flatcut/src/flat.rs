@@ -123,9 +123,11 @@ pub fn flatten_and_report(
                     limits.compress_pct,
                 )?;
                 report.darts = darting::dart_reports(&darts);
-                report.grain = grain
-                    .as_ref()
-                    .and_then(|g| crate::material::report(g, &mesh));
+                report.set_grain(
+                    grain
+                        .as_ref()
+                        .and_then(|g| crate::material::report(g, &mesh)),
+                );
                 Ok(Flat {
                     name: def.name.clone(),
                     quantity: def.quantity,

@@ -32,6 +32,8 @@ const MIN_COL_W: f64 = 120.0;
 const LEGEND_H: f64 = 36.0;
 /// Colour given to flipped faces.
 const FLIPPED: &str = "#ff00ff";
+/// Colour of a face with nothing to show in the measure (no material to measure against).
+const NO_VALUE: &str = "#d0d0d0";
 /// Drawing width (mm) up to which titles and legend keep their nominal size. A wider drawing is
 /// shown shrunk to the page (the HTML report fits it to the page width), so its annotations grow
 /// in proportion: two 400 mm pieces side by side keep the legend as readable as one shoe piece.
@@ -215,10 +217,13 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
         if let Some(flat) = flat {
             let fill_of = |t: usize| {
                 let f = &c.report.per_face[t];
+                let v = m.drawn(f);
                 if f.flipped {
                     FLIPPED.to_string()
+                } else if v.is_nan() {
+                    NO_VALUE.to_string()
                 } else {
-                    colour(m, m.drawn(f), range)
+                    colour(m, v, range)
                 }
             };
             let tri_d = |tri: &[u32; 3]| {

@@ -36,6 +36,9 @@ pub struct GrainReport {
     pub material_excess_pct: f64,
     /// Area-weighted share of the squared Green strain that is shear (on the bias).
     pub bias_strain_share: f64,
+    /// Each face's largest excess over the limits (percentage points), for the heat map.
+    #[serde(skip)]
+    pub face_excess_pct: Vec<f64>,
 }
 
 impl GrainReport {
@@ -68,6 +71,7 @@ impl GrainReport {
             faces_over_material_limits: 0,
             material_excess_pct: f64::NEG_INFINITY,
             bias_strain_share: 0.0,
+            face_excess_pct: Vec::with_capacity(mesh.triangles.len()),
         };
         let (mut shear, mut all) = (0.0, 0.0);
         for (t, tri) in mesh.triangles.iter().enumerate() {
@@ -83,6 +87,7 @@ impl GrainReport {
             let e = g.excess(limits);
             r.faces_over_material_limits += usize::from(e > 0.0);
             r.material_excess_pct = r.material_excess_pct.max(e);
+            r.face_excess_pct.push(e);
             let area = 0.5 * (c[1] - c[0]).cross(c[2] - c[0]).length();
             let (sh, a) = g.bias_share_parts();
             shear += area * sh;

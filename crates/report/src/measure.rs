@@ -18,6 +18,10 @@ pub enum Measure {
     Stretch,
     /// Area change in percent: (σ1σ2 − 1)·100.
     Area,
+    /// The largest excess of the strain along the grain, across it or on either bias over the
+    /// material's limit in that direction, in percentage points (negative: the margin left), for
+    /// pieces flattened with a material.
+    Material,
 }
 
 impl Measure {
@@ -27,6 +31,7 @@ impl Measure {
             "delta2" => Some(Self::Delta2),
             "stretch" => Some(Self::Stretch),
             "area" => Some(Self::Area),
+            "material" => Some(Self::Material),
             _ => None,
         }
     }
@@ -37,6 +42,7 @@ impl Measure {
             Self::Delta2 => "delta2",
             Self::Stretch => "stretch",
             Self::Area => "area",
+            Self::Material => "material",
         }
     }
 
@@ -47,6 +53,7 @@ impl Measure {
             Self::Delta2 => "ISOMETRIC DISTORTION D2",
             Self::Stretch => "PRINCIPAL STRETCH % (+ STRETCH, - COMPRESSION)",
             Self::Area => "AREA CHANGE %",
+            Self::Material => "EXCESS OVER THE MATERIAL LIMITS ALONG ACROSS BIAS (% POINTS)",
         }
     }
 
@@ -58,7 +65,7 @@ impl Measure {
         match self {
             Self::Delta1 => 1e-4,
             Self::Delta2 => 1e-5,
-            Self::Stretch | Self::Area => 0.01,
+            Self::Stretch | Self::Area | Self::Material => 0.01,
         }
     }
 
@@ -70,7 +77,7 @@ impl Measure {
 
     /// True for measures with a sign (drawn with a diverging colour map).
     pub fn signed(self) -> bool {
-        matches!(self, Self::Stretch | Self::Area)
+        matches!(self, Self::Stretch | Self::Area | Self::Material)
     }
 
     pub fn of(self, f: &FaceMeasure) -> f64 {
@@ -85,6 +92,7 @@ impl Measure {
                 }
             }
             Self::Area => (f.area_ratio - 1.0) * 100.0,
+            Self::Material => f.material_excess_pct.unwrap_or(f64::NAN),
         }
     }
 }
@@ -107,6 +115,10 @@ pub struct FaceMeasure {
     pub dir_max_2d: DVec2,
     /// 3D area of the face, mm².
     pub area_3d: f64,
+    /// With a material: the face's largest excess over the material's limits along, across or
+    /// on the bias (percentage points; negative: the margin) — [`crate::GrainReport`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub material_excess_pct: Option<f64>,
 }
 
 /// Area-weighted statistics of one quantity.
@@ -414,6 +426,7 @@ impl Report {
                 flipped,
                 dir_max_2d: d.dir_max_2d,
                 area_3d: mesh.triangle_area(t),
+                material_excess_pct: None,
             });
         }
         let flipped = per_face.iter().filter(|f| f.flipped).count();
@@ -507,6 +520,16 @@ impl Report {
     }
 
     /// Area-weighted statistics of a measure.
+    /// Sets the grain section and each face's excess over the material's limits from it.
+    pub fn set_grain(&mut self, grain: Option<crate::GrainReport>) {
+        if let Some(g) = &grain {
+            for (f, e) in self.per_face.iter_mut().zip(&g.face_excess_pct) {
+                f.material_excess_pct = Some(*e);
+            }
+        }
+        self.grain = grain;
+    }
+
     pub fn stats(&self, m: Measure) -> Stats {
         weighted_stats(
             &self

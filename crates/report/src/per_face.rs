@@ -22,6 +22,10 @@ pub struct FaceRow {
     pub stretch_pct: f64,
     pub compress_pct: f64,
     pub flipped: bool,
+    /// With a material: the largest excess over its limits along, across or on the bias
+    /// (percentage points; negative: the margin).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub material_excess_pct: Option<f64>,
 }
 
 /// A report with its per-face rows, serialised as the report's keys plus `per_face`.
@@ -56,6 +60,7 @@ pub fn per_face_rows(report: &Report, mesh: &TriMesh) -> Vec<FaceRow> {
                 stretch_pct: m.stretch_pct,
                 compress_pct: m.compress_pct,
                 flipped: m.flipped,
+                material_excess_pct: m.material_excess_pct,
             }
         })
         .collect()

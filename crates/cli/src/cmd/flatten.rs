@@ -99,9 +99,11 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             a.flatten.max_compress,
         )?;
         report.darts = flatcut::darting::dart_reports(&darts);
-        report.grain = grain
-            .as_ref()
-            .and_then(|g| flatcut::material::report(g, &mesh));
+        report.set_grain(
+            grain
+                .as_ref()
+                .and_then(|g| flatcut::material::report(g, &mesh)),
+        );
         eprintln!(
             "  {} iterations, mean δ2 {:.6}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
             info.iterations,

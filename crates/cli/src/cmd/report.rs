@@ -20,7 +20,8 @@ pub struct Args {
     #[arg(long)]
     pub json: Option<PathBuf>,
     /// With --json: add `per_face`, each face's index, 3D centroid and measures (μ1, μ2, δ1, δ2,
-    /// area ratio, stretch, compression, flipped).
+    /// area ratio, stretch, compression, flipped, and with a material its excess over the
+    /// limits along, across or on the bias).
     #[arg(long, requires = "json")]
     pub per_face: bool,
     /// Heat map as SVG (true mm, one column per input).
@@ -36,7 +37,9 @@ pub struct Args {
     /// Self-contained HTML report.
     #[arg(long)]
     pub html: Option<PathBuf>,
-    /// What the pictures show: delta1, delta2, stretch or area.
+    /// What the pictures show: delta1, delta2, stretch, area, or material (each face's largest
+    /// excess over its material's limits along, across or on the bias, in percentage points;
+    /// pieces flattened with a material).
     #[arg(long, default_value = "stretch", value_parser = parse_measure)]
     pub measure: Measure,
     /// Draw short ticks along the principal stretch directions.
@@ -53,8 +56,9 @@ pub struct Args {
 }
 
 fn parse_measure(s: &str) -> Result<Measure, String> {
-    Measure::from_name(s)
-        .ok_or_else(|| format!("unknown measure '{s}'; one of delta1, delta2, stretch, area"))
+    Measure::from_name(s).ok_or_else(|| {
+        format!("unknown measure '{s}'; one of delta1, delta2, stretch, area, material")
+    })
 }
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
@@ -82,6 +86,16 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     }
     // Flattened meshes of one split surface pair up by their seams' shared coordinates.
     flatcut::flat::pair_coincident(&mut flats);
+    if a.measure == Measure::Material
+        && let Some(f) = flats.iter().find(|f| f.report.grain.is_none())
+    {
+        anyhow::bail!(
+            "--measure material: piece '{}' has no material to measure against; flatten a design \
+             with --material NAME or a piece's material_properties (a flat OBJ does not carry \
+             its grain)",
+            f.name
+        );
+    }
     for f in &flats {
         let r = &f.report;
         crate::outln!("{}", f.name);
