@@ -258,6 +258,35 @@ pub fn load_flat(
     limits: (Option<f64>, Option<f64>),
     verbose: bool,
 ) -> anyhow::Result<Vec<Flat>> {
+    load_with(path, fa, limits, verbose, flatcut::flat::load_flat)
+}
+
+/// [`load_flat`], except that a mesh carrying a flat map (`vt`) is flattened again from its 3D
+/// shape, as `flatten` promises.
+pub fn flatten_again(
+    path: &Path,
+    fa: &FlattenArgs,
+    limits: (Option<f64>, Option<f64>),
+    verbose: bool,
+) -> anyhow::Result<Vec<Flat>> {
+    load_with(path, fa, limits, verbose, flatcut::flat::flatten_and_report)
+}
+
+/// The loader `load` (a flattened OBJ as it is or a design flattened, or everything flattened)
+/// with the command line's settings, its progress and figures on stderr when `verbose`.
+fn load_with(
+    path: &Path,
+    fa: &FlattenArgs,
+    limits: (Option<f64>, Option<f64>),
+    verbose: bool,
+    load: fn(
+        &Path,
+        &Tolerances,
+        &FlattenParams,
+        Limits,
+        &mut dyn FnMut(&str, usize, usize),
+    ) -> Result<Vec<Flat>, flatcut::pipeline::PipelineError>,
+) -> anyhow::Result<Vec<Flat>> {
     let (params, bar) = with_progress_bar(fa.params()?);
     let tol = fa.tolerances()?;
     let limits = Limits {
@@ -272,7 +301,7 @@ pub fn load_flat(
         Some(m) => format!("{} for {}", Method::Orthotropic, m.name),
         None => params.method.to_string(),
     };
-    let flats = flatcut::flat::load_flat(path, &tol, &params, limits, &mut |name, k, n| {
+    let flats = load(path, &tol, &params, limits, &mut |name, k, n| {
         if verbose {
             bar.suspend(|| eprintln!("flattening piece {}/{} '{}' ({})", k + 1, n, name, method));
         }

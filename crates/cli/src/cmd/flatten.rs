@@ -130,7 +130,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         }]
     } else {
         let limits = (a.flatten.max_stretch, a.flatten.max_compress);
-        common::load_flat(&a.file, &a.flatten, limits, true)?
+        common::flatten_again(&a.file, &a.flatten, limits, true)?
     };
     let seam_tolerance = a.flatten.seam_tolerance;
     let mut out = OutputSet::new();
