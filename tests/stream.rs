@@ -886,9 +886,17 @@ fn resume_at_a_terminal_child() {
     }
 }
 
-/// Runs [`resume_at_a_terminal_child`] in `dir` with a pseudo-terminal as stdin, answers its
-/// question with `answer`, and returns what it printed on stderr.
-fn resume_at_a_terminal(dir: &Path, answer: &str) -> String {
+/// How the operator at the terminal responds to the question.
+enum Respond<'a> {
+    /// Types this.
+    Type(&'a str),
+    /// Presses Ctrl-C (SIGINT to the process).
+    Interrupt,
+}
+
+/// Runs [`resume_at_a_terminal_child`] in `dir` with a pseudo-terminal as stdin, responds to its
+/// question, and returns what it printed on stderr; the child must end within 30 s.
+fn resume_at_a_terminal(dir: &Path, respond: Respond<'_>) -> String {
     use std::io::{Read, Write};
     use std::process::Stdio;
     use std::time::{Duration, Instant};
@@ -922,8 +930,25 @@ fn resume_at_a_terminal(dir: &Path, answer: &str) -> String {
     }
     assert!(said.contains("[y/N]"), "never asked: {said}");
     let mut master = std::fs::File::from(pty.master);
-    master.write_all(answer.as_bytes()).unwrap();
-    let status = child.wait().unwrap();
+    match respond {
+        Respond::Type(answer) => master.write_all(answer.as_bytes()).unwrap(),
+        Respond::Interrupt => nix::sys::signal::kill(
+            nix::unistd::Pid::from_raw(child.id() as i32),
+            nix::sys::signal::Signal::SIGINT,
+        )
+        .unwrap(),
+    }
+    let t0 = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if t0.elapsed() > Duration::from_secs(30) {
+            let _ = child.kill();
+            panic!("the child hangs after the response: {said}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
     reader.join().unwrap();
     said.extend(
         rx.try_iter()
@@ -942,7 +967,7 @@ fn the_terminal_prompt_resumes_on_yes_and_refuses_otherwise() {
     let mut a = args(&c);
     a.sim_error_at = Some("40".into());
     stream_file(&c.job_path, &a).expect_err("the injected error stops the first run");
-    let said = resume_at_a_terminal(&c.root, "no\n");
+    let said = resume_at_a_terminal(&c.root, Respond::Type("no\n"));
     assert!(
         said.contains("The machine position is not known: the controller restarted")
             && said.contains(
@@ -957,7 +982,16 @@ fn the_terminal_prompt_resumes_on_yes_and_refuses_otherwise() {
         "{said}"
     );
     assert!(!Journal::read(&c.journal).unwrap().finished);
-    let said = resume_at_a_terminal(&c.root, "y\n");
+    // Ctrl-C at the question is a no, at once: nothing moved, nothing left waiting for a line.
+    let said = resume_at_a_terminal(&c.root, Respond::Interrupt);
+    assert!(
+        said.contains("interrupted: not confirmed; aborting")
+            && said.contains("CHILD-ERROR: cannot resume")
+            && said.contains("nothing moved, tool off"),
+        "{said}"
+    );
+    assert!(!Journal::read(&c.journal).unwrap().finished);
+    let said = resume_at_a_terminal(&c.root, Respond::Type("y\n"));
     assert!(
         said.contains("CHILD-OK: ")
             && said.contains("note: resuming on the operator's word, asked at the start"),

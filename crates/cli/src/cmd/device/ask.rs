@@ -5,35 +5,58 @@
 use std::io::{BufRead, IsTerminal, Write};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{RecvTimeoutError, channel};
+use std::time::Duration;
 
-use flatcut_grbl::{Operator, Question};
+use flatcut_grbl::{CancelToken, Operator, Question};
 use indicatif::{ProgressBar, ProgressDrawTarget};
 
+/// How often a question waiting for its answer looks whether the send was aborted.
+const ABORT_POLL: Duration = Duration::from_millis(50);
+
 /// The operator at this terminal, if stdin is one: shows the question with the progress bar
-/// hidden and reads the answer; only `y` or `yes` confirms.
+/// hidden and reads the answer; only `y` or `yes` confirms. Ctrl-C while it waits aborts the
+/// send (the prompt loop sees `prompting` set), and the question returns its safe "no" at once
+/// rather than waiting for a line that may never come.
 pub(super) fn terminal_operator(
     bar: &ProgressBar,
     interactive: bool,
     prompting: &Arc<AtomicBool>,
+    cancel: &CancelToken,
 ) -> Option<Operator> {
     if !std::io::stdin().is_terminal() {
         return None;
     }
-    let (bar, prompting) = (bar.clone(), prompting.clone());
+    let (bar, prompting, cancel) = (bar.clone(), prompting.clone(), cancel.clone());
     Some(Operator::new(move |q: &Question| {
         prompting.store(true, Ordering::Relaxed);
         bar.set_draw_target(ProgressDrawTarget::hidden());
         let mut e = std::io::stderr();
-        // A terminal that is gone cannot answer: the read below then fails, which is a "no".
+        // A terminal that is gone cannot answer: the read then fails, which is a "no".
         let _ = write!(e, "\n{q}\n{}", q.prompt());
         let _ = e.flush();
-        let mut line = String::new();
-        let read = std::io::stdin().lock().read_line(&mut line);
+        // The stdin read blocks, so it runs on its own thread; an abort does not wait for it.
+        let (tx, rx) = channel();
+        std::thread::spawn(move || {
+            let mut line = String::new();
+            let read = std::io::stdin().lock().read_line(&mut line);
+            let _ = tx.send(matches!(read, Ok(n) if n > 0).then_some(line));
+        });
+        let answer = loop {
+            if cancel.is_aborted() {
+                break None;
+            }
+            match rx.recv_timeout(ABORT_POLL) {
+                Ok(line) => break line,
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => break None,
+            }
+        };
         prompting.store(false, Ordering::Relaxed);
         if interactive {
             bar.set_draw_target(ProgressDrawTarget::stderr());
         }
-        matches!(read, Ok(n) if n > 0) && is_yes(&line)
+        answer.is_some_and(|l| is_yes(&l))
     }))
 }
 

@@ -89,10 +89,12 @@ pub(super) fn run_send(
         printer.show(p);
     };
     // Asked when the sender needs the operator's word (the flag that gives it was absent).
-    let opts =
-        &opts
-            .clone()
-            .with_operator(super::ask::terminal_operator(&bar, interactive, &prompting));
+    let opts = &opts.clone().with_operator(super::ask::terminal_operator(
+        &bar,
+        interactive,
+        &prompting,
+        cancel,
+    ));
     let result = flatcut_grbl::send_job(transport, job, opts, &mut observer, cancel);
     printer.finish();
     if let Ok(i) = interrupts {

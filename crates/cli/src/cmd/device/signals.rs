@@ -163,6 +163,12 @@ pub(super) fn prompt_loop(
     for ev in rx {
         match ev {
             Ev::Done => return,
+            // Ctrl-C while the sender waits for the operator's word (the origin question):
+            // the answer is no, and the send ends with nothing moved.
+            Ev::Interrupt if !asking && prompting.load(Ordering::Relaxed) => {
+                say("\ninterrupted: not confirmed; aborting\n");
+                cancel.abort();
+            }
             Ev::Interrupt if asking || cancel.is_aborted() => {
                 say("\naborting: soft reset, tool off\n");
                 cancel.abort();
