@@ -17,6 +17,7 @@ fn main() {
     let opts = SplitOptions {
         band: Band::from_pct(Some(s), Some(c)),
         max_pieces: SplitOptions::DEFAULT_MAX_PIECES,
+        keep_out: None,
     };
     match split(&mesh, &f.uv, &params, &opts) {
         Ok(r) => {

@@ -37,8 +37,8 @@ use flatcut_mesh::mating::{MatingSeam, coincident_seams};
 use flatcut_mesh::regions::split_along_lines;
 use flatcut_mesh::{Topology, TriMesh, check_disk};
 
-use crate::DartError;
 use crate::limits::{Band, face_excess};
+use crate::{DartError, KeepOut};
 
 /// How far inside the limits (log strain, 0.001 % of stretch) the assembled parts are held: the
 /// flattener's limits land on their bound, and a map written to a file (to a micrometre) and
@@ -53,12 +53,14 @@ const CHORD_SAMPLES: usize = 16;
 pub const MIN_AREA_SHARE: f64 = 0.05;
 
 /// What to split for.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SplitOptions {
     /// The limits every face must meet.
     pub band: Band,
     /// Most pieces the piece may become.
     pub max_pieces: usize,
+    /// Vertices of the piece no cut may pass (no_cut regions, marks), as for darts; `None`: none.
+    pub keep_out: Option<KeepOut>,
 }
 
 impl SplitOptions {
@@ -107,6 +109,7 @@ pub fn split(
     let held = isometric(params)
         .with_max_stretch_pct(stretch_pct(inside))
         .with_max_compress_pct(compress_pct(inside));
+    let guard = Guard::new(mesh, opts.keep_out.as_ref());
     let mut first = mesh.clone();
     first.flat = Some(x0.to_vec());
     let mut pieces = vec![first];
@@ -117,7 +120,7 @@ pub fn split(
         let next = if done {
             None
         } else {
-            best_cut(&pieces[w], face, opts.band, params)?
+            best_cut(&pieces[w], face, opts.band, params, &guard)?
         };
         let Some((a, b, cut)) = next else {
             let seams = seams_of(&pieces);
@@ -202,6 +205,7 @@ fn best_cut(
     worst_face: usize,
     band: Band,
     params: &FlattenParams,
+    guard: &Guard,
 ) -> Result<Option<(TriMesh, TriMesh, Vec<DVec3>)>, DartError> {
     let x = piece
         .flat
@@ -232,6 +236,9 @@ fn best_cut(
             let Some((a, b, path)) = cut_in_two(&bare, points, area) else {
                 continue;
             };
+            if guard.blocks(&path) {
+                continue;
+            }
             let mut score = f64::NEG_INFINITY;
             let mut sides = [a, b];
             for side in &mut sides {
@@ -259,6 +266,33 @@ fn best_cut(
         }
     }
     Ok(best.map(|(_, _, a, b, path)| (a, b, path)))
+}
+
+/// The keep-out of the piece being split, in 3D: the parts are new meshes, so a cut is checked
+/// against the original piece's vertices, a path point taking the flag of its nearest one.
+struct Guard {
+    positions: Vec<DVec3>,
+    blocked: Vec<bool>,
+}
+
+impl Guard {
+    fn new(mesh: &TriMesh, keep_out: Option<&KeepOut>) -> Self {
+        Self {
+            positions: mesh.positions.clone(),
+            blocked: keep_out.map_or_else(Vec::new, |k| k.blocked.clone()),
+        }
+    }
+
+    /// True when some point of the cut lies at a blocked vertex's place.
+    fn blocks(&self, path: &[DVec3]) -> bool {
+        if !self.blocked.iter().any(|&b| b) {
+            return false;
+        }
+        path.iter().any(|&p| {
+            let v = flatcut_mesh::seams::nearest_vertex(&self.positions, p) as usize;
+            self.blocked.get(v).copied().unwrap_or(false)
+        })
+    }
 }
 
 /// The chord of the flat outline through `c` along `d`, as points on the surface: its two ends on

@@ -55,6 +55,7 @@ fn options(pct: f64, max_pieces: usize) -> SplitOptions {
     SplitOptions {
         band: Band::from_pct(Some(pct), Some(pct)),
         max_pieces,
+        keep_out: None,
     }
 }
 
@@ -187,4 +188,27 @@ fn limits_no_split_meets_are_reported_with_what_was_reached() {
     assert!(!s.feasible);
     assert!(s.excess > 0.0);
     assert!(s.pieces.len() <= 2);
+}
+
+#[test]
+fn cuts_keep_out_of_no_cut_regions_and_marks() {
+    let mesh = saddle(200.0, 24);
+    let x0 = isometric(&mesh);
+    let params = FlattenParams::new(Method::Isometric);
+    let free = split(&mesh, &x0, &params, &options(3.0, 8)).unwrap();
+    // Block a disc around the middle of the first cut the free split made.
+    let path = &free.cuts[0];
+    let mid = path[path.len() / 2];
+    let mut keep = flatcut_darts::KeepOut::none(&mesh);
+    keep.block_points(&mesh, &[mid], 20.0);
+    let mut opts = options(3.0, 8);
+    opts.keep_out = Some(keep.clone());
+    let s = split(&mesh, &x0, &params, &opts).unwrap();
+    assert!(s.feasible, "excess {}", s.excess);
+    for cut in &s.cuts {
+        for &p in cut {
+            let v = flatcut_mesh::seams::nearest_vertex(&mesh.positions, p);
+            assert!(!keep.is_blocked(v), "a cut passes the kept-out disc at {p}");
+        }
+    }
 }

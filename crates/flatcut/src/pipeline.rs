@@ -279,9 +279,20 @@ fn split_where_wanted(
     let mut out: Vec<FlatPiece> = Vec::with_capacity(pieces.len());
     let mut index = Vec::with_capacity(pieces.len());
     let mut new_seams = Vec::new();
-    for (piece, &joined) in pieces.into_iter().zip(joined) {
+    for (mut piece, &joined) in pieces.into_iter().zip(joined) {
         index.push(out.len());
         if joined {
+            let over = piece
+                .mesh
+                .flat
+                .as_deref()
+                .is_some_and(|uv| !darting::within(&piece.mesh, uv, params));
+            if over {
+                piece.info.warnings.push(format!(
+                    "{}: a piece joined to others by seams is not split (a cut would move its seams); split it by a style line instead",
+                    piece.def.name
+                ));
+            }
             out.push(piece);
             continue;
         }

@@ -67,6 +67,7 @@ pub fn split_piece(
     let opts = SplitOptions {
         band: flatcut_darts::Band::from_pct(params.max_stretch_pct, params.max_compress_pct),
         max_pieces: settings.max_pieces,
+        keep_out: Some(darting::keep_out(Some(&piece.def), &piece.mesh)?),
     };
     let s = split(&piece.mesh, &uv, params, &opts).map_err(|source| PipelineError::Darts {
         piece: name.clone(),

@@ -490,3 +490,31 @@ fn json<T: serde::Serialize + ?Sized>(v: &T) -> Vec<u8> {
 pub fn file_safe(name: &str) -> String {
     flatcut_pattern::safe_name(name)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `darts` and `split` in a project reach the flattening's limits; absent, neither is asked.
+    #[test]
+    fn a_projects_darts_and_split_reach_the_flattening() {
+        let dir = tempfile::tempdir().unwrap();
+        let write = |extra: &str| {
+            let p = dir.path().join("project.toml");
+            std::fs::write(
+                &p,
+                format!(
+                    "name = \"t\"\ndesign = \"d.toml\"\n{extra}[material]\nname = \"m\"\nmax_stretch_pct = 3.0\nmax_compress_pct = 3.0\n[sheet]\nwidth_mm = 600.0\nheight_mm = 400.0\n[machine]\nprofile = \"pen\"\n"
+                ),
+            )
+            .unwrap();
+            Project::load(&p).unwrap()
+        };
+        let l = limits(&write("darts = \"auto\"\nsplit = \"auto\"\n"));
+        assert_eq!(l.darts, Some(crate::darting::DartSettings::default()));
+        assert_eq!(l.split, Some(crate::splitting::SplitSettings::default()));
+        let l = limits(&write(""));
+        assert!(l.darts.is_none() && l.split.is_none());
+        assert_eq!((l.stretch_pct, l.compress_pct), (Some(3.0), Some(3.0)));
+    }
+}
