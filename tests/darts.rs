@@ -650,3 +650,129 @@ fn split_without_limits_is_refused() {
     assert!(text.contains("--split auto needs --max-stretch"), "{text}");
     assert!(!flat.exists());
 }
+
+/// A UV sphere of radius `r` (closed: no boundary) as OBJ text.
+fn ball_obj(r: f64, rings: usize, segments: usize) -> String {
+    use std::f64::consts::PI;
+    let mut s = format!("v 0 0 {r}\n");
+    for i in 1..rings {
+        let th = PI * i as f64 / rings as f64;
+        for j in 0..segments {
+            let ph = 2.0 * PI * j as f64 / segments as f64;
+            s.push_str(&format!(
+                "v {} {} {}\n",
+                r * th.sin() * ph.cos(),
+                r * th.sin() * ph.sin(),
+                r * th.cos()
+            ));
+        }
+    }
+    s.push_str(&format!("v 0 0 {}\n", -r));
+    let (m, last) = (segments, 1 + (rings - 1) * segments);
+    for j in 0..m {
+        s.push_str(&format!("f 1 {} {}\n", 2 + j, 2 + (j + 1) % m));
+    }
+    for i in 0..rings - 2 {
+        for j in 0..m {
+            let (a, b) = (1 + i * m + j, 1 + i * m + (j + 1) % m);
+            let (c, d) = (a + m, b + m);
+            s.push_str(&format!("f {} {} {}\n", a + 1, c + 1, d + 1));
+            s.push_str(&format!("f {} {} {}\n", a + 1, d + 1, b + 1));
+        }
+    }
+    let base = 1 + (rings - 2) * m;
+    for j in 0..m {
+        s.push_str(&format!(
+            "f {} {} {}\n",
+            base + j + 1,
+            last + 1,
+            base + (j + 1) % m + 1
+        ));
+    }
+    s
+}
+
+/// A closed ball cannot be flattened at all until it is cut open: with `--split auto` it is
+/// opened and split into parts, each within the limits as measured here, that cover the ball
+/// once (their areas add up to its area) and close it again: every outline edge of every part
+/// is sewn to an outline edge of another part at the same two 3D points, at the same flat length.
+#[test]
+fn a_closed_ball_is_opened_and_split_into_parts_that_close_it_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let ball = dir.path().join("ball.obj");
+    std::fs::write(&ball, ball_obj(60.0, 16, 32)).unwrap();
+    let flat = dir.path().join("flat.obj");
+    let cli = flatcut_cli::Cli::try_parse_from([
+        "flatcut",
+        "flatten",
+        ball.to_str().unwrap(),
+        "--max-stretch",
+        "8",
+        "--max-compress",
+        "8",
+        "--split",
+        "auto",
+        "-o",
+        flat.to_str().unwrap(),
+    ])
+    .unwrap();
+    let code = flatcut_cli::run(cli).unwrap();
+    assert_eq!(
+        format!("{code:?}"),
+        format!("{:?}", std::process::ExitCode::SUCCESS)
+    );
+    let parts: Vec<Obj> = (1..)
+        .map(|k| dir.path().join(format!("flat-ball-{k}.obj")))
+        .take_while(|p| p.exists())
+        .map(|p| read_obj(&p))
+        .collect();
+    assert!(parts.len() >= 2, "{} parts", parts.len());
+    let area3 = |o: &Obj| -> f64 {
+        o.f.iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|x| o.v[x.0]);
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .sum()
+    };
+    let whole = read_obj(&ball);
+    let total: f64 = parts.iter().map(area3).sum();
+    // The cuts' cleanup moves the surface by far less than its chordal tolerance: 1e-5 of the area.
+    assert!(
+        (total - area3(&whole)).abs() < 1e-5 * total,
+        "{total} vs {}",
+        area3(&whole)
+    );
+    let uv = |o: &Obj, v: usize| {
+        o.f.iter()
+            .flatten()
+            .find(|c| c.0 == v)
+            .map(|c| o.vt[c.1])
+            .unwrap()
+    };
+    for (i, a) in parts.iter().enumerate() {
+        let (s, c) = measured_limits(a);
+        assert!(
+            s <= 8.0 + LIMIT_SLACK && c <= 8.0 + LIMIT_SLACK,
+            "part {i}: {s} % / {c} %"
+        );
+        for (&u, &w) in &boundary_next(a) {
+            let sewn = parts.iter().enumerate().any(|(j, b)| {
+                if j == i {
+                    return false;
+                }
+                let at = |p: DVec3| b.v.iter().position(|q| *q == p);
+                let (Some(x), Some(y)) = (at(a.v[u]), at(a.v[w])) else {
+                    return false;
+                };
+                boundary_next(b).get(&y) == Some(&x)
+                    && (uv(a, u).distance(uv(a, w)) - uv(b, x).distance(uv(b, y))).abs() < 1e-5
+            });
+            assert!(
+                sewn,
+                "part {i}: outline edge {} – {} is sewn to nothing",
+                a.v[u], a.v[w]
+            );
+        }
+    }
+}

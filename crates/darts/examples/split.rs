@@ -13,13 +13,22 @@ fn main() {
     let c: f64 = args[3].parse().unwrap();
     let t0 = std::time::Instant::now();
     let params = FlattenParams::new(Method::Isometric);
-    let f = flatten(&mesh, &params).unwrap();
+    let closed = flatcut_mesh::Topology::build(&mesh)
+        .unwrap()
+        .boundary_loops
+        .is_empty();
     let opts = SplitOptions {
         band: Band::from_pct(Some(s), Some(c)),
         max_pieces: SplitOptions::DEFAULT_MAX_PIECES,
         keep_out: None,
     };
-    match split(&mesh, &f.uv, &params, &opts) {
+    let result = if closed {
+        flatcut_darts::split::split_closed(&mesh, &params, &opts)
+    } else {
+        let f = flatten(&mesh, &params).unwrap();
+        split(&mesh, &f.uv, &params, &opts)
+    };
+    match result {
         Ok(r) => {
             println!(
                 "pieces {} cuts {:.1} mm excess {:.4}% feasible {} time {:.2}s",

@@ -19,9 +19,15 @@
 //!    a piece is still beyond the limits and fewer than `max_pieces` exist, the worst is split
 //!    again.
 //!
+//! A closed surface (a ball, a cushion) cannot be flattened at all: [`split_closed`] first cuts
+//! it open along its middle section ([`opening_loop`]) into two disks and goes on from those.
+//! New parts are judged flattened on their own with the limits held; all parts are flattened
+//! together only when they look done (step 3 is then the proof, or it sends the loop on).
+//!
 //! The seams between the final pieces are found by their coincident vertices
 //! ([`flatcut_mesh::mating::coincident_seams`]): a cut's vertices are copied to both of its sides
-//! with the same coordinates, and a later cut moves no vertex of an earlier one.
+//! with the same coordinates, and a cut ends at an outline vertex, so it adds no vertex to one
+//! side of an earlier seam that the other side lacks.
 //!
 //! Why chords of the flat map rather than OptCuts' joint optimisation of cuts and map: a few
 //! candidates, each judged by the flattener itself, give seams a pattern maker would draw (smooth,
@@ -101,28 +107,87 @@ pub fn split(
     params: &FlattenParams,
     opts: &SplitOptions,
 ) -> Result<Split, DartError> {
+    let mut first = mesh.clone();
+    first.flat = Some(x0.to_vec());
+    split_on(mesh, vec![first], Vec::new(), params, opts)
+}
+
+/// Splits a closed surface (no boundary, such as a ball or a cushion): it is first cut open
+/// along [`opening_loop`] into two disks, flattened together, and then split as [`split`]
+/// does. The opening cut is the first of the result's `cuts`.
+pub fn split_closed(
+    mesh: &TriMesh,
+    params: &FlattenParams,
+    opts: &SplitOptions,
+) -> Result<Split, DartError> {
+    let (a, b, path) = open(mesh)?;
+    let mut pieces = vec![a, b];
+    flatten_together(&mut pieces, &held_params(params, opts))?;
+    split_on(mesh, pieces, vec![path], params, opts)
+}
+
+/// A closed surface cut open along [`opening_loop`]: its two halves (disks) and the cut.
+pub fn open(mesh: &TriMesh) -> Result<(TriMesh, TriMesh, Vec<DVec3>), DartError> {
+    let loop3 = opening_loop(mesh).ok_or_else(|| {
+        DartError::Placement(
+            "the closed surface has no section through its middle to open it along".into(),
+        )
+    })?;
+    let mut bare = mesh.clone();
+    bare.flat = None;
+    cut_in_two(&bare, loop3, mesh.area()).ok_or_else(|| {
+        DartError::Placement(
+            "cutting the closed surface along its middle section did not give two disks (is it a sphere-like surface, genus 0?)".into(),
+        )
+    })
+}
+
+/// The flattening parameters that hold the limits of `opts` (a little inside them).
+fn held_params(params: &FlattenParams, opts: &SplitOptions) -> FlattenParams {
     // Inside by the margin, or by half a side narrower than it (a 0 % limit stays 0 %).
     let inside = Band {
         ln_s: (opts.band.ln_s - HELD_INSIDE).max(0.5 * opts.band.ln_s),
         ln_c: (opts.band.ln_c + HELD_INSIDE).min(0.5 * opts.band.ln_c),
     };
-    let held = isometric(params)
+    isometric(params)
         .with_max_stretch_pct(stretch_pct(inside))
-        .with_max_compress_pct(compress_pct(inside));
+        .with_max_compress_pct(compress_pct(inside))
+}
+
+/// The greedy loop of the module documentation from `pieces` (each flattened), the cuts made
+/// so far being `cuts`; `mesh` is the piece the keep-out of `opts` is indexed by.
+fn split_on(
+    mesh: &TriMesh,
+    mut pieces: Vec<TriMesh>,
+    mut cuts: Vec<Vec<DVec3>>,
+    params: &FlattenParams,
+    opts: &SplitOptions,
+) -> Result<Split, DartError> {
+    let held = held_params(params, opts);
     let guard = Guard::new(mesh, opts.keep_out.as_ref());
-    let mut first = mesh.clone();
-    first.flat = Some(x0.to_vec());
-    let mut pieces = vec![first];
-    let mut cuts = Vec::new();
+    // New parts are judged flattened on their own with the limits held; the parts are flattened
+    // together (seams equal) only when that says they are done, and split further if the seams
+    // then push one beyond the limits.
+    let mut together = pieces.len() == 1;
     loop {
         let (w, excess, face) = worst(&pieces, opts.band)?;
-        let done = excess <= 0.0 || pieces.len() >= opts.max_pieces.max(1);
-        let next = if done {
+        let full = pieces.len() >= opts.max_pieces.max(1);
+        if (excess <= 0.0 || full) && !together {
+            flatten_together(&mut pieces, &held)?;
+            together = true;
+            continue;
+        }
+        let next = if excess <= 0.0 || full {
             None
         } else {
             best_cut(&pieces[w], face, opts.band, params, &guard)?
         };
         let Some((a, b, cut)) = next else {
+            if !together {
+                flatten_together(&mut pieces, &held)?;
+                together = true;
+                continue;
+            }
             let seams = seams_of(&pieces);
             return Ok(Split {
                 worst_3d: centroid(&pieces[w], face),
@@ -133,10 +198,16 @@ pub fn split(
                 feasible: excess <= 0.0,
             });
         };
+        let mut parts = [a, b];
+        for p in &mut parts {
+            let f = flatcut_flatten::flatten(p, &held).map_err(DartError::Flatten)?;
+            p.flat = Some(f.uv);
+        }
+        let [a, b] = parts;
         pieces[w] = a;
         pieces.push(b);
         cuts.push(cut);
-        flatten_together(&mut pieces, &held)?;
+        together = false;
     }
 }
 
@@ -268,6 +339,105 @@ fn best_cut(
     Ok(best.map(|(_, _, a, b, path)| (a, b, path)))
 }
 
+/// Where a closed surface is cut open: its section by the plane through its centroid that
+/// holds its two longest directions (normal to the direction of least spread of its vertices),
+/// the longest loop of that section, as points on the surface (closed: the last is the first).
+/// The seam round a cushion's edge, a ball's equator, a sausage's length.
+pub fn opening_loop(mesh: &TriMesh) -> Option<Vec<DVec3>> {
+    let n = mesh.positions.len() as f64;
+    let c = mesh.positions.iter().sum::<DVec3>() / n;
+    let cov = mesh
+        .positions
+        .iter()
+        .fold(flatcut_geom::DMat3::ZERO, |m, p| {
+            let d = *p - c;
+            m + flatcut_geom::DMat3::from_cols(d * d.x, d * d.y, d * d.z)
+        });
+    let normal = least_spread(cov)?;
+    // Signed distances, with vertices on the plane moved to its positive side so that every
+    // crossing lies inside an edge.
+    let side: Vec<f64> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            let s = (*p - c).dot(normal);
+            if s == 0.0 { f64::MIN_POSITIVE } else { s }
+        })
+        .collect();
+    let key = |a: u32, b: u32| (a.min(b), a.max(b));
+    let mut next: std::collections::BTreeMap<(u32, u32), Vec<(u32, u32)>> = Default::default();
+    for t in &mesh.triangles {
+        let crossed: Vec<(u32, u32)> = (0..3)
+            .map(|k| (t[k], t[(k + 1) % 3]))
+            .filter(|&(a, b)| (side[a as usize] > 0.0) != (side[b as usize] > 0.0))
+            .map(|(a, b)| key(a, b))
+            .collect();
+        if let [e, f] = crossed[..] {
+            next.entry(e).or_default().push(f);
+            next.entry(f).or_default().push(e);
+        }
+    }
+    let at = |(a, b): (u32, u32)| {
+        let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+        let (sa, sb) = (side[a as usize], side[b as usize]);
+        pa.lerp(pb, sa / (sa - sb))
+    };
+    let mut seen = std::collections::BTreeSet::new();
+    let mut best: Vec<DVec3> = Vec::new();
+    for &start in next.keys() {
+        if seen.contains(&start) {
+            continue;
+        }
+        let (mut prev, mut cur) = (start, start);
+        let mut pts = Vec::new();
+        loop {
+            seen.insert(cur);
+            pts.push(at(cur));
+            let Some(&n) = next[&cur].iter().find(|&&e| e != prev) else {
+                break;
+            };
+            (prev, cur) = (cur, n);
+            if cur == start {
+                let closes = pts.len() >= 3;
+                if closes && polyline_length(&pts) > polyline_length(&best) {
+                    pts.push(pts[0]);
+                    best = pts;
+                }
+                break;
+            }
+            if seen.contains(&cur) {
+                break;
+            }
+        }
+    }
+    // At most OPENING_POINTS points: the trace joins them along the surface.
+    if best.len() > OPENING_POINTS {
+        let step = best.len() as f64 / OPENING_POINTS as f64;
+        let last = best[best.len() - 1];
+        best = (0..OPENING_POINTS)
+            .map(|k| best[(k as f64 * step) as usize])
+            .chain(std::iter::once(last))
+            .collect();
+    }
+    (best.len() >= 4).then_some(best)
+}
+
+/// Points of an opening loop given to the trace.
+const OPENING_POINTS: usize = 64;
+
+/// The unit eigenvector of the smallest eigenvalue of a symmetric positive semi-definite 3×3
+/// matrix: power iteration on its shifted complement (`tr·I − M`, whose largest eigenvalue is
+/// M's smallest), deterministic from a fixed start.
+fn least_spread(m: flatcut_geom::DMat3) -> Option<DVec3> {
+    let tr = m.x_axis.x + m.y_axis.y + m.z_axis.z;
+    let shifted = flatcut_geom::DMat3::from_diagonal(DVec3::splat(tr)) - m;
+    let mut v = DVec3::new(0.577, 0.5773, 0.5774).normalize();
+    for _ in 0..200 {
+        v = (shifted * v).try_normalize()?;
+    }
+    Some(v)
+}
+
 /// The keep-out of the piece being split, in 3D: the parts are new meshes, so a cut is checked
 /// against the original piece's vertices, a path point taking the flag of its nearest one.
 struct Guard {
@@ -308,8 +478,11 @@ fn chord_on_surface(
 ) -> Option<Vec<DVec3>> {
     let ha = polygon::ray_hit(outline, c, d)?;
     let hb = polygon::ray_hit(outline, c, -d)?;
+    // A cut ends at an outline vertex, never inside an outline edge: a new vertex there would be
+    // on this part's side of a seam only, and its neighbour's side would no longer match it
+    // vertex for vertex.
     let n = rim3.len();
-    let on_rim = |h: polygon::RayHit| rim3[h.edge].lerp(rim3[(h.edge + 1) % n], h.u);
+    let on_rim = |h: polygon::RayHit| rim3[(h.edge + usize::from(h.u > 0.5)) % n];
     let (a3, b3) = (on_rim(ha), on_rim(hb));
     let (a2, b2) = (c + d * ha.t, c - d * hb.t);
     let mut points = vec![a3];

@@ -133,7 +133,22 @@ pub fn flatten_design(
     let design = Design::load(path)?;
     check_unique_names(&design)?;
     let base = path.parent().unwrap_or(Path::new("."));
-    let asm = design.assemble(base, tol)?;
+    let mut asm = design.assemble(base, tol)?;
+    // Nothing flattens a closed surface: one that may be split is flattened as one half of
+    // itself here and split from the whole afterwards.
+    let mut closed: std::collections::BTreeMap<usize, TriMesh> = Default::default();
+    if split.is_some() {
+        for (k, p) in asm.pieces.iter_mut().enumerate() {
+            if flatcut_mesh::Topology::build(&p.mesh).is_ok_and(|t| t.boundary_loops.is_empty()) {
+                let (half, _, _) =
+                    flatcut_darts::split::open(&p.mesh).map_err(|source| PipelineError::Darts {
+                        piece: p.def.name.clone(),
+                        source,
+                    })?;
+                closed.insert(k, std::mem::replace(&mut p.mesh, half));
+            }
+        }
+    }
     for (k, p) in asm.pieces.iter().enumerate() {
         progress(&p.def.name, k, asm.pieces.len());
     }
@@ -190,9 +205,23 @@ pub fn flatten_design(
         .zip(flats)
         .zip(notches)
         .zip(joined)
-        .map(|(((p, f), notches), joined)| {
+        .enumerate()
+        .map(|(k, (((p, f), notches), joined))| {
             let piece_material = crate::material::of_piece(&p.def, base, material)?;
-            if joined {
+            if closed.contains_key(&k) {
+                // A stand-in until the split pass splits the whole.
+                let mut mesh = p.mesh;
+                mesh.flat = Some(f.uv);
+                Ok(FlatPiece {
+                    def: p.def,
+                    mesh,
+                    info: f.info,
+                    notches,
+                    darts: Vec::new(),
+                    grain: None,
+                    grain_dir: None,
+                })
+            } else if joined {
                 let mut info = f.info;
                 if piece_material.is_some() {
                     info.warnings.push(format!(
@@ -254,9 +283,11 @@ pub fn flatten_design(
         })
         .collect::<Result<Vec<_>, PipelineError>>()?;
     let (pieces, seams) = match split {
-        Some(s) => split_where_wanted(pieces, asm.seams, &joined_copy, params, s, |def| {
-            crate::material::of_piece(def, base, material)
-        })?,
+        Some(s) => {
+            split_where_wanted(pieces, asm.seams, &joined_copy, &closed, params, s, |def| {
+                crate::material::of_piece(def, base, material)
+            })?
+        }
         None => (pieces, asm.seams),
     };
     Ok(FlatDesign {
@@ -272,6 +303,7 @@ fn split_where_wanted(
     pieces: Vec<FlatPiece>,
     mut seams: Vec<MatingSeam>,
     joined: &[bool],
+    closed: &std::collections::BTreeMap<usize, TriMesh>,
     params: &FlattenParams,
     settings: &crate::splitting::SplitSettings,
     material_of: impl Fn(&PieceDef) -> Result<Option<MaterialSpec>, PipelineError>,
@@ -279,7 +311,7 @@ fn split_where_wanted(
     let mut out: Vec<FlatPiece> = Vec::with_capacity(pieces.len());
     let mut index = Vec::with_capacity(pieces.len());
     let mut new_seams = Vec::new();
-    for (mut piece, &joined) in pieces.into_iter().zip(joined) {
+    for (k, (mut piece, &joined)) in pieces.into_iter().zip(joined).enumerate() {
         index.push(out.len());
         if joined {
             let over = piece
@@ -300,7 +332,10 @@ fn split_where_wanted(
             Some(m) => crate::material::dart_params(params, &m),
             None => params.clone(),
         };
-        let parts = crate::splitting::split_piece(piece, &limits, settings)?;
+        let parts = match closed.get(&k) {
+            Some(whole) => crate::splitting::split_closed_piece(piece, whole, &limits, settings)?,
+            None => crate::splitting::split_piece(piece, &limits, settings)?,
+        };
         let base = out.len();
         new_seams.extend(parts.seams.into_iter().map(|mut s| {
             s.sides.iter_mut().for_each(|side| side.piece += base);

@@ -63,16 +63,55 @@ pub fn split_piece(
     if !limited || !piece.darts.is_empty() || darting::within(&piece.mesh, &uv, params) {
         return Ok(whole(piece));
     }
-    let name = piece.def.name.clone();
-    let opts = SplitOptions {
-        band: flatcut_darts::Band::from_pct(params.max_stretch_pct, params.max_compress_pct),
-        max_pieces: settings.max_pieces,
-        keep_out: Some(darting::keep_out(Some(&piece.def), &piece.mesh)?),
-    };
+    let opts = options(&piece, &piece.mesh, params, settings)?;
     let s = split(&piece.mesh, &uv, params, &opts).map_err(|source| PipelineError::Darts {
-        piece: name.clone(),
+        piece: piece.def.name.clone(),
         source,
     })?;
+    into_parts(piece, s, settings)
+}
+
+/// Splits a closed piece (`whole`, no boundary: a ball, a cushion) into parts within the limits
+/// of `params` (at least two: it is opened first, [`flatcut_darts::split::split_closed`]);
+/// `piece` carries its design (its mesh is not used).
+pub fn split_closed_piece(
+    piece: FlatPiece,
+    whole: &TriMesh,
+    params: &FlattenParams,
+    settings: &SplitSettings,
+) -> Result<SplitPieces, PipelineError> {
+    let opts = options(&piece, whole, params, settings)?;
+    let s = flatcut_darts::split::split_closed(whole, params, &opts).map_err(|source| {
+        PipelineError::Darts {
+            piece: piece.def.name.clone(),
+            source,
+        }
+    })?;
+    into_parts(piece, s, settings)
+}
+
+/// What a split of `piece` (its surface `mesh`) is for: the limits of `params`, the most parts,
+/// and the design's no_cut regions and marks kept out of the cuts.
+fn options(
+    piece: &FlatPiece,
+    mesh: &TriMesh,
+    params: &FlattenParams,
+    settings: &SplitSettings,
+) -> Result<SplitOptions, PipelineError> {
+    Ok(SplitOptions {
+        band: flatcut_darts::Band::from_pct(params.max_stretch_pct, params.max_compress_pct),
+        max_pieces: settings.max_pieces,
+        keep_out: Some(darting::keep_out(Some(&piece.def), mesh)?),
+    })
+}
+
+/// The parts of a split as pieces of the pattern, or the error saying what was reached.
+fn into_parts(
+    piece: FlatPiece,
+    s: flatcut_darts::split::Split,
+    settings: &SplitSettings,
+) -> Result<SplitPieces, PipelineError> {
+    let name = piece.def.name.clone();
     if !s.feasible {
         return Err(PipelineError::Darts {
             piece: name,
