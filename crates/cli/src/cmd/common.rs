@@ -56,7 +56,7 @@ pub struct FlattenArgs {
     /// `auto`: split a piece that exceeds --max-stretch/--max-compress, and that darts (when
     /// asked for too) cannot bring within them, into parts sewn together along new seams (with
     /// balance notches), every part within the limits.
-    #[arg(long, value_name = "MODE", value_parser = parse_darts)]
+    #[arg(long, value_name = "MODE", value_parser = parse_split)]
     pub split: Option<DartMode>,
     /// Most parts one piece may be split into.
     #[arg(long, value_name = "N", default_value_t = SplitSettings::default().max_pieces, value_parser = values::piece_count)]
@@ -105,7 +105,7 @@ pub fn progress_hooks(hooks: FlattenHooks, len: usize) -> (FlattenHooks, indicat
     (hooks, bar)
 }
 
-/// `--darts`: when darts are cut.
+/// `--darts` and `--split`: when darts are cut, and when pieces are split.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DartMode {
     /// Where a piece exceeds its limits.
@@ -116,6 +116,13 @@ fn parse_darts(s: &str) -> Result<DartMode, String> {
     match s {
         "auto" => Ok(DartMode::Auto),
         _ => Err(format!("unknown dart mode '{s}'; the mode is auto")),
+    }
+}
+
+fn parse_split(s: &str) -> Result<DartMode, String> {
+    match s {
+        "auto" => Ok(DartMode::Auto),
+        _ => Err(format!("unknown split mode '{s}'; the mode is auto")),
     }
 }
 
