@@ -55,7 +55,8 @@ pub struct FlattenArgs {
     pub dart_drill: f64,
     /// `auto`: split a piece that exceeds --max-stretch/--max-compress, and that darts (when
     /// asked for too) cannot bring within them, into parts sewn together along new seams (with
-    /// balance notches), every part within the limits.
+    /// balance notches), every part within the limits; a closed surface (a ball) is cut open
+    /// along its middle first.
     #[arg(long, value_name = "MODE", value_parser = parse_split)]
     pub split: Option<DartMode>,
     /// Most parts one piece may be split into.
