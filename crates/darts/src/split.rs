@@ -310,22 +310,14 @@ fn best_cut(
             if guard.blocks(&path) {
                 continue;
             }
-            let mut score = f64::NEG_INFINITY;
             let mut sides = [a, b];
-            for side in &mut sides {
-                let Ok(f) = flatcut_flatten::flatten(side, &free) else {
-                    score = f64::INFINITY;
-                    break;
-                };
-                let rest = rest_frames(side)
-                    .map_err(|t| DartError::Internal(format!("degenerate face {t}")))?;
-                score = score.max(
-                    face_excess(&rest, &f.uv, band)
-                        .into_iter()
-                        .fold(f64::NEG_INFINITY, f64::max),
-                );
-                side.flat = Some(f.uv);
-            }
+            let (Some(sa), Some(sb)) = (
+                alone_excess(&mut sides[0], &free, band),
+                alone_excess(&mut sides[1], &free, band),
+            ) else {
+                continue;
+            };
+            let score = sa.max(sb);
             let length = polyline_length(&path);
             let better = best
                 .as_ref()
@@ -463,6 +455,18 @@ impl Guard {
             self.blocked.get(v).copied().unwrap_or(false)
         })
     }
+}
+
+/// The largest face excess of `side` flattened on its own with `free` (its map is kept);
+/// `None` when it cannot be flattened.
+fn alone_excess(side: &mut TriMesh, free: &FlattenParams, band: Band) -> Option<f64> {
+    let f = flatcut_flatten::flatten(side, free).ok()?;
+    let rest = rest_frames(side).ok()?;
+    let e = face_excess(&rest, &f.uv, band)
+        .into_iter()
+        .fold(f64::NEG_INFINITY, f64::max);
+    side.flat = Some(f.uv);
+    Some(e)
 }
 
 /// The chord of the flat outline through `c` along `d`, as points on the surface: its two ends on
