@@ -162,7 +162,10 @@ fn bench(a: &Args, name: &str, mesh: &TriMesh, out: Option<PathBuf>) {
     if let Some(out) = out {
         let mut m = mesh.clone();
         m.flat = Some(f.uv);
-        std::fs::write(&out, flatcut_mesh::io::obj_string(&m)).expect("output writes");
+        if let Err(e) = std::fs::write(&out, flatcut_mesh::io::obj_string(&m)) {
+            eprintln!("bench: {}: {e}", out.display());
+            std::process::exit(1);
+        }
     }
 }
 
@@ -177,6 +180,12 @@ fn main() {
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = a.threads {
         pool = pool.num_threads(n);
+    }
+    if let Some(dir) = &a.out
+        && let Err(e) = std::fs::create_dir_all(dir)
+    {
+        eprintln!("bench: --out {}: {e}", dir.display());
+        std::process::exit(2);
     }
     let pool = pool.build().expect("thread pool");
     pool.install(|| {
