@@ -531,6 +531,37 @@ fn limits_no_dart_can_meet_exit_3_and_say_what_was_reached() {
     );
 }
 
+/// The parts `<stem>-1.obj`, `<stem>-2.obj`, … a split wrote into `dir`, in order.
+fn split_parts(dir: &Path, stem: &str) -> Vec<Obj> {
+    (1..)
+        .map(|k| dir.join(format!("{stem}-{k}.obj")))
+        .take_while(|p| p.exists())
+        .map(|p| read_obj(&p))
+        .collect()
+}
+
+/// The flat position of vertex `v` (its first corner's UV).
+fn flat_at(o: &Obj, v: usize) -> DVec2 {
+    o.f.iter()
+        .flatten()
+        .find(|c| c.0 == v)
+        .map(|c| o.vt[c.1])
+        .unwrap()
+}
+
+/// When outline edge `(u, w)` of `a` is sewn to `b` (an outline edge of `b` runs between the
+/// same two 3D points the other way), its flat length in `a` and in `b`.
+fn sewn_lengths(a: &Obj, (u, w): (usize, usize), b: &Obj) -> Option<(f64, f64)> {
+    let at = |p: DVec3| b.v.iter().position(|q| *q == p);
+    let (x, y) = (at(a.v[u])?, at(a.v[w])?);
+    (boundary_next(b).get(&y) == Some(&x)).then(|| {
+        (
+            flat_at(a, u).distance(flat_at(a, w)),
+            flat_at(b, x).distance(flat_at(b, y)),
+        )
+    })
+}
+
 /// The bench's saddle at 3 %/3 %: no dart can help (its flat piece is too short at the rim), and
 /// the error says so and names `--split auto`; with `--split auto` it is cut in parts, each
 /// within the limits as measured here from its OBJ, sewn along seams whose coincident edges
@@ -571,11 +602,7 @@ fn a_saddle_no_dart_can_help_is_split_into_parts_that_sew_together() {
         format!("{code:?}"),
         format!("{:?}", std::process::ExitCode::SUCCESS)
     );
-    let parts: Vec<Obj> = (1..)
-        .map(|k| dir.path().join(format!("flat-saddle_2k_mm-{k}.obj")))
-        .take_while(|p| p.exists())
-        .map(|p| read_obj(&p))
-        .collect();
+    let parts = split_parts(dir.path(), "flat-saddle_2k_mm");
     assert!(
         parts.len() >= 2,
         "{:?}",
@@ -592,26 +619,11 @@ fn a_saddle_no_dart_can_help_is_split_into_parts_that_sew_together() {
     let mut sewn = 0;
     for i in 0..parts.len() {
         for j in i + 1..parts.len() {
-            let (a, b) = (&parts[i], &parts[j]);
-            let (na, nb) = (boundary_next(a), boundary_next(b));
-            let at = |o: &Obj, p: DVec3| o.v.iter().position(|q| *q == p);
-            for (&u, &w) in &na {
-                let (Some(x), Some(y)) = (at(b, a.v[u]), at(b, a.v[w])) else {
-                    continue;
-                };
-                if nb.get(&y) != Some(&x) {
-                    continue;
+            for (&u, &w) in &boundary_next(&parts[i]) {
+                if let Some((la, lb)) = sewn_lengths(&parts[i], (u, w), &parts[j]) {
+                    assert!((la - lb).abs() < 1e-5, "parts {i}/{j}: {la} vs {lb}");
+                    sewn += 1;
                 }
-                let uv = |o: &Obj, v: usize| {
-                    o.f.iter()
-                        .flatten()
-                        .find(|c| c.0 == v)
-                        .map(|c| o.vt[c.1])
-                        .unwrap()
-                };
-                let (la, lb) = (uv(a, u).distance(uv(a, w)), uv(b, x).distance(uv(b, y)));
-                assert!((la - lb).abs() < 1e-5, "parts {i}/{j}: {la} vs {lb}");
-                sewn += 1;
             }
         }
     }
@@ -721,11 +733,7 @@ fn a_closed_ball_is_opened_and_split_into_parts_that_close_it_again() {
         format!("{code:?}"),
         format!("{:?}", std::process::ExitCode::SUCCESS)
     );
-    let parts: Vec<Obj> = (1..)
-        .map(|k| dir.path().join(format!("flat-ball-{k}.obj")))
-        .take_while(|p| p.exists())
-        .map(|p| read_obj(&p))
-        .collect();
+    let parts = split_parts(dir.path(), "flat-ball");
     assert!(parts.len() >= 2, "{} parts", parts.len());
     let area3 = |o: &Obj| -> f64 {
         o.f.iter()
@@ -743,13 +751,6 @@ fn a_closed_ball_is_opened_and_split_into_parts_that_close_it_again() {
         "{total} vs {}",
         area3(&whole)
     );
-    let uv = |o: &Obj, v: usize| {
-        o.f.iter()
-            .flatten()
-            .find(|c| c.0 == v)
-            .map(|c| o.vt[c.1])
-            .unwrap()
-    };
     for (i, a) in parts.iter().enumerate() {
         let (s, c) = measured_limits(a);
         assert!(
@@ -758,15 +759,7 @@ fn a_closed_ball_is_opened_and_split_into_parts_that_close_it_again() {
         );
         for (&u, &w) in &boundary_next(a) {
             let sewn = parts.iter().enumerate().any(|(j, b)| {
-                if j == i {
-                    return false;
-                }
-                let at = |p: DVec3| b.v.iter().position(|q| *q == p);
-                let (Some(x), Some(y)) = (at(a.v[u]), at(a.v[w])) else {
-                    return false;
-                };
-                boundary_next(b).get(&y) == Some(&x)
-                    && (uv(a, u).distance(uv(a, w)) - uv(b, x).distance(uv(b, y))).abs() < 1e-5
+                j != i && sewn_lengths(a, (u, w), b).is_some_and(|(la, lb)| (la - lb).abs() < 1e-5)
             });
             assert!(
                 sewn,

@@ -26,6 +26,20 @@ fn sleeve(dir: &Path, grain: &str, material: &str) -> std::path::PathBuf {
     p
 }
 
+/// A dome 100 mm across, a biquadratic Bézier whose middle control point stands 60 mm up, with
+/// `grain`, as `cap.toml` in `dir`: doubly curved, so no map keeps every thread's length.
+fn dome(dir: &Path, grain: &str) -> std::path::PathBuf {
+    let p = dir.join("cap.toml");
+    std::fs::write(
+        &p,
+        format!(
+            "[[piece]]\nname = \"cap\"\ngrain = {grain}\n[piece.surface]\ntype = \"bezier\"\ndegree = [2, 2]\npoints = [[0, 0, 0], [0, 50, 0], [0, 100, 0], [50, 0, 0], [50, 50, 60], [50, 100, 0], [100, 0, 0], [100, 50, 0], [100, 100, 0]]\n"
+        ),
+    )
+    .unwrap();
+    p
+}
+
 /// A material file `NAME.toml` in `dir` with the stretch limits along, across and on the bias, and
 /// one compression limit for every direction.
 fn material_file(dir: &Path, name: &str, stretch: [f64; 3], compress: f64) -> std::path::PathBuf {
@@ -169,12 +183,7 @@ fn a_piece_over_its_materials_limits_exits_3_and_says_by_how_much() {
     // outputs are written and the exit code says the limits are broken.
     let dir = tempfile::tempdir().unwrap();
     let m = material_file(dir.path(), "stiff", [0.5; 3], 0.5);
-    let design = dir.path().join("cap.toml");
-    std::fs::write(
-        &design,
-        "[[piece]]\nname = \"cap\"\ngrain = \"auto\"\n[piece.surface]\ntype = \"bezier\"\ndegree = [2, 2]\npoints = [[0, 0, 0], [0, 50, 0], [0, 100, 0], [50, 0, 0], [50, 50, 60], [50, 100, 0], [100, 0, 0], [100, 50, 0], [100, 100, 0]]\n",
-    )
-    .unwrap();
+    let design = dome(dir.path(), "\"auto\"");
     let obj = dir.path().join("cap.obj");
     let report = dir.path().join("cap.json");
     let code = run_cli(&[
@@ -280,12 +289,7 @@ fn numbers(s: &str) -> Vec<f64> {
 fn the_material_heat_map_shows_each_faces_excess_over_the_limits_per_direction() {
     let dir = tempfile::tempdir().unwrap();
     let m = material_file(dir.path(), "bias-soft", [1.0, 1.0, 8.0], 1.0);
-    let design = dir.path().join("cap.toml");
-    std::fs::write(
-        &design,
-        "[[piece]]\nname = \"cap\"\ngrain = [[0, 50, 0], [100, 50, 0]]\n[piece.surface]\ntype = \"bezier\"\ndegree = [2, 2]\npoints = [[0, 0, 0], [0, 50, 0], [0, 100, 0], [50, 0, 0], [50, 50, 60], [50, 100, 0], [100, 0, 0], [100, 50, 0], [100, 100, 0]]\n",
-    )
-    .unwrap();
+    let design = dome(dir.path(), "[[0, 50, 0], [100, 50, 0]]");
     let (json, svg) = (dir.path().join("cap.json"), dir.path().join("cap.svg"));
     let args = [
         "report",
