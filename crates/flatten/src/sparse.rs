@@ -318,6 +318,17 @@ pub struct SpdSolver {
     symbolic: SymbolicCholesky<usize>,
     l_values: Vec<f64>,
     factored: bool,
+    /// Workspace of the numeric factorisation, kept between factorisations.
+    scratch: Option<Scratch>,
+}
+
+/// A factorisation workspace (faer's buffer, which has no `Debug`).
+struct Scratch(MemBuffer);
+
+impl std::fmt::Debug for Scratch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Scratch")
+    }
 }
 
 impl SpdSolver {
@@ -348,6 +359,7 @@ impl SpdSolver {
             symbolic,
             l_values,
             factored: false,
+            scratch: None,
         })
     }
 
@@ -397,14 +409,24 @@ impl SpdSolver {
             Some(m) => m.as_ref(),
             None => SparseColMatRef::new(self.pattern.symbolic.as_ref(), values),
         };
-        let mut mem = MemBuffer::try_new(
-            self.symbolic
-                .factorize_numeric_llt_scratch::<f64>(PAR, Default::default()),
-        )
-        .map_err(|e| FlattenError::Solver {
-            stage: self.stage,
-            reason: format!("out of memory: {e:?}"),
-        })?;
+        // The scratch is the same size for every factorisation of this pattern: allocated once,
+        // so the later ones neither page-fault nor zero it again.
+        if self.scratch.is_none() {
+            let size = self
+                .symbolic
+                .factorize_numeric_llt_scratch::<f64>(PAR, Default::default());
+            let buffer = MemBuffer::try_new(size).map_err(|e| FlattenError::Solver {
+                stage: self.stage,
+                reason: format!("out of memory: {e:?}"),
+            })?;
+            self.scratch = Some(Scratch(buffer));
+        }
+        let Some(Scratch(mem)) = self.scratch.as_mut() else {
+            return Err(FlattenError::Internal(format!(
+                "{}: no factorisation scratch",
+                self.stage
+            )));
+        };
         self.symbolic
             .factorize_numeric_llt::<f64>(
                 &mut self.l_values,
@@ -412,7 +434,7 @@ impl SpdSolver {
                 self.pattern.side,
                 LltRegularization::default(),
                 PAR,
-                MemStack::new(&mut mem),
+                MemStack::new(mem),
                 Default::default(),
             )
             .map_err(|e| FlattenError::Solver {
