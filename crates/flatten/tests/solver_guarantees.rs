@@ -95,6 +95,31 @@ fn one_thread_and_two_give_the_same_bits() {
     assert_eq!(one.uv, two.uv, "boundary-isometric");
 }
 
+/// The solve may end on a chord step (the last factorisation reused) instead of a last Newton
+/// step: the energy it stops at must still be within the tolerance of the converged one.
+#[test]
+fn a_solve_ended_by_a_chord_step_is_converged_to_the_tolerance() {
+    for (name, mesh) in [
+        ("cap", testmesh::spherical_cap(80.0, 1.2, 14)),
+        ("saddle", testmesh::saddle(80.0, 16)),
+    ] {
+        let p = FlattenParams::new(Method::Isometric);
+        let f = flatten(&mesh, &p).unwrap();
+        let mut tight = FlattenParams::new(Method::Isometric);
+        tight.rel_tolerance = 1e-15;
+        let r = flatten(&mesh, &tight).unwrap();
+        assert!(
+            r.info.iterations > f.info.iterations,
+            "{name}: no tail to save"
+        );
+        let gap = (f.info.final_energy - r.info.final_energy) / r.info.final_energy;
+        assert!(
+            (0.0..=p.rel_tolerance).contains(&gap),
+            "{name}: stopped {gap:.2e} above the converged energy"
+        );
+    }
+}
+
 #[test]
 fn cancel_flag_stops_every_iterative_method() {
     let mesh = testmesh::spherical_cap(80.0, 1.2, 10);

@@ -215,9 +215,15 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
     /// energy too. The triangles are evaluated in parallel, block by block, while the previous
     /// block is scattered in triangle order, so every sum is formed in the same order as by a
     /// sequential loop: the result does not depend on the number of threads.
-    fn assemble(&mut self, x: &[DVec2], proj: Projection) -> (f64, Vec<f64>) {
+    ///
+    /// With `proj` `None` only the energy and gradient are formed: the system, and the
+    /// factorisation of the last Hessian, are left as they are.
+    fn assemble(&mut self, x: &[DVec2], proj: Option<Projection>) -> (f64, Vec<f64>) {
         let mut g = vec![0.0; 2 * self.n];
-        self.sys.clear();
+        let hessian = proj.is_some();
+        if hessian {
+            self.sys.clear();
+        }
         let mut en = 0.0;
         let (rest, energy) = (self.rest, &self.energy);
         let eval = |b: usize| -> Vec<TriEval> {
@@ -226,7 +232,7 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
             rest[lo..hi]
                 .par_iter()
                 .with_min_len(MIN_PER_TASK)
-                .map(|r| tri_eval_projected(energy, r, x, Some(proj)))
+                .map(|r| tri_eval_projected(energy, r, x, proj))
                 .collect()
         };
         let blocks = rest.len().div_ceil(BLOCK);
@@ -241,6 +247,9 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
                     for c in 0..3 {
                         g[2 * r.v[c]] += ev.grad[c].x;
                         g[2 * r.v[c] + 1] += ev.grad[c].y;
+                    }
+                    if !hessian {
+                        continue;
                     }
                     for (s, &(p, q)) in slots[k].iter().zip(PAIRS.iter()) {
                         if *s != u32::MAX {
@@ -272,6 +281,9 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
                 g[2 * a + 1] -= gd.y;
                 g[2 * b] += gd.x;
                 g[2 * b + 1] += gd.y;
+                if !hessian {
+                    continue;
+                }
                 // Hessian w.r.t. d: 4w d dᵀ/L² + 2 max(m, 0) I.
                 let dd = [d.x, d.y];
                 let mut h = [[0.0; 2]; 2];
@@ -356,6 +368,9 @@ pub struct ProjectedNewton {
     last_decrease: f64,
     last_decrement: f64,
     stalled: bool,
+    /// Set when a chord step showed that a further Newton step would gain less than the
+    /// tolerance.
+    converged: bool,
     /// How the next step projects the triangles' Hessians.
     projection: Projection,
     budget: Budget,
@@ -371,6 +386,7 @@ impl ProjectedNewton {
             last_decrease: f64::INFINITY,
             last_decrement: f64::INFINITY,
             stalled: false,
+            converged: false,
             projection: Projection::Abs,
             budget,
             max_iters,
@@ -444,7 +460,7 @@ impl<E: TriEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
         let tmax = p.max_step(&x, &d);
         let found = line_search(p, &x, &d, e0, gd, tmax);
         self.last_decrement = -0.5 * gd;
-        let Some((t, xn, en)) = found.filter(|f| f.2 < e0) else {
+        let Some((t, mut xn, mut en)) = found.filter(|f| f.2 < e0) else {
             self.stalled = true;
             return Ok((state.param(xf).cost(e0), None));
         };
@@ -457,6 +473,17 @@ impl<E: TriEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
             "newton step"
         );
         self.last_decrease = e0 - en;
+        // In the tail a full step leaves a gradient the factorisation just used still inverts
+        // well: where that chord step's decrement is below the tolerance, the next Newton step
+        // could gain no more than the tolerance either, so the chord step ends the solve and
+        // saves a factorisation.
+        if t == 1.0 && self.last_decrease < RAW_BELOW * en.abs() {
+            let tolerance = self.abs_tolerance.max(self.rel_tolerance * en.abs());
+            if let Some((xc, ec)) = chord_step(p, &xn, en, tolerance) {
+                (xn, en) = (xc, ec);
+                self.converged = true;
+            }
+        }
         // The quadratic model predicts a decrease of −t g·d (1 − t/2) along the Newton step
         // (dᵀHd = −g·d); where it is met, the model is trusted and the next step clamps.
         self.projection = if t < 1.0 {
@@ -482,7 +509,7 @@ impl<E: TriEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
     }
 
     fn terminate(&mut self, state: &NState) -> TerminationStatus {
-        if self.stalled {
+        if self.stalled || self.converged {
             return TerminationStatus::Terminated(TerminationReason::SolverConverged);
         }
         if self.budget.hooks.cancelled() {
@@ -517,7 +544,7 @@ fn newton_direction<E: TriEnergy>(
     x: &[DVec2],
     proj: Projection,
 ) -> (f64, Vec<f64>, Option<Vec<f64>>) {
-    let (e0, g) = p.assemble(x, proj);
+    let (e0, g) = p.assemble(x, Some(proj));
     let ndof = g.len();
     let mean_diag = (0..ndof)
         .map(|i| p.sys.values[p.sys.diag_slot(i)])
@@ -545,6 +572,31 @@ fn newton_direction<E: TriEnergy>(
         reg *= 100.0;
     }
     (e0, g, None)
+}
+
+/// A chord step from `x` (energy `e`): the direction from the last factorised Hessian and the
+/// gradient at `x`. Returns the map after it (or `x` itself where no step decreases the energy
+/// any more) when its decrement −g·d/2 is at most `tolerance`; `None` when it is larger or the
+/// factorisation cannot be reused.
+fn chord_step<E: TriEnergy>(
+    p: &mut MapProblem<'_, E>,
+    x: &[DVec2],
+    e: f64,
+    tolerance: f64,
+) -> Option<(Vec<DVec2>, f64)> {
+    let (_, g) = p.assemble(x, None);
+    let mut dir: Vec<f64> = g.iter().map(|v| -v).collect();
+    p.sys.solve_factored(&mut dir).ok()?;
+    let gd: f64 = g.iter().zip(&dir).map(|(a, b)| a * b).sum();
+    if !(gd < 0.0 && -0.5 * gd <= tolerance) {
+        return None;
+    }
+    let d = to_points(&dir);
+    let tmax = p.max_step(x, &d);
+    Some(match line_search(p, x, &d, e, gd, tmax) {
+        Some((_, xc, ec)) if ec < e => (xc, ec),
+        _ => (x.to_vec(), e),
+    })
 }
 
 /// Largest number of step doublings past the Newton step.

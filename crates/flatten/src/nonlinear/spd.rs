@@ -149,6 +149,12 @@ impl SpdSystem {
             .map_err(|e| e.to_string())?;
         self.solver.solve_in_place(b).map_err(|e| e.to_string())
     }
+
+    /// Solves A x = b in place with the factorisation of the last successful
+    /// [`Self::factor_solve`], whatever the values are now.
+    pub fn solve_factored(&self, b: &mut [f64]) -> Result<(), String> {
+        self.solver.solve_in_place(b).map_err(|e| e.to_string())
+    }
 }
 
 #[cfg(test)]
