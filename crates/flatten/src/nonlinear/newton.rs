@@ -47,6 +47,12 @@ const MIN_PER_TASK: usize = 1024;
 /// single triangles are not).
 const RAW_BELOW: f64 = 1e-3;
 
+/// Largest chord-step decrement, as a fraction of the Newton step's decrease before it, at which
+/// the chord step is taken: Newton is then converging fast and the old Hessian still fits (on
+/// the hard bench patches 0.1 saved one or two steps each and cost none; 0.3 cost three on the
+/// mannequin).
+const CHORD_FAST: f64 = 0.1;
+
 /// A boundary-length term for the augmented Lagrangian of the boundary-isometric method:
 /// L²·(λ c + w c²/2) with c = (|x_b − x_a|² − L²)/L².
 #[derive(Clone, Debug)]
@@ -473,15 +479,19 @@ impl<E: TriEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
             "newton step"
         );
         self.last_decrease = e0 - en;
-        // In the tail a full step leaves a gradient the factorisation just used still inverts
-        // well: where that chord step's decrement is below the tolerance, the next Newton step
-        // could gain no more than the tolerance either, so the chord step ends the solve and
-        // saves a factorisation.
+        // In the tail the factorisation just used still inverts the Hessian well after a full
+        // step: the chord step it gives (gradient at the new map, old factor) is nearly a Newton
+        // step for the price of a gradient. It is taken where its decrement, which predicts the
+        // next Newton step's gain, shows fast convergence (at most [`CHORD_FAST`] of this step's
+        // decrease); where it is below the tolerance the solve ends without another
+        // factorisation.
         if t == 1.0 && self.last_decrease < RAW_BELOW * en.abs() {
             let tolerance = self.abs_tolerance.max(self.rel_tolerance * en.abs());
-            if let Some((xc, ec)) = chord_step(p, &xn, en, tolerance) {
-                (xn, en) = (xc, ec);
-                self.converged = true;
+            let take = tolerance.max(CHORD_FAST * self.last_decrease);
+            if let Some(c) = chord_step(p, &xn, en, take) {
+                (xn, en) = (c.x, c.energy);
+                self.last_decrease = e0 - en;
+                self.converged = c.decrement <= tolerance;
             }
         }
         // The quadratic model predicts a decrease of −t g·d (1 − t/2) along the Newton step
@@ -574,28 +584,42 @@ fn newton_direction<E: TriEnergy>(
     (e0, g, None)
 }
 
+/// A chord step: the map after it and its decrement.
+struct Chord {
+    x: Vec<DVec2>,
+    energy: f64,
+    /// −g·d/2 at the start of the step.
+    decrement: f64,
+}
+
 /// A chord step from `x` (energy `e`): the direction from the last factorised Hessian and the
-/// gradient at `x`. Returns the map after it (or `x` itself where no step decreases the energy
-/// any more) when its decrement −g·d/2 is at most `tolerance`; `None` when it is larger or the
+/// gradient at `x`, taken when its decrement −g·d/2 is at most `take` (the map stays `x` where no
+/// step along it decreases the energy any more); `None` when the decrement is larger or the
 /// factorisation cannot be reused.
 fn chord_step<E: TriEnergy>(
     p: &mut MapProblem<'_, E>,
     x: &[DVec2],
     e: f64,
-    tolerance: f64,
-) -> Option<(Vec<DVec2>, f64)> {
+    take: f64,
+) -> Option<Chord> {
     let (_, g) = p.assemble(x, None);
     let mut dir: Vec<f64> = g.iter().map(|v| -v).collect();
     p.sys.solve_factored(&mut dir).ok()?;
     let gd: f64 = g.iter().zip(&dir).map(|(a, b)| a * b).sum();
-    if !(gd < 0.0 && -0.5 * gd <= tolerance) {
+    let decrement = -0.5 * gd;
+    if !(gd < 0.0 && decrement <= take) {
         return None;
     }
     let d = to_points(&dir);
     let tmax = p.max_step(x, &d);
-    Some(match line_search(p, x, &d, e, gd, tmax) {
+    let (x, energy) = match line_search(p, x, &d, e, gd, tmax) {
         Some((_, xc, ec)) if ec < e => (xc, ec),
         _ => (x.to_vec(), e),
+    };
+    Some(Chord {
+        x,
+        energy,
+        decrement,
     })
 }
 
