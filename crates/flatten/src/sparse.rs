@@ -8,9 +8,12 @@
 //! sorts the triplets) and the fill-reducing ordering and elimination tree once as a
 //! [`SpdSolver`]; each [`SpdSolver::factor`] call only redoes the numeric factorization.
 //!
-//! All faer calls run with [`Par::Seq`] passed explicitly: on small machines faer's default
-//! rayon parallelism is an order of magnitude slower for these sizes, and sequential execution
-//! keeps results bit-identical from run to run.
+//! Every faer call is given its parallelism explicitly: sequential ([`PAR`]) except the numeric
+//! factorisations of large factors ([`PARALLEL_FACTOR_FROM`]), which run on rayon's threads.
+//! Below that size the threads' hand-over costs more than they gain (a 20k-face Newton solve was
+//! 25 % slower with two), above it two threads factor 1.15–1.2× faster. faer's parallel
+//! supernodal factorisation splits the dense updates by output blocks, so the factor is the
+//! same bits with any number of threads (checked by `the_parallel_factorisation_gives_the_same_bits`).
 
 use faer::Par;
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -32,8 +35,13 @@ use crate::ordering;
 /// −6 % at 90k, −13 % at 360k; with two (u, v) +4 % at 12k, equal at 62k and 109k, −13 % at 200k.
 pub const NESTED_DISSECTION_FROM: usize = 150_000;
 
-/// The parallelism of every faer call in this crate (see the module docs).
+/// The parallelism of the faer calls in this crate other than large factorisations (see the
+/// module docs).
 pub const PAR: Par = Par::Seq;
+
+/// Values of the Cholesky factor from which the numeric factorisation runs in parallel (a
+/// 100k-face map has about 8M: two threads were 5 % faster there, 17 % at 200k faces).
+pub const PARALLEL_FACTOR_FROM: usize = 8_000_000;
 
 /// Entries of a symmetric matrix, accumulated as `(row, col, value)` triplets. Only the lower
 /// triangle is stored: an entry above the diagonal is mirrored below it. Duplicate positions
@@ -318,6 +326,8 @@ pub struct SpdSolver {
     symbolic: SymbolicCholesky<usize>,
     l_values: Vec<f64>,
     factored: bool,
+    /// Parallelism of the numeric factorisation.
+    par: Par,
     /// Workspace of the numeric factorisation, kept between factorisations.
     scratch: Option<Scratch>,
 }
@@ -353,14 +363,28 @@ impl SpdSolver {
                 }
             })?;
         let l_values = vec![0.0; symbolic.len_val()];
+        let par = if l_values.len() >= PARALLEL_FACTOR_FROM {
+            Par::rayon(0)
+        } else {
+            PAR
+        };
         Ok(Self {
             stage,
             pattern,
             symbolic,
             l_values,
             factored: false,
+            par,
             scratch: None,
         })
+    }
+
+    /// The same solver with its factorisations run with `par`.
+    #[cfg(test)]
+    fn with_par(mut self, par: Par) -> Self {
+        self.par = par;
+        self.scratch = None;
+        self
     }
 
     /// Builds the pattern of `t` and analyses it, then factors `t`'s values.
@@ -414,7 +438,7 @@ impl SpdSolver {
         if self.scratch.is_none() {
             let size = self
                 .symbolic
-                .factorize_numeric_llt_scratch::<f64>(PAR, Default::default());
+                .factorize_numeric_llt_scratch::<f64>(self.par, Default::default());
             let buffer = MemBuffer::try_new(size).map_err(|e| FlattenError::Solver {
                 stage: self.stage,
                 reason: format!("out of memory: {e:?}"),
@@ -433,7 +457,7 @@ impl SpdSolver {
                 a,
                 self.pattern.side,
                 LltRegularization::default(),
-                PAR,
+                self.par,
                 MemStack::new(mem),
                 Default::default(),
             )
@@ -668,6 +692,50 @@ mod tests {
                 .zip(&again)
                 .all(|(a, b)| a.to_bits() == b.to_bits())
         );
+    }
+
+    #[test]
+    fn the_parallel_factorisation_gives_the_same_bits() {
+        let (w, h) = (160, 120);
+        let (t, node_of) = grid_mesh(w, h, 2);
+        let pattern = SymPattern::new(&t, "test")
+            .unwrap()
+            .with_nodes(node_of, w * h)
+            .unwrap();
+        let solver = || {
+            SpdSolver::with_ordering(pattern.clone(), "test", Ordering::NestedDissection).unwrap()
+        };
+        let factor = |threads: usize| {
+            let mut s = solver().with_par(Par::rayon(0));
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| s.factor(t.values()))
+                .unwrap();
+            s
+        };
+        let (one, two) = (factor(1), factor(2));
+        assert!(
+            one.l_values
+                .iter()
+                .zip(&two.l_values)
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
+            "the factors differ between one and two threads"
+        );
+        let mut seq = solver().with_par(Par::Seq);
+        seq.factor(t.values()).unwrap();
+        let n = 2 * w * h;
+        let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).sin()).collect();
+        let (mut x2, mut xs) = (b.clone(), b);
+        two.solve_in_place(&mut x2).unwrap();
+        seq.solve_in_place(&mut xs).unwrap();
+        for i in 0..n {
+            assert!(
+                (x2[i] - xs[i]).abs() <= 1e-12 * xs[i].abs().max(1.0),
+                "unknown {i}"
+            );
+        }
     }
 
     #[test]

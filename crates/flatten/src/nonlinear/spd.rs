@@ -3,8 +3,8 @@
 //! scattered straight into precomputed slots, and the factorisation is the crate's one sparse
 //! Cholesky, [`crate::sparse::SpdSolver`] (faer; AMD, or nested dissection of the vertex graph
 //! from [`crate::sparse::NESTED_DISSECTION_FROM`] vertices; symbolic factorisation computed
-//! once and reused for every step, sequential `Par::Seq`: faster on small machines and
-//! bit-for-bit deterministic, crates.md §3).
+//! once and reused for every step; sequential below [`crate::sparse::PARALLEL_FACTOR_FROM`]
+//! factor values, the same bits with any number of threads above).
 //!
 //! The pattern is handed to [`crate::sparse::SymPattern`] in compressed-column form, so `values`
 //! is exactly the value array that [`crate::sparse::SpdSolver::factor`] reads in place: no
