@@ -289,6 +289,18 @@ impl Ordering {
     }
 }
 
+/// Symbolic parameters that always choose the supernodal factorisation. faer picks the
+/// simplicial one below a flop-per-entry ratio that the maps of this crate fall under up to
+/// about 10k faces, where it is slower: a 10k-face scanned patch solved in 0.30 s instead of
+/// 0.51 s, a 2k-face toe in 21 ms instead of 31 ms, with nothing slower on the bench.
+fn supernodal() -> CholeskySymbolicParams<'static> {
+    CholeskySymbolicParams {
+        supernodal_flop_ratio_threshold:
+            faer::sparse::linalg::SupernodalThreshold::FORCE_SUPERNODAL,
+        ..Default::default()
+    }
+}
+
 /// The symbolic Cholesky factorisation of `pattern` under `ordering`.
 fn analyse(
     pattern: &SymPattern,
@@ -356,11 +368,9 @@ impl SpdSolver {
         ordering: Ordering,
     ) -> Result<Self, FlattenError> {
         let symbolic =
-            analyse(&pattern, ordering, CholeskySymbolicParams::default()).map_err(|e| {
-                FlattenError::Solver {
-                    stage,
-                    reason: format!("symbolic factorization failed: {e:?}"),
-                }
+            analyse(&pattern, ordering, supernodal()).map_err(|e| FlattenError::Solver {
+                stage,
+                reason: format!("symbolic factorization failed: {e:?}"),
             })?;
         let l_values = vec![0.0; symbolic.len_val()];
         let par = if l_values.len() >= PARALLEL_FACTOR_FROM {
