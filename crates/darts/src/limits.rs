@@ -20,7 +20,9 @@
 //! Why not a penalty: a penalty of finite stiffness settles beyond the bound it penalises, so a
 //! penalised map is never proof that the limits can be met; the barrier is.
 
-use flatcut_flatten::nonlinear::kernel::{IsoEnergy, RestTri, SymDirichlet, rest_frames, svd2};
+use flatcut_flatten::nonlinear::kernel::{
+    IsoEnergy, RestTri, SymDirichlet, rest_frames, singular_values,
+};
 use flatcut_geom::DVec2;
 use flatcut_mesh::TriMesh;
 
@@ -251,8 +253,8 @@ pub fn max_excess(rest: &[RestTri], x: &[DVec2], band: Band) -> (f64, usize) {
     for (t, r) in rest.iter().enumerate() {
         let f = r.jacobian(x);
         let e = if f.determinant() > 0.0 {
-            let s = svd2(f);
-            band.excess(s.s1, s.s2)
+            let (s1, s2) = singular_values(f);
+            band.excess(s1, s2)
         } else {
             f64::INFINITY
         };
@@ -269,8 +271,8 @@ pub fn face_excess(rest: &[RestTri], x: &[DVec2], band: Band) -> Vec<f64> {
         .map(|r| {
             let f = r.jacobian(x);
             if f.determinant() > 0.0 {
-                let s = svd2(f);
-                band.excess(s.s1, s.s2)
+                let (s1, s2) = singular_values(f);
+                band.excess(s1, s2)
             } else {
                 f64::INFINITY
             }

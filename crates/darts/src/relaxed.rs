@@ -12,7 +12,7 @@
 //! extent inward from the outline is where the darts reach, and its sum along the outline is the
 //! total opening the darts must provide at their mouths.
 
-use flatcut_flatten::nonlinear::kernel::{IsoEnergy, RestTri, svd2};
+use flatcut_flatten::nonlinear::kernel::{IsoEnergy, RestTri, singular_values};
 use flatcut_geom::DVec2;
 
 use crate::limits::Band;
@@ -96,8 +96,8 @@ impl IsoEnergy for Yield {
 pub fn face_opening(rest: &[RestTri], x: &[DVec2], s_max: f64) -> Vec<f64> {
     rest.iter()
         .map(|r| {
-            let s = svd2(r.jacobian(x));
-            (s.s1 / s_max - 1.0).max(0.0)
+            let (s1, _) = singular_values(r.jacobian(x));
+            (s1 / s_max - 1.0).max(0.0)
         })
         .collect()
 }

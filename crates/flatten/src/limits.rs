@@ -19,7 +19,7 @@
 use flatcut_geom::DVec2;
 use flatcut_mesh::{TriMesh, face_distortion};
 
-use crate::nonlinear::kernel::{IsoEnergy, RestTri, SymDirichlet, WithLimits, svd2};
+use crate::nonlinear::kernel::{IsoEnergy, RestTri, SymDirichlet, WithLimits, singular_values};
 use crate::nonlinear::newton::{Budget, EarlyStop};
 use crate::{FlattenError, FlattenParams};
 
@@ -70,8 +70,8 @@ impl Limits {
     /// True when every triangle's principal stretches lie strictly between the limits.
     pub fn hold(&self, rest: &[RestTri], x: &[DVec2]) -> bool {
         rest.iter().all(|r| {
-            let s = svd2(r.jacobian(x));
-            s.s1 < self.hi && s.s2 > self.lo
+            let (s1, s2) = singular_values(r.jacobian(x));
+            s1 < self.hi && s2 > self.lo
         })
     }
 

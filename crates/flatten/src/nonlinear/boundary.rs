@@ -28,7 +28,7 @@
 use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
-use super::kernel::{GREEN_CONCAVE_BELOW, GuardedGreen, RestTri, SymDirichlet, svd2};
+use super::kernel::{GREEN_CONCAVE_BELOW, GuardedGreen, RestTri, SymDirichlet, singular_values};
 use super::newton::{Budget, EarlyStop, EdgeTerms, MapProblem, run};
 use super::{ABS_DECREMENT_PER_AREA, mean_density, newton_solve, time_limit_warning, total_area};
 use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
@@ -100,7 +100,7 @@ pub fn boundary_edges(mesh: &TriMesh, topo: &Topology) -> Vec<(usize, usize, f64
 pub fn min_stretch(rest: &[RestTri], x: &[DVec2]) -> (f64, usize) {
     let mut worst = (f64::INFINITY, 0);
     for (t, r) in rest.iter().enumerate() {
-        let s = svd2(r.jacobian(x)).s2;
+        let s = singular_values(r.jacobian(x)).1;
         if s < worst.0 {
             worst = (s, t);
         }

@@ -79,14 +79,29 @@ pub struct Svd2 {
     pub s2: f64,
 }
 
-/// Closed-form signed SVD of a 2×2 matrix (Blinn's construction).
-pub fn svd2(f: DMat2) -> Svd2 {
+/// The parts of Blinn's construction: the similarity part (e, h) and the anti-similarity part
+/// (f, g) of a 2×2 matrix, F = [[e + f, g − h], [g + h, e − f]].
+#[inline]
+fn blinn_parts(f: DMat2) -> (f64, f64, f64, f64) {
     let (a, c) = (f.x_axis.x, f.x_axis.y);
     let (b, d) = (f.y_axis.x, f.y_axis.y);
-    let e = 0.5 * (a + d);
-    let ff = 0.5 * (a - d);
-    let g = 0.5 * (c + b);
-    let h = 0.5 * (c - b);
+    (0.5 * (a + d), 0.5 * (c - b), 0.5 * (a - d), 0.5 * (c + b))
+}
+
+/// The signed singular values (σ1, σ2) of a 2×2 matrix, σ2 < 0 for a reflection: [`svd2`]'s,
+/// bit for bit, without its rotations (no trigonometry), for the energy evaluations of the line
+/// searches and the limit checks.
+#[inline]
+pub fn singular_values(f: DMat2) -> (f64, f64) {
+    let (e, h, ff, g) = blinn_parts(f);
+    let q = (e * e + h * h).sqrt();
+    let r = (ff * ff + g * g).sqrt();
+    (q + r, q - r)
+}
+
+/// Closed-form signed SVD of a 2×2 matrix (Blinn's construction).
+pub fn svd2(f: DMat2) -> Svd2 {
+    let (e, h, ff, g) = blinn_parts(f);
     let q = (e * e + h * h).sqrt();
     let r = (ff * ff + g * g).sqrt();
     let a1 = g.atan2(ff);
@@ -429,8 +444,8 @@ fn iso_tri_energy<E: IsoEnergy>(e: &E, r: &RestTri, x: &[DVec2]) -> f64 {
     if (det.is_nan() || det <= 0.0) && e.is_barrier() {
         return f64::INFINITY;
     }
-    let s = svd2(f);
-    r.area * e.psi(s.s1, s.s2)
+    let (s1, s2) = singular_values(f);
+    r.area * e.psi(s1, s2)
 }
 
 /// Full evaluation of one triangle with the clamped Hessian; `with_hess` = false skips it.
@@ -595,6 +610,8 @@ pub(crate) mod tests {
             DMat2::from_cols(DVec2::new(2.0, 0.0), DVec2::new(0.0, 2.0)),
         ] {
             let s = svd2(f);
+            let (s1, s2) = singular_values(f);
+            assert!(s1.to_bits() == s.s1.to_bits() && s2.to_bits() == s.s2.to_bits());
             let back = s.u * DMat2::from_diagonal(DVec2::new(s.s1, s.s2)) * s.v.transpose();
             assert!((back - f).abs().to_cols_array().iter().all(|e| *e < 1e-13));
             assert!((s.s1 * s.s2 - f.determinant()).abs() < 1e-13);

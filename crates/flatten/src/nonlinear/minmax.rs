@@ -27,7 +27,7 @@ use std::collections::VecDeque;
 use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
-use super::kernel::{RestTri, max_step_tri, svd2};
+use super::kernel::{RestTri, max_step_tri, singular_values, svd2};
 use super::newton::{Budget, EarlyStop};
 use crate::{FlattenError, FlattenInfo, FlattenParams, FlattenProgress, Flattening, Method};
 
@@ -136,9 +136,9 @@ pub fn measure(rest: &[RestTri], uv: &[DVec2], pairs: &PairSet) -> Delta0 {
                 pairs: 0,
             };
         }
-        let s = svd2(f);
-        lo = lo.min(s.s2);
-        hi = hi.max(s.s1);
+        let (s1, s2) = singular_values(f);
+        lo = lo.min(s2);
+        hi = hi.max(s1);
     }
     for &(a, b, g) in &pairs.pairs {
         let q = uv[a as usize].distance(uv[b as usize]) / g;
