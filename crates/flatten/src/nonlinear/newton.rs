@@ -5,7 +5,9 @@
 //! Newton system with a sparse Cholesky whose symbolic factorisation is computed once
 //! ([`super::spd`]), bounds the step before the first triangle inverts (smallest positive root
 //! of det J(t) = 0 per triangle, Smith & Schaefer 2015) and backtracks to an Armijo decrease.
-//! Every iterate is therefore flip-free if the start is.
+//! Every iterate is therefore flip-free if the start is. In the tail, where Newton converges
+//! fast, a chord step (the new gradient solved with the factorisation already made) follows a
+//! full step, and ends the solve when its decrement is below the tolerance (`CHORD_FAST`).
 //!
 //! argmin drives the loop (termination, iteration cap, observers); the heavy work is our own on
 //! `Vec<f64>` parameters (crates.md §2: argmin has no sparse Hessians).
