@@ -207,9 +207,9 @@ impl QuadraticBuilder {
             }
         }
         let node_of = self.free.iter().map(|&d| d / k).collect();
-        let pattern = SymPattern::new(&self.triplets, stage)?.with_nodes(node_of, n_vertices)?;
-        let mut solver = SpdSolver::new(pattern, stage)?;
-        solver.factor(self.triplets.values())?;
+        let (pattern, values) = SymPattern::compress(self.triplets, stage)?;
+        let mut solver = SpdSolver::new(pattern.with_nodes(node_of, n_vertices)?, stage)?;
+        solver.factor(&values)?;
         Ok(Reduced {
             free: self.free,
             coupling: self.coupling,
