@@ -268,22 +268,9 @@ impl<'a> Joint<'a> {
                 .map(|i| self.sys.values[self.sys.diag_slot(i)])
                 .sum::<f64>()
                 / ndof as f64;
-            let base = self.sys.values.clone();
-            let mut reg = REG_REL * mean_diag.max(f64::MIN_POSITIVE);
-            let mut dir = Vec::new();
-            for _ in 0..8 {
-                self.sys.values.copy_from_slice(&base);
-                for i in 0..ndof {
-                    let s = self.sys.diag_slot(i);
-                    self.sys.values[s] += reg;
-                }
-                let mut rhs: Vec<f64> = g.iter().map(|v| -v).collect();
-                if self.sys.factor_solve(&mut rhs).is_ok() && rhs.iter().all(|v| v.is_finite()) {
-                    dir = rhs;
-                    break;
-                }
-                reg *= 100.0;
-            }
+            let reg = REG_REL * mean_diag.max(f64::MIN_POSITIVE);
+            let minus_g: Vec<f64> = g.iter().map(|v| -v).collect();
+            let mut dir = self.sys.solve_shifted(&minus_g, reg, 8).unwrap_or_default();
             let mut gd: f64 = g.iter().zip(&dir).map(|(a, b)| a * b).sum();
             if dir.is_empty() || gd.is_nan() || gd >= 0.0 {
                 dir = g.iter().map(|v| -v).collect();

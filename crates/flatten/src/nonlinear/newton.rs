@@ -563,27 +563,10 @@ fn newton_direction<E: TriEnergy>(
         .sum::<f64>()
         / ndof as f64;
     let tries = if proj == Projection::Raw { 1 } else { 8 };
-    let base: Vec<f64> = if tries > 1 {
-        p.sys.values.clone()
-    } else {
-        Vec::new()
-    };
-    let mut reg = REG_REL * mean_diag.max(f64::MIN_POSITIVE);
-    for k in 0..tries {
-        if k > 0 {
-            p.sys.values.copy_from_slice(&base);
-        }
-        for i in 0..ndof {
-            let s = p.sys.diag_slot(i);
-            p.sys.values[s] += reg;
-        }
-        let mut rhs: Vec<f64> = g.iter().map(|v| -v).collect();
-        if p.sys.factor_solve(&mut rhs).is_ok() && rhs.iter().all(|v| v.is_finite()) {
-            return (e0, g, Some(rhs));
-        }
-        reg *= 100.0;
-    }
-    (e0, g, None)
+    let reg = REG_REL * mean_diag.max(f64::MIN_POSITIVE);
+    let minus_g: Vec<f64> = g.iter().map(|v| -v).collect();
+    let dir = p.sys.solve_shifted(&minus_g, reg, tries);
+    (e0, g, dir)
 }
 
 /// A chord step: the map after it and its decrement.
