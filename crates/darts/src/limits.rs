@@ -342,7 +342,7 @@ const CLEARLY_OUT: f64 = 0.5;
 /// Phases 0 and 1: the map nearest the limits the solver finds (min-max of the excess).
 pub fn reach(mesh: &TriMesh, x0: &[DVec2], band: Band, effort: Effort) -> Result<Held, LimitError> {
     let rest = rest_frames(mesh).map_err(LimitError::Degenerate)?;
-    let n = mesh.positions.len();
+    let mut solves = solve::Solves::new(&rest, mesh.positions.len());
     let mut x = x0.to_vec();
     let mut iterations = 0;
     let (mut e, mut worst) = max_excess(&rest, &x, band);
@@ -380,7 +380,8 @@ pub fn reach(mesh: &TriMesh, x0: &[DVec2], band: Band, effort: Effort) -> Result
             p,
             reg: CENTRE_REG,
         };
-        let run = solve::newton(&rest, n, energy, &x, POWER_ITERS, None, SEARCH_TOLERANCE)
+        let run = solves
+            .newton(energy, &x, POWER_ITERS, None, SEARCH_TOLERANCE)
             .map_err(LimitError::Solver)?;
         iterations += run.iterations;
         let (e_run, w_run) = max_excess(&rest, &run.x, band);
@@ -404,7 +405,8 @@ pub fn reach(mesh: &TriMesh, x0: &[DVec2], band: Band, effort: Effort) -> Result
             mu: 1.0,
             reg: CENTRE_REG,
         };
-        let run = solve::newton(&rest, n, energy, &x, STAGE_ITERS, None, SEARCH_TOLERANCE)
+        let run = solves
+            .newton(energy, &x, STAGE_ITERS, None, SEARCH_TOLERANCE)
             .map_err(LimitError::Solver)?;
         iterations += run.iterations;
         let (e_run, w_run) = max_excess(&rest, &run.x, band);
@@ -443,7 +445,7 @@ pub fn settle(
     pairs: &EdgePairs,
 ) -> Result<Held, LimitError> {
     let rest = rest_frames(mesh).map_err(LimitError::Degenerate)?;
-    let n = mesh.positions.len();
+    let mut solves = solve::Solves::new(&rest, mesh.positions.len());
     let mut x = x0.to_vec();
     let mut iterations = 0;
     for (i, mu) in INTERIOR_MU.iter().enumerate() {
@@ -455,7 +457,8 @@ pub fn settle(
         };
         // The legs are paired in the last solve only: the first brings the map near.
         let pairs = (i + 1 == INTERIOR_MU.len()).then_some(pairs);
-        let run = solve::newton(&rest, n, energy, &x, INTERIOR_ITERS, pairs, FINAL_TOLERANCE)
+        let run = solves
+            .newton(energy, &x, INTERIOR_ITERS, pairs, FINAL_TOLERANCE)
             .map_err(LimitError::Solver)?;
         iterations += run.iterations;
         x = run.x;

@@ -149,16 +149,9 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
         .unwrap_or_default();
     // 1. Demand, from the relaxed map.
     let rest = rest_of(mesh)?;
-    let relaxed = solve::newton(
-        &rest,
-        mesh.positions.len(),
-        Yield::new(band),
-        x0,
-        RELAXED_ITERS,
-        None,
-        RELAXED_TOLERANCE,
-    )
-    .map_err(DartError::Solver)?;
+    let relaxed = solve::Solves::new(&rest, mesh.positions.len())
+        .newton(Yield::new(band), x0, RELAXED_ITERS, None, RELAXED_TOLERANCE)
+        .map_err(DartError::Solver)?;
     let edge_demand = rim_demand(&mesh.positions, &relaxed.x, &rim, band.s_max());
     let total: f64 = edge_demand.iter().sum();
     let n = rim.len();

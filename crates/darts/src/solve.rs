@@ -44,47 +44,86 @@ const PAIR_WEIGHT: f64 = 1e4;
 /// methods).
 const ABS_DECREMENT_PER_AREA: f64 = 1e-15;
 
-/// Runs projected Newton on `energy` from the flip-free map `x0` for at most `max_iters`
-/// iterations (per round when pairs are held), stopping when the energy falls by less than `rel`
-/// of itself in an iteration.
-pub fn newton<E: IsoEnergy + Copy>(
-    rest: &[RestTri],
+/// Projected Newton solves on one mesh that share its analysed problem: the Hessian's pattern,
+/// its symbolic factorisation and the scatter slots depend on the mesh alone, so they are built
+/// at the first solve and kept for the next (the stages of a limit solve are dozens of solves;
+/// the analysis was a sixth of each).
+pub struct Solves<'a> {
+    rest: &'a [RestTri],
     n: usize,
-    energy: E,
-    x0: &[DVec2],
-    max_iters: usize,
-    pairs: Option<&EdgePairs>,
-    rel: f64,
-) -> Result<Run, String> {
-    let area: f64 = rest.iter().map(|r| r.area).sum();
-    let abs = ABS_DECREMENT_PER_AREA * area;
-    let pairs = pairs.filter(|p| !p.pairs.is_empty());
-    let Some(pairs) = pairs else {
-        let problem = MapProblem::new(rest, n, energy, None)?;
-        let (r, _) = newton::run(problem, x0, max_iters, rel, abs, &Budget::none("darts"))?;
-        return Ok(Run {
-            x: r.x,
-            iterations: r.iterations,
-        });
-    };
-    let mut x = x0.to_vec();
-    let mut iterations = 0;
-    for _ in 0..PAIR_ROUNDS {
-        let mut edges = Vec::with_capacity(2 * pairs.pairs.len());
-        for [(a, b), (c, d)] in &pairs.pairs {
-            let l = 0.5 * (x[*a].distance(x[*b]) + x[*c].distance(x[*d]));
-            edges.push((*a, *b, l));
-            edges.push((*c, *d, l));
+    problem: Option<MapProblem<'a, ()>>,
+}
+
+impl<'a> Solves<'a> {
+    /// Solves on the mesh of `rest` with `n` vertices.
+    pub fn new(rest: &'a [RestTri], n: usize) -> Self {
+        Self {
+            rest,
+            n,
+            problem: None,
         }
-        let terms = EdgeTerms {
-            lambda: vec![0.0; edges.len()],
-            edges,
-            weight: PAIR_WEIGHT,
-        };
-        let problem = MapProblem::new(rest, n, energy, Some(terms))?;
-        let (r, _) = newton::run(problem, &x, max_iters, rel, abs, &Budget::none("darts"))?;
-        iterations += r.iterations;
-        x = r.x;
     }
-    Ok(Run { x, iterations })
+
+    /// Runs projected Newton on `energy` from the flip-free map `x0` for at most `max_iters`
+    /// iterations (per round when pairs are held), stopping when the energy falls by less than
+    /// `rel` of itself in an iteration.
+    pub fn newton<E: IsoEnergy + Copy>(
+        &mut self,
+        energy: E,
+        x0: &[DVec2],
+        max_iters: usize,
+        pairs: Option<&EdgePairs>,
+        rel: f64,
+    ) -> Result<Run, String> {
+        let area: f64 = self.rest.iter().map(|r| r.area).sum();
+        let abs = ABS_DECREMENT_PER_AREA * area;
+        let mut problem = match self.problem.take() {
+            Some(p) => p.with_energy(energy),
+            None => MapProblem::new(self.rest, self.n, energy, None)?,
+        };
+        let pairs = pairs.filter(|p| !p.pairs.is_empty());
+        let Some(pairs) = pairs else {
+            let (r, p) = newton::run(
+                problem.with_edges(None),
+                x0,
+                max_iters,
+                rel,
+                abs,
+                &Budget::none("darts"),
+            )?;
+            self.problem = Some(p.with_energy(()));
+            return Ok(Run {
+                x: r.x,
+                iterations: r.iterations,
+            });
+        };
+        let mut x = x0.to_vec();
+        let mut iterations = 0;
+        for _ in 0..PAIR_ROUNDS {
+            let mut edges = Vec::with_capacity(2 * pairs.pairs.len());
+            for [(a, b), (c, d)] in &pairs.pairs {
+                let l = 0.5 * (x[*a].distance(x[*b]) + x[*c].distance(x[*d]));
+                edges.push((*a, *b, l));
+                edges.push((*c, *d, l));
+            }
+            let terms = EdgeTerms {
+                lambda: vec![0.0; edges.len()],
+                edges,
+                weight: PAIR_WEIGHT,
+            };
+            let (r, p) = newton::run(
+                problem.with_edges(Some(terms)),
+                &x,
+                max_iters,
+                rel,
+                abs,
+                &Budget::none("darts"),
+            )?;
+            problem = p;
+            iterations += r.iterations;
+            x = r.x;
+        }
+        self.problem = Some(problem.with_energy(()));
+        Ok(Run { x, iterations })
+    }
 }

@@ -115,6 +115,23 @@ const PAIRS: [(u8, u8); 21] = {
     out
 };
 
+/// The slots of each edge term's 4×4 block (both end vertices' u and v).
+fn edge_slots(sys: &SpdSystem, edges: Option<&EdgeTerms>) -> Vec<[u32; 16]> {
+    edges
+        .map(|e| {
+            e.edges
+                .iter()
+                .map(|&(a, b, _)| {
+                    let s = slots_for(sys, &[2 * a, 2 * a + 1, 2 * b, 2 * b + 1]);
+                    let mut o = [u32::MAX; 16];
+                    o.copy_from_slice(&s);
+                    o
+                })
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 fn slots_for(sys: &SpdSystem, dofs: &[usize]) -> Vec<u32> {
     let k = dofs.len();
     let mut out = vec![u32::MAX; k * k];
@@ -131,7 +148,7 @@ fn slots_for(sys: &SpdSystem, dofs: &[usize]) -> Vec<u32> {
     out
 }
 
-impl<'a, E: TriEnergy> MapProblem<'a, E> {
+impl<'a, E> MapProblem<'a, E> {
     /// Builds the problem and the symbolic factorisation for `n` vertices.
     pub fn new(
         rest: &'a [RestTri],
@@ -165,20 +182,7 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
                 a
             })
             .collect();
-        let edge_slots = edges
-            .as_ref()
-            .map(|e| {
-                e.edges
-                    .iter()
-                    .map(|&(a, b, _)| {
-                        let s = slots_for(&sys, &[2 * a, 2 * a + 1, 2 * b, 2 * b + 1]);
-                        let mut o = [u32::MAX; 16];
-                        o.copy_from_slice(&s);
-                        o
-                    })
-                    .collect()
-            })
-            .unwrap_or_default();
+        let edge_slots = edge_slots(&sys, edges.as_ref());
         let total_area = rest.iter().map(|r| r.area).sum();
         Ok(Self {
             rest,
@@ -192,6 +196,32 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
         })
     }
 
+    /// The same problem with another energy. The pattern, its symbolic factorisation and the
+    /// scatter slots depend on the mesh alone and are kept: a sequence of solves on one mesh
+    /// (the stages of a continuation) analyses it once.
+    pub fn with_energy<F>(self, energy: F) -> MapProblem<'a, F> {
+        MapProblem {
+            rest: self.rest,
+            energy,
+            edges: self.edges,
+            n: self.n,
+            sys: self.sys,
+            tri_slots: self.tri_slots,
+            edge_slots: self.edge_slots,
+            total_area: self.total_area,
+        }
+    }
+
+    /// The same problem with other edge terms (`None`: none); as in [`MapProblem::new`], only
+    /// the entries of edges in the mesh's pattern enter the Hessian.
+    pub fn with_edges(mut self, edges: Option<EdgeTerms>) -> Self {
+        self.edge_slots = edge_slots(&self.sys, edges.as_ref());
+        self.edges = edges;
+        self
+    }
+}
+
+impl<'a, E: TriEnergy> MapProblem<'a, E> {
     /// Total energy (+∞ if a barrier energy sees an inverted triangle).
     pub fn total_energy(&self, x: &[DVec2]) -> f64 {
         let energy = &self.energy;
