@@ -425,6 +425,9 @@ pub fn reach(mesh: &TriMesh, x0: &[DVec2], band: Band, effort: Effort) -> Result
         if k > STALL_STAGES && history[k - 1 - STALL_STAGES] - e < STALL_REL * scale {
             break;
         }
+        if out_of_reach(&history, MAX_STAGES + 1 - k) {
+            break;
+        }
         wall = e + WALL_KEEP * (wall - e).max(0.0) + f64::EPSILON * scale;
     }
     Ok(Held {
@@ -434,6 +437,24 @@ pub fn reach(mesh: &TriMesh, x0: &[DVec2], band: Band, effort: Effort) -> Result
         feasible: e <= -FEASIBLE_MARGIN,
         iterations,
     })
+}
+
+/// True when the largest excess (`history`, one entry per stage) cannot fall below the target
+/// in the `left` stages the method of centres has left: the stages' gains shrink as the walls
+/// close in, so at most the best of the last [`STALL_STAGES`] gains is still to come per stage.
+/// Such a cut ends above the limits whatever the remaining stages do, and its excess is only a
+/// measure for the search, which does not need it to more digits.
+fn out_of_reach(history: &[f64], left: usize) -> bool {
+    let k = history.len();
+    if k <= STALL_STAGES {
+        return false;
+    }
+    let e = history[k - 1];
+    let pace = history[k - 1 - STALL_STAGES..]
+        .windows(2)
+        .map(|w| w[0] - w[1])
+        .fold(0.0, f64::max);
+    e - pace * left as f64 > -FEASIBLE_MARGIN
 }
 
 /// Phase 2: from a map within the limits, the least-δ2 map within them, with the paired edges
