@@ -90,6 +90,41 @@ struct Piece<'a> {
     start: Vec<DVec2>,
 }
 
+/// The attempts of the search for the count, one ahead: an attempt is computed together with the
+/// one the search will most likely ask for next (`next`), on the other core, since an attempt
+/// is a sequence of solves on one mesh that keeps one core busy. The search asks for the same
+/// attempts in the same order as without it and each attempt is the same bits, so the answer
+/// is too; an attempt computed ahead and never asked for is dropped.
+struct Lookahead<'p, 'a> {
+    piece: &'p Piece<'a>,
+    ready: Vec<(usize, Result<Outcome, DartError>)>,
+}
+
+impl<'p, 'a> Lookahead<'p, 'a> {
+    fn new(piece: &'p Piece<'a>) -> Self {
+        Self {
+            piece,
+            ready: Vec::new(),
+        }
+    }
+
+    /// The attempt with `k` darts; `next` (when not 0, not `k` and not yet computed) is
+    /// computed alongside it.
+    fn attempt(&mut self, k: usize, next: usize) -> Result<Outcome, DartError> {
+        if let Some(i) = self.ready.iter().position(|(j, _)| *j == k) {
+            return self.ready.swap_remove(i).1;
+        }
+        let ahead = next != 0 && next != k && self.ready.iter().all(|(j, _)| *j != next);
+        if !ahead {
+            return self.piece.attempt(k);
+        }
+        let piece = self.piece;
+        let (this, that) = rayon::join(|| piece.attempt(k), || piece.attempt(next));
+        self.ready.push((next, that));
+        this
+    }
+}
+
 /// One dart while it is being placed: its start on the rim, direction and reach.
 #[derive(Clone, Debug)]
 struct Plan {
@@ -199,44 +234,46 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
     // 3–5. Attempts: down from k0 while they hold, else up until one does.
     let mut outcomes: Vec<Outcome> = Vec::new();
     let mut unplaced: Vec<String> = Vec::new();
-    let mut try_k = |k: usize, attempts: &mut Vec<Attempt>| -> Result<bool, DartError> {
-        match piece.attempt(k) {
-            Ok(o) => {
-                attempts.push(Attempt {
-                    darts: k,
-                    total_length_mm: o.total_length(),
-                    excess: o.held.excess,
-                    feasible: o.held.feasible,
-                });
-                let ok = o.held.feasible;
-                outcomes.push(o);
-                Ok(ok)
+    let mut ahead = Lookahead::new(&piece);
+    let mut try_k =
+        |k: usize, next: usize, attempts: &mut Vec<Attempt>| -> Result<bool, DartError> {
+            match ahead.attempt(k, next) {
+                Ok(o) => {
+                    attempts.push(Attempt {
+                        darts: k,
+                        total_length_mm: o.total_length(),
+                        excess: o.held.excess,
+                        feasible: o.held.feasible,
+                    });
+                    let ok = o.held.feasible;
+                    outcomes.push(o);
+                    Ok(ok)
+                }
+                Err(DartError::Placement(reason)) => {
+                    debug(&format!("k = {k}: {reason}"));
+                    unplaced.push(format!("{k} darts: {reason}"));
+                    Ok(false)
+                }
+                Err(e) => Err(e),
             }
-            Err(DartError::Placement(reason)) => {
-                debug(&format!("k = {k}: {reason}"));
-                unplaced.push(format!("{k} darts: {reason}"));
-                Ok(false)
-            }
-            Err(e) => Err(e),
-        }
-    };
+        };
     let mut k = k0;
-    if try_k(k, &mut attempts)? {
-        while k > 1 && try_k(k - 1, &mut attempts)? {
+    if try_k(k, k - 1, &mut attempts)? {
+        while k > 1 && try_k(k - 1, k - 2, &mut attempts)? {
             k -= 1;
         }
     } else if attempts.len() == 1 {
         // k0 darts could not even be placed: fewer might.
         while k > 1 {
             k -= 1;
-            if try_k(k, &mut attempts)? {
+            if try_k(k, k - 1, &mut attempts)? {
                 break;
             }
         }
     } else {
         while k < k_cap {
             k += 1;
-            if try_k(k, &mut attempts)? {
+            if try_k(k, (k + 1).min(k_cap), &mut attempts)? {
                 break;
             }
         }
