@@ -542,6 +542,20 @@ mod tests {
     }
 
     #[test]
+    fn the_centres_stop_only_where_the_best_recent_pace_cannot_reach_the_target() {
+        // Too few stages to judge a pace.
+        assert!(!out_of_reach(&[0.02, 0.019, 0.018], 10));
+        // 1.5 % left at a best pace of 0.05 % per stage: 20 stages cannot do it, 40 can.
+        let slowing = [0.0165, 0.0160, 0.0156, 0.0153, 0.0150];
+        assert!(out_of_reach(&slowing, 20));
+        assert!(!out_of_reach(&slowing, 40));
+        // Already within the limits: never out of reach.
+        assert!(!out_of_reach(&[0.001, 0.0, -0.001, -0.002], 1));
+        // A stalled history (no gain at all) is out of reach as long as it is above the target.
+        assert!(out_of_reach(&[0.01, 0.01, 0.01, 0.01], 1000));
+    }
+
+    #[test]
     fn barrier_is_infinite_beyond_its_wall() {
         let band = Band::from_pct(Some(3.0), Some(3.0));
         let e = BandBarrier {
