@@ -21,7 +21,8 @@
 //! penalised map is never proof that the limits can be met; the barrier is.
 
 use flatcut_flatten::nonlinear::kernel::{
-    IsoEnergy, RestTri, SymDirichlet, rest_frames, singular_values,
+    IsoDerivs, IsoEnergy, RestTri, SymDirichlet, flip_from, rest_frames, singular_values,
+    twist_from,
 };
 use flatcut_geom::DVec2;
 use flatcut_mesh::TriMesh;
@@ -191,6 +192,28 @@ macro_rules! separable_iso_energy {
                     [self.reg * h[0][0] + self.terms(s1).2, 0.0],
                     [0.0, self.reg * h[1][1] + self.terms(s2).2],
                 ]
+            }
+            fn derivs(&self, s1: f64, s2: f64) -> IsoDerivs {
+                let (t1, t2) = (self.terms(s1), self.terms(s2));
+                let psi = if s2.is_nan() || s2 <= 0.0 {
+                    f64::INFINITY
+                } else {
+                    self.reg * SymDirichlet.psi(s1, s2) + t1.0 + t2.0
+                };
+                let g = SymDirichlet.grad(s1, s2);
+                let grad = [self.reg * g[0] + t1.1, self.reg * g[1] + t2.1];
+                let h = SymDirichlet.hess(s1, s2);
+                let hess = [
+                    [self.reg * h[0][0] + t1.2, 0.0],
+                    [0.0, self.reg * h[1][1] + t2.2],
+                ];
+                IsoDerivs {
+                    psi,
+                    grad,
+                    hess,
+                    twist: twist_from(s1, s2, || grad, || hess),
+                    flip: flip_from(s1, s2, grad),
+                }
             }
             fn is_barrier(&self) -> bool {
                 true
@@ -553,6 +576,42 @@ mod tests {
         assert!(!out_of_reach(&[0.001, 0.0, -0.001, -0.002], 1));
         // A stalled history (no gain at all) is out of reach as long as it is above the target.
         assert!(out_of_reach(&[0.01, 0.01, 0.01, 0.01], 1000));
+    }
+
+    #[test]
+    fn the_combined_derivatives_are_the_separate_methods_bit_for_bit() {
+        let band = Band::from_pct(Some(3.0), Some(3.0));
+        let barrier = BandBarrier {
+            band,
+            wall: 0.01,
+            mu: 0.7,
+            reg: 0.3,
+        };
+        let power = BandPower {
+            band,
+            p: 150.0,
+            reg: 1e-3,
+        };
+        // Inside, near the walls, at σ1 = σ2 (the twist's limit), beyond the wall, reflected.
+        for (s1, s2) in [
+            (1.02, 0.985),
+            (1.039, 0.962),
+            (1.0, 1.0),
+            (1.05, 0.99),
+            (1.0, -0.5),
+        ] {
+            for e in [&barrier as &dyn IsoEnergy, &power] {
+                let d = e.derivs(s1, s2);
+                let want = IsoDerivs {
+                    psi: e.psi(s1, s2),
+                    grad: e.grad(s1, s2),
+                    hess: e.hess(s1, s2),
+                    twist: e.twist(s1, s2),
+                    flip: e.flip(s1, s2),
+                };
+                assert_eq!(format!("{d:?}"), format!("{want:?}"), "σ = ({s1}, {s2})");
+            }
+        }
     }
 
     #[test]

@@ -128,22 +128,60 @@ pub trait IsoEnergy: Sync {
     fn hess(&self, s1: f64, s2: f64) -> [[f64; 2]; 2];
     /// Twist eigenvalue (Ψ1 − Ψ2)/(σ1 − σ2), with its limit at σ1 = σ2.
     fn twist(&self, s1: f64, s2: f64) -> f64 {
-        if (s1 - s2).abs() <= TWIST_LIMIT_GAP * (s1.abs() + s2.abs()) {
-            let h = self.hess(s1, s2);
-            h[0][0] - h[0][1]
-        } else {
-            let g = self.grad(s1, s2);
-            (g[0] - g[1]) / (s1 - s2)
-        }
+        twist_from(s1, s2, || self.grad(s1, s2), || self.hess(s1, s2))
     }
     /// Flip eigenvalue (Ψ1 + Ψ2)/(σ1 + σ2).
     fn flip(&self, s1: f64, s2: f64) -> f64 {
-        let g = self.grad(s1, s2);
-        (g[0] + g[1]) / (s1 + s2)
+        flip_from(s1, s2, self.grad(s1, s2))
+    }
+    /// Ψ, its derivatives and the twist and flip eigenvalues at once, as a Newton step needs
+    /// them. An energy whose terms share a costly part (the logarithms of a barrier) overrides
+    /// it to compute that part once; the values must equal the separate methods' bit for bit.
+    fn derivs(&self, s1: f64, s2: f64) -> IsoDerivs {
+        IsoDerivs {
+            psi: self.psi(s1, s2),
+            grad: self.grad(s1, s2),
+            hess: self.hess(s1, s2),
+            twist: self.twist(s1, s2),
+            flip: self.flip(s1, s2),
+        }
     }
     /// True if the energy goes to +∞ as a triangle degenerates (so a line search on it can
     /// never step onto an inverted triangle by itself).
     fn is_barrier(&self) -> bool;
+}
+
+/// An isotropic energy's value and derivatives at one pair of singular values
+/// ([`IsoEnergy::derivs`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IsoDerivs {
+    pub psi: f64,
+    pub grad: [f64; 2],
+    pub hess: [[f64; 2]; 2],
+    pub twist: f64,
+    pub flip: f64,
+}
+
+/// The twist eigenvalue (Ψ1 − Ψ2)/(σ1 − σ2) from the gradient, or its limit Ψ11 − Ψ12 from the
+/// Hessian where σ1 and σ2 are too close to divide (each asked for only where it is used).
+pub fn twist_from(
+    s1: f64,
+    s2: f64,
+    grad: impl FnOnce() -> [f64; 2],
+    hess: impl FnOnce() -> [[f64; 2]; 2],
+) -> f64 {
+    if (s1 - s2).abs() <= TWIST_LIMIT_GAP * (s1.abs() + s2.abs()) {
+        let h = hess();
+        h[0][0] - h[0][1]
+    } else {
+        let g = grad();
+        (g[0] - g[1]) / (s1 - s2)
+    }
+}
+
+/// The flip eigenvalue (Ψ1 + Ψ2)/(σ1 + σ2) from the gradient.
+pub fn flip_from(s1: f64, s2: f64, g: [f64; 2]) -> f64 {
+    (g[0] + g[1]) / (s1 + s2)
 }
 
 /// Duncan's isometric distortion δ2 = (σ1² + σ1⁻² + σ2² + σ2⁻² − 4)/2 (symmetric Dirichlet).
@@ -473,8 +511,9 @@ fn iso_tri_eval<E: IsoEnergy>(
     let f = r.jacobian(x);
     let s = svd2(f);
     let (s1, s2) = (s.s1, s.s2);
-    let energy = r.area * e.psi(s1, s2);
-    let g = e.grad(s1, s2);
+    let d = e.derivs(s1, s2);
+    let energy = r.area * d.psi;
+    let g = d.grad;
     // P = ∂Ψ/∂F = U diag(g) Vᵀ; ∂E/∂x_v = A · P g_v.
     let p = s.u * DMat2::from_diagonal(DVec2::new(g[0], g[1])) * s.v.transpose();
     let grad = [
@@ -484,7 +523,7 @@ fn iso_tri_eval<E: IsoEnergy>(
     ];
     let mut hess = [[0.0; 6]; 6];
     if let Some(proj) = proj {
-        let h = e.hess(s1, s2);
+        let h = d.hess;
         // Eigen-decomposition of the symmetric 2×2 scaling block.
         let (a, b, c) = (h[0][0], h[0][1], h[1][1]);
         let mean = 0.5 * (a + c);
@@ -510,11 +549,11 @@ fn iso_tri_eval<E: IsoEnergy>(
             (l1, s.u * DMat2::from_diagonal(ev1) * vt),
             (l2, s.u * DMat2::from_diagonal(ev2) * vt),
             (
-                e.twist(s1, s2),
+                d.twist,
                 s.u * DMat2::from_cols(DVec2::new(0.0, inv_sqrt2), DVec2::new(inv_sqrt2, 0.0)) * vt,
             ),
             (
-                e.flip(s1, s2),
+                d.flip,
                 s.u * DMat2::from_cols(DVec2::new(0.0, inv_sqrt2), DVec2::new(-inv_sqrt2, 0.0))
                     * vt,
             ),
