@@ -20,7 +20,9 @@
 //! 5. **Fewest.** When k₀ darts fail, k₀ + 1, … are tried; when they succeed, k₀ − 1, … are tried
 //!    while they succeed. The answer is the fewest darts that held the limits, each no longer
 //!    than the growth needed (so the total length is the smallest the growth steps resolve), and
-//!    every attempt is kept in [`Darted::attempts`].
+//!    every attempt is kept in [`Darted::attempts`]. The attempt the search will most likely
+//!    ask for next (one fewer after a success, one more after a failure) is computed alongside
+//!    the one it asks for, on the other core; the search and its answer are unchanged.
 //!
 //! Dart legs are kept at equal 2D lengths edge by edge in the final map ([`crate::solve`]).
 
