@@ -6,7 +6,8 @@
 //! multi-piece flattening with seam-length equalities is available to call, they are held by
 //! the solver's edge-length terms with a common target per pair, renewed from the map between
 //! rounds (the targets converge to the pairs' shared length). Swapping in another seam solver
-//! changes [`newton`] only.
+//! changes [`Solves::newton`] only. [`Solves`] keeps one analysed Newton problem per mesh for all
+//! the solves on it.
 
 use flatcut_flatten::nonlinear::kernel::{IsoEnergy, RestTri};
 use flatcut_flatten::nonlinear::newton::{self, Budget, EdgeTerms, MapProblem};
