@@ -2,7 +2,7 @@
 //! limits.
 //!
 //! A doubly curved piece cannot lie flat within a few percent of stretch; pattern makers cut
-//! darts (wedges from the outline to a point inside, sewn shut) or split the piece. [`place`]
+//! darts (wedges from the outline to a point inside, sewn shut) or split the piece. [`place()`]
 //! finds the fewest darts that let every face of the piece flatten within the limits, as short
 //! as the search resolves, and returns the cut piece flattened with the limits held as hard
 //! constraints ([`limits`]) and the two legs of every dart kept at equal 2D length edge by edge
