@@ -1,5 +1,6 @@
 //! Kernels of closed plane polygons (f64 mm, no repeated end point) used by more than one crate:
-//! containment, the area centroid and where a ray leaves. A few lines each, exact in their
+//! containment, the area centroid, where a ray leaves, segment crossings and the first
+//! self-crossing (the pattern's outlines and seam offsets, the darts' flat outlines). A few lines each, exact in their
 //! arithmetic, so written here rather than taken from a polygon library.
 
 use glam::DVec2;
@@ -62,6 +63,72 @@ pub fn ray_hit(poly: &[DVec2], o: DVec2, dir: DVec2) -> Option<RayHit> {
         }
     }
     best
+}
+
+/// Proper or touching intersection point of segments `a0a1` and `b0b1`, if any.
+pub fn seg_intersection(a0: DVec2, a1: DVec2, b0: DVec2, b1: DVec2) -> Option<DVec2> {
+    let r = a1 - a0;
+    let s = b1 - b0;
+    let den = r.perp_dot(s);
+    let qp = b0 - a0;
+    if den.abs() <= f64::EPSILON * r.length() * s.length() {
+        // Parallel: report an overlap of collinear segments as an intersection.
+        if qp.perp_dot(r).abs() > 1e-12 * (1.0 + r.length_squared()) {
+            return None;
+        }
+        let rr = r.length_squared();
+        if rr == 0.0 {
+            return None;
+        }
+        let t0 = qp.dot(r) / rr;
+        let t1 = (b1 - a0).dot(r) / rr;
+        let (lo, hi) = (t0.min(t1), t0.max(t1));
+        if hi < 0.0 || lo > 1.0 {
+            return None;
+        }
+        return Some(a0 + r * lo.max(0.0));
+    }
+    let t = qp.perp_dot(s) / den;
+    let u = qp.perp_dot(r) / den;
+    ((0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u)).then(|| a0 + r * t)
+}
+
+/// First pair of non-adjacent crossing edges of a closed polygon (edge i runs from vertex i to
+/// i+1), found with a sweep over x-sorted edge boxes: O(n log n + k).
+pub fn first_self_intersection(p: &[DVec2]) -> Option<(usize, usize, DVec2)> {
+    let n = p.len();
+    if n < 4 {
+        return None;
+    }
+    let mut order: Vec<usize> = (0..n).collect();
+    let lo = |i: usize| p[i].x.min(p[(i + 1) % n].x);
+    let hi = |i: usize| p[i].x.max(p[(i + 1) % n].x);
+    order.sort_by(|&a, &b| lo(a).total_cmp(&lo(b)).then(a.cmp(&b)));
+    let mut active: Vec<usize> = Vec::new();
+    let mut found: Option<(usize, usize, DVec2)> = None;
+    for &i in &order {
+        let x = lo(i);
+        active.retain(|&j| hi(j) >= x);
+        for &j in &active {
+            let adjacent = (i + 1) % n == j || (j + 1) % n == i;
+            if adjacent {
+                continue;
+            }
+            let (ylo_i, yhi_i) = (p[i].y.min(p[(i + 1) % n].y), p[i].y.max(p[(i + 1) % n].y));
+            let (ylo_j, yhi_j) = (p[j].y.min(p[(j + 1) % n].y), p[j].y.max(p[(j + 1) % n].y));
+            if yhi_i < ylo_j || yhi_j < ylo_i {
+                continue;
+            }
+            if let Some(x) = seg_intersection(p[i], p[(i + 1) % n], p[j], p[(j + 1) % n]) {
+                let (a, b) = (i.min(j), i.max(j));
+                if found.is_none_or(|(fa, fb, _)| (a, b) < (fa, fb)) {
+                    found = Some((a, b, x));
+                }
+            }
+        }
+        active.push(i);
+    }
+    found
 }
 
 #[cfg(test)]
