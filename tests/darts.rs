@@ -486,6 +486,61 @@ fn darts_bring_a_spherical_cap_within_the_limits_and_keep_out_of_a_no_cut_region
     }
 }
 
+/// The shoe toe at ±3 %: the fewest darts that hold the limits include two short ones the map
+/// closes past their mouths, so the flat outline overlaps itself there. That is no pattern: the
+/// run says so and writes nothing, and with `--split auto` the piece is split instead.
+#[test]
+fn darts_that_close_past_their_mouths_are_refused_not_written() {
+    let Some(toe) = bench_mesh("toe_2k") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let flat = dir.path().join("flat.obj");
+    let args = |split: bool| {
+        let mut a = vec![
+            "flatcut".to_string(),
+            "flatten".into(),
+            toe.to_str().unwrap().into(),
+            "--max-stretch".into(),
+            "3".into(),
+            "--max-compress".into(),
+            "3".into(),
+            "--darts".into(),
+            "auto".into(),
+            "-o".into(),
+            flat.to_str().unwrap().into(),
+        ];
+        if split {
+            a.extend(["--split".into(), "auto".into()]);
+        }
+        a
+    };
+    let result = flatcut_cli::run(flatcut_cli::Cli::try_parse_from(args(false)).unwrap());
+    let text = match &result {
+        Ok(code) => panic!("an overlapping flat piece was accepted: {code:?}"),
+        Err(e) => format!("{e:#}"),
+    };
+    assert!(text.contains("overlaps itself"), "{text}");
+    assert_eq!(
+        format!("{:?}", flatcut_cli::exit_code(result)),
+        format!(
+            "{:?}",
+            std::process::ExitCode::from(flatcut_cli::EXIT_LIMIT)
+        )
+    );
+    assert!(
+        !flat.exists(),
+        "nothing is written for an overlapping piece"
+    );
+    let split = flatcut_cli::run(flatcut_cli::Cli::try_parse_from(args(true)).unwrap());
+    assert!(split.is_ok(), "{split:?}");
+    let parts = split_parts(dir.path(), "flat-toe_2k_mm");
+    assert!(parts.len() >= 2, "{} parts", parts.len());
+    for part in &parts {
+        assert_outline_simple(part);
+    }
+}
+
 #[test]
 fn limits_no_dart_can_meet_exit_3_and_say_what_was_reached() {
     let Some(cap) = bench_mesh("sphcap_a100_2k") else {

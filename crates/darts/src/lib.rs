@@ -214,6 +214,13 @@ pub enum DartError {
         at: DVec3,
         reason: String,
     },
+    /// The darts that hold the limits close past their mouths: the flat outline overlaps itself,
+    /// and no pattern can be cut from it.
+    #[error(
+        "the darts that bring the piece within the limits ({darts} of them) close past their mouths: the flat piece overlaps itself near ({:.2}, {:.2}, {:.2})",
+        at.x, at.y, at.z
+    )]
+    Overlap { darts: usize, at: DVec3 },
     #[error("internal error (please report): {0}")]
     Internal(String),
 }

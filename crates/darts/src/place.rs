@@ -28,6 +28,7 @@
 
 use flatcut_flatten::nonlinear::kernel::rest_frames;
 use flatcut_flatten::{FlattenParams, Method, flatten};
+use flatcut_geom::polygon::first_self_intersection;
 use flatcut_geom::{DVec2, DVec3};
 use flatcut_mesh::{Topology, TriMesh, check_disk};
 
@@ -280,19 +281,21 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             }
         }
     }
-    // The shortest total length that held; the fewer darts on a tie.
-    let best_ok = outcomes
-        .iter()
-        .enumerate()
-        .filter(|(_, o)| o.held.feasible)
-        .min_by(|(_, a), (_, b)| {
-            a.total_length()
-                .total_cmp(&b.total_length())
-                .then(a.darts.len().cmp(&b.darts.len()))
-        })
-        .map(|(i, _)| i);
-    if let Some(i) = best_ok {
-        let o = outcomes.swap_remove(i);
+    // The shortest total length that held, the fewer darts on a tie, whose flat outline does not
+    // overlap itself: a dart the limits hardly need can close past its mouth in the final map
+    // (the outline on its two sides crossing), and no pattern can be cut from that.
+    let mut held_ok: Vec<usize> = (0..outcomes.len())
+        .filter(|&i| outcomes[i].held.feasible)
+        .collect();
+    held_ok.sort_by(|&a, &b| {
+        let (a, b) = (&outcomes[a], &outcomes[b]);
+        a.total_length()
+            .total_cmp(&b.total_length())
+            .then(a.darts.len().cmp(&b.darts.len()))
+    });
+    let mut overlap: Option<DartError> = None;
+    for i in held_ok {
+        let o = &outcomes[i];
         let legs: Vec<Legs> = o.darts.iter().map(|(_, l)| l.clone()).collect();
         let t0 = std::time::Instant::now();
         let settled = limits::settle(&o.cut.mesh, &o.held.x, band, &all_pairs(&legs))?;
@@ -301,6 +304,17 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             settled.iterations,
             t0.elapsed().as_secs_f64()
         ));
+        if let Some(at) = outline_overlap(&o.cut.mesh, &settled.x)? {
+            debug(&format!(
+                "{} darts: the flat outline overlaps itself",
+                o.darts.len()
+            ));
+            overlap.get_or_insert(DartError::Overlap {
+                darts: o.darts.len(),
+                at,
+            });
+            continue;
+        }
         return Ok(finish(
             &o.emb.mesh,
             &o.cut,
@@ -309,6 +323,9 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             attempts,
             opts.drill_offset_mm,
         ));
+    }
+    if let Some(e) = overlap {
+        return Err(e);
     }
     let closest = outcomes
         .iter()
@@ -334,6 +351,28 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             },
         },
     })
+}
+
+/// Where the flat outline of `mesh` in the map `x` crosses itself (the 3D position of the
+/// boundary vertex nearest the first crossing), or `None` when every boundary loop is simple.
+fn outline_overlap(mesh: &TriMesh, x: &[DVec2]) -> Result<Option<DVec3>, DartError> {
+    let topo = Topology::build(mesh)?;
+    for l in &topo.boundary_loops {
+        let pts: Vec<DVec2> = l.iter().map(|&v| x[v as usize]).collect();
+        if let Some((_, _, p)) = first_self_intersection(&pts) {
+            let nearest = l
+                .iter()
+                .min_by(|&&a, &&b| {
+                    x[a as usize]
+                        .distance_squared(p)
+                        .total_cmp(&x[b as usize].distance_squared(p))
+                })
+                .copied()
+                .unwrap_or(0);
+            return Ok(Some(mesh.positions[nearest as usize]));
+        }
+    }
+    Ok(None)
 }
 
 fn debug(msg: &str) {

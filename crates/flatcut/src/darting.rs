@@ -161,7 +161,7 @@ pub fn is_out_of_limits(e: &PipelineError) -> bool {
     matches!(
         e,
         PipelineError::Darts {
-            source: DartError::Infeasible { .. },
+            source: DartError::Infeasible { .. } | DartError::Overlap { .. },
             ..
         }
     )
