@@ -35,7 +35,7 @@ use flatcut_mesh::{Topology, TriMesh, check_disk};
 use crate::cut::{CutMesh, Legs, all_pairs};
 use crate::embed::{Embedded, embed, transfer};
 use crate::keepout::KeepOut;
-use crate::limits::{self, Effort, Held};
+use crate::limits::{self, Band, Effort, Held};
 use crate::relaxed::{Yield, face_opening, rim_demand};
 use crate::solve;
 use crate::trace::{Adjacency, Geodesic, inward_direction, trace};
@@ -47,6 +47,9 @@ use crate::{Attempt, Dart, DartError, DartOptions, Darted};
 /// held opened 0.61–0.64 mm per mm of rule length: with 1.75 the first count tried is the
 /// fewest that held on each of them.
 pub const CURVED_LEGS: f64 = 1.75;
+/// Counts above the largest tried that the search goes on to when every count that held closes
+/// a dart past its mouth.
+const OVERLAP_MORE_DARTS: usize = 3;
 /// Fraction of the rule length a dart first reaches.
 pub const FIRST_REACH: f64 = 1.0;
 /// Fraction of its length a dart grows by when the limits are exceeded next to its point.
@@ -296,33 +299,51 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
     let mut overlap: Option<DartError> = None;
     for i in held_ok {
         let o = &outcomes[i];
-        let legs: Vec<Legs> = o.darts.iter().map(|(_, l)| l.clone()).collect();
-        let t0 = std::time::Instant::now();
-        let settled = limits::settle(&o.cut.mesh, &o.held.x, band, &all_pairs(&legs))?;
-        debug(&format!(
-            "settle: {} iterations, {:.2} s",
-            settled.iterations,
-            t0.elapsed().as_secs_f64()
-        ));
-        if let Some(at) = outline_overlap(&o.cut.mesh, &settled.x)? {
-            debug(&format!(
-                "{} darts: the flat outline overlaps itself",
-                o.darts.len()
-            ));
-            overlap.get_or_insert(DartError::Overlap {
-                darts: o.darts.len(),
-                at,
-            });
-            continue;
+        match settle_simple(o, band)? {
+            Ok(settled) => {
+                return Ok(finish(
+                    &o.emb.mesh,
+                    &o.cut,
+                    &o.darts,
+                    settled,
+                    attempts,
+                    opts.drill_offset_mm,
+                ));
+            }
+            Err(e) => {
+                overlap.get_or_insert(e);
+            }
         }
-        return Ok(finish(
-            &o.emb.mesh,
-            &o.cut,
-            &o.darts,
-            settled,
-            attempts,
-            opts.drill_offset_mm,
-        ));
+    }
+    // Every count that held closes a dart past its mouth: more darts, each needed less, may not.
+    if overlap.is_some() {
+        let tried = attempts.iter().map(|a| a.darts).max().unwrap_or(0);
+        for k in (tried + 1..=k_cap).take(OVERLAP_MORE_DARTS) {
+            let o = match piece.attempt(k) {
+                Ok(o) => o,
+                Err(DartError::Placement(_)) => break,
+                Err(e) => return Err(e),
+            };
+            attempts.push(Attempt {
+                darts: k,
+                total_length_mm: o.total_length(),
+                excess: o.held.excess,
+                feasible: o.held.feasible,
+            });
+            if !o.held.feasible {
+                continue;
+            }
+            if let Ok(settled) = settle_simple(&o, band)? {
+                return Ok(finish(
+                    &o.emb.mesh,
+                    &o.cut,
+                    &o.darts,
+                    settled,
+                    attempts,
+                    opts.drill_offset_mm,
+                ));
+            }
+        }
     }
     if let Some(e) = overlap {
         return Err(e);
@@ -373,6 +394,32 @@ fn outline_overlap(mesh: &TriMesh, x: &[DVec2]) -> Result<Option<DVec3>, DartErr
         }
     }
     Ok(None)
+}
+
+/// The final map of an outcome that held the limits (legs paired, least δ2 within the limits),
+/// or [`DartError::Overlap`] when its flat outline crosses itself.
+fn settle_simple(o: &Outcome, band: Band) -> Result<Result<Held, DartError>, DartError> {
+    let legs: Vec<Legs> = o.darts.iter().map(|(_, l)| l.clone()).collect();
+    let t0 = std::time::Instant::now();
+    let settled = limits::settle(&o.cut.mesh, &o.held.x, band, &all_pairs(&legs))?;
+    debug(&format!(
+        "settle: {} iterations, {:.2} s",
+        settled.iterations,
+        t0.elapsed().as_secs_f64()
+    ));
+    Ok(match outline_overlap(&o.cut.mesh, &settled.x)? {
+        Some(at) => {
+            debug(&format!(
+                "{} darts: the flat outline overlaps itself",
+                o.darts.len()
+            ));
+            Err(DartError::Overlap {
+                darts: o.darts.len(),
+                at,
+            })
+        }
+        None => Ok(settled),
+    })
 }
 
 fn debug(msg: &str) {
