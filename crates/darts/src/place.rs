@@ -297,18 +297,12 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             .then(a.darts.len().cmp(&b.darts.len()))
     });
     let mut overlap: Option<DartError> = None;
+    let mut chosen: Option<(usize, Held)> = None;
     for i in held_ok {
-        let o = &outcomes[i];
-        match settle_simple(o, band)? {
+        match settle_simple(&outcomes[i], band)? {
             Ok(settled) => {
-                return Ok(finish(
-                    &o.emb.mesh,
-                    &o.cut,
-                    &o.darts,
-                    settled,
-                    attempts,
-                    opts.drill_offset_mm,
-                ));
+                chosen = Some((i, settled));
+                break;
             }
             Err(e) => {
                 overlap.get_or_insert(e);
@@ -316,7 +310,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
         }
     }
     // Every count that held closes a dart past its mouth: more darts, each needed less, may not.
-    if overlap.is_some() {
+    if chosen.is_none() && overlap.is_some() {
         let tried = attempts.iter().map(|a| a.darts).max().unwrap_or(0);
         for k in (tried + 1..=k_cap).take(OVERLAP_MORE_DARTS) {
             let o = match piece.attempt(k) {
@@ -333,17 +327,24 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             if !o.held.feasible {
                 continue;
             }
-            if let Ok(settled) = settle_simple(&o, band)? {
-                return Ok(finish(
-                    &o.emb.mesh,
-                    &o.cut,
-                    &o.darts,
-                    settled,
-                    attempts,
-                    opts.drill_offset_mm,
-                ));
+            outcomes.push(o);
+            let i = outcomes.len() - 1;
+            if let Ok(settled) = settle_simple(&outcomes[i], band)? {
+                chosen = Some((i, settled));
+                break;
             }
         }
+    }
+    if let Some((i, settled)) = chosen {
+        let o = &outcomes[i];
+        return Ok(finish(
+            &o.emb.mesh,
+            &o.cut,
+            &o.darts,
+            settled,
+            attempts,
+            opts.drill_offset_mm,
+        ));
     }
     if let Some(e) = overlap {
         return Err(e);
