@@ -76,12 +76,11 @@ impl<'a> Solves<'a> {
         pairs: Option<&EdgePairs>,
         rel: f64,
     ) -> Result<Run, String> {
-        let area: f64 = self.rest.iter().map(|r| r.area).sum();
-        let abs = ABS_DECREMENT_PER_AREA * area;
         let mut problem = match self.problem.take() {
             Some(p) => p.with_energy(energy),
             None => MapProblem::new(self.rest, self.n, energy, None)?,
         };
+        let abs = ABS_DECREMENT_PER_AREA * problem.total_area;
         let pairs = pairs.filter(|p| !p.pairs.is_empty());
         let Some(pairs) = pairs else {
             let (r, p) = newton::run(
