@@ -422,6 +422,48 @@ fn darts_bring_the_shoe_toe_within_five_percent_stretch_and_two_compression() {
 }
 
 #[test]
+fn darts_for_a_material_hold_its_limits_in_every_direction() {
+    // `--material` alone gives the limits: leather's tightest (3 % stretch along the backbone,
+    // 0.5 % compression) bound the principal stretches, and so every thread's.
+    let Some(cap) = bench_mesh("sphcap_a100_2k") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let flat = dir.path().join("flat.obj");
+    let report = dir.path().join("r.json");
+    let code = run_cli(&[
+        "flatten",
+        cap.to_str().unwrap(),
+        "--material",
+        "leather",
+        "--darts",
+        "auto",
+        "-o",
+        flat.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        format!("{code:?}"),
+        format!("{:?}", std::process::ExitCode::SUCCESS)
+    );
+    check_darted(&cap, &flat, &report, 3.0, 0.5);
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(r["faces_over_material_limits"], 0, "{r}");
+    for d in ["along", "across", "bias"] {
+        for (got, limit) in [
+            ("stretch_max_pct", "limit_stretch_pct"),
+            ("compress_max_pct", "limit_compress_pct"),
+        ] {
+            let g = r[format!("{got}_{d}")].as_f64().unwrap();
+            let l = r[format!("{limit}_{d}")].as_f64().unwrap();
+            assert!(g <= l + LIMIT_SLACK, "{got}_{d} {g} beyond {l}");
+        }
+    }
+}
+
+#[test]
 fn darts_bring_a_spherical_cap_within_the_limits_and_keep_out_of_a_no_cut_region() {
     let Some(cap) = bench_mesh("sphcap_a100_2k") else {
         return;
@@ -687,6 +729,7 @@ fn split_without_limits_is_refused() {
     .unwrap();
     let text = format!("{:#}", flatcut_cli::run(cli).expect_err("refused"));
     assert!(text.contains("--split auto needs --max-stretch"), "{text}");
+    assert!(text.contains("or --material"), "{text}");
     assert!(!flat.exists());
 }
 

@@ -163,14 +163,21 @@ impl FlattenArgs {
         Ok(p)
     }
 
+    /// True when the command line gives limits: a stretch or compression limit, or a material
+    /// (darts and splits for it hold the tightest of its limits along, across and on the bias,
+    /// [`flatcut::material::dart_params`], and so all of them).
+    fn has_limits(&self) -> bool {
+        self.max_stretch.is_some() || self.max_compress.is_some() || self.material.is_some()
+    }
+
     /// The dart settings when darts are asked for on the command line.
     pub fn darts(&self) -> anyhow::Result<Option<DartSettings>> {
         if self.darts != Some(DartMode::Auto) {
             return Ok(None);
         }
         anyhow::ensure!(
-            self.max_stretch.is_some() || self.max_compress.is_some(),
-            "--darts auto needs --max-stretch and/or --max-compress: the limits the darts are for"
+            self.has_limits(),
+            "--darts auto needs --max-stretch and/or --max-compress, or --material: the limits the darts are for"
         );
         Ok(Some(DartSettings {
             max_darts: self.max_darts,
@@ -185,8 +192,8 @@ impl FlattenArgs {
             return Ok(None);
         }
         anyhow::ensure!(
-            self.max_stretch.is_some() || self.max_compress.is_some(),
-            "--split auto needs --max-stretch and/or --max-compress: the limits the parts are for"
+            self.has_limits(),
+            "--split auto needs --max-stretch and/or --max-compress, or --material: the limits the parts are for"
         );
         Ok(Some(SplitSettings {
             max_pieces: self.max_pieces,
