@@ -28,7 +28,9 @@
 use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
-use super::kernel::{GREEN_CONCAVE_BELOW, GuardedGreen, RestTri, SymDirichlet, singular_values};
+use super::kernel::{
+    GREEN_CONCAVE_BELOW, GuardShape, GuardedGreen, RestTri, SymDirichlet, singular_values,
+};
 use super::newton::{Budget, EarlyStop, EdgeTerms, MapProblem, run};
 use super::{ABS_DECREMENT_PER_AREA, mean_density, newton_solve, time_limit_warning, total_area};
 use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
@@ -140,6 +142,7 @@ pub fn boundary_isometric(
         floor: GREEN_CONCAVE_BELOW,
         collapse: DEGENERATE_STRETCH.min(START_COLLAPSE_FRACTION * start_min),
         k: GUARD_STIFFNESS,
+        shape: GuardShape::Quadratic,
     };
     let terms = EdgeTerms {
         lambda: vec![0.0; edges.len()],

@@ -286,13 +286,13 @@ impl IsoEnergy for GreenStrain {
 /// the interior collapses a few triangles instead of compressing many.
 pub const GREEN_CONCAVE_BELOW: f64 = 0.577_350_269_189_625_8;
 
-/// Duncan's Green–Lagrange deviation with a collapse guard: [`GreenStrain`] plus
-/// k·((f − c)/(σ − c) − 1)² on each principal stretch σ below the floor f (zero above it, C¹
-/// at f, +∞ as σ → c). With f = [`GREEN_CONCAVE_BELOW`] and k ≥ 2/3 the guarded term is convex
-/// in each σ below f (the guard's second derivative is at least 2k/(f − c)² ≥ 6k there, the
-/// Green term's at least −4), so compression spreads instead of localising, and no stretch can
-/// reach c: the smallest admissible stretch. Maps whose stretches all stay above f are scored
-/// exactly as by Duncan's energy.
+/// Duncan's Green–Lagrange deviation with a collapse guard: [`GreenStrain`] plus a guard on each
+/// principal stretch σ below the floor f, a power of u = (f − c)/(σ − c) − 1 ([`GuardShape`]):
+/// zero above f, +∞ as σ → c. With f ≥ [`GREEN_CONCAVE_BELOW`] and k ≥ 2/3 the guarded term is
+/// convex in each σ below f (the guard's second derivative outgrows the Green term's, which is
+/// at least −4), so compression spreads instead of localising, and no stretch can reach c: the
+/// smallest admissible stretch. Maps whose stretches all stay above f are scored exactly as by
+/// Duncan's energy.
 #[derive(Clone, Copy, Debug)]
 pub struct GuardedGreen {
     /// Stretch floor f below which the guard acts.
@@ -301,33 +301,61 @@ pub struct GuardedGreen {
     pub collapse: f64,
     /// Guard stiffness k (dimensionless, relative to the Green–Lagrange density).
     pub k: f64,
+    /// How the guard starts at the floor.
+    pub shape: GuardShape,
+}
+
+/// How a [`GuardedGreen`]'s guard starts at its floor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GuardShape {
+    /// k·u²: its slope is continuous at the floor, its curvature jumps there from 0 to
+    /// 2k/(f − c)².
+    Quadratic,
+    /// k·u³: slope and curvature continuous at the floor. Placed where the Green term is still
+    /// convex (f > 1/√3), it makes the guarded term's curvature in σ continuous and positive
+    /// everywhere, which a Newton solve needs to converge fast where many stretches sit near the
+    /// floor (a jump in curvature there makes the steps alternate between too long and too
+    /// short).
+    Cubic,
 }
 
 impl GuardedGreen {
+    /// u = (f − c)/(σ − c) − 1 and its first two derivatives in σ.
+    fn u(&self, s: f64) -> (f64, f64, f64) {
+        let (w, d) = (self.floor - self.collapse, s - self.collapse);
+        (w / d - 1.0, -w / (d * d), 2.0 * w / (d * d * d))
+    }
+
     /// The guard on one principal stretch (its derivatives below).
     pub(crate) fn b(&self, s: f64) -> f64 {
         if s >= self.floor {
             return 0.0;
         }
-        let u = (self.floor - self.collapse) / (s - self.collapse) - 1.0;
-        self.k * u * u
+        let (u, _, _) = self.u(s);
+        match self.shape {
+            GuardShape::Quadratic => self.k * u * u,
+            GuardShape::Cubic => self.k * u * u * u,
+        }
     }
     pub(crate) fn db(&self, s: f64) -> f64 {
         if s >= self.floor {
             return 0.0;
         }
-        let (w, d) = (self.floor - self.collapse, s - self.collapse);
-        let u = w / d - 1.0;
-        -2.0 * self.k * u * w / (d * d)
+        let (u, du, _) = self.u(s);
+        match self.shape {
+            GuardShape::Quadratic => 2.0 * self.k * u * du,
+            GuardShape::Cubic => 3.0 * self.k * u * u * du,
+        }
     }
     pub(crate) fn d2b(&self, s: f64) -> f64 {
         if s >= self.floor {
             return 0.0;
         }
-        let (w, d) = (self.floor - self.collapse, s - self.collapse);
-        let u = w / d - 1.0;
-        let du = -w / (d * d);
-        2.0 * self.k * (du * du + u * 2.0 * w / (d * d * d))
+        let (u, du, d2u) = self.u(s);
+        match self.shape {
+            GuardShape::Quadratic => 2.0 * self.k * (du * du + u * d2u),
+            GuardShape::Cubic => 3.0 * self.k * u * (2.0 * du * du + u * d2u),
+        }
     }
 }
 
@@ -726,21 +754,16 @@ pub(crate) mod tests {
     fn guarded_green_derivatives_match_finite_differences() {
         // Floor above the test map's stretches (≈ 1.1–1.4), so the guard is active in both
         // directions and its derivatives are checked too.
-        check_fd(&GuardedGreen {
-            floor: 1.6,
-            collapse: 0.0,
-            k: 1.0,
-        });
-        check_fd(&GuardedGreen {
-            floor: 1.6,
-            collapse: 0.5,
-            k: 1.0,
-        });
-        check_fd(&GuardedGreen {
-            floor: GREEN_CONCAVE_BELOW,
-            collapse: 0.2,
-            k: 1.0,
-        });
+        for shape in [GuardShape::Quadratic, GuardShape::Cubic] {
+            for (floor, collapse) in [(1.6, 0.0), (1.6, 0.5), (GREEN_CONCAVE_BELOW, 0.2)] {
+                check_fd(&GuardedGreen {
+                    floor,
+                    collapse,
+                    k: 1.0,
+                    shape,
+                });
+            }
+        }
     }
 
     #[test]
@@ -750,6 +773,7 @@ pub(crate) mod tests {
             floor: GREEN_CONCAVE_BELOW,
             collapse: c,
             k: 1.0,
+            shape: GuardShape::Quadratic,
         };
         assert_eq!(g.psi(1.2, 0.8), GreenStrain.psi(1.2, 0.8));
         assert!(g.psi(1.0, c + 1e-3) > 1e4);
@@ -759,6 +783,31 @@ pub(crate) mod tests {
         for i in 1..100 {
             let s = c + (GREEN_CONCAVE_BELOW - c) * i as f64 / 100.0;
             assert!(g.hess(1.0, s)[1][1] > 0.0, "σ2 = {s}");
+        }
+    }
+
+    #[test]
+    fn a_cubic_guard_above_the_inflection_keeps_the_curvature_continuous_and_positive() {
+        // The second derivative in σ of (σ² − 1)² plus the guard, for every collapse stretch the
+        // boundary-isometric method may choose (0 to 0.2), from just above c to well above f.
+        let floor = 0.7;
+        for c in [0.0, 0.05, 0.1, 0.2] {
+            let g = GuardedGreen {
+                floor,
+                collapse: c,
+                k: 1.0,
+                shape: GuardShape::Cubic,
+            };
+            let curvature = |s: f64| g.hess(1.0, s)[1][1];
+            for i in 1..=400 {
+                let s = c + (1.5 - c) * i as f64 / 400.0;
+                assert!(curvature(s) > 0.0, "c = {c}, σ = {s}: {}", curvature(s));
+            }
+            // Continuous at the floor: Green's 12f² − 4 from both sides.
+            let (below, above) = (curvature(floor - 1e-9), curvature(floor + 1e-9));
+            assert!((below - above).abs() < 1e-6, "{below} {above}");
+            assert!((above - (12.0 * floor * floor - 4.0)).abs() < 1e-6);
+            assert_eq!(g.psi(1.0, 0.9), GreenStrain.psi(1.0, 0.9));
         }
     }
 

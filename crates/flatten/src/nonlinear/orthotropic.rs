@@ -26,8 +26,8 @@ use flatcut_geom::{DMat2, DVec2};
 use nalgebra::{Matrix4, SymmetricEigen};
 
 use super::kernel::{
-    GREEN_CONCAVE_BELOW, GuardedGreen, IsoEnergy, Projection, RestTri, TriEnergy, TriEval,
-    tri_eval_projected,
+    GREEN_CONCAVE_BELOW, GuardShape, GuardedGreen, IsoEnergy, Projection, RestTri, TriEnergy,
+    TriEval, tri_eval_projected,
 };
 use crate::anisotropy::Stiffness;
 
@@ -46,6 +46,7 @@ impl Orthotropic {
                 floor: GREEN_CONCAVE_BELOW,
                 collapse: 0.0,
                 k: k.along.max(k.across).max(k.shear),
+                shape: GuardShape::Quadratic,
             }),
         }
     }
