@@ -110,6 +110,7 @@ impl<'a> Solves<'a> {
                 lambda: vec![0.0; edges.len()],
                 edges,
                 weight: PAIR_WEIGHT,
+                hold: None,
             };
             let (r, p) = newton::run(
                 problem.with_edges(Some(terms)),

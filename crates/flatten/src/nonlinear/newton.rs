@@ -55,8 +55,16 @@ const RAW_BELOW: f64 = 1e-3;
 /// mannequin).
 const CHORD_FAST: f64 = 0.1;
 
-/// A boundary-length term for the augmented Lagrangian of the boundary-isometric method:
-/// L²·(λ c + w c²/2) with c = (|x_b − x_a|² − L²)/L².
+/// Relative rise of a total energy that is within its round-off (a sum of up to millions of
+/// terms in double precision).
+const ROUND_OFF_REL: f64 = 1e-12;
+/// Factor by which one Newton step must shrink the largest error of held lengths to count as
+/// progress on them ([`EdgeTerms::hold`]).
+const HOLD_PROGRESS: f64 = 0.9;
+
+/// Edge-length terms of an augmented Lagrangian, L²·(λ c + w c²/2) with
+/// c = (|x_b − x_a|² − L²)/L²: the boundary-isometric method holds its boundary with them, the
+/// darts pull their legs to equal lengths.
 #[derive(Clone, Debug)]
 pub struct EdgeTerms {
     /// (a, b, rest length L).
@@ -65,6 +73,11 @@ pub struct EdgeTerms {
     pub lambda: Vec<f64>,
     /// Penalty weight w.
     pub weight: f64,
+    /// Lengths held as constraints to this largest relative error |ℓ − L|/L: the multipliers
+    /// then move with every Newton step ([`EdgeTerms::follow`]), and the solve does not stop on
+    /// a small decrease while the lengths are further off and still coming closer. `None`: the
+    /// multipliers stay as given (a penalty solve).
+    pub hold: Option<f64>,
 }
 
 impl EdgeTerms {
@@ -72,6 +85,29 @@ impl EdgeTerms {
     pub fn constraint(&self, e: usize, x: &[DVec2]) -> f64 {
         let (a, b, l) = self.edges[e];
         ((x[b] - x[a]).length_squared() - l * l) / (l * l)
+    }
+
+    /// Largest relative length error |ℓ − L|/L.
+    pub fn max_rel_error(&self, x: &[DVec2]) -> f64 {
+        self.edges
+            .iter()
+            .map(|&(a, b, l)| ((x[b] - x[a]).length() - l).abs() / l)
+            .fold(0.0, f64::max)
+    }
+
+    /// Moves the multipliers with a Newton step `d` taken with length `t` from `x`. The Newton
+    /// step of the augmented Lagrangian solves the equality-constrained problem's KKT system
+    /// with the constraint rows regularised by 1/w, whose multipliers are λ + w (c + ∇c·d): the
+    /// step of sequential quadratic programming (Nocedal & Wright §17.3, §18.1). Taking them
+    /// with the step lets the lengths converge with the map, where a multiplier update per
+    /// converged solve needs a tenfold weight or a whole solve for each digit.
+    fn follow(&mut self, x: &[DVec2], d: &[DVec2], t: f64) {
+        for k in 0..self.edges.len() {
+            let (a, b, l) = self.edges[k];
+            let linear = 2.0 * (x[b] - x[a]).dot(d[b] - d[a]) / (l * l);
+            let target = self.lambda[k] + self.weight * (self.constraint(k, x) + linear);
+            self.lambda[k] += t.min(1.0) * (target - self.lambda[k]);
+        }
     }
     fn energy(&self, x: &[DVec2]) -> f64 {
         let mut s = 0.0;
@@ -414,6 +450,9 @@ pub struct ProjectedNewton {
     budget: Budget,
     max_iters: usize,
     early: Option<EarlyStop>,
+    /// False while held edge lengths ([`EdgeTerms::hold`]) are off by more than asked and the
+    /// last step brought them closer: the solve may not stop on a small decrease then.
+    settled_lengths: bool,
 }
 
 impl ProjectedNewton {
@@ -429,7 +468,33 @@ impl ProjectedNewton {
             budget,
             max_iters,
             early: None,
+            settled_lengths: true,
         }
+    }
+
+    /// The step taken where the line search saw no decrease while held lengths are off by more
+    /// than asked: once the map has converged, the energy the lengths still change is below the
+    /// round-off of the total, and no decrease can be seen. The full step (short of an
+    /// inversion) is taken if it brings the lengths closer without a rise beyond that round-off.
+    fn round_off_step<E: TriEnergy>(
+        &self,
+        p: &MapProblem<'_, E>,
+        x: &[DVec2],
+        d: &[DVec2],
+        e0: f64,
+        tmax: f64,
+    ) -> Option<(f64, Vec<DVec2>, f64)> {
+        let e = p.edges.as_ref()?;
+        let hold = e.hold?;
+        let before = e.max_rel_error(x);
+        if before <= hold {
+            return None;
+        }
+        let t = (INVERSION_STEP_FRACTION * tmax).min(1.0);
+        let xn: Vec<DVec2> = x.iter().zip(d).map(|(a, b)| *a + t * *b).collect();
+        let en = p.total_energy(&xn);
+        let flat = en.is_finite() && en - e0 <= ROUND_OFF_REL * e0.abs();
+        (flat && e.max_rel_error(&xn) < before).then_some((t, xn, en))
     }
 }
 
@@ -496,9 +561,11 @@ impl<E: TriEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
         }
         let d = to_points(&dir);
         let tmax = p.max_step(&x, &d);
-        let found = line_search(p, &x, &d, e0, gd, tmax);
+        let found = line_search(p, &x, &d, e0, gd, tmax)
+            .filter(|f| f.2 < e0)
+            .or_else(|| self.round_off_step(p, &x, &d, e0, tmax));
         self.last_decrement = -0.5 * gd;
-        let Some((t, mut xn, mut en)) = found.filter(|f| f.2 < e0) else {
+        let Some((t, mut xn, mut en)) = found else {
             self.stalled = true;
             return Ok((state.param(xf).cost(e0), None));
         };
@@ -511,6 +578,16 @@ impl<E: TriEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
             "newton step"
         );
         self.last_decrease = e0 - en;
+        let held_before = p
+            .edges
+            .as_ref()
+            .and_then(|e| e.hold.map(|_| e.max_rel_error(&x)));
+        if let Some(e) = p.edges.as_mut().filter(|e| e.hold.is_some()) {
+            // The decrease above was measured with the old multipliers; the energy carried on
+            // is the new ones'.
+            e.follow(&x, &d, t);
+            en = p.total_energy(&xn);
+        }
         // In the tail the factorisation just used still inverts the Hessian well after a full
         // step: the chord step it gives (gradient at the new map, old factor) is nearly a Newton
         // step for the price of a gradient. It is taken where its decrement, which predicts the
@@ -525,6 +602,10 @@ impl<E: TriEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
                 self.last_decrease = e0 - en;
                 self.converged = c.decrement <= tolerance;
             }
+        }
+        if let (Some(e), Some(before)) = (&p.edges, held_before) {
+            let now = e.max_rel_error(&xn);
+            self.settled_lengths = e.hold.is_none_or(|h| now <= h) || now > HOLD_PROGRESS * before;
         }
         // The quadratic model predicts a decrease of −t g·d (1 − t/2) along the Newton step
         // (dᵀHd = −g·d); where it is met, the model is trusted and the next step clamps.
@@ -551,7 +632,7 @@ impl<E: TriEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
     }
 
     fn terminate(&mut self, state: &NState) -> TerminationStatus {
-        if self.stalled || self.converged {
+        if self.stalled || (self.converged && self.settled_lengths) {
             return TerminationStatus::Terminated(TerminationReason::SolverConverged);
         }
         if self.budget.hooks.cancelled() {
@@ -568,6 +649,7 @@ impl<E: TriEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
         }
         let e = state.get_cost();
         if state.get_iter() > 0
+            && self.settled_lengths
             && (self.last_decrease <= self.rel_tolerance * e.abs()
                 || self.last_decrement <= self.abs_tolerance)
         {
