@@ -383,15 +383,19 @@ fn flatten_darts_within(
     (stretch, compress): (&str, &str),
     extra: &[&str],
 ) -> (PathBuf, PathBuf) {
+    let mut args = vec!["--max-stretch", stretch, "--max-compress", compress];
+    args.extend_from_slice(extra);
+    flatten_darted(input, out, &args)
+}
+
+/// `flatten --darts auto` with `args` (the limits among them), which must succeed; the flat OBJ
+/// and the report.
+fn flatten_darted(input: &Path, out: &Path, args: &[&str]) -> (PathBuf, PathBuf) {
     let flat = out.join("flat.obj");
     let report = out.join("r.json");
-    let mut args = vec![
+    let mut all = vec![
         "flatten",
         input.to_str().unwrap(),
-        "--max-stretch",
-        stretch,
-        "--max-compress",
-        compress,
         "--darts",
         "auto",
         "-o",
@@ -399,8 +403,8 @@ fn flatten_darts_within(
         "--report",
         report.to_str().unwrap(),
     ];
-    args.extend_from_slice(extra);
-    let code = run_cli(&args);
+    all.extend_from_slice(args);
+    let code = run_cli(&all);
     assert_eq!(
         format!("{code:?}"),
         format!("{:?}", std::process::ExitCode::SUCCESS)
@@ -429,24 +433,7 @@ fn darts_for_a_material_hold_its_limits_in_every_direction() {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
-    let flat = dir.path().join("flat.obj");
-    let report = dir.path().join("r.json");
-    let code = run_cli(&[
-        "flatten",
-        cap.to_str().unwrap(),
-        "--material",
-        "leather",
-        "--darts",
-        "auto",
-        "-o",
-        flat.to_str().unwrap(),
-        "--report",
-        report.to_str().unwrap(),
-    ]);
-    assert_eq!(
-        format!("{code:?}"),
-        format!("{:?}", std::process::ExitCode::SUCCESS)
-    );
+    let (flat, report) = flatten_darted(&cap, dir.path(), &["--material", "leather"]);
     check_darted(&cap, &flat, &report, 3.0, 0.5);
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
