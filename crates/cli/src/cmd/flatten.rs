@@ -37,6 +37,8 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             .unwrap_or_else(|| "mesh".into());
         let (params, bar) = common::with_progress_bar(a.flatten.params()?);
         let material = a.flatten.material()?;
+        // Checked before the solve: darts without limits are refused at once, not after it.
+        let settings = a.flatten.darts()?;
         eprintln!(
             "flattening '{name}' ({} faces) with {}",
             mesh.triangles.len(),
@@ -59,7 +61,6 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             ),
         };
         bar.finish_and_clear();
-        let settings = a.flatten.darts()?;
         let dart_params = match &material {
             Some(m) => flatcut::material::dart_params(&params, m),
             None => params.clone(),
