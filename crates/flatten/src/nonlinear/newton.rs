@@ -74,7 +74,7 @@ pub struct EdgeTerms {
     /// Penalty weight w.
     pub weight: f64,
     /// Lengths held as constraints to this largest relative error |ℓ − L|/L: the multipliers
-    /// then move with every Newton step ([`EdgeTerms::follow`]), and the solve does not stop on
+    /// then move with every Newton step (`EdgeTerms::follow`), and the solve does not stop on
     /// a small decrease while the lengths are further off and still coming closer. `None`: the
     /// multipliers stay as given (a penalty solve).
     pub hold: Option<f64>,
