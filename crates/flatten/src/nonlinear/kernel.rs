@@ -343,7 +343,11 @@ impl GuardedGreen {
         }
         let (u, du, _) = self.u(s);
         match self.shape {
-            GuardShape::Quadratic => 2.0 * self.k * u * du,
+            // Written as before the cubic shape existed, so its results keep their bits.
+            GuardShape::Quadratic => {
+                let (w, d) = (self.floor - self.collapse, s - self.collapse);
+                -2.0 * self.k * u * w / (d * d)
+            }
             GuardShape::Cubic => 3.0 * self.k * u * u * du,
         }
     }
@@ -353,7 +357,10 @@ impl GuardedGreen {
         }
         let (u, du, d2u) = self.u(s);
         match self.shape {
-            GuardShape::Quadratic => 2.0 * self.k * (du * du + u * d2u),
+            GuardShape::Quadratic => {
+                let (w, d) = (self.floor - self.collapse, s - self.collapse);
+                2.0 * self.k * (du * du + u * 2.0 * w / (d * d * d))
+            }
             GuardShape::Cubic => 3.0 * self.k * u * (2.0 * du * du + u * d2u),
         }
     }
