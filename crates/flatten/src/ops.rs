@@ -25,6 +25,22 @@ pub fn corner_angles(mesh: &TriMesh) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// Interior angle at each corner of each triangle of the flat map `uv` (radians), as
+/// [`corner_angles`] gives them on the surface.
+pub fn flat_corner_angles(triangles: &[[u32; 3]], uv: &[DVec2]) -> Vec<[f64; 3]> {
+    triangles
+        .iter()
+        .map(|tri| {
+            let p = tri.map(|v| uv[v as usize]);
+            std::array::from_fn(|k| {
+                let a = p[(k + 1) % 3] - p[k];
+                let b = p[(k + 2) % 3] - p[k];
+                a.perp_dot(b).abs().atan2(a.dot(b))
+            })
+        })
+        .collect()
+}
+
 /// Cotangent of the angle at each corner: `cot[t][k]` weights the edge opposite corner `k`,
 /// i.e. the edge `(triangles[t][k+1], triangles[t][k+2])`.
 pub fn corner_cotans(positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {

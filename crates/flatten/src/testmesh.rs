@@ -91,10 +91,17 @@ pub fn cone_patch(half_angle: f64, t0: f64, t1: f64, span: f64, nu: usize, nv: u
 /// The saddle `z = (x² − y²)/(2c)` over the square of side `size` centred at the origin, with
 /// `c = size` (Gaussian curvature about −1/c² at the centre), `n × n` cells.
 pub fn saddle(size: f64, n: usize) -> TriMesh {
+    saddle_of_radius(size, size, n)
+}
+
+/// The saddle `z = (x² − y²)/(2c)` over the square of side `size` centred at the origin, with
+/// `n × n` cells: Gaussian curvature about −1/c² at the centre. The bench's saddle is
+/// `c = size / 2`.
+pub fn saddle_of_radius(size: f64, c: f64, n: usize) -> TriMesh {
     grid_surface(n, n, |s, t| {
         let x = size * (s - 0.5);
         let y = size * (t - 0.5);
-        DVec3::new(x, y, (x * x - y * y) / (2.0 * size))
+        DVec3::new(x, y, (x * x - y * y) / (2.0 * c))
     })
 }
 

@@ -180,7 +180,8 @@ const HEMISPHERE_STEPS: usize = 40;
 fn a_compressed_interior_converges_in_tens_of_newton_steps() {
     let mesh = testmesh::spherical_cap(50.0, std::f64::consts::FRAC_PI_2, 24);
     let topo = Topology::build(&mesh).unwrap();
-    let (f1, steps, _) = run(&mesh, &topo, Method::BoundaryIsometric);
+    let (f1, steps, warnings) = run(&mesh, &topo, Method::BoundaryIsometric);
+    assert!(warnings.is_empty(), "{warnings:?}");
     println!(
         "hemisphere, {} faces: {steps} steps, boundary error {:.1e}, σ2 min {:.3}",
         mesh.triangles.len(),
@@ -199,4 +200,39 @@ fn a_compressed_interior_converges_in_tens_of_newton_steps() {
         f1.min_stretch
     );
     assert!(steps <= HEMISPHERE_STEPS, "{steps} Newton steps");
+}
+
+/// A saddle's rim is longer than its interior can take flat: kept at its 3D lengths it ruffles
+/// at the scale of the mesh (flat turns alternating against the surface's, up to 100° on the
+/// bench's saddle). f1 keeps the lengths and says so, naming where; `conformal-boundary` keeps
+/// them with a smooth outline and is not warned about.
+#[test]
+fn a_ruffled_rim_is_reported() {
+    // The bench's saddle, z = (x² − y²)/2 over [−1, 1]², at 100 mm.
+    let mesh = testmesh::saddle_of_radius(100.0, 50.0, 24);
+    let topo = Topology::build(&mesh).unwrap();
+    let (f1, _, warnings) = run(&mesh, &topo, Method::BoundaryIsometric);
+    println!(
+        "saddle: boundary error {:.1e}, {warnings:?}",
+        f1.boundary_rel
+    );
+    assert_eq!(f1.flips, 0);
+    assert!(
+        f1.boundary_rel <= 1e-9,
+        "boundary error {:.2e}",
+        f1.boundary_rel
+    );
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(
+        warnings[0].contains("the boundary ruffles"),
+        "{}",
+        warnings[0]
+    );
+    let (f2, _, w2) = run(&mesh, &topo, Method::ConformalBoundary);
+    assert!(
+        f2.boundary_rel <= 1e-9,
+        "f2 boundary error {:.2e}",
+        f2.boundary_rel
+    );
+    assert!(w2.iter().all(|w| !w.contains("ruffles")), "{w2:?}");
 }

@@ -41,6 +41,7 @@ use flatcut_mesh::{Topology, TriMesh};
 use super::kernel::{GuardShape, GuardedGreen, RestTri, singular_values};
 use super::newton::{Budget, EarlyStop, EdgeTerms, MapProblem, run};
 use super::{ABS_DECREMENT_PER_AREA, isometric_run, mean_density, time_limit_warning, total_area};
+use crate::ops::{angle_sums, corner_angles, flat_corner_angles};
 use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
 
 /// Target relative boundary-length error.
@@ -246,6 +247,17 @@ pub fn boundary_isometric(
         }
     } else if viol > REPORT_REL_ERROR {
         warnings.push(infeasible_warning(mesh, rest, &edges, &x, viol, stop));
+    } else if let Some(r) = ruffled_rim(mesh, topo, &x) {
+        warnings.push(format!(
+            "the boundary ruffles: at {} of its {} vertices the flat outline turns alternately against the surface by more than {:.0}° (up to {:.0}°, near ({:.2}, {:.2}, {:.2})): the rim is longer than the interior can take flat, so keeping its lengths crimps it at the scale of the mesh and a piece cut from it has a ragged edge; `conformal-boundary` keeps the rim's lengths with a smooth outline (its interior conformal), `isometric` lets them go",
+            r.count,
+            r.vertices,
+            RUFFLE_ANGLE.to_degrees(),
+            r.worst.to_degrees(),
+            r.at.x,
+            r.at.y,
+            r.at.z
+        ));
     }
     Ok(Flattening {
         info: FlattenInfo {
@@ -255,6 +267,59 @@ pub fn boundary_isometric(
         },
         uv: x,
     })
+}
+
+/// Turn (radians) of the flat outline against the surface's at a boundary vertex beyond which,
+/// alternating in sign with its neighbour's, the rim counts as ruffled there. A smooth kept rim
+/// differs from the surface by its share of the total turning, 0.02 rad per vertex on the 20k
+/// hemisphere; the saddle's ruffled one by up to 1.7 rad.
+const RUFFLE_ANGLE: f64 = 0.1;
+/// Share of the boundary vertices that must be ruffled (and at least [`RUFFLE_MIN_VERTICES`])
+/// for the warning: a few crimps at corners are the pattern's, not a ruffle.
+const RUFFLE_SHARE: f64 = 0.02;
+const RUFFLE_MIN_VERTICES: usize = 3;
+
+/// A rim that ruffles: how many of its vertices, out of how many, the largest turn against the
+/// surface, and where (3D).
+struct Ruffle {
+    count: usize,
+    vertices: usize,
+    worst: f64,
+    at: flatcut_geom::DVec3,
+}
+
+/// Where the kept boundary of the map `x` ruffles: boundary vertices at which the flat outline
+/// turns against the surface (flat angle sum − 3D angle sum) by more than [`RUFFLE_ANGLE`],
+/// alternating in sign with the next vertex's. A rim longer than its interior can take flat
+/// buckles that way, at the scale of the mesh (the bench's saddle).
+fn ruffled_rim(mesh: &TriMesh, topo: &Topology, x: &[DVec2]) -> Option<Ruffle> {
+    let s3 = angle_sums(mesh, &corner_angles(mesh));
+    let s2 = angle_sums(mesh, &flat_corner_angles(&mesh.triangles, x));
+    let mut r = Ruffle {
+        count: 0,
+        vertices: 0,
+        worst: 0.0,
+        at: flatcut_geom::DVec3::ZERO,
+    };
+    for lp in &topo.boundary_loops {
+        let turn = |i: usize| {
+            let v = lp[i % lp.len()] as usize;
+            s2[v] - s3[v]
+        };
+        r.vertices += lp.len();
+        for i in 0..lp.len() {
+            let (a, b) = (turn(i), turn(i + 1));
+            if a * b < 0.0 && a.abs() > RUFFLE_ANGLE && b.abs() > RUFFLE_ANGLE {
+                r.count += 1;
+                if a.abs() > r.worst {
+                    r.worst = a.abs();
+                    r.at = mesh.positions[lp[i] as usize];
+                }
+            }
+        }
+    }
+    let enough = (RUFFLE_SHARE * r.vertices as f64).max(RUFFLE_MIN_VERTICES as f64);
+    (r.count as f64 >= enough).then_some(r)
 }
 
 /// The warning for boundary lengths that were not kept: the largest error, the worst edges with
