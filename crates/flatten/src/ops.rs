@@ -224,7 +224,10 @@ impl QuadraticBuilder {
         }
         let node_of = self.free.iter().map(|&d| d / k).collect();
         let (pattern, values) = SymPattern::compress(self.triplets, stage)?;
-        let mut solver = SpdSolver::new(pattern.with_nodes(node_of, n_vertices)?, stage)?;
+        let pattern = pattern.with_nodes(node_of, n_vertices)?;
+        let mut solver = SpdSolver::new(&pattern, stage)?;
+        let values = solver.gather(&pattern, &values)?;
+        drop(pattern);
         solver.factor(&values)?;
         Ok(Reduced {
             free: self.free,

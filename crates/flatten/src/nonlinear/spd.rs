@@ -1,21 +1,23 @@
 //! A symmetric positive-definite sparse system with a fixed pattern for the Newton steps: the
-//! values live in CSC order (upper triangle, rows ≤ column) so that the per-triangle Hessians are
-//! scattered straight into precomputed slots, and the factorisation is the crate's one sparse
+//! values live in the order the factorisation reads them (the lower triangle of the matrix
+//! renumbered by the fill-reducing order) so that the per-triangle Hessians are scattered
+//! straight into precomputed slots, and the factorisation is the crate's one sparse
 //! Cholesky, [`crate::sparse::SpdSolver`] (faer; AMD, or nested dissection of the vertex graph
 //! from [`crate::sparse::NESTED_DISSECTION_FROM`] vertices; symbolic factorisation computed
 //! once and reused for every step; sequential below [`crate::sparse::PARALLEL_FACTOR_FROM`]
 //! factor values, the same bits with any number of threads above).
 //!
-//! The pattern is handed to [`crate::sparse::SymPattern`] in compressed-column form, so `values`
-//! is exactly the value array that [`crate::sparse::SpdSolver::factor`] reads in place: no
-//! duplicate summing, no copy, no per-step assembly beyond the scatter.
+//! The pattern is handed to [`crate::sparse::SymPattern`] in compressed-column form and then
+//! dropped; the slots are the solver's ([`crate::sparse::SpdSolver::slot`]), so `values` is
+//! exactly the value array that [`crate::sparse::SpdSolver::factor`] reads in place: no
+//! duplicate summing, no copy, no renumbering, no per-step assembly beyond the scatter.
 
 use crate::sparse::{SpdSolver, SymPattern};
 
 /// A fixed-pattern SPD matrix and its reusable symbolic Cholesky factorisation.
 pub struct SpdSystem {
     n: usize,
-    /// Values of the upper triangle, in CSC order.
+    /// Values of the matrix, in the solver's order ([`Self::slot`]).
     pub values: Vec<f64>,
     /// Slot of each diagonal entry.
     diag: Vec<usize>,
@@ -97,11 +99,9 @@ impl SpdSystem {
         row_idx: Vec<usize>,
         nodes: Option<(Vec<u32>, usize)>,
     ) -> Result<Self, String> {
-        let diag: Vec<usize> = (0..n).map(|c| col_ptr[c + 1].saturating_sub(1)).collect();
-        if (0..n).any(|c| col_ptr[c + 1] == col_ptr[c] || row_idx[diag[c]] != c) {
+        if (0..n).any(|c| col_ptr[c + 1] == col_ptr[c] || row_idx[col_ptr[c + 1] - 1] != c) {
             return Err("the pattern lacks a diagonal entry".into());
         }
-        let nnz = row_idx.len();
         let mut pattern =
             SymPattern::from_upper_csc(n, col_ptr, row_idx, "newton").map_err(|e| e.to_string())?;
         if let Some((node_of, n_nodes)) = nodes {
@@ -109,10 +109,18 @@ impl SpdSystem {
                 .with_nodes(node_of, n_nodes)
                 .map_err(|e| e.to_string())?;
         }
-        let solver = SpdSolver::new(pattern, "newton").map_err(|e| e.to_string())?;
+        let solver = SpdSolver::new(&pattern, "newton").map_err(|e| e.to_string())?;
+        drop(pattern);
+        let diag = (0..n)
+            .map(|c| {
+                solver
+                    .slot(c, c)
+                    .ok_or("the pattern lacks a diagonal entry")
+            })
+            .collect::<Result<Vec<usize>, _>>()?;
         Ok(Self {
             n,
-            values: vec![0.0; nnz],
+            values: vec![0.0; solver.n_values()],
             diag,
             solver,
         })
@@ -123,12 +131,9 @@ impl SpdSystem {
         self.n
     }
 
-    /// The slot of entry (r, c) of the upper triangle (r ≤ c); `None` if not in the pattern.
+    /// The slot of entry (r, c) (or (c, r)) in `values`; `None` if not in the pattern.
     pub fn slot(&self, r: usize, c: usize) -> Option<usize> {
-        let (r, c) = if r <= c { (r, c) } else { (c, r) };
-        let (col_ptr, row_idx) = self.solver.pattern().csc();
-        let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
-        rows.binary_search(&r).ok().map(|k| col_ptr[c] + k)
+        self.solver.slot(r, c)
     }
 
     /// Slot of diagonal entry i.
