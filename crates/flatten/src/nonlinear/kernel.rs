@@ -29,11 +29,20 @@ pub struct RestTri {
     pub dm_inv: DMat2,
     /// 3D area (mm²).
     pub area: f64,
-    /// Gradient coefficients g_v = ∂F/∂x_v (row vector) for the three corners: F = Σ x_v g_vᵀ.
-    pub g: [DVec2; 3],
 }
 
 impl RestTri {
+    /// Gradient coefficients g_v = ∂F/∂x_v (row vector) for the three corners: F = Σ x_v g_vᵀ.
+    /// Row j of Dm⁻¹ is the coefficient of x_{j+1} (F = Ds Dm⁻¹, Ds = [x1 − x0, x2 − x0]).
+    /// Computed where used rather than stored: at a million faces they would be 48 MB.
+    #[inline]
+    pub fn g(&self) -> [DVec2; 3] {
+        let m = self.dm_inv;
+        let r0 = DVec2::new(m.x_axis.x, m.y_axis.x);
+        let r1 = DVec2::new(m.x_axis.y, m.y_axis.y);
+        [-(r0 + r1), r0, r1]
+    }
+
     /// The Jacobian F (2×2, columns = images of the frame axes) of the map for positions `x`.
     #[inline]
     pub fn jacobian(&self, x: &[DVec2]) -> DMat2 {
@@ -55,15 +64,10 @@ pub fn rest_frames(mesh: &TriMesh) -> Result<Vec<RestTri>, usize> {
         if !det.is_finite() || det <= 0.0 {
             return Err(t);
         }
-        let dm_inv = dm.inverse();
-        // F = Ds Dm⁻¹ with Ds = [x1 − x0, x2 − x0]: row j of Dm⁻¹ is the coefficient of x_{j+1}.
-        let r0 = DVec2::new(dm_inv.x_axis.x, dm_inv.y_axis.x);
-        let r1 = DVec2::new(dm_inv.x_axis.y, dm_inv.y_axis.y);
         out.push(RestTri {
             v: [tri[0] as usize, tri[1] as usize, tri[2] as usize],
-            dm_inv,
+            dm_inv: dm.inverse(),
             area: 0.5 * det,
-            g: [-(r0 + r1), r0, r1],
         });
     }
     Ok(out)
@@ -551,10 +555,11 @@ fn iso_tri_eval<E: IsoEnergy>(
     let g = d.grad;
     // P = ∂Ψ/∂F = U diag(g) Vᵀ; ∂E/∂x_v = A · P g_v.
     let p = s.u * DMat2::from_diagonal(DVec2::new(g[0], g[1])) * s.v.transpose();
+    let gv = r.g();
     let grad = [
-        r.area * (p * r.g[0]),
-        r.area * (p * r.g[1]),
-        r.area * (p * r.g[2]),
+        r.area * (p * gv[0]),
+        r.area * (p * gv[1]),
+        r.area * (p * gv[2]),
     ];
     let mut hess = [[0.0; 6]; 6];
     if let Some(proj) = proj {
@@ -604,7 +609,7 @@ fn iso_tri_eval<E: IsoEnergy>(
                 continue;
             }
             // Mode vector in x-space: for corner v, m · g_v.
-            let w = [m * r.g[0], m * r.g[1], m * r.g[2]];
+            let w = [m * gv[0], m * gv[1], m * gv[2]];
             let q = [w[0].x, w[0].y, w[1].x, w[1].y, w[2].x, w[2].y];
             let scale = r.area * lambda;
             for i in 0..6 {

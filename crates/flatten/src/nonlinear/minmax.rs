@@ -198,8 +198,9 @@ impl Surrogate<'_> {
                 let c1 = wu[t] / s.s1;
                 let c2 = -wd[t] / s.s2;
                 let p = s.u * flatcut_geom::DMat2::from_diagonal(DVec2::new(c1, c2)) * vt;
+                let g = r.g();
                 for k in 0..3 {
-                    gr[r.v[k]] += p * r.g[k];
+                    gr[r.v[k]] += p * g[k];
                 }
             }
             for (k, &(a, b, _)) in self.pairs.pairs.iter().enumerate() {

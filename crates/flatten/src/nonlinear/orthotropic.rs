@@ -90,8 +90,9 @@ impl TriEnergy for Orthotropic {
         let dp = 8.0 * k.along * eaa * p + 8.0 * k.shear * eab * q;
         let dq = 8.0 * k.across * ebb * q + 8.0 * k.shear * eab * p;
         let pm = DMat2::from_cols(dp, dq);
+        let g = r.g();
         for c in 0..3 {
-            out.grad[c] += r.area * (pm * r.g[c]);
+            out.grad[c] += r.area * (pm * g[c]);
         }
         let Some(proj) = proj else {
             return out;
@@ -101,8 +102,8 @@ impl TriEnergy for Orthotropic {
         let mut jac = [[0.0; 6]; 4];
         for v in 0..3 {
             for c in 0..2 {
-                jac[c][2 * v + c] = r.g[v].x;
-                jac[2 + c][2 * v + c] = r.g[v].y;
+                jac[c][2 * v + c] = g[v].x;
+                jac[2 + c][2 * v + c] = g[v].y;
             }
         }
         for i in 0..6 {
@@ -193,14 +194,10 @@ pub fn grain_frames(rest: &[RestTri], warp: &[DVec2]) -> Vec<RestTri> {
         .zip(warp)
         .map(|(r, a)| {
             let rot = DMat2::from_cols(*a, a.perp());
-            let dm_inv = r.dm_inv * rot;
-            let r0 = DVec2::new(dm_inv.x_axis.x, dm_inv.y_axis.x);
-            let r1 = DVec2::new(dm_inv.x_axis.y, dm_inv.y_axis.y);
             RestTri {
                 v: r.v,
-                dm_inv,
+                dm_inv: r.dm_inv * rot,
                 area: r.area,
-                g: [-(r0 + r1), r0, r1],
             }
         })
         .collect()
