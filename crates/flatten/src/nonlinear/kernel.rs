@@ -14,6 +14,7 @@
 use flatcut_geom::{DMat2, DVec2};
 use flatcut_mesh::TriMesh;
 use flatcut_mesh::distortion::local_frame;
+use nalgebra::{Matrix4, SymmetricEigen};
 
 /// Relative gap |σ₁ − σ₂| / (σ₁ + σ₂) below which the twist eigenvalue is taken from its limit
 /// (Ψ₁₁ − Ψ₁₂) instead of the difference quotient, which would lose all digits there.
@@ -538,6 +539,71 @@ pub fn tri_eval_projected<E: TriEnergy>(
     proj: Option<Projection>,
 ) -> TriEval {
     e.tri_eval(r, x, proj)
+}
+
+/// Adds to `out` the area-weighted gradient and projected Hessian of a density Ψ(F) that is not
+/// a function of the singular values alone (the orthotropic energy, per-direction limits):
+/// `p` = ∂Ψ/∂F (columns: the derivatives by F's columns) and `h` its 4×4 Hessian in F's entries
+/// taken column by column, (F₁₁, F₂₁, F₁₂, F₂₂), or `None` when no Hessian is asked for.
+/// The Hessian is projected by a symmetric eigen-decomposition (nalgebra's, deterministic) as
+/// `proj` says, then carried to the corners: corner v's coordinate c moves F's column 1 entry c
+/// by g_v.x and column 2 entry c by g_v.y.
+pub fn add_jacobian_terms(
+    out: &mut TriEval,
+    r: &RestTri,
+    p: DMat2,
+    h: Option<Matrix4<f64>>,
+    proj: Option<Projection>,
+) {
+    let g = r.g();
+    for c in 0..3 {
+        out.grad[c] += r.area * (p * g[c]);
+    }
+    let (Some(h), Some(proj)) = (h, proj) else {
+        return;
+    };
+    let h4 = project4(h, proj);
+    let mut jac = [[0.0; 6]; 4];
+    for v in 0..3 {
+        for c in 0..2 {
+            jac[c][2 * v + c] = g[v].x;
+            jac[2 + c][2 * v + c] = g[v].y;
+        }
+    }
+    for i in 0..6 {
+        for j in 0..6 {
+            let mut s = 0.0;
+            for a in 0..4 {
+                if jac[a][i] == 0.0 {
+                    continue;
+                }
+                for b in 0..4 {
+                    s += jac[a][i] * h4[(a, b)] * jac[b][j];
+                }
+            }
+            out.hess[i][j] += r.area * s;
+        }
+    }
+}
+
+/// A 4×4 Hessian with its eigenvalues made non-negative as `proj` says.
+fn project4(h: Matrix4<f64>, proj: Projection) -> Matrix4<f64> {
+    if proj == Projection::Raw {
+        return h;
+    }
+    let eig = SymmetricEigen::new(h);
+    let mut out = Matrix4::zeros();
+    for (i, &l) in eig.eigenvalues.iter().enumerate() {
+        let l = match proj {
+            Projection::Abs => l.abs(),
+            _ => l.max(0.0),
+        };
+        if l > 0.0 {
+            let v = eig.eigenvectors.column(i);
+            out += l * v * v.transpose();
+        }
+    }
+    out
 }
 
 /// [`tri_eval_projected`] of an isotropic energy.

@@ -19,15 +19,15 @@
 //! Gradient: ∂Ψ/∂p = 8k_a E_aa p + 8k_s E_ab q, ∂Ψ/∂q = 8k_b E_bb q + 8k_s E_ab p. Hessian in
 //! (p, q): H_pp = 8k_a(p pᵀ + E_aa I) + 4k_s q qᵀ, H_qq = 8k_b(q qᵀ + E_bb I) + 4k_s p pᵀ,
 //! H_pq = 4k_s q pᵀ + 8k_s E_ab I. The energy is not a function of the singular values, so the
-//! 4×4 Hessian is projected by a symmetric eigen-decomposition (nalgebra's, deterministic)
-//! rather than by the analytic eigensystems of [`super::kernel`].
+//! 4×4 Hessian is projected by a symmetric eigen-decomposition
+//! ([`super::kernel::add_jacobian_terms`]) rather than by the analytic eigensystems.
 
 use flatcut_geom::{DMat2, DVec2};
-use nalgebra::{Matrix4, SymmetricEigen};
+use nalgebra::Matrix4;
 
 use super::kernel::{
     GREEN_CONCAVE_BELOW, GuardShape, GuardedGreen, IsoEnergy, Projection, RestTri, TriEnergy,
-    TriEval, tri_eval_projected,
+    TriEval, add_jacobian_terms, tri_eval_projected,
 };
 use crate::anisotropy::Stiffness;
 
@@ -90,36 +90,8 @@ impl TriEnergy for Orthotropic {
         let dp = 8.0 * k.along * eaa * p + 8.0 * k.shear * eab * q;
         let dq = 8.0 * k.across * ebb * q + 8.0 * k.shear * eab * p;
         let pm = DMat2::from_cols(dp, dq);
-        let g = r.g();
-        for c in 0..3 {
-            out.grad[c] += r.area * (pm * g[c]);
-        }
-        let Some(proj) = proj else {
-            return out;
-        };
-        let h4 = project(strain_hessian(k, p, q, eaa, ebb, eab), proj);
-        // dof (corner v, coordinate c) moves p_c by g_v.x and q_c by g_v.y.
-        let mut jac = [[0.0; 6]; 4];
-        for v in 0..3 {
-            for c in 0..2 {
-                jac[c][2 * v + c] = g[v].x;
-                jac[2 + c][2 * v + c] = g[v].y;
-            }
-        }
-        for i in 0..6 {
-            for j in 0..6 {
-                let mut s = 0.0;
-                for a in 0..4 {
-                    if jac[a][i] == 0.0 {
-                        continue;
-                    }
-                    for b in 0..4 {
-                        s += jac[a][i] * h4[(a, b)] * jac[b][j];
-                    }
-                }
-                out.hess[i][j] += r.area * s;
-            }
-        }
+        let h = proj.map(|_| strain_hessian(k, p, q, eaa, ebb, eab));
+        add_jacobian_terms(&mut out, r, pm, h, proj);
         out
     }
 }
@@ -142,26 +114,6 @@ fn strain_hessian(k: Stiffness, p: DVec2, q: DVec2, eaa: f64, ebb: f64, eab: f64
         }
     }
     h
-}
-
-/// The Hessian with its eigenvalues made non-negative as `proj` says.
-fn project(h: Matrix4<f64>, proj: Projection) -> Matrix4<f64> {
-    if proj == Projection::Raw {
-        return h;
-    }
-    let eig = SymmetricEigen::new(h);
-    let mut out = Matrix4::zeros();
-    for (i, &l) in eig.eigenvalues.iter().enumerate() {
-        let l = match proj {
-            Projection::Abs => l.abs(),
-            _ => l.max(0.0),
-        };
-        if l > 0.0 {
-            let v = eig.eigenvectors.column(i);
-            out += l * v * v.transpose();
-        }
-    }
-    out
 }
 
 /// The collapse guard of [`GuardedGreen`] alone (without its Green–Lagrange term).
