@@ -24,6 +24,7 @@ pub mod place;
 pub mod relaxed;
 pub mod solve;
 pub mod split;
+pub mod threads;
 pub mod trace;
 
 use flatcut_geom::{DVec2, DVec3};
@@ -31,15 +32,16 @@ use flatcut_mesh::{TopologyError, TriMesh};
 
 pub use cut::{CutMesh, Legs};
 pub use keepout::KeepOut;
-pub use limits::Band;
+pub use limits::{Band, Limits};
 pub use place::place;
+pub use threads::Threads;
 
 /// What to place darts for.
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct DartOptions {
     /// The material limits every face must meet.
-    pub band: Band,
+    pub limits: Limits,
     /// Most darts allowed.
     pub max_darts: usize,
     /// Least distance between the mouths of two darts and between a dart's point and another
@@ -60,12 +62,19 @@ impl DartOptions {
     /// drill offset.
     pub fn new(stretch_pct: Option<f64>, compress_pct: Option<f64>) -> Self {
         Self {
-            band: Band::from_pct(stretch_pct, compress_pct),
+            limits: Limits::Band(Band::from_pct(stretch_pct, compress_pct)),
             max_darts: Self::DEFAULT_MAX_DARTS,
             min_spacing_mm: Self::DEFAULT_MIN_SPACING_MM,
             drill_offset_mm: Self::DEFAULT_DRILL_OFFSET_MM,
             keep_out: None,
         }
+    }
+
+    /// Holds the limits of each thread instead ([`Threads`]: a material's limits along, across
+    /// and on the bias, with the grain where it lies in the plane of the start map).
+    pub fn with_threads(mut self, threads: Threads) -> Self {
+        self.limits = Limits::Threads(threads);
+        self
     }
 
     pub fn with_max_darts(mut self, n: usize) -> Self {

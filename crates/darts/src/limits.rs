@@ -21,13 +21,14 @@
 //! penalised map is never proof that the limits can be met; the barrier is.
 
 use flatcut_flatten::nonlinear::kernel::{
-    IsoDerivs, IsoEnergy, RestTri, SymDirichlet, flip_from, rest_frames, singular_values,
-    twist_from,
+    IsoDerivs, IsoEnergy, Projection, RestTri, SymDirichlet, TriEnergy, TriEval, flip_from,
+    rest_frames, singular_values, twist_from,
 };
-use flatcut_geom::DVec2;
+use flatcut_geom::{DMat2, DVec2};
 use flatcut_mesh::TriMesh;
 
 use crate::solve::{self, EdgePairs};
+use crate::threads::{ThreadBarrier, ThreadPower, Threads};
 
 /// The limits as a band of log stretch: ln C ≤ ln σ ≤ ln S.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -73,7 +74,7 @@ impl Band {
 
     /// A length scale of the band in log strain, for relative tolerances: its width, or the
     /// finite side's distance from 0 when one side is open (at least [`MIN_SCALE`]).
-    fn scale(&self) -> f64 {
+    pub(crate) fn scale(&self) -> f64 {
         let w = if self.ln_s.is_finite() && self.ln_c.is_finite() {
             self.ln_s - self.ln_c
         } else if self.ln_s.is_finite() {
@@ -84,6 +85,116 @@ impl Band {
             0.0
         };
         w.max(MIN_SCALE)
+    }
+}
+
+/// The limits a piece is held to: on the principal stretches (a [`Band`]: an isotropic material,
+/// or the tightest of a material's directions), or per thread of a woven or knitted material
+/// ([`Threads`], with the grain where it lies in the plane of the solve).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Limits {
+    Band(Band),
+    Threads(Threads),
+}
+
+impl Limits {
+    /// The largest excess (log strain; negative inside the limits) of a face mapped by `f`;
+    /// +∞ for a degenerate or inverted face.
+    pub fn excess(&self, f: DMat2) -> f64 {
+        match self {
+            Limits::Band(b) => {
+                if f.determinant() > 0.0 {
+                    let (s1, s2) = singular_values(f);
+                    b.excess(s1, s2)
+                } else {
+                    f64::INFINITY
+                }
+            }
+            Limits::Threads(t) => t.excess(f),
+        }
+    }
+
+    /// The principal-stretch band the darts' demand, reach and count are estimated with: the
+    /// band itself, or the tightest of the threads' limits. The estimate is then the one darts
+    /// for that band would get, and the search goes down from it while fewer darts hold the
+    /// threads' own limits: the loosest thread (a woven fabric's bias) would see no demand
+    /// where the warp and the weft are far beyond theirs.
+    pub fn estimate_band(&self) -> Band {
+        match self {
+            Limits::Band(b) => *b,
+            Limits::Threads(t) => t.tightest(),
+        }
+    }
+
+    /// True when nothing is limited.
+    pub fn is_open(&self) -> bool {
+        match self {
+            Limits::Band(b) => b.is_open(),
+            Limits::Threads(t) => t.tightest().is_open(),
+        }
+    }
+
+    /// A length scale in log strain for relative tolerances: the band's, or the tightest
+    /// thread's.
+    fn scale(&self) -> f64 {
+        match self {
+            Limits::Band(b) => b.scale(),
+            Limits::Threads(t) => t.tightest().scale(),
+        }
+    }
+
+    /// The p-norm stand-in for the largest excess.
+    fn power(&self, p: f64, reg: f64) -> LimitEnergy {
+        match *self {
+            Limits::Band(band) => LimitEnergy::BandPower(BandPower { band, p, reg }),
+            Limits::Threads(threads) => LimitEnergy::ThreadPower(ThreadPower { threads, p, reg }),
+        }
+    }
+
+    /// Log barriers at walls `wall` beyond the limits.
+    fn barrier(&self, wall: f64, mu: f64, reg: f64) -> LimitEnergy {
+        match *self {
+            Limits::Band(band) => LimitEnergy::BandBarrier(BandBarrier {
+                band,
+                wall,
+                mu,
+                reg,
+            }),
+            Limits::Threads(threads) => LimitEnergy::ThreadBarrier(ThreadBarrier {
+                threads,
+                wall,
+                mu,
+                reg,
+            }),
+        }
+    }
+}
+
+/// The energies of the limit solves, for either kind of [`Limits`].
+#[derive(Clone, Copy, Debug)]
+enum LimitEnergy {
+    BandPower(BandPower),
+    BandBarrier(BandBarrier),
+    ThreadPower(ThreadPower),
+    ThreadBarrier(ThreadBarrier),
+}
+
+impl TriEnergy for LimitEnergy {
+    fn tri_energy(&self, r: &RestTri, x: &[DVec2]) -> f64 {
+        match self {
+            LimitEnergy::BandPower(e) => e.tri_energy(r, x),
+            LimitEnergy::BandBarrier(e) => e.tri_energy(r, x),
+            LimitEnergy::ThreadPower(e) => e.tri_energy(r, x),
+            LimitEnergy::ThreadBarrier(e) => e.tri_energy(r, x),
+        }
+    }
+    fn tri_eval(&self, r: &RestTri, x: &[DVec2], proj: Option<Projection>) -> TriEval {
+        match self {
+            LimitEnergy::BandPower(e) => e.tri_eval(r, x, proj),
+            LimitEnergy::BandBarrier(e) => e.tri_eval(r, x, proj),
+            LimitEnergy::ThreadPower(e) => e.tri_eval(r, x, proj),
+            LimitEnergy::ThreadBarrier(e) => e.tri_eval(r, x, proj),
+        }
     }
 }
 
@@ -271,16 +382,10 @@ impl BandPower {
 separable_iso_energy!(BandPower);
 
 /// The largest limit excess over the faces of a map, and the face where it is.
-pub fn max_excess(rest: &[RestTri], x: &[DVec2], band: Band) -> (f64, usize) {
+pub fn max_excess(rest: &[RestTri], x: &[DVec2], limits: &Limits) -> (f64, usize) {
     let mut best = (f64::NEG_INFINITY, 0usize);
     for (t, r) in rest.iter().enumerate() {
-        let f = r.jacobian(x);
-        let e = if f.determinant() > 0.0 {
-            let (s1, s2) = singular_values(f);
-            band.excess(s1, s2)
-        } else {
-            f64::INFINITY
-        };
+        let e = limits.excess(r.jacobian(x));
         if e > best.0 || e.is_nan() {
             best = (if e.is_nan() { f64::INFINITY } else { e }, t);
         }
@@ -289,18 +394,8 @@ pub fn max_excess(rest: &[RestTri], x: &[DVec2], band: Band) -> (f64, usize) {
 }
 
 /// Per-face limit excess (log strain) of a map.
-pub fn face_excess(rest: &[RestTri], x: &[DVec2], band: Band) -> Vec<f64> {
-    rest.iter()
-        .map(|r| {
-            let f = r.jacobian(x);
-            if f.determinant() > 0.0 {
-                let (s1, s2) = singular_values(f);
-                band.excess(s1, s2)
-            } else {
-                f64::INFINITY
-            }
-        })
-        .collect()
+pub fn face_excess(rest: &[RestTri], x: &[DVec2], limits: &Limits) -> Vec<f64> {
+    rest.iter().map(|r| limits.excess(r.jacobian(x))).collect()
 }
 
 /// What the limit solve reached.
@@ -336,12 +431,12 @@ pub enum LimitError {
 pub fn hold(
     mesh: &TriMesh,
     x0: &[DVec2],
-    band: Band,
+    limits: &Limits,
     pairs: &EdgePairs,
 ) -> Result<Held, LimitError> {
-    let held = reach(mesh, x0, band, Effort::Full)?;
+    let held = reach(mesh, x0, limits, Effort::Full)?;
     if held.feasible {
-        settle(mesh, &held.x, band, pairs)
+        settle(mesh, &held.x, limits, pairs)
     } else {
         Ok(held)
     }
@@ -363,17 +458,22 @@ pub enum Effort {
 const CLEARLY_OUT: f64 = 0.5;
 
 /// Phases 0 and 1: the map nearest the limits the solver finds (min-max of the excess).
-pub fn reach(mesh: &TriMesh, x0: &[DVec2], band: Band, effort: Effort) -> Result<Held, LimitError> {
+pub fn reach(
+    mesh: &TriMesh,
+    x0: &[DVec2],
+    limits: &Limits,
+    effort: Effort,
+) -> Result<Held, LimitError> {
     let rest = rest_frames(mesh).map_err(LimitError::Degenerate)?;
     let mut solves = solve::Solves::new(&rest, mesh.positions.len());
     let mut x = x0.to_vec();
     let mut iterations = 0;
-    let (mut e, mut worst) = max_excess(&rest, &x, band);
+    let (mut e, mut worst) = max_excess(&rest, &x, limits);
     if !e.is_finite() {
         return Err(LimitError::Inverted(worst));
     }
-    let scale = band.scale();
-    if band.is_open() {
+    let scale = limits.scale();
+    if limits.is_open() {
         return Ok(Held {
             x,
             excess: f64::NEG_INFINITY,
@@ -398,16 +498,12 @@ pub fn reach(mesh: &TriMesh, x0: &[DVec2], band: Band, effort: Effort) -> Result
         }
         last_q = q;
         let p = q / scale;
-        let energy = BandPower {
-            band,
-            p,
-            reg: CENTRE_REG,
-        };
+        let energy = limits.power(p, CENTRE_REG);
         let run = solves
             .newton(energy, &x, POWER_ITERS, None, SEARCH_TOLERANCE)
             .map_err(LimitError::Solver)?;
         iterations += run.iterations;
-        let (e_run, w_run) = max_excess(&rest, &run.x, band);
+        let (e_run, w_run) = max_excess(&rest, &run.x, limits);
         if e_run <= e {
             x = run.x;
             (e, worst) = (e_run, w_run);
@@ -422,17 +518,12 @@ pub fn reach(mesh: &TriMesh, x0: &[DVec2], band: Band, effort: Effort) -> Result
         if e <= -FEASIBLE_MARGIN {
             break;
         }
-        let energy = BandBarrier {
-            band,
-            wall,
-            mu: 1.0,
-            reg: CENTRE_REG,
-        };
+        let energy = limits.barrier(wall, 1.0, CENTRE_REG);
         let run = solves
             .newton(energy, &x, STAGE_ITERS, None, SEARCH_TOLERANCE)
             .map_err(LimitError::Solver)?;
         iterations += run.iterations;
-        let (e_run, w_run) = max_excess(&rest, &run.x, band);
+        let (e_run, w_run) = max_excess(&rest, &run.x, limits);
         if e_run <= e {
             x = run.x;
             (e, worst) = (e_run, w_run);
@@ -485,7 +576,7 @@ fn out_of_reach(history: &[f64], left: usize) -> bool {
 pub fn settle(
     mesh: &TriMesh,
     x0: &[DVec2],
-    band: Band,
+    limits: &Limits,
     pairs: &EdgePairs,
 ) -> Result<Held, LimitError> {
     let rest = rest_frames(mesh).map_err(LimitError::Degenerate)?;
@@ -493,12 +584,7 @@ pub fn settle(
     let mut x = x0.to_vec();
     let mut iterations = 0;
     for (i, mu) in INTERIOR_MU.iter().enumerate() {
-        let energy = BandBarrier {
-            band,
-            wall: -INTERIOR_MARGIN,
-            mu: *mu,
-            reg: 1.0,
-        };
+        let energy = limits.barrier(-INTERIOR_MARGIN, *mu, 1.0);
         // The legs are paired in the last solve only: the first brings the map near.
         let pairs = (i + 1 == INTERIOR_MU.len()).then_some(pairs);
         let run = solves
@@ -507,7 +593,7 @@ pub fn settle(
         iterations += run.iterations;
         x = run.x;
     }
-    let (e, worst) = max_excess(&rest, &x, band);
+    let (e, worst) = max_excess(&rest, &x, limits);
     Ok(Held {
         x,
         excess: e,

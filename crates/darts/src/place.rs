@@ -35,7 +35,7 @@ use flatcut_mesh::{Topology, TriMesh, check_disk};
 use crate::cut::{CutMesh, Legs, all_pairs};
 use crate::embed::{Embedded, embed, transfer};
 use crate::keepout::KeepOut;
-use crate::limits::{self, Band, Effort, Held};
+use crate::limits::{self, Effort, Held, Limits};
 use crate::relaxed::{Yield, face_opening, rim_demand};
 use crate::solve;
 use crate::trace::{Adjacency, Geodesic, inward_direction, trace};
@@ -161,9 +161,11 @@ impl Outcome {
 /// flattening `x0` (flip-free).
 pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted, DartError> {
     let topo = check_disk(mesh)?;
-    let band = opts.band;
+    let limits = &opts.limits;
+    // Demand, reach and count are estimated on the principal stretches ([`Limits::estimate_band`]).
+    let band = limits.estimate_band();
     let uncut = CutMesh::new(mesh, &[])?;
-    let held = limits::reach(mesh, x0, band, Effort::Full)?;
+    let held = limits::reach(mesh, x0, limits, Effort::Full)?;
     let mut attempts = vec![Attempt {
         darts: 0,
         total_length_mm: 0.0,
@@ -171,7 +173,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
         feasible: held.feasible,
     }];
     if held.feasible {
-        let settled = limits::settle(mesh, &held.x, band, &Default::default())?;
+        let settled = limits::settle(mesh, &held.x, limits, &Default::default())?;
         return Ok(finish(
             mesh,
             &uncut,
@@ -299,7 +301,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
     let mut overlap: Option<DartError> = None;
     let mut chosen: Option<(usize, Held)> = None;
     for i in held_ok {
-        match settle_simple(&outcomes[i], band)? {
+        match settle_simple(&outcomes[i], limits)? {
             Ok(settled) => {
                 chosen = Some((i, settled));
                 break;
@@ -329,7 +331,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             }
             outcomes.push(o);
             let i = outcomes.len() - 1;
-            if let Ok(settled) = settle_simple(&outcomes[i], band)? {
+            if let Ok(settled) = settle_simple(&outcomes[i], limits)? {
                 chosen = Some((i, settled));
                 break;
             }
@@ -399,10 +401,10 @@ fn outline_overlap(mesh: &TriMesh, x: &[DVec2]) -> Result<Option<DVec3>, DartErr
 
 /// The final map of an outcome that held the limits (legs paired, least δ2 within the limits),
 /// or [`DartError::Overlap`] when its flat outline crosses itself.
-fn settle_simple(o: &Outcome, band: Band) -> Result<Result<Held, DartError>, DartError> {
+fn settle_simple(o: &Outcome, limits: &Limits) -> Result<Result<Held, DartError>, DartError> {
     let legs: Vec<Legs> = o.darts.iter().map(|(_, l)| l.clone()).collect();
     let t0 = std::time::Instant::now();
-    let settled = limits::settle(&o.cut.mesh, &o.held.x, band, &all_pairs(&legs))?;
+    let settled = limits::settle(&o.cut.mesh, &o.held.x, limits, &all_pairs(&legs))?;
     debug(&format!(
         "settle: {} iterations, {:.2} s",
         settled.iterations,
@@ -662,7 +664,7 @@ impl Piece<'_> {
                 Effort::Full
             };
             let t0 = std::time::Instant::now();
-            let held = limits::reach(&cut.mesh, &x, self.opts.band, effort)?;
+            let held = limits::reach(&cut.mesh, &x, &self.opts.limits, effort)?;
             debug(&format!(
                 "reach: {} iterations, {:.2} s",
                 held.iterations,
@@ -688,7 +690,7 @@ impl Piece<'_> {
                 });
             }
             // Grow the darts whose points are next to the excess.
-            let exc = limits::face_excess(&rest_of(&cut.mesh)?, &held.x, self.opts.band);
+            let exc = limits::face_excess(&rest_of(&cut.mesh)?, &held.x, &self.opts.limits);
             let emax = held.excess;
             let hot: Vec<DVec3> = exc
                 .iter()

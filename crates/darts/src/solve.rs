@@ -9,7 +9,7 @@
 //! changes [`Solves::newton`] only. [`Solves`] keeps one analysed Newton problem per mesh for all
 //! the solves on it.
 
-use flatcut_flatten::nonlinear::kernel::{IsoEnergy, RestTri};
+use flatcut_flatten::nonlinear::kernel::{RestTri, TriEnergy};
 use flatcut_flatten::nonlinear::newton::{self, Budget, EdgeTerms, MapProblem};
 use flatcut_geom::DVec2;
 
@@ -68,7 +68,7 @@ impl<'a> Solves<'a> {
     /// Runs projected Newton on `energy` from the flip-free map `x0` for at most `max_iters`
     /// iterations (per round when pairs are held), stopping when the energy falls by less than
     /// `rel` of itself in an iteration.
-    pub fn newton<E: IsoEnergy + Copy>(
+    pub fn newton<E: TriEnergy + Copy>(
         &mut self,
         energy: E,
         x0: &[DVec2],

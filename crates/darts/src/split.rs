@@ -43,7 +43,7 @@ use flatcut_mesh::mating::{MatingSeam, coincident_seams};
 use flatcut_mesh::regions::split_along_lines;
 use flatcut_mesh::{Topology, TriMesh, check_disk};
 
-use crate::limits::{Band, face_excess};
+use crate::limits::{Band, Limits, face_excess};
 use crate::{DartError, KeepOut};
 
 /// How far inside the limits (log strain, 0.001 % of stretch) the assembled parts are held: the
@@ -239,7 +239,10 @@ fn worst(pieces: &[TriMesh], band: Band) -> Result<(usize, f64, usize), DartErro
             .ok_or_else(|| DartError::Internal("a split piece has no map".into()))?;
         let rest =
             rest_frames(p).map_err(|t| DartError::Internal(format!("degenerate face {t}")))?;
-        for (t, e) in face_excess(&rest, x, band).into_iter().enumerate() {
+        for (t, e) in face_excess(&rest, x, &Limits::Band(band))
+            .into_iter()
+            .enumerate()
+        {
             if e > best.1 {
                 best = (k, e, t);
             }
@@ -462,7 +465,7 @@ impl Guard {
 fn alone_excess(side: &mut TriMesh, free: &FlattenParams, band: Band) -> Option<f64> {
     let f = flatcut_flatten::flatten(side, free).ok()?;
     let rest = rest_frames(side).ok()?;
-    let e = face_excess(&rest, &f.uv, band)
+    let e = face_excess(&rest, &f.uv, &Limits::Band(band))
         .into_iter()
         .fold(f64::NEG_INFINITY, f64::max);
     side.flat = Some(f.uv);
