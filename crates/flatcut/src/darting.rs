@@ -7,7 +7,7 @@
 //! (notches, drill and reference points, stitch and placement lines); its seams are already part
 //! of the outline.
 
-use flatcut_darts::{Dart, DartError, DartOptions, Darted, KeepOut};
+use flatcut_darts::{Dart, DartError, DartOptions, Darted, KeepOut, Threads};
 use flatcut_design::{DartsDef, MarkKind, PieceDef};
 use flatcut_flatten::{FlattenInfo, FlattenParams};
 use flatcut_geom::{DVec2, DVec3};
@@ -37,6 +37,24 @@ impl Default for DartSettings {
     }
 }
 
+/// The limits a piece is darted for: `params`' stretch and compression on the principal
+/// stretches, or, when given, `threads`' per thread of the material.
+#[derive(Clone, Debug)]
+pub struct DartLimits {
+    pub params: FlattenParams,
+    pub threads: Option<Threads>,
+}
+
+impl DartLimits {
+    /// The limits of `params` alone.
+    pub fn of(params: &FlattenParams) -> Self {
+        Self {
+            params: params.clone(),
+            threads: None,
+        }
+    }
+}
+
 /// Radius (mm) around a point mark that darts keep clear of.
 const MARK_CLEARANCE_MM: f64 = 3.0;
 
@@ -50,14 +68,24 @@ pub fn wanted(def: Option<&PieceDef>, run: Option<&DartSettings>) -> bool {
     }
 }
 
-/// True when every face of the map is within the limits of `params`.
-pub fn within(mesh: &TriMesh, uv: &[DVec2], params: &FlattenParams) -> bool {
+/// True when every face of the map is within the limits of `params`, or within `threads`'
+/// limits when given.
+pub fn within(
+    mesh: &TriMesh,
+    uv: &[DVec2],
+    params: &FlattenParams,
+    threads: Option<&Threads>,
+) -> bool {
     let band = flatcut_darts::Band::from_pct(params.max_stretch_pct, params.max_compress_pct);
     (0..mesh.triangles.len()).all(|t| {
         let c3 = mesh.corners(t);
         let c2 = mesh.triangles[t].map(|v| uv[v as usize]);
-        flatcut_mesh::face_distortion(c3, c2)
-            .is_some_and(|d| !d.flipped() && band.excess(d.sigma1, d.sigma2) <= 0.0)
+        match threads {
+            Some(th) => flatcut_mesh::grain_strain::triangle_jacobian(c3, c2)
+                .is_some_and(|j| th.excess(j) <= 0.0),
+            None => flatcut_mesh::face_distortion(c3, c2)
+                .is_some_and(|d| !d.flipped() && band.excess(d.sigma1, d.sigma2) <= 0.0),
+        }
     })
 }
 
@@ -88,27 +116,32 @@ pub fn keep_out(def: Option<&PieceDef>, mesh: &TriMesh) -> Result<KeepOut, Pipel
     Ok(k)
 }
 
-/// Darts for a flattened piece (`mesh` with `uv`) that exceeds the limits of `params`; `None`
-/// when it is within them already. Fails when no darts bring it within them.
+/// Darts for a flattened piece (`mesh` with `uv`) that exceeds the limits of `params` (or of
+/// `threads`, per thread, when given); `None` when it is within them already. Fails when no
+/// darts bring it within them.
 pub fn dart_piece(
     name: &str,
     def: Option<&PieceDef>,
     mesh: &TriMesh,
     uv: &[DVec2],
-    params: &FlattenParams,
+    limits: &DartLimits,
     settings: &DartSettings,
 ) -> Result<Option<Darted>, PipelineError> {
+    let (params, threads) = (&limits.params, limits.threads.as_ref());
     if params.max_stretch_pct.is_none() && params.max_compress_pct.is_none() {
         return Ok(None);
     }
-    if within(mesh, uv, params) {
+    if within(mesh, uv, params, threads) {
         return Ok(None);
     }
-    let opts = DartOptions::new(params.max_stretch_pct, params.max_compress_pct)
+    let mut opts = DartOptions::new(params.max_stretch_pct, params.max_compress_pct)
         .with_max_darts(settings.max_darts)
         .with_min_spacing_mm(settings.min_spacing_mm)
         .with_drill_offset_mm(settings.drill_offset_mm)
         .with_keep_out(keep_out(def, mesh)?);
+    if let Some(t) = threads {
+        opts = opts.with_threads(*t);
+    }
     flatcut_darts::place(mesh, uv, &opts)
         .map(Some)
         .map_err(|source| PipelineError::Darts {
@@ -120,18 +153,18 @@ pub fn dart_piece(
 /// A flattened piece (`mesh` with its map `uv`) with darts when `settings` asks for them and the
 /// piece needs them: the mesh (cut along the darts when there are any) with `flat` set, the
 /// flattening's info (its limit warnings dropped when darts brought the piece within them) and
-/// the darts.
+/// the darts. With per-thread limits, the darted map keeps the grain where it lay in `uv`.
 pub fn finish(
     name: &str,
     def: Option<&PieceDef>,
     mut mesh: TriMesh,
     uv: Vec<DVec2>,
     mut info: FlattenInfo,
-    params: &FlattenParams,
+    limits: &DartLimits,
     settings: Option<&DartSettings>,
 ) -> Result<(TriMesh, FlattenInfo, Vec<Dart>), PipelineError> {
     if let Some(settings) = settings
-        && let Some(d) = dart_piece(name, def, &mesh, &uv, params, settings)?
+        && let Some(d) = dart_piece(name, def, &mesh, &uv, limits, settings)?
     {
         info.warnings.clear();
         return Ok((d.mesh, info, d.darts));

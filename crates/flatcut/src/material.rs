@@ -2,10 +2,14 @@
 //! a project, `material_properties` in a piece) is flattened with the orthotropic energy along
 //! its grain (`flatcut_flatten::Method::Orthotropic`), its report checks the material's limits
 //! along, across and on the bias ([`flatcut_report::GrainReport`]), and darts, when asked for,
-//! are placed for the tightest of those limits: a direction's stretch lies between the
-//! principal stretches, so a piece whose principal stretches are within the tightest limits is
-//! within every direction's. (The darted piece is flattened again by the darts' isotropic
-//! solve, which holds that band; its grain is the one chosen before the cut.)
+//! hold each of those limits on its own thread where the grain is chosen ([`dart_threads`],
+//! [`flatcut_darts::Threads`]): a woven fabric takes a dome's curvature on its bias and needs
+//! darts only for what is beyond that. The darted piece is flattened again by the darts' solve,
+//! and its threads run along the pattern direction the darts were solved with. Where the run
+//! gives its own limits too (`--max-stretch`/`--max-compress`, on the principal stretches), or
+//! the design fixes the grain line, darts hold the tightest of the limits as one band on the
+//! principal stretches ([`dart_params`]): a direction's stretch lies between the principal
+//! stretches, so a piece within that band is within every direction's.
 
 use flatcut_design::material::MaterialSpec;
 use flatcut_design::{GrainDef, PieceDef};
@@ -108,8 +112,24 @@ pub fn flatten(
     ))
 }
 
+/// The per-thread limits darts hold for a piece of material `m` whose grain lies along
+/// `g.pattern_dir` in its map; `None` (darts hold [`dart_params`]' band) where the run gives
+/// limits of its own, or where the design fixes the grain line: the thread limits turn with the
+/// map, and the darts' solve does not hold the grain line's direction on the surface, so the
+/// threads could end up a few degrees off the line. A chosen grain is where the solve leaves it.
+pub fn dart_threads(
+    params: &FlattenParams,
+    m: &MaterialSpec,
+    g: &PieceGrain,
+) -> Option<flatcut_darts::Threads> {
+    (g.auto && params.max_stretch_pct.is_none() && params.max_compress_pct.is_none())
+        .then(|| flatcut_darts::Threads::new(&limits(m), g.pattern_dir))
+}
+
 /// The parameters darts are placed with for a piece of material `m`: the tightest of its limits
-/// (and of the run's own limits, where given) as the isotropic band.
+/// (and of the run's own limits, where given) as the isotropic band; with no limits of the run's
+/// own, [`dart_threads`] replaces the band in the solve, and the band only says that darts are
+/// asked for limits.
 pub fn dart_params(params: &FlattenParams, m: &MaterialSpec) -> FlattenParams {
     let (s, c) = m.tightest_pct();
     let tight = |run: Option<f64>, mat: f64| Some(run.map_or(mat, |r| r.min(mat)));

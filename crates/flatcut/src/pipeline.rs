@@ -19,7 +19,7 @@ use flatcut_pattern::{
 };
 use flatcut_report::{Report, ReportError};
 
-use crate::darting::{self, DartSettings};
+use crate::darting::{self, DartLimits, DartSettings};
 
 /// Why a pipeline stage failed; every variant names the piece or file.
 #[derive(Debug, thiserror::Error)]
@@ -256,9 +256,13 @@ pub fn flatten_design(
                             m,
                             p.def.grain.as_ref(),
                         )?;
-                        (f, Some(g), crate::material::dart_params(params, m))
+                        let limits = DartLimits {
+                            params: crate::material::dart_params(params, m),
+                            threads: crate::material::dart_threads(params, m, &g),
+                        };
+                        (f, Some(g), limits)
                     }
-                    None => (f, None, params.clone()),
+                    None => (f, None, DartLimits::of(params)),
                 };
                 // Darts first; where they cannot help and splitting is asked for, the piece
                 // goes on whole to be split.
@@ -318,7 +322,7 @@ fn split_where_wanted(
                 .mesh
                 .flat
                 .as_deref()
-                .is_some_and(|uv| !darting::within(&piece.mesh, uv, params));
+                .is_some_and(|uv| !darting::within(&piece.mesh, uv, params, None));
             if over {
                 piece.info.warnings.push(format!(
                     "{}: a piece joined to others by seams is not split (a cut would move its seams); split it by a style line instead",
@@ -371,7 +375,7 @@ fn dart_if_wanted(
     mesh: TriMesh,
     f: flatcut_flatten::Flattening,
     notches: Vec<FlatNotch>,
-    params: &FlattenParams,
+    limits: &DartLimits,
     darts: Option<&DartSettings>,
     grain: Option<crate::material::PieceGrain>,
 ) -> Result<FlatPiece, PipelineError> {
@@ -387,7 +391,7 @@ fn dart_if_wanted(
         mesh,
         f.uv,
         f.info,
-        params,
+        limits,
         settings.as_ref(),
     )?;
     let notches = if darts.is_empty() {
@@ -406,7 +410,8 @@ fn dart_if_wanted(
             .collect()
     };
     let grain = match (grain, before) {
-        (Some(g), Some((m0, uv0))) if !darts.is_empty() => {
+        // Darts that held each thread's limits kept the grain where it was.
+        (Some(g), Some((m0, uv0))) if !darts.is_empty() && limits.threads.is_none() => {
             let uv = mesh.flat.as_deref().unwrap_or_default();
             Some(crate::material::carry_over(&g, (&m0, &uv0), (&mesh, uv)))
         }

@@ -60,7 +60,7 @@ pub fn split_piece(
     let Some(uv) = piece.mesh.flat.clone() else {
         return Ok(whole(piece));
     };
-    if !limited || !piece.darts.is_empty() || darting::within(&piece.mesh, &uv, params) {
+    if !limited || !piece.darts.is_empty() || darting::within(&piece.mesh, &uv, params, None) {
         return Ok(whole(piece));
     }
     let opts = options(&piece, &piece.mesh, params, settings)?;

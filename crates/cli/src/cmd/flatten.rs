@@ -61,9 +61,12 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             ),
         };
         bar.finish_and_clear();
-        let dart_params = match &material {
-            Some(m) => flatcut::material::dart_params(&params, m),
-            None => params.clone(),
+        let dart_limits = match (&material, &grain) {
+            (Some(m), Some(g)) => flatcut::darting::DartLimits {
+                params: flatcut::material::dart_params(&params, m),
+                threads: flatcut::material::dart_threads(&params, m, g),
+            },
+            _ => flatcut::darting::DartLimits::of(&params),
         };
         let before = (mesh.clone(), f.uv.clone());
         let (darted, info, darts) = flatcut::darting::finish(
@@ -72,13 +75,14 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             mesh,
             f.uv,
             f.info,
-            &dart_params,
+            &dart_limits,
             settings.as_ref(),
         )
         .map_err(|e| anyhow::Error::new(e).context(a.file.display().to_string()))?;
         mesh = darted;
         let grain = grain.map(|g| {
-            if darts.is_empty() {
+            // Darts that held each thread's limits kept the grain where it was.
+            if darts.is_empty() || dart_limits.threads.is_some() {
                 g
             } else {
                 let uv = mesh.flat.as_deref().unwrap_or_default();
