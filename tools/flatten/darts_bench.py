@@ -4,8 +4,8 @@ the map within a stretch/compression limit, the total cut length, the worst prin
 by the bench's metrics.py (not by either tool's own report), flips, and time.
 
 usage: python darts_bench.py --bench ../shared/bench --flatcut target/release/flatcut
-                             [--optcuts OptCuts_bin] [--stretch 3] [--compress 3]
-                             [--timeout S] [--out DIR] MESH.obj...
+                             [--optcuts OptCuts_bin] [--optcuts-limits S C]
+                             [--stretch 3] [--compress 3] [--timeout S] [--out DIR] MESH.obj...
 
 flatcut runs `flatten MESH --darts auto --split auto --max-stretch S --max-compress C` (darts
 first; a piece no dart can help, as a saddle, is split into parts); its cut length is the darts'
@@ -13,8 +13,10 @@ first; a piece no dart can help, as a saddle, is split into parts); its cut leng
 the bound is on the area-weighted mean symmetric Dirichlet energy, so the equivalent of a
 per-face limit is the energy of a face stretched by S along one axis and compressed by C across,
 s² + s⁻² + c² + c⁻² with s = 1 + S/100, c = 1 − C/100. A mean bound does not hold every face,
-which is why the table counts the faces beyond the limits for both. OptCuts' cut length is the
-3D length of the interior edges whose two sides have different UV.
+which is why the table counts the faces beyond the limits for both. `--optcuts-limits S C`
+gives OptCuts the bound of other (tighter) limits, to find the bound at which its result, too,
+holds every face within --stretch/--compress. OptCuts' cut length is the 3D length of the
+interior edges whose two sides have different UV.
 """
 import argparse
 import glob
@@ -141,6 +143,8 @@ def main():
     ap.add_argument("--bench", required=True)
     ap.add_argument("--flatcut", required=True)
     ap.add_argument("--optcuts")
+    ap.add_argument("--optcuts-limits", nargs=2, type=float, metavar=("S", "C"),
+                    help="limits (%%) OptCuts' equivalent bound is computed from (default: --stretch, --compress)")
     ap.add_argument("--stretch", type=float, default=3.0)
     ap.add_argument("--compress", type=float, default=3.0)
     ap.add_argument("--timeout", type=float, default=3600.0)
@@ -158,7 +162,8 @@ def main():
             out = os.path.join(root, tag, label)
             shutil.rmtree(out, ignore_errors=True)
             os.makedirs(out)
-            r = run(binary, os.path.abspath(mesh), out, a.stretch, a.compress, a.timeout)
+            s, c = (a.optcuts_limits or (a.stretch, a.compress)) if label == "OptCuts" else (a.stretch, a.compress)
+            r = run(binary, os.path.abspath(mesh), out, s, c, a.timeout)
             if "obj" in r:
                 r.update(measure(a.bench, r["obj"], a.stretch, a.compress))
             r.update({"mesh": tag, "tool": label})
