@@ -160,6 +160,7 @@ pub fn boundary_isometric(
         edges: edges.clone(),
         weight: INITIAL_WEIGHT,
         hold: None,
+        align: Vec::new(),
     };
     // One problem (and one symbolic factorisation) for every outer iteration: only the
     // multipliers and the weight change between them.

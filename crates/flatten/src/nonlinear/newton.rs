@@ -64,8 +64,9 @@ const HOLD_PROGRESS: f64 = 0.9;
 
 /// Edge-length terms of an augmented Lagrangian, L²·(λ c + w c²/2) with
 /// c = (|x_b − x_a|² − L²)/L²: the boundary-isometric method holds its boundary with them, the
-/// darts pull their legs to equal lengths.
-#[derive(Clone, Debug)]
+/// darts pull their legs to equal lengths. Also [`DirectionTerm`]s, which turn a vector of the
+/// map towards a direction (the darts hold a grain line's direction with them).
+#[derive(Clone, Debug, Default)]
 pub struct EdgeTerms {
     /// (a, b, rest length L).
     pub edges: Vec<(usize, usize, f64)>,
@@ -78,6 +79,32 @@ pub struct EdgeTerms {
     /// a small decrease while the lengths are further off and still coming closer. `None`: the
     /// multipliers stay as given (a penalty solve).
     pub hold: Option<f64>,
+    /// Direction terms.
+    pub align: Vec<DirectionTerm>,
+}
+
+/// k·(v × t)² for the vector v = Σ coef_i x_{verts_i} of a triangle's corners (the image of a
+/// direction of its rest frame is one: F a = Σ (g_i·a) x_i): zero when v lies along the unit
+/// direction t, k·|v|² sin² of the angle between them otherwise.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectionTerm {
+    pub verts: [usize; 3],
+    pub coef: [f64; 3],
+    pub t: DVec2,
+    pub k: f64,
+}
+
+impl DirectionTerm {
+    /// n = t⊥ with v × t = v·n.
+    fn normal(&self) -> DVec2 {
+        DVec2::new(self.t.y, -self.t.x)
+    }
+
+    /// v × t.
+    fn value(&self, x: &[DVec2]) -> f64 {
+        let v: DVec2 = (0..3).map(|i| self.coef[i] * x[self.verts[i]]).sum();
+        v.dot(self.normal())
+    }
 }
 
 impl EdgeTerms {
@@ -116,6 +143,10 @@ impl EdgeTerms {
             let c = self.constraint(e, x);
             s += l * l * (self.lambda[e] * c + 0.5 * self.weight * c * c);
         }
+        for d in &self.align {
+            let c = d.value(x);
+            s += d.k * c * c;
+        }
         s
     }
 }
@@ -131,6 +162,8 @@ pub struct MapProblem<'a, E> {
     /// Per triangle: slot in `sys.values` of each local dof pair (p ≤ q), in [`PAIRS`] order.
     tri_slots: Vec<[u32; 21]>,
     edge_slots: Vec<[u32; 16]>,
+    /// Per direction term: slot of each pair of its 6 dofs (row-major 6×6).
+    align_slots: Vec<[u32; 36]>,
     /// Σ A_t, to report mean densities.
     pub total_area: f64,
 }
@@ -161,6 +194,23 @@ fn edge_slots(sys: &SpdSystem, edges: Option<&EdgeTerms>) -> Vec<[u32; 16]> {
                     let s = slots_for(sys, &[2 * a, 2 * a + 1, 2 * b, 2 * b + 1]);
                     let mut o = [u32::MAX; 16];
                     o.copy_from_slice(&s);
+                    o
+                })
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// The slots of each direction term's 6×6 block (its three corners' u and v).
+fn align_slots(sys: &SpdSystem, edges: Option<&EdgeTerms>) -> Vec<[u32; 36]> {
+    edges
+        .map(|e| {
+            e.align
+                .iter()
+                .map(|d| {
+                    let dofs = d.verts.map(|v| [2 * v, 2 * v + 1]).concat();
+                    let mut o = [u32::MAX; 36];
+                    o.copy_from_slice(&slots_for(sys, &dofs));
                     o
                 })
                 .collect()
@@ -219,6 +269,7 @@ impl<'a, E> MapProblem<'a, E> {
             })
             .collect();
         let edge_slots = edge_slots(&sys, edges.as_ref());
+        let align_slots = align_slots(&sys, edges.as_ref());
         let total_area = rest.iter().map(|r| r.area).sum();
         Ok(Self {
             rest,
@@ -228,6 +279,7 @@ impl<'a, E> MapProblem<'a, E> {
             sys,
             tri_slots,
             edge_slots,
+            align_slots,
             total_area,
         })
     }
@@ -244,6 +296,7 @@ impl<'a, E> MapProblem<'a, E> {
             sys: self.sys,
             tri_slots: self.tri_slots,
             edge_slots: self.edge_slots,
+            align_slots: self.align_slots,
             total_area: self.total_area,
         }
     }
@@ -252,6 +305,7 @@ impl<'a, E> MapProblem<'a, E> {
     /// the entries of edges in the mesh's pattern enter the Hessian.
     pub fn with_edges(mut self, edges: Option<EdgeTerms>) -> Self {
         self.edge_slots = edge_slots(&self.sys, edges.as_ref());
+        self.align_slots = align_slots(&self.sys, edges.as_ref());
         self.edges = edges;
         self
     }
@@ -374,6 +428,32 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
                         if s != u32::MAX {
                             let sign = if (p < 2) == (q < 2) { 1.0 } else { -1.0 };
                             self.sys.values[s as usize] += sign * h[p % 2][q % 2];
+                        }
+                    }
+                }
+            }
+            // Direction terms: c = v·n, linear in the corners (∂c/∂x_i = coef_i n); energy
+            // k c², gradient 2k c coef_i n, Hessian 2k coef_i coef_j n nᵀ.
+            for (j, d) in e.align.iter().enumerate() {
+                let n = d.normal();
+                let c = d.value(x);
+                en += d.k * c * c;
+                for i in 0..3 {
+                    let gi = 2.0 * d.k * c * d.coef[i] * n;
+                    g[2 * d.verts[i]] += gi.x;
+                    g[2 * d.verts[i] + 1] += gi.y;
+                }
+                if !hessian {
+                    continue;
+                }
+                let nn = [n.x, n.y];
+                let slots = &self.align_slots[j];
+                for p in 0..6 {
+                    for q in 0..6 {
+                        let s = slots[p * 6 + q];
+                        if s != u32::MAX {
+                            let h = 2.0 * d.k * d.coef[p / 2] * d.coef[q / 2];
+                            self.sys.values[s as usize] += h * nn[p % 2] * nn[q % 2];
                         }
                     }
                 }
