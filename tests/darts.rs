@@ -538,6 +538,65 @@ fn darts_for_a_material_hold_its_limits_in_every_direction() {
 }
 
 #[test]
+fn darts_per_thread_keep_the_warp_on_the_designs_grain_line() {
+    // The thread limits turn with the map: the darted piece must still put the warp along the
+    // grain line the design draws on the surface, here 30° off the x axis.
+    let Some(cap) = bench_mesh("sphcap_a100_2k") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(&cap, dir.path().join("cap.obj")).unwrap();
+    let g = DVec3::new(30f64.to_radians().cos(), 30f64.to_radians().sin(), 0.0);
+    let (a, b) = (-50.0 * g + 100.0 * DVec3::Z, 50.0 * g + 100.0 * DVec3::Z);
+    let design = dir.path().join("cap.toml");
+    std::fs::write(
+        &design,
+        format!(
+            "[[piece]]\nname = \"cap\"\ndarts = \"auto\"\nmaterial_properties = \"woven-cotton\"\ngrain = [[{}, {}, {}], [{}, {}, {}]]\n[piece.surface]\ntype = \"mesh\"\nfile = \"cap.obj\"\n",
+            a.x, a.y, a.z, b.x, b.y, b.z
+        ),
+    )
+    .unwrap();
+    let flat = dir.path().join("flat.obj");
+    let report = dir.path().join("r.json");
+    let code = run_cli(&[
+        "flatten",
+        design.to_str().unwrap(),
+        "-o",
+        flat.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        format!("{code:?}"),
+        format!("{:?}", std::process::ExitCode::SUCCESS)
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let r = if r.is_array() { r[0].clone() } else { r };
+    assert!(!reported_darts(&r).is_empty(), "the cap needs a dart: {r}");
+    let o = read_obj(&flat);
+    assert_threads_within(&o, &r);
+    // Around the pole, the image of the grain line's direction runs along the pattern's warp
+    // (+x): F a for a the line's direction in each face's frame.
+    let mut worst: f64 = 0.0;
+    for t in &o.f {
+        let [p0, p1, p2] = t.map(|c| o.v[c.0]);
+        if ((p0 + p1 + p2) / 3.0 - 100.0 * DVec3::Z).length() > 10.0 {
+            continue;
+        }
+        let (e1, e2) = (p1 - p0, p2 - p0);
+        let x = e1.normalize();
+        let y = e1.cross(e2).cross(e1).normalize();
+        let [ja, jb, jc, jd] = face_jacobian(&o, t);
+        let (ax, ay) = (g.dot(x), g.dot(y));
+        let image = DVec2::new(ja * ax + jb * ay, jc * ax + jd * ay);
+        worst = worst.max(image.y.atan2(image.x).abs().to_degrees());
+    }
+    assert!(worst < 1.0, "the warp runs {worst:.2}° off the grain line");
+}
+
+#[test]
 fn a_woven_dome_takes_its_curvature_on_the_bias_and_needs_fewer_darts() {
     // Woven cotton hardly stretches along its threads (2 %, 3 %) but shears freely (15 % on the
     // bias): darts for its thread limits leave the dome's curvature to the bias, where darts for

@@ -465,7 +465,7 @@ pub fn reach(
     effort: Effort,
 ) -> Result<Held, LimitError> {
     let rest = rest_frames(mesh).map_err(LimitError::Degenerate)?;
-    let mut solves = solve::Solves::new(&rest, mesh.positions.len());
+    let mut solves = solves(mesh, &rest, limits);
     let mut x = x0.to_vec();
     let mut iterations = 0;
     let (mut e, mut worst) = max_excess(&rest, &x, limits);
@@ -580,7 +580,7 @@ pub fn settle(
     pairs: &EdgePairs,
 ) -> Result<Held, LimitError> {
     let rest = rest_frames(mesh).map_err(LimitError::Degenerate)?;
-    let mut solves = solve::Solves::new(&rest, mesh.positions.len());
+    let mut solves = solves(mesh, &rest, limits);
     let mut x = x0.to_vec();
     let mut iterations = 0;
     for (i, mu) in INTERIOR_MU.iter().enumerate() {
@@ -601,6 +601,16 @@ pub fn settle(
         feasible: e <= 0.0,
         iterations,
     })
+}
+
+/// The solves of a limit solve on `mesh`: with a grain line held where the limits are a
+/// material's threads anchored on the surface.
+fn solves<'a>(mesh: &TriMesh, rest: &'a [RestTri], limits: &Limits) -> solve::Solves<'a> {
+    let s = solve::Solves::new(rest, mesh.positions.len());
+    match limits {
+        Limits::Threads(t) => s.with_align(t.anchor_terms(mesh, rest)),
+        Limits::Band(_) => s,
+    }
 }
 
 /// Relative energy decrease at which the search's solves stop: the excess is resolved to far

@@ -10,7 +10,7 @@
 //! the solves on it.
 
 use flatcut_flatten::nonlinear::kernel::{RestTri, TriEnergy};
-use flatcut_flatten::nonlinear::newton::{self, Budget, EdgeTerms, MapProblem};
+use flatcut_flatten::nonlinear::newton::{self, Budget, DirectionTerm, EdgeTerms, MapProblem};
 use flatcut_geom::DVec2;
 
 /// Pairs of edges (vertex index pairs of the cut mesh) that must keep equal 2D lengths: the two
@@ -53,6 +53,8 @@ pub struct Solves<'a> {
     rest: &'a [RestTri],
     n: usize,
     problem: Option<MapProblem<'a, ()>>,
+    /// Direction terms added to every solve (a grain line held).
+    align: Vec<DirectionTerm>,
 }
 
 impl<'a> Solves<'a> {
@@ -62,7 +64,14 @@ impl<'a> Solves<'a> {
             rest,
             n,
             problem: None,
+            align: Vec::new(),
         }
+    }
+
+    /// Solves with the direction terms `align` added to every energy.
+    pub fn with_align(mut self, align: Vec<DirectionTerm>) -> Self {
+        self.align = align;
+        self
     }
 
     /// Runs projected Newton on `energy` from the flip-free map `x0` for at most `max_iters`
@@ -84,7 +93,10 @@ impl<'a> Solves<'a> {
         let pairs = pairs.filter(|p| !p.pairs.is_empty());
         let Some(pairs) = pairs else {
             let (r, p) = newton::run(
-                problem.with_edges(None),
+                problem.with_edges((!self.align.is_empty()).then(|| EdgeTerms {
+                    align: self.align.clone(),
+                    ..Default::default()
+                })),
                 x0,
                 max_iters,
                 rel,
@@ -107,6 +119,7 @@ impl<'a> Solves<'a> {
                 edges.push((*c, *d, l));
             }
             let terms = EdgeTerms {
+                align: self.align.clone(),
                 lambda: vec![0.0; edges.len()],
                 edges,
                 weight: PAIR_WEIGHT,

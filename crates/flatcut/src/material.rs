@@ -2,14 +2,14 @@
 //! a project, `material_properties` in a piece) is flattened with the orthotropic energy along
 //! its grain (`flatcut_flatten::Method::Orthotropic`), its report checks the material's limits
 //! along, across and on the bias ([`flatcut_report::GrainReport`]), and darts, when asked for,
-//! hold each of those limits on its own thread where the grain is chosen ([`dart_threads`],
-//! [`flatcut_darts::Threads`]): a woven fabric takes a dome's curvature on its bias and needs
-//! darts only for what is beyond that. The darted piece is flattened again by the darts' solve,
-//! and its threads run along the pattern direction the darts were solved with. Where the run
-//! gives its own limits too (`--max-stretch`/`--max-compress`, on the principal stretches), or
-//! the design fixes the grain line, darts hold the tightest of the limits as one band on the
-//! principal stretches ([`dart_params`]): a direction's stretch lies between the principal
-//! stretches, so a piece within that band is within every direction's.
+//! hold each of those limits on its own thread ([`dart_threads`], [`flatcut_darts::Threads`]):
+//! a woven fabric takes a dome's curvature on its bias and needs darts only for what is beyond
+//! that. The darted piece is flattened again by the darts' solve, and its threads run along the
+//! pattern direction the darts were solved with; a design's grain line is held on the surface.
+//! Where the run gives its own limits too (`--max-stretch`/`--max-compress`, on the principal
+//! stretches), darts hold the tightest of the limits as one band on the principal stretches
+//! ([`dart_params`]): a direction's stretch lies between the principal stretches, so a piece
+//! within that band is within every direction's.
 
 use flatcut_design::material::MaterialSpec;
 use flatcut_design::{GrainDef, PieceDef};
@@ -112,18 +112,31 @@ pub fn flatten(
     ))
 }
 
-/// The per-thread limits darts hold for a piece of material `m` whose grain lies along
+/// The per-thread limits darts hold for a piece `mesh` of material `m` whose grain lies along
 /// `g.pattern_dir` in its map; `None` (darts hold [`dart_params`]' band) where the run gives
-/// limits of its own, or where the design fixes the grain line: the thread limits turn with the
-/// map, and the darts' solve does not hold the grain line's direction on the surface, so the
-/// threads could end up a few degrees off the line. A chosen grain is where the solve leaves it.
+/// limits of its own. The thread limits turn with the map, so where the design fixes the grain
+/// line (`grain`), the darts' solve holds the warp along the line's direction at the piece's
+/// central face (where the orthotropic flattening put the grain and a split finds it again); a
+/// chosen grain goes where the solve puts it.
 pub fn dart_threads(
     params: &FlattenParams,
     m: &MaterialSpec,
     g: &PieceGrain,
+    grain: Option<&GrainDef>,
+    mesh: &TriMesh,
 ) -> Option<flatcut_darts::Threads> {
-    (g.auto && params.max_stretch_pct.is_none() && params.max_compress_pct.is_none())
-        .then(|| flatcut_darts::Threads::new(&limits(m), g.pattern_dir))
+    if params.max_stretch_pct.is_some() || params.max_compress_pct.is_some() {
+        return None;
+    }
+    let threads = flatcut_darts::Threads::new(&limits(m), g.pattern_dir);
+    let line = grain.and_then(GrainDef::line);
+    Some(match (line, central_face(mesh)) {
+        (Some([a, b]), Some(t)) => threads.with_anchor(
+            centroid(mesh, t),
+            DVec3::from_array(*b) - DVec3::from_array(*a),
+        ),
+        _ => threads,
+    })
 }
 
 /// The parameters darts are placed with for a piece of material `m`: the tightest of its limits

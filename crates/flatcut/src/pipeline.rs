@@ -258,7 +258,13 @@ pub fn flatten_design(
                         )?;
                         let limits = DartLimits {
                             params: crate::material::dart_params(params, m),
-                            threads: crate::material::dart_threads(params, m, &g),
+                            threads: crate::material::dart_threads(
+                                params,
+                                m,
+                                &g,
+                                p.def.grain.as_ref(),
+                                &p.mesh,
+                            ),
                         };
                         (f, Some(g), limits)
                     }

@@ -64,7 +64,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         let dart_limits = match (&material, &grain) {
             (Some(m), Some(g)) => flatcut::darting::DartLimits {
                 params: flatcut::material::dart_params(&params, m),
-                threads: flatcut::material::dart_threads(&params, m, g),
+                threads: flatcut::material::dart_threads(&params, m, g, None, &mesh),
             },
             _ => flatcut::darting::DartLimits::of(&params),
         };
