@@ -364,8 +364,6 @@ impl TriEnergy for ThreadBarrier {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flatcut_geom::DVec3;
-    use flatcut_mesh::TriMesh;
     use flatcut_mesh::grain_strain::{ByDirection, grain_strain_of};
 
     fn woven() -> DirectionalLimits {
@@ -384,14 +382,7 @@ mod tests {
     }
 
     fn one_triangle() -> (RestTri, Vec<DVec2>) {
-        let m = TriMesh::new(
-            vec![
-                DVec3::new(0.0, 0.0, 0.0),
-                DVec3::new(2.0, 0.3, 0.1),
-                DVec3::new(0.4, 1.7, -0.2),
-            ],
-            vec![[0, 1, 2]],
-        );
+        let m = flatcut_flatten::testmesh::skew_triangle();
         let rest = flatcut_flatten::nonlinear::kernel::rest_frames(&m).unwrap()[0];
         // A map near the rest shape, sheared on the bias.
         let dm = rest.dm_inv.inverse();

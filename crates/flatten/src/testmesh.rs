@@ -11,6 +11,18 @@ use std::f64::consts::TAU;
 use flatcut_geom::{DVec2, DVec3};
 use flatcut_mesh::TriMesh;
 
+/// One scalene triangle tilted out of every coordinate plane, for per-triangle energy tests.
+pub fn skew_triangle() -> TriMesh {
+    TriMesh::new(
+        vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(2.0, 0.3, 0.1),
+            DVec3::new(0.4, 1.7, -0.2),
+        ],
+        vec![[0, 1, 2]],
+    )
+}
+
 /// A spherical cap of sphere radius `radius` and geodesic radius `alpha` (radians, < π),
 /// centred on the +z pole, with `rings` concentric rings (ring k has 6k vertices, all
 /// rings start at longitude 0). Triangles are counter-clockwise seen from outside.

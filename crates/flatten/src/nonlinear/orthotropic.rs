@@ -160,8 +160,6 @@ mod tests {
     use super::*;
     use crate::nonlinear::kernel::tests::check_fd;
     use crate::nonlinear::kernel::{GreenStrain, rest_frames, tri_energy, tri_eval};
-    use flatcut_geom::DVec3;
-    use flatcut_mesh::TriMesh;
 
     #[test]
     fn derivatives_match_finite_differences() {
@@ -183,15 +181,7 @@ mod tests {
     }
 
     fn one_triangle() -> (Vec<RestTri>, Vec<DVec2>) {
-        let m = TriMesh::new(
-            vec![
-                DVec3::new(0.0, 0.0, 0.0),
-                DVec3::new(2.0, 0.3, 0.1),
-                DVec3::new(0.4, 1.7, -0.2),
-            ],
-            vec![[0, 1, 2]],
-        );
-        let rest = rest_frames(&m).unwrap();
+        let rest = rest_frames(&crate::testmesh::skew_triangle()).unwrap();
         let x = vec![
             DVec2::new(0.1, 0.0),
             DVec2::new(2.2, 0.5),
