@@ -118,7 +118,9 @@ pub fn keep_out(def: Option<&PieceDef>, mesh: &TriMesh) -> Result<KeepOut, Pipel
 
 /// Darts for a flattened piece (`mesh` with `uv`) that exceeds the limits of `params` (or of
 /// `threads`, per thread, when given); `None` when it is within them already. Fails when no
-/// darts bring it within them.
+/// darts bring it within them. The flag says whether the darts held the threads' limits: where
+/// no darts do (their final map closing past a mouth, say), the piece is darted for the tightest
+/// band of `params` instead, as it would have been without them, and the flag is false.
 pub fn dart_piece(
     name: &str,
     def: Option<&PieceDef>,
@@ -126,7 +128,7 @@ pub fn dart_piece(
     uv: &[DVec2],
     limits: &DartLimits,
     settings: &DartSettings,
-) -> Result<Option<Darted>, PipelineError> {
+) -> Result<Option<(Darted, bool)>, PipelineError> {
     let (params, threads) = (&limits.params, limits.threads.as_ref());
     if params.max_stretch_pct.is_none() && params.max_compress_pct.is_none() {
         return Ok(None);
@@ -134,26 +136,39 @@ pub fn dart_piece(
     if within(mesh, uv, params, threads) {
         return Ok(None);
     }
-    let mut opts = DartOptions::new(params.max_stretch_pct, params.max_compress_pct)
+    let band = DartOptions::new(params.max_stretch_pct, params.max_compress_pct)
         .with_max_darts(settings.max_darts)
         .with_min_spacing_mm(settings.min_spacing_mm)
         .with_drill_offset_mm(settings.drill_offset_mm)
         .with_keep_out(keep_out(def, mesh)?);
-    if let Some(t) = threads {
-        opts = opts.with_threads(*t);
+    if let Some(t) = threads
+        && let Ok(d) = flatcut_darts::place(mesh, uv, &band.clone().with_threads(*t))
+    {
+        return Ok(Some((d, true)));
     }
-    flatcut_darts::place(mesh, uv, &opts)
-        .map(Some)
+    flatcut_darts::place(mesh, uv, &band)
+        .map(|d| Some((d, false)))
         .map_err(|source| PipelineError::Darts {
             piece: name.to_string(),
             source,
         })
 }
 
+/// A piece after [`finish`].
+pub struct Finished {
+    /// The mesh, cut along the darts when there are any, with `flat` set.
+    pub mesh: TriMesh,
+    /// The flattening's info (its limit warnings dropped when darts brought the piece within
+    /// them).
+    pub info: FlattenInfo,
+    pub darts: Vec<Dart>,
+    /// True when the map keeps the grain where it lay in the flattening's map: no darts, or
+    /// darts that held the threads' limits along it. False: the grain is to be found again.
+    pub grain_kept: bool,
+}
+
 /// A flattened piece (`mesh` with its map `uv`) with darts when `settings` asks for them and the
-/// piece needs them: the mesh (cut along the darts when there are any) with `flat` set, the
-/// flattening's info (its limit warnings dropped when darts brought the piece within them) and
-/// the darts. With per-thread limits, the darted map keeps the grain where it lay in `uv`.
+/// piece needs them ([`dart_piece`]).
 pub fn finish(
     name: &str,
     def: Option<&PieceDef>,
@@ -162,15 +177,30 @@ pub fn finish(
     mut info: FlattenInfo,
     limits: &DartLimits,
     settings: Option<&DartSettings>,
-) -> Result<(TriMesh, FlattenInfo, Vec<Dart>), PipelineError> {
+) -> Result<Finished, PipelineError> {
     if let Some(settings) = settings
-        && let Some(d) = dart_piece(name, def, &mesh, &uv, limits, settings)?
+        && let Some((d, per_thread)) = dart_piece(name, def, &mesh, &uv, limits, settings)?
     {
         info.warnings.clear();
-        return Ok((d.mesh, info, d.darts));
+        if limits.threads.is_some() && !per_thread {
+            info.warnings.push(format!(
+                "{name}: no darts held the material's limits thread by thread, so the darts hold the tightest of them on every direction (more darts than the threads would need)"
+            ));
+        }
+        return Ok(Finished {
+            mesh: d.mesh,
+            info,
+            darts: d.darts,
+            grain_kept: per_thread,
+        });
     }
     mesh.flat = Some(uv);
-    Ok((mesh, info, Vec::new()))
+    Ok(Finished {
+        mesh,
+        info,
+        darts: Vec::new(),
+        grain_kept: true,
+    })
 }
 
 /// The report's view of a piece's darts.
@@ -198,4 +228,49 @@ pub fn is_out_of_limits(e: &PipelineError) -> bool {
             ..
         }
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flatcut_flatten::anisotropy::{ByDirection, DirectionalLimits};
+    use flatcut_flatten::testmesh::spherical_cap;
+
+    #[test]
+    fn darts_fall_back_to_the_band_where_no_darts_hold_the_threads() {
+        // Thread limits of 0 % no darts can meet, with a band of 5 % / 2 % they can: the band's
+        // darts are the answer, the grain is to be found again, and the run says why.
+        let mesh = spherical_cap(100.0, 0.8, 12);
+        let params = FlattenParams::new(flatcut_flatten::Method::Isometric)
+            .with_max_stretch_pct(Some(5.0))
+            .with_max_compress_pct(Some(2.0));
+        let f = flatcut_flatten::flatten(&mesh, &params).unwrap();
+        let none = ByDirection {
+            along: 0.0,
+            across: 0.0,
+            bias: 0.0,
+        };
+        let zero = DirectionalLimits {
+            stretch_pct: none,
+            compress_pct: none,
+        };
+        let limits = DartLimits {
+            params: params.clone(),
+            threads: Some(Threads::new(&zero, DVec2::X)),
+        };
+        let settings = DartSettings {
+            max_darts: 4,
+            ..Default::default()
+        };
+        let done = finish("cap", None, mesh, f.uv, f.info, &limits, Some(&settings)).unwrap();
+        assert!(!done.darts.is_empty());
+        assert!(!done.grain_kept);
+        assert!(
+            done.info.warnings.iter().any(|w| w.contains("tightest")),
+            "{:?}",
+            done.info.warnings
+        );
+        let uv = done.mesh.flat.as_deref().unwrap();
+        assert!(within(&done.mesh, uv, &params, None));
+    }
 }

@@ -391,7 +391,12 @@ fn dart_if_wanted(
         .iter()
         .map(|n| mesh.positions[n.vertex as usize])
         .collect();
-    let (mesh, info, darts) = darting::finish(
+    let darting::Finished {
+        mesh,
+        info,
+        darts,
+        grain_kept,
+    } = darting::finish(
         &def.name,
         Some(&def),
         mesh,
@@ -416,8 +421,7 @@ fn dart_if_wanted(
             .collect()
     };
     let grain = match (grain, before) {
-        // Darts that held each thread's limits kept the grain where it was.
-        (Some(g), Some((m0, uv0))) if !darts.is_empty() && limits.threads.is_none() => {
+        (Some(g), Some((m0, uv0))) if !grain_kept => {
             let uv = mesh.flat.as_deref().unwrap_or_default();
             Some(crate::material::carry_over(&g, (&m0, &uv0), (&mesh, uv)))
         }

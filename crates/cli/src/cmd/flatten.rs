@@ -69,7 +69,12 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             _ => flatcut::darting::DartLimits::of(&params),
         };
         let before = (mesh.clone(), f.uv.clone());
-        let (darted, info, darts) = flatcut::darting::finish(
+        let flatcut::darting::Finished {
+            mesh: darted,
+            info,
+            darts,
+            grain_kept,
+        } = flatcut::darting::finish(
             &name,
             None,
             mesh,
@@ -81,8 +86,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         .map_err(|e| anyhow::Error::new(e).context(a.file.display().to_string()))?;
         mesh = darted;
         let grain = grain.map(|g| {
-            // Darts that held each thread's limits kept the grain where it was.
-            if darts.is_empty() || dart_limits.threads.is_some() {
+            if grain_kept {
                 g
             } else {
                 let uv = mesh.flat.as_deref().unwrap_or_default();
