@@ -2,7 +2,7 @@
 //! a project, `material_properties` in a piece) is flattened with the orthotropic energy along
 //! its grain (`flatcut_flatten::Method::Orthotropic`), its report checks the material's limits
 //! along, across and on the bias ([`flatcut_report::GrainReport`]), and darts, when asked for,
-//! hold each of those limits on its own thread ([`dart_threads`], [`flatcut_darts::Threads`]):
+//! hold each of those limits on its own thread ([`dart_limits`], [`flatcut_darts::Threads`]):
 //! a woven fabric takes a dome's curvature on its bias and needs darts only for what is beyond
 //! that. The darted piece is flattened again by the darts' solve, and its threads run along the
 //! pattern direction the darts were solved with; a design's grain line is held on the surface.
@@ -112,13 +112,29 @@ pub fn flatten(
     ))
 }
 
+/// The limits darts hold for a piece `mesh` of material `m` whose grain lies along
+/// `g.pattern_dir` in its map and is drawn as `grain` by the design: [`dart_params`]' band, and
+/// the per-thread limits where they apply (`dart_threads`).
+pub fn dart_limits(
+    params: &FlattenParams,
+    m: &MaterialSpec,
+    g: &PieceGrain,
+    grain: Option<&GrainDef>,
+    mesh: &TriMesh,
+) -> crate::darting::DartLimits {
+    crate::darting::DartLimits {
+        params: dart_params(params, m),
+        threads: dart_threads(params, m, g, grain, mesh),
+    }
+}
+
 /// The per-thread limits darts hold for a piece `mesh` of material `m` whose grain lies along
 /// `g.pattern_dir` in its map; `None` (darts hold [`dart_params`]' band) where the run gives
 /// limits of its own. The thread limits turn with the map, so where the design fixes the grain
 /// line (`grain`), the darts' solve holds the warp along the line's direction at the piece's
 /// central face (where the orthotropic flattening put the grain and a split finds it again); a
 /// chosen grain goes where the solve puts it.
-pub fn dart_threads(
+fn dart_threads(
     params: &FlattenParams,
     m: &MaterialSpec,
     g: &PieceGrain,
@@ -141,8 +157,8 @@ pub fn dart_threads(
 
 /// The parameters darts are placed with for a piece of material `m`: the tightest of its limits
 /// (and of the run's own limits, where given) as the isotropic band; with no limits of the run's
-/// own, [`dart_threads`] replaces the band in the solve, and the band only says that darts are
-/// asked for limits.
+/// own, the per-thread limits of [`dart_limits`] replace the band in the solve, and the band
+/// only says that darts are asked for limits.
 pub fn dart_params(params: &FlattenParams, m: &MaterialSpec) -> FlattenParams {
     let (s, c) = m.tightest_pct();
     let tight = |run: Option<f64>, mat: f64| Some(run.map_or(mat, |r| r.min(mat)));

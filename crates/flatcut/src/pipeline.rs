@@ -256,16 +256,13 @@ pub fn flatten_design(
                             m,
                             p.def.grain.as_ref(),
                         )?;
-                        let limits = DartLimits {
-                            params: crate::material::dart_params(params, m),
-                            threads: crate::material::dart_threads(
-                                params,
-                                m,
-                                &g,
-                                p.def.grain.as_ref(),
-                                &p.mesh,
-                            ),
-                        };
+                        let limits = crate::material::dart_limits(
+                            params,
+                            m,
+                            &g,
+                            p.def.grain.as_ref(),
+                            &p.mesh,
+                        );
                         (f, Some(g), limits)
                     }
                     None => (f, None, DartLimits::of(params)),

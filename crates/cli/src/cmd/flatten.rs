@@ -62,10 +62,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         };
         bar.finish_and_clear();
         let dart_limits = match (&material, &grain) {
-            (Some(m), Some(g)) => flatcut::darting::DartLimits {
-                params: flatcut::material::dart_params(&params, m),
-                threads: flatcut::material::dart_threads(&params, m, g, None, &mesh),
-            },
+            (Some(m), Some(g)) => flatcut::material::dart_limits(&params, m, g, None, &mesh),
             _ => flatcut::darting::DartLimits::of(&params),
         };
         let before = (mesh.clone(), f.uv.clone());
