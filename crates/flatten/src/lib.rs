@@ -28,6 +28,7 @@ pub mod nonlinear;
 pub(crate) mod ops;
 pub(crate) mod ordering;
 pub mod params;
+pub(crate) mod refine;
 pub(crate) mod sparse;
 /// Generated test surfaces (caps, cylinders, cones, saddles): for this crate's tests, benches
 /// and examples only (feature `test-support`), not part of the public API.

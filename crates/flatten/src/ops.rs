@@ -228,7 +228,7 @@ impl QuadraticBuilder {
         let mut solver = SpdSolver::new(&pattern, stage)?;
         let values = solver.gather(&pattern, &values)?;
         drop(pattern);
-        solver.factor(&values)?;
+        solver.factor(values)?;
         Ok(Reduced {
             free: self.free,
             coupling: self.coupling,

@@ -16,9 +16,15 @@
 //! 25 % slower with two), above it two threads factor 1.15–1.2× faster. faer's parallel
 //! supernodal factorisation splits the dense updates by output blocks, so the factor is the
 //! same bits with any number of threads (checked by `the_parallel_factorisation_gives_the_same_bits`).
+//!
+//! A solver asked for refined solves ([`SpdSolver::refined`]) makes large factors ([`SINGLE_PRECISION_FROM`]) in
+//! single precision, half the memory, and refines every solve with them by conjugate gradients
+//! on the double-precision matrix it holds ([`crate::refine`]), to the residual the caller needs
+//! (a Newton direction far less than a map). A matrix that single precision cannot factor, and a
+//! solve whose refinement stalls, fall back to a double-precision factor.
 
 use faer::Par;
-use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::amd;
 use faer::sparse::linalg::cholesky::{
@@ -26,10 +32,14 @@ use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky,
 };
 use faer::sparse::{Argsort, Pair, SparseColMat, SparseColMatRef, SymbolicSparseColMat};
+use faer::traits::ComplexField;
 use faer::{Conj, MatMut, Side};
+
+use std::sync::atomic::{AtomicBool, Ordering as Memory};
 
 use crate::FlattenError;
 use crate::ordering;
+use crate::refine::preconditioned_cg;
 
 /// Nodes (mesh vertices) from which the factorisations use nested dissection instead of AMD.
 /// Measured on triangulated grids (`nested_dissection_fills_a_grid_mesh_no_more_than_amd`), the
@@ -44,6 +54,28 @@ pub const PAR: Par = Par::Seq;
 /// Values of the Cholesky factor from which the numeric factorisation runs in parallel (a
 /// 100k-face map has about 8M: two threads were 5 % faster there, 17 % at 200k faces).
 pub const PARALLEL_FACTOR_FROM: usize = 8_000_000;
+
+/// Values of the Cholesky factor from which a solver asked for refined solves
+/// ([`SpdSolver::refined`]) makes it in single precision and refines its solutions by conjugate
+/// gradients on the double-precision matrix ([`crate::refine`]). The factor is most of a large
+/// map's memory (1.03 GB of 1.58 at a million faces), and single precision halves it. Below, the
+/// factor is double precision and a solve is two triangular solves.
+pub const SINGLE_PRECISION_FROM: usize = 40_000_000;
+
+/// The relative residual at which a refined solve ends unless its solver says otherwise (a
+/// double-precision triangular solve of these systems leaves about 1e-14).
+const REFINE_TOL: f64 = 1e-12;
+
+/// Most conjugate-gradient steps of a refined solve that keep single precision worth it; a solver
+/// whose refinement takes more makes its later factors in double precision. A step is a
+/// single-precision triangular solve (0.16 s at a million faces). An isometric Newton solve
+/// takes 1–2 steps to its tolerance, and is 0.9× the double-precision time; f1's, whose length
+/// constraints stiffen the system, took 5–7, and were 1.19× slower in single precision.
+const REFINE_CHEAP: usize = 4;
+
+/// Most conjugate-gradient iterations of a refined solve; a single-precision factor of these
+/// systems takes 2–7 to 1e-12 on a Newton system, 31 on a million-face LSCM system.
+const REFINE_MAX: usize = 50;
 
 /// Entries of a symmetric matrix, accumulated as `(row, col, value)` triplets. Only the lower
 /// triangle is stored: an entry above the diagonal is mirrored below it. Duplicate positions
@@ -277,18 +309,7 @@ impl SymPattern {
 /// [`SymPattern::matrix`]).
 #[cfg(test)]
 pub fn sym_mul(lower: &SparseColMat<usize, f64>, x: &[f64], y: &mut [f64]) {
-    y.iter_mut().for_each(|v| *v = 0.0);
-    let a = lower.as_ref();
-    for j in 0..a.ncols() {
-        let rows = a.symbolic().row_idx_of_col_raw(j);
-        let vals = a.val_of_col(j);
-        for (&i, &v) in rows.iter().zip(vals) {
-            y[i] += v * x[j];
-            if i != j {
-                y[j] += v * x[i];
-            }
-        }
-    }
+    lower_mul(lower.as_ref(), x, y);
 }
 
 /// The fill-reducing ordering of a factorisation.
@@ -416,16 +437,30 @@ pub struct SpdSolver {
     /// The pattern of P A Pᵀ's lower triangle.
     lower: SymbolicSparseColMat<usize>,
     symbolic: SymbolicCholesky<usize>,
-    l_values: Vec<f64>,
+    /// The matrix: the values of P A Pᵀ's lower triangle, in the order of [`SpdSolver::slot`].
+    values: Vec<f64>,
+    /// The storage of the factor, kept between factorisations.
+    factor: Factor,
+    /// Whether `factor` is the factor of `values`.
     factored: bool,
+    /// The relative residual solves are refined to, when factorisations are made in single
+    /// precision ([`SpdSolver::refined`]).
+    refine: Option<f64>,
+    /// Set by a refined solve that took more than [`REFINE_CHEAP`] steps: the factorisations
+    /// after it are made in double precision.
+    slow_refinement: AtomicBool,
     /// Parallelism of the numeric factorisation.
     par: Par,
     /// Workspace of the numeric factorisation, kept between factorisations.
     scratch: Option<Scratch>,
 }
 
-/// A factorisation workspace (faer's buffer, which has no `Debug`).
-struct Scratch(MemBuffer);
+/// A factorisation workspace (faer's buffer, which has no `Debug`), large enough for a
+/// double-precision factorisation or only for a single-precision one.
+struct Scratch {
+    mem: MemBuffer,
+    double: bool,
+}
 
 impl std::fmt::Debug for Scratch {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -465,8 +500,9 @@ impl SpdSolver {
         .map_err(|e| failed(format!("{e:?}")))?;
         drop(upper);
         let lower = permuted_triangle(pattern, &inv, Side::Lower);
-        let l_values = vec![0.0; symbolic.len_val()];
-        let par = if l_values.len() >= PARALLEL_FACTOR_FROM {
+        let n_lower = lower.row_idx().len();
+        let size = symbolic.len_val();
+        let par = if size >= PARALLEL_FACTOR_FROM {
             Par::rayon(0)
         } else {
             PAR
@@ -477,9 +513,12 @@ impl SpdSolver {
             fwd,
             inv,
             lower,
+            values: vec![0.0; n_lower],
             symbolic,
-            l_values,
+            factor: Factor::None,
             factored: false,
+            refine: None,
+            slow_refinement: AtomicBool::new(false),
             par,
             scratch: None,
         })
@@ -493,13 +532,38 @@ impl SpdSolver {
         self
     }
 
+    /// The values of the last factor, when it is in double precision (empty otherwise).
+    #[cfg(test)]
+    fn double_factor(&self) -> &[f64] {
+        match &self.factor {
+            Factor::Double(l) => l,
+            _ => &[],
+        }
+    }
+
+    /// The same solver with its factors made in single precision when they have
+    /// [`SINGLE_PRECISION_FROM`] values or more, and its solves then refined to the relative
+    /// residual `tol`. (By default factors are double precision.)
+    pub fn refined(mut self, tol: f64) -> Self {
+        self.refine = (self.symbolic.len_val() >= SINGLE_PRECISION_FROM).then_some(tol);
+        self
+    }
+
+    /// The same solver with its factors made in single precision whatever their size, and its
+    /// solves refined to [`REFINE_TOL`].
+    #[cfg(test)]
+    fn single(mut self) -> Self {
+        self.refine = Some(REFINE_TOL);
+        self
+    }
+
     /// Builds the pattern of `t` and analyses it, then factors `t`'s values.
     #[cfg(test)]
     pub fn from_triplets(t: &SymTriplets, stage: &'static str) -> Result<Self, FlattenError> {
         let pattern = SymPattern::new(t, stage)?;
         let mut s = Self::new(&pattern, stage)?;
         let values = s.gather_matrix(pattern.matrix(t.values(), stage)?.as_ref());
-        s.factor(&values)?;
+        s.factor(values)?;
         Ok(s)
     }
 
@@ -555,10 +619,22 @@ impl SpdSolver {
         out
     }
 
+    /// The matrix's values, in the order of [`SpdSolver::slot`].
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// The matrix's values, to be changed: the factor no longer holds until
+    /// [`SpdSolver::refactor`].
+    pub fn values_mut(&mut self) -> &mut [f64] {
+        self.factored = false;
+        &mut self.values
+    }
+
     /// Numeric factorization of the matrix with these `values` (in the order of
-    /// [`SpdSolver::slot`]). Fails with [`FlattenError::Solver`] when the matrix is not
-    /// numerically positive definite or holds a non-finite value.
-    pub fn factor(&mut self, values: &[f64]) -> Result<(), FlattenError> {
+    /// [`SpdSolver::slot`]), which the solver keeps. Fails with [`FlattenError::Solver`] when the
+    /// matrix is not numerically positive definite or holds a non-finite value.
+    pub fn factor(&mut self, values: Vec<f64>) -> Result<(), FlattenError> {
         self.factored = false;
         if values.len() != self.n_values() {
             return Err(FlattenError::Internal(format!(
@@ -568,49 +644,97 @@ impl SpdSolver {
                 self.n_values()
             )));
         }
-        if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+        self.values = values;
+        self.refactor()
+    }
+
+    /// Numeric factorization of the matrix's current values (see [`SpdSolver::factor`]).
+    pub fn refactor(&mut self) -> Result<(), FlattenError> {
+        self.factored = false;
+        if let Some(k) = self.values.iter().position(|v| !v.is_finite()) {
             return Err(FlattenError::Solver {
                 stage: self.stage,
                 reason: format!("matrix entry {k} is not finite"),
             });
         }
-        let a = SparseColMatRef::new(self.lower.as_ref(), values);
-        // The scratch is the same size for every factorisation of this pattern: allocated once,
-        // so the later ones neither page-fault nor zero it again. Its room for a renumbered copy
-        // of the matrix is never written here (the matrix is already in the factor's order and
-        // triangle), so it is never paged in either.
-        if self.scratch.is_none() {
-            let size = self
-                .symbolic
-                .factorize_numeric_llt_scratch::<f64>(self.par, Default::default());
-            let buffer = MemBuffer::try_new(size).map_err(|e| FlattenError::Solver {
-                stage: self.stage,
-                reason: format!("out of memory: {e:?}"),
-            })?;
-            self.scratch = Some(Scratch(buffer));
+        // The factor's storage is reused: it is the same size every time.
+        let size = self.symbolic.len_val();
+        let single = self.refine.is_some() && !self.slow_refinement.load(Memory::Relaxed);
+        if single && self.values.iter().all(|v| v.abs() <= f64::from(f32::MAX)) {
+            let mut l = match std::mem::take(&mut self.factor) {
+                Factor::Single(l) => l,
+                _ => Vec::new(),
+            };
+            l.resize(size, 0.0);
+            let a: Vec<f32> = self.values.iter().map(|&v| v as f32).collect();
+            if self.factor_numeric(&mut l, &a, false).is_ok() {
+                self.factor = Factor::Single(l);
+                self.factored = true;
+                return Ok(());
+            }
+            // Not positive definite in single precision (an ill-conditioned system): this
+            // factorisation is made in double precision; the next tries single again.
         }
-        let Some(Scratch(mem)) = self.scratch.as_mut() else {
+        let mut l = match std::mem::take(&mut self.factor) {
+            Factor::Double(l) => l,
+            _ => Vec::new(),
+        };
+        l.resize(size, 0.0);
+        let a = std::mem::take(&mut self.values);
+        let done = self.factor_numeric(&mut l, &a, true);
+        self.values = a;
+        done?;
+        self.factor = Factor::Double(l);
+        self.factored = true;
+        Ok(())
+    }
+
+    /// faer's numeric factorisation of the matrix with `values` into `l`, in the precision of
+    /// `T` (`double`: f64), with the kept scratch.
+    fn factor_numeric<T: ComplexField>(
+        &mut self,
+        l: &mut [T],
+        values: &[T],
+        double: bool,
+    ) -> Result<(), FlattenError> {
+        // The scratch is the same size for every factorisation of this pattern and precision:
+        // allocated once, so the later ones neither page-fault nor zero it again. Its room for a
+        // renumbered copy of the matrix is never written here (the matrix is already in the
+        // factor's order and triangle), so it is never paged in either.
+        if !self.scratch.as_ref().is_some_and(|s| s.double || !double) {
+            self.scratch = None;
+            let mut size = self
+                .symbolic
+                .factorize_numeric_llt_scratch::<f32>(self.par, Default::default());
+            if double {
+                size = size.or(self
+                    .symbolic
+                    .factorize_numeric_llt_scratch::<f64>(self.par, Default::default()));
+            }
+            self.scratch = Some(Scratch {
+                mem: self.buffer(size)?,
+                double,
+            });
+        }
+        let Some(Scratch { mem, .. }) = self.scratch.as_mut() else {
             return Err(FlattenError::Internal(format!(
                 "{}: no factorisation scratch",
                 self.stage
             )));
         };
-        self.symbolic
-            .factorize_numeric_llt::<f64>(
-                &mut self.l_values,
-                a,
-                Side::Lower,
-                LltRegularization::default(),
-                self.par,
-                MemStack::new(mem),
-                Default::default(),
-            )
-            .map_err(|e| FlattenError::Solver {
-                stage: self.stage,
-                reason: format!("the system is not positive definite ({e:?})"),
-            })?;
-        self.factored = true;
-        Ok(())
+        let a = SparseColMatRef::new(self.lower.as_ref(), values);
+        llt(&self.symbolic, a, l, self.par, mem).map_err(|reason| FlattenError::Solver {
+            stage: self.stage,
+            reason,
+        })
+    }
+
+    /// A workspace of `size`, or an out-of-memory solver error.
+    fn buffer(&self, size: StackReq) -> Result<MemBuffer, FlattenError> {
+        MemBuffer::try_new(size).map_err(|e| FlattenError::Solver {
+            stage: self.stage,
+            reason: format!("out of memory: {e:?}"),
+        })
     }
 
     /// Solves `A x = rhs` in place for one right-hand side.
@@ -628,12 +752,6 @@ impl SpdSolver {
                 rhs.len()
             )));
         }
-        if !self.factored {
-            return Err(FlattenError::Internal(format!(
-                "{}: solve before a successful factorization",
-                self.stage
-            )));
-        }
         // Into the factor's order, solved there, and back.
         let mut y = vec![0.0; n * k];
         for (yc, rc) in y.chunks_exact_mut(n).zip(rhs.chunks_exact(n)) {
@@ -641,17 +759,19 @@ impl SpdSolver {
                 *v = rc[i];
             }
         }
-        let mut mem = MemBuffer::try_new(self.symbolic.solve_in_place_scratch::<f64>(k, PAR))
-            .map_err(|e| FlattenError::Solver {
-                stage: self.stage,
-                reason: format!("out of memory: {e:?}"),
-            })?;
-        LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut y, n, k),
-            PAR,
-            MemStack::new(&mut mem),
-        );
+        match &self.factor {
+            Factor::Double(l) if self.factored => self.solve_factored(l, &mut y, k)?,
+            Factor::Single(l) if self.factored => {
+                let tol = self.refine.unwrap_or(REFINE_TOL);
+                self.solve_refined(l, &mut y, tol, REFINE_MAX)?
+            }
+            _ => {
+                return Err(FlattenError::Internal(format!(
+                    "{}: solve before a successful factorization",
+                    self.stage
+                )));
+            }
+        }
         for (j, (yc, rc)) in y.chunks_exact(n).zip(rhs.chunks_exact_mut(n)).enumerate() {
             for (&v, &i) in yc.iter().zip(&self.fwd) {
                 if !v.is_finite() {
@@ -664,6 +784,141 @@ impl SpdSolver {
             }
         }
         Ok(())
+    }
+
+    /// Solves in place, in the factor's order, for the `k` columns of `y` with the factor `l`.
+    fn solve_factored<T: ComplexField>(
+        &self,
+        l: &[T],
+        y: &mut [T],
+        k: usize,
+    ) -> Result<(), FlattenError> {
+        let mut mem = self.buffer(self.symbolic.solve_in_place_scratch::<T>(k, PAR))?;
+        LltRef::new(&self.symbolic, l).solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(y, self.n, k),
+            PAR,
+            MemStack::new(&mut mem),
+        );
+        Ok(())
+    }
+
+    /// Solves in place, in the factor's order, for the columns of `y`: conjugate gradients on
+    /// the matrix, preconditioned by its single-precision factor `l`, to the relative residual
+    /// `tol`. A column that does not get there in `max_iter` iterations is solved with a
+    /// double-precision factor of the matrix, made for it.
+    fn solve_refined(
+        &self,
+        l: &[f32],
+        y: &mut [f64],
+        tol: f64,
+        max_iter: usize,
+    ) -> Result<(), FlattenError> {
+        let n = self.n;
+        let lower = SparseColMatRef::new(self.lower.as_ref(), self.values.as_slice());
+        let precondition = |r: &[f64], z: &mut [f64]| {
+            // Scaled into f32's range whatever the residual's size.
+            let scale = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if scale == 0.0 || !scale.is_finite() {
+                z.copy_from_slice(r);
+                return;
+            }
+            let mut r32: Vec<f32> = r.iter().map(|&v| (v / scale) as f32).collect();
+            if self.solve_factored(l, &mut r32, 1).is_err() {
+                z.copy_from_slice(r);
+                return;
+            }
+            for (z, &v) in z.iter_mut().zip(&r32) {
+                *z = f64::from(v) * scale;
+            }
+        };
+        let mut stalled = Vec::new();
+        for (j, col) in y.chunks_exact_mut(n).enumerate() {
+            let mut x = vec![0.0; n];
+            let done = preconditioned_cg(
+                col,
+                &mut x,
+                |v, out| lower_mul(lower, v, out),
+                precondition,
+                tol,
+                max_iter,
+            );
+            if done.is_some_and(|it| it > REFINE_CHEAP) {
+                self.slow_refinement.store(true, Memory::Relaxed);
+            }
+            if done.is_some() {
+                col.copy_from_slice(&x);
+            } else {
+                stalled.push(j);
+            }
+        }
+        if stalled.is_empty() {
+            return Ok(());
+        }
+        let mut l64 = vec![0.0; l.len()];
+        let mut mem = self.buffer(
+            self.symbolic
+                .factorize_numeric_llt_scratch::<f64>(self.par, Default::default()),
+        )?;
+        llt(&self.symbolic, lower, &mut l64, self.par, &mut mem).map_err(|reason| {
+            FlattenError::Solver {
+                stage: self.stage,
+                reason,
+            }
+        })?;
+        for j in stalled {
+            self.solve_factored(&l64, &mut y[j * n..(j + 1) * n], 1)?;
+        }
+        Ok(())
+    }
+}
+
+/// The factor of a solver's matrix.
+#[derive(Debug, Default)]
+enum Factor {
+    /// None made yet.
+    #[default]
+    None,
+    /// In double precision: solves are two triangular solves.
+    Double(Vec<f64>),
+    /// In single precision: solves refine its solutions to double precision on the matrix.
+    Single(Vec<f32>),
+}
+
+/// faer's numeric Cholesky factorisation of `a` (lower triangle, in `symbolic`'s order) into
+/// `l`, in `mem`; the error says why it failed.
+fn llt<T: ComplexField>(
+    symbolic: &SymbolicCholesky<usize>,
+    a: SparseColMatRef<'_, usize, T>,
+    l: &mut [T],
+    par: Par,
+    mem: &mut MemBuffer,
+) -> Result<(), String> {
+    symbolic
+        .factorize_numeric_llt::<T>(
+            l,
+            a,
+            Side::Lower,
+            LltRegularization::default(),
+            par,
+            MemStack::new(mem),
+            Default::default(),
+        )
+        .map(|_| ())
+        .map_err(|e| format!("the system is not positive definite ({e:?})"))
+}
+
+/// `out = A v` for the symmetric `A` whose lower triangle is `lower`.
+fn lower_mul(lower: SparseColMatRef<'_, usize, f64>, v: &[f64], out: &mut [f64]) {
+    out.iter_mut().for_each(|o| *o = 0.0);
+    for j in 0..lower.ncols() {
+        let rows = lower.symbolic().row_idx_of_col_raw(j);
+        for (&i, &a) in rows.iter().zip(lower.val_of_col(j)) {
+            out[i] += a * v[j];
+            if i != j {
+                out[j] += a * v[i];
+            }
+        }
     }
 }
 
@@ -699,7 +954,7 @@ mod tests {
         assert!(row_idx[col_ptr[0]..col_ptr[1]].contains(&1));
         let mut compressed = SpdSolver::new(&pattern, "test").unwrap();
         compressed
-            .factor(&compressed.gather(&pattern, &values).unwrap())
+            .factor(compressed.gather(&pattern, &values).unwrap())
             .unwrap();
         let rhs: Vec<f64> = (0..n).map(|i| 1.0 + (i as f64).cos()).collect();
         let (mut a, mut b) = (rhs.clone(), rhs);
@@ -735,7 +990,7 @@ mod tests {
         }
         // New values, same pattern: scale the matrix by 2, the solution halves.
         t.values_mut().iter_mut().for_each(|v| *v *= 2.0);
-        s.factor(&values_of(&s, &pattern, &t)).unwrap();
+        s.factor(values_of(&s, &pattern, &t)).unwrap();
         let mut b2 = vec![0.0; 2 * n];
         sym_mul(&a, &x_true, &mut b2[..n]);
         b2[n..].copy_from_slice(&x_true);
@@ -839,11 +1094,11 @@ mod tests {
             .unwrap();
         for ordering in [Ordering::Amd, Ordering::NestedDissection] {
             let mut s = SpdSolver::with_ordering(&pattern, "test", ordering).unwrap();
-            s.factor(&values_of(&s, &pattern, &t)).unwrap();
+            s.factor(values_of(&s, &pattern, &t)).unwrap();
             let by_faer = factored_by_faer(&pattern, &t, ordering);
-            assert_eq!(s.l_values.len(), by_faer.len(), "{ordering:?}");
+            assert_eq!(s.double_factor().len(), by_faer.len(), "{ordering:?}");
             assert!(
-                s.l_values
+                s.double_factor()
                     .iter()
                     .zip(&by_faer)
                     .all(|(a, b)| a.to_bits() == b.to_bits()),
@@ -903,7 +1158,7 @@ mod tests {
         sym_mul(&a, &x_true, &mut b);
         let solve = |ordering| {
             let mut s = SpdSolver::with_ordering(&pattern, "test", ordering).unwrap();
-            s.factor(&values_of(&s, &pattern, &t)).unwrap();
+            s.factor(values_of(&s, &pattern, &t)).unwrap();
             let mut x = b.clone();
             s.solve_in_place(&mut x).unwrap();
             x
@@ -937,20 +1192,20 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| s.factor(&values_of(&s, &pattern, &t)))
+                .install(|| s.factor(values_of(&s, &pattern, &t)))
                 .unwrap();
             s
         };
         let (one, two) = (factor(1), factor(2));
         assert!(
-            one.l_values
+            one.double_factor()
                 .iter()
-                .zip(&two.l_values)
+                .zip(two.double_factor())
                 .all(|(a, b)| a.to_bits() == b.to_bits()),
             "the factors differ between one and two threads"
         );
         let mut seq = solver().with_par(Par::Seq);
-        seq.factor(&values_of(&seq, &pattern, &t)).unwrap();
+        seq.factor(values_of(&seq, &pattern, &t)).unwrap();
         let n = 2 * w * h;
         let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).sin()).collect();
         let (mut x2, mut xs) = (b.clone(), b);
@@ -961,6 +1216,176 @@ mod tests {
                 (x2[i] - xs[i]).abs() <= 1e-12 * xs[i].abs().max(1.0),
                 "unknown {i}"
             );
+        }
+    }
+
+    /// Solves of `t`'s system for `b` by a double-precision solver and by one forced to single
+    /// precision (nested dissection, as large maps are ordered).
+    fn single_and_double(
+        pattern: &SymPattern,
+        t: &SymTriplets,
+        b: &[f64],
+    ) -> (SpdSolver, Vec<f64>, Vec<f64>) {
+        let solve = |single: bool| {
+            let s = SpdSolver::with_ordering(pattern, "test", Ordering::NestedDissection).unwrap();
+            let mut s = if single { s.single() } else { s };
+            s.factor(values_of(&s, pattern, t)).unwrap();
+            let mut x = b.to_vec();
+            s.solve_in_place(&mut x).unwrap();
+            (s, x)
+        };
+        let (_, xd) = solve(false);
+        let (single, xs) = solve(true);
+        (single, xs, xd)
+    }
+
+    #[test]
+    fn a_single_precision_factor_solves_to_double_precision() {
+        let (w, h) = (60, 50);
+        let (mut t, node_of) = grid_mesh(w, h, 2);
+        // A weaker diagonal, so the system is less well conditioned than the grid's own.
+        t.values_mut().iter_mut().for_each(|v| *v *= 1.0 + 1e-3);
+        let pattern = SymPattern::new(&t, "test")
+            .unwrap()
+            .with_nodes(node_of, w * h)
+            .unwrap();
+        let n = 2 * w * h;
+        let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).sin() + 0.3).collect();
+        let (single, xs, xd) = single_and_double(&pattern, &t, &b);
+        assert!(
+            single.double_factor().is_empty(),
+            "the factor is single precision"
+        );
+        let a = pattern.matrix(t.values(), "test").unwrap();
+        let mut r = vec![0.0; n];
+        sym_mul(&a, &xs, &mut r);
+        let res: f64 = r
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (p - q).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let nb: f64 = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        assert!(res <= REFINE_TOL * nb, "residual {res}");
+        let scale = xd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for i in 0..n {
+            assert!(
+                (xs[i] - xd[i]).abs() <= 1e-10 * scale,
+                "unknown {i}: {} vs {}",
+                xs[i],
+                xd[i]
+            );
+        }
+        // The same bits again.
+        let (_, again, _) = single_and_double(&pattern, &t, &b);
+        assert!(
+            xs.iter()
+                .zip(&again)
+                .all(|(p, q)| p.to_bits() == q.to_bits())
+        );
+    }
+
+    #[test]
+    fn a_system_single_precision_cannot_factor_is_factored_in_double() {
+        // [[1, 1 − 1e-9], [1 − 1e-9, 1]] is positive definite; rounded to f32 it is singular.
+        let mut t = SymTriplets::new(2);
+        t.add(0, 0, 1.0);
+        t.add(1, 0, 1.0 - 1e-9);
+        t.add(1, 1, 1.0);
+        let pattern = SymPattern::new(&t, "test").unwrap();
+        let mut s = SpdSolver::new(&pattern, "test").unwrap().single();
+        s.factor(values_of(&s, &pattern, &t)).unwrap();
+        assert!(
+            !s.double_factor().is_empty(),
+            "factored in double precision"
+        );
+        // A (1, −1) = 1e-9 (1, −1).
+        let mut x = vec![1e-9, -1e-9];
+        s.solve_in_place(&mut x).unwrap();
+        assert!(
+            (x[0] - 1.0).abs() < 1e-6 && (x[1] + 1.0).abs() < 1e-6,
+            "{x:?}"
+        );
+    }
+
+    #[test]
+    fn a_refinement_that_stalls_is_solved_with_a_double_factor() {
+        let t = tridiag(30);
+        let pattern = SymPattern::new(&t, "test").unwrap();
+        let mut single = SpdSolver::new(&pattern, "test").unwrap().single();
+        let mut double = SpdSolver::new(&pattern, "test").unwrap();
+        single.factor(values_of(&single, &pattern, &t)).unwrap();
+        double.factor(values_of(&double, &pattern, &t)).unwrap();
+        let b: Vec<f64> = (0..30).map(|i| (i as f64).cos()).collect();
+        let mut want = b.clone();
+        double.solve_in_place(&mut want).unwrap();
+        let Factor::Single(l) = &single.factor else {
+            panic!("not single precision");
+        };
+        // No iteration allowed: the column stalls and is solved directly (in the factor's
+        // order, as the solver holds it).
+        let mut y: Vec<f64> = single.fwd.iter().map(|&i| b[i]).collect();
+        single.solve_refined(l, &mut y, REFINE_TOL, 0).unwrap();
+        for (k, &i) in single.fwd.iter().enumerate() {
+            assert_eq!(y[k].to_bits(), want[i].to_bits(), "unknown {i}");
+        }
+    }
+
+    #[test]
+    fn a_solver_whose_refinement_is_slow_factors_in_double_precision_after_it() {
+        // A 1D Laplacian with a small shift: κ ≈ 1e6, so the single-precision factor is a
+        // loose preconditioner and the refinement to 1e-12 takes several steps.
+        let n = 2000;
+        let mut t = SymTriplets::new(n);
+        for i in 0..n {
+            t.add(i, i, 2.0 + 1e-6);
+            if i + 1 < n {
+                t.add(i + 1, i, -1.0);
+            }
+        }
+        let pattern = SymPattern::new(&t, "test").unwrap();
+        let mut s = SpdSolver::new(&pattern, "test").unwrap().single();
+        s.factor(values_of(&s, &pattern, &t)).unwrap();
+        assert!(s.double_factor().is_empty());
+        let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.01).sin()).collect();
+        let mut x = b.clone();
+        s.solve_in_place(&mut x).unwrap();
+        let a = pattern.matrix(t.values(), "test").unwrap();
+        let mut r = vec![0.0; n];
+        sym_mul(&a, &x, &mut r);
+        let res: f64 = r
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (p - q).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let nb: f64 = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        assert!(
+            s.slow_refinement.load(Memory::Relaxed),
+            "the refinement was slow"
+        );
+        s.refactor().unwrap();
+        assert!(
+            !s.double_factor().is_empty(),
+            "refactored in double precision"
+        );
+        let mut y = b.clone();
+        s.solve_in_place(&mut y).unwrap();
+        sym_mul(&a, &y, &mut r);
+        let res_double: f64 = r
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (p - q).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        // As accurate as the double-precision solve (whose residual, κ ≈ 1e6, is above 1e-12).
+        assert!(
+            res <= (REFINE_TOL * nb).max(10.0 * res_double),
+            "{res} against {res_double}"
+        );
+        let scale = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for i in 0..n {
+            assert!((x[i] - y[i]).abs() <= 1e-9 * scale, "unknown {i}");
         }
     }
 

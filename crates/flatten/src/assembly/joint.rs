@@ -184,7 +184,7 @@ impl<'a> Joint<'a> {
             for p in 0..6 {
                 for q in 0..6 {
                     if s[p * 6 + q] != u32::MAX {
-                        self.sys.values[s[p * 6 + q] as usize] += ev.hess[p][q];
+                        self.sys.values_mut()[s[p * 6 + q] as usize] += ev.hess[p][q];
                     }
                 }
             }
@@ -237,7 +237,7 @@ impl<'a> Joint<'a> {
                     let slot = s[p * 8 + q];
                     if slot != u32::MAX {
                         let (j, sq) = jt(q);
-                        self.sys.values[slot as usize] += sp * sq * h[i][j];
+                        self.sys.values_mut()[slot as usize] += sp * sq * h[i][j];
                     }
                 }
             }
@@ -265,7 +265,7 @@ impl<'a> Joint<'a> {
             let (e0, g) = self.assemble(e, &x);
             let ndof = g.len();
             let mean_diag = (0..ndof)
-                .map(|i| self.sys.values[self.sys.diag_slot(i)])
+                .map(|i| self.sys.values()[self.sys.diag_slot(i)])
                 .sum::<f64>()
                 / ndof as f64;
             let reg = REG_REL * mean_diag.max(f64::MIN_POSITIVE);

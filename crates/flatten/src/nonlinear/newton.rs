@@ -366,7 +366,12 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
         let blocks = rest.len().div_ceil(BLOCK);
         let mut cur = eval(0);
         for b in 0..blocks {
-            let values = &mut self.sys.values;
+            // Without the Hessian the values are left alone, and with them the factorisation.
+            let values: &mut [f64] = if hessian {
+                self.sys.values_mut()
+            } else {
+                &mut []
+            };
             let slots = &self.tri_slots[b * BLOCK..];
             let scatter = |evs: &[TriEval], g: &mut [f64], en: &mut f64, values: &mut [f64]| {
                 for (k, ev) in evs.iter().enumerate() {
@@ -427,7 +432,7 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
                         let s = slots[p * 4 + q];
                         if s != u32::MAX {
                             let sign = if (p < 2) == (q < 2) { 1.0 } else { -1.0 };
-                            self.sys.values[s as usize] += sign * h[p % 2][q % 2];
+                            self.sys.values_mut()[s as usize] += sign * h[p % 2][q % 2];
                         }
                     }
                 }
@@ -453,7 +458,7 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
                         let s = slots[p * 6 + q];
                         if s != u32::MAX {
                             let h = 2.0 * d.k * d.coef[p / 2] * d.coef[q / 2];
-                            self.sys.values[s as usize] += h * nn[p % 2] * nn[q % 2];
+                            self.sys.values_mut()[s as usize] += h * nn[p % 2] * nn[q % 2];
                         }
                     }
                 }
@@ -751,7 +756,7 @@ fn newton_direction<E: TriEnergy>(
     let (e0, g) = p.assemble(x, Some(proj));
     let ndof = g.len();
     let mean_diag = (0..ndof)
-        .map(|i| p.sys.values[p.sys.diag_slot(i)])
+        .map(|i| p.sys.values()[p.sys.diag_slot(i)])
         .sum::<f64>()
         / ndof as f64;
     let tries = if proj == Projection::Raw { 1 } else { 8 };

@@ -8,17 +8,22 @@
 //! factor values, the same bits with any number of threads above).
 //!
 //! The pattern is handed to [`crate::sparse::SymPattern`] in compressed-column form and then
-//! dropped; the slots are the solver's ([`crate::sparse::SpdSolver::slot`]), so `values` is
-//! exactly the value array that [`crate::sparse::SpdSolver::factor`] reads in place: no
-//! duplicate summing, no copy, no renumbering, no per-step assembly beyond the scatter.
+//! dropped; the slots are the solver's ([`crate::sparse::SpdSolver::slot`]), and the values are
+//! the solver's own, the array its factorisation reads in place: no duplicate summing, no copy,
+//! no renumbering, no per-step assembly beyond the scatter.
 
 use crate::sparse::{SpdSolver, SymPattern};
+
+/// The relative residual a Newton direction is solved to where the factor is single precision
+/// (from [`crate::sparse::SINGLE_PRECISION_FROM`] factor values, about 300k faces). A Newton
+/// step needs its direction to a few digits, not to the last: on a million-face cap the
+/// isometric solve takes the same 3 steps to the same δ2 at 1e-4 as at 1e-12, with 1–2 refinement
+/// steps per solve instead of 7.
+pub const DIRECTION_TOL: f64 = 1e-4;
 
 /// A fixed-pattern SPD matrix and its reusable symbolic Cholesky factorisation.
 pub struct SpdSystem {
     n: usize,
-    /// Values of the matrix, in the solver's order ([`Self::slot`]).
-    pub values: Vec<f64>,
     /// Slot of each diagonal entry.
     diag: Vec<usize>,
     solver: SpdSolver,
@@ -109,7 +114,9 @@ impl SpdSystem {
                 .with_nodes(node_of, n_nodes)
                 .map_err(|e| e.to_string())?;
         }
-        let solver = SpdSolver::new(&pattern, "newton").map_err(|e| e.to_string())?;
+        let solver = SpdSolver::new(&pattern, "newton")
+            .map_err(|e| e.to_string())?
+            .refined(DIRECTION_TOL);
         drop(pattern);
         let diag = (0..n)
             .map(|c| {
@@ -118,12 +125,7 @@ impl SpdSystem {
                     .ok_or("the pattern lacks a diagonal entry")
             })
             .collect::<Result<Vec<usize>, _>>()?;
-        Ok(Self {
-            n,
-            values: vec![0.0; solver.n_values()],
-            diag,
-            solver,
-        })
+        Ok(Self { n, diag, solver })
     }
 
     /// Dimension.
@@ -141,17 +143,25 @@ impl SpdSystem {
         self.diag[i]
     }
 
+    /// Values of the matrix, in the solver's order ([`Self::slot`]).
+    pub fn values(&self) -> &[f64] {
+        self.solver.values()
+    }
+
+    /// Values of the matrix, to be changed (the last factorisation no longer holds).
+    pub fn values_mut(&mut self) -> &mut [f64] {
+        self.solver.values_mut()
+    }
+
     /// Zeroes all values.
     pub fn clear(&mut self) {
-        self.values.iter_mut().for_each(|v| *v = 0.0);
+        self.values_mut().iter_mut().for_each(|v| *v = 0.0);
     }
 
     /// Factorises the current values (numeric phase only) and solves A x = b in place.
     /// Returns an error if the matrix is not numerically positive definite.
     pub fn factor_solve(&mut self, b: &mut [f64]) -> Result<(), String> {
-        self.solver
-            .factor(&self.values)
-            .map_err(|e| e.to_string())?;
+        self.solver.refactor().map_err(|e| e.to_string())?;
         self.solver.solve_in_place(b).map_err(|e| e.to_string())
     }
 
@@ -161,11 +171,12 @@ impl SpdSystem {
     /// only the diagonal is saved between tries (the whole matrix would be 60 MB at a million
     /// faces). `None` when no try succeeds.
     pub fn solve_shifted(&mut self, b: &[f64], shift: f64, tries: usize) -> Option<Vec<f64>> {
-        let base: Vec<f64> = self.diag.iter().map(|&s| self.values[s]).collect();
+        let base: Vec<f64> = self.diag.iter().map(|&s| self.values()[s]).collect();
         let mut shift = shift;
         for _ in 0..tries {
+            let values = self.solver.values_mut();
             for (&s, &d) in self.diag.iter().zip(&base) {
-                self.values[s] = d + shift;
+                values[s] = d + shift;
             }
             let mut x = b.to_vec();
             if self.factor_solve(&mut x).is_ok() && x.iter().all(|v| v.is_finite()) {
@@ -177,7 +188,7 @@ impl SpdSystem {
     }
 
     /// Solves A x = b in place with the factorisation of the last successful
-    /// [`Self::factor_solve`], whatever the values are now.
+    /// [`Self::factor_solve`]; an error once the values have been changed since.
     pub fn solve_factored(&self, b: &mut [f64]) -> Result<(), String> {
         self.solver.solve_in_place(b).map_err(|e| e.to_string())
     }
@@ -198,10 +209,10 @@ mod tests {
         let mut s = SpdSystem::new(n, entries).unwrap();
         for i in 0..n {
             let d = s.diag_slot(i);
-            s.values[d] = 3.0;
+            s.values_mut()[d] = 3.0;
             if i + 1 < n {
                 let k = s.slot(i, i + 1).unwrap();
-                s.values[k] = -1.0;
+                s.values_mut()[k] = -1.0;
             }
         }
         let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
