@@ -114,15 +114,25 @@ impl Limits {
         }
     }
 
-    /// The principal-stretch band the darts' demand, reach and count are estimated with: the
-    /// band itself, or the tightest of the threads' limits. The estimate is then the one darts
-    /// for that band would get, and the search goes down from it while fewer darts hold the
-    /// threads' own limits: the loosest thread (a woven fabric's bias) would see no demand
-    /// where the warp and the weft are far beyond theirs.
+    /// The principal-stretch band the darts' demand and reach are estimated with: the band
+    /// itself, or the tightest of the threads' limits (the loosest thread, a woven fabric's
+    /// bias, would see no demand where the warp and the weft are far beyond theirs). The count
+    /// is first estimated with [`Limits::count_band`].
     pub fn estimate_band(&self) -> Band {
         match self {
             Limits::Band(b) => *b,
             Limits::Threads(t) => t.tightest(),
+        }
+    }
+
+    /// The principal-stretch band the darts' count is first estimated with: the band itself, or
+    /// the loosest of the threads' limits. A dome in a woven fabric takes its curvature on the
+    /// bias, so its count is near the loosest band's, far below the tightest's: the search then
+    /// goes up from the first estimate until a count holds, in few attempts.
+    pub fn count_band(&self) -> Band {
+        match self {
+            Limits::Band(b) => *b,
+            Limits::Threads(t) => t.loosest(),
         }
     }
 

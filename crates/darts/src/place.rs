@@ -223,8 +223,9 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
     }
     // 2. Count.
     let mean_reach = piece.mean_rule_reach();
-    let theta =
-        (std::f64::consts::TAU * (1.0 - band.s_min() / band.s_max())).min(std::f64::consts::PI);
+    let count_band = limits.count_band();
+    let theta = (std::f64::consts::TAU * (1.0 - count_band.s_min() / count_band.s_max()))
+        .min(std::f64::consts::PI);
     let capacity = 2.0 * mean_reach * (0.5 * theta).sin() * CURVED_LEGS;
     let k_cap = opts.max_darts.min(piece.most_darts());
     if k_cap == 0 {

@@ -138,6 +138,15 @@ impl Threads {
         }
     }
 
+    /// The band of the loosest limits on either side: the most any thread may stretch, and
+    /// compress.
+    pub fn loosest(&self) -> Band {
+        Band {
+            ln_s: self.ln_s.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            ln_c: self.ln_c.iter().copied().fold(f64::INFINITY, f64::min),
+        }
+    }
+
     /// The largest excess over a thread's limit (log strain; negative inside them) of the map
     /// `f`; +∞ for a degenerate or inverted map.
     pub fn excess(&self, f: DMat2) -> f64 {
