@@ -1219,6 +1219,18 @@ mod tests {
         }
     }
 
+    /// ‖A x − b‖ and ‖b‖ for the matrix of `t`.
+    fn residual(pattern: &SymPattern, t: &SymTriplets, x: &[f64], b: &[f64]) -> (f64, f64) {
+        let a = pattern.matrix(t.values(), "test").unwrap();
+        let mut r = vec![0.0; b.len()];
+        sym_mul(&a, x, &mut r);
+        let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|e| e * e).sum::<f64>().sqrt();
+        (
+            norm(&mut r.iter().zip(b).map(|(p, q)| p - q)),
+            norm(&mut b.iter().copied()),
+        )
+    }
+
     /// Solves of `t`'s system for `b` by a double-precision solver and by one forced to single
     /// precision (nested dissection, as large maps are ordered).
     fn single_and_double(
@@ -1256,16 +1268,7 @@ mod tests {
             single.double_factor().is_empty(),
             "the factor is single precision"
         );
-        let a = pattern.matrix(t.values(), "test").unwrap();
-        let mut r = vec![0.0; n];
-        sym_mul(&a, &xs, &mut r);
-        let res: f64 = r
-            .iter()
-            .zip(&b)
-            .map(|(p, q)| (p - q).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        let nb: f64 = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let (res, nb) = residual(&pattern, &t, &xs, &b);
         assert!(res <= REFINE_TOL * nb, "residual {res}");
         let scale = xd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         for i in 0..n {
@@ -1350,16 +1353,7 @@ mod tests {
         let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.01).sin()).collect();
         let mut x = b.clone();
         s.solve_in_place(&mut x).unwrap();
-        let a = pattern.matrix(t.values(), "test").unwrap();
-        let mut r = vec![0.0; n];
-        sym_mul(&a, &x, &mut r);
-        let res: f64 = r
-            .iter()
-            .zip(&b)
-            .map(|(p, q)| (p - q).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        let nb: f64 = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let (res, nb) = residual(&pattern, &t, &x, &b);
         assert!(
             s.slow_refinement.load(Memory::Relaxed),
             "the refinement was slow"
@@ -1371,13 +1365,7 @@ mod tests {
         );
         let mut y = b.clone();
         s.solve_in_place(&mut y).unwrap();
-        sym_mul(&a, &y, &mut r);
-        let res_double: f64 = r
-            .iter()
-            .zip(&b)
-            .map(|(p, q)| (p - q).powi(2))
-            .sum::<f64>()
-            .sqrt();
+        let (res_double, _) = residual(&pattern, &t, &y, &b);
         // As accurate as the double-precision solve (whose residual, κ ≈ 1e6, is above 1e-12).
         assert!(
             res <= (REFINE_TOL * nb).max(10.0 * res_double),
