@@ -106,8 +106,16 @@ impl Legs {
 
 /// The edge pairs of every path's legs.
 pub fn all_pairs(legs: &[Legs]) -> EdgePairs {
+    let mut pairs = Vec::new();
+    let mut groups = Vec::with_capacity(legs.len());
+    for l in legs {
+        let start = pairs.len();
+        pairs.extend(l.pairs());
+        groups.push(start..pairs.len());
+    }
     EdgePairs {
-        pairs: legs.iter().flat_map(Legs::pairs).collect(),
+        pairs,
+        legs: groups,
     }
 }
 

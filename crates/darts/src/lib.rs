@@ -34,6 +34,7 @@ pub use cut::{CutMesh, Legs};
 pub use keepout::KeepOut;
 pub use limits::{Band, Limits};
 pub use place::place;
+pub use solve::LEG_MATCH_MM;
 pub use threads::Threads;
 
 /// What to place darts for.
@@ -230,6 +231,17 @@ pub enum DartError {
         at.x, at.y, at.z
     )]
     Overlap { darts: usize, at: DVec3 },
+    /// The darts that hold the limits cannot keep a dart's two legs at equal 2D lengths: they
+    /// could not be sewn point to point.
+    #[error(
+        "the darts that bring the piece within the limits ({darts} of them) cannot keep their legs equal: one dart's legs differ by {apart_mm:.2} mm in the flat piece (a seam is held to {:.1} mm), near ({:.2}, {:.2}, {:.2})",
+        LEG_MATCH_MM, at.x, at.y, at.z
+    )]
+    LegsApart {
+        darts: usize,
+        apart_mm: f64,
+        at: DVec3,
+    },
     #[error("internal error (please report): {0}")]
     Internal(String),
 }

@@ -37,7 +37,7 @@ use crate::embed::{Embedded, embed, transfer};
 use crate::keepout::KeepOut;
 use crate::limits::{self, Effort, Held, Limits};
 use crate::relaxed::{Yield, face_opening, rim_demand};
-use crate::solve;
+use crate::solve::{self, LEG_MATCH_MM};
 use crate::trace::{Adjacency, Geodesic, inward_direction, trace};
 use crate::{Attempt, Dart, DartError, DartOptions, Darted};
 
@@ -287,9 +287,11 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             }
         }
     }
-    // The shortest total length that held, the fewer darts on a tie, whose flat outline does not
-    // overlap itself: a dart the limits hardly need can close past its mouth in the final map
-    // (the outline on its two sides crossing), and no pattern can be cut from that.
+    // The shortest total length that held, the fewer darts on a tie, whose final map keeps every
+    // dart's legs equal and whose flat outline does not overlap itself: a dart the limits hardly
+    // need can close past its mouth in the final map (the outline on its two sides crossing),
+    // and where the limits press hard on a dart's flanks along different threads its legs may
+    // not be kept equal; no pattern can be cut or sewn from either.
     let mut held_ok: Vec<usize> = (0..outcomes.len())
         .filter(|&i| outcomes[i].held.feasible)
         .collect();
@@ -299,7 +301,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             .total_cmp(&b.total_length())
             .then(a.darts.len().cmp(&b.darts.len()))
     });
-    let mut overlap: Option<DartError> = None;
+    let mut unsettled: Option<DartError> = None;
     let mut chosen: Option<(usize, Held)> = None;
     for i in held_ok {
         match settle_simple(&outcomes[i], limits)? {
@@ -308,12 +310,13 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
                 break;
             }
             Err(e) => {
-                overlap.get_or_insert(e);
+                unsettled.get_or_insert(e);
             }
         }
     }
-    // Every count that held closes a dart past its mouth: more darts, each needed less, may not.
-    if chosen.is_none() && overlap.is_some() {
+    // Every count that held closes a dart past its mouth or parts its legs: more darts, each
+    // needed less, may not.
+    if chosen.is_none() && unsettled.is_some() {
         let tried = attempts.iter().map(|a| a.darts).max().unwrap_or(0);
         for k in (tried + 1..=k_cap).take(OVERLAP_MORE_DARTS) {
             let o = match piece.attempt(k) {
@@ -349,7 +352,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             opts.drill_offset_mm,
         ));
     }
-    if let Some(e) = overlap {
+    if let Some(e) = unsettled {
         return Err(e);
     }
     let closest = outcomes
@@ -401,11 +404,30 @@ fn outline_overlap(mesh: &TriMesh, x: &[DVec2]) -> Result<Option<DVec3>, DartErr
 }
 
 /// The final map of an outcome that held the limits (legs paired, least δ2 within the limits),
-/// or [`DartError::Overlap`] when its flat outline crosses itself.
+/// [`DartError::LegsApart`] when a dart's legs cannot be kept equal within the limits, or
+/// [`DartError::Overlap`] when its flat outline crosses itself.
 fn settle_simple(o: &Outcome, limits: &Limits) -> Result<Result<Held, DartError>, DartError> {
     let legs: Vec<Legs> = o.darts.iter().map(|(_, l)| l.clone()).collect();
+    let pairs = all_pairs(&legs);
     let t0 = std::time::Instant::now();
-    let settled = limits::settle(&o.cut.mesh, &o.held.x, limits, &all_pairs(&legs))?;
+    let settled = limits::settle(&o.cut.mesh, &o.held.x, limits, &pairs)?;
+    if let Some((k, apart)) = pairs.worst_legs(&settled.x)
+        && apart > LEG_MATCH_MM
+    {
+        debug(&format!(
+            "{} darts: a dart's legs differ by {apart:.3} mm",
+            o.darts.len()
+        ));
+        let at = o.darts[k]
+            .0
+            .first()
+            .map_or(DVec3::ZERO, |&v| o.emb.mesh.positions[v as usize]);
+        return Ok(Err(DartError::LegsApart {
+            darts: o.darts.len(),
+            apart_mm: apart,
+            at,
+        }));
+    }
     debug(&format!(
         "settle: {} iterations, {:.2} s",
         settled.iterations,

@@ -12,21 +12,36 @@
 use flatcut_flatten::nonlinear::kernel::{RestTri, TriEnergy};
 use flatcut_flatten::nonlinear::newton::{self, Budget, DirectionTerm, EdgeTerms, MapProblem};
 use flatcut_geom::DVec2;
+use std::ops::Range;
 
 /// Pairs of edges (vertex index pairs of the cut mesh) that must keep equal 2D lengths: the two
 /// copies of one cut edge, one on each leg of a dart.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct EdgePairs {
     pub pairs: Vec<[(usize, usize); 2]>,
+    /// The pairs of each dart's legs: `pairs[legs[k]]` (a dart's legs are sewn as a whole).
+    pub legs: Vec<Range<usize>>,
 }
 
 impl EdgePairs {
-    /// The largest difference of 2D lengths within a pair (mm).
-    pub fn worst_mismatch(&self, x: &[DVec2]) -> f64 {
-        self.pairs
+    /// The largest difference of a dart's two legs' 2D lengths (mm).
+    pub fn worst_leg_mismatch(&self, x: &[DVec2]) -> f64 {
+        self.worst_legs(x).map_or(0.0, |(_, d)| d)
+    }
+
+    /// The dart whose legs differ most in 2D length, and by how much (mm); `None` without darts.
+    pub fn worst_legs(&self, x: &[DVec2]) -> Option<(usize, f64)> {
+        self.legs
             .iter()
-            .map(|[(a, b), (c, d)]| (x[*a].distance(x[*b]) - x[*c].distance(x[*d])).abs())
-            .fold(0.0, f64::max)
+            .map(|r| {
+                self.pairs[r.clone()]
+                    .iter()
+                    .map(|[(a, b), (c, d)]| x[*a].distance(x[*b]) - x[*c].distance(x[*d]))
+                    .sum::<f64>()
+                    .abs()
+            })
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
     }
 }
 
@@ -38,6 +53,13 @@ pub struct Run {
 
 /// Rounds of renewed pair targets.
 const PAIR_ROUNDS: usize = 3;
+/// The most a dart's two legs may differ in 2D length (mm): the 0.1 mm a sewn seam is held to
+/// (the report's seam tolerance, `flatcut_report::DEFAULT_SEAM_TOLERANCE_MM`).
+pub const LEG_MATCH_MM: f64 = 0.1;
+/// What the solves aim the legs' difference at (mm): half of [`LEG_MATCH_MM`].
+const LEG_TOLERANCE_MM: f64 = 0.5 * LEG_MATCH_MM;
+/// Most rounds of multiplier updates after the target rounds (each is a Newton run).
+const LEG_ROUNDS: usize = 6;
 /// Weight of the pair length terms (relative to the faces' densities; see `EdgeTerms`): a pair
 /// force of the order of a face's stress moves a target by 10⁻⁴ of its length per round.
 const PAIR_WEIGHT: f64 = 1e4;
@@ -133,6 +155,24 @@ impl<'a> Solves<'a> {
                 abs,
                 &Budget::none("darts"),
             )?;
+            problem = p;
+            iterations += r.iterations;
+            x = r.x;
+        }
+        // A penalty alone leaves each pair apart by the force it carries over its weight: where
+        // the limits press hard on a dart's flanks (a fabric at its bias limit) that adds up to
+        // more than the legs may differ. The pair terms then take multipliers (an augmented
+        // Lagrangian on fixed targets) until the legs meet.
+        for _ in 0..LEG_ROUNDS {
+            if pairs.worst_leg_mismatch(&x) <= LEG_TOLERANCE_MM {
+                break;
+            }
+            if let Some(t) = problem.edges.as_mut() {
+                for k in 0..t.edges.len() {
+                    t.lambda[k] += t.weight * t.constraint(k, &x);
+                }
+            }
+            let (r, p) = newton::run(problem, &x, max_iters, rel, abs, &Budget::none("darts"))?;
             problem = p;
             iterations += r.iterations;
             x = r.x;

@@ -224,7 +224,9 @@ pub fn is_out_of_limits(e: &PipelineError) -> bool {
     matches!(
         e,
         PipelineError::Darts {
-            source: DartError::Infeasible { .. } | DartError::Overlap { .. },
+            source: DartError::Infeasible { .. }
+                | DartError::Overlap { .. }
+                | DartError::LegsApart { .. },
             ..
         }
     )
