@@ -373,6 +373,7 @@ impl TriEnergy for ThreadBarrier {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flatcut_flatten::nonlinear::kernel::check_derivatives;
     use flatcut_mesh::grain_strain::{ByDirection, grain_strain_of};
 
     fn woven() -> DirectionalLimits {
@@ -436,56 +437,11 @@ mod tests {
         assert!((t.excess(f) - want).abs() < 1e-13);
     }
 
-    /// Energy, gradient and Hessian (unprojected) against central differences in the corners.
-    fn check_fd<E: TriEnergy>(e: &E, r: &RestTri, x: &[DVec2]) {
-        let ev = e.tri_eval(r, x, Some(Projection::Raw));
-        let te = e.tri_energy(r, x);
-        assert!(te.is_finite(), "the test map must lie inside the walls");
-        assert!(
-            (ev.energy - te).abs() < 1e-12 * te.abs().max(1.0),
-            "{} vs {te}",
-            ev.energy
-        );
-        let h = 1e-6;
-        for i in 0..6 {
-            let bump = |s: f64| {
-                let mut y = x.to_vec();
-                if i % 2 == 0 {
-                    y[i / 2].x += s;
-                } else {
-                    y[i / 2].y += s;
-                }
-                y
-            };
-            let (xp, xm) = (bump(h), bump(-h));
-            let fd = (e.tri_energy(r, &xp) - e.tri_energy(r, &xm)) / (2.0 * h);
-            let g = if i % 2 == 0 {
-                ev.grad[i / 2].x
-            } else {
-                ev.grad[i / 2].y
-            };
-            assert!(
-                (g - fd).abs() < 1e-6 * (1.0 + fd.abs()),
-                "grad {i}: {g} vs {fd}"
-            );
-            let (gp, gm) = (e.tri_eval(r, &xp, None).grad, e.tri_eval(r, &xm, None).grad);
-            for j in 0..6 {
-                let pick = |g: &[DVec2; 3]| if j % 2 == 0 { g[j / 2].x } else { g[j / 2].y };
-                let fdh = (pick(&gp) - pick(&gm)) / (2.0 * h);
-                let hij = ev.hess[i][j];
-                assert!(
-                    (hij - fdh).abs() < 1e-5 * (1.0 + fdh.abs()),
-                    "hess {i},{j}: {hij} vs {fdh}"
-                );
-            }
-        }
-    }
-
     #[test]
     fn energies_match_finite_differences() {
         let (r, x) = one_triangle();
         let t = Threads::new(&woven(), DVec2::new(0.8, 0.6));
-        check_fd(
+        check_derivatives(
             &ThreadBarrier {
                 threads: t,
                 wall: 0.1,
@@ -495,7 +451,7 @@ mod tests {
             &r,
             &x,
         );
-        check_fd(
+        check_derivatives(
             &ThreadPower {
                 threads: t,
                 p: 40.0,
