@@ -6,7 +6,7 @@ use flatcut_geom::{DVec2, DVec3};
 use flatcut_mesh::{Topology, TriMesh};
 
 use crate::FlattenError;
-use crate::sparse::{Ordering, SpdSolver, SymPattern, SymTriplets};
+use crate::sparse::{SpdSolver, SymPattern, SymTriplets};
 
 /// Interior angle at each corner of each triangle (radians), corner `k` at `triangles[t][k]`.
 pub fn corner_angles(mesh: &TriMesh) -> Vec<[f64; 3]> {
@@ -173,12 +173,12 @@ impl QuadraticBuilder {
         }
     }
 
-    /// Declares that dofs `k·i … k·i + k − 1` belong to vertex `i` (u and v of a map: `k = 2`),
-    /// so that the factorisation orders vertices rather than single dofs.
+    /// Declares that dofs `k·i … k·i + k − 1` are the fields of vertex `i` (u and v of a map:
+    /// `k = 2`), coupled at few vertices (as LSCM's are, at the boundary only): nested
+    /// dissection orders the vertices, and the unknowns field by field
+    /// ([`crate::sparse::SymPattern::by_field`]).
     pub fn dofs_per_vertex(mut self, k: u32) -> Self {
         self.dofs_per_vertex = k.max(1);
-        // Room for the structural zeros `build` adds, so that they never grow the triplets.
-        self.triplets.reserve(self.free.len());
         self
     }
 
@@ -211,20 +211,10 @@ impl QuadraticBuilder {
             )));
         }
         let k = self.dofs_per_vertex;
-        // For nested dissection, a structural zero between the dofs of one vertex: u and v of a
-        // vertex are not coupled in LSCM, so without it they are never one supernode and the
-        // factor falls apart into one-column supernodes (4× slower at 1M faces). AMD orders
-        // better without it.
         let n_vertices = (self.free_index.len() as u32).div_ceil(k) as usize;
-        let nd = Ordering::for_nodes(n_vertices) == Ordering::NestedDissection;
-        for i in (1..self.free.len()).filter(|_| nd && k > 1) {
-            if self.free[i] / k == self.free[i - 1] / k {
-                self.triplets.add(i, i - 1, 0.0);
-            }
-        }
         let node_of = self.free.iter().map(|&d| d / k).collect();
         let (pattern, values) = SymPattern::compress(self.triplets, stage)?;
-        let pattern = pattern.with_nodes(node_of, n_vertices)?;
+        let pattern = pattern.with_nodes(node_of, n_vertices)?.by_field();
         let mut solver = SpdSolver::new(&pattern, stage)?;
         let values = solver.gather(&pattern, &values)?;
         drop(pattern);

@@ -19,7 +19,9 @@
 //!
 //! The ordering works on a quotient graph: unknowns that belong to one mesh vertex (its u and v
 //! coordinates) form one node, so the graph is the mesh's vertex graph, half or a quarter the
-//! size of the matrix graph, and the unknowns of a node are eliminated together.
+//! size of the matrix graph, and the unknowns of a node are eliminated together ([`expand`]), or,
+//! where the matrix couples them at few nodes only (LSCM's u and v), field by field
+//! ([`expand_by_field`]).
 
 /// Regions of at most this many nodes are not dissected further: their fill is bounded by a
 /// dense block of this size, and splitting them would cost more than it saves.
@@ -386,28 +388,93 @@ pub fn nested_dissection(g: &Graph) -> Vec<u32> {
 /// The elimination order of the unknowns: nodes in `node_order`, the unknowns of one node
 /// together in increasing index. Every unknown appears once (`node_of[i] < node_order.len()`).
 pub fn expand(node_order: &[u32], node_of: &[u32]) -> Vec<usize> {
-    let n_nodes = node_order.len();
-    let mut ptr = vec![0usize; n_nodes + 1];
-    for &v in node_of {
-        ptr[v as usize + 1] += 1;
-    }
-    for i in 0..n_nodes {
-        ptr[i + 1] += ptr[i];
-    }
-    let mut members = vec![0usize; node_of.len()];
-    let mut fill = ptr.clone();
-    for (i, &v) in node_of.iter().enumerate() {
-        members[fill[v as usize]] = i;
-        fill[v as usize] += 1;
-    }
+    let members = Members::new(node_of, node_order.len());
     node_order
         .iter()
-        .flat_map(|&v| {
-            members[ptr[v as usize]..ptr[v as usize + 1]]
-                .iter()
-                .copied()
-        })
+        .flat_map(|&v| members.of(v).iter().copied())
         .collect()
+}
+
+/// The elimination order of the unknowns field by field, for a system whose fields (the k-th
+/// unknown of each node: a vertex's u, then its v) are coupled at few nodes only, as LSCM's u and
+/// v are, in the boundary's area term. The symmetric pattern is given by one triangle in
+/// compressed-column form.
+///
+/// The first field comes first, all of it in `node_order`: its factor is a Laplacian's, with
+/// rows to the other fields only where they couple. The other fields follow in `node_order`,
+/// except at the coupled nodes: eliminating the first field couples those to each other (a dense
+/// block), so they come last. Against [`expand`], which keeps a node's unknowns together and
+/// factors every node as a 2 × 2 block, this holds about half the values.
+pub fn expand_by_field(
+    node_order: &[u32],
+    node_of: &[u32],
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> Vec<usize> {
+    let members = Members::new(node_of, node_order.len());
+    let mut field = vec![0u32; node_of.len()];
+    for v in 0..node_order.len() as u32 {
+        for (f, &i) in members.of(v).iter().enumerate() {
+            field[i] = f as u32;
+        }
+    }
+    let mut coupled = vec![false; node_order.len()];
+    for c in 0..col_ptr.len().saturating_sub(1) {
+        for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
+            if field[r] != field[c] {
+                coupled[node_of[r] as usize] = true;
+                coupled[node_of[c] as usize] = true;
+            }
+        }
+    }
+    let fields = (0..node_order.len() as u32)
+        .map(|v| members.of(v).len())
+        .max()
+        .unwrap_or(0);
+    let mut out = Vec::with_capacity(node_of.len());
+    let mut push = |f: usize, last: bool| {
+        for &v in node_order {
+            if f == 0 || coupled[v as usize] == last {
+                out.extend(members.of(v).get(f).copied());
+            }
+        }
+    };
+    for f in 0..fields {
+        push(f, false);
+    }
+    for f in 1..fields {
+        push(f, true);
+    }
+    out
+}
+
+/// The unknowns of each node, in increasing index.
+struct Members {
+    ptr: Vec<usize>,
+    members: Vec<usize>,
+}
+
+impl Members {
+    fn new(node_of: &[u32], n_nodes: usize) -> Self {
+        let mut ptr = vec![0usize; n_nodes + 1];
+        for &v in node_of {
+            ptr[v as usize + 1] += 1;
+        }
+        for i in 0..n_nodes {
+            ptr[i + 1] += ptr[i];
+        }
+        let mut members = vec![0usize; node_of.len()];
+        let mut fill = ptr.clone();
+        for (i, &v) in node_of.iter().enumerate() {
+            members[fill[v as usize]] = i;
+            fill[v as usize] += 1;
+        }
+        Self { ptr, members }
+    }
+
+    fn of(&self, v: u32) -> &[usize] {
+        &self.members[self.ptr[v as usize]..self.ptr[v as usize + 1]]
+    }
 }
 
 #[cfg(test)]
