@@ -23,6 +23,7 @@
 //! (a Newton direction far less than a map). A matrix that single precision cannot factor, and a
 //! solve whose refinement stalls, fall back to a double-precision factor.
 
+use faer::Index;
 use faer::Par;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -76,6 +77,11 @@ const REFINE_CHEAP: usize = 4;
 /// Most conjugate-gradient iterations of a refined solve; a single-precision factor of these
 /// systems takes 2–7 to 1e-12 on a Newton system, 31 on a million-face LSCM system.
 const REFINE_MAX: usize = 50;
+
+/// The index type of the solvers' matrices and factors: half the memory of `usize` for their
+/// row indices (a million-face map's factor has 8M, its matrix 7.5M). A system too large for
+/// it is refused with an error.
+type Idx = u32;
 
 /// Entries of a symmetric matrix, accumulated as `(row, col, value)` triplets. Only the lower
 /// triangle is stored: an entry above the diagonal is mirrored below it. Duplicate positions
@@ -392,14 +398,17 @@ fn inverse(fwd: &[usize]) -> Vec<usize> {
 }
 
 /// One triangle of `P A Pᵀ` (P: unknown `i` becomes `inv[i]`) for the stored triangle of
-/// `pattern`: the lower one (row ≥ column) or the upper one, rows sorted in each column.
+/// `pattern`: the lower one (row ≥ column) or the upper one, rows sorted in each column. `None`
+/// when its size or entries do not fit the solver's 32-bit indices.
 fn permuted_triangle(
     pattern: &SymPattern,
     inv: &[usize],
     side: Side,
-) -> SymbolicSparseColMat<usize> {
+) -> Option<SymbolicSparseColMat<Idx>> {
     let n = pattern.n;
     let (col_ptr, row_idx) = pattern.csc();
+    Idx::try_from(n).ok()?;
+    Idx::try_from(row_idx.len()).ok()?;
     let place = |i: usize, j: usize| {
         let (a, b) = (inv[i], inv[j]);
         match side {
@@ -407,7 +416,7 @@ fn permuted_triangle(
             Side::Upper => (a.min(b), a.max(b)),
         }
     };
-    let mut new_ptr = vec![0usize; n + 1];
+    let mut new_ptr: Vec<Idx> = vec![0; n + 1];
     for j in 0..n {
         for &i in &row_idx[col_ptr[j]..col_ptr[j + 1]] {
             new_ptr[place(i, j).1 + 1] += 1;
@@ -417,18 +426,20 @@ fn permuted_triangle(
         new_ptr[c + 1] += new_ptr[c];
     }
     let mut next = new_ptr.clone();
-    let mut new_rows = vec![0usize; row_idx.len()];
+    let mut new_rows: Vec<Idx> = vec![0; row_idx.len()];
     for j in 0..n {
         for &i in &row_idx[col_ptr[j]..col_ptr[j + 1]] {
             let (r, c) = place(i, j);
-            new_rows[next[c]] = r;
+            new_rows[next[c] as usize] = r as Idx;
             next[c] += 1;
         }
     }
     for c in 0..n {
-        new_rows[new_ptr[c]..new_ptr[c + 1]].sort_unstable();
+        new_rows[new_ptr[c] as usize..new_ptr[c + 1] as usize].sort_unstable();
     }
-    SymbolicSparseColMat::new_checked(n, n, new_ptr, None, new_rows)
+    Some(SymbolicSparseColMat::new_checked(
+        n, n, new_ptr, None, new_rows,
+    ))
 }
 
 /// Sparse Cholesky `P A Pᵀ = L Lᵀ` of a symmetric positive definite matrix with a fixed pattern:
@@ -448,8 +459,8 @@ pub struct SpdSolver {
     fwd: Vec<usize>,
     inv: Vec<usize>,
     /// The pattern of P A Pᵀ's lower triangle.
-    lower: SymbolicSparseColMat<usize>,
-    symbolic: SymbolicCholesky<usize>,
+    lower: SymbolicSparseColMat<Idx>,
+    symbolic: SymbolicCholesky<Idx>,
     /// The matrix: the values of P A Pᵀ's lower triangle, in the order of [`SpdSolver::slot`].
     values: Vec<f64>,
     /// The storage of the factor, kept between factorisations.
@@ -503,7 +514,8 @@ impl SpdSolver {
         let inv = inverse(&fwd);
         // faer's symbolic analysis reads the upper triangle when no ordering is asked of it, its
         // supernodal numeric factorisation the lower one.
-        let upper = permuted_triangle(pattern, &inv, Side::Upper);
+        let too_large = || failed(format!("{} unknowns are too many to index", pattern.n));
+        let upper = permuted_triangle(pattern, &inv, Side::Upper).ok_or_else(too_large)?;
         let symbolic = factorize_symbolic_cholesky(
             upper.as_ref(),
             Side::Upper,
@@ -512,7 +524,7 @@ impl SpdSolver {
         )
         .map_err(|e| failed(format!("{e:?}")))?;
         drop(upper);
-        let lower = permuted_triangle(pattern, &inv, Side::Lower);
+        let lower = permuted_triangle(pattern, &inv, Side::Lower).ok_or_else(too_large)?;
         let n_lower = lower.row_idx().len();
         let size = symbolic.len_val();
         let par = if size >= PARALLEL_FACTOR_FROM {
@@ -595,9 +607,9 @@ impl SpdSolver {
     pub fn slot(&self, r: usize, c: usize) -> Option<usize> {
         let (a, b) = (*self.inv.get(r)?, *self.inv.get(c)?);
         let (row, col) = (a.max(b), a.min(b));
-        let start = self.lower.col_ptr()[col];
-        let rows = &self.lower.row_idx()[start..self.lower.col_ptr()[col + 1]];
-        rows.binary_search(&row).ok().map(|k| start + k)
+        let start = self.lower.col_ptr()[col] as usize;
+        let rows = &self.lower.row_idx()[start..self.lower.col_ptr()[col + 1] as usize];
+        rows.binary_search(&(row as Idx)).ok().map(|k| start + k)
     }
 
     /// The values of a compressed-column `pattern` (as [`SymPattern::compress`] returns them,
@@ -901,8 +913,8 @@ enum Factor {
 /// faer's numeric Cholesky factorisation of `a` (lower triangle, in `symbolic`'s order) into
 /// `l`, in `mem`; the error says why it failed.
 fn llt<T: ComplexField>(
-    symbolic: &SymbolicCholesky<usize>,
-    a: SparseColMatRef<'_, usize, T>,
+    symbolic: &SymbolicCholesky<Idx>,
+    a: SparseColMatRef<'_, Idx, T>,
     l: &mut [T],
     par: Par,
     mem: &mut MemBuffer,
@@ -922,11 +934,12 @@ fn llt<T: ComplexField>(
 }
 
 /// `out = A v` for the symmetric `A` whose lower triangle is `lower`.
-fn lower_mul(lower: SparseColMatRef<'_, usize, f64>, v: &[f64], out: &mut [f64]) {
+fn lower_mul<I: Index>(lower: SparseColMatRef<'_, I, f64>, v: &[f64], out: &mut [f64]) {
     out.iter_mut().for_each(|o| *o = 0.0);
     for j in 0..lower.ncols() {
         let rows = lower.symbolic().row_idx_of_col_raw(j);
         for (&i, &a) in rows.iter().zip(lower.val_of_col(j)) {
+            let i = i.zx();
             out[i] += a * v[j];
             if i != j {
                 out[j] += a * v[i];
@@ -1057,7 +1070,7 @@ mod tests {
             ..Default::default()
         };
         let inv = inverse(&elimination_order(pattern, ordering).unwrap());
-        let upper = permuted_triangle(pattern, &inv, Side::Upper);
+        let upper = permuted_triangle(pattern, &inv, Side::Upper).unwrap();
         factorize_symbolic_cholesky(
             upper.as_ref(),
             Side::Upper,
