@@ -98,6 +98,7 @@ pub fn solve_pinned(
             q.add_edge(2 * a + 1, 2 * b + 1, w);
         }
     }
+    drop(cot);
     for lp in &topo.boundary_loops {
         for i in 0..lp.len() {
             let (a, b) = (lp[i] as usize, lp[(i + 1) % lp.len()] as usize);

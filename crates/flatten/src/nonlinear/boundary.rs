@@ -131,17 +131,18 @@ enum Stop {
     Crushed { t: usize, s: f64 },
 }
 
-/// Duncan's f1.
+/// Duncan's f1, from the isometric map solved from the flip-free map `x0`.
 pub fn boundary_isometric(
     mesh: &TriMesh,
     topo: &Topology,
     rest: &[RestTri],
+    x0: Vec<DVec2>,
     params: &FlattenParams,
     budget: &Budget,
 ) -> Result<Flattening, FlattenError> {
     let n = mesh.positions.len();
     let method = Method::BoundaryIsometric;
-    let iso = isometric_run(mesh, topo, rest, params, method, budget)?;
+    let iso = isometric_run(rest, n, x0, params, method, budget)?;
     let mut early = iso.early;
     let mut iterations = iso.iterations;
     let mut x = iso.x;

@@ -15,10 +15,10 @@
 //! order, ties to the smaller angle.
 
 use flatcut_geom::{DVec2, DVec3};
+use flatcut_mesh::TriMesh;
 use flatcut_mesh::grain_strain::{
     GrainStrain, grain_strain_of, pattern_direction_near, warp_in_frame,
 };
-use flatcut_mesh::{Topology, TriMesh};
 
 use super::kernel::RestTri;
 use super::newton::{Budget, EarlyStop};
@@ -37,8 +37,8 @@ const FRAME_PASSES: usize = 2;
 /// The orthotropic flattening of `mesh` with `params.anisotropy`, the warp along +x.
 pub(crate) fn orthotropic(
     mesh: &TriMesh,
-    topo: &Topology,
     rest: &[RestTri],
+    x0: Vec<DVec2>,
     params: &FlattenParams,
     budget: &Budget,
 ) -> Result<Flattening, FlattenError> {
@@ -52,7 +52,7 @@ pub(crate) fn orthotropic(
         .validate()
         .map_err(FlattenError::Anisotropy)?;
     let n = mesh.positions.len();
-    let iso = isometric_run(mesh, topo, rest, params, Method::Orthotropic, budget)?;
+    let iso = isometric_run(rest, n, x0, params, Method::Orthotropic, budget)?;
     let mut iterations = iso.iterations;
     let mut early = iso.early;
     let start = iso.x;

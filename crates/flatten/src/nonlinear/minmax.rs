@@ -409,6 +409,7 @@ pub fn minmax(
     mesh: &TriMesh,
     topo: &Topology,
     rest: &[RestTri],
+    x0: Vec<DVec2>,
     params: &FlattenParams,
     budget: &Budget,
 ) -> Result<Flattening, FlattenError> {
@@ -423,7 +424,7 @@ pub fn minmax(
             stage: "min-max start",
             ..budget.clone()
         };
-        super::isometric(mesh, topo, rest, &p, &b)
+        super::isometric(mesh, rest, x0, &p, &b)
             .map_err(|e| match e {
                 FlattenError::Cancelled { .. } => FlattenError::Cancelled {
                     method: Method::Minmax,

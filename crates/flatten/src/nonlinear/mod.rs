@@ -43,17 +43,23 @@ pub fn solve(
         started,
         stage: params.method.name(),
     };
+    // The start before the rest frames: LSCM's factor is the memory peak of a large map, and
+    // the frames (64 MB at a million faces) are not needed until the descent.
+    let x0 = match params.method {
+        Method::Conformal => init::tutte(mesh, topo)?,
+        _ => init::lscm_or_tutte(mesh, topo)?,
+    };
     let rest = kernel::rest_frames(mesh).map_err(|t| {
         FlattenError::Internal(format!("triangle {t} is degenerate after the disk check"))
     })?;
     let mut out = match params.method {
-        Method::Isometric => isometric(mesh, topo, &rest, params, &budget)?,
-        Method::Conformal => conformal(mesh, topo, &rest, params, &budget)?,
+        Method::Isometric => isometric(mesh, &rest, x0, params, &budget)?,
+        Method::Conformal => conformal(mesh, &rest, x0, params, &budget)?,
         Method::BoundaryIsometric => {
-            boundary::boundary_isometric(mesh, topo, &rest, params, &budget)?
+            boundary::boundary_isometric(mesh, topo, &rest, x0, params, &budget)?
         }
-        Method::Minmax => minmax::minmax(mesh, topo, &rest, params, &budget)?,
-        Method::Orthotropic => grain::orthotropic(mesh, topo, &rest, params, &budget)?,
+        Method::Minmax => minmax::minmax(mesh, topo, &rest, x0, params, &budget)?,
+        Method::Orthotropic => grain::orthotropic(mesh, &rest, x0, params, &budget)?,
         m => {
             return Err(FlattenError::Internal(format!(
                 "method {m} is not a nonlinear method"
@@ -104,16 +110,17 @@ pub(crate) fn time_limit_warning(method: Method, iterations: usize) -> String {
     )
 }
 
-/// Duncan's isometric distortion δ2 (symmetric Dirichlet), with material limits if asked.
+/// Duncan's isometric distortion δ2 (symmetric Dirichlet) from the flip-free map `x0`, with
+/// material limits if asked.
 pub(crate) fn isometric(
     mesh: &TriMesh,
-    topo: &Topology,
     rest: &[RestTri],
+    x0: Vec<DVec2>,
     params: &FlattenParams,
     budget: &Budget,
 ) -> Result<Flattening, FlattenError> {
     let n = mesh.positions.len();
-    let run = isometric_run(mesh, topo, rest, params, Method::Isometric, budget)?;
+    let run = isometric_run(rest, n, x0, params, Method::Isometric, budget)?;
     let mut info = FlattenInfo {
         iterations: run.iterations,
         final_energy: run.energy / total_area(rest),
@@ -144,37 +151,29 @@ pub(crate) fn isometric(
     Ok(Flattening { uv: x, info })
 }
 
-/// The unconstrained δ2 solve from LSCM (or Tutte where LSCM flips), for `method`'s messages.
+/// The unconstrained δ2 solve on `n` vertices from `x0` (LSCM, or Tutte where LSCM flips:
+/// [`init::lscm_or_tutte`]), for `method`'s messages.
 pub(crate) fn isometric_run(
-    mesh: &TriMesh,
-    topo: &Topology,
     rest: &[RestTri],
+    n: usize,
+    x0: Vec<DVec2>,
     params: &FlattenParams,
     method: Method,
     budget: &Budget,
 ) -> Result<newton::NewtonRun, FlattenError> {
-    let x0 = init::lscm_or_tutte(mesh, topo)?;
-    newton_solve(
-        rest,
-        mesh.positions.len(),
-        SymDirichlet,
-        &x0,
-        params,
-        method,
-        budget,
-    )
+    newton_solve(rest, n, SymDirichlet, &x0, params, method, budget)
 }
 
-/// Duncan's conformal distortion δ1 via the MIPS energy, scaled to the 3D area.
+/// Duncan's conformal distortion δ1 via the MIPS energy from the flip-free map `x0` (Tutte's),
+/// scaled to the 3D area.
 fn conformal(
     mesh: &TriMesh,
-    topo: &Topology,
     rest: &[RestTri],
+    x0: Vec<DVec2>,
     params: &FlattenParams,
     budget: &Budget,
 ) -> Result<Flattening, FlattenError> {
     let n = mesh.positions.len();
-    let x0 = init::tutte(mesh, topo)?;
     let run = newton_solve(rest, n, Mips, &x0, params, Method::Conformal, budget)?;
     let mut x = run.x;
     init::scale_to_area(mesh, &mut x);
