@@ -479,6 +479,25 @@ pub struct SpdSolver {
     scratch: Option<Scratch>,
 }
 
+/// Where each entry of a solver's matrix is in its values: the pattern of the matrix in the
+/// factor's order, borrowed apart from the values.
+#[derive(Clone, Copy, Debug)]
+pub struct Slots<'a> {
+    inv: &'a [usize],
+    lower: &'a SymbolicSparseColMat<Idx>,
+}
+
+impl Slots<'_> {
+    /// The slot of entry `(r, c)` (or `(c, r)`); `None` if it is not in the pattern.
+    pub fn slot(&self, r: usize, c: usize) -> Option<usize> {
+        let (a, b) = (*self.inv.get(r)?, *self.inv.get(c)?);
+        let (row, col) = (a.max(b), a.min(b));
+        let start = self.lower.col_ptr()[col] as usize;
+        let rows = &self.lower.row_idx()[start..self.lower.col_ptr()[col + 1] as usize];
+        rows.binary_search(&(row as Idx)).ok().map(|k| start + k)
+    }
+}
+
 /// A factorisation workspace (faer's buffer, which has no `Debug`), large enough for a
 /// double-precision factorisation or only for a single-precision one.
 struct Scratch {
@@ -605,11 +624,26 @@ impl SpdSolver {
     /// Where the value of entry `(r, c)` (or `(c, r)`) of A goes in the values
     /// [`SpdSolver::factor`] reads; `None` if it is not in the pattern.
     pub fn slot(&self, r: usize, c: usize) -> Option<usize> {
-        let (a, b) = (*self.inv.get(r)?, *self.inv.get(c)?);
-        let (row, col) = (a.max(b), a.min(b));
-        let start = self.lower.col_ptr()[col] as usize;
-        let rows = &self.lower.row_idx()[start..self.lower.col_ptr()[col + 1] as usize];
-        rows.binary_search(&(row as Idx)).ok().map(|k| start + k)
+        self.slots().slot(r, c)
+    }
+
+    /// The slots of the matrix's entries ([`SpdSolver::slot`]), to look up while the values
+    /// are changed ([`SpdSolver::slots_and_values_mut`]).
+    pub fn slots(&self) -> Slots<'_> {
+        Slots {
+            inv: &self.inv,
+            lower: &self.lower,
+        }
+    }
+
+    /// [`SpdSolver::slots`] and [`SpdSolver::values_mut`] at once.
+    pub fn slots_and_values_mut(&mut self) -> (Slots<'_>, &mut [f64]) {
+        self.factored = false;
+        let slots = Slots {
+            inv: &self.inv,
+            lower: &self.lower,
+        };
+        (slots, &mut self.values)
     }
 
     /// The values of a compressed-column `pattern` (as [`SymPattern::compress`] returns them,

@@ -25,6 +25,7 @@ use super::kernel::{
     Projection, RestTri, TriEnergy, TriEval, max_step_tri, tri_energy, tri_eval_projected,
 };
 use super::spd::SpdSystem;
+use crate::sparse::Slots;
 use crate::{FlattenHooks, FlattenProgress};
 
 /// Fraction of the distance to the first inversion taken as the largest trial step
@@ -159,8 +160,6 @@ pub struct MapProblem<'a, E> {
     pub edges: Option<EdgeTerms>,
     n: usize,
     sys: SpdSystem,
-    /// Per triangle: slot in `sys.values` of each local dof pair (p ≤ q), in [`PAIRS`] order.
-    tri_slots: Vec<[u32; 21]>,
     edge_slots: Vec<[u32; 16]>,
     /// Per direction term: slot of each pair of its 6 dofs (row-major 6×6).
     align_slots: Vec<[u32; 36]>,
@@ -183,6 +182,22 @@ const PAIRS: [(u8, u8); 21] = {
     }
     out
 };
+
+/// The slots of a triangle's dof pairs (p ≤ q, in [`PAIRS`] order) in the system's values,
+/// looked up at each assembly rather than kept: a table holds 84 bytes per triangle (84 MB at a
+/// million faces, the Newton solve's largest item after the factor and the matrix), and the
+/// lookups run in the parallel evaluation, beside the energy's derivatives.
+fn tri_slots(slots: Slots<'_>, r: &RestTri) -> [u32; 21] {
+    let d = r.v.map(|v| [2 * v, 2 * v + 1]);
+    let mut a = [u32::MAX; 21];
+    for (k, &(p, q)) in PAIRS.iter().enumerate() {
+        let (p, q) = (p as usize, q as usize);
+        if let Some(s) = slots.slot(d[p / 2][p % 2], d[q / 2][q % 2]) {
+            a[k] = s as u32;
+        }
+    }
+    a
+}
 
 /// The slots of each edge term's 4×4 block (both end vertices' u and v).
 fn edge_slots(sys: &SpdSystem, edges: Option<&EdgeTerms>) -> Vec<[u32; 16]> {
@@ -254,20 +269,6 @@ impl<'a, E> MapProblem<'a, E> {
         }
         pairs.extend((0..n as u32).map(|v| (v, v)));
         let sys = SpdSystem::from_vertex_pairs(n, pairs)?;
-        let tri_slots = rest
-            .par_iter()
-            .map(|r| {
-                let d = r.v.map(|v| [2 * v, 2 * v + 1]);
-                let mut a = [u32::MAX; 21];
-                for (k, &(p, q)) in PAIRS.iter().enumerate() {
-                    let (p, q) = (p as usize, q as usize);
-                    if let Some(s) = sys.slot(d[p / 2][p % 2], d[q / 2][q % 2]) {
-                        a[k] = s as u32;
-                    }
-                }
-                a
-            })
-            .collect();
         let edge_slots = edge_slots(&sys, edges.as_ref());
         let align_slots = align_slots(&sys, edges.as_ref());
         let total_area = rest.iter().map(|r| r.area).sum();
@@ -277,7 +278,6 @@ impl<'a, E> MapProblem<'a, E> {
             edges,
             n,
             sys,
-            tri_slots,
             edge_slots,
             align_slots,
             total_area,
@@ -294,7 +294,6 @@ impl<'a, E> MapProblem<'a, E> {
             edges: self.edges,
             n: self.n,
             sys: self.sys,
-            tri_slots: self.tri_slots,
             edge_slots: self.edge_slots,
             align_slots: self.align_slots,
             total_area: self.total_area,
@@ -354,43 +353,47 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
         }
         let mut en = 0.0;
         let (rest, energy) = (self.rest, &self.energy);
-        let eval = |b: usize| -> Vec<TriEval> {
+        // Without the Hessian the values are left alone, and with them the factorisation.
+        let (slots, values) = if hessian {
+            let (s, v) = self.sys.slots_and_values_mut();
+            (Some(s), v)
+        } else {
+            (None, &mut [][..])
+        };
+        let eval = |b: usize| -> Vec<(TriEval, [u32; 21])> {
             let lo = (b * BLOCK).min(rest.len());
             let hi = ((b + 1) * BLOCK).min(rest.len());
             rest[lo..hi]
                 .par_iter()
                 .with_min_len(MIN_PER_TASK)
-                .map(|r| tri_eval_projected(energy, r, x, proj))
+                .map(|r| {
+                    let slots = slots.map_or([u32::MAX; 21], |s| tri_slots(s, r));
+                    (tri_eval_projected(energy, r, x, proj), slots)
+                })
                 .collect()
         };
         let blocks = rest.len().div_ceil(BLOCK);
         let mut cur = eval(0);
         for b in 0..blocks {
-            // Without the Hessian the values are left alone, and with them the factorisation.
-            let values: &mut [f64] = if hessian {
-                self.sys.values_mut()
-            } else {
-                &mut []
-            };
-            let slots = &self.tri_slots[b * BLOCK..];
-            let scatter = |evs: &[TriEval], g: &mut [f64], en: &mut f64, values: &mut [f64]| {
-                for (k, ev) in evs.iter().enumerate() {
-                    let r = &rest[b * BLOCK + k];
-                    *en += ev.energy;
-                    for c in 0..3 {
-                        g[2 * r.v[c]] += ev.grad[c].x;
-                        g[2 * r.v[c] + 1] += ev.grad[c].y;
-                    }
-                    if !hessian {
-                        continue;
-                    }
-                    for (s, &(p, q)) in slots[k].iter().zip(PAIRS.iter()) {
-                        if *s != u32::MAX {
-                            values[*s as usize] += ev.hess[p as usize][q as usize];
+            let scatter =
+                |evs: &[(TriEval, [u32; 21])], g: &mut [f64], en: &mut f64, values: &mut [f64]| {
+                    for (k, (ev, slots)) in evs.iter().enumerate() {
+                        let r = &rest[b * BLOCK + k];
+                        *en += ev.energy;
+                        for c in 0..3 {
+                            g[2 * r.v[c]] += ev.grad[c].x;
+                            g[2 * r.v[c] + 1] += ev.grad[c].y;
+                        }
+                        if !hessian {
+                            continue;
+                        }
+                        for (s, &(p, q)) in slots.iter().zip(PAIRS.iter()) {
+                            if *s != u32::MAX {
+                                values[*s as usize] += ev.hess[p as usize][q as usize];
+                            }
                         }
                     }
-                }
-            };
+                };
             let (_, next) = rayon::join(
                 || scatter(&cur, &mut g, &mut en, values),
                 || {

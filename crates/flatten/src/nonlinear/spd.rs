@@ -12,7 +12,7 @@
 //! the solver's own, the array its factorisation reads in place: no duplicate summing, no copy,
 //! no renumbering, no per-step assembly beyond the scatter.
 
-use crate::sparse::{SpdSolver, SymPattern};
+use crate::sparse::{Slots, SpdSolver, SymPattern};
 
 /// The relative residual a Newton direction is solved to where the factor is single precision
 /// (from [`crate::sparse::SINGLE_PRECISION_FROM`] factor values, about 300k faces). A Newton
@@ -141,6 +141,11 @@ impl SpdSystem {
     /// Slot of diagonal entry i.
     pub fn diag_slot(&self, i: usize) -> usize {
         self.diag[i]
+    }
+
+    /// The slots of the entries ([`Self::slot`]) and the values to be changed, at once.
+    pub fn slots_and_values_mut(&mut self) -> (Slots<'_>, &mut [f64]) {
+        self.solver.slots_and_values_mut()
     }
 
     /// Values of the matrix, in the solver's order ([`Self::slot`]).
