@@ -490,9 +490,19 @@ pub struct Slots<'a> {
 impl Slots<'_> {
     /// The slot of entry `(r, c)` (or `(c, r)`); `None` if it is not in the pattern.
     pub fn slot(&self, r: usize, c: usize) -> Option<usize> {
-        let (a, b) = (*self.inv.get(r)?, *self.inv.get(c)?);
+        self.slot_in_order(self.position(r)?, self.position(c)?)
+    }
+
+    /// The position of unknown `i` in the factor's order.
+    pub fn position(&self, i: usize) -> Option<usize> {
+        self.inv.get(i).copied()
+    }
+
+    /// The slot of the entry between the unknowns at positions `a` and `b` of the factor's
+    /// order ([`Slots::position`]); `None` if it is not in the pattern.
+    pub fn slot_in_order(&self, a: usize, b: usize) -> Option<usize> {
         let (row, col) = (a.max(b), a.min(b));
-        let start = self.lower.col_ptr()[col] as usize;
+        let start = *self.lower.col_ptr().get(col)? as usize;
         let rows = &self.lower.row_idx()[start..self.lower.col_ptr()[col + 1] as usize];
         rows.binary_search(&(row as Idx)).ok().map(|k| start + k)
     }

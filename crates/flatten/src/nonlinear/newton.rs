@@ -188,11 +188,12 @@ const PAIRS: [(u8, u8); 21] = {
 /// million faces, the Newton solve's largest item after the factor and the matrix), and the
 /// lookups run in the parallel evaluation, beside the energy's derivatives.
 fn tri_slots(slots: Slots<'_>, r: &RestTri) -> [u32; 21] {
-    let d = r.v.map(|v| [2 * v, 2 * v + 1]);
+    let at = |dof: usize| slots.position(dof).unwrap_or(usize::MAX);
+    let pos = r.v.map(|v| [at(2 * v), at(2 * v + 1)]);
     let mut a = [u32::MAX; 21];
     for (k, &(p, q)) in PAIRS.iter().enumerate() {
         let (p, q) = (p as usize, q as usize);
-        if let Some(s) = slots.slot(d[p / 2][p % 2], d[q / 2][q % 2]) {
+        if let Some(s) = slots.slot_in_order(pos[p / 2][p % 2], pos[q / 2][q % 2]) {
             a[k] = s as u32;
         }
     }
