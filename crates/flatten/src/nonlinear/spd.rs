@@ -24,8 +24,8 @@ pub const DIRECTION_TOL: f64 = 1e-4;
 /// A fixed-pattern SPD matrix and its reusable symbolic Cholesky factorisation.
 pub struct SpdSystem {
     n: usize,
-    /// Slot of each diagonal entry.
-    diag: Vec<usize>,
+    /// Slot of each diagonal entry (32 bits, as the solver's indices).
+    diag: Vec<u32>,
     solver: SpdSolver,
 }
 
@@ -122,9 +122,10 @@ impl SpdSystem {
             .map(|c| {
                 solver
                     .slot(c, c)
+                    .map(|s| s as u32)
                     .ok_or("the pattern lacks a diagonal entry")
             })
-            .collect::<Result<Vec<usize>, _>>()?;
+            .collect::<Result<Vec<u32>, _>>()?;
         Ok(Self { n, diag, solver })
     }
 
@@ -140,7 +141,7 @@ impl SpdSystem {
 
     /// Slot of diagonal entry i.
     pub fn diag_slot(&self, i: usize) -> usize {
-        self.diag[i]
+        self.diag[i] as usize
     }
 
     /// The slots of the entries ([`Self::slot`]) and the values to be changed, at once.
@@ -176,12 +177,16 @@ impl SpdSystem {
     /// only the diagonal is saved between tries (the whole matrix would be 60 MB at a million
     /// faces). `None` when no try succeeds.
     pub fn solve_shifted(&mut self, b: &[f64], shift: f64, tries: usize) -> Option<Vec<f64>> {
-        let base: Vec<f64> = self.diag.iter().map(|&s| self.values()[s]).collect();
+        let base: Vec<f64> = self
+            .diag
+            .iter()
+            .map(|&s| self.values()[s as usize])
+            .collect();
         let mut shift = shift;
         for _ in 0..tries {
             let values = self.solver.values_mut();
             for (&s, &d) in self.diag.iter().zip(&base) {
-                values[s] = d + shift;
+                values[s as usize] = d + shift;
             }
             let mut x = b.to_vec();
             if self.factor_solve(&mut x).is_ok() && x.iter().all(|v| v.is_finite()) {
