@@ -74,18 +74,15 @@ pub fn solve_pinned(
 ) -> Result<Vec<DVec2>, FlattenError> {
     let n = mesh.positions.len();
     let mut fixed = vec![false; 2 * n];
-    let mut x = vec![0.0; 2 * n];
     for (v, used) in used_mask(mesh).into_iter().enumerate() {
         if !used {
             fixed[2 * v] = true;
             fixed[2 * v + 1] = true;
         }
     }
-    for &(v, p) in hard {
+    for &(v, _) in hard {
         fixed[2 * v as usize] = true;
         fixed[2 * v as usize + 1] = true;
-        x[2 * v as usize] = p.x;
-        x[2 * v as usize + 1] = p.y;
     }
     let cot = corner_cotans(&mesh.positions, &mesh.triangles);
     let mut q = QuadraticBuilder::new(&fixed, 6 * mesh.triangles.len()).dofs_per_vertex(2);
@@ -108,6 +105,12 @@ pub fn solve_pinned(
         }
     }
     let sys = q.build("lscm")?;
+    // The map's vector after the factorisation, the memory peak of a large map.
+    let mut x = vec![0.0; 2 * n];
+    for &(v, p) in hard {
+        x[2 * v as usize] = p.x;
+        x[2 * v as usize + 1] = p.y;
+    }
     let mut fields = vec![x];
     sys.solve(&mut fields, None)?;
     let x = &fields[0];
