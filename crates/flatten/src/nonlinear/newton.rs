@@ -160,6 +160,9 @@ pub struct MapProblem<'a, E> {
     pub edges: Option<EdgeTerms>,
     n: usize,
     sys: SpdSystem,
+    /// Per triangle, the slots of its dof pairs ([`tri_slots`]), below [`SLOT_TABLE_BELOW`]
+    /// triangles; above, they are looked up at each assembly.
+    tri_slots: Option<Vec<[u32; 21]>>,
     edge_slots: Vec<[u32; 16]>,
     /// Per direction term: slot of each pair of its 6 dofs (row-major 6×6).
     align_slots: Vec<[u32; 36]>,
@@ -183,10 +186,14 @@ const PAIRS: [(u8, u8); 21] = {
     out
 };
 
-/// The slots of a triangle's dof pairs (p ≤ q, in [`PAIRS`] order) in the system's values,
-/// looked up at each assembly rather than kept: a table holds 84 bytes per triangle (84 MB at a
-/// million faces, the Newton solve's largest item after the factor and the matrix), and the
-/// lookups run in the parallel evaluation, beside the energy's derivatives.
+/// Triangles from which a Newton problem looks its triangles' slots up at each assembly rather
+/// than keeping them in a table: the table holds 84 bytes a triangle (84 MB at a million faces,
+/// the Newton solve's largest item after the factor and the matrix), and the lookups cost
+/// 10–25 % of a small solve's time (the hard patches, 2.6k–27k faces) but 3 % of a
+/// million-face one's.
+const SLOT_TABLE_BELOW: usize = 500_000;
+
+/// The slots of a triangle's dof pairs (p ≤ q, in [`PAIRS`] order) in the system's values.
 fn tri_slots(slots: Slots<'_>, r: &RestTri) -> [u32; 21] {
     let at = |dof: usize| slots.position(dof).unwrap_or(usize::MAX);
     let pos = r.v.map(|v| [at(2 * v), at(2 * v + 1)]);
@@ -270,6 +277,10 @@ impl<'a, E> MapProblem<'a, E> {
         }
         pairs.extend((0..n as u32).map(|v| (v, v)));
         let sys = SpdSystem::from_vertex_pairs(n, pairs)?;
+        let tri_slots = (rest.len() < SLOT_TABLE_BELOW).then(|| {
+            let slots = sys.slots();
+            rest.par_iter().map(|r| tri_slots(slots, r)).collect()
+        });
         let edge_slots = edge_slots(&sys, edges.as_ref());
         let align_slots = align_slots(&sys, edges.as_ref());
         let total_area = rest.iter().map(|r| r.area).sum();
@@ -279,6 +290,7 @@ impl<'a, E> MapProblem<'a, E> {
             edges,
             n,
             sys,
+            tri_slots,
             edge_slots,
             align_slots,
             total_area,
@@ -295,6 +307,7 @@ impl<'a, E> MapProblem<'a, E> {
             edges: self.edges,
             n: self.n,
             sys: self.sys,
+            tri_slots: self.tri_slots,
             edge_slots: self.edge_slots,
             align_slots: self.align_slots,
             total_area: self.total_area,
@@ -361,14 +374,20 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
         } else {
             (None, &mut [][..])
         };
+        let table = self.tri_slots.as_deref();
         let eval = |b: usize| -> Vec<(TriEval, [u32; 21])> {
             let lo = (b * BLOCK).min(rest.len());
             let hi = ((b + 1) * BLOCK).min(rest.len());
             rest[lo..hi]
                 .par_iter()
+                .enumerate()
                 .with_min_len(MIN_PER_TASK)
-                .map(|r| {
-                    let slots = slots.map_or([u32::MAX; 21], |s| tri_slots(s, r));
+                .map(|(k, r)| {
+                    let slots = match (table, slots) {
+                        (Some(t), Some(_)) => t[lo + k],
+                        (None, Some(s)) => tri_slots(s, r),
+                        _ => [u32::MAX; 21],
+                    };
                     (tri_eval_projected(energy, r, x, proj), slots)
                 })
                 .collect()

@@ -144,6 +144,11 @@ impl SpdSystem {
         self.diag[i] as usize
     }
 
+    /// The slots of the entries ([`Self::slot`]).
+    pub fn slots(&self) -> Slots<'_> {
+        self.solver.slots()
+    }
+
     /// The slots of the entries ([`Self::slot`]) and the values to be changed, at once.
     pub fn slots_and_values_mut(&mut self) -> (Slots<'_>, &mut [f64]) {
         self.solver.slots_and_values_mut()
