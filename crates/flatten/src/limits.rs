@@ -207,7 +207,7 @@ impl EnergySolve for OnePiece<'_> {
             self.rest,
             self.n,
             energy,
-            x,
+            crate::nonlinear::newton::to_flat(x),
             self.params,
             crate::Method::Isometric,
             self.budget,

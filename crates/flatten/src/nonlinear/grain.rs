@@ -124,7 +124,15 @@ fn solve_with_grain(
     for _ in 0..passes {
         let warp = warps(rest, &x, u)?;
         let frames = grain_frames(rest, &warp);
-        let run = newton_solve(&frames, n, energy, &x, params, Method::Orthotropic, budget)?;
+        let run = newton_solve(
+            &frames,
+            n,
+            energy,
+            super::newton::to_flat(&x),
+            params,
+            Method::Orthotropic,
+            budget,
+        )?;
         iterations += run.iterations;
         early = early.or(run.early);
         e = run.energy;

@@ -71,13 +71,14 @@ pub fn solve(
     Ok(out)
 }
 
-/// Runs projected Newton on `energy` from `x0`. A cancelled run is an error; a run stopped by
-/// the time limit returns its last (flip-free) iterate with `early` set.
+/// Runs projected Newton on `energy` from `x0` (flat, [`newton::to_flat`]). A cancelled run is
+/// an error; a run stopped by the time limit returns its last (flip-free) iterate with `early`
+/// set.
 pub(crate) fn newton_solve<E: TriEnergy>(
     rest: &[RestTri],
     n: usize,
     energy: E,
-    x0: &[DVec2],
+    x0: Vec<f64>,
     params: &FlattenParams,
     method: Method,
     budget: &Budget,
@@ -88,7 +89,7 @@ pub(crate) fn newton_solve<E: TriEnergy>(
             reason,
         })?;
     let abs = ABS_DECREMENT_PER_AREA * problem.total_area;
-    let (run, _) = newton::run(
+    let (run, _) = newton::run_flat(
         problem,
         x0,
         params.max_iters,
@@ -161,7 +162,9 @@ pub(crate) fn isometric_run(
     method: Method,
     budget: &Budget,
 ) -> Result<newton::NewtonRun, FlattenError> {
-    newton_solve(rest, n, SymDirichlet, &x0, params, method, budget)
+    let flat = newton::to_flat(&x0);
+    drop(x0);
+    newton_solve(rest, n, SymDirichlet, flat, params, method, budget)
 }
 
 /// Duncan's conformal distortion δ1 via the MIPS energy from the flip-free map `x0` (Tutte's),
@@ -174,7 +177,15 @@ fn conformal(
     budget: &Budget,
 ) -> Result<Flattening, FlattenError> {
     let n = mesh.positions.len();
-    let run = newton_solve(rest, n, Mips, &x0, params, Method::Conformal, budget)?;
+    let run = newton_solve(
+        rest,
+        n,
+        Mips,
+        newton::to_flat(&x0),
+        params,
+        Method::Conformal,
+        budget,
+    )?;
     let mut x = run.x;
     init::scale_to_area(mesh, &mut x);
     let mut warnings = Vec::new();
