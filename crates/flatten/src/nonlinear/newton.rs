@@ -188,9 +188,9 @@ const PAIRS: [(u8, u8); 21] = {
 
 /// Triangles from which a Newton problem looks its triangles' slots up at each assembly rather
 /// than keeping them in a table: the table holds 84 bytes a triangle (84 MB at a million faces,
-/// the Newton solve's largest item after the factor and the matrix), and the lookups cost
-/// 10–25 % of a small solve's time (the hard patches, 2.6k–27k faces) but 3 % of a
-/// million-face one's.
+/// the Newton solve's largest item after the factor and the matrix). The lookups cost 3 % of a
+/// million-face solve's time; on the hard patches (2.6k–27k faces) one run had the small solves
+/// 10–25 % slower with them and another within the noise, so small problems keep the table.
 const SLOT_TABLE_BELOW: usize = 500_000;
 
 /// The slots of a triangle's dof pairs (p ≤ q, in [`PAIRS`] order) in the system's values.
