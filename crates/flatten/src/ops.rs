@@ -214,7 +214,8 @@ impl QuadraticBuilder {
         let n_vertices = (self.free_index.len() as u32).div_ceil(k) as usize;
         let node_of = self.free.iter().map(|&d| d / k).collect();
         let (pattern, values) = SymPattern::compress(self.triplets, stage)?;
-        let pattern = pattern.with_nodes(node_of, n_vertices)?.by_field();
+        let pattern = pattern.with_nodes(node_of, n_vertices)?;
+        let pattern = if k > 1 { pattern.by_field() } else { pattern };
         let mut solver = SpdSolver::new(&pattern, stage)?;
         let values = solver.gather(&pattern, &values)?;
         drop(pattern);
