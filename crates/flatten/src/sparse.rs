@@ -1207,10 +1207,7 @@ mod tests {
             let by_faer = factored_by_faer(&pattern, &t, ordering);
             assert_eq!(s.double_factor().len(), by_faer.len(), "{ordering:?}");
             assert!(
-                s.double_factor()
-                    .iter()
-                    .zip(&by_faer)
-                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                same_bits(s.double_factor(), &by_faer),
                 "{ordering:?}: the factors differ"
             );
         }
@@ -1278,11 +1275,7 @@ mod tests {
             assert!((nd[i] - amd[i]).abs() < 1e-12, "ND and AMD at {i}");
         }
         let again = solve(Ordering::NestedDissection);
-        assert!(
-            nd.iter()
-                .zip(&again)
-                .all(|(a, b)| a.to_bits() == b.to_bits())
-        );
+        assert!(same_bits(&nd, &again));
     }
 
     #[test]
@@ -1307,10 +1300,7 @@ mod tests {
         };
         let (one, two) = (factor(1), factor(2));
         assert!(
-            one.double_factor()
-                .iter()
-                .zip(two.double_factor())
-                .all(|(a, b)| a.to_bits() == b.to_bits()),
+            same_bits(one.double_factor(), two.double_factor()),
             "the factors differ between one and two threads"
         );
         let mut seq = solver().with_par(Par::Seq);
@@ -1454,6 +1444,11 @@ mod tests {
         assert_eq!(b, a);
     }
 
+    /// Whether `a` and `b` hold the same bits, pair by pair.
+    fn same_bits(a: &[f64], b: &[f64]) -> bool {
+        a.iter().zip(b).all(|(p, q)| p.to_bits() == q.to_bits())
+    }
+
     /// ‖A x − b‖ and ‖b‖ for the matrix of `t`.
     fn residual(pattern: &SymPattern, t: &SymTriplets, x: &[f64], b: &[f64]) -> (f64, f64) {
         let a = pattern.matrix(t.values(), "test").unwrap();
@@ -1516,11 +1511,7 @@ mod tests {
         }
         // The same bits again.
         let (_, again, _) = single_and_double(&pattern, &t, &b);
-        assert!(
-            xs.iter()
-                .zip(&again)
-                .all(|(p, q)| p.to_bits() == q.to_bits())
-        );
+        assert!(same_bits(&xs, &again));
     }
 
     #[test]
