@@ -166,8 +166,67 @@ pub struct MapProblem<'a, E> {
     edge_slots: Vec<[u32; 16]>,
     /// Per direction term: slot of each pair of its 6 dofs (row-major 6×6).
     align_slots: Vec<[u32; 36]>,
+    /// Vertices held where they are ([`MapProblem::with_fixed`]).
+    fixed: Option<Fixed>,
     /// Σ A_t, to report mean densities.
     pub total_area: f64,
+}
+
+/// Vertices a problem holds in place: their dofs, the slots of their diagonal entries, and the
+/// slots of every Hessian entry that couples one of them to another dof.
+struct Fixed {
+    dofs: Vec<u32>,
+    diag: Vec<u32>,
+    coupling: Vec<u32>,
+}
+
+impl Fixed {
+    fn new(sys: &SpdSystem, rest: &[RestTri], fixed: &[bool]) -> Self {
+        let is_fixed = |v: usize| fixed.get(v).copied().unwrap_or(false);
+        let dofs: Vec<u32> = (0..fixed.len())
+            .filter(|&v| fixed[v])
+            .flat_map(|v| [2 * v as u32, 2 * v as u32 + 1])
+            .collect();
+        let mut coupling = Vec::new();
+        for r in rest.iter().filter(|r| r.v.iter().any(|&v| is_fixed(v))) {
+            let dof = |p: u8| 2 * r.v[p as usize / 2] + p as usize % 2;
+            for &(p, q) in &PAIRS {
+                let (a, b) = (dof(p), dof(q));
+                if a != b && (is_fixed(a / 2) || is_fixed(b / 2)) {
+                    coupling.extend(sys.slot(a, b).map(|s| s as u32));
+                }
+            }
+        }
+        coupling.sort_unstable();
+        coupling.dedup();
+        let diag = dofs
+            .iter()
+            .map(|&d| sys.diag_slot(d as usize) as u32)
+            .collect();
+        Self {
+            dofs,
+            diag,
+            coupling,
+        }
+    }
+
+    /// Holds the fixed dofs: no gradient, and Hessian rows and columns that couple them to
+    /// nothing (their diagonal kept, so the Newton step moves them by zero whatever the
+    /// right-hand side's other entries).
+    fn hold(&self, g: &mut [f64], sys: Option<&mut SpdSystem>) {
+        for &d in &self.dofs {
+            g[d as usize] = 0.0;
+        }
+        let Some(sys) = sys else { return };
+        let values = sys.values_mut();
+        for &s in &self.coupling {
+            values[s as usize] = 0.0;
+        }
+        for &s in &self.diag {
+            let v = values[s as usize].abs();
+            values[s as usize] = if v > 0.0 { v } else { 1.0 };
+        }
+    }
 }
 
 /// The 21 local dof pairs (p ≤ q) of a triangle's 6×6 Hessian.
@@ -293,8 +352,19 @@ impl<'a, E> MapProblem<'a, E> {
             tri_slots,
             edge_slots,
             align_slots,
+            fixed: None,
             total_area,
         })
+    }
+
+    /// The same problem with the vertices marked in `fixed` held where the map puts them
+    /// (a Dirichlet problem): their Newton steps are zero.
+    pub fn with_fixed(mut self, fixed: &[bool]) -> Self {
+        self.fixed = fixed
+            .iter()
+            .any(|&f| f)
+            .then(|| Fixed::new(&self.sys, self.rest, fixed));
+        self
     }
 
     /// The same problem with another energy. The pattern, its symbolic factorisation and the
@@ -310,6 +380,7 @@ impl<'a, E> MapProblem<'a, E> {
             tri_slots: self.tri_slots,
             edge_slots: self.edge_slots,
             align_slots: self.align_slots,
+            fixed: self.fixed,
             total_area: self.total_area,
         }
     }
@@ -486,6 +557,9 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
                     }
                 }
             }
+        }
+        if let Some(f) = &self.fixed {
+            f.hold(&mut g, hessian.then_some(&mut self.sys));
         }
         (en, g)
     }
