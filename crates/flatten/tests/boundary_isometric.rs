@@ -207,32 +207,89 @@ fn a_compressed_interior_converges_in_tens_of_newton_steps() {
     assert!(steps <= HEMISPHERE_STEPS, "{steps} Newton steps");
 }
 
-/// A saddle's rim is longer than its interior can take flat: kept at its 3D lengths it ruffles
-/// at the scale of the mesh (flat turns alternating against the surface's, up to 100° on the
-/// bench's saddle). f1 keeps the lengths and says so, naming where; `conformal-boundary` keeps
-/// them with a smooth outline and is not warned about.
+/// Newton steps f1 may take on the saddle below: its interior relaxes inside a held outline.
+/// Measured 3 here and on the bench's 20k and 200k saddles; with the outline free the 20k saddle
+/// took 226 and the 200k one 881.
+const SADDLE_STEPS: usize = 8;
+/// Largest turn (radians) of f1's outline against the surface at a rim vertex of the saddle
+/// below (measured 0.024): a crimped rim turns by up to 1.7 rad, alternately.
+const SMOOTH_TURN: f64 = 0.1;
+
+/// At every boundary vertex, the flat angle sum minus the 3D one: how far the flat outline
+/// turns there against the surface (computed here from the corner angles, not by the crate).
+fn rim_turns(mesh: &TriMesh, topo: &Topology, uv: &[DVec2]) -> Vec<f64> {
+    let angle = |a: f64, b: f64, c: f64| {
+        ((b * b + c * c - a * a) / (2.0 * b * c))
+            .clamp(-1.0, 1.0)
+            .acos()
+    };
+    let mut sums = vec![0.0; mesh.positions.len()];
+    for t in &mesh.triangles {
+        let p = t.map(|v| mesh.positions[v as usize]);
+        let q = t.map(|v| uv[v as usize]);
+        for k in 0..3 {
+            let (i, j, l) = (k, (k + 1) % 3, (k + 2) % 3);
+            let a3 = angle(
+                (p[j] - p[l]).length(),
+                (p[i] - p[j]).length(),
+                (p[i] - p[l]).length(),
+            );
+            let a2 = angle(
+                (q[j] - q[l]).length(),
+                (q[i] - q[j]).length(),
+                (q[i] - q[l]).length(),
+            );
+            sums[t[i] as usize] += a2 - a3;
+        }
+    }
+    topo.boundary_loops[0]
+        .iter()
+        .map(|&v| sums[v as usize])
+        .collect()
+}
+
+/// A saddle's rim is longer than its interior can take flat: with the lengths held and the
+/// outline free it crimps at the scale of the mesh (flat turns alternating against the
+/// surface's, up to 100° on the bench's saddle). f1 then holds Duncan's first step, the
+/// conformal map's outline closed at the 3D lengths, and relaxes the interior inside it: the
+/// lengths are kept, the outline is smooth, and it takes a few Newton steps. On the build
+/// before, the saddle's f1 was warned about as ruffled and took 160 steps here.
 #[test]
-fn a_ruffled_rim_is_reported() {
+fn a_rim_too_long_for_its_interior_keeps_a_smooth_outline() {
     // The bench's saddle, z = (x² − y²)/2 over [−1, 1]², at 100 mm.
     let mesh = testmesh::saddle_of_radius(100.0, 50.0, 24);
     let topo = Topology::build(&mesh).unwrap();
-    let (f1, _, warnings) = run(&mesh, &topo, Method::BoundaryIsometric);
+    let map = flatten(&mesh, &FlattenParams::new(Method::BoundaryIsometric)).unwrap();
+    let (steps, warnings) = (map.info.iterations, map.info.warnings);
+    let f1 = score(&mesh, &topo, &map.uv, 0.0);
+    let (f2, _, _) = run(&mesh, &topo, Method::ConformalBoundary);
+    let (iso, _, _) = run(&mesh, &topo, Method::Isometric);
+    let turns = rim_turns(&mesh, &topo, &map.uv);
+    let mut sorted: Vec<f64> = turns.iter().map(|t| t.abs()).collect();
+    sorted.sort_by(|a, b| b.total_cmp(a));
     println!(
-        "saddle: boundary error {:.1e}, {warnings:?}",
-        f1.boundary_rel
+        "saddle: {steps} steps, boundary error {:.1e}, δ2 f1 {:.4e} f2 {:.4e} iso {:.4e}, largest turns {:?}, {warnings:?}",
+        f1.boundary_rel,
+        f1.mean_delta2,
+        f2.mean_delta2,
+        iso.mean_delta2,
+        &sorted[..6]
     );
     assert_kept(&f1);
-    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert!(steps <= SADDLE_STEPS, "{steps} Newton steps");
     assert!(
-        warnings[0].contains("the boundary ruffles"),
-        "{}",
-        warnings[0]
+        sorted[4] <= SMOOTH_TURN,
+        "the outline crimps: turns {:?}",
+        &sorted[..8]
     );
-    let (f2, _, w2) = run(&mesh, &topo, Method::ConformalBoundary);
+    // Step 2 lowers the conformal map's deviation inside (nearly) the same outline, and pays
+    // for keeping the rim against the free isometric map.
     assert!(
-        f2.boundary_rel <= KEPT_BOUNDARY_REL,
-        "f2 boundary error {:.2e}",
-        f2.boundary_rel
+        f1.mean_delta2 < f2.mean_delta2,
+        "f1 {} f2 {}",
+        f1.mean_delta2,
+        f2.mean_delta2
     );
-    assert!(w2.iter().all(|w| !w.contains("ruffles")), "{w2:?}");
+    assert!(f1.mean_delta2 > iso.mean_delta2);
 }

@@ -43,32 +43,40 @@ pub fn solve(
         started,
         stage: params.method.name(),
     };
-    // The start before the rest frames: LSCM's factor is the memory peak of a large map, and
-    // the frames (64 MB at a million faces) are not needed until the descent.
-    let x0 = match params.method {
-        Method::Conformal => init::tutte(mesh, topo)?,
-        _ => init::lscm_or_tutte(mesh, topo)?,
-    };
-    let rest = kernel::rest_frames(mesh).map_err(|t| {
-        FlattenError::Internal(format!("triangle {t} is degenerate after the disk check"))
-    })?;
     let mut out = match params.method {
-        Method::Isometric => isometric(mesh, &rest, x0, params, &budget)?,
-        Method::Conformal => conformal(mesh, &rest, x0, params, &budget)?,
-        Method::BoundaryIsometric => {
-            boundary::boundary_isometric(mesh, topo, &rest, x0, params, &budget)?
-        }
-        Method::Minmax => minmax::minmax(mesh, topo, &rest, x0, params, &budget)?,
-        Method::Orthotropic => grain::orthotropic(mesh, &rest, x0, params, &budget)?,
-        m => {
-            return Err(FlattenError::Internal(format!(
-                "method {m} is not a nonlinear method"
-            )));
+        // f1 decides on its own start (see its module).
+        Method::BoundaryIsometric => boundary::boundary_isometric(mesh, topo, params, &budget)?,
+        method => {
+            // The start before the rest frames: LSCM's factor is the memory peak of a large
+            // map, and the frames (64 MB at a million faces) are not needed until the descent.
+            let x0 = match method {
+                Method::Conformal => init::tutte(mesh, topo)?,
+                _ => init::lscm_or_tutte(mesh, topo)?,
+            };
+            let rest = rest_frames(mesh)?;
+            match method {
+                Method::Isometric => isometric(mesh, &rest, x0, params, &budget)?,
+                Method::Conformal => conformal(mesh, &rest, x0, params, &budget)?,
+                Method::Minmax => minmax::minmax(mesh, topo, &rest, x0, params, &budget)?,
+                Method::Orthotropic => grain::orthotropic(mesh, &rest, x0, params, &budget)?,
+                m => {
+                    return Err(FlattenError::Internal(format!(
+                        "method {m} is not a nonlinear method"
+                    )));
+                }
+            }
         }
     };
     check_flip_free(mesh, &out.uv, params.method)?;
     apply_pins(&mut out, mesh, params)?;
     Ok(out)
+}
+
+/// The rest frames of a mesh that passed the disk check.
+pub(crate) fn rest_frames(mesh: &TriMesh) -> Result<Vec<RestTri>, FlattenError> {
+    kernel::rest_frames(mesh).map_err(|t| {
+        FlattenError::Internal(format!("triangle {t} is degenerate after the disk check"))
+    })
 }
 
 /// Runs projected Newton on `energy` from `x0` (flat, [`newton::to_flat`]). A cancelled run is
