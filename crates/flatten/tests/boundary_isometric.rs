@@ -253,7 +253,7 @@ fn rim_turns(mesh: &TriMesh, topo: &Topology, uv: &[DVec2]) -> Vec<f64> {
 /// surface's, up to 100° on the bench's saddle). f1 then holds Duncan's first step, the
 /// conformal map's outline closed at the 3D lengths, and relaxes the interior inside it: the
 /// lengths are kept, the outline is smooth, and it takes a few Newton steps. On the build
-/// before, the saddle's f1 was warned about as ruffled and took 160 steps here.
+/// before, the saddle's f1 was warned about as ruffled.
 #[test]
 fn a_rim_too_long_for_its_interior_keeps_a_smooth_outline() {
     // The bench's saddle, z = (x² − y²)/2 over [−1, 1]², at 100 mm.
