@@ -142,6 +142,7 @@ impl<'a> Solves<'a> {
             }
             let terms = EdgeTerms {
                 align: self.align.clone(),
+                pulls: Vec::new(),
                 lambda: vec![0.0; edges.len()],
                 edges,
                 weight: PAIR_WEIGHT,

@@ -289,6 +289,7 @@ fn free_outline(
         weight: INITIAL_WEIGHT,
         hold: None,
         align: Vec::new(),
+        pulls: Vec::new(),
     };
     // One problem (and one symbolic factorisation) for every outer iteration: only the
     // multipliers and the weight change between them.

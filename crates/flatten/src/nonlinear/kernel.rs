@@ -692,7 +692,13 @@ fn iso_tri_eval<E: IsoEnergy>(
 /// The largest step t ∈ (0, ∞] such that det F(x + s·d) > 0 for all s ∈ [0, t) for one
 /// triangle, i.e. the smallest positive root of the quadratic det(Ds + t dDs) = 0.
 pub fn max_step_tri(r: &RestTri, x: &[DVec2], d: &[DVec2]) -> f64 {
-    let (i0, i1, i2) = (r.v[0], r.v[1], r.v[2]);
+    max_step_corners(r.v, x, d)
+}
+
+/// Largest step along `d` before the triangle of the vertices `v` (counter-clockwise in `x`)
+/// turns over.
+pub fn max_step_corners(v: [usize; 3], x: &[DVec2], d: &[DVec2]) -> f64 {
+    let (i0, i1, i2) = (v[0], v[1], v[2]);
     let a0 = x[i1] - x[i0];
     let b0 = x[i2] - x[i0];
     let da = d[i1] - d[i0];

@@ -22,7 +22,8 @@ use flatcut_geom::DVec2;
 use rayon::prelude::*;
 
 use super::kernel::{
-    Projection, RestTri, TriEnergy, TriEval, max_step_tri, tri_energy, tri_eval_projected,
+    Projection, RestTri, TriEnergy, TriEval, max_step_corners, max_step_tri, tri_energy,
+    tri_eval_projected,
 };
 use super::spd::SpdSystem;
 use crate::sparse::Slots;
@@ -82,6 +83,18 @@ pub struct EdgeTerms {
     pub hold: Option<f64>,
     /// Direction terms.
     pub align: Vec<DirectionTerm>,
+    /// Pulls between vertex pairs.
+    pub pulls: Vec<Pull>,
+}
+
+/// k·|x_b − x_a|²: a spring of zero rest length between two vertices (the darts close a dart
+/// with them, drawing the two copies of each cut vertex together). Its vertex pairs join the
+/// Hessian's pattern when the problem is built ([`MapProblem::new`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pull {
+    pub a: usize,
+    pub b: usize,
+    pub k: f64,
 }
 
 /// k·(v × t)² for the vector v = Σ coef_i x_{verts_i} of a triangle's corners (the image of a
@@ -148,6 +161,9 @@ impl EdgeTerms {
             let c = d.value(x);
             s += d.k * c * c;
         }
+        for p in &self.pulls {
+            s += p.k * (x[p.b] - x[p.a]).length_squared();
+        }
         s
     }
 }
@@ -164,10 +180,15 @@ pub struct MapProblem<'a, E> {
     /// triangles; above, they are looked up at each assembly.
     tri_slots: Option<Vec<[u32; 21]>>,
     edge_slots: Vec<[u32; 16]>,
+    /// Per pull: the slots of its 4×4 block.
+    pull_slots: Vec<[u32; 16]>,
     /// Per direction term: slot of each pair of its 6 dofs (row-major 6×6).
     align_slots: Vec<[u32; 36]>,
     /// Vertices held where they are ([`MapProblem::with_fixed`]).
     fixed: Option<Fixed>,
+    /// Triangles of vertices that must not turn over, with no energy of their own
+    /// ([`MapProblem::with_guards`]).
+    guards: Vec<[usize; 3]>,
     /// Σ A_t, to report mean densities.
     pub total_area: f64,
 }
@@ -269,18 +290,27 @@ fn tri_slots(slots: Slots<'_>, r: &RestTri) -> [u32; 21] {
 /// The slots of each edge term's 4×4 block (both end vertices' u and v).
 fn edge_slots(sys: &SpdSystem, edges: Option<&EdgeTerms>) -> Vec<[u32; 16]> {
     edges
-        .map(|e| {
-            e.edges
-                .iter()
-                .map(|&(a, b, _)| {
-                    let s = slots_for(sys, &[2 * a, 2 * a + 1, 2 * b, 2 * b + 1]);
-                    let mut o = [u32::MAX; 16];
-                    o.copy_from_slice(&s);
-                    o
-                })
-                .collect()
-        })
+        .map(|e| pair_slots(sys, e.edges.iter().map(|&(a, b, _)| (a, b))))
         .unwrap_or_default()
+}
+
+/// The slots of each pull's 4×4 block.
+fn pull_slots(sys: &SpdSystem, edges: Option<&EdgeTerms>) -> Vec<[u32; 16]> {
+    edges
+        .map(|e| pair_slots(sys, e.pulls.iter().map(|p| (p.a, p.b))))
+        .unwrap_or_default()
+}
+
+/// The slots of the 4×4 block (both vertices' u and v) of each vertex pair.
+fn pair_slots(sys: &SpdSystem, pairs: impl Iterator<Item = (usize, usize)>) -> Vec<[u32; 16]> {
+    pairs
+        .map(|(a, b)| {
+            let s = slots_for(sys, &[2 * a, 2 * a + 1, 2 * b, 2 * b + 1]);
+            let mut o = [u32::MAX; 16];
+            o.copy_from_slice(&s);
+            o
+        })
+        .collect()
 }
 
 /// The slots of each direction term's 6×6 block (its three corners' u and v).
@@ -335,12 +365,19 @@ impl<'a, E> MapProblem<'a, E> {
             }
         }
         pairs.extend((0..n as u32).map(|v| (v, v)));
+        if let Some(e) = &edges {
+            for p in &e.pulls {
+                let (a, b) = (p.a as u32, p.b as u32);
+                pairs.push((a.min(b), a.max(b)));
+            }
+        }
         let sys = SpdSystem::from_vertex_pairs(n, pairs)?;
         let tri_slots = (rest.len() < SLOT_TABLE_BELOW).then(|| {
             let slots = sys.slots();
             rest.par_iter().map(|r| tri_slots(slots, r)).collect()
         });
         let edge_slots = edge_slots(&sys, edges.as_ref());
+        let pull_slots = pull_slots(&sys, edges.as_ref());
         let align_slots = align_slots(&sys, edges.as_ref());
         let total_area = rest.iter().map(|r| r.area).sum();
         Ok(Self {
@@ -351,10 +388,20 @@ impl<'a, E> MapProblem<'a, E> {
             sys,
             tri_slots,
             edge_slots,
+            pull_slots,
             align_slots,
             fixed: None,
+            guards: Vec::new(),
             total_area,
         })
+    }
+
+    /// The same problem with the triangles `guards` (counter-clockwise in the maps it will be
+    /// solved from) kept from turning over, as the mesh's own are: the darts keep a dart's legs
+    /// from crossing with them.
+    pub fn with_guards(mut self, guards: Vec<[usize; 3]>) -> Self {
+        self.guards = guards;
+        self
     }
 
     /// The same problem with the vertices marked in `fixed` held where the map puts them
@@ -379,8 +426,10 @@ impl<'a, E> MapProblem<'a, E> {
             sys: self.sys,
             tri_slots: self.tri_slots,
             edge_slots: self.edge_slots,
+            pull_slots: self.pull_slots,
             align_slots: self.align_slots,
             fixed: self.fixed,
+            guards: self.guards,
             total_area: self.total_area,
         }
     }
@@ -389,6 +438,7 @@ impl<'a, E> MapProblem<'a, E> {
     /// the entries of edges in the mesh's pattern enter the Hessian.
     pub fn with_edges(mut self, edges: Option<EdgeTerms>) -> Self {
         self.edge_slots = edge_slots(&self.sys, edges.as_ref());
+        self.pull_slots = pull_slots(&self.sys, edges.as_ref());
         self.align_slots = align_slots(&self.sys, edges.as_ref());
         self.edges = edges;
         self
@@ -413,14 +463,19 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
 
     /// Largest step along `d` before any triangle inverts.
     pub fn max_step(&self, x: &[DVec2], d: &[DVec2]) -> f64 {
-        self.rest
+        let mesh = self
+            .rest
             .par_chunks(BLOCK)
             .map(|c| {
                 c.iter()
                     .map(|r| max_step_tri(r, x, d))
                     .fold(f64::INFINITY, f64::min)
             })
-            .reduce(|| f64::INFINITY, f64::min)
+            .reduce(|| f64::INFINITY, f64::min);
+        self.guards
+            .iter()
+            .map(|&v| max_step_corners(v, x, d))
+            .fold(mesh, f64::min)
     }
 
     /// Assembles gradient (returned) and the projected Hessian (into the system); returns the
@@ -553,6 +608,29 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
                         if s != u32::MAX {
                             let h = 2.0 * d.k * d.coef[p / 2] * d.coef[q / 2];
                             self.sys.values_mut()[s as usize] += h * nn[p % 2] * nn[q % 2];
+                        }
+                    }
+                }
+            }
+            // Pulls: energy k|d|² with d = x_b − x_a; gradient ∓2k d, Hessian 2k [I −I; −I I].
+            for (j, p) in e.pulls.iter().enumerate() {
+                let d = x[p.b] - x[p.a];
+                en += p.k * d.length_squared();
+                let gd = 2.0 * p.k * d;
+                g[2 * p.a] -= gd.x;
+                g[2 * p.a + 1] -= gd.y;
+                g[2 * p.b] += gd.x;
+                g[2 * p.b + 1] += gd.y;
+                if !hessian {
+                    continue;
+                }
+                let slots = &self.pull_slots[j];
+                for q in 0..4 {
+                    for r in 0..4 {
+                        let s = slots[q * 4 + r];
+                        if s != u32::MAX && q % 2 == r % 2 {
+                            let sign = if (q < 2) == (r < 2) { 1.0 } else { -1.0 };
+                            self.sys.values_mut()[s as usize] += sign * 2.0 * p.k;
                         }
                     }
                 }
