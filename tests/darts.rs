@@ -488,6 +488,47 @@ fn darts_bring_the_shoe_toe_within_five_percent_stretch_and_two_compression() {
     assert!(d.darts.len() <= 24);
 }
 
+/// The total width of the darts' mouths in the flat piece, measured on its outline: the
+/// distance between the mouth ends of each dart's two legs.
+fn mouths_mm(o: &Obj, legs: &[[Leg; 2]]) -> f64 {
+    legs.iter()
+        .map(|[a, b]| {
+            let (ma, mb) = (a.verts.last().unwrap(), b.verts.last().unwrap());
+            o.vt[*ma].distance(o.vt[*mb])
+        })
+        .sum()
+}
+
+#[test]
+fn a_tight_fit_draws_the_same_darts_narrower_within_the_limits() {
+    // `--dart-fit tight` spends the give of ±3 % on closing the darts: the same darts (mouths,
+    // points, lengths), every face still within the limits and the legs meeting (measured on the
+    // OBJ by `check_darted`), the mouths narrower.
+    let Some(cap) = bench_mesh("sphcap_a100_2k") else {
+        return;
+    };
+    let fit = |name: &str| {
+        let dir = tempfile::tempdir().unwrap();
+        let (flat, report) =
+            flatten_darts_within(&cap, dir.path(), ("3", "3"), &["--dart-fit", name]);
+        let d = check_darted(&cap, &flat, &report, 3.0, 3.0);
+        let width = mouths_mm(&read_obj(&flat), &d.legs);
+        (d, width)
+    };
+    let (loose, loose_mm) = fit("least-strain");
+    let (tight, tight_mm) = fit("tight");
+    println!("mouths: least strain {loose_mm:.2} mm, tight {tight_mm:.2} mm");
+    assert_eq!(loose.darts.len(), tight.darts.len());
+    for (a, b) in loose.darts.iter().zip(&tight.darts) {
+        assert!(a.start.distance(b.start) < 1e-6 && a.apex.distance(b.apex) < 1e-6);
+        assert!((a.length_3d - b.length_3d).abs() < 1e-6);
+    }
+    assert!(
+        tight_mm < 0.95 * loose_mm,
+        "tight {tight_mm} mm, least strain {loose_mm} mm"
+    );
+}
+
 #[test]
 fn darts_for_a_material_hold_its_limits_in_every_direction() {
     // `--material` alone gives the limits, each thread its own: leather takes 3 % along the

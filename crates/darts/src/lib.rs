@@ -18,6 +18,7 @@
 
 pub mod cut;
 pub mod embed;
+pub mod fit;
 pub mod keepout;
 pub mod limits;
 pub mod place;
@@ -31,6 +32,7 @@ use flatcut_geom::{DVec2, DVec3};
 use flatcut_mesh::{TopologyError, TriMesh};
 
 pub use cut::{CutMesh, Legs};
+pub use fit::DartFit;
 pub use keepout::KeepOut;
 pub use limits::{Band, Limits};
 pub use place::place;
@@ -52,6 +54,8 @@ pub struct DartOptions {
     pub drill_offset_mm: f64,
     /// Vertices no dart may use (no_cut regions, marks); `None`: none.
     pub keep_out: Option<KeepOut>,
+    /// How the final map uses the material's give ([`DartFit`]).
+    pub fit: DartFit,
 }
 
 impl DartOptions {
@@ -68,6 +72,7 @@ impl DartOptions {
             min_spacing_mm: Self::DEFAULT_MIN_SPACING_MM,
             drill_offset_mm: Self::DEFAULT_DRILL_OFFSET_MM,
             keep_out: None,
+            fit: DartFit::LeastStrain,
         }
     }
 
@@ -95,6 +100,11 @@ impl DartOptions {
 
     pub fn with_keep_out(mut self, k: KeepOut) -> Self {
         self.keep_out = Some(k);
+        self
+    }
+
+    pub fn with_fit(mut self, fit: DartFit) -> Self {
+        self.fit = fit;
         self
     }
 }
@@ -187,6 +197,9 @@ pub struct Darted {
     pub worst_3d: DVec3,
     /// Every count the search tried, in order.
     pub attempts: Vec<Attempt>,
+    /// The fit of the final map: the one asked for, or the least-strained one where a tight map
+    /// would cross or part a dart's legs ([`crate::fit`]).
+    pub fit: DartFit,
 }
 
 impl Darted {

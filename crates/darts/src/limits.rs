@@ -27,6 +27,7 @@ use flatcut_flatten::nonlinear::kernel::{
 use flatcut_geom::{DMat2, DVec2};
 use flatcut_mesh::TriMesh;
 
+use crate::fit::Closing;
 use crate::solve::{self, EdgePairs};
 use crate::threads::{ThreadBarrier, ThreadPower, Threads};
 
@@ -446,7 +447,7 @@ pub fn hold(
 ) -> Result<Held, LimitError> {
     let held = reach(mesh, x0, limits, Effort::Full)?;
     if held.feasible {
-        settle(mesh, &held.x, limits, pairs)
+        settle(mesh, &held.x, limits, pairs, Closing::default())
     } else {
         Ok(held)
     }
@@ -581,16 +582,17 @@ fn out_of_reach(history: &[f64], left: usize) -> bool {
     e - pace * left as f64 > -FEASIBLE_MARGIN
 }
 
-/// Phase 2: from a map within the limits, the least-δ2 map within them, with the paired edges
-/// at equal 2D lengths.
+/// Phase 2: from a map within the limits, the least-δ2 map within them (drawn shut by
+/// `closing` for a tight fit, [`crate::fit`]), with the paired edges at equal 2D lengths.
 pub fn settle(
     mesh: &TriMesh,
     x0: &[DVec2],
     limits: &Limits,
     pairs: &EdgePairs,
+    closing: Closing,
 ) -> Result<Held, LimitError> {
     let rest = rest_frames(mesh).map_err(LimitError::Degenerate)?;
-    let mut solves = solves(mesh, &rest, limits);
+    let mut solves = solves(mesh, &rest, limits).with_closing(closing);
     let mut x = x0.to_vec();
     let mut iterations = 0;
     for (i, mu) in INTERIOR_MU.iter().enumerate() {

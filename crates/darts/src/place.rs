@@ -34,10 +34,11 @@ use flatcut_mesh::{Topology, TriMesh, check_disk};
 
 use crate::cut::{CutMesh, Legs, all_pairs};
 use crate::embed::{Embedded, embed, transfer};
+use crate::fit::{Closing, DartFit, closing};
 use crate::keepout::KeepOut;
 use crate::limits::{self, Effort, Held, Limits};
 use crate::relaxed::{Yield, face_opening, rim_demand};
-use crate::solve::{self, LEG_MATCH_MM};
+use crate::solve::{self, EdgePairs, LEG_MATCH_MM};
 use crate::trace::{Adjacency, Geodesic, inward_direction, trace};
 use crate::{Attempt, Dart, DartError, DartOptions, Darted};
 
@@ -173,7 +174,14 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
         feasible: held.feasible,
     }];
     if held.feasible {
-        let settled = limits::settle(mesh, &held.x, limits, &Default::default())?;
+        let settled = limits::settle(
+            mesh,
+            &held.x,
+            limits,
+            &Default::default(),
+            Closing::default(),
+        )?;
+        // No dart to draw shut: every fit is this map.
         return Ok(finish(
             mesh,
             &uncut,
@@ -181,6 +189,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             settled,
             attempts,
             opts.drill_offset_mm,
+            opts.fit,
         ));
     }
     let adj = Adjacency::new(mesh, &topo);
@@ -302,9 +311,9 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             .then(a.darts.len().cmp(&b.darts.len()))
     });
     let mut unsettled: Option<DartError> = None;
-    let mut chosen: Option<(usize, Held)> = None;
+    let mut chosen: Option<(usize, (Held, DartFit))> = None;
     for i in held_ok {
-        match settle_simple(&outcomes[i], limits)? {
+        match settle_simple(&outcomes[i], limits, opts.fit)? {
             Ok(settled) => {
                 chosen = Some((i, settled));
                 break;
@@ -335,13 +344,13 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             }
             outcomes.push(o);
             let i = outcomes.len() - 1;
-            if let Ok(settled) = settle_simple(&outcomes[i], limits)? {
+            if let Ok(settled) = settle_simple(&outcomes[i], limits, opts.fit)? {
                 chosen = Some((i, settled));
                 break;
             }
         }
     }
-    if let Some((i, settled)) = chosen {
+    if let Some((i, (settled, fit))) = chosen {
         let o = &outcomes[i];
         return Ok(finish(
             &o.emb.mesh,
@@ -350,6 +359,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             settled,
             attempts,
             opts.drill_offset_mm,
+            fit,
         ));
     }
     if let Some(e) = unsettled {
@@ -403,14 +413,37 @@ fn outline_overlap(mesh: &TriMesh, x: &[DVec2]) -> Result<Option<DVec3>, DartErr
     Ok(None)
 }
 
-/// The final map of an outcome that held the limits (legs paired, least δ2 within the limits),
-/// [`DartError::LegsApart`] when a dart's legs cannot be kept equal within the limits, or
-/// [`DartError::Overlap`] when its flat outline crosses itself.
-fn settle_simple(o: &Outcome, limits: &Limits) -> Result<Result<Held, DartError>, DartError> {
+/// The final map of an outcome that held the limits, fitted as `fit` says, and the fit it has:
+/// a tight map whose legs would cross or part is not kept, and the outcome's least-strained map
+/// is settled instead (the pulls draw a dart's mouth shut, and where the limits would let more
+/// than the dart close, its legs cross).
+fn settle_simple(
+    o: &Outcome,
+    limits: &Limits,
+    fit: DartFit,
+) -> Result<Result<(Held, DartFit), DartError>, DartError> {
     let legs: Vec<Legs> = o.darts.iter().map(|(_, l)| l.clone()).collect();
     let pairs = all_pairs(&legs);
+    if fit == DartFit::Tight {
+        match settle_with(o, limits, &pairs, closing(&legs, &o.held.x))? {
+            Ok(held) => return Ok(Ok((held, DartFit::Tight))),
+            Err(e) => debug(&format!("drawn tight: {e}; settled least-strained")),
+        }
+    }
+    Ok(settle_with(o, limits, &pairs, Closing::default())?.map(|h| (h, DartFit::LeastStrain)))
+}
+
+/// The final map of an outcome that held the limits (legs paired, least δ2 within the limits
+/// plus `closing`'s pulls), [`DartError::LegsApart`] when a dart's legs cannot be kept equal within the
+/// limits, or [`DartError::Overlap`] when its flat outline crosses itself.
+fn settle_with(
+    o: &Outcome,
+    limits: &Limits,
+    pairs: &EdgePairs,
+    closing: Closing,
+) -> Result<Result<Held, DartError>, DartError> {
     let t0 = std::time::Instant::now();
-    let settled = limits::settle(&o.cut.mesh, &o.held.x, limits, &pairs)?;
+    let settled = limits::settle(&o.cut.mesh, &o.held.x, limits, pairs, closing)?;
     if let Some((k, apart)) = pairs.worst_legs(&settled.x)
         && apart > LEG_MATCH_MM
     {
@@ -839,6 +872,7 @@ fn finish(
     held: Held,
     attempts: Vec<Attempt>,
     drill_mm: f64,
+    fit: DartFit,
 ) -> Darted {
     let mut out = cut.mesh.clone();
     out.flat = Some(held.x.clone());
@@ -855,5 +889,6 @@ fn finish(
         feasible: held.feasible,
         worst_3d,
         attempts,
+        fit,
     }
 }

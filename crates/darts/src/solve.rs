@@ -10,7 +10,9 @@
 //! the solves on it.
 
 use flatcut_flatten::nonlinear::kernel::{RestTri, TriEnergy};
-use flatcut_flatten::nonlinear::newton::{self, Budget, DirectionTerm, EdgeTerms, MapProblem};
+use flatcut_flatten::nonlinear::newton::{
+    self, Budget, DirectionTerm, EdgeTerms, MapProblem, Pull,
+};
 use flatcut_geom::DVec2;
 use std::ops::Range;
 
@@ -77,6 +79,10 @@ pub struct Solves<'a> {
     problem: Option<MapProblem<'a, ()>>,
     /// Direction terms added to every solve (a grain line held).
     align: Vec<DirectionTerm>,
+    /// Pulls added to every solve (darts drawn shut).
+    pulls: Vec<Pull>,
+    /// Triangles kept from turning over in every solve (a shut dart's legs kept apart).
+    guards: Vec<[usize; 3]>,
 }
 
 impl<'a> Solves<'a> {
@@ -87,7 +93,17 @@ impl<'a> Solves<'a> {
             n,
             problem: None,
             align: Vec::new(),
+            pulls: Vec::new(),
+            guards: Vec::new(),
         }
+    }
+
+    /// Solves that draw darts shut (before the first solve: the pulls' vertex pairs join the
+    /// Hessian's pattern then), [`crate::fit::Closing`].
+    pub fn with_closing(mut self, c: crate::fit::Closing) -> Self {
+        self.pulls = c.pulls;
+        self.guards = c.guards;
+        self
     }
 
     /// Solves with the direction terms `align` added to every energy.
@@ -109,15 +125,27 @@ impl<'a> Solves<'a> {
     ) -> Result<Run, String> {
         let mut problem = match self.problem.take() {
             Some(p) => p.with_energy(energy),
-            None => MapProblem::new(self.rest, self.n, energy, None)?,
+            None => MapProblem::new(
+                self.rest,
+                self.n,
+                energy,
+                Some(EdgeTerms {
+                    pulls: self.pulls.clone(),
+                    ..Default::default()
+                }),
+            )?
+            .with_guards(self.guards.clone()),
         };
         let abs = ABS_DECREMENT_PER_AREA * problem.total_area;
         let pairs = pairs.filter(|p| !p.pairs.is_empty());
         let Some(pairs) = pairs else {
             let (r, p) = newton::run(
-                problem.with_edges((!self.align.is_empty()).then(|| EdgeTerms {
-                    align: self.align.clone(),
-                    ..Default::default()
+                problem.with_edges((!self.align.is_empty() || !self.pulls.is_empty()).then(|| {
+                    EdgeTerms {
+                        align: self.align.clone(),
+                        pulls: self.pulls.clone(),
+                        ..Default::default()
+                    }
                 })),
                 x0,
                 max_iters,
@@ -142,7 +170,7 @@ impl<'a> Solves<'a> {
             }
             let terms = EdgeTerms {
                 align: self.align.clone(),
-                pulls: Vec::new(),
+                pulls: self.pulls.clone(),
                 lambda: vec![0.0; edges.len()],
                 edges,
                 weight: PAIR_WEIGHT,

@@ -11,16 +11,59 @@
 //!
 //! at the rim (for α where this is positive). The bound is met with equality only by a map that
 //! compresses every radial line by c all the way from the centre and stretches the whole rim by
-//! s; the darts end short of the centre and the band-held δ2 map does not use the whole band
-//! everywhere, so the darts open more. Measured (R = 50 mm, α = 1 rad, 3 %/3 %): 4 darts,
-//! 41.2 mm against W = 32.4 mm, 1.27 W — outside the 20 % the darts issue aims for. The test
-//! holds the bound (no placement may open less: that would break the limits somewhere) and the
-//! measured 1.27 with a little room, as a guard against the placement getting worse, and checks
-//! that one dart fewer was tried and broke the limits.
+//! s: a map that spends all the give the limits allow on closing the darts. The tight fit
+//! ([`DartFit::Tight`]) is that map for the darts placed; it opens them 1.13 W (R = 50 mm,
+//! α = 1 rad, 3 %/3 %: 4 darts, 36.6 mm against W = 32.4 mm), within the 20 % asked, the rest
+//! being what four darts that end short of the centre cost over a continuum of them. The
+//! default, least-strained fit leaves the material nearer its 3D size and opens the same darts
+//! more (1.27 W, 41.2 mm): held with a little room, as a guard. Both must stay above the bound
+//! (no map may open less: it would break the limits somewhere), and one dart fewer must have
+//! been tried and broken the limits.
 
-use flatcut_darts::{DartOptions, place};
+use flatcut_darts::{DartFit, DartOptions, LEG_MATCH_MM, place};
 use flatcut_flatten::testmesh::spherical_cap;
 use flatcut_flatten::{FlattenParams, Method, flatten};
+
+/// Largest total opening of the tight fit over the bound: the issue's 20 %.
+const TIGHT_OVER_BOUND: f64 = 1.2;
+/// Largest total opening of the least-strained fit over the bound (measured 1.27).
+const LEAST_STRAIN_OVER_BOUND: f64 = 1.3;
+
+#[test]
+fn a_tight_fit_opens_the_darts_within_20_percent_of_the_analytic_bound() {
+    let (r, alpha, pct) = (50.0, 1.0f64, 3.0);
+    let mesh = spherical_cap(r, alpha, 18);
+    let x0 = flatten(&mesh, &FlattenParams::new(Method::Isometric))
+        .unwrap()
+        .uv;
+    let opts = DartOptions::new(Some(pct), Some(pct));
+    let loose = place(&mesh, &x0, &opts).unwrap();
+    let tight = place(&mesh, &x0, &opts.clone().with_fit(DartFit::Tight)).unwrap();
+    let (s, c) = (pct / 100.0, pct / 100.0);
+    let bound = std::f64::consts::TAU * r * (alpha * (1.0 - c) - (1.0 + s) * alpha.sin());
+    let total = |d: &flatcut_darts::Darted| d.darts.iter().map(|d| d.opening_mm).sum::<f64>();
+    let (lt, tt) = (total(&loose), total(&tight));
+    eprintln!(
+        "{} darts: least strain {lt:.2} mm ({:.3} W), tight {tt:.2} mm ({:.3} W), W {bound:.2} mm",
+        tight.darts.len(),
+        lt / bound,
+        tt / bound
+    );
+    // The fit changes the final map only: the same darts.
+    assert_eq!(tight.darts.len(), loose.darts.len());
+    for (a, b) in tight.darts.iter().zip(&loose.darts) {
+        assert_eq!(a.path, b.path);
+    }
+    assert_eq!(tight.fit, DartFit::Tight, "the tight map was not kept");
+    assert!(tight.feasible && tight.excess <= 0.0, "{}", tight.excess);
+    for d in &tight.darts {
+        let [a, b] = d.leg_2d_mm;
+        assert!((a - b).abs() <= LEG_MATCH_MM, "legs {a} / {b}");
+    }
+    assert!(tt >= 0.99 * bound, "tight {tt} below the bound {bound}");
+    assert!(tt <= TIGHT_OVER_BOUND * bound, "tight {tt}, bound {bound}");
+    assert!(tt < lt, "tight {tt} not below least strain {lt}");
+}
 
 #[test]
 fn total_opening_on_a_spherical_cap_holds_the_analytic_bound() {
@@ -44,7 +87,10 @@ fn total_opening_on_a_spherical_cap_holds_the_analytic_bound() {
         total >= 0.99 * bound,
         "total {total} below the bound {bound}"
     );
-    assert!(total <= 1.3 * bound, "total {total}, bound {bound}");
+    assert!(
+        total <= LEAST_STRAIN_OVER_BOUND * bound,
+        "total {total}, bound {bound}"
+    );
     // The fewest darts the placement rule allows: the count below was tried and broke the limits
     // (no count below the result held), so no dart is cut that the limits do not need.
     let k = d.darts.len();

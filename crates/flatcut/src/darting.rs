@@ -7,6 +7,7 @@
 //! (notches, drill and reference points, stitch and placement lines); its seams are already part
 //! of the outline.
 
+pub use flatcut_darts::DartFit;
 use flatcut_darts::{Dart, DartError, DartOptions, Darted, KeepOut, Threads};
 use flatcut_design::{DartsDef, MarkKind, PieceDef};
 use flatcut_flatten::{FlattenInfo, FlattenParams};
@@ -25,6 +26,8 @@ pub struct DartSettings {
     pub min_spacing_mm: f64,
     /// How far short of its point a dart's drill mark sits (mm).
     pub drill_offset_mm: f64,
+    /// How the final map uses the material's give.
+    pub fit: DartFit,
 }
 
 impl Default for DartSettings {
@@ -33,6 +36,7 @@ impl Default for DartSettings {
             max_darts: DartOptions::DEFAULT_MAX_DARTS,
             min_spacing_mm: DartOptions::DEFAULT_MIN_SPACING_MM,
             drill_offset_mm: DartOptions::DEFAULT_DRILL_OFFSET_MM,
+            fit: DartFit::LeastStrain,
         }
     }
 }
@@ -140,6 +144,7 @@ pub fn dart_piece(
         .with_max_darts(settings.max_darts)
         .with_min_spacing_mm(settings.min_spacing_mm)
         .with_drill_offset_mm(settings.drill_offset_mm)
+        .with_fit(settings.fit)
         .with_keep_out(keep_out(def, mesh)?);
     if let Some(t) = threads
         && let Ok(d) = flatcut_darts::place(mesh, uv, &band.clone().with_threads(*t))
@@ -185,6 +190,11 @@ pub fn finish(
         if limits.threads.is_some() && !per_thread {
             info.warnings.push(format!(
                 "{name}: no darts held the material's limits thread by thread, so the darts hold the tightest of them on every direction (more darts than the threads would need)"
+            ));
+        }
+        if settings.fit == DartFit::Tight && d.fit != DartFit::Tight {
+            info.warnings.push(format!(
+                "{name}: drawn tight, a dart would close past its mouth (its legs cross or part), so the darts keep the least-strained map"
             ));
         }
         return Ok(Finished {

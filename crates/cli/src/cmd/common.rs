@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use flatcut::darting::DartSettings;
+use flatcut::darting::{DartFit, DartSettings};
 use flatcut::design::material::MaterialSpec;
 use flatcut::flat::Limits;
 use flatcut::flatten::{FlattenHooks, FlattenParams, FlattenProgress, Method};
@@ -53,6 +53,11 @@ pub struct FlattenArgs {
     /// How far short of its point a dart's drill mark sits (mm).
     #[arg(long, value_name = "MM", default_value_t = DartSettings::default().drill_offset_mm, value_parser = values::nonneg_mm)]
     pub dart_drill: f64,
+    /// How the darted piece's final map uses the material's give: `least-strain` (the least
+    /// strained map within the limits) or `tight` (every dart drawn shut as far as the limits
+    /// let it: the darts open least, the material sits at its limits around them).
+    #[arg(long, value_name = "FIT", default_value = "least-strain", value_parser = parse_dart_fit)]
+    pub dart_fit: DartFit,
     /// `auto`: split a piece that exceeds --max-stretch/--max-compress, and that darts (when
     /// asked for too) cannot bring within them, into parts sewn together along new seams (with
     /// balance notches), every part within the limits; a closed surface (a ball) is cut open
@@ -120,6 +125,11 @@ fn parse_darts(s: &str) -> Result<DartMode, String> {
     }
 }
 
+fn parse_dart_fit(s: &str) -> Result<DartFit, String> {
+    DartFit::from_name(s)
+        .ok_or_else(|| format!("unknown dart fit '{s}'; the fits are least-strain and tight"))
+}
+
 fn parse_split(s: &str) -> Result<DartMode, String> {
     match s {
         "auto" => Ok(DartMode::Auto),
@@ -183,6 +193,7 @@ impl FlattenArgs {
             max_darts: self.max_darts,
             min_spacing_mm: self.dart_min_spacing,
             drill_offset_mm: self.dart_drill,
+            fit: self.dart_fit,
         }))
     }
 
