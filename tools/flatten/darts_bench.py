@@ -91,10 +91,10 @@ def one(metrics, path, stretch, compress):
     }
 
 
-def run_flatcut(binary, mesh, out, stretch, compress, timeout):
+def run_flatcut(binary, mesh, out, stretch, compress, timeout, extra=()):
     obj, rep = os.path.join(out, "flatcut.obj"), os.path.join(out, "flatcut.json")
     cmd = [binary, "flatten", mesh, "-o", obj, "--report", rep, "--darts", "auto", "--split", "auto",
-           "--max-stretch", str(stretch), "--max-compress", str(compress)]
+           "--max-stretch", str(stretch), "--max-compress", str(compress)] + list(extra)
     t0 = time.monotonic()
     try:
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
@@ -111,6 +111,7 @@ def run_flatcut(binary, mesh, out, stretch, compress, timeout):
     seams = {s["name"]: s["length_3d_mm"] for r in reports for s in r.get("mating_seams", [])}
     return {"obj": objs, "seconds": dt, "cuts": len(darts) + len(seams),
             "darts": len(darts), "seams": len(seams),
+            "mouths_mm": sum(d.get("opening_mm", 0.0) for d in darts),
             "dart_mm": sum(d["length_3d_mm"] for d in darts) + sum(seams.values())}
 
 
@@ -142,6 +143,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--bench", required=True)
     ap.add_argument("--flatcut", required=True)
+    ap.add_argument("--flatcut-args", default="",
+                    help="more arguments for flatcut, e.g. '--dart-fit tight'")
     ap.add_argument("--optcuts")
     ap.add_argument("--optcuts-limits", nargs=2, type=float, metavar=("S", "C"),
                     help="limits (%%) OptCuts' equivalent bound is computed from (default: --stretch, --compress)")
@@ -155,7 +158,9 @@ def main():
     rows = []
     for mesh in a.meshes:
         tag = os.path.splitext(os.path.basename(mesh))[0]
-        tools = [("flatcut", run_flatcut, a.flatcut)]
+        extra = a.flatcut_args.split()
+        tools = [("flatcut" + (" " + a.flatcut_args if extra else ""),
+                  lambda *args: run_flatcut(*args, extra=extra), a.flatcut)]
         if a.optcuts:
             tools.append(("OptCuts", run_optcuts, a.optcuts))
         for label, run, binary in tools:
@@ -170,16 +175,17 @@ def main():
             print(json.dumps(r), file=sys.stderr, flush=True)
             rows.append(r)
     print(f"\nLimits: stretch {a.stretch} %, compression {a.compress} %, measured by metrics.py's singular values.\n")
-    print("| mesh | tool | cuts | cut length mm | worst stretch % | worst compression % | faces over | flips | s |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| mesh | tool | cuts | cut length mm | dart mouths mm | worst stretch % | worst compression % | faces over | flips | s |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         if "error" in r:
-            print(f"| {r['mesh']} | {r['tool']} | – | – | – | – | – | – | {r.get('seconds', float('nan')):.1f} ({r['error']}) |")
+            print(f"| {r['mesh']} | {r['tool']} | – | – | – | – | – | – | – | {r.get('seconds', float('nan')):.1f} ({r['error']}) |")
             continue
+        mouths = f"{r['mouths_mm']:.1f}" if "mouths_mm" in r else "–"
         cuts = (f"{r['darts']} darts" if r.get("darts") else "") + \
             (f" {r['seams']} seams ({r['parts']} parts)" if r.get("seams") else "") if "darts" in r else "seams"
         length = r.get("dart_mm", r["cut_mm"])
-        print(f"| {r['mesh']} | {r['tool']} | {cuts} | {length:.1f} | {r['stretch_max_pct']:.2f} | "
+        print(f"| {r['mesh']} | {r['tool']} | {cuts} | {length:.1f} | {mouths} | {r['stretch_max_pct']:.2f} | "
               f"{r['compress_max_pct']:.2f} | {r['faces_over']} of {r['faces']} | {r['flips']} | {r['seconds']:.1f} |")
 
 
