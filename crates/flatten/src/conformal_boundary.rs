@@ -257,12 +257,11 @@ fn close_turns(len: &[f64], turn: &[f64]) -> Result<Vec<f64>, FlattenError> {
     let weight: Vec<f64> = (0..m)
         .map(|j| 0.5 * (len[(j + m - 1) % m] + len[j]))
         .collect();
-    let gap_of =
-        |turn: &[f64]| -> DVec2 { len.iter().zip(tangents(turn)).map(|(l, ti)| *l * ti).sum() };
+    let gap_of = |t: &[DVec2]| -> DVec2 { len.iter().zip(t).map(|(l, ti)| *l * *ti).sum() };
     let mut turn = turn.to_vec();
     for _ in 0..CLOSE_TURN_STEPS {
         let t = tangents(&turn);
-        let gap = gap_of(&turn);
+        let gap = gap_of(&t);
         if gap.length() <= CLOSE_TURN_GAP * total {
             return Ok(turn);
         }
@@ -290,7 +289,7 @@ fn close_turns(len: &[f64], turn: &[f64]) -> Result<Vec<f64>, FlattenError> {
             turn[j] -= weight[j] * jac[j].dot(lam);
         }
     }
-    if gap_of(&turn).length() <= CLOSE_TURN_ACCEPT * total {
+    if gap_of(&tangents(&turn)).length() <= CLOSE_TURN_ACCEPT * total {
         return Ok(turn);
     }
     Err(FlattenError::NoConvergence {

@@ -188,9 +188,8 @@ fn step_one_outline(mesh: &TriMesh, topo: &Topology) -> Option<Vec<DVec2>> {
 /// to keep its length, and a free outline ruffles instead.
 fn rim_too_long(mesh: &TriMesh, u: &[f64]) -> bool {
     let (mut conformal, mut surface) = (0.0, 0.0);
-    for t in &mesh.triangles {
-        let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
-        let area = 0.5 * (b - a).cross(c - a).length();
+    for (k, t) in mesh.triangles.iter().enumerate() {
+        let area = mesh.triangle_area(k);
         let mean_u = t.iter().map(|&v| u[v as usize]).sum::<f64>() / 3.0;
         surface += area;
         conformal += area * (2.0 * mean_u).exp();
