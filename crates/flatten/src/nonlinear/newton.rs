@@ -558,33 +558,19 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
                 let c = e.constraint(k, x);
                 en += l * l * (e.lambda[k] * c + 0.5 * e.weight * c * c);
                 let m = e.lambda[k] + e.weight * c;
-                let gd = 2.0 * m * d;
-                g[2 * a] -= gd.x;
-                g[2 * a + 1] -= gd.y;
-                g[2 * b] += gd.x;
-                g[2 * b + 1] += gd.y;
-                if !hessian {
-                    continue;
-                }
                 // Hessian w.r.t. d: 4w d dᵀ/L² + 2 max(m, 0) I.
-                let dd = [d.x, d.y];
-                let mut h = [[0.0; 2]; 2];
-                for i in 0..2 {
-                    for j in 0..2 {
-                        h[i][j] = 4.0 * e.weight * dd[i] * dd[j] / (l * l)
-                            + if i == j { 2.0 * m.max(0.0) } else { 0.0 };
-                    }
-                }
-                let slots = &self.edge_slots[k];
-                for p in 0..4 {
-                    for q in 0..4 {
-                        let s = slots[p * 4 + q];
-                        if s != u32::MAX {
-                            let sign = if (p < 2) == (q < 2) { 1.0 } else { -1.0 };
-                            self.sys.values_mut()[s as usize] += sign * h[p % 2][q % 2];
+                let h = hessian.then(|| {
+                    let dd = [d.x, d.y];
+                    let mut h = [[0.0; 2]; 2];
+                    for i in 0..2 {
+                        for j in 0..2 {
+                            h[i][j] = 4.0 * e.weight * dd[i] * dd[j] / (l * l)
+                                + if i == j { 2.0 * m.max(0.0) } else { 0.0 };
                         }
                     }
-                }
+                    (h, &self.edge_slots[k], self.sys.values_mut())
+                });
+                add_pair_terms(&mut g, (a, b), 2.0 * m * d, h);
             }
             // Direction terms: c = v·n, linear in the corners (∂c/∂x_i = coef_i n); energy
             // k c², gradient 2k c coef_i n, Hessian 2k coef_i coef_j n nᵀ.
@@ -616,30 +602,48 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
             for (j, p) in e.pulls.iter().enumerate() {
                 let d = x[p.b] - x[p.a];
                 en += p.k * d.length_squared();
-                let gd = 2.0 * p.k * d;
-                g[2 * p.a] -= gd.x;
-                g[2 * p.a + 1] -= gd.y;
-                g[2 * p.b] += gd.x;
-                g[2 * p.b + 1] += gd.y;
-                if !hessian {
-                    continue;
-                }
-                let slots = &self.pull_slots[j];
-                for q in 0..4 {
-                    for r in 0..4 {
-                        let s = slots[q * 4 + r];
-                        if s != u32::MAX && q % 2 == r % 2 {
-                            let sign = if (q < 2) == (r < 2) { 1.0 } else { -1.0 };
-                            self.sys.values_mut()[s as usize] += sign * 2.0 * p.k;
-                        }
-                    }
-                }
+                let h = hessian.then(|| {
+                    let k2 = 2.0 * p.k;
+                    (
+                        [[k2, 0.0], [0.0, k2]],
+                        &self.pull_slots[j],
+                        self.sys.values_mut(),
+                    )
+                });
+                add_pair_terms(&mut g, (p.a, p.b), 2.0 * p.k * d, h);
             }
         }
         if let Some(f) = &self.fixed {
             f.hold(&mut g, hessian.then_some(&mut self.sys));
         }
         (en, g)
+    }
+}
+
+/// Adds a term of d = x_b − x_a to the gradient (∂/∂d = `gd`: −gd at a, +gd at b) and, when
+/// the Hessian is assembled, its Hessian `h` (2×2 in d) as the block [h −h; −h h] at the pair's
+/// `slots` of the system's `values` (taken only then: taking them drops the factor).
+fn add_pair_terms(
+    g: &mut [f64],
+    (a, b): (usize, usize),
+    gd: DVec2,
+    h: Option<([[f64; 2]; 2], &[u32; 16], &mut [f64])>,
+) {
+    g[2 * a] -= gd.x;
+    g[2 * a + 1] -= gd.y;
+    g[2 * b] += gd.x;
+    g[2 * b + 1] += gd.y;
+    let Some((h, slots, values)) = h else {
+        return;
+    };
+    for p in 0..4 {
+        for q in 0..4 {
+            let s = slots[p * 4 + q];
+            if s != u32::MAX {
+                let sign = if (p < 2) == (q < 2) { 1.0 } else { -1.0 };
+                values[s as usize] += sign * h[p % 2][q % 2];
+            }
+        }
     }
 }
 
