@@ -33,6 +33,32 @@ impl CutMesh {
         Ok(Self { mesh, origin })
     }
 
+    /// A map of `from` (a finer cut of the same piece) carried to this cut: a vertex takes the
+    /// position of its copy in `from`, or the mean of its copies where `from` is cut and this
+    /// cut is not.
+    pub fn merge_from(&self, from: &CutMesh, x: &[DVec2]) -> Vec<DVec2> {
+        let n = self.mesh.positions.len();
+        let mut copies: Vec<Vec<u32>> = vec![Vec::new(); n];
+        for (t, tri) in self.mesh.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let c = &mut copies[tri[k] as usize];
+                let old = from.mesh.triangles[t][k];
+                if !c.contains(&old) {
+                    c.push(old);
+                }
+            }
+        }
+        copies
+            .iter()
+            .map(|c| match c.as_slice() {
+                [one] => x[*one as usize],
+                many => {
+                    many.iter().map(|&v| x[v as usize]).sum::<DVec2>() / many.len().max(1) as f64
+                }
+            })
+            .collect()
+    }
+
     /// A map of `from` (a coarser cut of the same piece) carried to this cut: every copy of a
     /// vertex takes the position its corner had.
     pub fn transfer(&self, from: &CutMesh, x: &[DVec2]) -> Vec<DVec2> {
@@ -149,5 +175,45 @@ mod tests {
         let x: Vec<DVec2> = cap.positions.iter().map(|p| p.truncate()).collect();
         let y = cut.transfer(&uncut, &x);
         assert_eq!(legs.lengths_2d(&y)[0], legs.lengths_2d(&y)[1]);
+    }
+
+    /// A dart shortened by two edges: the copies the shorter cut joins take their mean, every
+    /// other vertex its own position, to the bit.
+    #[test]
+    fn a_shorter_cut_merges_the_copies_it_joins() {
+        let cap = spherical_cap(100.0, 1.0, 8);
+        let first = |k: usize| (1 + 3 * k * (k - 1)) as u32;
+        let path: Vec<u32> = (4..=8).rev().map(first).collect();
+        let long = CutMesh::new(&cap, std::slice::from_ref(&path)).unwrap();
+        let short = CutMesh::new(&cap, &[path[..3].to_vec()]).unwrap();
+        assert_eq!(short.mesh.positions.len(), cap.positions.len() + 2);
+        // Each vertex of the long cut somewhere of its own.
+        let x: Vec<DVec2> = (0..long.mesh.positions.len())
+            .map(|i| DVec2::new(i as f64, (i * i % 7) as f64 / 3.0))
+            .collect();
+        let y = short.merge_from(&long, &x);
+        let copies = |c: &CutMesh, p: u32| -> Vec<usize> {
+            (0..c.origin.len()).filter(|&v| c.origin[v] == p).collect()
+        };
+        for (v, &p) in short.origin.iter().enumerate() {
+            let (s, l) = (copies(&short, p), copies(&long, p));
+            if s.len() == l.len() {
+                // Cut alike in both (one copy, or both legs of the remaining dart): its own.
+                assert!(l.iter().any(|&w| x[w] == y[v]), "vertex {v}");
+            } else {
+                assert_eq!((s.len(), l.len()), (1, 2), "vertex {v}");
+                assert_eq!(y[v], 0.5 * (x[l[0]] + x[l[1]]), "vertex {v}");
+            }
+        }
+        // Each leg copy of the shorter dart sits where that side's copy was.
+        let topo = Topology::build(&cap).unwrap();
+        let short_legs = Legs::of(&topo, &cap, &short, &path[..3]).unwrap();
+        let long_legs = Legs::of(&topo, &cap, &long, &path).unwrap();
+        for side in 0..2 {
+            for i in 0..2 {
+                let (s, l) = (short_legs.sides[side][i], long_legs.sides[side][i]);
+                assert_eq!(y[s as usize], x[l as usize]);
+            }
+        }
     }
 }

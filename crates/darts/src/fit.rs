@@ -6,20 +6,25 @@
 //! drawing every dart shut as far as it will go: the darts open least and take away the least
 //! material, and the material sits at its limits around them, as a leather lasted over its form
 //! or a prepreg draped onto its tool does. On a spherical cap of radius 50 mm and geodesic
-//! radius 1 rad at ±3 %, the same darts open 41.2 mm in all least-strained and 35.3 mm tight
+//! radius 1 rad at ±3 %, the same darts open 41.2 mm in all least-strained and 34.6 mm tight
 //! (four darts, 1,944 faces; three darts on the bench's 20k cap: 42.5 and 35.9 mm), against
 //! the 32.4 mm the limits allow at the very least (`tests/opening.rs` derives that bound).
 //!
 //! The tight map is the least of δ2 plus a [`Pull`] of zero rest length between the two corners
 //! of every dart's mouth, within the limits ([`closing`]). A pull's energy k·d² (d in mm) and
-//! δ2's (a density times an area in mm²) scale alike with the piece, so the weight
-//! [`CLOSE_WEIGHT`] is a plain number; at it the limits, not the weight, stop the darts (the
+//! δ2's (a density times an area in mm²) scale alike with the piece, so its weight is a plain
+//! number; at the first of [`CLOSE_WEIGHTS`] the limits, not the weight, stop the darts (the
 //! 20k cap's open 35.9 mm at weights 10 and 100, 36.2 mm at 1, 39.2 mm at 0.1).
 //!
 //! A dart drawn shut can close past its mouth, its legs crossing, or have its legs pulled to
-//! different lengths; the legs are kept from crossing by guards ([`Closing::guards`]), and a
-//! tight map whose legs still part or cross is not kept: the piece keeps its least-strained
-//! map and says so (the bench's 20k toe at ±3 %: legs 0.37 mm apart).
+//! different lengths. The legs are kept from crossing by guards ([`Closing::guards`]). Where a
+//! guard next to the point is on its boundary, the legs lie on one line there: the dart takes
+//! nothing away from there on and is longer than the tight map needs, and the guard stops the
+//! solver. The dart then ends where it was drawn shut ([`shut_points`]) and the piece is drawn
+//! tight again (the bench's 140° cap at ±3 %: five darts 531.7 mm long instead of 539.2).
+//! Where the legs still part or cross, the next, weaker weight is tried (the bench's toe holds
+//! its legs at 1, not at 10), and a piece none of them draws tight keeps its least-strained map
+//! and says so.
 
 use flatcut_flatten::nonlinear::newton::Pull;
 use flatcut_geom::DVec2;
@@ -53,8 +58,10 @@ impl DartFit {
     }
 }
 
-/// Weight of a pull that draws a dart shut (dimensionless; see the module docs).
-pub const CLOSE_WEIGHT: f64 = 10.0;
+/// Weights of the pulls that draw the darts shut (dimensionless; see the module docs), in the
+/// order they are tried: the first whose map keeps every dart's legs paired and the outline
+/// simple is kept.
+pub const CLOSE_WEIGHTS: [f64; 3] = [10.0, 1.0, 0.1];
 
 /// What draws a piece's darts shut: pulls on the darts' mouths, and guards that keep their legs
 /// from crossing. Empty for the least-strained fit.
@@ -70,7 +77,7 @@ pub struct Closing {
 /// guard, the triangle of the dart's point and the two copies, which turns over when the legs
 /// cross there. Pulling every pair of copies instead crossed the legs next to the point, where
 /// they run close; the mouth's pull alone crossed them there too on a cap with three darts.
-pub fn closing(legs: &[Legs], x: &[DVec2]) -> Closing {
+pub fn closing(legs: &[Legs], x: &[DVec2], weight: f64) -> Closing {
     let mut out = Closing::default();
     for l in legs {
         let [a, b] = &l.sides;
@@ -81,7 +88,7 @@ pub fn closing(legs: &[Legs], x: &[DVec2]) -> Closing {
             out.pulls.push(Pull {
                 a: ma as usize,
                 b: mb as usize,
-                k: CLOSE_WEIGHT,
+                k: weight,
             });
         }
         for (&p, &q) in a.iter().zip(b) {
@@ -100,9 +107,75 @@ pub fn closing(legs: &[Legs], x: &[DVec2]) -> Closing {
     out
 }
 
+/// Below this sine of the angle that two copies of a leg vertex make at their dart's point, the
+/// guard between them is on its boundary: the legs lie on one line there, and the tight map would
+/// close the dart further if the guard let it.
+pub const SHUT_SINE: f64 = 1e-6;
+/// Two copies of a leg vertex closer than this fraction of their distance from the dart's point
+/// (the angle, in radians, the dart opens there) are one point of the pattern: merging them
+/// strains the faces next to them by about half of it.
+pub const SHUT_ANGLE: f64 = 0.05;
+
+/// Per dart, where a tight map `x` has drawn it shut: the index along its legs (mouth first) of
+/// the farthest pair of copies from the point whose guard is on its boundary, every pair from
+/// there to the point within [`SHUT_ANGLE`] (the legs may cross a little next to the point,
+/// where their guards hold them as the first map had them); `None` where the dart is open up
+/// to its point.
+/// From there on the dart takes nothing away, and its guards stop the solver (a step along
+/// them turns a guard over, so every step is cut to nothing): the dart is shorter than the
+/// tight map needs, and ends there instead (`0`: at its mouth, so it is not needed at all).
+pub fn shut_points(legs: &[Legs], x: &[DVec2]) -> Vec<Option<usize>> {
+    legs.iter()
+        .map(|l| {
+            let [a, b] = &l.sides;
+            let point = x[*a.last()? as usize];
+            let mut shut = None;
+            for i in (0..a.len().min(b.len()).saturating_sub(1)).rev() {
+                let (p, q) = (x[a[i] as usize], x[b[i] as usize]);
+                let (u, v) = (p - point, q - point);
+                if p.distance(q) > SHUT_ANGLE * u.length().min(v.length()) {
+                    break;
+                }
+                let scale = u.length() * v.length();
+                if scale > 0.0 && u.perp_dot(v).abs() <= SHUT_SINE * scale {
+                    shut = Some(i);
+                }
+            }
+            shut
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A dart whose legs lie on one line for their last two pairs before the point, each pair
+    /// within the angle: it is shut from the farther of them; a pair apart by more than the
+    /// angle, or at an angle of its own, is not.
+    #[test]
+    fn a_dart_drawn_shut_next_to_its_point_is_found() {
+        let mut x: Vec<DVec2> = [(0.0, 0.0), (3.0, 0.6), (2.0, 0.0), (1.0, 0.0)]
+            .into_iter()
+            .chain([(3.0, -0.6), (2.004, 0.0), (1.002, 0.0)])
+            .map(|(a, b)| DVec2::new(a, b))
+            .collect();
+        let legs = [Legs {
+            sides: [vec![1, 2, 3, 0], vec![4, 5, 6, 0]],
+        }];
+        assert_eq!(shut_points(&legs, &x), vec![Some(1)]);
+        // The farther pair apart by more than the angle: shut from the nearer one only.
+        x[5].x = 2.0 * (1.0 + 1.5 * SHUT_ANGLE);
+        assert_eq!(shut_points(&legs, &x), vec![Some(2)]);
+        // The nearer pair at an angle (open) and the farther one beyond the angle: open.
+        x[6].y = -1e-3;
+        assert_eq!(shut_points(&legs, &x), vec![None]);
+        // The whole dart shut, the mouth's corners on one point.
+        let shut: Vec<DVec2> = (0..7)
+            .map(|i| DVec2::new([0.0, 3.0, 2.0, 1.0, 3.0, 2.0, 1.0][i], 0.0))
+            .collect();
+        assert_eq!(shut_points(&legs, &shut), vec![Some(0)]);
+    }
 
     /// A dart along −x from its mouth (x = 3) to its point (the origin): one pull between the
     /// mouth's corners, a guard for every other pair of copies, each counter-clockwise in the
@@ -119,10 +192,11 @@ mod tests {
             [vec![1, 2, 3, 0], vec![4, 5, 6, 0]],
             [vec![4, 5, 6, 0], vec![1, 2, 3, 0]],
         ] {
-            let c = closing(&[Legs { sides }], &x);
+            let c = closing(&[Legs { sides }], &x, 2.0);
             assert_eq!(c.pulls.len(), 1);
             let p = c.pulls[0];
             assert_eq!([p.a.min(p.b), p.a.max(p.b)], [1, 4]);
+            assert_eq!(p.k, 2.0);
             assert_eq!(c.guards.len(), 3);
             for g in &c.guards {
                 assert_eq!(g[0], 0);

@@ -34,7 +34,7 @@ use flatcut_mesh::{Topology, TriMesh, check_disk};
 
 use crate::cut::{CutMesh, Legs, all_pairs};
 use crate::embed::{Embedded, embed, transfer};
-use crate::fit::{Closing, DartFit, closing};
+use crate::fit::{CLOSE_WEIGHTS, Closing, DartFit, closing, shut_points};
 use crate::keepout::KeepOut;
 use crate::limits::{self, Effort, Held, Limits};
 use crate::relaxed::{Yield, face_opening, rim_demand};
@@ -155,6 +155,48 @@ impl Outcome {
             .iter()
             .map(|(p, _)| path_length(&self.emb.mesh, p))
             .sum()
+    }
+
+    fn legs(&self) -> Vec<Legs> {
+        self.darts.iter().map(|(_, l)| l.clone()).collect()
+    }
+
+    /// The outcome with each dart ending where `shut` says ([`shut_points`]; a dart shut up to
+    /// its mouth is dropped), from its map `x`: the piece cut again, the map carried over with
+    /// the copies the shorter cut joins merged at their mean, and brought within the limits
+    /// again. `None` when the merged map folds or cannot be brought within the limits.
+    fn shortened(
+        &self,
+        shut: &[Option<usize>],
+        x: &[DVec2],
+        limits: &Limits,
+    ) -> Result<Option<Outcome>, DartError> {
+        let paths: Vec<Vec<u32>> = self
+            .darts
+            .iter()
+            .zip(shut)
+            .filter_map(|((path, _), s)| {
+                let end = s.map_or(path.len(), |i| i + 1);
+                (end >= 2).then(|| path[..end].to_vec())
+            })
+            .collect();
+        let cut = CutMesh::new(&self.emb.mesh, &paths)?;
+        let merged = cut.merge_from(&self.cut, x);
+        if !flip_free(&cut.mesh, &merged) {
+            return Ok(None);
+        }
+        let held = limits::reach(&cut.mesh, &merged, limits, Effort::Warm)?;
+        if !held.feasible {
+            return Ok(None);
+        }
+        let topo = Topology::build(&self.emb.mesh)?;
+        let legs = legs_of(&topo, &self.emb.mesh, &cut, &paths)?;
+        Ok(Some(Outcome {
+            emb: self.emb.clone(),
+            cut,
+            darts: paths.into_iter().zip(legs).collect(),
+            held,
+        }))
     }
 }
 
@@ -311,7 +353,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             .then(a.darts.len().cmp(&b.darts.len()))
     });
     let mut unsettled: Option<DartError> = None;
-    let mut chosen: Option<(usize, (Held, DartFit))> = None;
+    let mut chosen: Option<(usize, Settled)> = None;
     for i in held_ok {
         match settle_simple(&outcomes[i], limits, opts.fit)? {
             Ok(settled) => {
@@ -350,16 +392,16 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             }
         }
     }
-    if let Some((i, (settled, fit))) = chosen {
-        let o = &outcomes[i];
+    if let Some((i, settled)) = chosen {
+        let o = settled.shortened.as_ref().unwrap_or(&outcomes[i]);
         return Ok(finish(
             &o.emb.mesh,
             &o.cut,
             &o.darts,
-            settled,
+            settled.held,
             attempts,
             opts.drill_offset_mm,
-            fit,
+            settled.fit,
         ));
     }
     if let Some(e) = unsettled {
@@ -413,37 +455,99 @@ fn outline_overlap(mesh: &TriMesh, x: &[DVec2]) -> Result<Option<DVec3>, DartErr
     Ok(None)
 }
 
-/// The final map of an outcome that held the limits, fitted as `fit` says, and the fit it has:
-/// a tight map whose legs would cross or part is not kept, and the outcome's least-strained map
-/// is settled instead (the pulls draw a dart's mouth shut, and where the limits would let more
-/// than the dart close, its legs cross).
+/// The final map of an outcome that held the limits, fitted as `fit` says, with the fit it has
+/// and, where the tight fit shortened darts, the outcome it shortened them in. A tight map whose
+/// legs would cross or part is not kept, at any of [`CLOSE_WEIGHTS`]: the outcome's
+/// least-strained map is settled instead.
 fn settle_simple(
     o: &Outcome,
     limits: &Limits,
     fit: DartFit,
-) -> Result<Result<(Held, DartFit), DartError>, DartError> {
-    let legs: Vec<Legs> = o.darts.iter().map(|(_, l)| l.clone()).collect();
-    let pairs = all_pairs(&legs);
+) -> Result<Result<Settled, DartError>, DartError> {
     if fit == DartFit::Tight {
-        match settle_with(o, limits, &pairs, closing(&legs, &o.held.x))? {
-            Ok(held) => return Ok(Ok((held, DartFit::Tight))),
-            Err(e) => debug(&format!("drawn tight: {e}; settled least-strained")),
+        // Darts one weight shortens stay short for the next: they held the limits.
+        let mut shortened = None;
+        for weight in CLOSE_WEIGHTS {
+            match settle_tight(o, &mut shortened, limits, weight)? {
+                Ok(held) => {
+                    return Ok(Ok(Settled {
+                        held,
+                        fit: DartFit::Tight,
+                        shortened,
+                    }));
+                }
+                Err(e) => debug(&format!("drawn tight at {weight}: {e}")),
+            }
         }
+        debug("settled least-strained");
     }
-    Ok(settle_with(o, limits, &pairs, Closing::default())?.map(|h| (h, DartFit::LeastStrain)))
+    let pairs = all_pairs(&o.legs());
+    let held = limits::settle(&o.cut.mesh, &o.held.x, limits, &pairs, Closing::default())?;
+    Ok(checked(o, &pairs, held)?.map(|held| Settled {
+        held,
+        fit: DartFit::LeastStrain,
+        shortened: None,
+    }))
 }
 
-/// The final map of an outcome that held the limits (legs paired, least δ2 within the limits
-/// plus `closing`'s pulls), [`DartError::LegsApart`] when a dart's legs cannot be kept equal within the
-/// limits, or [`DartError::Overlap`] when its flat outline crosses itself.
-fn settle_with(
+/// A final map of an outcome and what it took.
+struct Settled {
+    held: Held,
+    fit: DartFit,
+    /// The outcome with its darts shortened where the tight map drew them shut.
+    shortened: Option<Outcome>,
+}
+
+/// Most times the tight fit shortens the darts of one outcome.
+const MAX_SHORTENINGS: usize = 12;
+
+/// The tight map of outcome `o` at the pulls' `weight`, from its darts as `shortened` has them
+/// (`None`: as placed). Where the map draws a dart shut before its point ([`shut_points`]), the
+/// dart ends there: the piece is cut again with the shorter darts (kept in `shortened`), the map
+/// carried over with the shut copies merged, brought within the limits and drawn tight again.
+fn settle_tight(
     o: &Outcome,
+    shortened: &mut Option<Outcome>,
     limits: &Limits,
-    pairs: &EdgePairs,
-    closing: Closing,
+    weight: f64,
 ) -> Result<Result<Held, DartError>, DartError> {
-    let t0 = std::time::Instant::now();
-    let settled = limits::settle(&o.cut.mesh, &o.held.x, limits, pairs, closing)?;
+    let mut rounds = 0;
+    loop {
+        let cur = shortened.as_ref().unwrap_or(o);
+        let legs = cur.legs();
+        let pairs = all_pairs(&legs);
+        let held = limits::settle(
+            &cur.cut.mesh,
+            &cur.held.x,
+            limits,
+            &pairs,
+            closing(&legs, &cur.held.x, weight),
+        )?;
+        let shut = shut_points(&legs, &held.x);
+        if rounds < MAX_SHORTENINGS
+            && shut.iter().any(Option::is_some)
+            && let Some(next) = cur.shortened(&shut, &held.x, limits)?
+        {
+            debug(&format!(
+                "tight: darts shortened from {:.1} to {:.1} mm",
+                cur.total_length(),
+                next.total_length()
+            ));
+            *shortened = Some(next);
+            rounds += 1;
+            continue;
+        }
+        return checked(cur, &pairs, held);
+    }
+}
+
+/// A final map `settled` of outcome `o`, [`DartError::LegsApart`] when a dart's legs are not
+/// kept equal, or [`DartError::Overlap`] when its flat outline crosses itself.
+fn checked(
+    o: &Outcome,
+    pairs: &EdgePairs,
+    settled: Held,
+) -> Result<Result<Held, DartError>, DartError> {
     if let Some((k, apart)) = pairs.worst_legs(&settled.x)
         && apart > LEG_MATCH_MM
     {
@@ -461,11 +565,6 @@ fn settle_with(
             at,
         }));
     }
-    debug(&format!(
-        "settle: {} iterations, {:.2} s",
-        settled.iterations,
-        t0.elapsed().as_secs_f64()
-    ));
     Ok(match outline_overlap(&o.cut.mesh, &settled.x)? {
         Some(at) => {
             debug(&format!(
