@@ -19,6 +19,7 @@ use flatcut_mesh::TriMesh;
 use flatcut_mesh::grain_strain::{
     GrainStrain, grain_strain_of, pattern_direction_near, warp_in_frame,
 };
+use rayon::prelude::*;
 
 use super::kernel::RestTri;
 use super::newton::{Budget, EarlyStop};
@@ -210,25 +211,36 @@ pub fn limit_excess(rest: &[RestTri], x: &[DVec2], u: DVec2, l: &DirectionalLimi
 }
 
 /// Minimises `f` over angles in [0, π): [`AUTO_SAMPLES`] samples, then golden-section search in
-/// the bracket around the best sample. Returns the best angle's score and value.
-pub fn search_angle<T, E>(mut f: impl FnMut(f64) -> Result<(f64, T), E>) -> Result<(f64, T), E> {
+/// the bracket around the best sample. Returns the best angle's score and value. The samples,
+/// and the bracket's first two points, are independent solves: they run side by side (the
+/// 20k-face hemisphere in woven cotton: 71.9 s instead of 89.8 s on two cores), and are
+/// compared in the order of the sequential search, so the answer is the same.
+pub fn search_angle<T: Send, E: Send>(
+    f: impl Fn(f64) -> Result<(f64, T), E> + Sync,
+) -> Result<(f64, T), E> {
     let step = std::f64::consts::PI / AUTO_SAMPLES as f64;
-    let (s0, v0) = f(0.0)?;
-    let mut best = (0.0, s0, v0);
-    for i in 1..AUTO_SAMPLES {
-        let a = i as f64 * step;
-        let (s, v) = f(a)?;
-        if s < best.1 {
-            best = (a, s, v);
+    // The samples are independent solves: they run side by side, and are compared in order.
+    let samples: Vec<Result<(f64, T), E>> = (0..AUTO_SAMPLES)
+        .into_par_iter()
+        .map(|i| f(i as f64 * step))
+        .collect();
+    let mut best: Option<(f64, f64, T)> = None;
+    for (i, r) in samples.into_iter().enumerate() {
+        let (s, v) = r?;
+        if best.as_ref().is_none_or(|b| s < b.1) {
+            best = Some((i as f64 * step, s, v));
         }
     }
+    let Some(mut best) = best else {
+        unreachable!("AUTO_SAMPLES is not zero")
+    };
     let a0 = best.0;
     let inv_phi = (5f64.sqrt() - 1.0) / 2.0;
     let (mut lo, mut hi) = (a0 - step, a0 + step);
     let mut c = hi - inv_phi * (hi - lo);
     let mut d = lo + inv_phi * (hi - lo);
-    let (mut fc, vc) = f(c)?;
-    let (mut fd, vd) = f(d)?;
+    let (rc, rd) = rayon::join(|| f(c), || f(d));
+    let ((mut fc, vc), (mut fd, vd)) = (rc?, rd?);
     for (a, s, v) in [(c, fc, vc), (d, fd, vd)] {
         if s < best.1 {
             best = (a, s, v);
