@@ -22,9 +22,10 @@
 //! nothing away from there on and is longer than the tight map needs, and the guard stops the
 //! solver. The dart then ends where it was drawn shut ([`shut_points`]) and the piece is drawn
 //! tight again (the bench's 140° cap at ±3 %: five darts 531.7 mm long instead of 539.2).
-//! Where the legs still part or cross, the next, weaker weight is tried (the bench's toe holds
-//! its legs at 1, not at 10), and a piece none of them draws tight keeps its least-strained map
-//! and says so.
+//! Where ending it there would break the limits, the dart is let go (its pull dropped) and the
+//! others are drawn tight. Where the legs still part or cross, the next, weaker weight is tried
+//! (the bench's toe holds its legs at 1, not at 10), and a piece none of them draws tight keeps
+//! its least-strained map and says so.
 
 use flatcut_flatten::nonlinear::newton::Pull;
 use flatcut_geom::DVec2;
@@ -77,14 +78,14 @@ pub struct Closing {
 /// guard, the triangle of the dart's point and the two copies, which turns over when the legs
 /// cross there. Pulling every pair of copies instead crossed the legs next to the point, where
 /// they run close; the mouth's pull alone crossed them there too on a cap with three darts.
-pub fn closing(legs: &[Legs], x: &[DVec2], weight: f64) -> Closing {
+pub fn closing(legs: &[Legs], x: &[DVec2], weights: &[f64]) -> Closing {
     let mut out = Closing::default();
-    for l in legs {
+    for (l, &weight) in legs.iter().zip(weights) {
         let [a, b] = &l.sides;
         let (Some(&point), Some(&ma), Some(&mb)) = (a.last(), a.first(), b.first()) else {
             continue;
         };
-        if ma != mb {
+        if ma != mb && weight > 0.0 {
             out.pulls.push(Pull {
                 a: ma as usize,
                 b: mb as usize,
@@ -146,6 +147,25 @@ pub fn shut_points(legs: &[Legs], x: &[DVec2]) -> Vec<Option<usize>> {
         .collect()
 }
 
+/// Per dart, whether a guard of its legs is on its boundary in the map `x` (the two copies on
+/// one line with the point): the solver can take no step that draws it further shut.
+pub fn jammed(legs: &[Legs], x: &[DVec2]) -> Vec<bool> {
+    legs.iter()
+        .map(|l| {
+            let [a, b] = &l.sides;
+            let Some(&point) = a.last() else {
+                return false;
+            };
+            let point = x[point as usize];
+            a.iter().zip(b).rev().skip(1).any(|(&p, &q)| {
+                let (u, v) = (x[p as usize] - point, x[q as usize] - point);
+                let scale = u.length() * v.length();
+                scale > 0.0 && u.perp_dot(v).abs() <= SHUT_SINE * scale
+            })
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -164,12 +184,17 @@ mod tests {
             sides: [vec![1, 2, 3, 0], vec![4, 5, 6, 0]],
         }];
         assert_eq!(shut_points(&legs, &x), vec![Some(1)]);
+        assert_eq!(jammed(&legs, &x), vec![true]);
         // The farther pair apart by more than the angle: shut from the nearer one only.
         x[5].x = 2.0 * (1.0 + 1.5 * SHUT_ANGLE);
         assert_eq!(shut_points(&legs, &x), vec![Some(2)]);
         // The nearer pair at an angle (open) and the farther one beyond the angle: open.
         x[6].y = -1e-3;
         assert_eq!(shut_points(&legs, &x), vec![None]);
+        // Not shut, but the farther pair still on one line with the point: stuck.
+        assert_eq!(jammed(&legs, &x), vec![true]);
+        x[5].y = 0.05;
+        assert_eq!(jammed(&legs, &x), vec![false]);
         // The whole dart shut, the mouth's corners on one point.
         let shut: Vec<DVec2> = (0..7)
             .map(|i| DVec2::new([0.0, 3.0, 2.0, 1.0, 3.0, 2.0, 1.0][i], 0.0))
@@ -192,7 +217,7 @@ mod tests {
             [vec![1, 2, 3, 0], vec![4, 5, 6, 0]],
             [vec![4, 5, 6, 0], vec![1, 2, 3, 0]],
         ] {
-            let c = closing(&[Legs { sides }], &x, 2.0);
+            let c = closing(&[Legs { sides }], &x, &[2.0]);
             assert_eq!(c.pulls.len(), 1);
             let p = c.pulls[0];
             assert_eq!([p.a.min(p.b), p.a.max(p.b)], [1, 4]);

@@ -34,7 +34,7 @@ use flatcut_mesh::{Topology, TriMesh, check_disk};
 
 use crate::cut::{CutMesh, Legs, all_pairs};
 use crate::embed::{Embedded, embed, transfer};
-use crate::fit::{CLOSE_WEIGHTS, Closing, DartFit, closing, shut_points};
+use crate::fit::{CLOSE_WEIGHTS, Closing, DartFit, closing, jammed, shut_points};
 use crate::keepout::KeepOut;
 use crate::limits::{self, Effort, Held, Limits};
 use crate::relaxed::{Yield, face_opening, rim_demand};
@@ -183,10 +183,15 @@ impl Outcome {
         let cut = CutMesh::new(&self.emb.mesh, &paths)?;
         let merged = cut.merge_from(&self.cut, x);
         if !flip_free(&cut.mesh, &merged) {
+            debug("shortened: folds");
             return Ok(None);
         }
         let held = limits::reach(&cut.mesh, &merged, limits, Effort::Warm)?;
         if !held.feasible {
+            debug(&format!(
+                "shortened: infeasible {:.3}%",
+                held.excess * 100.0
+            ));
             return Ok(None);
         }
         let topo = Topology::build(&self.emb.mesh)?;
@@ -512,6 +517,8 @@ fn settle_tight(
     weight: f64,
 ) -> Result<Result<Held, DartError>, DartError> {
     let mut rounds = 0;
+    // Per dart, its pull's weight: a dart drawn shut where it cannot end is let go.
+    let mut weights = vec![weight; shortened.as_ref().unwrap_or(o).darts.len()];
     loop {
         let cur = shortened.as_ref().unwrap_or(o);
         let legs = cur.legs();
@@ -521,7 +528,7 @@ fn settle_tight(
             &cur.held.x,
             limits,
             &pairs,
-            closing(&legs, &cur.held.x, weight),
+            closing(&legs, &cur.held.x, &weights),
         )?;
         let shut = shut_points(&legs, &held.x);
         if rounds < MAX_SHORTENINGS
@@ -533,7 +540,30 @@ fn settle_tight(
                 cur.total_length(),
                 next.total_length()
             ));
+            // A dart shut up to its mouth is gone, and its weight with it.
+            weights = weights
+                .iter()
+                .zip(&shut)
+                .filter(|(_, s)| **s != Some(0))
+                .map(|(w, _)| *w)
+                .collect();
             *shortened = Some(next);
+            rounds += 1;
+            continue;
+        }
+        // A dart drawn shut that could not end there (ending it broke the limits): its guards
+        // stop every step of the solver, so it is let go and the others drawn tight.
+        let stuck = jammed(&legs, &held.x);
+        if rounds < MAX_SHORTENINGS && stuck.iter().zip(&weights).any(|(&j, &w)| j && w > 0.0) {
+            for (w, j) in weights.iter_mut().zip(&stuck) {
+                if *j {
+                    *w = 0.0;
+                }
+            }
+            debug(&format!(
+                "tight: {} darts let go",
+                stuck.iter().filter(|&&j| j).count()
+            ));
             rounds += 1;
             continue;
         }
