@@ -499,6 +499,16 @@ fn mouths_mm(o: &Obj, legs: &[[Leg; 2]]) -> f64 {
         .sum()
 }
 
+/// `mesh` darted at ±3 % with `--dart-fit fit`, checked by `check_darted`, and the total width
+/// of its darts' mouths (mm).
+fn darted_with_fit(mesh: &Path, fit: &str) -> (Darted, f64) {
+    let dir = tempfile::tempdir().unwrap();
+    let (flat, report) = flatten_darts_within(mesh, dir.path(), ("3", "3"), &["--dart-fit", fit]);
+    let d = check_darted(mesh, &flat, &report, 3.0, 3.0);
+    let width = mouths_mm(&read_obj(&flat), &d.legs);
+    (d, width)
+}
+
 #[test]
 fn a_tight_fit_draws_the_same_darts_narrower_within_the_limits() {
     // `--dart-fit tight` spends the give of ±3 % on closing the darts: the same darts (mouths,
@@ -507,16 +517,8 @@ fn a_tight_fit_draws_the_same_darts_narrower_within_the_limits() {
     let Some(cap) = bench_mesh("sphcap_a100_2k") else {
         return;
     };
-    let fit = |name: &str| {
-        let dir = tempfile::tempdir().unwrap();
-        let (flat, report) =
-            flatten_darts_within(&cap, dir.path(), ("3", "3"), &["--dart-fit", name]);
-        let d = check_darted(&cap, &flat, &report, 3.0, 3.0);
-        let width = mouths_mm(&read_obj(&flat), &d.legs);
-        (d, width)
-    };
-    let (loose, loose_mm) = fit("least-strain");
-    let (tight, tight_mm) = fit("tight");
+    let (loose, loose_mm) = darted_with_fit(&cap, "least-strain");
+    let (tight, tight_mm) = darted_with_fit(&cap, "tight");
     println!("mouths: least strain {loose_mm:.2} mm, tight {tight_mm:.2} mm");
     assert_eq!(loose.darts.len(), tight.darts.len());
     for (a, b) in loose.darts.iter().zip(&tight.darts) {
@@ -539,16 +541,8 @@ fn a_tight_fit_ends_a_dart_where_it_draws_it_shut() {
     let Some(cap) = bench_mesh("sphcap_a140_2k") else {
         return;
     };
-    let fit = |name: &str| {
-        let dir = tempfile::tempdir().unwrap();
-        let (flat, report) =
-            flatten_darts_within(&cap, dir.path(), ("3", "3"), &["--dart-fit", name]);
-        let d = check_darted(&cap, &flat, &report, 3.0, 3.0);
-        let width = mouths_mm(&read_obj(&flat), &d.legs);
-        (d, width)
-    };
-    let (loose, loose_mm) = fit("least-strain");
-    let (tight, tight_mm) = fit("tight");
+    let (loose, loose_mm) = darted_with_fit(&cap, "least-strain");
+    let (tight, tight_mm) = darted_with_fit(&cap, "tight");
     let length = |d: &Darted| d.darts.iter().map(|d| d.length_3d).sum::<f64>();
     let (ll, tl) = (length(&loose), length(&tight));
     println!(
