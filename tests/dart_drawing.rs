@@ -77,7 +77,66 @@ fn darts_in_the_dxf_are_sew_legs_meeting_near_a_drill_mark() {
         format!("{code:?}"),
         format!("{:?}", std::process::ExitCode::SUCCESS)
     );
-    let text = std::fs::read_to_string(&dxf).unwrap();
+    let n = darts_read_back(&dxf);
+    let svg_text = std::fs::read_to_string(&svg).unwrap();
+    assert!(svg_text.contains("<svg"), "an SVG is written");
+    eprintln!("{n} darts' drill marks read back from the DXF");
+}
+
+#[test]
+fn a_flat_obj_keeps_its_darts_for_the_pattern() {
+    // `flatten --darts auto` writes each dart's sew line into the OBJ (`g dart-k`, `l`), so the
+    // pattern drawn from that file has the darts as the one drawn from the mesh: sew lines of
+    // equal legs, drill marks, the mouths bridged by the cut line. Before, the pattern of the
+    // flat OBJ took the darts for notches cut into the outline and refused the piece (its seam
+    // allowance crossed each dart).
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("cap.obj");
+    std::fs::write(&obj, cap_obj(50.0, 1.0, 12)).unwrap();
+    let flat = dir.path().join("flat").join("cap.obj");
+    std::fs::create_dir_all(flat.parent().unwrap()).unwrap();
+    let limits = ["--max-stretch", "3", "--max-compress", "3"];
+    let ok = format!("{:?}", std::process::ExitCode::SUCCESS);
+    let mut args = vec![
+        "flatten",
+        obj.to_str().unwrap(),
+        "-o",
+        flat.to_str().unwrap(),
+    ];
+    args.extend(limits);
+    args.extend(["--darts", "auto"]);
+    assert_eq!(format!("{:?}", run_cli(&args)), ok);
+    let dxf_of = |input: &std::path::Path, name: &str, darted: bool| {
+        let (svg, dxf) = (
+            dir.path().join(format!("{name}.svg")),
+            dir.path().join(format!("{name}.dxf")),
+        );
+        let mut args = vec![
+            "pattern",
+            input.to_str().unwrap(),
+            "-o",
+            svg.to_str().unwrap(),
+            "--dxf",
+            dxf.to_str().unwrap(),
+        ];
+        if darted {
+            args.extend(limits);
+            args.extend(["--darts", "auto"]);
+        }
+        assert_eq!(format!("{:?}", run_cli(&args)), ok, "pattern of {name}");
+        dxf
+    };
+    let from_flat = darts_read_back(&dxf_of(&flat, "from_flat", false));
+    let from_mesh = darts_read_back(&dxf_of(&obj, "from_mesh", true));
+    assert!(from_flat > 0);
+    assert_eq!(from_flat, from_mesh);
+}
+
+/// Reads the DXF back with the project's AAMA reader and checks its darts: one open sew line per
+/// drill mark, each drill mark inside the one piece about 5 mm short of its sew line's point,
+/// the two legs within 0.1 mm. Returns how many darts.
+fn darts_read_back(dxf: &std::path::Path) -> usize {
+    let text = std::fs::read_to_string(dxf).unwrap();
     let d = flatcut::pattern::dxf_read::read_dxf(&text, 0.01)
         .unwrap()
         .drawing;
@@ -126,9 +185,7 @@ fn darts_in_the_dxf_are_sew_legs_meeting_near_a_drill_mark() {
             "dart {i}: legs {legs:?} differ by more than 0.1 mm"
         );
     }
-    let svg_text = std::fs::read_to_string(&svg).unwrap();
-    assert!(svg_text.contains("<svg"), "an SVG is written");
-    eprintln!("{} darts' drill marks read back from the DXF", drills.len());
+    drills.len()
 }
 
 /// Point in polygon (even-odd).

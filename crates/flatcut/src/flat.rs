@@ -60,13 +60,35 @@ pub struct Limits {
 /// named after the file. `Ok(None)`: the file is a 3D mesh that still needs flattening.
 pub fn read_flat_mesh(path: &Path, limits: &Limits) -> Result<Option<Flat>, PipelineError> {
     let mesh = flatcut_mesh::read_mesh(path)?;
-    if mesh.flat.is_none() {
+    let Some(x) = &mesh.flat else {
         return Ok(None);
-    }
+    };
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "piece".into());
+    // The darts `flatten --darts auto` wrote with the map (only an OBJ carries them).
+    let is_obj = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    let darts = if is_obj {
+        let text = std::fs::read_to_string(path).map_err(|e| PipelineError::Piece {
+            piece: name.clone(),
+            reason: format!("{}: {e}", path.display()),
+        })?;
+        let drill = limits
+            .darts
+            .as_ref()
+            .map_or(flatcut_darts::DartOptions::DEFAULT_DRILL_OFFSET_MM, |d| {
+                d.drill_offset_mm
+            });
+        crate::dart_lines::read(&text, &mesh, x, drill).map_err(|e| PipelineError::Piece {
+            piece: name.clone(),
+            reason: format!("{}: {e}", path.display()),
+        })?
+    } else {
+        Vec::new()
+    };
     let report =
         pipeline::report_piece(&name, &mesh, &[], limits.stretch_pct, limits.compress_pct)?;
     Ok(Some(Flat {
@@ -78,7 +100,7 @@ pub fn read_flat_mesh(path: &Path, limits: &Limits) -> Result<Option<Flat>, Pipe
         mirrored: 0,
         notches: Vec::new(),
         info: None,
-        darts: Vec::new(),
+        darts,
         grain: None,
         grain_dir: None,
     }))

@@ -41,6 +41,7 @@
 //! Start reading at [`run`], then [`pipeline`].
 
 pub mod check;
+pub mod dart_lines;
 pub mod darting;
 pub mod flat;
 pub mod inspect;

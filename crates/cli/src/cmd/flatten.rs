@@ -149,7 +149,8 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         } else {
             a.output.clone()
         };
-        out.add(&path, flatcut::mesh::io::obj_string(&f.mesh).as_bytes())?;
+        let obj = flatcut::mesh::io::obj_string(&f.mesh) + &flatcut::dart_lines::write(&f.darts);
+        out.add(&path, obj.as_bytes())?;
         lines.push(format!(
             "{}: {} vertices, {} faces, mean δ2 {:.6} -> {}",
             f.name,
