@@ -21,7 +21,7 @@
 //! guard next to the point is on its boundary, the legs lie on one line there: the dart takes
 //! nothing away from there on and is longer than the tight map needs, and the guard stops the
 //! solver. The dart then ends where it was drawn shut ([`shut_points`]) and the piece is drawn
-//! tight again (the bench's 140° cap at ±3 %: five darts 531.7 mm long instead of 539.2).
+//! tight again (the bench's 140° cap at ±3 %: five darts 527.6 mm long instead of 539.2).
 //! Where ending it there would break the limits, the dart is let go (its pull dropped) and the
 //! others are drawn tight. Where the legs still part or cross, the next, weaker weight is tried
 //! (the bench's toe holds its legs at 1, not at 10), and a piece none of them draws tight keeps
@@ -137,8 +137,7 @@ pub fn shut_points(legs: &[Legs], x: &[DVec2]) -> Vec<Option<usize>> {
                 if p.distance(q) > SHUT_ANGLE * u.length().min(v.length()) {
                     break;
                 }
-                let scale = u.length() * v.length();
-                if scale > 0.0 && u.perp_dot(v).abs() <= SHUT_SINE * scale {
+                if on_one_line(u, v) {
                     shut = Some(i);
                 }
             }
@@ -157,13 +156,20 @@ pub fn jammed(legs: &[Legs], x: &[DVec2]) -> Vec<bool> {
                 return false;
             };
             let point = x[point as usize];
-            a.iter().zip(b).rev().skip(1).any(|(&p, &q)| {
-                let (u, v) = (x[p as usize] - point, x[q as usize] - point);
-                let scale = u.length() * v.length();
-                scale > 0.0 && u.perp_dot(v).abs() <= SHUT_SINE * scale
-            })
+            a.iter()
+                .zip(b)
+                .rev()
+                .skip(1)
+                .any(|(&p, &q)| on_one_line(x[p as usize] - point, x[q as usize] - point))
         })
         .collect()
+}
+
+/// True when two copies, at `u` and `v` from their dart's point, lie on one line with it (within
+/// [`SHUT_SINE`]): the guard through them is on its boundary.
+fn on_one_line(u: DVec2, v: DVec2) -> bool {
+    let scale = u.length() * v.length();
+    scale > 0.0 && u.perp_dot(v).abs() <= SHUT_SINE * scale
 }
 
 #[cfg(test)]
