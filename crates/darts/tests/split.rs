@@ -56,6 +56,8 @@ fn options(pct: f64, max_pieces: usize) -> SplitOptions {
         band: Band::from_pct(Some(pct), Some(pct)),
         max_pieces,
         keep_out: None,
+        visibility: Default::default(),
+        time_limit: None,
     }
 }
 
