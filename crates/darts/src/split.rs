@@ -12,8 +12,8 @@
 //!    [`flatcut_mesh::lines`]), so the cut is a smooth line the sewer can follow.
 //! 2. **Choice.** A chord that splits the piece into two disks, neither smaller than
 //!    [`MIN_AREA_SHARE`] of it, is scored by the larger of the two halves' limit excess, each half
-//!    flattened on its own (isometric, without limits). The lowest score wins, the shorter cut on
-//!    a tie.
+//!    flattened on its own (isometric, without limits). The lowest score wins, the cheaper seam
+//!    on a tie (below).
 //! 3. **All pieces together.** The pieces are flattened together, the two sides of every seam
 //!    kept at equal lengths edge by edge and the limits held ([`flatcut_flatten::assembly`]); while
 //!    a piece is still beyond the limits and fewer than `max_pieces` exist, the worst is split
@@ -91,7 +91,7 @@ pub struct SplitOptions {
 }
 
 impl SplitOptions {
-    pub const DEFAULT_MAX_PIECES: usize = 8;
+    pub const DEFAULT_MAX_PIECES: usize = 32;
 }
 
 /// A piece split into pieces.
@@ -136,8 +136,9 @@ pub fn split(
 }
 
 /// Splits a surface that is not a disk (closed, of any genus, or with several boundary loops):
-/// it is first opened into disks ([`crate::open::open_surface`]), those flattened together, and
-/// then split as [`split`] does. The opening cuts are the first of the result's `cuts`.
+/// it is first opened into disks ([`crate::open::open_surface`]), each flattened on its own, and
+/// then split as [`split`] does (the seams of the opening held equal from the first joint solve
+/// on). The opening cuts are the first of the result's `cuts`.
 pub fn split_surface(
     mesh: &TriMesh,
     params: &FlattenParams,
