@@ -1151,9 +1151,9 @@ fn a_closed_ball_is_opened_and_split_into_parts_that_close_it_again() {
             "part {i}: {s} % / {c} %"
         );
         for (&u, &w) in &boundary_next(a) {
-            let sewn = parts.iter().any(|b| {
-                sewn_lengths(a, (u, w), b).is_some_and(|(la, lb)| (la - lb).abs() < 1e-5)
-            });
+            let sewn = parts
+                .iter()
+                .any(|b| sewn_lengths(a, (u, w), b).is_some_and(|(la, lb)| (la - lb).abs() < 1e-5));
             assert!(
                 sewn,
                 "part {i}: outline edge {} – {} is sewn to nothing",

@@ -19,14 +19,29 @@ fn torus_obj(r1: f64, r2: f64, n: usize, m: usize) -> String {
         for j in 0..m {
             let (u, v) = (TAU * i as f64 / n as f64, TAU * j as f64 / m as f64);
             let r = r1 + r2 * v.cos();
-            s.push_str(&format!("v {} {} {}\n", r * u.cos(), r * u.sin(), r2 * v.sin()));
+            s.push_str(&format!(
+                "v {} {} {}\n",
+                r * u.cos(),
+                r * u.sin(),
+                r2 * v.sin()
+            ));
         }
     }
     let id = |i: usize, j: usize| (i % n) * m + j % m + 1;
     for i in 0..n {
         for j in 0..m {
-            s.push_str(&format!("f {} {} {}\n", id(i, j), id(i + 1, j), id(i + 1, j + 1)));
-            s.push_str(&format!("f {} {} {}\n", id(i, j), id(i + 1, j + 1), id(i, j + 1)));
+            s.push_str(&format!(
+                "f {} {} {}\n",
+                id(i, j),
+                id(i + 1, j),
+                id(i + 1, j + 1)
+            ));
+            s.push_str(&format!(
+                "f {} {} {}\n",
+                id(i, j),
+                id(i + 1, j + 1),
+                id(i, j + 1)
+            ));
         }
     }
     s
@@ -69,7 +84,16 @@ fn a_torus_is_opened_and_split_into_parts_within_the_limits_that_close_it_again(
     let code = flatten(
         &torus,
         dir.path(),
-        &["--max-stretch", "8", "--max-compress", "8", "--split", "auto", "--max-pieces", "16"],
+        &[
+            "--max-stretch",
+            "8",
+            "--max-compress",
+            "8",
+            "--split",
+            "auto",
+            "--max-pieces",
+            "16",
+        ],
     )
     .unwrap();
     assert_eq!(code, format!("{:?}", std::process::ExitCode::SUCCESS));
@@ -84,19 +108,29 @@ fn a_torus_is_opened_and_split_into_parts_within_the_limits_that_close_it_again(
     );
     for (i, a) in parts.iter().enumerate() {
         let (s, c) = measured_limits(a);
-        assert!(s <= 8.0 + 1e-6 && c <= 8.0 + 1e-6, "part {i}: {s} % / {c} %");
+        assert!(
+            s <= 8.0 + 1e-6 && c <= 8.0 + 1e-6,
+            "part {i}: {s} % / {c} %"
+        );
         for (&u, &w) in &crate::darts::boundary_next(a) {
-            let sewn = parts.iter().any(|b| {
-                sewn_lengths(a, (u, w), b).is_some_and(|(la, lb)| (la - lb).abs() < 1e-5)
-            });
-            assert!(sewn, "part {i}: outline edge {} – {} is sewn to nothing", a.v[u], a.v[w]);
+            let sewn = parts
+                .iter()
+                .any(|b| sewn_lengths(a, (u, w), b).is_some_and(|(la, lb)| (la - lb).abs() < 1e-5));
+            assert!(
+                sewn,
+                "part {i}: outline edge {} – {} is sewn to nothing",
+                a.v[u], a.v[w]
+            );
         }
     }
     // The report lists every seam with its length and its visibility cost.
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("flat.json")).unwrap())
             .unwrap();
-    let pieces = report.as_array().cloned().unwrap_or_else(|| vec![report.clone()]);
+    let pieces = report
+        .as_array()
+        .cloned()
+        .unwrap_or_else(|| vec![report.clone()]);
     let seams: Vec<&serde_json::Value> = pieces
         .iter()
         .flat_map(|p| p["mating_seams"].as_array().into_iter().flatten())
@@ -120,13 +154,23 @@ fn a_surface_that_passes_through_itself_is_refused_naming_where() {
     // Two tetrahedra, the second pushed into the first.
     let mut obj = String::new();
     for off in [0.0, 2.0] {
-        for p in [[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 10.0, 0.0], [0.0, 0.0, 10.0]] {
+        for p in [
+            [0.0, 0.0, 0.0],
+            [10.0, 0.0, 0.0],
+            [0.0, 10.0, 0.0],
+            [0.0, 0.0, 10.0],
+        ] {
             obj.push_str(&format!("v {} {} {}\n", p[0] + off, p[1] + off, p[2] + off));
         }
     }
     for base in [0, 4] {
         for t in [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]] {
-            obj.push_str(&format!("f {} {} {}\n", t[0] + base + 1, t[1] + base + 1, t[2] + base + 1));
+            obj.push_str(&format!(
+                "f {} {} {}\n",
+                t[0] + base + 1,
+                t[1] + base + 1,
+                t[2] + base + 1
+            ));
         }
     }
     let file = dir.path().join("tets.obj");
@@ -134,10 +178,20 @@ fn a_surface_that_passes_through_itself_is_refused_naming_where() {
     let err = flatten(
         &file,
         dir.path(),
-        &["--max-stretch", "5", "--max-compress", "5", "--split", "auto"],
+        &[
+            "--max-stretch",
+            "5",
+            "--max-compress",
+            "5",
+            "--split",
+            "auto",
+        ],
     )
     .unwrap_err();
-    assert!(err.contains("passes through itself") && err.contains("near ("), "{err}");
+    assert!(
+        err.contains("passes through itself") && err.contains("near ("),
+        "{err}"
+    );
     assert!(!dir.path().join("flat.json").exists());
 }
 
@@ -152,7 +206,14 @@ fn a_non_manifold_surface_is_refused_naming_the_edge() {
     let err = flatten(
         &file,
         dir.path(),
-        &["--max-stretch", "5", "--max-compress", "5", "--split", "auto"],
+        &[
+            "--max-stretch",
+            "5",
+            "--max-compress",
+            "5",
+            "--split",
+            "auto",
+        ],
     )
     .unwrap_err();
     assert!(err.contains("edge 1-2"), "{err}");
@@ -185,10 +246,16 @@ fn limits_no_split_can_meet_exit_3_with_the_excess_reached() {
         Ok(code) => panic!("a ball cannot lie flat within 0 %, yet the run ended {code:?}"),
         Err(e) => format!("{e:#}"),
     };
-    assert!(text.contains("beyond the limits") && text.contains("at most 2 parts"), "{text}");
+    assert!(
+        text.contains("beyond the limits") && text.contains("at most 2 parts"),
+        "{text}"
+    );
     assert_eq!(
         format!("{:?}", flatcut_cli::exit_code(result)),
-        format!("{:?}", std::process::ExitCode::from(flatcut_cli::EXIT_LIMIT))
+        format!(
+            "{:?}",
+            std::process::ExitCode::from(flatcut_cli::EXIT_LIMIT)
+        )
     );
     assert!(!flat.exists());
 }

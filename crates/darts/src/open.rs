@@ -49,8 +49,9 @@ pub fn open_surface(mesh: &TriMesh, visibility: &Visibility) -> Result<Opened, D
             .map_err(|e| DartError::Placement(e.to_string()))?;
     }
     let factors = visibility.vertex_factors(&bare);
-    let regions = split_along_lines(&bare, &[])
-        .map_err(|e| DartError::Placement(format!("the surface cannot be split into its parts: {e}")))?;
+    let regions = split_along_lines(&bare, &[]).map_err(|e| {
+        DartError::Placement(format!("the surface cannot be split into its parts: {e}"))
+    })?;
     let mut out = Opened {
         pieces: Vec::new(),
         cuts: Vec::new(),
@@ -137,13 +138,27 @@ mod tests {
                 if hole(i, j) {
                     continue;
                 }
-                quad(id(i, j, true), id(i + 1, j, true), id(i + 1, j + 1, true), id(i, j + 1, true));
-                quad(id(i, j, false), id(i, j + 1, false), id(i + 1, j + 1, false), id(i + 1, j, false));
+                quad(
+                    id(i, j, true),
+                    id(i + 1, j, true),
+                    id(i + 1, j + 1, true),
+                    id(i, j + 1, true),
+                );
+                quad(
+                    id(i, j, false),
+                    id(i, j + 1, false),
+                    id(i + 1, j + 1, false),
+                    id(i + 1, j, false),
+                );
             }
         }
         // Walls along every edge between a solid cell and a hole or the outside.
         let solid = |i: isize, j: isize| {
-            i >= 0 && j >= 0 && (i as usize) < nx && (j as usize) < ny && !hole(i as usize, j as usize)
+            i >= 0
+                && j >= 0
+                && (i as usize) < nx
+                && (j as usize) < ny
+                && !hole(i as usize, j as usize)
         };
         for j in 0..ny as isize {
             for i in 0..nx as isize {
@@ -160,7 +175,12 @@ mod tests {
                 ];
                 for ((a, b), (c, d), neighbour) in sides {
                     if !neighbour {
-                        quad(id(a, b, false), id(c, d, false), id(c, d, true), id(a, b, true));
+                        quad(
+                            id(a, b, false),
+                            id(c, d, false),
+                            id(c, d, true),
+                            id(a, b, true),
+                        );
                     }
                 }
             }

@@ -138,7 +138,11 @@ fn normals_and_curvature(mesh: &TriMesh) -> (Vec<DVec3>, Vec<f64>) {
             if k == 0 {
                 return 0.0;
             }
-            let mean = adj[v].iter().map(|&w| mesh.positions[w as usize]).sum::<DVec3>() / k as f64;
+            let mean = adj[v]
+                .iter()
+                .map(|&w| mesh.positions[w as usize])
+                .sum::<DVec3>()
+                / k as f64;
             let d2 = adj[v]
                 .iter()
                 .map(|&w| mesh.positions[w as usize].distance_squared(p))

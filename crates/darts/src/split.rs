@@ -194,9 +194,11 @@ fn split_on(
     // then push one beyond the limits.
     loop {
         if params.hooks.cancelled() {
-            return Err(DartError::Flatten(flatcut_flatten::FlattenError::Cancelled {
-                method: Method::Isometric,
-            }));
+            return Err(DartError::Flatten(
+                flatcut_flatten::FlattenError::Cancelled {
+                    method: Method::Isometric,
+                },
+            ));
         }
         let (w, excess, face) = worst(&pieces, opts.band)?;
         params.hooks.report(&flatcut_flatten::FlattenProgress {

@@ -297,8 +297,9 @@ pub fn tighten(mesh: &TriMesh, paths: &[Vec<u32>], cost: &[f64]) -> Vec<Vec<u32>
                 }
             }
             let strip = rings(&adj, path, STRIP_RINGS);
-            let allowed =
-                |v: u32| v == a || v == b || (strip[v as usize] && !blocked[v as usize] && !bnd[v as usize]);
+            let allowed = |v: u32| {
+                v == a || v == b || (strip[v as usize] && !blocked[v as usize] && !bnd[v as usize])
+            };
             let candidate = if closed {
                 tighten_loop(mesh, &adj, cost, path, &allowed)
             } else {
@@ -334,7 +335,11 @@ fn tighten_loop(
     let a = path[0];
     let m = path[path.len() / 2];
     let half = |part: &[u32], other: &[u32]| {
-        let other: BTreeSet<u32> = other.iter().copied().filter(|&v| v != a && v != m).collect();
+        let other: BTreeSet<u32> = other
+            .iter()
+            .copied()
+            .filter(|&v| v != a && v != m)
+            .collect();
         let (_, parent) = dijkstra(mesh, adj, cost, &[part[0]], |v| {
             v != part[0] && !other.contains(&v) && allowed(v)
         });
@@ -468,7 +473,8 @@ mod tests {
         assert!(cut_graph(&grid, &cost, 6).unwrap().is_empty());
         // The grid with its middle quad's two triangles removed: two boundary loops.
         let mut ring = grid.clone();
-        ring.triangles.retain(|t| !(t.contains(&6) && t.contains(&12)));
+        ring.triangles
+            .retain(|t| !(t.contains(&6) && t.contains(&12)));
         let paths = cut_graph(&ring, &cost, 0).unwrap();
         assert_eq!(paths.len(), 1);
         assert!(opens_to_disk(&ring, &paths));

@@ -59,8 +59,7 @@ pub fn check_no_self_intersection(mesh: &TriMesh) -> Result<(), SelfIntersection
         let [a, b, c] = corners(t);
         let (lo, hi) = (index(a.min(b).min(c)), index(a.max(b).max(c)));
         let count = |a: i32, b: i32| (b - a + 1) as f64;
-        if count(lo.0, hi.0) * count(lo.1, hi.1) * count(lo.2, hi.2)
-            > MAX_CELLS_PER_TRIANGLE as f64
+        if count(lo.0, hi.0) * count(lo.1, hi.1) * count(lo.2, hi.2) > MAX_CELLS_PER_TRIANGLE as f64
         {
             cells.entry(lo).or_default().push(t as u32);
             continue;
@@ -174,8 +173,7 @@ mod tests {
         check_no_self_intersection(&tet).unwrap();
         let mut two = tet.clone();
         let off = DVec3::new(0.2, 0.2, 0.2);
-        two.positions
-            .extend(tet.positions.iter().map(|p| *p + off));
+        two.positions.extend(tet.positions.iter().map(|p| *p + off));
         two.triangles
             .extend(tet.triangles.iter().map(|t| t.map(|v| v + 4)));
         let e = check_no_self_intersection(&two).unwrap_err();
