@@ -157,14 +157,16 @@ fn options(
 
 /// The parts of a split as pieces of the pattern, or the error saying what was reached.
 fn into_parts(
-    mut piece: FlatPiece,
+    piece: FlatPiece,
     s: flatcut_darts::split::Split,
     settings: &SplitSettings,
 ) -> Result<SplitPieces, PipelineError> {
     let name = piece.def.name.clone();
+    // The stand-in's own warnings do not carry over to the parts.
+    let mut timed_out_warning = None;
     if s.timed_out {
         // The best split found in the time: written, its excess left to the report's check.
-        piece.info.warnings.push(format!(
+        timed_out_warning = Some(format!(
             "{name}: the split's time limit ended the search at {} parts, {:.2} % beyond the limits near ({:.1}, {:.1}, {:.1}); this is the best split found",
             s.pieces.len(),
             flatcut_darts::excess_pct(s.excess),
@@ -219,10 +221,8 @@ fn into_parts(
             seam.notches.push(SeamNotch { name: notch, index });
         }
     }
-    if s.timed_out
-        && let Some(first) = parts.first_mut()
-    {
-        first.info.warnings = piece.info.warnings.clone();
+    if let (Some(w), Some(first)) = (timed_out_warning, parts.first_mut()) {
+        first.info.warnings.push(w);
     }
     Ok(SplitPieces {
         pieces: parts,
