@@ -73,10 +73,10 @@ fn bench_mesh(name: &str) -> Option<PathBuf> {
 
 /// A mesh as read from an OBJ: 3D positions, per-vertex UV when given, triangles.
 pub(crate) struct Obj {
-    v: Vec<DVec3>,
+    pub(crate) v: Vec<DVec3>,
     vt: Vec<DVec2>,
     /// Per face: (vertex, uv) indices of its corners.
-    f: Vec<[(usize, usize); 3]>,
+    pub(crate) f: Vec<[(usize, usize); 3]>,
 }
 
 pub(crate) fn read_obj(path: &Path) -> Obj {
