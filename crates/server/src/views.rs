@@ -77,9 +77,18 @@ pub fn part_view(design: &Design, k: usize, regions: &PartRegions) -> Json {
             })
         })
         .collect();
+    let grain: Vec<Json> = part
+        .pieces
+        .iter()
+        .filter_map(|p| {
+            let [a, b] = p.grain.as_ref()?.line()?;
+            Some(json!({ "piece": p.name, "from": a, "to": b }))
+        })
+        .collect();
     json!({
         "index": k,
         "name": part.name,
+        "grain": grain,
         "mm_per_unit": design.units.mm(),
         "end_tolerance_mm": flatcut::mesh::lines::END_REL * diag,
         "mesh": mesh_json(m),

@@ -466,7 +466,7 @@ async function start() {
     hello: (s) => bar(s),
     design: (s) => { bar(s); refresh(s.revision); },
     stage: (s) => {
-      if (s.state === 'started') { status(`${s.stage}…`); progress(0, 0); } else { idle(); }
+      if (s.state === 'started') { status(`${s.stage}…`); progress(0, 0); } else { idle(); status(`${s.stage}: done`); }
     },
     progress: (s) => { status(`${s.stage}: ${s.what || ''} ${s.done}/${s.total}`); progress(s.done, s.total); },
     solver: (s) => { status(`solving (${s.stage}) step ${s.iteration}`); progress(s.iteration, s.max_iterations); },

@@ -64,25 +64,27 @@ export function seamsPanel(el, view, tolerance) {
   const rows = view.mating_seams.map((s) => {
     const notch = s.notches.reduce((m, n) => Math.max(m, Math.abs(n.offset_mm[0] - n.offset_mm[1])), 0);
     const bad = s.mismatch_mm > tolerance || notch > tolerance;
-    return `<tr><td>${esc(s.name)}</td><td>${esc(s.pieces.join(' / '))}</td><td>${s.length_3d_mm.toFixed(2)}</td>
+    return `<tr><td>${esc(s.name)}</td><td class="names">${esc(s.pieces.join(' / '))}</td><td>${s.length_3d_mm.toFixed(2)}</td>
       <td>${s.length_2d_mm.map((x) => x.toFixed(2)).join(' / ')}</td>
       <td class="${bad ? 'over' : 'ok'}">${s.mismatch_mm.toFixed(3)}</td><td>${s.notches.length ? notch.toFixed(3) : ''}</td></tr>`;
   }).join('');
   el.innerHTML = `<p>Each seam's two sides flat, and their difference (tolerance ${tolerance} mm).</p>
-    <table><thead><tr><th>seam</th><th>pieces</th><th>3D mm</th><th>flat mm</th><th>mismatch</th><th>notches</th></tr></thead><tbody>${rows}</tbody></table>`;
+    <table><thead><tr><th>seam</th><th>pieces</th><th>3D mm</th><th>flat mm (both sides)</th><th>mismatch</th><th>notches</th></tr></thead><tbody>${rows}</tbody></table>`;
 }
 
 /** The pattern pieces in true millimetres (the run's pattern.svg) and its downloads. */
 export function patternPanel(el, revision) {
   const q = `?rev=${revision}`;
-  el.innerHTML = `<div class="row"><button id="true-size">True size (1 mm = 1 mm on screen)</button></div>
-    <div class="downloads">Download: <a href="/api/pattern.svg" download="pattern.svg">pattern.svg</a>
+  el.innerHTML = `<div class="row">Zoom <button data-zoom="fit">fit</button><button data-zoom="true">true size (1 mm = 1 mm)</button>
+    <span class="downloads">Download: <a href="/api/pattern.svg" download="pattern.svg">pattern.svg</a>
     <a href="/api/pattern.dxf" download="pattern.dxf">pattern.dxf</a>
-    <a href="/api/report.html" target="_blank">report.html</a></div>
+    <a href="/api/report.html" target="_blank">report.html</a></span></div>
     <p class="muted">With seam allowance, notches, grain lines and labels, as <code>flatcut run</code> writes them.</p>
-    <img class="pattern-img" id="pattern-img" alt="pattern pieces" src="/api/pattern.svg${q}">`;
+    <div class="drawing"><img class="fit-height" id="pattern-img" alt="pattern pieces" src="/api/pattern.svg${q}"></div>`;
   const img = el.querySelector('#pattern-img');
-  el.querySelector('#true-size').addEventListener('click', () => img.classList.toggle('true-size'));
+  for (const b of el.querySelectorAll('[data-zoom]')) {
+    b.addEventListener('click', () => { img.className = b.dataset.zoom === 'true' ? 'true-size' : 'fit-height'; });
+  }
 }
 
 /** The nest on the sheet or roll with its utilisation, and the job downloads. */

@@ -63,6 +63,8 @@ export class View3D {
     this.camera.up.set(0, 0, 1);
     this.controls = new OrbitControls(this.camera, canvas);
     this.controls.addEventListener('change', () => this.redraw());
+    // Until the user moves the camera, a resized view is framed again.
+    this.controls.addEventListener('start', () => { this.moved = true; });
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8090a0, 1.6));
     const sun = new THREE.DirectionalLight(0xffffff, 1.4);
     sun.position.set(1, -2, 3);
@@ -102,6 +104,7 @@ export class View3D {
     this.renderer.setSize(w, h, false);
     this.camera.aspect = w / h;
     this.camera.updateProjectionMatrix();
+    if (this.box && !this.moved) this.frame(this.box);
     this.redraw();
   }
 
@@ -123,10 +126,14 @@ export class View3D {
     this.parts = parts;
     const box = new THREE.Box3();
     for (const part of parts) {
+      const P = part.mesh?.positions || [];
+      for (let i = 0; i < P.length; i += 3) box.expandByPoint(new THREE.Vector3(P[i], P[i + 1], P[i + 2]));
+    }
+    if (!box.isEmpty()) this.diag = box.getSize(new THREE.Vector3()).length();
+    for (const part of parts) {
       if (!part.mesh) { this.pick.push(null); continue; }
       const { positions, triangles } = part.mesh;
       const g = indexed(positions, triangles);
-      box.union(g.boundingBox);
       const pickMesh = new THREE.Mesh(g, new THREE.MeshBasicMaterial({ visible: false, side: THREE.DoubleSide }));
       pickMesh.userData.part = part.index;
       this.groups.regions.add(pickMesh);
@@ -143,6 +150,7 @@ export class View3D {
       mesh.userData.regionView = true;
       this.groups.regions.add(mesh);
       for (const loop of part.boundary || []) this.groups.lines.add(polyline(loop, 0x30363d, true));
+      for (const g of part.grain || []) this.groups.lines.add(this.arrow(g.from, g.to));
       part.lines.forEach((l, li) => {
         if (l.path && l.path.length) this.groups.lines.add(polyline(l.path, 0x1d4ed8));
         l.points.forEach((p, pi) => this.addHandle(p, part.index, li, pi, 0x1d4ed8));
@@ -150,7 +158,6 @@ export class View3D {
       });
     }
     if (!box.isEmpty()) {
-      this.diag = box.getSize(new THREE.Vector3()).length();
       this.raycaster.params.Line.threshold = 0.005 * this.diag;
       for (const h of this.handles) h.mesh.scale.setScalar(this.handleSize());
       if (!this.box) this.frame(box);
@@ -160,6 +167,14 @@ export class View3D {
   }
 
   handleSize() { return 0.006 * this.diag; }
+
+  /** A piece's grain line as an arrow (the warp runs from its first point to its second). */
+  arrow(from, to) {
+    const a = new THREE.Vector3(...from), b = new THREE.Vector3(...to);
+    const len = a.distanceTo(b);
+    const dir = b.clone().sub(a).normalize();
+    return new THREE.ArrowHelper(dir, a, len, 0x7c3aed, Math.min(0.25 * len, 0.03 * this.diag), Math.min(0.12 * len, 0.015 * this.diag));
+  }
 
   addHandle(p, part, line, point, colour, scale = 1) {
     const m = new THREE.Mesh(new THREE.SphereGeometry(scale, 12, 8), new THREE.MeshLambertMaterial({ color: colour }));
