@@ -311,6 +311,7 @@ fn serve_refuses_large_bodies_and_malformed_designs_and_lives_on() {
     // A line that does not close: the loader's message names the part, the line and the end.
     let mut loose = before.clone();
     loose["part"][0]["line"][3]["points"] = json!([[-4, 0, 0], [-6.28, 0, 14.4]]);
+    loose["part"][0]["line"][3]["notches"] = json!([]);
     let r = send(a, "PUT", "/api/design?regions=name", &loose);
     assert_eq!(r.status, 400);
     let msg = r.json()["error"].as_str().unwrap().to_string();
@@ -543,5 +544,8 @@ fn serve_events_tell_every_page_the_design_changed() {
     assert_eq!(send(a, "PUT", "/api/design", &tree).status, 200);
     saw("event: design", &mut r);
     saw("\"revision\":2", &mut r);
+    // Stopping ends the stream (an open page does not hold the server up).
     srv.stop().unwrap();
+    let mut rest = String::new();
+    r.read_to_string(&mut rest).unwrap();
 }

@@ -174,6 +174,7 @@ impl Server {
         let app = self.app.clone();
         tokio::spawn(async move {
             shutdown.await;
+            app.events.close();
             app::lock(&app.flatten).cancel();
             app::lock(&app.finish).cancel();
             let _ = stop_tx.send(true);
