@@ -310,7 +310,7 @@ fn serve_refuses_large_bodies_and_malformed_designs_and_lives_on() {
     assert!(msg.contains("invalid type"), "{msg}");
     // A line that does not close: the loader's message names the part, the line and the end.
     let mut loose = before.clone();
-    loose["part"][0]["line"][3]["points"] = json!([[-4, 0, 0], [-6.28, 0, 14.4]]);
+    loose["part"][0]["line"][3]["points"] = json!([[-4, 0, 0], [-6.3, 0, 14.4]]);
     loose["part"][0]["line"][3]["notches"] = json!([]);
     let r = send(a, "PUT", "/api/design?regions=name", &loose);
     assert_eq!(r.status, 400);
