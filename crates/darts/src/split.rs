@@ -31,8 +31,16 @@
 //! results taken in the order of the candidates, so the choice does not depend on the threads),
 //! each half by [`CANDIDATE_ITERS`] Newton steps at most: enough to rank them.
 //!
+//! A part within the limits can still overlap itself flat (a long limb or a ring laid out past
+//! a full turn): its outline crossing itself ([`crate::crossing`]) makes it a piece to cut like
+//! one beyond the limits, by chords through the face at the crossing and by its necks (the
+//! shortest ways across it from points round its outline); candidates whose halves overlap
+//! themselves rank last. A split that cannot undo an overlap within its pieces or time is an
+//! error ([`DartError::SplitOverlap`]), never a result.
+//!
 //! The loop stops early on its time limit (returning the best split so far, `timed_out`) and
-//! on the flattening hooks' cancel flag (an error); it reports its progress through them.
+//! on the flattening hooks' cancel flag (an error; the candidates not yet judged are skipped);
+//! it reports its progress through them.
 //!
 //! The seams between the final pieces are found by their coincident vertices
 //! ([`flatcut_mesh::mating::coincident_seams`]): a cut's vertices are copied to both of its sides
@@ -55,6 +63,7 @@ use flatcut_mesh::{Topology, TriMesh, check_disk};
 
 use rayon::prelude::*;
 
+use crate::crossing::outline_crossing;
 use crate::limits::{Band, Limits, face_excess};
 use crate::seam_cost::{SeamCost, Visibility};
 use crate::{DartError, KeepOut};
@@ -194,13 +203,10 @@ fn split_on(
     // then push one beyond the limits.
     loop {
         if params.hooks.cancelled() {
-            return Err(DartError::Flatten(
-                flatcut_flatten::FlattenError::Cancelled {
-                    method: Method::Isometric,
-                },
-            ));
+            return Err(cancelled());
         }
         let (w, excess, face) = worst(&pieces, opts.band)?;
+        let crossing = first_crossing(&pieces)?;
         params.hooks.report(&flatcut_flatten::FlattenProgress {
             stage: "split",
             iteration: pieces.len(),
@@ -210,21 +216,41 @@ fn split_on(
         });
         timed_out |= opts.time_limit.is_some_and(|t| started.elapsed() >= t);
         let full = pieces.len() >= opts.max_pieces.max(1) || timed_out;
-        if (excess <= 0.0 || full) && !together {
+        let done = excess <= 0.0 && crossing.is_none();
+        if (done || full) && !together {
             flatten_together(&mut pieces, &held)?;
             together = true;
             continue;
         }
-        let next = if excess <= 0.0 || full {
-            None
+        // The piece to cut: the worst beyond the limits, else one that overlaps itself flat
+        // (cut through the face at the crossing).
+        let target = if excess > 0.0 {
+            Some((w, face))
         } else {
-            best_cut(&pieces[w], face, opts.band, params, &guard)?
+            crossing.map(|(k, v)| (k, face_at(&pieces[k], v)))
         };
-        let Some((a, b, cut)) = next else {
+        let next = match target {
+            Some((k, t)) if !full => {
+                best_cut(&pieces[k], t, excess <= 0.0, opts.band, params, &guard)?
+                    .map(|cut| (k, cut))
+            }
+            _ => None,
+        };
+        if params.hooks.cancelled() {
+            return Err(cancelled());
+        }
+        let Some((k, (a, b, cut))) = next else {
             if !together {
                 flatten_together(&mut pieces, &held)?;
                 together = true;
                 continue;
+            }
+            // Never a piece that overlaps itself: no pattern can be cut from it.
+            if let Some((k, v)) = crossing {
+                return Err(DartError::SplitOverlap {
+                    parts: pieces.len(),
+                    at: pieces[k].positions[v as usize],
+                });
             }
             let seams = seams_of(&pieces);
             return Ok(Split {
@@ -243,11 +269,41 @@ fn split_on(
             p.flat = Some(f.uv);
         }
         let [a, b] = parts;
-        pieces[w] = a;
+        pieces[k] = a;
         pieces.push(b);
         cuts.push(cut);
         together = false;
     }
+}
+
+/// The error of a split stopped by the flattening hooks' cancel flag.
+fn cancelled() -> DartError {
+    DartError::Flatten(flatcut_flatten::FlattenError::Cancelled {
+        method: Method::Isometric,
+    })
+}
+
+/// The first piece whose flat outline crosses itself, and the boundary vertex nearest the
+/// crossing ([`crate::crossing`]).
+fn first_crossing(pieces: &[TriMesh]) -> Result<Option<(usize, u32)>, DartError> {
+    for (k, p) in pieces.iter().enumerate() {
+        let x = p
+            .flat
+            .as_deref()
+            .ok_or_else(|| DartError::Internal("a split piece has no map".into()))?;
+        if let Some(v) = outline_crossing(p, x)? {
+            return Ok(Some((k, v)));
+        }
+    }
+    Ok(None)
+}
+
+/// A face of `mesh` at vertex `v` (the first, 0 when none).
+fn face_at(mesh: &TriMesh, v: u32) -> usize {
+    mesh.triangles
+        .iter()
+        .position(|t| t.contains(&v))
+        .unwrap_or(0)
 }
 
 /// `params` with the isometric method (no material's grain): the one that holds seams and limits
@@ -313,9 +369,12 @@ fn flatten_together(pieces: &mut [TriMesh], params: &FlattenParams) -> Result<()
 
 /// The best cut of `piece` (see the module documentation): its two sides (unflattened maps are
 /// replaced by each side's own) and the cut's 3D path. `None` when no chord splits the piece.
+/// With `necks`, the shortest ways across the piece from points round its outline are judged
+/// too ([`necks`]).
 fn best_cut(
     piece: &TriMesh,
     worst_face: usize,
+    necks: bool,
     band: Band,
     params: &FlattenParams,
     guard: &Guard,
@@ -342,22 +401,31 @@ fn best_cut(
     centres.extend(polygon::area_centroid(&outline).filter(|&c| polygon::contains(&outline, c)));
     let mut bare = piece.clone();
     bare.flat = None;
-    let chords: Vec<(DVec2, DVec2)> = centres
+    let mut lines: Vec<Line> = centres
         .iter()
         .flat_map(|&c| {
             (0..DIRECTIONS).map(move |k| {
-                (
+                Line::Chord(
                     c,
                     DVec2::from_angle(std::f64::consts::PI * k as f64 / DIRECTIONS as f64),
                 )
             })
         })
         .collect();
+    if necks {
+        lines.extend(self::necks(piece, rim).into_iter().map(Line::Path));
+    }
     // Judged side by side; taken in the candidates' order.
-    let judged: Vec<Option<Candidate>> = chords
+    let judged: Vec<Option<Candidate>> = lines
         .par_iter()
-        .map(|&(c, d)| {
-            let points = chord_on_surface(piece, x, &outline, &rim3, c, d)?;
+        .map(|line| {
+            if params.hooks.cancelled() {
+                return None;
+            }
+            let points = match line {
+                Line::Chord(c, d) => chord_on_surface(piece, x, &outline, &rim3, *c, *d)?,
+                Line::Path(p) => p.clone(),
+            };
             let (a, b, path) = cut_in_two(&bare, points, area)?;
             if guard.blocks(&path) {
                 return None;
@@ -366,7 +434,16 @@ fn best_cut(
             let sa = alone_excess(&mut sides[0], &free, band)?;
             let sb = alone_excess(&mut sides[1], &free, band)?;
             let score = sa.max(sb);
+            let crossed = sides
+                .iter()
+                .filter(|s| {
+                    s.flat
+                        .as_deref()
+                        .is_none_or(|x| !matches!(outline_crossing(s, x), Ok(None)))
+                })
+                .count();
             score.is_finite().then(|| Candidate {
+                crossed,
                 score,
                 cost: guard.cost(&path).total(),
                 sides,
@@ -386,9 +463,56 @@ fn best_cut(
     }))
 }
 
-/// A chord judged: the larger excess of its two halves flattened alone, its seam cost, the
-/// halves and the cut's 3D path.
+/// A line a piece may be cut along: a chord of its flat outline (through a centre, along a
+/// direction), or a path on its surface (3D points).
+enum Line {
+    Chord(DVec2, DVec2),
+    Path(Vec<DVec3>),
+}
+
+/// Rim vertices a neck is sought from, evenly round the outline.
+const NECK_STARTS: usize = 16;
+
+/// Necks of the piece: from each of [`NECK_STARTS`] vertices evenly round its outline `rim`, the
+/// shortest edge path across the piece to the nearest rim vertex at least twice as far round the
+/// outline as across. Cutting a piece that overlaps itself flat (a long limb, a ring past a full
+/// turn) across such a neck parts its overlapping ends, where a chord of its tangled flat map
+/// need not.
+fn necks(piece: &TriMesh, rim: &[u32]) -> Vec<Vec<DVec3>> {
+    let n = rim.len();
+    if n < 4 {
+        return Vec::new();
+    }
+    let p = &piece.positions;
+    let mut along = vec![0.0; n];
+    for i in 1..n {
+        along[i] = along[i - 1] + p[rim[i - 1] as usize].distance(p[rim[i] as usize]);
+    }
+    let round = along[n - 1] + p[rim[n - 1] as usize].distance(p[rim[0] as usize]);
+    let cost = vec![1.0; p.len()];
+    (0..NECK_STARTS.min(n))
+        .into_par_iter()
+        .filter_map(|k| {
+            let i = k * n / NECK_STARTS.min(n);
+            let d = flatcut_mesh::geodesic::distances_from(piece, rim[i]);
+            let (j, _) = (0..n)
+                .filter(|&j| {
+                    let a = (along[i] - along[j]).abs();
+                    a.min(round - a) >= 2.0 * d[rim[j] as usize]
+                })
+                .map(|j| (j, d[rim[j] as usize]))
+                .filter(|(_, dj)| dj.is_finite() && *dj > 0.0)
+                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))?;
+            let path = flatcut_mesh::cut_graph::shortest_path(piece, &cost, rim[i], rim[j])?;
+            Some(path.iter().map(|&v| p[v as usize]).collect())
+        })
+        .collect()
+}
+
+/// A chord judged: how many of its two halves overlap themselves flattened alone, the larger
+/// excess of the two, its seam cost, the halves and the cut's 3D path.
 struct Candidate {
+    crossed: usize,
     score: f64,
     cost: f64,
     sides: [TriMesh; 2],
@@ -396,9 +520,12 @@ struct Candidate {
 }
 
 impl Candidate {
-    /// Lower excess first; where both are within the limits, or tie within [`SCORE_TIE`], the
-    /// cheaper seam.
+    /// Fewer halves that overlap themselves first, then lower excess; where both are within the
+    /// limits, or tie within [`SCORE_TIE`], the cheaper seam.
     fn beats(&self, other: &Candidate) -> bool {
+        if self.crossed != other.crossed {
+            return self.crossed < other.crossed;
+        }
         let both_within = self.score <= 0.0 && other.score <= 0.0;
         if both_within || (self.score - other.score).abs() <= SCORE_TIE {
             self.cost < other.cost
