@@ -8,6 +8,7 @@ mod dxf;
 mod fuzz;
 mod genus;
 mod hpgl;
+mod licences;
 mod material;
 mod nest;
 mod pipeline;
