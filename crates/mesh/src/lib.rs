@@ -8,6 +8,7 @@
 
 pub mod disk;
 pub mod distortion;
+pub mod fixed;
 pub mod geodesic;
 pub mod grain_strain;
 pub mod grid;
