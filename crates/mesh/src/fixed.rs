@@ -24,7 +24,7 @@ pub fn push(out: &mut String, x: f64) {
     let y = x.abs() * SCALE;
     let floor = y.floor();
     let frac = y - floor;
-    if !(y < FAST_BELOW) || (frac - 0.5).abs() < TIE_WINDOW {
+    if y.is_nan() || y >= FAST_BELOW || (frac - 0.5).abs() < TIE_WINDOW {
         let _ = write!(out, "{x:.DECIMALS$}");
         return;
     }

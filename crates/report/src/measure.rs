@@ -157,7 +157,7 @@ pub struct Region {
 }
 
 /// What to compute besides the per-face measures.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 #[non_exhaustive]
 pub struct ReportOptions {
     /// Boundary vertices that split the boundary into seam segments (match marks).
@@ -180,16 +180,6 @@ impl ReportOptions {
     pub fn with_boundary_marks(mut self, marks: Vec<u32>) -> Self {
         self.boundary_marks = marks;
         self
-    }
-}
-
-impl Default for ReportOptions {
-    fn default() -> Self {
-        Self {
-            boundary_marks: Vec::new(),
-            limit_stretch_pct: None,
-            limit_compress_pct: None,
-        }
     }
 }
 
