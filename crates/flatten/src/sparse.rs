@@ -37,10 +37,12 @@ use faer::traits::ComplexField;
 use faer::{Conj, MatMut, Side};
 
 use std::sync::atomic::{AtomicBool, Ordering as Memory};
+use std::time::{Duration, Instant};
 
 use crate::FlattenError;
 use crate::ordering;
 use crate::refine::preconditioned_cg;
+use crate::timings::{SharedDuration, Timings};
 
 /// Nodes (mesh vertices) from which the factorisations use nested dissection instead of AMD.
 /// Measured on triangulated grids (`nested_dissection_fills_a_grid_mesh_no_more_than_amd`), the
@@ -477,6 +479,12 @@ pub struct SpdSolver {
     par: Par,
     /// Workspace of the numeric factorisation, kept between factorisations.
     scratch: Option<Scratch>,
+    /// Time spent on the ordering and the symbolic factorisation, on numeric factorisations
+    /// (and how many), and on solves.
+    analysis_time: Duration,
+    factor_time: Duration,
+    factorisations: usize,
+    solve_time: SharedDuration,
 }
 
 /// Where each entry of a solver's matrix is in its values: the pattern of the matrix in the
@@ -539,6 +547,7 @@ impl SpdSolver {
             stage,
             reason: format!("symbolic factorization failed: {reason}"),
         };
+        let started = Instant::now();
         let fwd = elimination_order(pattern, ordering).map_err(failed)?;
         let inv = inverse(&fwd);
         // faer's symbolic analysis reads the upper triangle when no ordering is asked of it, its
@@ -584,6 +593,10 @@ impl SpdSolver {
             slow_refinement: AtomicBool::new(false),
             par,
             scratch: None,
+            analysis_time: started.elapsed(),
+            factor_time: Duration::ZERO,
+            factorisations: 0,
+            solve_time: SharedDuration::default(),
         })
     }
 
@@ -728,6 +741,26 @@ impl SpdSolver {
 
     /// Numeric factorization of the matrix's current values (see [`SpdSolver::factor`]).
     pub fn refactor(&mut self) -> Result<(), FlattenError> {
+        let started = Instant::now();
+        let done = self.refactor_numeric();
+        self.factor_time += started.elapsed();
+        self.factorisations += 1;
+        done
+    }
+
+    /// Where this solver's time went: the analysis, the numeric factorisations and the solves.
+    pub fn timings(&self) -> Timings {
+        Timings {
+            ordering: self.analysis_time,
+            factorisation: self.factor_time,
+            factorisations: self.factorisations,
+            solve: self.solve_time.get(),
+            ..Timings::default()
+        }
+    }
+
+    /// [`SpdSolver::refactor`], untimed.
+    fn refactor_numeric(&mut self) -> Result<(), FlattenError> {
         self.factored = false;
         if let Some(k) = self.values.iter().position(|v| !v.is_finite()) {
             return Err(FlattenError::Solver {
@@ -837,6 +870,15 @@ impl SpdSolver {
                 self.stage
             )));
         }
+        let started = Instant::now();
+        let done = self.solve_many_timed(rhs, k);
+        self.solve_time.add_since(started);
+        done
+    }
+
+    /// [`SpdSolver::solve_many_in_place`] once the arguments are checked, untimed.
+    fn solve_many_timed(&self, rhs: &mut [f64], k: usize) -> Result<(), FlattenError> {
+        let n = self.dim();
         // Into the factor's order, solved there, and back, in place (a copy is 8 MB a column at a
         // million faces).
         let mut seen = vec![false; n];
