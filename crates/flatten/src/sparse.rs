@@ -881,9 +881,9 @@ impl SpdSolver {
         let n = self.dim();
         // Into the factor's order, solved there, and back, in place (a copy is 8 MB a column at a
         // million faces).
-        let mut seen = vec![false; n];
+        let mut scratch = Vec::with_capacity(n);
         for col in rhs.chunks_exact_mut(n) {
-            permute_in_place(col, &self.fwd, &mut seen);
+            permute_in_place(col, &self.fwd, &mut scratch);
         }
         match &self.factor {
             Factor::Double(l) => self.solve_factored(l, rhs, k)?,
@@ -908,7 +908,7 @@ impl SpdSolver {
                     ),
                 });
             }
-            permute_in_place(col, &self.inv, &mut seen);
+            permute_in_place(col, &self.inv, &mut scratch);
         }
         Ok(())
     }
@@ -1012,27 +1012,14 @@ enum Factor {
     Single(Vec<f32>),
 }
 
-/// `a[k] ← a[perm[k]]` for every k, in place, by following the permutation's cycles; `seen`
-/// (as long as `a`) is scratch, returned all false.
-fn permute_in_place(a: &mut [f64], perm: &[Idx], seen: &mut [bool]) {
-    for start in 0..a.len() {
-        if seen[start] {
-            continue;
-        }
-        let first = a[start];
-        let mut k = start;
-        loop {
-            seen[k] = true;
-            let from = perm[k] as usize;
-            if from == start {
-                a[k] = first;
-                break;
-            }
-            a[k] = a[from];
-            k = from;
-        }
-    }
-    seen.iter_mut().for_each(|s| *s = false);
+/// `a[k] ← a[perm[k]]` for every k, through `scratch` (as long as `a` once grown). A gather:
+/// one scattered read an entry, where following the permutation's cycles in place read and
+/// wrote four places at random (a twentieth of a million-face solve's time, for the 8 MB a
+/// column saved).
+fn permute_in_place(a: &mut [f64], perm: &[Idx], scratch: &mut Vec<f64>) {
+    scratch.clear();
+    scratch.extend(perm.iter().map(|&p| a[p as usize]));
+    a.copy_from_slice(scratch);
 }
 
 /// faer's numeric Cholesky factorisation of `a` (lower triangle, in `symbolic`'s order) into
@@ -1473,16 +1460,17 @@ mod tests {
         let perm: Vec<Idx> = vec![0, 2, 1, 4, 5, 3, 7, 8, 9, 10, 6];
         let a: Vec<f64> = (0..11).map(|i| i as f64 * 1.5 - 3.0).collect();
         let mut b = a.clone();
-        let mut seen = vec![false; 11];
-        permute_in_place(&mut b, &perm, &mut seen);
-        let copied: Vec<f64> = perm.iter().map(|&p| a[p as usize]).collect();
-        assert_eq!(b, copied);
-        assert!(seen.iter().all(|&s| !s), "scratch returned clear");
+        let mut scratch = Vec::new();
+        permute_in_place(&mut b, &perm, &mut scratch);
+        assert_eq!(
+            b,
+            vec![-3.0, 0.0, -1.5, 3.0, 4.5, 1.5, 7.5, 9.0, 10.5, 12.0, 6.0]
+        );
         let mut inv = vec![0 as Idx; 11];
         for (k, &p) in perm.iter().enumerate() {
             inv[p as usize] = k as Idx;
         }
-        permute_in_place(&mut b, &inv, &mut seen);
+        permute_in_place(&mut b, &inv, &mut scratch);
         assert_eq!(b, a);
     }
 
