@@ -59,6 +59,9 @@ pub struct DartOptions {
     pub keep_out: Option<KeepOut>,
     /// How the final map uses the material's give ([`DartFit`]).
     pub fit: DartFit,
+    /// The stage every solve of the search and of the final map draws on: its iteration cap and
+    /// time limit ([`flatcut_flatten::budget`]); none by default.
+    pub budget: flatcut_flatten::Budget,
 }
 
 impl DartOptions {
@@ -76,7 +79,14 @@ impl DartOptions {
             drill_offset_mm: Self::DEFAULT_DRILL_OFFSET_MM,
             keep_out: None,
             fit: DartFit::LeastStrain,
+            budget: flatcut_flatten::Budget::none("darts"),
         }
+    }
+
+    /// The search and the final map within `budget` (the darts stage of a flattening).
+    pub fn with_budget(mut self, budget: flatcut_flatten::Budget) -> Self {
+        self.budget = budget;
+        self
     }
 
     /// Holds the limits of each thread instead ([`Threads`]: a material's limits along, across

@@ -20,6 +20,7 @@
 //! Why not a penalty: a penalty of finite stiffness settles beyond the bound it penalises, so a
 //! penalised map is never proof that the limits can be met; the barrier is.
 
+use flatcut_flatten::Budget;
 use flatcut_flatten::nonlinear::kernel::{
     IsoDerivs, IsoEnergy, Projection, RestTri, SymDirichlet, TriEnergy, TriEval, flip_from,
     rest_frames, singular_values, twist_from,
@@ -444,10 +445,11 @@ pub fn hold(
     x0: &[DVec2],
     limits: &Limits,
     pairs: &EdgePairs,
+    budget: &Budget,
 ) -> Result<Held, LimitError> {
-    let held = reach(mesh, x0, limits, Effort::Full)?;
+    let held = reach(mesh, x0, limits, Effort::Full, budget)?;
     if held.feasible {
-        settle(mesh, &held.x, limits, pairs, Closing::default())
+        settle(mesh, &held.x, limits, pairs, Closing::default(), budget)
     } else {
         Ok(held)
     }
@@ -474,9 +476,10 @@ pub fn reach(
     x0: &[DVec2],
     limits: &Limits,
     effort: Effort,
+    budget: &Budget,
 ) -> Result<Held, LimitError> {
     let rest = rest_frames(mesh).map_err(LimitError::Degenerate)?;
-    let mut solves = solves(mesh, &rest, limits);
+    let mut solves = solves(mesh, &rest, limits, budget);
     let mut x = x0.to_vec();
     let mut iterations = 0;
     let (mut e, mut worst) = max_excess(&rest, &x, limits);
@@ -500,7 +503,7 @@ pub fn reach(
     let _ = effort;
     let mut last_q = 0.0;
     for _ in 0..MAX_POWER_STAGES {
-        if e <= -FEASIBLE_MARGIN {
+        if e <= -FEASIBLE_MARGIN || budget.spent() {
             break;
         }
         let q = (POWER_RANGE * scale / (e + 0.5 * scale)).clamp(Q_MIN, Q_MAX);
@@ -526,7 +529,7 @@ pub fn reach(
     let mut wall = e + FIRST_GAP * scale;
     let mut history: Vec<f64> = vec![e];
     for _ in 0..if skip { 0 } else { MAX_STAGES } {
-        if e <= -FEASIBLE_MARGIN {
+        if e <= -FEASIBLE_MARGIN || budget.spent() {
             break;
         }
         let energy = limits.barrier(wall, 1.0, CENTRE_REG);
@@ -590,9 +593,10 @@ pub fn settle(
     limits: &Limits,
     pairs: &EdgePairs,
     closing: Closing,
+    budget: &Budget,
 ) -> Result<Held, LimitError> {
     let rest = rest_frames(mesh).map_err(LimitError::Degenerate)?;
-    let mut solves = solves(mesh, &rest, limits).with_closing(closing);
+    let mut solves = solves(mesh, &rest, limits, budget).with_closing(closing);
     let mut x = x0.to_vec();
     let mut iterations = 0;
     for (i, mu) in INTERIOR_MU.iter().enumerate() {
@@ -617,8 +621,13 @@ pub fn settle(
 
 /// The solves of a limit solve on `mesh`: with a grain line held where the limits are a
 /// material's threads anchored on the surface.
-fn solves<'a>(mesh: &TriMesh, rest: &'a [RestTri], limits: &Limits) -> solve::Solves<'a> {
-    let s = solve::Solves::new(rest, mesh.positions.len());
+fn solves<'a>(
+    mesh: &TriMesh,
+    rest: &'a [RestTri],
+    limits: &Limits,
+    budget: &Budget,
+) -> solve::Solves<'a> {
+    let s = solve::Solves::new(rest, mesh.positions.len(), budget);
     match limits {
         Limits::Threads(t) => s.with_align(t.anchor_terms(mesh, rest)),
         Limits::Band(_) => s,

@@ -27,7 +27,7 @@
 //! Dart legs are kept at equal 2D lengths edge by edge in the final map ([`crate::solve`]).
 
 use flatcut_flatten::nonlinear::kernel::rest_frames;
-use flatcut_flatten::{FlattenParams, Method, flatten};
+use flatcut_flatten::{Budget, FlattenParams, Method, flatten};
 use flatcut_geom::{DVec2, DVec3};
 use flatcut_mesh::{Topology, TriMesh, check_disk};
 
@@ -103,7 +103,9 @@ struct Piece<'a> {
 /// is too; an attempt computed ahead and never asked for is dropped.
 struct Lookahead<'p, 'a> {
     piece: &'p Piece<'a>,
-    ready: Vec<(usize, Result<Outcome, DartError>)>,
+    /// Attempts computed ahead: the count, the outcome, the fork of the budget it was computed
+    /// on, and what the budget had used at the fork.
+    ready: Vec<(usize, Result<Outcome, DartError>, Budget, usize)>,
 }
 
 impl<'p, 'a> Lookahead<'p, 'a> {
@@ -117,16 +119,24 @@ impl<'p, 'a> Lookahead<'p, 'a> {
     /// The attempt with `k` darts; `next` (when not 0, not `k` and not yet computed) is
     /// computed alongside it.
     fn attempt(&mut self, k: usize, next: usize) -> Result<Outcome, DartError> {
-        if let Some(i) = self.ready.iter().position(|(j, _)| *j == k) {
-            return self.ready.swap_remove(i).1;
+        let budget = &self.piece.opts.budget;
+        if let Some(i) = self.ready.iter().position(|(j, ..)| *j == k) {
+            let (_, outcome, fork, at) = self.ready.swap_remove(i);
+            // Taken only where the iterations spent since would have cut none of its solves
+            // short: it is then the attempt computed now, bit for bit.
+            if budget.join(&fork, at) {
+                return outcome;
+            }
+            return self.piece.attempt(k, budget);
         }
-        let ahead = next != 0 && next != k && self.ready.iter().all(|(j, _)| *j != next);
+        let ahead = next != 0 && next != k && self.ready.iter().all(|(j, ..)| *j != next);
         if !ahead {
-            return self.piece.attempt(k);
+            return self.piece.attempt(k, budget);
         }
         let piece = self.piece;
-        let (this, that) = rayon::join(|| piece.attempt(k), || piece.attempt(next));
-        self.ready.push((next, that));
+        let (at, fork) = (budget.used(), budget.fork());
+        let (this, that) = rayon::join(|| piece.attempt(k, budget), || piece.attempt(next, &fork));
+        self.ready.push((next, that, fork, at));
         this
     }
 }
@@ -169,6 +179,7 @@ impl Outcome {
         shut: &[Option<usize>],
         x: &[DVec2],
         limits: &Limits,
+        budget: &Budget,
     ) -> Result<Option<Outcome>, DartError> {
         let paths: Vec<Vec<u32>> = self
             .darts
@@ -185,7 +196,7 @@ impl Outcome {
             debug("shortened: folds");
             return Ok(None);
         }
-        let held = limits::reach(&cut.mesh, &merged, limits, Effort::Warm)?;
+        let held = limits::reach(&cut.mesh, &merged, limits, Effort::Warm, budget)?;
         if !held.feasible {
             debug(&format!(
                 "shortened: infeasible {:.3}%",
@@ -209,10 +220,11 @@ impl Outcome {
 pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted, DartError> {
     let topo = check_disk(mesh)?;
     let limits = &opts.limits;
+    let budget = &opts.budget;
     // Demand, reach and count are estimated on the principal stretches ([`Limits::estimate_band`]).
     let band = limits.estimate_band();
     let uncut = CutMesh::new(mesh, &[])?;
-    let held = limits::reach(mesh, x0, limits, Effort::Full)?;
+    let held = limits::reach(mesh, x0, limits, Effort::Full, budget)?;
     let mut attempts = vec![Attempt {
         darts: 0,
         total_length_mm: 0.0,
@@ -226,6 +238,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             limits,
             &Default::default(),
             Closing::default(),
+            budget,
         )?;
         // No dart to draw shut: every fit is this map.
         return Ok(finish(
@@ -247,7 +260,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
         .unwrap_or_default();
     // 1. Demand, from the relaxed map.
     let rest = rest_of(mesh)?;
-    let relaxed = solve::Solves::new(&rest, mesh.positions.len())
+    let relaxed = solve::Solves::new(&rest, mesh.positions.len(), budget)
         .newton(Yield::new(band), x0, RELAXED_ITERS, None, RELAXED_TOLERANCE)
         .map_err(DartError::Solver)?;
     let edge_demand = rim_demand(&mesh.positions, &relaxed.x, &rim, band.s_max());
@@ -321,21 +334,22 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
                 Err(e) => Err(e),
             }
         };
+    // The search ends, too, once the stage's iterations or time are spent.
     let mut k = k0;
     if try_k(k, k - 1, &mut attempts)? {
-        while k > 1 && try_k(k - 1, k - 2, &mut attempts)? {
+        while k > 1 && !budget.spent() && try_k(k - 1, k - 2, &mut attempts)? {
             k -= 1;
         }
     } else if attempts.len() == 1 {
         // k0 darts could not even be placed: fewer might.
-        while k > 1 {
+        while k > 1 && !budget.spent() {
             k -= 1;
             if try_k(k, k - 1, &mut attempts)? {
                 break;
             }
         }
     } else {
-        while k < k_cap {
+        while k < k_cap && !budget.spent() {
             k += 1;
             if try_k(k, (k + 1).min(k_cap), &mut attempts)? {
                 break;
@@ -359,7 +373,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
     let mut unsettled: Option<DartError> = None;
     let mut chosen: Option<(usize, Settled)> = None;
     for i in held_ok {
-        match settle_simple(&outcomes[i], limits, opts.fit)? {
+        match settle_simple(&outcomes[i], limits, opts.fit, budget)? {
             Ok(settled) => {
                 chosen = Some((i, settled));
                 break;
@@ -374,7 +388,10 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
     if chosen.is_none() && unsettled.is_some() {
         let tried = attempts.iter().map(|a| a.darts).max().unwrap_or(0);
         for k in (tried + 1..=k_cap).take(OVERLAP_MORE_DARTS) {
-            let o = match piece.attempt(k) {
+            if budget.spent() {
+                break;
+            }
+            let o = match piece.attempt(k, budget) {
                 Ok(o) => o,
                 Err(DartError::Placement(_)) => break,
                 Err(e) => return Err(e),
@@ -390,7 +407,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
             }
             outcomes.push(o);
             let i = outcomes.len() - 1;
-            if let Ok(settled) = settle_simple(&outcomes[i], limits, opts.fit)? {
+            if let Ok(settled) = settle_simple(&outcomes[i], limits, opts.fit, budget)? {
                 chosen = Some((i, settled));
                 break;
             }
@@ -451,12 +468,13 @@ fn settle_simple(
     o: &Outcome,
     limits: &Limits,
     fit: DartFit,
+    budget: &Budget,
 ) -> Result<Result<Settled, DartError>, DartError> {
     if fit == DartFit::Tight {
         // Darts one weight shortens stay short for the next: they held the limits.
         let mut shortened = None;
         for weight in CLOSE_WEIGHTS {
-            match settle_tight(o, &mut shortened, limits, weight)? {
+            match settle_tight(o, &mut shortened, limits, weight, budget)? {
                 Ok(held) => {
                     return Ok(Ok(Settled {
                         held,
@@ -470,7 +488,14 @@ fn settle_simple(
         debug("settled least-strained");
     }
     let pairs = all_pairs(&o.legs());
-    let held = limits::settle(&o.cut.mesh, &o.held.x, limits, &pairs, Closing::default())?;
+    let held = limits::settle(
+        &o.cut.mesh,
+        &o.held.x,
+        limits,
+        &pairs,
+        Closing::default(),
+        budget,
+    )?;
     Ok(checked(o, &pairs, held)?.map(|held| Settled {
         held,
         fit: DartFit::LeastStrain,
@@ -498,6 +523,7 @@ fn settle_tight(
     shortened: &mut Option<Outcome>,
     limits: &Limits,
     weight: f64,
+    budget: &Budget,
 ) -> Result<Result<Held, DartError>, DartError> {
     let mut rounds = 0;
     // Per dart, its pull's weight: a dart drawn shut where it cannot end is let go.
@@ -512,11 +538,12 @@ fn settle_tight(
             limits,
             &pairs,
             closing(&legs, &cur.held.x, &weights),
+            budget,
         )?;
         let shut = shut_points(&legs, &held.x);
         if rounds < MAX_SHORTENINGS
             && shut.iter().any(Option::is_some)
-            && let Some(next) = cur.shortened(&shut, &held.x, limits)?
+            && let Some(next) = cur.shortened(&shut, &held.x, limits, budget)?
         {
             debug(&format!(
                 "tight: darts shortened from {:.1} to {:.1} mm",
@@ -805,7 +832,8 @@ impl Piece<'_> {
     }
 
     /// One attempt with k darts (steps 3–4 of the module doc).
-    fn attempt(&self, k: usize) -> Result<Outcome, DartError> {
+    /// The attempt with `k` darts, its solves drawing on `budget`.
+    fn attempt(&self, k: usize, budget: &Budget) -> Result<Outcome, DartError> {
         let starts = self.starts(k)?;
         let mut plans: Vec<Plan> = starts
             .iter()
@@ -832,7 +860,7 @@ impl Piece<'_> {
                 Effort::Full
             };
             let t0 = std::time::Instant::now();
-            let held = limits::reach(&cut.mesh, &x, &self.opts.limits, effort)?;
+            let held = limits::reach(&cut.mesh, &x, &self.opts.limits, effort, budget)?;
             debug(&format!(
                 "reach: {} iterations, {:.2} s",
                 held.iterations,
@@ -906,9 +934,12 @@ impl Piece<'_> {
                 carried
             } else {
                 debug("the carried map folds: starting afresh");
-                flatten(&next_cut.mesh, &FlattenParams::new(Method::Isometric))
-                    .map_err(DartError::Flatten)?
-                    .uv
+                let params = FlattenParams::new(Method::Isometric)
+                    .with_max_iters(budget.allow(FlattenParams::DEFAULT_MAX_ITERS))
+                    .with_time_limit(budget.time_left());
+                let f = flatten(&next_cut.mesh, &params).map_err(DartError::Flatten)?;
+                budget.spend(f.info.iterations);
+                f.uv
             };
             emb = next_emb;
             paths = next_paths;

@@ -76,6 +76,8 @@ const ABS_DECREMENT_PER_AREA: f64 = 1e-15;
 pub struct Solves<'a> {
     rest: &'a [RestTri],
     n: usize,
+    /// The stage every solve draws on (the darts' budget).
+    budget: Budget,
     problem: Option<MapProblem<'a, ()>>,
     /// Direction terms added to every solve (a grain line held).
     align: Vec<DirectionTerm>,
@@ -86,11 +88,12 @@ pub struct Solves<'a> {
 }
 
 impl<'a> Solves<'a> {
-    /// Solves on the mesh of `rest` with `n` vertices.
-    pub fn new(rest: &'a [RestTri], n: usize) -> Self {
+    /// Solves on the mesh of `rest` with `n` vertices, within the stage's `budget`.
+    pub fn new(rest: &'a [RestTri], n: usize, budget: &Budget) -> Self {
         Self {
             rest,
             n,
+            budget: budget.clone(),
             problem: None,
             align: Vec::new(),
             pulls: Vec::new(),
@@ -151,7 +154,7 @@ impl<'a> Solves<'a> {
                 max_iters,
                 rel,
                 abs,
-                &Budget::none("darts"),
+                &self.budget,
             )?;
             self.problem = Some(p.with_energy(()));
             return Ok(Run {
@@ -162,6 +165,9 @@ impl<'a> Solves<'a> {
         let mut x = x0.to_vec();
         let mut iterations = 0;
         for _ in 0..PAIR_ROUNDS {
+            if self.budget.spent() {
+                break;
+            }
             let mut edges = Vec::with_capacity(2 * pairs.pairs.len());
             for [(a, b), (c, d)] in &pairs.pairs {
                 let l = 0.5 * (x[*a].distance(x[*b]) + x[*c].distance(x[*d]));
@@ -182,7 +188,7 @@ impl<'a> Solves<'a> {
                 max_iters,
                 rel,
                 abs,
-                &Budget::none("darts"),
+                &self.budget,
             )?;
             problem = p;
             iterations += r.iterations;
@@ -193,7 +199,7 @@ impl<'a> Solves<'a> {
         // more than the legs may differ. The pair terms then take multipliers (an augmented
         // Lagrangian on fixed targets) until the legs meet.
         for _ in 0..LEG_ROUNDS {
-            if pairs.worst_leg_mismatch(&x) <= LEG_TOLERANCE_MM {
+            if pairs.worst_leg_mismatch(&x) <= LEG_TOLERANCE_MM || self.budget.spent() {
                 break;
             }
             if let Some(t) = problem.edges.as_mut() {
@@ -201,7 +207,7 @@ impl<'a> Solves<'a> {
                     t.lambda[k] += t.weight * t.constraint(k, &x);
                 }
             }
-            let (r, p) = newton::run(problem, &x, max_iters, rel, abs, &Budget::none("darts"))?;
+            let (r, p) = newton::run(problem, &x, max_iters, rel, abs, &self.budget)?;
             problem = p;
             iterations += r.iterations;
             x = r.x;

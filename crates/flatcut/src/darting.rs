@@ -10,7 +10,7 @@
 pub use flatcut_darts::DartFit;
 use flatcut_darts::{Dart, DartError, DartOptions, Darted, KeepOut, Threads};
 use flatcut_design::{DartsDef, MarkKind, PieceDef};
-use flatcut_flatten::{FlattenInfo, FlattenParams};
+use flatcut_flatten::{Budget, FlattenInfo, FlattenParams};
 use flatcut_geom::{DVec2, DVec3};
 use flatcut_mesh::TriMesh;
 use flatcut_report::DartReport;
@@ -132,6 +132,7 @@ pub fn dart_piece(
     uv: &[DVec2],
     limits: &DartLimits,
     settings: &DartSettings,
+    stage: &Budget,
 ) -> Result<Option<(Darted, bool)>, PipelineError> {
     let (params, threads) = (&limits.params, limits.threads.as_ref());
     if params.max_stretch_pct.is_none() && params.max_compress_pct.is_none() {
@@ -145,7 +146,8 @@ pub fn dart_piece(
         .with_min_spacing_mm(settings.min_spacing_mm)
         .with_drill_offset_mm(settings.drill_offset_mm)
         .with_fit(settings.fit)
-        .with_keep_out(keep_out(def, mesh)?);
+        .with_keep_out(keep_out(def, mesh)?)
+        .with_budget(stage.clone());
     if let Some(t) = threads
         && let Ok(d) = flatcut_darts::place(mesh, uv, &band.clone().with_threads(*t))
     {
@@ -153,9 +155,21 @@ pub fn dart_piece(
     }
     flatcut_darts::place(mesh, uv, &band)
         .map(|d| Some((d, false)))
-        .map_err(|source| PipelineError::Darts {
-            piece: name.to_string(),
-            source,
+        .map_err(|source| {
+            let count = stage.count();
+            if count.stopped {
+                PipelineError::Piece {
+                    piece: name.to_string(),
+                    reason: format!(
+                        "darts: {source}, after the darts stopped at their cap ({count}; --max-iters, --flatten-time)"
+                    ),
+                }
+            } else {
+                PipelineError::Darts {
+                    piece: name.to_string(),
+                    source,
+                }
+            }
         })
 }
 
@@ -183,10 +197,15 @@ pub fn finish(
     limits: &DartLimits,
     settings: Option<&DartSettings>,
 ) -> Result<Finished, PipelineError> {
+    let stage = limits
+        .params
+        .stage_budget("darts", std::time::Instant::now());
     if let Some(settings) = settings
-        && let Some((d, per_thread)) = dart_piece(name, def, &mesh, &uv, limits, settings)?
+        && let Some((d, per_thread)) = dart_piece(name, def, &mesh, &uv, limits, settings, &stage)?
     {
         info.warnings.clear();
+        info.iterations += stage.used();
+        info.stages.push(stage.count());
         if limits.threads.is_some() && !per_thread {
             info.warnings.push(format!(
                 "{name}: no darts held the material's limits thread by thread, so the darts hold the tightest of them on every direction (more darts than the threads would need)"

@@ -12,7 +12,7 @@ use flatcut_darts::DartError;
 use flatcut_darts::seam_cost::{SeamCost, Visibility};
 use flatcut_darts::split::{SplitOptions, split};
 use flatcut_design::{MarkDef, PieceDef};
-use flatcut_flatten::FlattenParams;
+use flatcut_flatten::{Budget, FlattenParams};
 use flatcut_geom::DVec3;
 use flatcut_mesh::TriMesh;
 use flatcut_mesh::grain_strain::{central_face, centroid, pattern_direction_near};
@@ -72,11 +72,14 @@ pub fn split_piece(
         return Ok(whole(piece));
     }
     let opts = options(&piece, &piece.mesh, params, settings)?;
-    let s = split(&piece.mesh, &uv, params, &opts).map_err(|source| PipelineError::Darts {
+    // Every flattening of the split draws on one stage: the split's.
+    let stage = params.stage_budget("split", std::time::Instant::now());
+    let inside = params.clone().with_within(Some(stage.clone()));
+    let s = split(&piece.mesh, &uv, &inside, &opts).map_err(|source| PipelineError::Darts {
         piece: piece.def.name.clone(),
         source,
     })?;
-    into_parts(piece, s, settings)
+    into_parts(piece, s, settings, &stage)
 }
 
 /// Splits a piece whose surface (`whole`) is not a disk — closed (a ball, a plush toy), of any
@@ -90,13 +93,15 @@ pub fn split_surface_piece(
     settings: &SplitSettings,
 ) -> Result<SplitPieces, PipelineError> {
     let opts = options(&piece, whole, params, settings)?;
-    let s = flatcut_darts::split::split_surface(whole, params, &opts).map_err(|source| {
+    let stage = params.stage_budget("split", std::time::Instant::now());
+    let inside = params.clone().with_within(Some(stage.clone()));
+    let s = flatcut_darts::split::split_surface(whole, &inside, &opts).map_err(|source| {
         PipelineError::Darts {
             piece: piece.def.name.clone(),
             source,
         }
     })?;
-    into_parts(piece, s, settings)
+    into_parts(piece, s, settings, &stage)
 }
 
 /// True for a surface no flattening takes as it is but an opening can: one that is not a disk
@@ -160,8 +165,10 @@ fn into_parts(
     piece: FlatPiece,
     s: flatcut_darts::split::Split,
     settings: &SplitSettings,
+    stage: &Budget,
 ) -> Result<SplitPieces, PipelineError> {
     let name = piece.def.name.clone();
+    let count = stage.count();
     // The stand-in's own warnings do not carry over to the parts.
     let mut timed_out_warning = None;
     if s.timed_out {
@@ -182,8 +189,15 @@ fn into_parts(
                 excess: s.excess,
                 at: s.worst_3d,
                 reason: format!(
-                    "no split into at most {} parts brought every face within them",
-                    settings.max_pieces
+                    "no split into at most {} parts brought every face within them{}",
+                    settings.max_pieces,
+                    if count.stopped {
+                        format!(
+                            " before the split stopped at its cap ({count}; --max-iters, --flatten-time)"
+                        )
+                    } else {
+                        String::new()
+                    }
                 ),
             },
         });
@@ -196,6 +210,10 @@ fn into_parts(
         .enumerate()
         .map(|(k, mesh)| part(&piece, k, mesh, &s.pieces, grain_3d))
         .collect();
+    for p in &mut parts {
+        p.info.iterations += count.iterations;
+        p.info.stages.push(count.clone());
+    }
     let mut seams = s.seams;
     for seam in &mut seams {
         seam.name = format!("{name} {}", seam.name);

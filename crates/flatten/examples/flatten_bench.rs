@@ -1,6 +1,6 @@
 //! Benchmark driver: flattens meshes and prints one JSON line per mesh (faces, Newton steps,
 //! solve seconds, true-scale mean δ2, flipped triangles, largest relative boundary-edge error,
-//! warnings), writing the map as OBJ (`v` + `vt`) for the bench's `metrics.py`.
+//! where the time went, warnings), writing the map as OBJ (`v` + `vt`) for the bench's `metrics.py`.
 //!
 //! ```text
 //! cargo run --release -p flatcut-flatten --example flatten_bench -- \
@@ -150,8 +150,19 @@ fn bench(a: &Args, name: &str, mesh: &TriMesh, out: Option<PathBuf>) {
     };
     let (delta2, flips, bnd) = score(mesh, &f.uv);
     let warnings: Vec<String> = f.info.warnings.iter().map(|w| json_str(w)).collect();
+    let t = &f.info.timings;
+    let timings = format!(
+        "{{\"start\":{:.4},\"ordering\":{:.4},\"assembly\":{:.4},\"factorisation\":{:.4},\"factorisations\":{},\"solve\":{:.4},\"line_search\":{:.4}}}",
+        t.start.as_secs_f64(),
+        t.ordering.as_secs_f64(),
+        t.assembly.as_secs_f64(),
+        t.factorisation.as_secs_f64(),
+        t.factorisations,
+        t.solve.as_secs_f64(),
+        t.line_search.as_secs_f64()
+    );
     println!(
-        "{{\"mesh\":{},\"faces\":{},\"method\":\"{}\",\"threads\":{},\"iterations\":{},\"seconds\":{seconds:.4},\"delta2_mean\":{delta2:.9e},\"flips\":{flips},\"boundary_rel_max\":{bnd:.3e},\"warnings\":[{}]}}",
+        "{{\"mesh\":{},\"faces\":{},\"method\":\"{}\",\"threads\":{},\"iterations\":{},\"seconds\":{seconds:.4},\"delta2_mean\":{delta2:.9e},\"flips\":{flips},\"boundary_rel_max\":{bnd:.3e},\"timings\":{timings},\"warnings\":[{}]}}",
         json_str(name),
         mesh.triangles.len(),
         a.method,

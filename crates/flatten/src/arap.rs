@@ -132,6 +132,10 @@ pub struct ArapSolver {
     pub shortened_steps: usize,
     /// True when a step could not be taken at all without a flip.
     pub stalled: bool,
+    /// The stage's cap, time limit and cancel flag.
+    budget: crate::Budget,
+    /// True when the time limit (or the cancel flag) stopped the loop.
+    pub timed_out: bool,
 }
 
 impl Solver<ArapProblem, ArapState> for ArapSolver {
@@ -201,6 +205,12 @@ impl Solver<ArapProblem, ArapState> for ArapSolver {
                 "no flip-free step".into(),
             ));
         }
+        if self.budget.hooks.cancelled() || self.budget.expired() {
+            self.timed_out = true;
+            return TerminationStatus::Terminated(TerminationReason::SolverExit(
+                "time limit".into(),
+            ));
+        }
         if state.get_iter() > 0 && prev.is_finite() && prev - cur <= self.rel_tolerance * prev {
             return TerminationStatus::Terminated(TerminationReason::SolverConverged);
         }
@@ -238,6 +248,7 @@ pub fn arap(
     params: &FlattenParams,
 ) -> Result<Flattening, FlattenError> {
     let n = mesh.positions.len();
+    let budget = params.budget("arap", std::time::Instant::now());
     let mut warnings = Vec::new();
     let init = crate::lscm::lscm(mesh, topo, &params.pins)?;
     let mut uv0 = init.uv;
@@ -286,10 +297,13 @@ pub fn arap(
         rel_tolerance: params.rel_tolerance,
         shortened_steps: 0,
         stalled: false,
+        budget: budget.clone(),
+        timed_out: false,
     };
     let x0: Vec<f64> = uv0.iter().flat_map(|p| [p.x, p.y]).collect();
+    let max_iters = budget.allow(params.max_iters);
     let res = Executor::new(problem, solver)
-        .configure(|s| s.param(x0).max_iters(params.max_iters as u64))
+        .configure(|s| s.param(x0).max_iters(max_iters as u64))
         .add_observer(TraceObserver, ObserverMode::Always)
         .run()
         .map_err(|e| match e.downcast::<FlattenError>() {
@@ -301,6 +315,18 @@ pub fn arap(
         })?;
     let mut state = res.state;
     let iterations = state.get_iter() as usize;
+    budget.spend(iterations);
+    if budget.hooks.cancelled() {
+        return Err(FlattenError::Cancelled {
+            method: Method::Arap,
+        });
+    }
+    if res.solver.timed_out {
+        warnings.push(crate::nonlinear::time_limit_warning(
+            Method::Arap,
+            iterations,
+        ));
+    }
     let energy = state.get_best_cost();
     let x = state
         .take_best_param()
@@ -334,6 +360,8 @@ pub fn arap(
             iterations,
             final_energy: energy / mesh.area(),
             warnings,
+            stages: vec![budget.count()],
+            ..Default::default()
         },
     })
 }

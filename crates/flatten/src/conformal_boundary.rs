@@ -198,6 +198,7 @@ pub fn conformal_boundary(
             iterations: 1,
             final_energy: energy,
             warnings,
+            ..Default::default()
         },
     })
 }

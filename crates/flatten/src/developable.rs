@@ -86,6 +86,7 @@ pub fn developable(
             iterations: 1,
             final_energy: energy,
             warnings,
+            ..Default::default()
         },
     })
 }

@@ -18,6 +18,7 @@
 pub mod anisotropy;
 pub mod arap;
 pub mod assembly;
+pub mod budget;
 pub mod conformal_boundary;
 pub mod developable;
 pub mod limits;
@@ -35,13 +36,16 @@ pub(crate) mod sparse;
 #[cfg(any(test, feature = "test-support"))]
 #[doc(hidden)]
 pub mod testmesh;
+pub mod timings;
 pub mod tutte;
 
+pub use budget::{Budget, StageCount};
 pub use method::Method;
 pub use params::{
     FlattenError, FlattenHooks, FlattenInfo, FlattenParams, FlattenProgress, Flattening, Pin,
     ProgressFn,
 };
+pub use timings::Timings;
 
 use flatcut_mesh::{TriMesh, check_disk};
 

@@ -181,13 +181,14 @@ pub(crate) trait EnergySolve {
         energy: E,
         x: &[DVec2],
     ) -> Result<(Vec<DVec2>, usize), FlattenError>;
-    /// True once a solve stopped early (the caller's time limit): no further stage runs.
+    /// True once a solve stopped early (the caller's time limit) or the stage's iterations are
+    /// spent: no further stage runs.
     fn stopped(&self) -> bool {
         false
     }
 }
 
-/// The Newton solve of one piece ([`crate::nonlinear::newton_solve`]) within the caller's
+/// The Newton solve of one piece ([`crate::nonlinear::newton_solve`]) within the limits stage's
 /// budget; `early` records a solve the time limit stopped.
 pub(crate) struct OnePiece<'a> {
     pub rest: &'a [RestTri],
@@ -195,6 +196,8 @@ pub(crate) struct OnePiece<'a> {
     pub params: &'a FlattenParams,
     pub budget: &'a Budget,
     pub early: Option<EarlyStop>,
+    /// Where the solves' time went.
+    pub timings: crate::Timings,
 }
 
 impl EnergySolve for OnePiece<'_> {
@@ -213,10 +216,11 @@ impl EnergySolve for OnePiece<'_> {
             self.budget,
         )?;
         self.early = self.early.or(r.early);
+        self.timings.add(&r.timings);
         Ok((r.x, r.iterations))
     }
     fn stopped(&self) -> bool {
-        self.early.is_some()
+        self.early.is_some() || self.budget.spent()
     }
 }
 

@@ -58,6 +58,7 @@ pub fn lscm(mesh: &TriMesh, topo: &Topology, pins: &[Pin]) -> Result<Flattening,
             iterations: 1,
             final_energy: energy,
             warnings,
+            ..Default::default()
         },
     })
 }

@@ -224,3 +224,35 @@ fn limits_that_cannot_be_met_are_reported_with_where_and_how_much() {
     let w = f.info.warnings.join("\n");
     assert!(w.contains("cannot be met") && w.contains("near ("), "{w}");
 }
+
+#[test]
+fn every_stage_of_a_joint_solve_keeps_the_iteration_cap() {
+    // The split cap with limits it cannot meet: without a cap the limits alone take hundreds of
+    // Newton steps. With a cap of 12 every stage (each piece's own solve, the seams, the limits)
+    // stops at 12 over all its solves, and says so.
+    let (meshes, seam) = split_cap();
+    let refs: Vec<&TriMesh> = meshes.iter().collect();
+    let cap = 12;
+    let params = FlattenParams::new(Method::Isometric)
+        .with_max_stretch_pct(Some(0.5))
+        .with_max_compress_pct(Some(0.5))
+        .with_max_iters(cap);
+    let flats = flatten_assembly(&refs, std::slice::from_ref(&seam), &params).unwrap();
+    for f in &flats {
+        let names: Vec<&str> = f.info.stages.iter().map(|s| s.stage).collect();
+        assert_eq!(names, ["isometric", "seams", "limits"]);
+        assert!(
+            f.info
+                .stages
+                .iter()
+                .all(|s| s.iterations <= cap && s.cap == cap),
+            "{:?}",
+            f.info.stages
+        );
+        let total: usize = f.info.stages.iter().map(|s| s.iterations).sum();
+        assert_eq!(f.info.iterations, total);
+        assert!(total <= cap * f.info.stages.len());
+        let limits = &f.info.stages[2];
+        assert!(limits.stopped && limits.iterations == cap, "{limits:?}");
+    }
+}

@@ -180,8 +180,20 @@ fn progress_is_reported_and_minmax_keeps_its_iteration_cap() {
             .with_hooks(hooks),
     )
     .unwrap();
-    assert!(f.info.iterations <= cap, "{} > {cap}", f.info.iterations);
-    assert!(seen.load(Ordering::Relaxed) >= f.info.iterations);
+    // Two stages, the isometric start and the descent, each within the cap.
+    let names: Vec<&str> = f.info.stages.iter().map(|s| s.stage).collect();
+    assert_eq!(names, ["min-max start", "minmax"]);
+    assert!(
+        f.info
+            .stages
+            .iter()
+            .all(|s| s.iterations <= cap && s.cap == cap),
+        "{:?}",
+        f.info.stages
+    );
+    let total: usize = f.info.stages.iter().map(|s| s.iterations).sum();
+    assert_eq!(f.info.iterations, total);
+    assert!(seen.load(Ordering::Relaxed) >= f.info.stages[1].iterations);
     let last = last.lock().unwrap().clone().expect("a progress report");
     assert_eq!(last.stage, "minmax");
     assert!(last.iteration <= cap && last.max_iterations == cap);

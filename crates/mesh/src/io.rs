@@ -122,32 +122,54 @@ pub fn is_mesh_path(path: &Path) -> bool {
     )
 }
 
-/// One whitespace-separated token with its 1-based column.
+/// The whitespace-separated tokens of a line with their byte offsets in it (the 1-based column an
+/// error names is counted from the offset only then, [`ObjCtx::col`]).
 fn tokens(line: &str) -> impl Iterator<Item = (usize, &str)> {
-    let mut out = Vec::new();
-    let mut start: Option<usize> = None;
-    for (i, c) in line.char_indices() {
-        if c.is_whitespace() {
-            if let Some(s) = start.take() {
-                out.push((s, &line[s..i]));
+    // `char::is_whitespace` of an ASCII byte (which also counts the vertical tab).
+    let space = |b: u8| b.is_ascii_whitespace() || b == 0x0b;
+    let ascii = line.is_ascii();
+    let bytes = line.as_bytes();
+    let mut at = 0;
+    std::iter::from_fn(move || {
+        if ascii {
+            while at < bytes.len() && space(bytes[at]) {
+                at += 1;
             }
-        } else if start.is_none() {
-            start = Some(i);
+            let start = at;
+            while at < bytes.len() && !space(bytes[at]) {
+                at += 1;
+            }
+            return (start < at).then(|| (start, &line[start..at]));
         }
-    }
-    if let Some(s) = start {
-        out.push((s, &line[s..]));
-    }
-    out.into_iter()
-        .map(move |(s, t)| (line[..s].chars().count() + 1, t))
+        let rest = &line[at..];
+        let skip = rest.find(|c: char| !c.is_whitespace())?;
+        let start = at + skip;
+        let len = line[start..]
+            .find(char::is_whitespace)
+            .unwrap_or(line.len() - start);
+        at = start + len;
+        Some((start, &line[start..at]))
+    })
 }
 
 struct ObjCtx<'a> {
     path: &'a Path,
     line: usize,
+    /// The current line, its comment cut off.
+    text: &'a str,
 }
 
 impl ObjCtx<'_> {
+    /// The 1-based column of the byte at `offset` in the current line.
+    fn col(&self, offset: usize) -> usize {
+        self.text[..offset].chars().count() + 1
+    }
+
+    /// The column just past the line's last token.
+    fn eol_col(&self) -> usize {
+        self.text.trim_end().chars().count() + 1
+    }
+
     fn parse_err(&self, col: usize, msg: String) -> MeshIoError {
         MeshIoError::Parse {
             path: self.path.to_path_buf(),
@@ -157,23 +179,18 @@ impl ObjCtx<'_> {
         }
     }
 
-    fn float(
-        &self,
-        tok: Option<(usize, &str)>,
-        what: &'static str,
-        eol_col: usize,
-    ) -> Result<f64, MeshIoError> {
-        let Some((col, t)) = tok else {
-            return Err(self.parse_err(eol_col, format!("{what} needs more coordinates")));
+    fn float(&self, tok: Option<(usize, &str)>, what: &'static str) -> Result<f64, MeshIoError> {
+        let Some((at, t)) = tok else {
+            return Err(self.parse_err(self.eol_col(), format!("{what} needs more coordinates")));
         };
         let v: f64 = t
             .parse()
-            .map_err(|_| self.parse_err(col, format!("{what}: '{t}' is not a number")))?;
+            .map_err(|_| self.parse_err(self.col(at), format!("{what}: '{t}' is not a number")))?;
         if !v.is_finite() {
             return Err(MeshIoError::NonFinite {
                 path: self.path.to_path_buf(),
                 line: self.line,
-                col,
+                col: self.col(at),
                 what,
                 text: t.to_string(),
             });
@@ -182,7 +199,7 @@ impl ObjCtx<'_> {
             return Err(MeshIoError::OutOfRange {
                 path: self.path.to_path_buf(),
                 line: self.line,
-                col,
+                col: self.col(at),
                 what,
                 value: v,
             });
@@ -190,23 +207,24 @@ impl ObjCtx<'_> {
         Ok(v)
     }
 
-    /// Resolves an OBJ index (1-based, or negative relative to the current count) to 0-based.
+    /// Resolves an OBJ index (1-based, or negative relative to the current count) to 0-based;
+    /// `at` is the byte offset of its corner in the line.
     fn index(
         &self,
         text: &str,
-        col: usize,
+        at: usize,
         what: &'static str,
         count: usize,
     ) -> Result<u32, MeshIoError> {
         let i: i64 = text
             .parse()
-            .map_err(|_| self.parse_err(col, format!("'{text}' is not a {what} index")))?;
+            .map_err(|_| self.parse_err(self.col(at), format!("'{text}' is not a {what} index")))?;
         let resolved = if i > 0 { i - 1 } else { count as i64 + i };
         if i == 0 || resolved < 0 || resolved >= count as i64 {
             return Err(MeshIoError::BadIndex {
                 path: self.path.to_path_buf(),
                 line: self.line,
-                col,
+                col: self.col(at),
                 what,
                 index: i,
                 count,
@@ -228,33 +246,37 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<TriMesh, MeshIoError> {
     let mut normal_count = 0usize;
     // Triangles of (position, texcoord) corners.
     let mut corners: Vec<[(u32, Option<u32>); 3]> = Vec::new();
-    let mut ctx = ObjCtx { path, line: 0 };
+    let mut ctx = ObjCtx {
+        path,
+        line: 0,
+        text: "",
+    };
     for (ln, raw) in text.lines().enumerate() {
         ctx.line = ln + 1;
         let line = raw.split('#').next().unwrap_or("");
-        let eol_col = line.trim_end().chars().count() + 1;
+        ctx.text = line;
         let mut toks = tokens(line);
         let Some((_, kw)) = toks.next() else {
             continue;
         };
         match kw {
             "v" => {
-                let x = ctx.float(toks.next(), "vertex", eol_col)?;
-                let y = ctx.float(toks.next(), "vertex", eol_col)?;
-                let z = ctx.float(toks.next(), "vertex", eol_col)?;
+                let x = ctx.float(toks.next(), "vertex")?;
+                let y = ctx.float(toks.next(), "vertex")?;
+                let z = ctx.float(toks.next(), "vertex")?;
                 positions.push(DVec3::new(x, y, z));
             }
             "vt" => {
-                let u = ctx.float(toks.next(), "texture coordinate", eol_col)?;
+                let u = ctx.float(toks.next(), "texture coordinate")?;
                 let v = match toks.next() {
-                    Some(t) => ctx.float(Some(t), "texture coordinate", eol_col)?,
+                    Some(t) => ctx.float(Some(t), "texture coordinate")?,
                     None => 0.0,
                 };
                 texcoords.push(DVec2::new(u, v));
             }
             "vn" => {
                 for _ in 0..3 {
-                    ctx.float(toks.next(), "normal", eol_col)?;
+                    ctx.float(toks.next(), "normal")?;
                 }
                 normal_count += 1;
             }
@@ -277,7 +299,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<TriMesh, MeshIoError> {
                     }
                     if parts.next().is_some() {
                         return Err(ctx.parse_err(
-                            col,
+                            ctx.col(col),
                             format!("face corner '{t}' has more than three indices"),
                         ));
                     }
@@ -528,38 +550,51 @@ pub fn parse_ply(bytes: &[u8], path: &Path, weld_mm: f64) -> Result<TriMesh, Mes
     Ok(m.welded(weld_mm))
 }
 
-/// Digits after the decimal point in written coordinates: 1e-6 mm is far below any weld or
-/// chord tolerance, and fixed formatting makes the output byte-identical across runs.
-const OBJ_DECIMALS: usize = 6;
-
 /// Formats a mesh as OBJ text: `v` per vertex, one `vt` per vertex (mm, true scale) when the mesh
-/// has a flattening, and `f a/a b/b c/c` (or `f a b c`).
+/// has a flattening, and `f a/a b/b c/c` (or `f a b c`). Coordinates have
+/// [`crate::fixed::DECIMALS`] digits after the point (1e-6 mm is far below any weld or chord
+/// tolerance, and fixed formatting makes the output byte-identical across runs), never `-0`
+/// for a zero.
 pub fn obj_string(mesh: &TriMesh) -> String {
-    use std::fmt::Write as _;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# flatcut mesh: {} vertices, {} triangles, millimetres",
-        mesh.positions.len(),
-        mesh.triangles.len()
+    use crate::fixed::{push, push_uint};
+    // About 30 bytes a vertex line and 25 a face.
+    let mut s = String::with_capacity(
+        64 + 30 * mesh.positions.len() * (1 + usize::from(mesh.flat.is_some()))
+            + 25 * mesh.triangles.len(),
     );
-    let d = OBJ_DECIMALS;
+    s.push_str("# flatcut mesh: ");
+    push_uint(&mut s, mesh.positions.len() as u64);
+    s.push_str(" vertices, ");
+    push_uint(&mut s, mesh.triangles.len() as u64);
+    s.push_str(" triangles, millimetres\n");
     let z = |x: f64| if x == 0.0 { 0.0 } else { x }; // no "-0.000000"
+    let coords = |s: &mut String, tag: &str, xs: &[f64]| {
+        s.push_str(tag);
+        for &x in xs {
+            s.push(' ');
+            push(s, z(x));
+        }
+        s.push('\n');
+    };
     for p in &mesh.positions {
-        let _ = writeln!(s, "v {:.d$} {:.d$} {:.d$}", z(p.x), z(p.y), z(p.z));
+        coords(&mut s, "v", &[p.x, p.y, p.z]);
     }
     if let Some(f) = &mesh.flat {
         for q in f {
-            let _ = writeln!(s, "vt {:.d$} {:.d$}", z(q.x), z(q.y));
+            coords(&mut s, "vt", &[q.x, q.y]);
         }
     }
     for t in &mesh.triangles {
-        let [a, b, c] = t.map(|i| i + 1);
-        if mesh.flat.is_some() {
-            let _ = writeln!(s, "f {a}/{a} {b}/{b} {c}/{c}");
-        } else {
-            let _ = writeln!(s, "f {a} {b} {c}");
+        s.push('f');
+        for i in t.map(|i| u64::from(i) + 1) {
+            s.push(' ');
+            push_uint(&mut s, i);
+            if mesh.flat.is_some() {
+                s.push('/');
+                push_uint(&mut s, i);
+            }
         }
+        s.push('\n');
     }
     s
 }

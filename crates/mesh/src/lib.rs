@@ -9,6 +9,7 @@
 pub mod cut_graph;
 pub mod disk;
 pub mod distortion;
+pub mod fixed;
 pub mod geodesic;
 pub mod grain_strain;
 pub mod grid;

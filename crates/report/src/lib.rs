@@ -3,14 +3,16 @@
 //!
 //! [`Report::compute`] measures a flattened [`TriMesh`] (3D positions plus a 2D position per
 //! vertex, mm) with Duncan's measures per face (μ1, μ2, δ1, δ2, area ratio, principal
-//! directions), aggregates them over the surface area, estimates Duncan's global distortion δ0
-//! from geodesic distances, and checks seam lengths. [`heatmap_svg`], [`render_png`] and
+//! directions), aggregates them over the surface area, computes Duncan's global distortion δ0
+//! exactly (intrinsic distances in the flat piece against geodesic distances on the surface,
+//! [`delta0`]), and checks seam lengths. [`heatmap_svg`], [`render_png`] and
 //! [`html_report`] draw it; the PNG is rendered from the very SVG so the two cannot disagree.
 //!
 //! **Architecture invariant:** the per-face kernel is `flatcut_mesh::face_distortion`, the same the
 //! flattener uses, so the report and the optimiser can never disagree on a number.
 
 pub mod darts;
+pub mod delta0;
 pub mod draw;
 pub mod grain;
 pub mod measure;

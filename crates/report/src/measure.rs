@@ -1,4 +1,4 @@
-//! Per-face measures, area-weighted statistics, δ0 from geodesics, seam lengths and regions.
+//! Per-face measures, area-weighted statistics, δ0, seam lengths and regions.
 
 use std::collections::BTreeMap;
 
@@ -157,11 +157,9 @@ pub struct Region {
 }
 
 /// What to compute besides the per-face measures.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 #[non_exhaustive]
 pub struct ReportOptions {
-    /// Source vertices for δ0 (farthest-point sampled); 0 skips the geodesic estimate.
-    pub delta0_sources: usize,
     /// Boundary vertices that split the boundary into seam segments (match marks).
     pub boundary_marks: Vec<u32>,
     pub limit_stretch_pct: Option<f64>,
@@ -169,8 +167,6 @@ pub struct ReportOptions {
 }
 
 impl ReportOptions {
-    pub const DEFAULT_DELTA0_SOURCES: usize = 12;
-
     pub fn with_limit_stretch_pct(mut self, p: Option<f64>) -> Self {
         self.limit_stretch_pct = p;
         self
@@ -184,22 +180,6 @@ impl ReportOptions {
     pub fn with_boundary_marks(mut self, marks: Vec<u32>) -> Self {
         self.boundary_marks = marks;
         self
-    }
-
-    pub fn with_delta0_sources(mut self, n: usize) -> Self {
-        self.delta0_sources = n;
-        self
-    }
-}
-
-impl Default for ReportOptions {
-    fn default() -> Self {
-        Self {
-            delta0_sources: Self::DEFAULT_DELTA0_SOURCES,
-            boundary_marks: Vec::new(),
-            limit_stretch_pct: None,
-            limit_compress_pct: None,
-        }
     }
 }
 
@@ -232,11 +212,18 @@ pub struct Report {
     pub flipped: usize,
     pub area_3d_mm2: f64,
     pub area_2d_mm2: f64,
-    /// Duncan's global distortion δ0 = log(s2/s1).
+    /// Duncan's global distortion δ0 = log(s2/s1), intrinsic distances in the flat piece
+    /// against geodesic distances on the surface ([`crate::delta0`]).
     pub delta0: f64,
+    /// The least ratio of flat to surface distance.
     pub delta0_s1: f64,
+    /// The greatest ratio of flat to surface distance.
     pub delta0_s2: f64,
+    /// `exact` (from every face's principal stretches, which bound every pair of points).
     pub delta0_method: String,
+    /// A bound on the difference between `delta0` and the exact figure of the map (0: exact).
+    pub delta0_error_bound: f64,
+    /// Pairs of points sampled for δ0 (0: exact, none sampled).
     pub delta0_pairs: usize,
     pub delta1_mean: f64,
     pub delta1_max: f64,
@@ -335,38 +322,6 @@ fn weighted_stats(values: &[(f64, f64)]) -> Stats {
     }
 }
 
-/// Farthest-point sample of `k` vertices (deterministic: starts at vertex 0's farthest vertex).
-fn farthest_points(mesh: &TriMesh, k: usize) -> Vec<u32> {
-    let n = mesh.positions.len();
-    if n == 0 || k == 0 {
-        return Vec::new();
-    }
-    let mut chosen = Vec::with_capacity(k);
-    let mut dist = vec![f64::INFINITY; n];
-    let mut next = (0..n)
-        .max_by(|&a, &b| {
-            mesh.positions[a]
-                .distance_squared(mesh.positions[0])
-                .total_cmp(&mesh.positions[b].distance_squared(mesh.positions[0]))
-        })
-        .unwrap_or(0);
-    for _ in 0..k.min(n) {
-        chosen.push(next as u32);
-        let p = mesh.positions[next];
-        for (i, q) in mesh.positions.iter().enumerate() {
-            dist[i] = dist[i].min(q.distance_squared(p));
-        }
-        next = (0..n)
-            .max_by(|&a, &b| dist[a].total_cmp(&dist[b]))
-            .unwrap_or(0);
-    }
-    chosen
-}
-
-/// Pairs closer than this fraction of the mesh diameter are left to the per-face (local) term:
-/// over short distances the discrete geodesic error dominates the ratio.
-const DELTA0_MIN_PAIR_FRACTION: f64 = 0.05;
-
 impl Report {
     /// Measures a flattened mesh (`mesh.flat` must be set).
     pub fn compute(
@@ -457,7 +412,7 @@ impl Report {
             .sum::<f64>()
             / area3;
 
-        let (delta0, ds1, ds2, pairs) = delta0(mesh, flat, &per_face, opts.delta0_sources);
+        let d0 = crate::delta0::delta0(&per_face);
         let (boundary_length_error, boundary_segments) = boundary(mesh, flat, &opts.boundary_marks);
         let mut regions = Vec::new();
         if let Some(lim) = opts.limit_stretch_pct {
@@ -477,14 +432,12 @@ impl Report {
             flipped,
             area_3d_mm2: area3,
             area_2d_mm2: mesh.flat_area().unwrap_or(0.0),
-            delta0,
-            delta0_s1: ds1,
-            delta0_s2: ds2,
-            delta0_method: format!(
-                "geodesic distances (label-correcting fast marching) from {} farthest-point sources to every vertex, plus every face's principal stretches",
-                opts.delta0_sources.min(mesh.positions.len())
-            ),
-            delta0_pairs: pairs,
+            delta0: d0.delta0,
+            delta0_s1: d0.s1,
+            delta0_s2: d0.s2,
+            delta0_method: d0.method.into(),
+            delta0_error_bound: d0.error_bound,
+            delta0_pairs: 0,
             delta1_mean: s1.mean,
             delta1_max: s1.max,
             delta1_p50: s1.p50,
@@ -539,41 +492,6 @@ impl Report {
                 .collect::<Vec<_>>(),
         )
     }
-}
-
-/// δ0 = log(s2/s1): s over sampled pairs (geodesic on the surface vs straight in the plane) and,
-/// in the limit of short pairs, every face's principal stretches σ1, σ2 (exact for the
-/// polyhedral surface: within a flat face geodesics are straight).
-fn delta0(
-    mesh: &TriMesh,
-    flat: &[DVec2],
-    faces: &[FaceMeasure],
-    sources: usize,
-) -> (f64, f64, f64, usize) {
-    let mut s1 = f64::INFINITY;
-    let mut s2: f64 = 0.0;
-    for f in faces {
-        if f.flipped {
-            return (f64::INFINITY, 0.0, f.mu1.sqrt(), 0);
-        }
-        s1 = s1.min(f.mu2.sqrt());
-        s2 = s2.max(f.mu1.sqrt());
-    }
-    let diam = mesh.bbox().diagonal();
-    let mut pairs = 0;
-    for src in farthest_points(mesh, sources) {
-        let d = flatcut_mesh::geodesic::distances_from(mesh, src);
-        for (v, &g) in d.iter().enumerate() {
-            if g.is_finite() && g > DELTA0_MIN_PAIR_FRACTION * diam {
-                let e = flat[v].distance(flat[src as usize]);
-                let r = e / g;
-                s1 = s1.min(r);
-                s2 = s2.max(r);
-                pairs += 1;
-            }
-        }
-    }
-    ((s2 / s1).ln(), s1, s2, pairs)
 }
 
 /// Boundary loops (ordered) of the mesh.

@@ -30,10 +30,17 @@ pub struct FlattenArgs {
     /// Chordal tolerance of the tessellation in mm.
     #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_name = "MM", value_parser = values::positive_mm)]
     pub chord: f64,
-    /// Iteration cap of the nonlinear methods [default: 200; minmax: 1000, all its stages together].
+    /// Iteration cap of every stage of a piece's flattening, over all the solves of the stage:
+    /// the method's own solve (minmax, boundary-isometric and orthotropic: their start and their
+    /// descent, two stages), the material limits, the joint solve of pieces sewn together
+    /// (seams), the darts, the split. Each stage's count is printed; a piece takes at most N
+    /// times its stages [default: 200; minmax's descent: 1000; the limits, the darts and the
+    /// split: 2000].
     #[arg(long, value_name = "N", value_parser = values::iterations)]
     pub max_iters: Option<usize>,
-    /// Time limit of the flattening of one piece in seconds: when it runs out, the best flip-free map found so far is used, with a warning.
+    /// Time limit of every stage of a piece's flattening (the stages of --max-iters) in
+    /// seconds: when it runs out, the stage keeps the best flip-free map found so far, with a
+    /// warning.
     #[arg(long, value_name = "S", value_parser = values::seconds)]
     pub flatten_time: Option<std::time::Duration>,
     /// Largest difference between the two flat sides of a mating seam, or between a notch's
@@ -348,10 +355,11 @@ fn load_with(
         if verbose {
             let r = &f.report;
             eprintln!(
-                "  '{}': {} faces, {} iterations, mean δ2 {:.5}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
+                "  '{}': {} faces, {} iterations{}, mean δ2 {:.5}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
                 f.name,
                 r.faces,
                 info.iterations,
+                stage_counts(info),
                 r.delta2_mean,
                 r.stretch_max_pct,
                 r.compress_max_pct,
@@ -363,6 +371,16 @@ fn load_with(
         }
     }
     Ok(flats)
+}
+
+/// " (isometric 7/200, limits 12/200)": each stage's iterations against its cap, empty for a
+/// method without stages.
+pub fn stage_counts(info: &flatcut::flatten::FlattenInfo) -> String {
+    if info.stages.is_empty() {
+        return String::new();
+    }
+    let each: Vec<String> = info.stages.iter().map(|s| s.to_string()).collect();
+    format!(" ({})", each.join(", "))
 }
 
 /// Prints, on stderr, every region beyond the material limits (where on the 3D surface and by

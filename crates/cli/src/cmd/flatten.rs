@@ -5,6 +5,7 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::{Duration, Instant};
 
 use super::common::{self, FlattenArgs};
 use crate::output::OutputSet;
@@ -20,6 +21,11 @@ pub struct Args {
     /// Also write the distortion report (JSON).
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// Print where the time went: reading the mesh, the start map, the orderings, and over the
+    /// Newton steps the assembly, the factorisations, the solves and the line searches, then
+    /// the report and writing the outputs.
+    #[arg(long)]
+    pub timings: bool,
     #[command(flatten)]
     pub flatten: FlattenArgs,
 }
@@ -27,8 +33,12 @@ pub struct Args {
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     // A mesh that already carries `vt` is flattened again from its 3D shape. A mesh that may be
     // split into several pieces goes the way of a design's pieces.
+    // Reading the mesh, the flattening's own parts and the report, for --timings.
+    let mut spent: Option<(Duration, flatcut::flatten::Timings, Duration)> = None;
     let flats = if common::is_mesh(&a.file) && a.flatten.split.is_none() {
+        let reading = Instant::now();
         let mut mesh = flatcut::mesh::read_mesh(&a.file).map_err(anyhow::Error::from)?;
+        let read = reading.elapsed();
         mesh.flat = None;
         let name = a
             .file
@@ -97,6 +107,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         for w in &info.warnings {
             eprintln!("warning: {w}");
         }
+        let reporting = Instant::now();
         let mut report = flatcut::pipeline::report_piece(
             &name,
             &mesh,
@@ -104,6 +115,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             a.flatten.max_stretch,
             a.flatten.max_compress,
         )?;
+        spent = Some((read, info.timings, reporting.elapsed()));
         report.darts = flatcut::darting::dart_reports(&darts);
         report.set_grain(
             grain
@@ -111,8 +123,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
                 .and_then(|g| flatcut::material::report(g, &mesh)),
         );
         eprintln!(
-            "  {} iterations, mean δ2 {:.6}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
+            "  {} iterations{}, mean δ2 {:.6}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
             info.iterations,
+            common::stage_counts(&info),
             report.delta2_mean,
             report.stretch_max_pct,
             report.compress_max_pct,
@@ -139,6 +152,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         common::flatten_again(&a.file, &a.flatten, limits, true)?
     };
     let seam_tolerance = a.flatten.seam_tolerance;
+    let writing = Instant::now();
     let mut out = OutputSet::new();
     let several = flats.len() > 1;
     let mut reports = Vec::new();
@@ -170,6 +184,24 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         out.add(path, json.as_bytes())?;
     }
     out.commit()?;
+    if a.timings {
+        let write = writing.elapsed().as_secs_f64();
+        match spent {
+            Some((read, t, report)) => eprintln!(
+                "  time: read {:.2} s, {t}, report {:.2} s, write {write:.2} s",
+                read.as_secs_f64(),
+                report.as_secs_f64()
+            ),
+            None => {
+                for f in &flats {
+                    if let Some(info) = &f.info {
+                        eprintln!("  time '{}': {}", f.name, info.timings);
+                    }
+                }
+                eprintln!("  time: write {write:.2} s");
+            }
+        }
+    }
     for l in lines {
         crate::outln!("{l}");
     }

@@ -106,7 +106,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             r.area_3d_mm2,
             r.area_2d_mm2
         );
-        crate::outln!("  δ0 {:.5} ({} pairs)", r.delta0, r.delta0_pairs);
+        crate::outln!("  δ0 {:.5} ({})", r.delta0, r.delta0_method);
         crate::outln!(
             "  δ1 mean {:.5}  p90 {:.5}  max {:.5}",
             r.delta1_mean,

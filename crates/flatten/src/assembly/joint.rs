@@ -11,6 +11,7 @@
 
 use flatcut_geom::DVec2;
 
+use crate::Budget;
 use crate::nonlinear::kernel::{IsoEnergy, RestTri, max_step_tri, tri_energy, tri_eval};
 use crate::nonlinear::newton::{ARMIJO_C, INVERSION_STEP_FRACTION, MAX_HALVINGS, REG_REL};
 use crate::nonlinear::spd::SpdSystem;
@@ -256,12 +257,33 @@ impl<'a> Joint<'a> {
         max_iters: usize,
         rel_tolerance: f64,
         abs_tolerance: f64,
+        budget: &Budget,
+    ) -> Result<(Vec<DVec2>, usize), String> {
+        let max_iters = budget.allow(max_iters);
+        let (x, it) = self.descend(e, x0, max_iters, rel_tolerance, abs_tolerance, budget)?;
+        budget.spend(it);
+        Ok((x, it))
+    }
+
+    /// [`Joint::minimise`] for at most `max_iters` iterations, stopping at the budget's time
+    /// limit and reporting progress to it.
+    fn descend<E: IsoEnergy>(
+        &mut self,
+        e: &E,
+        x0: &[DVec2],
+        max_iters: usize,
+        rel_tolerance: f64,
+        abs_tolerance: f64,
+        budget: &Budget,
     ) -> Result<(Vec<DVec2>, usize), String> {
         let mut x = x0.to_vec();
         if !self.total_energy(e, &x).is_finite() {
             return Err("the start has an inverted or out-of-bounds triangle".into());
         }
         for it in 0..max_iters {
+            if budget.expired() || budget.hooks.cancelled() {
+                return Ok((x, it));
+            }
             let (e0, g) = self.assemble(e, &x);
             let ndof = g.len();
             let mean_diag = (0..ndof)
@@ -298,6 +320,13 @@ impl<'a> Joint<'a> {
                 return Ok((x, it));
             };
             x = xn;
+            budget.hooks.report(&crate::FlattenProgress {
+                stage: budget.stage,
+                iteration: budget.used() + it + 1,
+                max_iterations: budget.cap(),
+                energy: en,
+                elapsed: budget.started.elapsed(),
+            });
             if e0 - en <= rel_tolerance * en.abs() || -0.5 * gd <= abs_tolerance {
                 return Ok((x, it + 1));
             }
@@ -369,7 +398,10 @@ mod tests {
         j.weight = 10.0;
         let mut y = x.clone();
         for _ in 0..10 {
-            y = j.minimise(&e, &y, 100, 1e-14, 0.0).unwrap().0;
+            y = j
+                .minimise(&e, &y, 100, 1e-14, 0.0, &Budget::none("test"))
+                .unwrap()
+                .0;
             j.update_multipliers(&y);
         }
         assert!(j.max_mismatch(&y) < 1e-8, "{}", j.max_mismatch(&y));

@@ -24,8 +24,9 @@ use flatcut_mesh::mating::{MatingError, MatingSeam};
 use crate::limits::{self, EnergySolve, Limits};
 use crate::nonlinear::kernel::{IsoEnergy, RestTri, SymDirichlet, rest_frames};
 use crate::nonlinear::{ABS_DECREMENT_PER_AREA, mean_density};
-use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
+use crate::{Budget, FlattenError, FlattenInfo, FlattenParams, Flattening, Method, StageCount};
 use joint::{EdgePair, Joint};
+use std::time::Instant;
 
 /// Target relative length difference of two sewn edges (|ℓa − ℓb| / L): far below any
 /// tolerance of cutting (1e-9 of a 2 mm edge is 2 pm).
@@ -131,20 +132,23 @@ fn groups(n: usize, seams: &[MatingSeam]) -> Vec<Vec<usize>> {
     out
 }
 
-/// The Newton solves of the joined pieces, each run to seam convergence.
+/// The Newton solves of the joined pieces, each run to seam convergence, within the budget of
+/// the stage they belong to (the seams, then the limits).
 struct GroupSolve<'a> {
     joint: Joint<'a>,
     params: &'a FlattenParams,
     abs: f64,
     iterations: usize,
+    budget: Budget,
 }
 
 impl GroupSolve<'_> {
-    /// Minimises `energy` with the seam terms from `x` until the seams agree (or stall).
+    /// Minimises `energy` with the seam terms from `x` until the seams agree (or stall, or the
+    /// stage's budget is spent).
     fn run<E: IsoEnergy>(&mut self, energy: &E, mut x: Vec<DVec2>) -> Result<Vec<DVec2>, String> {
         let mut viol = self.joint.max_mismatch(&x);
         for outer in 0..MAX_OUTER {
-            if outer > 0 && viol <= SEAM_REL_TOLERANCE {
+            if outer > 0 && viol <= SEAM_REL_TOLERANCE || self.budget.spent() {
                 break;
             }
             let iters = if viol > INEXACT_ABOVE {
@@ -153,7 +157,9 @@ impl GroupSolve<'_> {
                 self.params.max_iters
             };
             let rel = self.params.rel_tolerance * INNER_REL_TIGHTENING;
-            let (y, it) = self.joint.minimise(energy, &x, iters, rel, self.abs)?;
+            let (y, it) = self
+                .joint
+                .minimise(energy, &x, iters, rel, self.abs, &self.budget)?;
             self.iterations += it;
             x = y;
             self.joint.update_multipliers(&x);
@@ -182,6 +188,10 @@ impl EnergySolve for GroupSolve<'_> {
             })?;
         Ok((y, self.iterations - before))
     }
+
+    fn stopped(&self) -> bool {
+        self.budget.spent()
+    }
 }
 
 /// Flattens the pieces of one group together.
@@ -197,14 +207,15 @@ fn flatten_group(
         max_compress_pct: None,
         ..params.clone()
     };
+    let started = Instant::now();
     let mut offset = vec![usize::MAX; meshes.len()];
     let mut x: Vec<DVec2> = Vec::new();
     let mut rest: Vec<RestTri> = Vec::new();
-    let mut start_iters = 0;
+    let mut own: Vec<FlattenInfo> = Vec::new();
     for &p in group {
         let f = crate::flatten(meshes[p], &free)
             .map_err(|source| AssemblyError::Piece { piece: p, source })?;
-        start_iters += f.info.iterations;
+        own.push(f.info);
         let r = rest_frames(meshes[p]).map_err(|t| AssemblyError::Piece {
             piece: p,
             source: FlattenError::Internal(format!(
@@ -231,7 +242,8 @@ fn flatten_group(
         joint,
         params,
         abs: ABS_DECREMENT_PER_AREA * area,
-        iterations: start_iters,
+        iterations: 0,
+        budget: params.budget("seams", started),
     };
     solve.joint.weight = INITIAL_WEIGHT;
     let fail = |reason: String| AssemblyError::Piece {
@@ -242,25 +254,40 @@ fn flatten_group(
         },
     };
     let mut x = solve.run(&SymDirichlet, x).map_err(fail)?;
+    let mut group_stages = vec![solve.budget.count()];
+    let mut timed_out = solve.budget.expired();
     let limits = Limits::of(params).map_err(|source| AssemblyError::Piece {
         piece: group[0],
         source,
     })?;
     if let Some(l) = limits {
+        solve.budget = solve
+            .budget
+            .next_capped("limits", params.stage_iters, params.time_limit);
         let r =
             limits::enforce(&mut solve, &rest, x, l).map_err(|source| AssemblyError::Piece {
                 piece: group[0],
                 source,
             })?;
         x = r.x;
+        group_stages.push(solve.budget.count());
+        timed_out |= solve.budget.expired();
+    }
+    if params.hooks.cancelled() {
+        return Err(AssemblyError::Piece {
+            piece: group[0],
+            source: FlattenError::Cancelled {
+                method: Method::Isometric,
+            },
+        });
     }
     let mismatch = solve.joint.max_mismatch(&x);
     let mut out = Vec::with_capacity(group.len());
-    for &p in group {
+    for (&p, own) in group.iter().zip(own) {
         let n = meshes[p].positions.len();
         let uv = x[offset[p]..offset[p] + n].to_vec();
-        let own = rest_frames(meshes[p]).unwrap_or_default();
-        let mut warnings = Vec::new();
+        let frames = rest_frames(meshes[p]).unwrap_or_default();
+        let mut warnings = own.warnings;
         if let Some(l) = limits {
             warnings.extend(limits::violations(meshes[p], &uv, l));
         }
@@ -269,11 +296,19 @@ fn flatten_group(
                 "mating seams of this piece's group agree only to {mismatch:.2e} of an edge's length"
             ));
         }
+        if timed_out {
+            warnings.push(
+                "the joint solve of this piece's group stopped at the time limit: the map is flip-free but not fully converged".into(),
+            );
+        }
+        let stages: Vec<StageCount> = own.stages.into_iter().chain(group_stages.clone()).collect();
         out.push(Flattening {
             info: FlattenInfo {
-                iterations: solve.iterations,
-                final_energy: mean_density(&own, &uv, &SymDirichlet),
+                iterations: stages.iter().map(|s| s.iterations).sum(),
+                final_energy: mean_density(&frames, &uv, &SymDirichlet),
                 warnings,
+                stages,
+                timings: own.timings,
             },
             uv,
         });

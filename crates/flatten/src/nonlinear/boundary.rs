@@ -159,13 +159,20 @@ pub fn boundary_isometric(
     params: &FlattenParams,
     budget: &Budget,
 ) -> Result<Flattening, FlattenError> {
+    let started = std::time::Instant::now();
     if let Some(outline) = step_one_outline(mesh, topo) {
+        let start = started.elapsed();
         let rest = super::rest_frames(mesh)?;
-        return held_outline(mesh, topo, &rest, outline, params, budget);
+        let mut out = held_outline(mesh, topo, &rest, outline, params, budget)?;
+        out.info.timings.start += start;
+        return Ok(out);
     }
     let x0 = super::init::lscm_or_tutte(mesh, topo)?;
+    let start = started.elapsed();
     let rest = super::rest_frames(mesh)?;
-    free_outline(mesh, topo, &rest, x0, params, budget)
+    let mut out = free_outline(mesh, topo, &rest, x0, params, budget)?;
+    out.info.timings.start += start;
+    Ok(out)
 }
 
 /// Step 1's map, closed with every boundary edge at its 3D length, where the rim is too long
@@ -217,10 +224,7 @@ fn held_outline(
         })?
         .with_fixed(&boundary_mask(n, topo));
     let abs = ABS_DECREMENT_PER_AREA * total_area(rest);
-    let budget = Budget {
-        stage: "interior of the kept outline",
-        ..budget.clone()
-    };
+    let budget = budget.labelled("interior of the kept outline");
     let (r, _) = run(
         problem,
         &x,
@@ -248,6 +252,8 @@ fn held_outline(
             iterations: r.iterations,
             final_energy: mean_density(rest, &r.x, &energy),
             warnings,
+            stages: vec![budget.count()],
+            timings: r.timings,
         },
         uv: r.x,
     })
@@ -276,7 +282,9 @@ fn free_outline(
 ) -> Result<Flattening, FlattenError> {
     let n = mesh.positions.len();
     let method = Method::BoundaryIsometric;
-    let iso = isometric_run(rest, n, x0, params, method, budget)?;
+    let start = budget.next("isometric start", params.time_limit);
+    let iso = isometric_run(rest, n, x0, params, method, &start)?;
+    let mut timings = iso.timings;
     let mut early = iso.early;
     let mut iterations = iso.iterations;
     let mut x = iso.x;
@@ -303,12 +311,9 @@ fn free_outline(
     // The closest non-degenerate map so far: (largest relative boundary error, map).
     let mut best = (viol, x.clone());
     let mut stop = None;
-    let budget = Budget {
-        stage: "boundary lengths",
-        ..budget.clone()
-    };
+    let lengths = budget.next("boundary lengths", params.time_limit);
     for _ in 0..MAX_OUTER {
-        if viol <= BOUNDARY_REL_TOLERANCE || early.is_some() {
+        if viol <= BOUNDARY_REL_TOLERANCE || early.is_some() || lengths.spent() {
             break;
         }
         let Some(mut pb) = problem.take() else { break };
@@ -325,9 +330,11 @@ fn free_outline(
         if let Some(t) = pb.edges.as_mut() {
             t.hold = (!far).then_some(BOUNDARY_REL_TOLERANCE);
         }
-        let (r, mut p) = run(pb, &x, iters, params.rel_tolerance, abs, &budget)
+        let iters = lengths.allow(iters);
+        let (r, mut p) = run(pb, &x, iters, params.rel_tolerance, abs, &lengths)
             .map_err(|reason| FlattenError::NoConvergence { method, reason })?;
         iterations += r.iterations;
+        timings.add(&r.timings);
         early = r.early;
         if early == Some(EarlyStop::Cancelled) {
             return Err(FlattenError::Cancelled { method });
@@ -393,6 +400,8 @@ fn free_outline(
             iterations,
             final_energy: mean_density(rest, &x, &energy),
             warnings,
+            stages: vec![start.count(), lengths.count()],
+            timings,
         },
         uv: x,
     })

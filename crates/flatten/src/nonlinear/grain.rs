@@ -19,7 +19,6 @@ use flatcut_mesh::TriMesh;
 use flatcut_mesh::grain_strain::{
     GrainStrain, grain_strain_of, pattern_direction_near, warp_in_frame,
 };
-use rayon::prelude::*;
 
 use super::kernel::RestTri;
 use super::newton::{Budget, EarlyStop};
@@ -53,19 +52,23 @@ pub(crate) fn orthotropic(
         .validate()
         .map_err(FlattenError::Anisotropy)?;
     let n = mesh.positions.len();
-    let iso = isometric_run(rest, n, x0, params, Method::Orthotropic, budget)?;
+    let start_stage = budget.next("isometric start", params.time_limit);
+    let iso = isometric_run(rest, n, x0, params, Method::Orthotropic, &start_stage)?;
     let mut iterations = iso.iterations;
     let mut early = iso.early;
     let start = iso.x;
-    let solve = |from: &[DVec2], u: DVec2, passes: usize| -> Result<Solved, FlattenError> {
-        solve_with_grain(rest, n, &aniso, from, u, passes, params, budget)
+    // The grain's search and the solves along the chosen grain: one stage.
+    let stage = budget.next("orthotropic", params.time_limit);
+    let solve = |from: &[DVec2], u: DVec2, passes: usize, b: &Budget| {
+        solve_with_grain(rest, n, &aniso, from, u, passes, params, b)
     };
     let best = match aniso.grain {
-        Grain::Angle(a) => solve(&start, grain_dir(a), FRAME_PASSES)?,
+        Grain::Angle(a) => solve(&start, grain_dir(a), FRAME_PASSES, &stage)?,
         Grain::Line(l) => solve(
             &start,
             grain_dir(line_angle(mesh, &start, l)?),
             FRAME_PASSES,
+            &stage,
         )?,
         Grain::Auto => {
             let score = |s: &Solved| match &aniso.limits {
@@ -73,8 +76,11 @@ pub(crate) fn orthotropic(
                 None => s.energy,
             };
             // Angles are compared after one pass; the chosen one gets the others from its map.
-            let first = search_angle(|a| solve(&start, grain_dir(a), 1).map(|s| (score(&s), s)))?.1;
-            let rest_passes = solve(&first.x, first.warp, FRAME_PASSES - 1)?;
+            let first = search_angle(&stage, |a, b| {
+                solve(&start, grain_dir(a), 1, b).map(|s| (score(&s), s))
+            })?
+            .1;
+            let rest_passes = solve(&first.x, first.warp, FRAME_PASSES - 1, &stage)?;
             iterations += first.iterations;
             early = early.or(first.early);
             rest_passes
@@ -90,9 +96,11 @@ pub(crate) fn orthotropic(
     }
     Ok(Flattening {
         info: FlattenInfo {
-            iterations,
+            iterations: start_stage.used() + stage.used(),
             final_energy: best.energy / super::total_area(rest),
             warnings,
+            stages: vec![start_stage.count(), stage.count()],
+            ..Default::default()
         },
         uv: x,
     })
@@ -213,17 +221,16 @@ pub fn limit_excess(rest: &[RestTri], x: &[DVec2], u: DVec2, l: &DirectionalLimi
 /// Minimises `f` over angles in [0, π): [`AUTO_SAMPLES`] samples, then golden-section search in
 /// the bracket around the best sample. Returns the best angle's score and value. The samples,
 /// and the bracket's first two points, are independent solves: they run side by side (the
-/// 20k-face hemisphere in woven cotton: 71.9 s instead of 89.8 s on two cores), and are
-/// compared in the order of the sequential search, so the answer is the same.
+/// 20k-face hemisphere in woven cotton: 71.9 s instead of 89.8 s on two cores), each on
+/// `budget` as if one after the other ([`Budget::map_in_order`]), and are compared in the order
+/// of the sequential search, so the answer is the same.
 pub fn search_angle<T: Send, E: Send>(
-    f: impl Fn(f64) -> Result<(f64, T), E> + Sync,
+    budget: &Budget,
+    f: impl Fn(f64, &Budget) -> Result<(f64, T), E> + Sync,
 ) -> Result<(f64, T), E> {
     let step = std::f64::consts::PI / AUTO_SAMPLES as f64;
-    // The samples are independent solves: they run side by side, and are compared in order.
-    let samples: Vec<Result<(f64, T), E>> = (0..AUTO_SAMPLES)
-        .into_par_iter()
-        .map(|i| f(i as f64 * step))
-        .collect();
+    let angles: Vec<f64> = (0..AUTO_SAMPLES).map(|i| i as f64 * step).collect();
+    let samples: Vec<Result<(f64, T), E>> = budget.map_in_order(&angles, |&a, b| f(a, b));
     let mut best: Option<(f64, f64, T)> = None;
     for (i, r) in samples.into_iter().enumerate() {
         let (s, v) = r?;
@@ -239,7 +246,10 @@ pub fn search_angle<T: Send, E: Send>(
     let (mut lo, mut hi) = (a0 - step, a0 + step);
     let mut c = hi - inv_phi * (hi - lo);
     let mut d = lo + inv_phi * (hi - lo);
-    let (rc, rd) = rayon::join(|| f(c), || f(d));
+    let mut pair = budget.map_in_order(&[c, d], |&a, b| f(a, b)).into_iter();
+    let (Some(rc), Some(rd)) = (pair.next(), pair.next()) else {
+        unreachable!("two angles give two results")
+    };
     let ((mut fc, vc), (mut fd, vd)) = (rc?, rd?);
     for (a, s, v) in [(c, fc, vc), (d, fd, vd)] {
         if s < best.1 {
@@ -260,7 +270,7 @@ pub fn search_angle<T: Send, E: Send>(
             d = lo + inv_phi * (hi - lo);
             d
         };
-        let (s, v) = f(next)?;
+        let (s, v) = f(next, budget)?;
         if next == c {
             fc = s;
         } else {

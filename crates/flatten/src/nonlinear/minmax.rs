@@ -418,13 +418,10 @@ pub fn minmax(
     // Two flip-free candidates; the descent starts from the one with the lower δ0, so the result
     // is never worse than the isometric map (which wins on nearly developable surfaces, where the
     // log map's harmonic angle is only approximate).
+    let start_stage = budget.next("min-max start", params.time_limit);
     let iso = {
         let p = FlattenParams::new(Method::Isometric).with_max_iters(params.max_iters);
-        let b = Budget {
-            stage: "min-max start",
-            ..budget.clone()
-        };
-        super::isometric(mesh, rest, x0, &p, &b)
+        super::isometric(mesh, rest, x0, &p, &start_stage)
             .map_err(|e| match e {
                 FlattenError::Cancelled { .. } => FlattenError::Cancelled {
                     method: Method::Minmax,
@@ -456,13 +453,13 @@ pub fn minmax(
         up: Vec::new(),
         down: Vec::new(),
     };
-    // `max_iters` caps the L-BFGS iterations of all stages together: each stage may use its
-    // share of what the earlier ones left.
+    // The descent is one stage of the flattening: `max_iters` caps the L-BFGS iterations of all
+    // its sharpness steps together, each taking its share of what the earlier ones left.
+    let descent = budget.next("minmax", params.time_limit);
     let mut iterations = 0;
     let mut early = None;
     for (k, p) in SHARPNESS.into_iter().enumerate() {
-        let left = params.max_iters - iterations;
-        let share = left.div_ceil(SHARPNESS.len() - k);
+        let share = descent.left().div_ceil(SHARPNESS.len() - k);
         if share == 0 || early.is_some() {
             break;
         }
@@ -471,10 +468,11 @@ pub fn minmax(
             &mut sur,
             &mut x,
             &mut best,
-            share,
-            budget,
-            (iterations, params.max_iters),
+            descent.allow(share),
+            &descent,
+            (iterations, descent.cap()),
         );
+        descent.spend(it);
         iterations += it;
         early = stop;
         // Continue each stage from the best map so far: a sharper surrogate only refines it.
@@ -504,9 +502,11 @@ pub fn minmax(
     }
     Ok(Flattening {
         info: FlattenInfo {
-            iterations,
+            iterations: start_stage.used() + iterations,
             final_energy: m.delta0,
             warnings,
+            stages: vec![start_stage.count(), descent.count()],
+            ..Default::default()
         },
         uv,
     })

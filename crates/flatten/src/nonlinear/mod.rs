@@ -37,12 +37,9 @@ pub fn solve(
     params: &FlattenParams,
 ) -> Result<Flattening, FlattenError> {
     let started = Instant::now();
-    let budget = Budget {
-        hooks: params.hooks.clone(),
-        deadline: params.time_limit.and_then(|t| started.checked_add(t)),
-        started,
-        stage: params.method.name(),
-    };
+    // The method's own stage (its start map included); the methods of several stages make
+    // their budgets from it ([`Budget::next`]).
+    let budget = params.budget(params.method.name(), started);
     let mut out = match params.method {
         // f1 decides on its own start (see its module).
         Method::BoundaryIsometric => boundary::boundary_isometric(mesh, topo, params, &budget)?,
@@ -53,8 +50,9 @@ pub fn solve(
                 Method::Conformal => init::tutte(mesh, topo)?,
                 _ => init::lscm_or_tutte(mesh, topo)?,
             };
+            let start = started.elapsed();
             let rest = rest_frames(mesh)?;
-            match method {
+            let mut out = match method {
                 Method::Isometric => isometric(mesh, &rest, x0, params, &budget)?,
                 Method::Conformal => conformal(mesh, &rest, x0, params, &budget)?,
                 Method::Minmax => minmax::minmax(mesh, topo, &rest, x0, params, &budget)?,
@@ -64,7 +62,9 @@ pub fn solve(
                         "method {m} is not a nonlinear method"
                     )));
                 }
-            }
+            };
+            out.info.timings.start += start;
+            out
         }
     };
     check_flip_free(mesh, &out.uv, params.method)?;
@@ -134,19 +134,25 @@ pub(crate) fn isometric(
         iterations: run.iterations,
         final_energy: run.energy / total_area(rest),
         warnings: Vec::new(),
+        stages: vec![budget.count()],
+        timings: run.timings,
     };
     let mut early = run.early;
     let mut x = run.x;
     if let Some(limits) = Limits::of(params)? {
+        let stage = budget.next_capped("limits", params.stage_iters, params.time_limit);
         let mut one = OnePiece {
             rest,
             n,
             params,
-            budget,
+            budget: &stage,
             early: None,
+            timings: crate::Timings::default(),
         };
         let r = crate::limits::enforce(&mut one, rest, x, limits)?;
         info.iterations += r.iterations;
+        info.stages.push(stage.count());
+        info.timings.add(&one.timings);
         early = early.or(one.early);
         x = r.x;
         info.final_energy = mean_density(rest, &x, &SymDirichlet);
@@ -205,6 +211,8 @@ fn conformal(
             iterations: run.iterations,
             final_energy: mean_density(rest, &x, &Mips),
             warnings,
+            stages: vec![budget.count()],
+            timings: run.timings,
         },
         uv: x,
     })

@@ -16,7 +16,7 @@ use argmin::core::{
     Error as ArgminError, Executor, IterState, KV, Problem, Solver, State, TerminationReason,
     TerminationStatus, observers::Observe, observers::ObserverMode,
 };
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use flatcut_geom::DVec2;
 use rayon::prelude::*;
@@ -26,8 +26,10 @@ use super::kernel::{
     tri_eval_projected,
 };
 use super::spd::SpdSystem;
+use crate::FlattenProgress;
+pub use crate::budget::Budget;
 use crate::sparse::Slots;
-use crate::{FlattenHooks, FlattenProgress};
+use crate::timings::Timings;
 
 /// Fraction of the distance to the first inversion taken as the largest trial step
 /// (SLIM uses 0.8; closer than that, the barrier makes the energy explode anyway).
@@ -56,6 +58,9 @@ const RAW_BELOW: f64 = 1e-3;
 /// the hard bench patches 0.1 saved one or two steps each and cost none; 0.3 cost three on the
 /// mannequin).
 const CHORD_FAST: f64 = 0.1;
+/// Most chord steps after one Newton step (each is a gradient, two triangular solves and a line
+/// search: on the million-face toe four of them cost a fifth of the Newton step they save).
+const MAX_CHORDS: usize = 4;
 
 /// Relative rise of a total energy that is within its round-off (a sum of up to millions of
 /// terms in double precision).
@@ -191,6 +196,8 @@ pub struct MapProblem<'a, E> {
     guards: Vec<[usize; 3]>,
     /// Σ A_t, to report mean densities.
     pub total_area: f64,
+    /// Time spent assembling gradients and Hessians.
+    assembly_time: Duration,
 }
 
 /// Vertices a problem holds in place: their dofs, the slots of their diagonal entries, and the
@@ -393,6 +400,7 @@ impl<'a, E> MapProblem<'a, E> {
             fixed: None,
             guards: Vec::new(),
             total_area,
+            assembly_time: Duration::ZERO,
         })
     }
 
@@ -431,6 +439,7 @@ impl<'a, E> MapProblem<'a, E> {
             fixed: self.fixed,
             guards: self.guards,
             total_area: self.total_area,
+            assembly_time: self.assembly_time,
         }
     }
 
@@ -486,6 +495,23 @@ impl<'a, E: TriEnergy> MapProblem<'a, E> {
     /// With `proj` `None` only the energy and gradient are formed: the system, and the
     /// factorisation of the last Hessian, are left as they are.
     fn assemble(&mut self, x: &[DVec2], proj: Option<Projection>) -> (f64, Vec<f64>) {
+        let started = Instant::now();
+        let out = self.assemble_untimed(x, proj);
+        self.assembly_time += started.elapsed();
+        out
+    }
+
+    /// Where this problem's time went: its assemblies and its system's analysis, factorisations
+    /// and solves.
+    pub fn timings(&self) -> Timings {
+        Timings {
+            assembly: self.assembly_time,
+            ..self.sys.timings()
+        }
+    }
+
+    /// [`MapProblem::assemble`], untimed.
+    fn assemble_untimed(&mut self, x: &[DVec2], proj: Option<Projection>) -> (f64, Vec<f64>) {
         let mut g = vec![0.0; 2 * self.n];
         let hessian = proj.is_some();
         if hessian {
@@ -657,36 +683,6 @@ pub fn to_flat(x: &[DVec2]) -> Vec<f64> {
     x.iter().flat_map(|p| [p.x, p.y]).collect()
 }
 
-/// When a Newton run stops early at the caller's request.
-#[derive(Clone, Debug)]
-pub struct Budget {
-    /// Progress callback and cancel flag.
-    pub hooks: FlattenHooks,
-    /// Stop after this instant (the best iterate so far is the result).
-    pub deadline: Option<Instant>,
-    /// When the whole flattening started (for the progress reports).
-    pub started: Instant,
-    /// Name of the stage in the progress reports.
-    pub stage: &'static str,
-}
-
-impl Budget {
-    /// No callback, no cancel flag, no deadline.
-    pub fn none(stage: &'static str) -> Self {
-        Self {
-            hooks: FlattenHooks::default(),
-            deadline: None,
-            started: Instant::now(),
-            stage,
-        }
-    }
-
-    /// True when the deadline has passed.
-    pub fn expired(&self) -> bool {
-        self.deadline.is_some_and(|d| Instant::now() >= d)
-    }
-}
-
 /// Why a Newton run stopped before convergence, if it did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EarlyStop {
@@ -717,6 +713,8 @@ pub struct ProjectedNewton {
     /// False while held edge lengths ([`EdgeTerms::hold`]) are off by more than asked and the
     /// last step brought them closer: the solve may not stop on a small decrease then.
     settled_lengths: bool,
+    /// Time spent in line searches.
+    line_search_time: Duration,
 }
 
 impl ProjectedNewton {
@@ -733,6 +731,7 @@ impl ProjectedNewton {
             max_iters,
             early: None,
             settled_lengths: true,
+            line_search_time: Duration::ZERO,
         }
     }
 
@@ -824,10 +823,12 @@ impl<E: TriEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
             gd = -g.iter().map(|v| v * v).sum::<f64>();
         }
         let d = to_points(&dir);
+        let searching = Instant::now();
         let tmax = p.max_step(&x, &d);
         let found = line_search(p, &x, &d, e0, gd, tmax)
             .filter(|f| f.2 < e0)
             .or_else(|| self.round_off_step(p, &x, &d, e0, tmax));
+        self.line_search_time += searching.elapsed();
         self.last_decrement = -0.5 * gd;
         let Some((t, mut xn, mut en)) = found else {
             self.stalled = true;
@@ -860,11 +861,22 @@ impl<E: TriEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
         // factorisation.
         if t == 1.0 && self.last_decrease < RAW_BELOW * en.abs() {
             let tolerance = self.abs_tolerance.max(self.rel_tolerance * en.abs());
-            let take = tolerance.max(CHORD_FAST * self.last_decrease);
-            if let Some(c) = chord_step(p, &xn, en, take) {
+            // While the chord steps keep converging fast (each gaining at most CHORD_FAST of
+            // the step before), the next one too reuses the factorisation: a few of them cost
+            // less than one more Newton step's assembly and factorisation.
+            let mut gained = self.last_decrease;
+            for _ in 0..MAX_CHORDS {
+                let take = tolerance.max(CHORD_FAST * gained);
+                let Some(c) = chord_step(p, &xn, en, take, &mut self.line_search_time) else {
+                    break;
+                };
+                gained = en - c.energy;
                 (xn, en) = (c.x, c.energy);
                 self.last_decrease = e0 - en;
                 self.converged = c.decrement <= tolerance;
+                if self.converged || gained <= 0.0 {
+                    break;
+                }
             }
         }
         if let (Some(e), Some(before)) = (&p.edges, held_before) {
@@ -962,6 +974,7 @@ fn chord_step<E: TriEnergy>(
     x: &[DVec2],
     e: f64,
     take: f64,
+    line_search_time: &mut Duration,
 ) -> Option<Chord> {
     let (_, g) = p.assemble(x, None);
     let mut dir: Vec<f64> = g.iter().map(|v| -v).collect();
@@ -972,11 +985,13 @@ fn chord_step<E: TriEnergy>(
         return None;
     }
     let d = to_points(&dir);
+    let searching = Instant::now();
     let tmax = p.max_step(x, &d);
     let (x, energy) = match line_search(p, x, &d, e, gd, tmax) {
         Some((_, xc, ec)) if ec < e => (xc, ec),
         _ => (x.to_vec(), e),
     };
+    *line_search_time += searching.elapsed();
     Some(Chord {
         x,
         energy,
@@ -1055,9 +1070,12 @@ pub struct NewtonRun {
     pub iterations: usize,
     /// Set when the run stopped at the caller's request rather than by convergence.
     pub early: Option<EarlyStop>,
+    /// Where the run's time went (with the problem's analysis when the run was its first).
+    pub timings: Timings,
 }
 
-/// Runs projected Newton from the flip-free map `x0`.
+/// Runs projected Newton from the flip-free map `x0`, for at most `max_iters` iterations and
+/// what the stage's `budget` has left.
 pub fn run<'a, E: TriEnergy>(
     problem: MapProblem<'a, E>,
     x0: &[DVec2],
@@ -1086,6 +1104,12 @@ pub fn run_flat<'a, E: TriEnergy>(
     abs_tolerance: f64,
     budget: &Budget,
 ) -> Result<(NewtonRun, MapProblem<'a, E>), String> {
+    let max_iters = budget.allow(max_iters);
+    let mut before = problem.timings();
+    if before.factorisations == 0 {
+        // The problem's first run: its analysis is this run's.
+        before.ordering = Duration::ZERO;
+    }
     let solver = ProjectedNewton::new(rel_tolerance, abs_tolerance, budget.clone(), max_iters);
     let res = Executor::new(problem, solver)
         .configure(|s| s.param(x0).max_iters(max_iters as u64))
@@ -1094,8 +1118,10 @@ pub fn run_flat<'a, E: TriEnergy>(
         .run()
         .map_err(|e| e.to_string())?;
     let early = res.solver.early;
+    let line_search = res.solver.line_search_time;
     let state = res.state();
     let iterations = state.get_iter() as usize;
+    budget.spend(iterations);
     let energy = state.get_cost();
     let x = state
         .get_param()
@@ -1106,12 +1132,17 @@ pub fn run_flat<'a, E: TriEnergy>(
         .problem
         .take_problem()
         .ok_or_else(|| "problem lost".to_string())?;
+    let timings = Timings {
+        line_search,
+        ..problem.timings().since(&before)
+    };
     Ok((
         NewtonRun {
             x,
             energy,
             iterations,
             early,
+            timings,
         },
         problem,
     ))

@@ -202,6 +202,11 @@ impl SpdSystem {
         None
     }
 
+    /// Where this system's time went (analysis, factorisations, solves).
+    pub fn timings(&self) -> crate::Timings {
+        self.solver.timings()
+    }
+
     /// Solves A x = b in place with the factorisation of the last successful
     /// [`Self::factor_solve`]; an error once the values have been changed since.
     pub fn solve_factored(&self, b: &mut [f64]) -> Result<(), String> {
