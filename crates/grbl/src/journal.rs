@@ -84,6 +84,15 @@ pub enum JournalError {
     },
 }
 
+/// How the lines of the job a journal was written for map onto the same file after an edit
+/// (see `job_edit`).
+pub trait LineMap {
+    /// Where the journal's line `old` is in the edited job; `None` for a line the edit changed.
+    fn map(&self, old: usize) -> Option<usize>;
+    /// What changed, for the journal's note.
+    fn summary(&self) -> String;
+}
+
 /// What a journal says about a job.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JournalState {
@@ -208,7 +217,7 @@ impl Journal {
         path: impl AsRef<Path>,
         job: &Job,
         st: &JournalState,
-        changes: &crate::job_edit::JobChanges,
+        changes: &dyn LineMap,
     ) -> Result<(Journal, JournalState), JournalError> {
         let path = path.as_ref();
         let m = |i: usize| changes.map(i);
@@ -227,7 +236,12 @@ impl Journal {
         for n in &st.notes {
             t.push_str(&format!("N {n}\n"));
         }
-        let done = changes.map_done(&st.done);
+        let mut done = vec![false; job.len()];
+        for i in (0..st.done.len()).filter(|&i| st.done[i]) {
+            if let Some(k) = m(i).filter(|&k| k < done.len()) {
+                done[k] = true;
+            }
+        }
         for (i, _) in done.iter().enumerate().filter(|(_, d)| **d) {
             t.push_str(&format!("A {i}\n"));
         }
@@ -249,7 +263,7 @@ impl Journal {
         {
             t.push_str(&format!("Q {a} {b}\n"));
         }
-        let summary = changes.to_string().replace('\n', " / ");
+        let summary = changes.summary().replace('\n', " / ");
         t.push_str(&format!(
             "N job edited after this journal was written: {summary}\n"
         ));

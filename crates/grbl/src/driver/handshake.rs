@@ -29,13 +29,14 @@ pub(super) fn connect<T: Transport + ?Sized>(
     sess: &mut Session<'_, T>,
     opts: &SendOptions,
 ) -> Result<Link, SendError> {
-    let restarted = !opts.reset_on_connect
+    let banner = !opts.reset_on_connect
         && sess
             .wait_banner(opts.banner_timeout)
             .map_err(|e| transport(e, None))?;
+    let restarted = banner || opts.controller_restarted;
     // The frame a reset would clear; none to read when the controller just restarted.
     let mut before = None;
-    if !restarted {
+    if !banner {
         if !opts.reset_on_connect {
             // A controller that kept running while the host was away may still be draining its
             // planner: a reset now would stop it mid-move (ALARM:3, position lost).
@@ -43,7 +44,7 @@ pub(super) fn connect<T: Transport + ?Sized>(
         }
         sess.clear_line().map_err(|e| transport(e, None))?;
         before = Some(frame::read(sess, opts)?);
-        sess.s.realtime(0x18);
+        sess.soft_reset();
         if !sess
             .wait_banner(opts.banner_timeout)
             .map_err(|e| transport(e, None))?

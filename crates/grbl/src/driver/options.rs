@@ -60,6 +60,10 @@ pub struct SendOptions {
     /// With `resume`: resume a job file edited after its journal was written (the change is
     /// shown in the report); otherwise only the operator's "yes" allows it.
     pub accept_changed_job: bool,
+    /// The caller saw the controller restart on this link before the job (a banner it did not
+    /// ask for, as a [`super::Console`] notices): its position counts as lost, as when the
+    /// banner comes during the job's own handshake.
+    pub controller_restarted: bool,
 }
 
 /// What to do when the job pauses itself with `M0` (GRBL 1.1h ignores `M1`, and `M2`/`M30` end
@@ -245,6 +249,7 @@ impl Default for SendOptions {
             position_tolerance: Some(SendOptions::DEFAULT_POSITION_TOLERANCE),
             operator: None,
             accept_changed_job: false,
+            controller_restarted: false,
         }
     }
 }

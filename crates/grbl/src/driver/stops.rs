@@ -2,8 +2,9 @@
 //! operator's abort. Each locates the machine on the path, journals why, and returns the error.
 
 use super::error::SendError;
+use super::error::line_ref;
 use super::session::{Session, transport};
-use super::tracker::{Tracker, line_ref};
+use super::tracker::Tracker;
 use super::watch::Deviation;
 use super::{ABORT_CYCLE_ALARM, READ_SLICE, SendOptions};
 use crate::codes::{alarm_is_critical, alarm_meaning};
@@ -97,7 +98,7 @@ pub(super) fn on_alarm<T: Transport + ?Sized>(
     if alarm_is_critical(code) {
         // GRBL blocks everything until reset; position is reported after it.
         sess.s.forget_in_flight();
-        sess.s.realtime(0x18);
+        sess.soft_reset();
         let _ = sess.wait_banner(opts.banner_timeout);
     }
     if code == ABORT_CYCLE_ALARM {
@@ -278,7 +279,7 @@ fn reset_held<T: Transport + ?Sized>(
     journal: &mut Option<Journal>,
 ) -> Result<(), SendError> {
     sess.s.forget_in_flight();
-    sess.s.realtime(0x18);
+    sess.soft_reset();
     let _ = sess.wait_banner(Duration::from_secs(3));
     if let Some(j) = journal.as_mut() {
         j.note("stopped: feed hold, soft reset");

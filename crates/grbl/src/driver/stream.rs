@@ -4,13 +4,15 @@
 //! finish, which checks that the machine ended where the job ends.
 
 use super::check::job_uses_unknown_moves;
+use super::error::line_ref;
 use super::error::{LineError, SendError};
+use super::geometry::{add, dist};
 use super::progress::{Phase, Progress, eta};
 use super::session::{Session, stop_noted, transport};
 use super::stops::{
     abort, on_alarm, on_reset, stop_off_path, stop_unexpected, stop_with_reset, with_tool_off,
 };
-use super::tracker::{Tracker, add, dist, line_ref};
+use super::tracker::Tracker;
 use super::watch::{off_path, state_on_path};
 use super::{
     CancelToken, JOURNAL_FSYNC_INTERVAL, POSITION_TOL_MM, PausePolicy, READ_SLICE, SendOptions,

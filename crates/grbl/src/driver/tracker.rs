@@ -1,22 +1,14 @@
 //! Which job lines are acknowledged and which are known executed in this run (an `ok` only means
-//! "queued"), and the geometry helpers that place the machine on the job's path.
+//! "queued").
 
 use super::SEGMENT_BUFFER;
-use super::error::LineRef;
-use super::resume::{places_on_path, position_tolerance};
+use super::error::{LineRef, line_ref};
+use super::places::{places_on_path, position_tolerance};
 use super::session::Session;
 use crate::job::Job;
 use crate::journal::Journal;
 use crate::transport::Transport;
 use std::collections::VecDeque;
-
-pub(super) fn line_ref(job: &Job, i: usize) -> LineRef {
-    LineRef {
-        index: i,
-        source_line: job.lines[i].source_line,
-        text: job.lines[i].text.clone(),
-    }
-}
 
 /// Bookkeeping of which job lines are acknowledged / known executed in this run.
 pub(super) struct Tracker {
@@ -211,29 +203,4 @@ fn min_motion(settings: &std::collections::BTreeMap<u16, f64>) -> f64 {
         .map(|v| 1.0 / v)
         .fold(0.0, f64::max);
     3f64.sqrt() * coarsest_step
-}
-
-pub(super) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-pub(super) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
-
-pub(super) fn seg_dist(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
-    dist(p, nearest_on_segment(p, a, b))
-}
-
-/// The point of segment `a`–`b` nearest to `p`.
-pub(super) fn nearest_on_segment(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-    let ap = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
-    let l2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
-    let t = if l2 > 0.0 {
-        ((ap[0] * ab[0] + ap[1] * ab[1] + ap[2] * ab[2]) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    [a[0] + ab[0] * t, a[1] + ab[1] * t, a[2] + ab[2] * t]
 }
