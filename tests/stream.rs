@@ -538,6 +538,8 @@ fn sigterm_child_process() {
     let Some(dir) = std::env::var_os(SIGTERM_CHILD_ENV) else {
         return;
     };
+    // As the binary does at start: the signal comes to the send, not to the default action.
+    flatcut_cli::install_signal_handler().unwrap();
     let dir = PathBuf::from(dir);
     let job = dir.join("job.gcode");
     std::fs::write(&job, pattern_job(6)).unwrap();
@@ -874,6 +876,7 @@ fn resume_at_a_terminal_child() {
     let Some(dir) = std::env::var_os(TERMINAL_CHILD_ENV) else {
         return;
     };
+    flatcut_cli::install_signal_handler().unwrap();
     let dir = PathBuf::from(dir);
     let a = StreamArgs::default()
         .with_sim_instant(true)

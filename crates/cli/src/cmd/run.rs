@@ -126,11 +126,7 @@ fn send_stage(
     };
     started(
         log,
-        &format!(
-            "{} job(s) to {}",
-            to_send,
-            device::select::describe(&a.stream)
-        ),
+        &format!("{} job(s) to {}", to_send, a.stream.describe()),
     );
     let mut lines = Vec::new();
     for job in jobs.iter().take(to_send) {
@@ -143,7 +139,15 @@ fn send_stage(
                 .get_or_insert_with(|| out.join(format!("sim-{n}.jsonl")));
             sa.sim_laser = outputs.profile.kind == flatcut::gcode::ToolKind::Laser;
         }
-        let o = device::stream_file(&out.join(&job.gcode_file), &sa)?;
+        // The job streams from memory; it is named after its file (`<file>.journal`).
+        let path = out.join(&job.gcode_file);
+        let text = outputs
+            .files
+            .iter()
+            .find(|f| f.name == job.gcode_file)
+            .map(|f| String::from_utf8_lossy(&f.bytes))
+            .with_context(|| format!("the run wrote no {}", job.gcode_file))?;
+        let o = device::stream_text(&text, &path.display().to_string(), &sa)?;
         let dev = match &o.sim_trace {
             Some(trace) => {
                 let cut = cut_segments(trace);
@@ -177,7 +181,7 @@ fn send_stage(
 }
 
 /// The simulator's tool-on cutting motions, in machine mm.
-fn cut_segments(trace: &[flatcut_firmware_sim::TraceSegment]) -> Vec<CutSegment> {
+fn cut_segments(trace: &[flatcut_device::sim::TraceSegment]) -> Vec<CutSegment> {
     trace
         .iter()
         .filter(|s| s.tool_on && s.motion != "G0")

@@ -1,9 +1,9 @@
 //! What a stopped send tells the operator: the sender's error, and what to do next.
 
-use flatcut_grbl::SendError;
+use flatcut_device::grbl::SendError;
 use std::path::Path;
 
-use super::StreamArgs;
+use super::args::StreamArgs;
 
 /// A send that stopped: the sender's error, and what to do next. Its message is the whole story
 /// (the sender's message names the line, the code's meaning and the last line executed), so it
@@ -124,7 +124,7 @@ pub(super) fn explain(
             );
         }
         if let SendError::Alarm { code, .. } = &e
-            && flatcut_grbl::codes::alarm_is_critical(*code)
+            && flatcut_device::grbl::codes::alarm_is_critical(*code)
         {
             h.push_str(
                 " (the controller will be alarm-locked: home it first, or add --unlock only if \
