@@ -55,6 +55,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     if let Some(m) = &a.material {
         proj.material.spec = Some(flatcut::design::material::MaterialSpec::load(m, None)?);
     }
+    check_before_work(&proj, &a)?;
     let out = a
         .output
         .clone()
@@ -86,6 +87,33 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let (stream_lines, exit) = send_stage(&a, &outputs, &out, &mut log)?;
     print_summary(&outputs, &stream_lines, &out, t0)?;
     Ok(exit)
+}
+
+/// Checks what can be checked before any work starts, so that a run that would fail at its
+/// end fails before it writes anything: the design file is there, the machine profile loads,
+/// and the device the jobs would stream to exists (a port) or can run (the simulator as the
+/// profile's machine).
+fn check_before_work(proj: &Project, a: &Args) -> anyhow::Result<()> {
+    let design = proj.design_path();
+    anyhow::ensure!(
+        design.is_file(),
+        "the project's design {} does not exist",
+        design.display()
+    );
+    let profile = flatcut::gcode::Profile::resolve(&proj.profile_spec())
+        .with_context(|| format!("the project's machine profile {}", proj.machine.profile))?;
+    if a.no_send {
+        return Ok(());
+    }
+    let stream = device::select::for_project(&proj.device, &profile, &a.stream);
+    let target = stream.target()?;
+    let checked = target.check();
+    if let flatcut_device::Target::Port { path, .. } = &target {
+        checked.with_context(|| format!("cannot open the serial port {path}"))?;
+    } else {
+        checked?;
+    }
+    Ok(())
 }
 
 /// Streams the jobs (all sheets to the simulator; the first, or all with `--all-sheets`, to a

@@ -212,6 +212,11 @@ impl StreamArgs {
         self.sim_trace = Some(path.into());
         self
     }
+    /// Adds a `--sim-set N=VALUE`.
+    pub fn with_sim_set(mut self, setting: impl Into<String>) -> Self {
+        self.sim_set.push(setting.into());
+        self
+    }
     /// Sets [`StreamArgs::quiet`].
     pub fn with_quiet(mut self, on: bool) -> Self {
         self.quiet = on;

@@ -95,6 +95,13 @@ pub(super) fn explain(
         SendError::ResumeFromOutOfRange { .. } => {
             Some("--resume-from takes a line number of the file that has a line to send.".to_string())
         }
+        SendError::OutOfTravel { .. } if args.uses_sim() => Some(if args.sim_machine.is_some() {
+            "The embedded simulator is the machine the profile describes: the job must fit its work area."
+                .to_string()
+        } else {
+            "The embedded simulator is GRBL's default machine (200 mm of travel on each axis): give it the machine's profile with --profile, or its travel with --sim-set 130=X --sim-set 131=Y."
+                .to_string()
+        }),
         SendError::OffsetsUnknown { .. } => Some(
             "Let the controller come to Idle and try again, or add --discard-offsets to run in G54 without G92."
                 .to_string(),

@@ -82,10 +82,7 @@ pub fn stream_text_with_control(
     }
     let journal = args.journal_path(name);
     let opts = args.send_options(&journal, args.resume_index(&job, name)?);
-    let target = match args.target()? {
-        Target::Simulator(s) => Target::Simulator(bed_for(s, &job)),
-        t => t,
-    };
+    let target = args.target()?;
     let device = match &target {
         Target::Port { path, .. } => Device::open(target.clone())
             .with_context(|| format!("cannot open the serial port {path}"))?,
@@ -124,26 +121,4 @@ pub fn stream_text_with_control(
         baud: args.baud,
         device: args.describe(),
     })
-}
-
-/// Extra travel given to the embedded simulator beyond the job's extent, mm, so a job that
-/// exactly fills the bed is not refused for rounding.
-const SIM_TRAVEL_MARGIN_MM: f64 = 10.0;
-
-/// The simulator with a bed (`$130-$132`) at least as large as the job, so a big nest is not
-/// refused by the travel check of a machine that does not exist.
-pub(super) fn bed_for(mut s: flatcut_device::SimSetup, job: &Job) -> flatcut_device::SimSetup {
-    if let Some((lo, hi)) = job.extent {
-        let default_travel = flatcut_device::sim::Settings::default().max_travel;
-        let given = s.all_settings();
-        for a in 0..3 {
-            let size = hi[a] - lo[a];
-            let set = given.iter().any(|g| g.0 == 130 + a as u16);
-            if size.is_finite() && size > default_travel[a] && !set {
-                s.settings
-                    .push((130 + a as u16, (size + SIM_TRAVEL_MARGIN_MM).ceil()));
-            }
-        }
-    }
-    s
 }

@@ -59,13 +59,12 @@ fn journal_path_and_sim_bed() {
         PathBuf::from("j")
     );
     assert!(a.uses_sim() && !a.clone().with_port("/dev/ttyUSB0").uses_sim());
-    // A 600 x 150 mm job: the simulated bed grows in X only, to 610 mm.
-    let job = Job::parse("G0 X0 Y0\nG1 X600 Y150 F1000\n").unwrap();
+    // The simulated machine is GRBL's, or the profile's: it does not grow to fit a job.
     let Ok(Target::Simulator(s)) = a.target() else {
         panic!("not the simulator")
     };
-    let cfg = super::stream::bed_for(s, &job).config().unwrap();
-    assert_eq!(cfg.settings, vec![(130, 610.0)]);
+    let cfg = s.config().unwrap();
+    assert!(cfg.settings.is_empty());
     assert_eq!(cfg.time_scale, DEFAULT_SIM_SPEED);
     let bad = StreamArgs {
         sim_speed: 0.0,
