@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use flatcut::check::{CutSegment, trace_deviation};
+use flatcut::check::{CutSegment, blade_tip_deviation, trace_deviation};
 use flatcut::geom::DVec2;
 use flatcut::nest::Stock;
 use flatcut::project::Project;
@@ -179,12 +179,19 @@ fn send_stage(
         let dev = match &o.sim_trace {
             Some(trace) => {
                 let cut = cut_segments(trace);
-                let d = trace_deviation(&cut, &job.drawing, &outputs.profile);
-                format!(
-                    ", simulator traced {} segments, cut path within {:.3} mm of the pattern",
-                    trace.len(),
-                    d
-                )
+                let axis = trace_deviation(&cut, &job.drawing, &outputs.profile);
+                // A drag knife cuts with its blade tip, which trails the axis the trace
+                // records by the blade offset: the tip is what lies on the pattern.
+                match blade_tip_deviation(&cut, &job.drawing, &outputs.profile) {
+                    Some(tip) => format!(
+                        ", simulator traced {} segments, blade tip within {tip:.3} mm of the pattern (knife axis within {axis:.3} mm: it runs the blade offset ahead)",
+                        trace.len()
+                    ),
+                    None => format!(
+                        ", simulator traced {} segments, cut path within {axis:.3} mm of the pattern",
+                        trace.len()
+                    ),
+                }
             }
             None => String::new(),
         };
