@@ -4,7 +4,7 @@ use super::confirm::Operator;
 use std::path::PathBuf;
 use std::time::Duration;
 
-/// Options for [`send_job`].
+/// Options for [`super::send_job`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct SendOptions {
     /// How long to wait for the banner after opening (and again after a soft reset).
