@@ -11,6 +11,7 @@ mod material;
 mod nest;
 mod pipeline;
 mod regressions;
+mod serve;
 mod step;
 mod stream;
 mod tidy;
