@@ -30,7 +30,7 @@ pub use driver::{
 };
 pub use job::{FeedClamp, Job, JobError, JobLine, JobStart, MachineLimits, ModalState};
 pub use job_edit::JobChanges;
-pub use journal::{Journal, JournalError, JournalState, LineMap};
+pub use journal::{Journal, JournalError, JournalState, LineMap, StopRecord};
 pub use response::{MachineState, Response, StatusReport, parse_response};
 pub use streamer::{Event, Streamer, Tag};
 pub use transport::{SerialTransport, Transport, TransportError, list_ports, open_port};

@@ -117,7 +117,7 @@ impl Console {
     }
 
     /// Connects: waits up to `opts.banner_timeout` for the banner of a controller that restarts
-    /// as the port opens; without one, asks for a status (and soft-resets a controller that
+    /// as the port opens, or for an answer to `?` from one that was running; without either, asks for a status (and soft-resets a controller that
     /// does not answer); then reads `$I`, `$$` and a status. Does not reset a controller that
     /// answers, so its work frame (G92, G55..G59) stays as the operator set it.
     pub fn connect(&mut self, opts: &SendOptions) -> Result<ControllerInfo, SendError> {
@@ -125,7 +125,7 @@ impl Console {
         let info = self.session(|sess| {
             let banner = fresh
                 && sess
-                    .wait_banner(opts.banner_timeout)
+                    .wait_boot(opts.banner_timeout)
                     .map_err(|e| transport(e, None))?;
             if !banner
                 && sess

@@ -10,8 +10,8 @@
 //! it; and after a stop, the reported position locates the line the machine was on.
 //!
 //! One idea per module: [`options`], [`control`] and [`progress`] are the API around a send;
-//! `session` is the connection, [`console`] keeps one open between jobs, `handshake` connects, `resume` settles what an interrupted run
-//! left in doubt, `check` runs the checks before motion, `stream` streams, `tracker` keeps the
+//! `session` is the connection, [`console`] keeps one open between jobs, `handshake` connects, `evidence` compares the controller with the journal's stop
+//! record, `resume` settles what an interrupted run left in doubt, `check` runs the checks before motion, `stream` streams, `tracker` keeps the
 //! books of what ran, `watch` checks the reported position against the job's path, `stops` stops a run, and [`send_job`] reads as handshake → check → stream
 //! → finish.
 
@@ -20,6 +20,7 @@ pub mod confirm;
 pub mod console;
 pub mod control;
 mod error;
+mod evidence;
 mod frame;
 mod geometry;
 mod handshake;

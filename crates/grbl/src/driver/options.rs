@@ -7,7 +7,9 @@ use std::time::Duration;
 /// Options for [`super::send_job`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct SendOptions {
-    /// How long to wait for the banner after opening (and again after a soft reset).
+    /// The boot wait: how long a controller may take after the port opens to say something (a
+    /// banner, or an answer to `?`), and how long to wait for the banner after a soft reset.
+    /// A banner that comes later still counts as a restart.
     pub banner_timeout: Duration,
     /// Send a soft reset at once instead of waiting for a power-up banner first.
     pub reset_on_connect: bool,
@@ -81,8 +83,10 @@ pub enum PausePolicy {
 }
 
 impl SendOptions {
-    /// Default banner wait: a real Uno's bootloader takes 1.4–2 s after DTR.
-    pub const DEFAULT_BANNER_TIMEOUT: Duration = Duration::from_millis(2500);
+    /// Default boot wait: a real Uno's bootloader takes 1.4–2 s after DTR, slower boards and
+    /// bootloaders up to about 3 s. A controller that was running answers the first `?` at
+    /// once, so only a silent port waits this long.
+    pub const DEFAULT_BANNER_TIMEOUT: Duration = Duration::from_millis(5000);
     /// Default handshake command timeout.
     pub const DEFAULT_COMMAND_TIMEOUT: Duration = Duration::from_secs(5);
     /// Default status interval: 5 Hz.

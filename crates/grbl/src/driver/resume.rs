@@ -5,11 +5,13 @@ use super::SendOptions;
 use super::confirm::{OriginQuestion, Question};
 use super::error::SendError;
 use super::error::line_ref;
+use super::evidence;
 use super::geometry::dist;
 use super::handshake::Link;
 use super::places::{places_on_path, position_tolerance};
 use super::session::Session;
-use super::stops::{OFF_PATH_NOTE, with_tool_off};
+use super::stops::{OFF_PATH_NOTE, refused_with_tool_off};
+use super::tracker::AMBIGUOUS_STOP_NOTE;
 use crate::job::Job;
 use crate::journal::{Journal, JournalState};
 use crate::transport::Transport;
@@ -44,8 +46,12 @@ pub(super) fn settle<T: Transport + ?Sized>(
     let Some(mut st) = prior else {
         return Ok(ResumePlan::default());
     };
-    let restarted = link.restarted;
-    let trusted = !restarted && !link.unlocked && !sess.alarm_lock;
+    // A banner after the handshake is a restart too.
+    let restarted = link.restarted || sess.restarts() > link.restarts_before;
+    let tol = position_tolerance(&sess.settings);
+    let homes = sess.settings.get(&22).is_some_and(|v| *v != 0.0);
+    let disagrees = evidence::disagreement(st.stop.as_ref(), link.found.as_ref(), homes, tol);
+    let trusted = !restarted && !link.unlocked && !sess.alarm_lock && disagrees.is_none();
     // Work position without the controller's G92 offset: the frame of the job's geometry.
     let g92 = link.frame.g92;
     let here = if trusted {
@@ -54,9 +60,9 @@ pub(super) fn settle<T: Transport + ?Sized>(
     } else {
         None
     };
-    let tol = position_tolerance(&sess.settings);
     let rx = sess.s.rx_size();
-    if let Some(r) = resolve_resume(job, &st, opts.resume_from, here, rx, tol, restarted)? {
+    let lost = restarted || disagrees.is_some();
+    if let Some(r) = resolve_resume(job, &st, opts.resume_from, here, rx, tol, lost)? {
         if let Some(j) = journal.as_mut() {
             j.resolved(r.from, r.cut);
             if let Some((k, p)) = r.partial {
@@ -72,11 +78,12 @@ pub(super) fn settle<T: Transport + ?Sized>(
         }
         st.partial = r.partial;
     }
-    let notice = match reestablish_position(sess, job, &st, link, opts) {
+    let why = position_lost(&st, link, restarted, disagrees);
+    let notice = match reestablish_position(sess, job, &st, link, opts, why) {
         Ok(n) => n,
         // Nothing moved; the tool is switched off all the same, as on every stop.
         Err(e @ (SendError::PositionUnknown { .. } | SendError::OriginNotConfirmed { .. })) => {
-            return Err(with_tool_off(sess, journal, e));
+            return Err(refused_with_tool_off(sess, journal, e));
         }
         Err(e) => return Err(e),
     };
@@ -113,11 +120,21 @@ pub(super) fn settle<T: Transport + ?Sized>(
 }
 
 /// Why the machine position cannot be trusted since the journal was written, if it cannot:
-/// the controller restarted (a banner at connect: power-up or the DTR reset of opening the
-/// port), was unlocked with `$X` without homing, or reset or alarmed during the interrupted run.
-fn position_lost(st: &JournalState, link: &Link) -> Option<String> {
-    if link.restarted {
+/// the controller restarted (a banner it was not asked for, at any moment since the port was
+/// opened: power-up or the DTR reset of opening the port), does not agree with the journal's
+/// stop record (`disagrees`: a power cycle or reset while nothing was connected), was
+/// unlocked with `$X` without homing, or reset or alarmed during the interrupted run.
+fn position_lost(
+    st: &JournalState,
+    link: &Link,
+    restarted: bool,
+    disagrees: Option<String>,
+) -> Option<String> {
+    if restarted {
         return Some("the controller restarted when the port was opened (or lost power)".into());
+    }
+    if disagrees.is_some() {
+        return disagrees;
     }
     if link.unlocked {
         return Some("the controller was in alarm and was unlocked with $X, not homed".into());
@@ -137,9 +154,10 @@ fn reestablish_position<T: Transport + ?Sized>(
     st: &JournalState,
     link: &Link,
     opts: &SendOptions,
+    why: Option<String>,
 ) -> Result<Option<String>, SendError> {
     let started = st.done.iter().any(|d| *d) || st.partial.is_some() || opts.resume_from.is_some();
-    let Some(why) = position_lost(st, link).filter(|_| started) else {
+    let Some(why) = why.filter(|_| started) else {
         return Ok(None);
     };
     if sess.settings.get(&22).is_some_and(|v| *v != 0.0) {
@@ -228,8 +246,15 @@ pub(super) fn resolve_resume(
         reason,
     };
     if let Some((a, b)) = st.uncertain {
-        let off_path = st.notes.iter().rev().find(|n| n.starts_with(OFF_PATH_NOTE));
-        let reason = match off_path {
+        let why = st
+            .notes
+            .iter()
+            .rev()
+            .find(|n| n.starts_with(OFF_PATH_NOTE) || n.starts_with(AMBIGUOUS_STOP_NOTE));
+        let reason = match why {
+            Some(n) if n.starts_with(AMBIGUOUS_STOP_NOTE) => format!(
+                "the interrupted run {n}; a resume from the first of these lines would cut again what may have been cut"
+            ),
             Some(n) => format!(
                 "the interrupted run stopped because {n}: a line damaged on the link ran elsewhere, and which of these lines ran as written is not known"
             ),

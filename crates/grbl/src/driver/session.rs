@@ -35,6 +35,9 @@ pub(super) struct Session<'a, T: Transport + ?Sized> {
     pub(super) feedback: Vec<String>,
 }
 
+/// First status poll after opening, and the poll interval after it while booting.
+const BOOT_POLL: Duration = Duration::from_millis(100);
+
 /// Feedback lines kept for the reader of `$#` (it prints ten).
 const FEEDBACK_KEPT: usize = 64;
 
@@ -191,6 +194,36 @@ impl<'a, T: Transport + ?Sized> Session<'a, T> {
             }
         }
         Ok(events)
+    }
+
+    /// Waits up to `boot_wait` for the controller to show that it runs: its banner (it just
+    /// started: power-up, or the reset of opening the port after its bootloader) or an answer to
+    /// `?`, asked every [`BOOT_POLL`] (it was running already; a controller in its bootloader
+    /// answers nothing). True for a banner; a banner later than this is still seen as a restart
+    /// (see `handshake::connect`).
+    pub(super) fn wait_boot(&mut self, boot_wait: Duration) -> Result<bool, TransportError> {
+        let (resets, seq) = (self.resets, self.status_seq);
+        let t0 = Instant::now();
+        let mut poll = t0 + BOOT_POLL;
+        while t0.elapsed() < boot_wait {
+            if self.resets > resets {
+                // Let the push messages after the banner (an alarm lock) arrive.
+                let settle = Instant::now() + Duration::from_millis(30);
+                while Instant::now() < settle {
+                    self.pump(Duration::from_millis(10))?;
+                }
+                return Ok(true);
+            }
+            if self.status_seq != seq {
+                return Ok(false);
+            }
+            if Instant::now() >= poll {
+                self.s.realtime(b'?');
+                poll = Instant::now() + BOOT_POLL;
+            }
+            self.pump(READ_SLICE)?;
+        }
+        Ok(self.resets > resets)
     }
 
     pub(super) fn wait_banner(&mut self, timeout: Duration) -> Result<bool, TransportError> {

@@ -164,11 +164,26 @@ impl Tracker {
         let upto = upto.min(job.len().saturating_sub(1)).max(first);
         let prior = &self.prior_done;
         let places = places_on_path(job, pos, first..=upto, self.pos_tol, |i| prior[i]);
-        // Ambiguous (the path passes here twice): the earliest place confirms least.
-        let Some(&(cut, partial)) = places.first() else {
+        // Ambiguous (the path passes here twice): the earliest place confirms least, and the
+        // lines from there to the last place may have run: a resume must not pass over them
+        // without the operator's `--resume-from`.
+        let (Some(&(cut, partial)), Some(&(last, _))) = (places.first(), places.last()) else {
             return;
         };
         self.confirm_below(job, cut, journal);
+        if last > cut
+            && let Some(j) = journal.as_mut()
+        {
+            j.note(&format!(
+                "{AMBIGUOUS_STOP_NOTE}: the machine stood at X{:.3} Y{:.3} Z{:.3} (work), which the path passes {} times",
+                pos[0],
+                pos[1],
+                pos[2],
+                places.len()
+            ));
+            j.uncertain(cut, last.min(job.len() - 1));
+            return;
+        }
         if cut < job.len()
             && let Some(j) = journal.as_mut()
         {
@@ -193,6 +208,10 @@ impl Tracker {
         Some(line_ref(job, i))
     }
 }
+
+/// How the journal's note of a stop at a place the job's path passes more than once begins (a
+/// resume names it as the reason the lines are in doubt).
+pub(super) const AMBIGUOUS_STOP_NOTE: &str = "stopped where the job's path passes twice";
 
 /// A line at least this long moves some axis by at least one step (its longest component is at
 /// least its length / √3), so GRBL plans it; `$100-$102` (default 250 steps/mm).
