@@ -10,6 +10,7 @@ mod hpgl;
 mod material;
 mod nest;
 mod pipeline;
+mod readme;
 mod regressions;
 mod serve;
 mod step;

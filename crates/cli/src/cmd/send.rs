@@ -23,6 +23,9 @@ pub struct Args {
     /// instead of GRBL's defaults (200 mm of travel on each axis).
     #[arg(long, value_name = "NAME|FILE")]
     pub profile: Option<String>,
+    /// Stream a laser job (its header says it needs `$32=1`) to a controller with `$32=0`.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Runs `flatcut send`.
@@ -37,6 +40,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         );
     }
     let mut stream = a.stream.clone();
+    stream.force_laser |= a.force;
     if let Some(p) = &a.profile {
         let profile = flatcut::gcode::Profile::resolve(p)?;
         stream.sim_machine = Some(super::device::select::machine(&profile));

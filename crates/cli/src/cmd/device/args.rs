@@ -11,6 +11,9 @@ use flatcut_device::{SimMachine, SimSetup, Target};
 
 /// GRBL 1.1's default baud rate (`config.h`).
 pub const DEFAULT_BAUD: u32 = 115_200;
+/// Default `--boot-wait`: [`flatcut_device::grbl::SendOptions::DEFAULT_BANNER_TIMEOUT`].
+pub const DEFAULT_BOOT_WAIT_MS: u64 =
+    flatcut_device::grbl::SendOptions::DEFAULT_BANNER_TIMEOUT.as_millis() as u64;
 /// Default time scale of the embedded simulator: fast enough that a demo job finishes in
 /// seconds, slow enough that the progress bar, feed hold and status polling are exercised.
 pub const DEFAULT_SIM_SPEED: f64 = 50.0;
@@ -66,9 +69,15 @@ pub struct StreamArgs {
     /// of the job's path it can be on (a line damaged on the link runs elsewhere), mm.
     #[arg(long, value_name = "MM", default_value_t = flatcut_device::grbl::SendOptions::DEFAULT_POSITION_TOLERANCE, value_parser = crate::values::positive_mm)]
     pub position_tolerance: f64,
-    /// Stream a laser job (its header says it needs `$32=1`) to a controller with `$32=0`.
+    /// Stream a laser job (its header says it needs `$32=1`) to a controller with `$32=0`
+    /// (`flatcut send --force`; `flatcut run --force` sets it too).
     #[arg(skip)]
     pub force_laser: bool,
+    /// How long a controller may take to start after the port opens (the reset of opening it,
+    /// then its bootloader) before it must have said something, ms. A banner that comes later
+    /// still counts as a restart.
+    #[arg(long, value_name = "MS", default_value_t = DEFAULT_BOOT_WAIT_MS)]
+    pub boot_wait: u64,
     /// Journal of acknowledged and executed lines (default: `<job>.journal`).
     #[arg(long, value_name = "PATH")]
     pub journal: Option<PathBuf>,
@@ -130,6 +139,7 @@ impl Default for StreamArgs {
             position_tolerance: flatcut_device::grbl::SendOptions::DEFAULT_POSITION_TOLERANCE,
             on_pause: None,
             force_laser: false,
+            boot_wait: DEFAULT_BOOT_WAIT_MS,
             journal: None,
             sim_speed: DEFAULT_SIM_SPEED,
             sim_instant: false,
@@ -315,6 +325,7 @@ impl StreamArgs {
             .with_position_tolerance(Some(self.position_tolerance))
             .with_on_pause(self.pause_policy())
             .with_force_laser(self.force_laser)
+            .with_banner_timeout(std::time::Duration::from_millis(self.boot_wait))
     }
 
     /// The job line `--resume-from` names (a line number of the file), as an index among the
