@@ -12,6 +12,7 @@ mod licences;
 mod material;
 mod nest;
 mod pipeline;
+mod readme;
 mod regressions;
 mod serve;
 mod step;

@@ -177,3 +177,43 @@ fn streamed_job_traced_by_the_simulator_matches_the_pattern() {
         "traced {traced} mm, pattern {cut_len} mm"
     );
 }
+
+/// Issue 38, item 7: on the shoe, cut with a drag knife, what lies on the pattern is the blade
+/// tip, not the knife's axis, which runs the blade offset (0.25 mm) ahead of the cut and swivels
+/// around the tip at corners: `flatcut run` reports the tip (about 0.01 mm, where the bends
+/// too gentle to swivel are cut a little inside) and names the axis's 0.25 mm as the axis's.
+#[test]
+fn the_shoes_knife_cuts_the_pattern_with_its_blade_tip() {
+    use flatcut::check::{CutSegment, blade_tip_deviation, trace_deviation};
+    let out = tempfile::tempdir().unwrap();
+    run_project("patterns/shoe/project.toml", out.path(), &["--sim-instant"]);
+    // The knife profile maps drawing mm to machine mm one to one (origin lower-left).
+    let svg = std::fs::read_to_string(out.path().join("layout-1.svg")).unwrap();
+    let drawing = flatcut::pattern::svg::read_svg(
+        &svg,
+        "layout-1.svg",
+        0.01,
+        &flatcut::pattern::ColourTable::default(),
+    )
+    .unwrap()
+    .drawing;
+    let cut: Vec<CutSegment> = std::fs::read_to_string(out.path().join("sim-1.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str::<flatcut_firmware_sim::TraceSegment>(l).unwrap())
+        .filter(|s| s.tool_on && s.motion != "G0")
+        .map(|s| CutSegment {
+            from: DVec2::new(s.from[0], s.from[1]),
+            to: DVec2::new(s.to[0], s.to[1]),
+            arc: s
+                .arc_center
+                .map(|c| (DVec2::new(c[0], c[1]), s.motion == "G3")),
+        })
+        .collect();
+    let knife = flatcut::gcode::Profile::knife();
+    let axis = trace_deviation(&cut, &drawing, &knife);
+    let tip = blade_tip_deviation(&cut, &drawing, &knife).expect("a knife");
+    assert!((axis - 0.25).abs() < 0.01, "axis {axis}");
+    assert!(tip < 0.02, "tip {tip}");
+    assert!(blade_tip_deviation(&cut, &drawing, &flatcut::gcode::Profile::pen()).is_none());
+}

@@ -38,11 +38,15 @@ fn case(pieces: usize) -> Case {
     }
 }
 
+/// The pattern jobs of up to 6 pieces span 257 mm in X: the simulated machine's X travel.
+const PATTERN_TRAVEL: &str = "130=300";
+
 fn args(c: &Case) -> StreamArgs {
     StreamArgs::default()
         .with_sim_instant(true)
         .with_quiet(true)
         .with_journal(&c.journal)
+        .with_sim_set(PATTERN_TRAVEL)
 }
 
 fn trace_of(out: &StreamOutcome) -> &[TraceSegment] {
@@ -538,13 +542,16 @@ fn sigterm_child_process() {
     let Some(dir) = std::env::var_os(SIGTERM_CHILD_ENV) else {
         return;
     };
+    // As the binary does at start: the signal comes to the send, not to the default action.
+    flatcut_cli::install_signal_handler().unwrap();
     let dir = PathBuf::from(dir);
     let job = dir.join("job.gcode");
     std::fs::write(&job, pattern_job(6)).unwrap();
     let a = StreamArgs::default()
         .with_sim_speed(2.0)
         .with_quiet(true)
-        .with_journal(dir.join("job.journal"));
+        .with_journal(dir.join("job.journal"))
+        .with_sim_set(PATTERN_TRAVEL);
     let e = stream_file(&job, &a).expect_err("the job was stopped by SIGTERM");
     eprintln!("CHILD-ERROR: {e:#}");
     let se = e.downcast_ref::<StreamError>().expect("a send error");
@@ -686,6 +693,93 @@ fn run_uses_the_projects_device() {
     assert!(format!("{e:#}").contains("[device] baud = 0"), "{e:#}");
 }
 
+/// Issue 38, item 7: a project whose `[device] port` does not exist fails before any work
+/// starts: no output is written (it wrote 12 before), and the error names the port. With
+/// `--no-send` the device is not needed and the run writes its outputs.
+#[test]
+fn a_missing_port_fails_the_run_before_any_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let nope = lampshade_project(dir.path(), "[device]\nport = \"/dev/ttyNOPE\"\n");
+    let out = dir.path().join("out");
+    let run = |extra: &[&str]| {
+        let mut argv = vec![
+            "flatcut",
+            "run",
+            nope.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--quiet",
+        ];
+        argv.extend_from_slice(extra);
+        flatcut_cli::run(parse_command_line(argv).unwrap())
+    };
+    let t0 = std::time::Instant::now();
+    let e = run(&[]).expect_err("a missing port fails the run");
+    let report = flatcut_cli::error_report(&e);
+    assert!(
+        report.contains("cannot open the serial port /dev/ttyNOPE")
+            && report.contains("the serial port /dev/ttyNOPE does not exist"),
+        "{report}"
+    );
+    assert!(!out.exists(), "outputs written before the failure");
+    // Nothing was flattened or nested first.
+    assert!(
+        t0.elapsed() < std::time::Duration::from_secs(1),
+        "{:?}",
+        t0.elapsed()
+    );
+    run(&["--no-send"]).expect("without streaming the port is not needed");
+    assert!(out.join("job-1.gcode").exists());
+}
+
+/// Issue 38, item 7: the embedded simulator is the machine it is set up as, never a bed grown
+/// to fit the job: `G1 X9999` is refused before anything moves on GRBL's default machine
+/// (200 mm of travel), and the message says how to describe the machine; set up as a
+/// profile's machine (the knife's 600 × 400 mm), a job within its work area runs and one
+/// beyond it is refused.
+#[test]
+fn the_embedded_simulator_does_not_grow_to_fit_a_job() {
+    let dir = tempfile::tempdir().unwrap();
+    let send = |name: &str, gcode: &str, extra: &[&str]| {
+        let job = dir.path().join(name);
+        std::fs::write(&job, gcode).unwrap();
+        let trace = dir.path().join(format!("{name}.jsonl"));
+        let (job_s, trace_s) = (job.display().to_string(), trace.display().to_string());
+        let mut argv = vec!["flatcut", "send", &job_s, "--sim-instant", "--quiet"];
+        argv.extend_from_slice(&["--sim-trace", &trace_s]);
+        argv.extend_from_slice(extra);
+        let r = flatcut_cli::run(parse_command_line(argv).unwrap());
+        (r, read_trace(&trace))
+    };
+    let (r, trace) = send("far.gcode", "G21 G90\nG1 X9999 F1000\n", &[]);
+    let report = flatcut_cli::error_report(&r.expect_err("G1 X9999 is beyond the machine"));
+    assert!(
+        report.contains("the job's X extent 0.000..9999.000 mm is 9999.000 mm long, more than the machine travel of 200.000 mm ($130)")
+            && report.contains("--profile"),
+        "{report}"
+    );
+    assert!(trace.is_empty(), "moved: {trace:?}");
+    let (r, trace) = send(
+        "in.gcode",
+        "G21 G90\nG1 X590 Y390 F1000\n",
+        &["--profile", "knife"],
+    );
+    r.unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!(moving(&trace).len(), 1);
+    let (r, trace) = send(
+        "out.gcode",
+        "G21 G90\nG1 X610 F1000\n",
+        &["--profile", "knife"],
+    );
+    let report = flatcut_cli::error_report(&r.expect_err("beyond the knife's work area"));
+    assert!(
+        report.contains("more than the machine travel of 600.000 mm ($130)")
+            && report.contains("the machine the profile describes"),
+        "{report}"
+    );
+    assert!(trace.is_empty());
+}
+
 /// Issue 14, item 4: a correct run is never stopped by the position checks: the lampshade's
 /// plotter job (2,000 lines), streamed with motion in time so that every status report lands
 /// mid-path, runs to the end.
@@ -693,10 +787,13 @@ fn run_uses_the_projects_device() {
 fn the_lampshade_job_passes_the_position_checks_without_a_false_alarm() {
     let dir = tempfile::tempdir().unwrap();
     let job_path = crate::pipeline::root().join("patterns/golden/lampshade/job-1.gcode");
+    // The lampshade's plotter (its profile's A0 work area).
     let a = StreamArgs::default()
         .with_sim_speed(100.0)
         .with_quiet(true)
-        .with_journal(dir.path().join("job.journal"));
+        .with_journal(dir.path().join("job.journal"))
+        .with_sim_set("130=1200")
+        .with_sim_set("131=914");
     let out = stream_file(&job_path, &a).unwrap_or_else(|e| panic!("{e:#}"));
     let job = Job::parse(&std::fs::read_to_string(&job_path).unwrap()).unwrap();
     assert_eq!(out.report.lines_sent, job.len());
@@ -874,6 +971,7 @@ fn resume_at_a_terminal_child() {
     let Some(dir) = std::env::var_os(TERMINAL_CHILD_ENV) else {
         return;
     };
+    flatcut_cli::install_signal_handler().unwrap();
     let dir = PathBuf::from(dir);
     let a = StreamArgs::default()
         .with_sim_instant(true)

@@ -71,6 +71,34 @@ fn sender_is_independent_of_the_gcode_writer_and_geometry() {
 }
 
 #[test]
+fn the_device_library_sits_on_the_sender_and_the_simulator_only() {
+    let g = workspace_deps();
+    assert_eq!(
+        closure(&g, "flatcut-device"),
+        ["flatcut-firmware-sim", "flatcut-grbl", "flatcut-motion"],
+        "flatcut-device streams any G-code: the sender, the simulator and the motion model, never \
+         the G-code writer or the geometry"
+    );
+    // The command line streams through it, and the server will: the facade stays free of it.
+    assert!(g["flatcut-cli"].contains(&"flatcut-device".to_string()));
+    assert!(!closure(&g, "flatcut").contains(&"flatcut-device".to_string()));
+}
+
+#[test]
+fn no_crate_is_its_own_dev_dependency_through_another() {
+    let g = workspace_deps();
+    for (name, dev) in workspace_dev_deps() {
+        for d in dev.iter().filter(|d| g.contains_key(*d) && **d != name) {
+            assert!(
+                !closure(&g, d).contains(&name),
+                "{name} dev-depends on {d}, which depends on {name}: the crate is built twice and \
+                 its tests see two copies of it"
+            );
+        }
+    }
+}
+
+#[test]
 fn the_motion_model_stands_alone_and_is_the_only_one() {
     let g = workspace_deps();
     assert_eq!(
@@ -106,6 +134,7 @@ fn two_dimensional_crates_know_nothing_of_surfaces() {
             "flatcut-design",
             "flatcut-report",
             "flatcut-grbl",
+            "flatcut-device",
             "flatcut-firmware-sim",
         ] {
             assert!(
@@ -154,14 +183,14 @@ fn the_testkit_is_only_ever_a_dev_dependency() {
             .any(|d| d.contains(&"flatcut-testkit".to_string())),
         "the shared fixtures are used"
     );
-    // Being dev-only, the testkit is the one library besides the CLI (which embeds the
-    // simulator as a device) allowed to depend on the simulator.
+    // Being dev-only, the testkit is the one library besides the device library (which embeds
+    // the simulator as a device) allowed to depend on the simulator.
     let users: Vec<&String> = g
         .iter()
         .filter(|(_, d)| d.contains(&"flatcut-firmware-sim".to_string()))
         .map(|(n, _)| n)
         .collect();
-    assert_eq!(users, ["flatcut-cli", "flatcut-testkit"]);
+    assert_eq!(users, ["flatcut-device", "flatcut-testkit"]);
     let manifest = std::fs::read_to_string(root().join("crates/testkit/Cargo.toml")).unwrap();
     let v: toml::Value = toml::from_str(&manifest).unwrap();
     assert_eq!(v["package"]["publish"].as_bool(), Some(false));
@@ -284,5 +313,365 @@ fn every_dependency_is_used() {
     assert!(
         unused.is_empty(),
         "dependencies no source names: {unused:#?}"
+    );
+}
+
+/// Rust source with comments, string and character literals blanked out (lifetimes kept), so
+/// that paths are only found in code.
+fn code_only(text: &str) -> String {
+    let c: Vec<char> = text.chars().collect();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    while i < c.len() {
+        let next = c.get(i + 1).copied();
+        if c[i] == '/' && next == Some('/') {
+            while i < c.len() && c[i] != '\n' {
+                i += 1;
+            }
+        } else if c[i] == '/' && next == Some('*') {
+            let mut depth = 0;
+            while i < c.len() {
+                if c[i] == '/' && c.get(i + 1) == Some(&'*') {
+                    depth += 1;
+                    i += 2;
+                } else if c[i] == '*' && c.get(i + 1) == Some(&'/') {
+                    depth -= 1;
+                    i += 2;
+                    if depth == 0 {
+                        break;
+                    }
+                } else {
+                    i += 1;
+                }
+            }
+            out.push(' ');
+        } else if c[i] == 'r' && (next == Some('"') || next == Some('#')) && {
+            let mut k = i + 1;
+            while c.get(k) == Some(&'#') {
+                k += 1;
+            }
+            c.get(k) == Some(&'"') && !(i > 0 && (c[i - 1].is_alphanumeric() || c[i - 1] == '_'))
+        } {
+            let mut hashes = 0;
+            i += 1;
+            while c[i] == '#' {
+                hashes += 1;
+                i += 1;
+            }
+            i += 1;
+            while i < c.len() {
+                if c[i] == '"' && (0..hashes).all(|h| c.get(i + 1 + h) == Some(&'#')) {
+                    i += 1 + hashes;
+                    break;
+                }
+                i += 1;
+            }
+            out.push_str("\"\"");
+        } else if c[i] == '"' {
+            i += 1;
+            while i < c.len() && c[i] != '"' {
+                i += if c[i] == '\\' { 2 } else { 1 };
+            }
+            i += 1;
+            out.push_str("\"\"");
+        } else if c[i] == '\''
+            && (c.get(i + 2) == Some(&'\'') || (next == Some('\\') && c.get(i + 3) == Some(&'\'')))
+        {
+            i += if next == Some('\\') { 4 } else { 3 };
+            out.push_str("' '");
+        } else {
+            out.push(c[i]);
+            i += 1;
+        }
+    }
+    out
+}
+
+/// The paths in `code`: every `a::b::c`, with `a::{b, c::d}` groups expanded one level.
+fn paths_in(code: &str) -> Vec<Vec<String>> {
+    let c: Vec<char> = code.chars().collect();
+    let ident = |i: usize| -> (String, usize) {
+        let mut j = i;
+        while j < c.len() && (c[j].is_alphanumeric() || c[j] == '_') {
+            j += 1;
+        }
+        (c[i..j].iter().collect(), j)
+    };
+    let skip_ws = |mut i: usize| {
+        while i < c.len() && c[i].is_whitespace() {
+            i += 1;
+        }
+        i
+    };
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < c.len() {
+        let starts = (c[i].is_alphabetic() || c[i] == '_')
+            && (i == 0 || !(c[i - 1].is_alphanumeric() || c[i - 1] == '_' || c[i - 1] == ':'));
+        if !starts {
+            i += 1;
+            continue;
+        }
+        let (first, mut j) = ident(i);
+        let mut path = vec![first];
+        loop {
+            let k = skip_ws(j);
+            if !(c.get(k) == Some(&':') && c.get(k + 1) == Some(&':')) {
+                break;
+            }
+            let k = skip_ws(k + 2);
+            if c.get(k) == Some(&'{') {
+                // A group: each member's first segment (and the rest up to a nested group).
+                let mut depth = 0;
+                let mut m = k;
+                let mut member_start = k + 1;
+                while m < c.len() {
+                    match c[m] {
+                        '{' => depth += 1,
+                        '}' | ',' if depth == 1 => {
+                            let member: String = c[member_start..m].iter().collect();
+                            let segs: Vec<String> = member
+                                .split("::")
+                                .map(|s| s.trim().to_string())
+                                .take_while(|s| {
+                                    !s.is_empty()
+                                        && s.chars().all(|x| x.is_alphanumeric() || x == '_')
+                                })
+                                .collect();
+                            if !segs.is_empty() && segs[0] != "self" {
+                                let mut p = path.clone();
+                                p.extend(segs);
+                                out.push(p);
+                            }
+                            member_start = m + 1;
+                            if c[m] == '}' {
+                                break;
+                            }
+                        }
+                        '}' => depth -= 1,
+                        _ => {}
+                    }
+                    m += 1;
+                }
+                j = m + 1;
+                path.clear();
+                break;
+            }
+            if !c.get(k).is_some_and(|x| x.is_alphabetic() || *x == '_') {
+                break;
+            }
+            let (seg, e) = ident(k);
+            path.push(seg);
+            j = e;
+        }
+        if path.len() > 1 {
+            out.push(path);
+        }
+        i = j.max(i + 1);
+    }
+    out
+}
+
+/// A crate's module graph: module path (`""` the root, `"driver::session"`) → the modules it
+/// names, found from `src`. A module naming one of its own ancestors (a child using what its
+/// parent declares) is not an edge: a parent holds what its children share.
+fn module_graph(src: &Path) -> BTreeMap<String, Vec<String>> {
+    let mut files = Vec::new();
+    rust_files(src, &mut files);
+    let module_of = |f: &Path| {
+        let rel = f.strip_prefix(src).unwrap().with_extension("");
+        let mut segs: Vec<String> = rel
+            .components()
+            .map(|c| c.as_os_str().to_string_lossy().into_owned())
+            .collect();
+        if matches!(
+            segs.last().map(String::as_str),
+            Some("mod" | "lib" | "main")
+        ) {
+            segs.pop();
+        }
+        segs.join("::")
+    };
+    let texts: BTreeMap<String, String> = files
+        .iter()
+        .map(|f| {
+            (
+                module_of(f),
+                code_only(&std::fs::read_to_string(f).unwrap()),
+            )
+        })
+        .collect();
+    let join = |a: &str, b: &str| {
+        if a.is_empty() {
+            b.to_string()
+        } else {
+            format!("{a}::{b}")
+        }
+    };
+    let parent = |m: &str| {
+        m.rsplit_once("::")
+            .map_or(String::new(), |(p, _)| p.to_string())
+    };
+    let is_ancestor = |a: &str, m: &str| a.is_empty() || m == a || m.starts_with(&format!("{a}::"));
+    let mut graph = BTreeMap::new();
+    for (m, text) in &texts {
+        let mut edges: Vec<String> = Vec::new();
+        for p in paths_in(text) {
+            let (mut base, rest) = match p[0].as_str() {
+                "crate" => (String::new(), &p[1..]),
+                "self" => (m.clone(), &p[1..]),
+                "super" => (parent(m), &p[1..]),
+                child if texts.contains_key(&join(m, child)) => (m.clone(), &p[..]),
+                _ => continue,
+            };
+            let mut rest = rest;
+            while rest.first().is_some_and(|s| s == "super") {
+                base = parent(&base);
+                rest = &rest[1..];
+            }
+            let mut target = base;
+            for seg in rest {
+                let next = join(&target, seg);
+                if !texts.contains_key(&next) {
+                    break;
+                }
+                target = next;
+            }
+            if !is_ancestor(&target, m) && !edges.contains(&target) {
+                edges.push(target);
+            }
+        }
+        graph.insert(m.clone(), edges);
+    }
+    graph
+}
+
+/// The import circles of a module graph: each a set of modules that reach one another
+/// (strongly connected components with more than one module), sorted.
+fn circles(graph: &BTreeMap<String, Vec<String>>) -> Vec<Vec<String>> {
+    let reach = |from: &String| {
+        let mut seen = vec![from.clone()];
+        let mut stack = vec![from.clone()];
+        while let Some(n) = stack.pop() {
+            for d in graph.get(&n).into_iter().flatten() {
+                if !seen.contains(d) {
+                    seen.push(d.clone());
+                    stack.push(d.clone());
+                }
+            }
+        }
+        seen
+    };
+    let reaches: BTreeMap<&String, Vec<String>> = graph.keys().map(|m| (m, reach(m))).collect();
+    let mut out: Vec<Vec<String>> = Vec::new();
+    for m in graph.keys() {
+        let mut scc: Vec<String> = reaches[m]
+            .iter()
+            .filter(|o| reaches.get(o).is_some_and(|r| r.contains(m)))
+            .cloned()
+            .collect();
+        scc.sort();
+        if scc.len() > 1 && !out.contains(&scc) {
+            out.push(scc);
+        }
+    }
+    out
+}
+
+#[test]
+fn the_import_checker_finds_a_circle_and_only_a_circle() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path();
+    std::fs::create_dir_all(src.join("dev")).unwrap();
+    let write = |p: &str, t: &str| std::fs::write(src.join(p), t).unwrap();
+    write("lib.rs", "//! x\nmod a;\nmod b;\nmod dev;\npub use a::A;\n");
+    write(
+        "a.rs",
+        "//! x\nuse crate::b::B; // crate::dev in a comment\n",
+    );
+    write(
+        "b.rs",
+        "//! x\nfn f() { let _ = \"crate::a::A\"; crate::dev::g(); }\n",
+    );
+    write(
+        "dev/mod.rs",
+        "//! x\nmod p;\nmod q;\npub fn g() { p::h(); }\n",
+    );
+    write("dev/p.rs", "//! x\nuse super::{q::Q, g};\npub fn h() {}\n");
+    write(
+        "dev/q.rs",
+        "//! x\nuse super::super::a::A;\npub struct Q;\n",
+    );
+    let g = module_graph(src);
+    assert_eq!(g["a"], ["b"]);
+    assert_eq!(g["b"], ["dev"]);
+    assert_eq!(g["dev"], ["dev::p"]);
+    assert_eq!(g["dev::p"], ["dev::q"]);
+    assert_eq!(g["dev::q"], ["a"]);
+    assert_eq!(
+        circles(&g),
+        [["a", "b", "dev", "dev::p", "dev::q"]
+            .map(String::from)
+            .to_vec()]
+    );
+    write("dev/q.rs", "//! x\npub struct Q;\n");
+    assert!(circles(&module_graph(src)).is_empty());
+}
+
+#[test]
+fn the_device_session_and_the_sender_import_without_circles() {
+    for krate in ["crates/device/src", "crates/grbl/src", "crates/motion/src"] {
+        let found = circles(&module_graph(&root().join(krate)));
+        assert!(found.is_empty(), "{krate}: import circles {found:?}");
+    }
+    // In the command line, the device layer and the file writer.
+    let found: Vec<Vec<String>> = circles(&module_graph(&root().join("crates/cli/src")))
+        .into_iter()
+        .filter(|c| {
+            c.iter()
+                .any(|m| m.starts_with("cmd::device") || m == "output")
+        })
+        .collect();
+    assert!(found.is_empty(), "crates/cli: import circles {found:?}");
+}
+
+#[test]
+fn only_the_binary_installs_the_signal_handler() {
+    let mut files = Vec::new();
+    for d in std::fs::read_dir(root().join("crates")).unwrap() {
+        let src = d.unwrap().path().join("src");
+        if src.exists() {
+            rust_files(&src, &mut files);
+        }
+    }
+    let mut setters = Vec::new();
+    let mut callers = Vec::new();
+    for f in &files {
+        let code = code_only(&std::fs::read_to_string(f).unwrap());
+        let rel = f.strip_prefix(root()).unwrap().display().to_string();
+        if code.contains("set_handler(") {
+            setters.push(rel.clone());
+        }
+        if code.contains("install_signal_handler()") || code.contains("install_handler()") {
+            callers.push(rel);
+        }
+    }
+    assert_eq!(setters, ["crates/cli/src/cmd/device/signals.rs"]);
+    // Defined there, re-exported for the binary, called by `main` alone: a file writer
+    // (`OutputSet::new`) or a library installs nothing.
+    callers.sort();
+    assert_eq!(
+        callers,
+        [
+            "crates/cli/src/cmd/device/signals.rs",
+            "crates/cli/src/lib.rs"
+        ]
+    );
+    let lib = code_only(&std::fs::read_to_string(root().join("crates/cli/src/lib.rs")).unwrap());
+    let main_fn = &lib[lib.find("pub fn main()").unwrap()..];
+    let main_body = &main_fn[..main_fn.find("\n}\n").unwrap()];
+    assert!(
+        main_body.contains("install_signal_handler()"),
+        "{main_body}"
     );
 }

@@ -76,6 +76,11 @@ pub struct SimArgs {
     /// it keeps its position and keeps running through a hang-up and a reconnect.
     #[arg(long)]
     pub no_dtr_reset: bool,
+    /// After a hardware reset (the reset of opening the port, a power cycle: SIGUSR1 to the
+    /// `firmware-sim` binary), the banner comes N ms later and input meanwhile is lost, as in
+    /// a bootloader.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub boot_ms: u64,
 }
 
 impl Default for SimArgs {
@@ -101,6 +106,7 @@ impl Default for SimArgs {
             drop_digit_at: None,
             seed: 0,
             no_dtr_reset: false,
+            boot_ms: 0,
         }
     }
 }
@@ -227,6 +233,7 @@ impl SimArgs {
             trace_svg: self.trace_svg.clone(),
             seed: self.seed,
             dtr_reset: !self.no_dtr_reset,
+            boot_ms: self.boot_ms,
         };
         cfg.validate()?;
         Ok(cfg)

@@ -126,6 +126,10 @@ pub struct SimConfig {
     /// power-cycles it). `false`: a board with auto-reset disabled and its own supply, which
     /// keeps running its planner and its position through a hang-up and a reconnect.
     pub dtr_reset: bool,
+    /// After a hardware reset (power-up, the reset of opening the port, a power cycle) the
+    /// banner comes this many milliseconds later (wall-clock time, as a bootloader's), and what
+    /// arrives meanwhile is lost. 0: at once.
+    pub boot_ms: u64,
 }
 
 /// Default baud rate of GRBL 1.1 (`config.h`).
@@ -144,6 +148,7 @@ impl Default for SimConfig {
             trace_svg: None,
             seed: 0,
             dtr_reset: true,
+            boot_ms: 0,
         }
     }
 }
@@ -241,6 +246,11 @@ impl SimConfig {
         self.dtr_reset = on;
         self
     }
+    /// Sets the bootloader's delay after a hardware reset ([`SimConfig::boot_ms`]).
+    pub fn with_boot_ms(mut self, ms: u64) -> Self {
+        self.boot_ms = ms;
+        self
+    }
 }
 
 /// One executed motion: a g-code motion command (an arc is one segment with its centre).
@@ -281,6 +291,9 @@ pub struct SimStats {
     pub bytes_dropped_fault: u64,
     /// Bytes lost while an EEPROM write held the RX interrupt off (`$x=`, G10, G28.1, `$N`, `$RST`).
     pub bytes_dropped_eeprom: u64,
+    /// Bytes lost while the controller was off or in its bootloader after a reset (`boot_ms`).
+    #[serde(default)]
+    pub bytes_dropped_boot: u64,
     /// Bytes corrupted by fault injection.
     pub bytes_corrupted: u64,
     /// Highest RX buffer fill seen, bytes.

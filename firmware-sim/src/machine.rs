@@ -138,6 +138,8 @@ pub struct Grbl {
     rng: Rng,
     lines_received: u32,
     stats: SimStats,
+    /// Powered off, or in the bootloader: nothing runs and received bytes are lost.
+    off: bool,
     events: Vec<SimEvent>,
     probe_pos: [f64; N_AXIS],
     door_restore_left: f64,
@@ -228,6 +230,7 @@ impl Grbl {
             rng: Rng::new(config.seed),
             lines_received: 0,
             stats: SimStats::default(),
+            off: false,
             events: Vec::new(),
             probe_pos: [0.0; N_AXIS],
             door_restore_left: 0.0,
@@ -326,6 +329,11 @@ impl Grbl {
             return false;
         }
         self.stats.bytes_received += 1;
+        if self.off {
+            // The bootloader (or nothing, powered off) reads the line: GRBL never sees it.
+            self.stats.bytes_dropped_boot += 1;
+            return true;
+        }
         if self.eeprom_left > 0.0 {
             // Interrupts are off while the EEPROM programs; one byte per write survives in the UART.
             let slot = ((self.eeprom_total - self.eeprom_left) / EEPROM_BYTE_S).floor() as i64;
@@ -746,6 +754,15 @@ impl Grbl {
     /// Power cycle (the device was unplugged and plugged in again): motion and output are gone, the position is
     /// zero, settings and EEPROM data are kept, and the banner comes as at power-up.
     pub fn power_cycle(&mut self) {
+        self.power_off();
+        self.power_on();
+    }
+
+    /// Power off (or a hardware reset, which holds the chip until its bootloader hands over): motion and output
+    /// are gone, the position is zero (and with it the work offsets that live in RAM: G92, the tool length
+    /// offset), settings and EEPROM data are kept; until [`Grbl::power_on`] nothing runs and every byte received
+    /// is lost.
+    pub fn power_off(&mut self) {
         self.out.clear();
         self.line_active = false;
         self.critical = false;
@@ -754,12 +771,24 @@ impl Grbl {
         self.stop_motion();
         self.planner.pos = [0.0; N_AXIS];
         self.planner.sync_position(&self.settings);
+        self.rx.clear();
+        self.off = true;
+    }
+
+    /// GRBL starts (power-up, or the bootloader handed over): the banner, and alarm-locked where homing is on.
+    pub fn power_on(&mut self) {
+        self.off = false;
         self.state = if self.settings.homing {
             State::Alarm
         } else {
             State::Idle
         };
         self.soft_reset();
+    }
+
+    /// Whether the controller is off (powered down, or in the bootloader after a reset).
+    pub fn is_off(&self) -> bool {
+        self.off
     }
 
     fn startup(&mut self) {
@@ -820,6 +849,10 @@ impl Grbl {
 
     /// Advances the virtual clock by `dt` seconds: runs the protocol loop and the motion.
     pub fn tick(&mut self, dt: f64) {
+        if self.off {
+            self.clock += dt;
+            return;
+        }
         self.process();
         let mut left = dt;
         while left > 0.0 {

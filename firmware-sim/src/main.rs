@@ -1,5 +1,6 @@
 //! `firmware-sim`: a GRBL 1.1h controller (Arduino Uno) on a pseudo-terminal. Prints the device path, runs until
-//! Ctrl-C or SIGTERM, then writes the traces.
+//! Ctrl-C or SIGTERM, then writes the traces. SIGUSR1 power-cycles the controller (position and G92 lost, the
+//! banner after `--boot-ms`, unheard when no client has the port open).
 
 use clap::Parser;
 use flatcut_firmware_sim::{PtySim, SimArgs, write_atomic};
@@ -28,6 +29,7 @@ fn main() -> ExitCode {
     signals.add(Signal::SIGINT);
     signals.add(Signal::SIGTERM);
     signals.add(Signal::SIGHUP);
+    signals.add(Signal::SIGUSR1);
     if let Err(e) = signals.thread_block() {
         eprintln!("firmware-sim: cannot block signals: {e}");
         return ExitCode::FAILURE;
@@ -48,7 +50,12 @@ fn main() -> ExitCode {
     } else {
         println!("{}", sim.path().display());
     }
-    let sig = signals.wait();
+    let sig = loop {
+        match signals.wait() {
+            Ok(Signal::SIGUSR1) => sim.power_cycle(),
+            other => break other,
+        }
+    };
     let report = sim.stop();
     if let Some(path) = &args.report {
         let summary = serde_json::json!({

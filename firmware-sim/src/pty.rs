@@ -4,7 +4,10 @@
 //! The thread keeps its own descriptor of the slave end open, so that reads on the master never fail with EIO
 //! when a client closes the port; a later client simply opens the same path again (the device "stays plugged in").
 //! Opening the port resets the board as the DTR line does on an Uno: an inotify watch on the device sees each
-//! client open, stale bytes in the pseudo-terminal are flushed, and the controller restarts with its banner.
+//! client open, stale bytes in the pseudo-terminal are flushed, and the controller restarts with its banner —
+//! after its bootloader's delay ([`SimConfig::boot_ms`]), during which input is lost. The watch also sees a
+//! client close: what the controller says while no client has the port open is lost, as on the wire, so a
+//! power cycle then ([`PtySim::power_cycle`]) leaves no banner for the next client to find.
 
 use crate::files::write_atomic;
 use crate::machine::{Grbl, SimEvent};
@@ -43,6 +46,8 @@ struct Shared {
     links: Vec<PathBuf>,
     replugs: u32,
     connects: u32,
+    /// A power cycle was asked for and not done yet.
+    power_cycle: bool,
 }
 
 /// A running simulator on a pseudo-terminal, on its own thread.
@@ -159,6 +164,13 @@ impl PtySim {
         lock(&self.shared).connects
     }
 
+    /// Cuts the controller's power and restores it, as unplugging a board powered over USB (or a reset button)
+    /// does: motion stops, the position is zero, G92 and the tool length offset are gone, settings and stored
+    /// offsets stay, and the banner comes after the bootloader's delay — lost if no client has the port open.
+    pub fn power_cycle(&self) {
+        lock(&self.shared).power_cycle = true;
+    }
+
     /// Stops the thread, writes the trace files of the configuration and returns trace and counters.
     pub fn stop(mut self) -> SimReport {
         self.shutdown();
@@ -241,8 +253,18 @@ pub(crate) fn open_pty() -> io::Result<(OwnedFd, OwnedFd, PathBuf)> {
 /// A non-blocking watch for opens of the device node (a client connecting).
 fn watch_opens(path: &Path) -> Option<Inotify> {
     let ino = Inotify::init(InitFlags::IN_NONBLOCK | InitFlags::IN_CLOEXEC).ok()?;
-    ino.add_watch(path, AddWatchFlags::IN_OPEN).ok()?;
+    ino.add_watch(
+        path,
+        AddWatchFlags::IN_OPEN | AddWatchFlags::IN_CLOSE_WRITE | AddWatchFlags::IN_CLOSE_NOWRITE,
+    )
+    .ok()?;
     Some(ino)
+}
+
+/// A hardware reset of the controller: off now, on again after the bootloader's delay.
+fn hard_reset(core: &mut Grbl, boot: Duration, booting: &mut Option<Instant>) {
+    core.power_off();
+    *booting = Some(Instant::now() + boot);
 }
 
 /// Brings the device back on a fresh pseudo-terminal and re-points the links.
@@ -288,7 +310,14 @@ fn run(
     let mut buf = [0u8; 512];
     let mut pushed_trace = 0;
     let mut unplugged_at: Option<Instant> = None;
-    let mut connected = opens.is_none();
+    let boot = Duration::from_millis(config.boot_ms);
+    // The controller is in its bootloader until then (it powered up as the thread started).
+    let mut booting: Option<Instant> = None;
+    if !boot.is_zero() {
+        hard_reset(&mut core, boot, &mut booting);
+    }
+    // Clients with the device open; without a watch, one is taken to be there all along.
+    let mut clients: i64 = i64::from(opens.is_none());
     while !stop.load(Ordering::SeqCst) {
         if let Some(t) = unplugged_at
             && t.elapsed().as_secs_f64() >= REPLUG_DELAY_S
@@ -298,10 +327,17 @@ fn run(
             slave = Some(s);
             unplugged_at = None;
             if dtr_reset {
-                core.power_cycle();
+                hard_reset(&mut core, boot, &mut booting);
             }
             opens = o;
-            connected = opens.is_none();
+            clients = i64::from(opens.is_none());
+        }
+        if std::mem::take(&mut lock(&shared).power_cycle) {
+            hard_reset(&mut core, boot, &mut booting);
+        }
+        if booting.is_some_and(|t| Instant::now() >= t) {
+            booting = None;
+            core.power_on();
         }
         if let Some(m) = &master {
             let mut fds = vec![PollFd::new(m.as_fd(), PollFlags::POLLIN)];
@@ -312,18 +348,34 @@ fn run(
         } else {
             std::thread::sleep(Duration::from_millis(u64::from(POLL_MS)));
         }
-        // A client opened the device: reset like the DTR pulse of an Uno, with the stale bytes flushed.
+        // A client opened the device: reset like the DTR pulse of an Uno, with the stale bytes flushed. The last
+        // client closed it: what is still on its way to it is lost.
         if let (Some(ino), Some(s)) = (&opens, &slave)
-            && ino.read_events().is_ok_and(|ev| !ev.is_empty())
+            && let Ok(events) = ino.read_events()
         {
-            if dtr_reset {
-                let _ = tcflush(s, FlushArg::TCIOFLUSH);
-                txq.clear();
-                core.power_cycle();
+            for ev in events {
+                if ev.mask.contains(AddWatchFlags::IN_OPEN) {
+                    if dtr_reset {
+                        let _ = tcflush(s, FlushArg::TCIOFLUSH);
+                        txq.clear();
+                        hard_reset(&mut core, boot, &mut booting);
+                        if boot.is_zero() {
+                            booting = None;
+                            core.power_on();
+                        }
+                    }
+                    clients += 1;
+                    lock(&shared).connects += 1;
+                } else {
+                    clients = (clients - 1).max(0);
+                    if clients == 0 {
+                        let _ = tcflush(s, FlushArg::TCIOFLUSH);
+                        txq.clear();
+                    }
+                }
             }
-            connected = true;
-            lock(&shared).connects += 1;
         }
+        let connected = clients > 0;
         let now = Instant::now();
         let dt = now.duration_since(last).as_secs_f64().min(MAX_TICK_S);
         last = now;

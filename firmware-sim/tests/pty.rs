@@ -327,3 +327,98 @@ fn character_counting_through_the_pty_loses_nothing() {
     drop(port);
     sim.stop();
 }
+
+/// Writes `cmd` and reads until `pat`, returning what came.
+fn ask(port: &mut dyn serialport::SerialPort, cmd: &[u8], pat: &str) -> String {
+    port.write_all(cmd).unwrap();
+    let mut acc = String::new();
+    assert!(
+        read_until(port, &mut acc, pat, Duration::from_secs(3)),
+        "{cmd:?}: {acc:?}"
+    );
+    acc
+}
+
+/// Issue 39, item 2: `--boot-ms`: after the reset of opening the port the banner comes that much later, as from
+/// a bootloader, and what arrives meanwhile is lost (a `$I` sent then gets no answer).
+#[test]
+fn the_bootloader_delays_the_banner_and_loses_what_comes_meanwhile() {
+    let sim = PtySim::spawn(SimConfig::default().with_boot_ms(1200)).unwrap();
+    let t0 = Instant::now();
+    let mut port = open(sim.path());
+    std::thread::sleep(Duration::from_millis(200));
+    port.write_all(b"$I\n").unwrap();
+    let mut acc = String::new();
+    assert!(read_until(
+        port.as_mut(),
+        &mut acc,
+        "for help]\r\n",
+        Duration::from_secs(5)
+    ));
+    let waited = t0.elapsed();
+    assert!(
+        waited >= Duration::from_millis(1150) && waited < Duration::from_millis(2500),
+        "{waited:?}"
+    );
+    // Only the banner: the `$I` went to the bootloader.
+    std::thread::sleep(Duration::from_millis(300));
+    read_until(port.as_mut(), &mut acc, "[VER:", Duration::from_millis(200));
+    assert_eq!(acc, "\r\nGrbl 1.1h ['$' for help]\r\n");
+    assert!(ask(port.as_mut(), b"$I\n", "ok\r\n").contains("[VER:1.1h"));
+    drop(port);
+    assert_eq!(sim.stop().stats.bytes_dropped_boot, 3);
+}
+
+/// Issue 39, item 2: a power cycle while no client has the port open (a board with auto-reset off and its own
+/// supply, switched off and on) loses the position and the G92 offset, keeps the stored G54 offset, and its
+/// banner is heard by nobody: the next client finds a fresh controller that says nothing of it. Without the
+/// power cycle, the same reconnect finds everything where it was.
+#[test]
+fn a_power_cycle_with_no_client_loses_position_and_g92_and_its_banner() {
+    let sim = PtySim::spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_dtr_reset(false)
+            .with_boot_ms(300),
+    )
+    .unwrap();
+    // The board powered up as the simulator started: its banner comes after the boot delay.
+    let mut port = open(sim.path());
+    let mut acc = String::new();
+    assert!(read_until(
+        port.as_mut(),
+        &mut acc,
+        "for help]\r\n",
+        Duration::from_secs(3)
+    ));
+    ask(
+        port.as_mut(),
+        b"G10 L2 P1 X2\nG0 X10 Y4\nG92 X1 Y1\n",
+        "ok\r\nok\r\nok\r\n",
+    );
+    drop(port);
+    let status = |port: &mut dyn serialport::SerialPort| ask(port, b"?", ">\r\n");
+    let offsets = |port: &mut dyn serialport::SerialPort| ask(port, b"$#\n", "ok\r\n");
+    // A reconnect alone changes nothing.
+    let mut port = open(sim.path());
+    assert!(
+        status(port.as_mut()).starts_with("<Idle|MPos:12.000,4.000,0.000|"),
+        "kept"
+    );
+    assert!(offsets(port.as_mut()).contains("[G92:9.000,3.000,0.000]"));
+    drop(port);
+    std::thread::sleep(Duration::from_millis(100));
+    sim.power_cycle();
+    std::thread::sleep(Duration::from_millis(600));
+    let mut port = open(sim.path());
+    acc = status(port.as_mut());
+    assert!(acc.starts_with("<Idle|MPos:0.000,0.000,0.000|"), "{acc:?}");
+    acc = offsets(port.as_mut());
+    assert!(
+        acc.contains("[G54:2.000,0.000,0.000]") && acc.contains("[G92:0.000,0.000,0.000]"),
+        "{acc:?}"
+    );
+    assert!(!acc.contains("Grbl"), "a banner nobody heard: {acc:?}");
+    drop(port);
+    sim.stop();
+}

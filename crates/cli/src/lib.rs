@@ -3,7 +3,7 @@
 //! **Architecture invariant:** this is the only crate that writes the user's output files, talks to
 //! the terminal, reads environment variables and opens serial ports on the user's behalf (the
 //! libraries read the input files they are given), and the only one that uses `anyhow`. Every
-//! command is a thin layer over the `flatcut` facade and `flatcut-grbl`.
+//! command is a thin layer over the `flatcut` facade and the device library `flatcut-device`.
 
 use std::process::ExitCode;
 
@@ -68,9 +68,22 @@ pub enum Command {
 /// Exit code when a material or distortion limit is exceeded.
 pub const EXIT_LIMIT: u8 = 3;
 
-/// Runs the command line with the process arguments.
+/// Runs the command line with the process arguments, with the process's signal handler in
+/// place (see [`install_signal_handler`]).
 pub fn main() -> ExitCode {
+    if let Err(e) = install_signal_handler() {
+        eprintln!("warning: Ctrl-C will neither pause a job nor clean up temporary files: {e}");
+    }
     exit_code(run(Cli::parse()))
+}
+
+/// Installs the binary's handler of SIGINT, SIGTERM and SIGHUP: during a send the first is a
+/// feed hold and a question (an abort without a terminal), otherwise the command's temporary
+/// outputs are removed and the process ends (130). Only the binary installs it (an embedding
+/// program owns its signals); a program that drives the command line in process and wants the
+/// same calls it once.
+pub fn install_signal_handler() -> Result<(), String> {
+    cmd::device::install_handler()
 }
 
 /// The process's exit code for a command's result, printing an error; a closed standard

@@ -7,8 +7,9 @@
 //! JSON, the command's error leaves the old outputs (or none) and no new one.
 //!
 //! Temporary files are removed on every exit path: by `Drop` when the command returns early (an
-//! error, a closed stdout), and by the process-wide signal handler on SIGINT, SIGTERM and SIGHUP
-//! through a registry of the temporaries alive in this process ([`remove_staged`]).
+//! error, a closed stdout), and by the process-wide signal handler the binary installs
+//! (`cmd::device::install_handler`) on SIGINT, SIGTERM and SIGHUP through a registry of the
+//! temporaries alive in this process ([`remove_staged`]). Writing files installs nothing.
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -48,11 +49,9 @@ pub struct OutputSet {
 }
 
 impl OutputSet {
-    /// An empty set. Installs the signal handler (once per process) so a signal removes the
-    /// temporaries; without one (another handler already owns the signals) temporaries are
-    /// still removed on every non-signal exit.
+    /// An empty set. A signal removes its temporaries where the binary installed its handler;
+    /// they are removed on every other exit path in any case.
     pub fn new() -> OutputSet {
-        crate::cmd::device::install_signal_cleanup();
         OutputSet::default()
     }
 

@@ -140,8 +140,46 @@ pub fn with_leads(
     } else {
         restarted
     };
-    let run = &run[..];
+    add_leads(&run, scrap_left(loop_pts, outer), cfg, true)
+}
+
+/// Adds a lead-in before and a lead-out after an open `run`, one piece of a closed contour
+/// `loop_pts` that tabs split (each piece is entered and left on its own): both on the scrap
+/// side, so a laser pierces in the scrap for every piece, as for a whole contour. A piece
+/// starts where a tab ends, maybe next to a corner, where an arc lead would swing behind the
+/// corner into the part: then a line lead is used, and where neither fits in the scrap (a
+/// hole narrower than the lead) the piece has none.
+pub fn with_open_leads(
+    run: &[DVec2],
+    loop_pts: &[DVec2],
+    outer: bool,
+    cfg: &LeadConfig,
+) -> Vec<DVec2> {
+    if run.len() < 2 {
+        return run.to_vec();
+    }
     let side = scrap_left(loop_pts, outer);
+    let in_scrap = |p: &DVec2| flatcut_geom::polygon::contains(loop_pts, *p) != outer;
+    let line = LeadConfig {
+        kind: LeadKind::Line,
+        ..*cfg
+    };
+    for c in [*cfg, line] {
+        let out = add_leads(run, side, &c, false);
+        let leads = (out.len() - run.len()) / 2;
+        let lead_points = out[..leads].iter().chain(&out[out.len() - leads..]);
+        if lead_points.clone().all(in_scrap) {
+            return out;
+        }
+    }
+    run.to_vec()
+}
+
+/// `run` with a lead before its first point and after its last, on the `side` of the path
+/// where the scrap is (+1 left, −1 right). A line lead of a `closed` run (first point = last
+/// point) goes in and out along one direction, the mean of the ends' normals; otherwise each
+/// end has its own.
+fn add_leads(run: &[DVec2], side: f64, cfg: &LeadConfig, closed: bool) -> Vec<DVec2> {
     let first = (run[1] - run[0]).normalize_or_zero();
     let k = run.len();
     let last = (run[k - 1] - run[k - 2]).normalize_or_zero();
@@ -149,15 +187,20 @@ pub fn with_leads(
     let mut out = Vec::with_capacity(run.len() + 2 * ARC_LEAD_SEGMENTS + 2);
     match cfg.kind {
         LeadKind::Line => {
-            let n = (left_normal(first) + left_normal(last)).normalize_or_zero();
-            let n = if n == DVec2::ZERO {
-                left_normal(first)
+            let (n_in, n_out) = if closed {
+                let n = (left_normal(first) + left_normal(last)).normalize_or_zero();
+                let n = if n == DVec2::ZERO {
+                    left_normal(first)
+                } else {
+                    n
+                };
+                (n, n)
             } else {
-                n
+                (left_normal(first), left_normal(last))
             };
-            out.push(run[0] + n * side * r);
+            out.push(run[0] + n_in * side * r);
             out.extend_from_slice(run);
-            out.push(run[k - 1] + n * side * r);
+            out.push(run[k - 1] + n_out * side * r);
         }
         LeadKind::Arc => {
             // Quarter circles on the scrap side, tangent to the first and last segments.

@@ -261,6 +261,11 @@ pub fn plan(drawing: &Drawing, profile: &Profile, opts: &GcodeOptions) -> Result
                     Some(lead) if closed && closed_cut => {
                         cutter::with_leads(&run, &s.pts, s.outer, lead, overcut)
                     }
+                    // A piece of a closed cut that tabs split is entered and left in the scrap
+                    // as the whole cut would be.
+                    Some(lead) if closed_cut => {
+                        cutter::with_open_leads(&run, &s.pts, s.outer, lead)
+                    }
                     _ if overcut > 0.0 => knife::with_overcut(&run, overcut),
                     _ => run,
                 };
@@ -507,7 +512,91 @@ impl Plan {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::profile::{LeadConfig, LeadKind, TabsConfig};
     use flatcut_pattern::{Stroke, StrokeKind};
+
+    /// Issue 38, item 7: a laser profile with tabs keeps its lead-ins. Every piece the tabs leave
+    /// of a closed cut is entered and left in the scrap, a lead's length off the part (the
+    /// laser pierces there, not on the part's edge), as the whole cut is without tabs.
+    #[test]
+    fn tabs_keep_the_lead_ins() {
+        let (w, h) = (60.0, 30.0);
+        let d = Drawing::from_strokes(vec![Stroke {
+            layer: Layer::Cut,
+            points: vec![
+                DVec2::new(50.0, 50.0),
+                DVec2::new(50.0 + w, 50.0),
+                DVec2::new(50.0 + w, 50.0 + h),
+                DVec2::new(50.0, 50.0 + h),
+            ],
+            closed: true,
+            piece: Some(0),
+            kind: StrokeKind::Boundary,
+            id: "plate".into(),
+        }]);
+        // Distance of a point from the part's outline, and whether it is inside.
+        let off = |p: DVec2| {
+            let (x, y) = (p.x - 50.0, p.y - 50.0);
+            let inside = x > 0.0 && x < w && y > 0.0 && y < h;
+            let dx = (-x).max(x - w).max(0.0);
+            let dy = (-y).max(y - h).max(0.0);
+            let d = if inside {
+                x.min(w - x).min(y).min(h - y)
+            } else {
+                dx.hypot(dy)
+            };
+            (inside, d)
+        };
+        for kind in [LeadKind::Line, LeadKind::Arc] {
+            let mut laser = Profile::laser();
+            laser.lead = Some(LeadConfig {
+                kind,
+                length_mm: 3.0,
+            });
+            let mut cut = laser.layer(Layer::Cut);
+            cut.tabs = Some(TabsConfig {
+                count: 4,
+                width_mm: 2.0,
+            });
+            laser.layers.insert("cut".into(), cut);
+            let opts = GcodeOptions {
+                arcs: false,
+                ..GcodeOptions::default()
+            };
+            let p = plan(&d, &laser, &opts).unwrap();
+            let pieces: Vec<&Toolpath> = p.paths.iter().filter(|t| t.layer == Layer::Cut).collect();
+            assert_eq!(
+                pieces.len(),
+                4,
+                "{kind:?}: one cut per piece between the tabs"
+            );
+            for t in pieces {
+                for end in [t.start, t.end()] {
+                    // A line lead ends 3 mm off the part; an arc lead 3 mm off the outline's
+                    // line, or farther where it swings back past a corner.
+                    let (inside, d) = off(end);
+                    let far = match kind {
+                        LeadKind::Line => (d - 3.0).abs() < 1e-9,
+                        LeadKind::Arc => d >= 3.0 - 1e-9,
+                    };
+                    assert!(
+                        !inside && far,
+                        "{kind:?}: a piece starts or ends at {end}, {d} mm from the part"
+                    );
+                }
+                // Between its leads (one point each for a line, eight for an arc) the piece
+                // runs on the outline.
+                let (lead_in, lead_out) = match kind {
+                    LeadKind::Line => (0, 1),
+                    LeadKind::Arc => (7, 8),
+                };
+                let on_outline = t.moves[lead_in..t.moves.len() - lead_out]
+                    .iter()
+                    .all(|m| off(m.end()).1 < 1e-9);
+                assert!(on_outline, "{kind:?}: {t:?}");
+            }
+        }
+    }
 
     /// A closed outline whose vertices come in clusters closer than the output resolution (as
     /// offsets of fine meshes give): a knife job must not repeat a line or turn on the spot.

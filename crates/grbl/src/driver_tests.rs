@@ -513,6 +513,7 @@ fn state_with_unconfirmed(job: &Job, unconfirmed: Vec<usize>) -> JournalState {
         start: None,
         origin: None,
         texts: Vec::new(),
+        stop: None,
     }
 }
 

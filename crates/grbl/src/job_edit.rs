@@ -126,6 +126,15 @@ impl JobChanges {
     }
 }
 
+impl crate::journal::LineMap for JobChanges {
+    fn map(&self, old: usize) -> Option<usize> {
+        JobChanges::map(self, old)
+    }
+    fn summary(&self) -> String {
+        self.to_string()
+    }
+}
+
 impl fmt::Display for JobChanges {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let span = |v: &[(usize, String)]| match (v.first(), v.last()) {

@@ -23,6 +23,11 @@
 //!                         (mm, G92-free); acknowledged lines of this run from <index> on did not run
 //! Q <from> <to>           lines <from>..=<to> may or may not have run: the controller lost its
 //!                         position (reset in motion); resuming needs an explicit choice
+//! S <mx> <my> <mz> <wcs> <gx> <gy> <gz> <tlo> <modal words>
+//!                         the run stopped with the controller at machine position (mx, my, mz)
+//!                         in G<wcs>, G92 offset (gx, gy, gz), tool length offset <tlo> (mm) and
+//!                         this parser state (`$G`'s G and M words); it counts until the next
+//!                         `A` (a later run moved the machine)
 //! K <from> <to>           resolved when resuming: lines <from>..<to> (exclusive) have executed,
 //!                         none from <to> on has; earlier unconfirmed acknowledgements are settled
 //! N <text>                a note (why the run stopped)
@@ -84,6 +89,15 @@ pub enum JournalError {
     },
 }
 
+/// How the lines of the job a journal was written for map onto the same file after an edit
+/// (see `job_edit`).
+pub trait LineMap {
+    /// Where the journal's line `old` is in the edited job; `None` for a line the edit changed.
+    fn map(&self, old: usize) -> Option<usize>;
+    /// What changed, for the journal's note.
+    fn summary(&self) -> String;
+}
+
 /// What a journal says about a job.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JournalState {
@@ -115,6 +129,36 @@ pub struct JournalState {
     pub origin: Option<[f64; 3]>,
     /// Per job line: (file line, text sent), if recorded (empty otherwise).
     pub texts: Vec<(usize, String)>,
+    /// What the controller said when the last run stopped, unless a later run moved it since.
+    pub stop: Option<StopRecord>,
+}
+
+/// What the controller said when a run stopped and the machine stood still (the `S` record):
+/// where it stood, in which frame, with which parser state. A resume compares it with what the
+/// controller says then.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StopRecord {
+    /// Machine position, mm.
+    pub machine: [f64; 3],
+    /// Active coordinate system, 54..=59.
+    pub wcs: u8,
+    /// G92 offset, mm.
+    pub g92: [f64; 3],
+    /// Tool length offset (G43.1), mm.
+    pub tlo: f64,
+    /// The G and M words of the parser state (`$G`), e.g. `G0 G54 G17 G21 G90 G94 M5 M9`.
+    pub modal: String,
+}
+
+impl StopRecord {
+    /// The record's text (without the leading `S `).
+    fn to_record(&self) -> String {
+        let (m, g) = (self.machine, self.g92);
+        format!(
+            "{} {} {} {} {} {} {} {} {}",
+            m[0], m[1], m[2], self.wcs, g[0], g[1], g[2], self.tlo, self.modal
+        )
+    }
 }
 
 impl JournalState {
@@ -208,7 +252,7 @@ impl Journal {
         path: impl AsRef<Path>,
         job: &Job,
         st: &JournalState,
-        changes: &crate::job_edit::JobChanges,
+        changes: &dyn LineMap,
     ) -> Result<(Journal, JournalState), JournalError> {
         let path = path.as_ref();
         let m = |i: usize| changes.map(i);
@@ -227,7 +271,12 @@ impl Journal {
         for n in &st.notes {
             t.push_str(&format!("N {n}\n"));
         }
-        let done = changes.map_done(&st.done);
+        let mut done = vec![false; job.len()];
+        for i in (0..st.done.len()).filter(|&i| st.done[i]) {
+            if let Some(k) = m(i).filter(|&k| k < done.len()) {
+                done[k] = true;
+            }
+        }
         for (i, _) in done.iter().enumerate().filter(|(_, d)| **d) {
             t.push_str(&format!("A {i}\n"));
         }
@@ -249,7 +298,10 @@ impl Journal {
         {
             t.push_str(&format!("Q {a} {b}\n"));
         }
-        let summary = changes.to_string().replace('\n', " / ");
+        if let Some(r) = &st.stop {
+            t.push_str(&format!("S {}\n", r.to_record()));
+        }
+        let summary = changes.summary().replace('\n', " / ");
         t.push_str(&format!(
             "N job edited after this journal was written: {summary}\n"
         ));
@@ -340,6 +392,7 @@ impl Journal {
             start: None,
             origin: None,
             texts: Vec::new(),
+            stop: None,
         };
         // Acks of the current run not yet confirmed, kept sorted by arrival (= index order
         // within a run except across resume gaps).
@@ -381,6 +434,7 @@ impl Journal {
                     st.rejected[i] = None;
                     st.last_acked = Some(st.last_acked.map_or(i, |l| l.max(i)));
                     pending.push(i);
+                    st.stop = None;
                 }
                 "E" => {
                     let mut w = rest.unwrap_or("").split_whitespace();
@@ -488,6 +542,29 @@ impl Journal {
                     }
                     st.texts.push((line, w.next().unwrap_or("").to_string()));
                 }
+                "S" => {
+                    let mut w = rest.unwrap_or("").split_whitespace();
+                    let mut v = [0.0; 3];
+                    for x in &mut v {
+                        *x = coord(n, w.next())?;
+                    }
+                    let wcs = w
+                        .next()
+                        .and_then(|s| s.parse::<u8>().ok())
+                        .filter(|n| (54..=59).contains(n))
+                        .ok_or_else(|| bad(n, "bad coordinate system"))?;
+                    let mut g = [0.0; 4];
+                    for x in &mut g {
+                        *x = coord(n, w.next())?;
+                    }
+                    st.stop = Some(StopRecord {
+                        machine: v,
+                        wcs,
+                        g92: [g[0], g[1], g[2]],
+                        tlo: g[3],
+                        modal: w.collect::<Vec<_>>().join(" "),
+                    });
+                }
                 "N" => st.notes.push(rest.unwrap_or("").to_string()),
                 "D" => st.finished = true,
                 _ => return Err(bad(n, &format!("unknown record '{kind}'"))),
@@ -539,6 +616,11 @@ impl Journal {
     /// Records that lines `from..=to` may or may not have run (the controller lost its position).
     pub fn uncertain(&mut self, from: usize, to: usize) {
         self.buf.push_str(&format!("Q {from} {to}\n"));
+    }
+
+    /// Records what the controller said when the run stopped (see [`StopRecord`]).
+    pub fn stopped_at(&mut self, r: &StopRecord) {
+        self.buf.push_str(&format!("S {}\n", r.to_record()));
     }
 
     /// Records the resolution of a resume: lines `from..to` executed, none from `to` on.
@@ -735,6 +817,43 @@ mod tests {
         assert!(st.unconfirmed.is_empty());
         let mut text = std::fs::read_to_string(&p).unwrap();
         text.push_str("P 2 1.0 nan 0\n");
+        std::fs::write(&p, text).unwrap();
+        assert!(matches!(
+            Journal::read(&p),
+            Err(JournalError::Malformed { .. })
+        ));
+    }
+
+    #[test]
+    fn a_stop_record_counts_until_a_later_run_moves_the_machine() {
+        let job = Job::parse("G1X1F100\nG1X2\nG1X3\n").unwrap();
+        let p = tmp("stop.journal");
+        let rec = StopRecord {
+            machine: [11.244, 10.416, 3.0],
+            wcs: 55,
+            g92: [1.0, 0.0, -0.5],
+            tlo: 0.25,
+            modal: "G0 G55 G17 G21 G90 G94 M5 M9".into(),
+        };
+        {
+            let mut j = Journal::create(&p, &job).unwrap();
+            j.ack(0);
+            j.executed_through(0);
+            j.stopped_at(&rec);
+            j.sync().unwrap();
+        }
+        assert_eq!(Journal::read(&p).unwrap().stop.as_ref(), Some(&rec));
+        // A resume refused before anything moved keeps it for the next attempt.
+        drop(Journal::resume(&p, &job).unwrap());
+        assert_eq!(Journal::read(&p).unwrap().stop.as_ref(), Some(&rec));
+        {
+            let (mut j, _) = Journal::resume(&p, &job).unwrap();
+            j.ack(1);
+            j.sync().unwrap();
+        }
+        assert_eq!(Journal::read(&p).unwrap().stop, None);
+        let mut text = std::fs::read_to_string(&p).unwrap();
+        text.push_str("S 1 2 3 53 0 0 0 0 G0\n");
         std::fs::write(&p, text).unwrap();
         assert!(matches!(
             Journal::read(&p),

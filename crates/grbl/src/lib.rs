@@ -25,12 +25,12 @@ pub mod streamer;
 pub mod transport;
 
 pub use driver::{
-    CancelToken, Control, Operator, OriginQuestion, PausePolicy, Progress, Question, SendError,
-    SendOptions, SendReport, send_job,
+    CancelToken, Console, Control, ControllerInfo, Jog, MachineStatus, Operator, OriginQuestion,
+    PausePolicy, Progress, Question, SendError, SendOptions, SendReport, send_job,
 };
 pub use job::{FeedClamp, Job, JobError, JobLine, JobStart, MachineLimits, ModalState};
 pub use job_edit::JobChanges;
-pub use journal::{Journal, JournalError, JournalState};
+pub use journal::{Journal, JournalError, JournalState, LineMap, StopRecord};
 pub use response::{MachineState, Response, StatusReport, parse_response};
 pub use streamer::{Event, Streamer, Tag};
 pub use transport::{SerialTransport, Transport, TransportError, list_ports, open_port};

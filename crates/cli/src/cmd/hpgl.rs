@@ -9,8 +9,8 @@ use std::time::Duration;
 
 use anyhow::Context as _;
 use flatcut::gcode::{FlowControl, GcodeOptions, Profile};
-use flatcut_firmware_sim::hpgl::{HpglPtySim, PlotterConfig};
-use flatcut_grbl::hpgl::{HpglFlow, HpglStreamOptions, stream_hpgl};
+use flatcut_device::grbl::hpgl::{HpglFlow, HpglStreamOptions, stream_hpgl};
+use flatcut_device::sim::hpgl::{HpglPtySim, PlotterConfig};
 
 use super::common::{self, FlattenArgs, PieceArgs};
 
@@ -98,7 +98,7 @@ pub fn send(
         (None, Some(p)) => p.to_string(),
         (None, None) => unreachable!("a port or the simulator"),
     };
-    let mut t = flatcut_grbl::open_port(&path, h.baud)?;
+    let mut t = flatcut_device::grbl::open_port(&path, h.baud)?;
     if flow == HpglFlow::RtsCts {
         t.port_mut()
             .set_flow_control(serialport::FlowControl::Hardware)
@@ -143,7 +143,7 @@ pub fn send(
             st.high_water
         );
         if let Some(p) = trace {
-            common::write(p, flatcut_firmware_sim::hpgl::trace_svg(&tr).as_bytes())?;
+            common::write(p, flatcut_device::sim::hpgl::trace_svg(&tr).as_bytes())?;
         }
         anyhow::ensure!(
             st.bytes_lost == 0,

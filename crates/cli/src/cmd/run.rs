@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use flatcut::check::{CutSegment, trace_deviation};
+use flatcut::check::{CutSegment, blade_tip_deviation, trace_deviation};
 use flatcut::geom::DVec2;
 use flatcut::nest::Stock;
 use flatcut::project::Project;
@@ -55,6 +55,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     if let Some(m) = &a.material {
         proj.material.spec = Some(flatcut::design::material::MaterialSpec::load(m, None)?);
     }
+    check_before_work(&proj, &a)?;
     let out = a
         .output
         .clone()
@@ -86,6 +87,33 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let (stream_lines, exit) = send_stage(&a, &outputs, &out, &mut log)?;
     print_summary(&outputs, &stream_lines, &out, t0)?;
     Ok(exit)
+}
+
+/// Checks what can be checked before any work starts, so that a run that would fail at its
+/// end fails before it writes anything: the design file is there, the machine profile loads,
+/// and the device the jobs would stream to exists (a port) or can run (the simulator as the
+/// profile's machine).
+fn check_before_work(proj: &Project, a: &Args) -> anyhow::Result<()> {
+    let design = proj.design_path();
+    anyhow::ensure!(
+        design.is_file(),
+        "the project's design {} does not exist",
+        design.display()
+    );
+    let profile = flatcut::gcode::Profile::resolve(&proj.profile_spec())
+        .with_context(|| format!("the project's machine profile {}", proj.machine.profile))?;
+    if a.no_send {
+        return Ok(());
+    }
+    let stream = device::select::for_project(&proj.device, &profile, &a.stream);
+    let target = stream.target()?;
+    let checked = target.check();
+    if let flatcut_device::Target::Port { path, .. } = &target {
+        checked.with_context(|| format!("cannot open the serial port {path}"))?;
+    } else {
+        checked?;
+    }
+    Ok(())
 }
 
 /// Streams the jobs (all sheets to the simulator; the first, or all with `--all-sheets`, to a
@@ -126,11 +154,7 @@ fn send_stage(
     };
     started(
         log,
-        &format!(
-            "{} job(s) to {}",
-            to_send,
-            device::select::describe(&a.stream)
-        ),
+        &format!("{} job(s) to {}", to_send, a.stream.describe()),
     );
     let mut lines = Vec::new();
     for job in jobs.iter().take(to_send) {
@@ -143,16 +167,31 @@ fn send_stage(
                 .get_or_insert_with(|| out.join(format!("sim-{n}.jsonl")));
             sa.sim_laser = outputs.profile.kind == flatcut::gcode::ToolKind::Laser;
         }
-        let o = device::stream_file(&out.join(&job.gcode_file), &sa)?;
+        // The job streams from memory; it is named after its file (`<file>.journal`).
+        let path = out.join(&job.gcode_file);
+        let text = outputs
+            .files
+            .iter()
+            .find(|f| f.name == job.gcode_file)
+            .map(|f| String::from_utf8_lossy(&f.bytes))
+            .with_context(|| format!("the run wrote no {}", job.gcode_file))?;
+        let o = device::stream_text(&text, &path.display().to_string(), &sa)?;
         let dev = match &o.sim_trace {
             Some(trace) => {
                 let cut = cut_segments(trace);
-                let d = trace_deviation(&cut, &job.drawing, &outputs.profile);
-                format!(
-                    ", simulator traced {} segments, cut path within {:.3} mm of the pattern",
-                    trace.len(),
-                    d
-                )
+                let axis = trace_deviation(&cut, &job.drawing, &outputs.profile);
+                // A drag knife cuts with its blade tip, which trails the axis the trace
+                // records by the blade offset: the tip is what lies on the pattern.
+                match blade_tip_deviation(&cut, &job.drawing, &outputs.profile) {
+                    Some(tip) => format!(
+                        ", simulator traced {} segments, blade tip within {tip:.3} mm of the pattern (knife axis within {axis:.3} mm: it runs the blade offset ahead)",
+                        trace.len()
+                    ),
+                    None => format!(
+                        ", simulator traced {} segments, cut path within {axis:.3} mm of the pattern",
+                        trace.len()
+                    ),
+                }
             }
             None => String::new(),
         };
@@ -177,7 +216,7 @@ fn send_stage(
 }
 
 /// The simulator's tool-on cutting motions, in machine mm.
-fn cut_segments(trace: &[flatcut_firmware_sim::TraceSegment]) -> Vec<CutSegment> {
+fn cut_segments(trace: &[flatcut_device::sim::TraceSegment]) -> Vec<CutSegment> {
     trace
         .iter()
         .filter(|s| s.tool_on && s.motion != "G0")

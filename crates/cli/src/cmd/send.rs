@@ -17,9 +17,15 @@ pub struct Args {
     /// grbl (G-code, character counting) or hpgl (HP-GL with the profile's flow control).
     #[arg(long, default_value = "grbl", value_parser = ["grbl", "hpgl"])]
     pub protocol: String,
-    /// With `--protocol hpgl`: the device's profile (vinyl, pen-hpgl or a .toml).
-    #[arg(long, default_value = "vinyl")]
-    pub profile: String,
+    /// The machine's profile. With `--protocol hpgl`: the plotter's (vinyl, pen-hpgl or a
+    /// .toml; default vinyl). With G-code and no `--port`: the embedded simulator is the
+    /// machine it describes (pen, knife, laser or a .toml: rates, acceleration, work area),
+    /// instead of GRBL's defaults (200 mm of travel on each axis).
+    #[arg(long, value_name = "NAME|FILE")]
+    pub profile: Option<String>,
+    /// Stream a laser job (its header says it needs `$32=1`) to a controller with `$32=0`.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Runs `flatcut send`.
@@ -28,12 +34,19 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         let s = &a.stream;
         return super::hpgl::send(
             &a.job,
-            &a.profile,
+            a.profile.as_deref().unwrap_or("vinyl"),
             s.port.as_deref(),
             s.sim_trace.as_deref(),
         );
     }
-    let out = stream_file(&a.job, &a.stream)?;
+    let mut stream = a.stream.clone();
+    stream.force_laser |= a.force;
+    if let Some(p) = &a.profile {
+        let profile = flatcut::gcode::Profile::resolve(p)?;
+        stream.sim_machine = Some(super::device::select::machine(&profile));
+        stream.sim_laser |= profile.kind == flatcut::gcode::ToolKind::Laser;
+    }
+    let out = stream_file(&a.job, &stream)?;
     // A closed stdout (`flatcut send … | head`) ends the command normally.
     crate::outln!("{}", summary(&out));
     Ok(ExitCode::SUCCESS)

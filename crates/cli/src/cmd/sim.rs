@@ -1,11 +1,11 @@
 //! `flatcut sim`: the simulated GRBL 1.1h controller on a pseudo-terminal, in the foreground
 //! until Ctrl-C, for any sender (including `flatcut send --port`). Its flags are the
-//! `firmware-sim` binary's own ([`flatcut_firmware_sim::SimArgs`]).
+//! `firmware-sim` binary's own ([`flatcut_device::sim::SimArgs`]).
 
 use std::process::ExitCode;
 
 use anyhow::Context;
-use flatcut_firmware_sim::{PtySim, SimArgs};
+use flatcut_device::sim::{PtySim, SimArgs};
 
 use super::device::wait_for_interrupt;
 
@@ -34,7 +34,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         a.baud,
         a.link.as_deref().unwrap_or(sim.path()).display()
     );
-    let waited = wait_for_interrupt();
+    wait_for_interrupt();
     let report = sim.stop();
     if let Some(path) = &a.report {
         let summary = serde_json::json!({
@@ -55,6 +55,5 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         report.trace.len(),
         report.sim_time
     );
-    waited?;
     Ok(ExitCode::SUCCESS)
 }

@@ -1,9 +1,9 @@
 //! Checks before anything moves: the job against the machine travel (`$130-$132`), and the
 //! optional `$C` check-mode pass.
 
+use super::error::line_ref;
 use super::error::{LineError, SendError};
 use super::session::{Session, transport};
-use super::tracker::line_ref;
 use super::{POSITION_TOL_MM, READ_SLICE, SendOptions};
 use crate::job::{Job, LineKind, MachineLimits};
 use crate::streamer::{Event, SendMode, Tag};
@@ -110,6 +110,7 @@ pub(super) fn check_pass<T: Transport + ?Sized>(
     }
     // Leaving check mode soft-resets GRBL: wait for the banner.
     let seen = sess.resets;
+    sess.reset_caused();
     sess.command_ok("$C", opts.command_timeout)?;
     if !sess
         .wait_banner_after(seen, opts.banner_timeout)

@@ -9,7 +9,7 @@ pub(super) struct ControlState {
     pub(super) abort: bool,
 }
 
-/// A handle to steer a running [`send_job`] from another thread (the CLI's Ctrl-C handler):
+/// A handle to steer a running [`super::send_job`] from another thread (the CLI's Ctrl-C handler):
 /// feed hold, resume (cycle start) and abort (feed hold, then soft reset; tool off).
 #[derive(Debug, Clone, Default)]
 pub struct CancelToken {

@@ -19,6 +19,15 @@ pub struct LineRef {
     pub text: String,
 }
 
+/// Job line `i`, for messages.
+pub(super) fn line_ref(job: &crate::job::Job, i: usize) -> LineRef {
+    LineRef {
+        index: i,
+        source_line: job.lines[i].source_line,
+        text: job.lines[i].text.clone(),
+    }
+}
+
 impl fmt::Display for LineRef {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "line {} (`{}`)", self.source_line, self.text)
@@ -62,7 +71,7 @@ impl fmt::Display for OffPath {
             self.to.source_line,
             fmt_pos(self.reported),
             fmt_pos(self.expected),
-            super::tracker::dist(self.reported, self.expected),
+            super::geometry::dist(self.reported, self.expected),
             self.tolerance,
             opt_line(&self.last_done)
         )

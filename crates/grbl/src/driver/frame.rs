@@ -9,6 +9,7 @@ use super::error::SendError;
 use super::session::{Session, transport};
 use crate::job::fmt_num;
 use crate::transport::Transport;
+use std::time::Duration;
 
 /// The work frame of a controller.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,13 +86,14 @@ fn triple(s: &str) -> Option<[f64; 3]> {
 }
 
 /// Reads the frame with `$#` (offsets, as reported: see [`Frame::in_mm`]) and `$G` (active
-/// system). `Err(code)` when the controller refuses (`$#` needs Idle or Alarm).
+/// system), each waiting at most `timeout`. `Err(code)` when the controller refuses (`$#`
+/// needs Idle or Alarm).
 pub(super) fn read<T: Transport + ?Sized>(
     sess: &mut Session<'_, T>,
-    opts: &SendOptions,
+    timeout: Duration,
 ) -> Result<Result<Frame, u8>, SendError> {
     sess.feedback.clear();
-    if let Err(code) = sess.command("$#", opts.command_timeout)? {
+    if let Err(code) = sess.command("$#", timeout)? {
         return Ok(Err(code));
     }
     let mut f = Frame {
@@ -116,7 +118,7 @@ pub(super) fn read<T: Transport + ?Sized>(
         }
     }
     sess.last_gc = None;
-    if let Err(code) = sess.command("$G", opts.command_timeout)? {
+    if let Err(code) = sess.command("$G", timeout)? {
         return Ok(Err(code));
     }
     if let Some(gc) = &sess.last_gc {

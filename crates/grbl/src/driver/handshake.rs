@@ -1,17 +1,21 @@
-//! Connecting: the banner (or a soft reset when none comes), `$I`, `$$`, a first status, and the
-//! alarm-lock policy.
+//! Connecting: the banner or a first status (a soft reset when no banner came), `$I`, `$$`, a
+//! first status, the alarm-lock policy, and what the controller said before anything changed it
+//! (the evidence a resume weighs).
 
 use super::SendOptions;
 use super::error::SendError;
+use super::evidence;
 use super::frame::{self, Frame};
 use super::session::{Session, transport, wait_until_still};
+use crate::journal::StopRecord;
 use crate::transport::Transport;
 
 /// What connecting found out.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct Link {
-    /// A banner came by itself: the controller just restarted (power-up, or the DTR pulse of
-    /// opening the port), so its planner and position are gone.
+    /// The controller restarted as this sender connected: a banner it did not cause came at
+    /// any moment of the handshake (power-up, the DTR pulse of opening the port, a bootloader
+    /// slower than the boot wait), so its planner and position are gone.
     pub restarted: bool,
     /// The controller was alarm-locked and this sender unlocked it with `$X` (no homing): its
     /// position is whatever it was when the alarm struck.
@@ -20,30 +24,44 @@ pub(super) struct Link {
     pub frame: Frame,
     /// What happened to the frame the soft reset cleared, for the report.
     pub frame_notice: Option<String>,
+    /// Where the controller stood, in which frame and parser state, before this sender
+    /// changed anything (`None` when it had just restarted, or did not say).
+    pub found: Option<StopRecord>,
+    /// Banners nobody asked for that the session had seen before this connection: one more
+    /// later is a restart (see [`Session::restarts`]).
+    pub restarts_before: u64,
 }
 
-/// Connects: waits for the power-up banner (or, with `reset_on_connect` or when none comes,
-/// resets the controller once it stands still), reads `$I` and `$$`, asks for a status, and
-/// unlocks an alarm lock only when the options allow it.
+/// Connects: waits for the controller to show it runs (a banner, or an answer to `?`; with
+/// `reset_on_connect` it resets at once), resets a controller that was running already once it
+/// stands still (its frame read first and put back after), reads `$I` and `$$`, asks for a
+/// status, and unlocks an alarm lock only when the options allow it. A banner this sender did
+/// not cause, whenever it comes, is a restart.
 pub(super) fn connect<T: Transport + ?Sized>(
     sess: &mut Session<'_, T>,
     opts: &SendOptions,
 ) -> Result<Link, SendError> {
-    let restarted = !opts.reset_on_connect
+    let restarts_before = sess.restarts();
+    let banner = !opts.reset_on_connect
         && sess
-            .wait_banner(opts.banner_timeout)
+            .wait_boot(opts.banner_timeout)
             .map_err(|e| transport(e, None))?;
     // The frame a reset would clear; none to read when the controller just restarted.
     let mut before = None;
-    if !restarted {
+    let mut found = None;
+    if !banner {
         if !opts.reset_on_connect {
             // A controller that kept running while the host was away may still be draining its
             // planner: a reset now would stop it mid-move (ALARM:3, position lost).
             wait_until_still(sess, opts).map_err(|e| transport(e, None))?;
         }
         sess.clear_line().map_err(|e| transport(e, None))?;
-        before = Some(frame::read(sess, opts)?);
-        sess.s.realtime(0x18);
+        sess.query_status(opts.command_timeout)
+            .map_err(|e| transport(e, None))?;
+        let b = frame::read(sess, opts.command_timeout)?;
+        found = b.as_ref().ok().and_then(|f| evidence::record(sess, f));
+        before = Some(b);
+        sess.soft_reset();
         if !sess
             .wait_banner(opts.banner_timeout)
             .map_err(|e| transport(e, None))?
@@ -57,6 +75,7 @@ pub(super) fn connect<T: Transport + ?Sized>(
         .map_err(|e| transport(e, None))?;
     let inches = sess.report_inches;
     let before = before.map(|b| b.map(|f| f.in_mm(inches)));
+    let restarted = banner || opts.controller_restarted || sess.restarts() > restarts_before;
     let (restarted, unlocked) = match unlock_policy(sess, opts)? {
         Some(AlarmOutcome::LeftForHoming) => (true, false),
         Some(AlarmOutcome::Unlocked) => (restarted, true),
@@ -68,7 +87,7 @@ pub(super) fn connect<T: Transport + ?Sized>(
         Some(b) if !sess.alarm_lock => frame::restore(sess, b, opts)?,
         _ => None,
     };
-    let frame = match frame::read(sess, opts)? {
+    let frame = match frame::read(sess, opts.command_timeout)? {
         Ok(f) => f.in_mm(inches),
         Err(code) => {
             return Err(SendError::SetupRejected {
@@ -85,6 +104,8 @@ pub(super) fn connect<T: Transport + ?Sized>(
         unlocked,
         frame,
         frame_notice,
+        found,
+        restarts_before,
     })
 }
 

@@ -10,18 +10,22 @@
 //! it; and after a stop, the reported position locates the line the machine was on.
 //!
 //! One idea per module: [`options`], [`control`] and [`progress`] are the API around a send;
-//! `session` is the connection, `handshake` connects, `resume` settles what an interrupted run
-//! left in doubt, `check` runs the checks before motion, `stream` streams, `tracker` keeps the
+//! `session` is the connection, [`console`] keeps one open between jobs, `handshake` connects, `evidence` compares the controller with the journal's stop
+//! record, `resume` settles what an interrupted run left in doubt, `check` runs the checks before motion, `stream` streams, `tracker` keeps the
 //! books of what ran, `watch` checks the reported position against the job's path, `stops` stops a run, and [`send_job`] reads as handshake → check → stream
 //! → finish.
 
 mod check;
 pub mod confirm;
+pub mod console;
 pub mod control;
 mod error;
+mod evidence;
 mod frame;
+mod geometry;
 mod handshake;
 pub mod options;
+mod places;
 pub mod progress;
 mod resume;
 mod session;
@@ -31,6 +35,7 @@ mod tracker;
 mod watch;
 
 pub use confirm::{Operator, OriginQuestion, Question};
+pub use console::{Console, ControllerInfo, Jog, MachineStatus};
 pub use control::{CancelToken, Control};
 pub use error::{LineError, LineRef, OffPath, SendError};
 pub use options::{PausePolicy, SendOptions};
@@ -87,14 +92,25 @@ pub fn send_job(
     observer: &mut dyn FnMut(&Progress),
     cancel: &CancelToken,
 ) -> Result<SendReport, SendError> {
+    run_job(&mut Session::new(transport), job, opts, observer, cancel)
+}
+
+/// [`send_job`] on a session, which may know the controller already (a [`Console`] that is
+/// connected): the job's own handshake runs all the same.
+fn run_job<T: crate::transport::Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    job: &Job,
+    opts: &SendOptions,
+    observer: &mut dyn FnMut(&Progress),
+    cancel: &CancelToken,
+) -> Result<SendReport, SendError> {
     let t0 = Instant::now();
     // Journal first: refuse a wrong job before touching the machine.
     let (mut journal, prior, edited) = open_journal(job, opts)?;
-    let mut sess = Session::new(transport);
     let mut progress = Progress::start(job);
     observer(&progress);
 
-    let link = handshake::connect(&mut sess, opts)?;
+    let link = handshake::connect(sess, opts)?;
     let limits = MachineLimits::from_settings(&sess.settings);
     if job.needs_laser_mode && !limits.laser_mode && !opts.force_laser {
         return Err(SendError::LaserModeOff);
@@ -127,7 +143,7 @@ pub fn send_job(
     }));
     // GRBL clamps a feed over an axis's max rate without a word: say so before anything runs.
     notices.extend(job.feed_clamps(&limits).iter().map(ToString::to_string));
-    let plan = resume::settle(&mut sess, job, opts, prior, &link, &mut journal)?;
+    let plan = resume::settle(sess, job, opts, prior, &link, &mut journal)?;
     notices.extend(plan.notice.iter().cloned());
     progress.notices.clone_from(&notices);
     observer(&progress);
@@ -142,13 +158,13 @@ pub fn send_job(
     if opts.check {
         progress.phase = Phase::Checking;
         observer(&progress);
-        check_pass(&mut sess, job, opts)?;
+        check_pass(sess, job, opts)?;
     }
 
-    let mut tracker = Tracker::new(job, &sess, plan.prior_done.as_deref());
-    let queued = stream::queue(&mut sess, job, &tracker, plan.resume_at);
+    let mut tracker = Tracker::new(job, sess, plan.prior_done.as_deref());
+    let queued = stream::queue(sess, job, &tracker, plan.resume_at);
     let streamed = Stream::new(
-        &mut sess,
+        sess,
         (job, job),
         opts,
         &mut tracker,
@@ -156,7 +172,7 @@ pub fn send_job(
         &queued.preamble,
     )
     .run(&mut progress, observer, cancel)?;
-    let final_position = stream::finish(&mut sess, job, opts, queued.lines, &mut journal)?;
+    let final_position = stream::finish(sess, job, opts, queued.lines, &mut journal)?;
 
     progress.complete(job);
     observer(&progress);
@@ -218,7 +234,7 @@ fn open_journal(job: &Job, opts: &SendOptions) -> Result<Opened, SendError> {
     if !opts.accept_changed_job && !asked() {
         return Err(SendError::JobChanged { changes });
     }
-    let (j, st) = Journal::resume_edited(p, job, &st, &changes)?;
+    let (j, st) = Journal::resume_edited(p, job, &st, changes.as_ref())?;
     Ok((Some(j), Some(st), Some(changes)))
 }
 

@@ -4,10 +4,12 @@ use super::confirm::Operator;
 use std::path::PathBuf;
 use std::time::Duration;
 
-/// Options for [`send_job`].
+/// Options for [`super::send_job`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct SendOptions {
-    /// How long to wait for the banner after opening (and again after a soft reset).
+    /// The boot wait: how long a controller may take after the port opens to say something (a
+    /// banner, or an answer to `?`), and how long to wait for the banner after a soft reset.
+    /// A banner that comes later still counts as a restart.
     pub banner_timeout: Duration,
     /// Send a soft reset at once instead of waiting for a power-up banner first.
     pub reset_on_connect: bool,
@@ -60,6 +62,10 @@ pub struct SendOptions {
     /// With `resume`: resume a job file edited after its journal was written (the change is
     /// shown in the report); otherwise only the operator's "yes" allows it.
     pub accept_changed_job: bool,
+    /// The caller saw the controller restart on this link before the job (a banner it did not
+    /// ask for, as a [`super::Console`] notices): its position counts as lost, as when the
+    /// banner comes during the job's own handshake.
+    pub controller_restarted: bool,
 }
 
 /// What to do when the job pauses itself with `M0` (GRBL 1.1h ignores `M1`, and `M2`/`M30` end
@@ -77,8 +83,10 @@ pub enum PausePolicy {
 }
 
 impl SendOptions {
-    /// Default banner wait: a real Uno's bootloader takes 1.4–2 s after DTR.
-    pub const DEFAULT_BANNER_TIMEOUT: Duration = Duration::from_millis(2500);
+    /// Default boot wait: a real Uno's bootloader takes 1.4–2 s after DTR, slower boards and
+    /// bootloaders up to about 3 s. A controller that was running answers the first `?` at
+    /// once, so only a silent port waits this long.
+    pub const DEFAULT_BANNER_TIMEOUT: Duration = Duration::from_millis(5000);
     /// Default handshake command timeout.
     pub const DEFAULT_COMMAND_TIMEOUT: Duration = Duration::from_secs(5);
     /// Default status interval: 5 Hz.
@@ -245,6 +253,7 @@ impl Default for SendOptions {
             position_tolerance: Some(SendOptions::DEFAULT_POSITION_TOLERANCE),
             operator: None,
             accept_changed_job: false,
+            controller_restarted: false,
         }
     }
 }

@@ -4,14 +4,17 @@
 use super::SendOptions;
 use super::confirm::{OriginQuestion, Question};
 use super::error::SendError;
+use super::error::line_ref;
+use super::evidence;
+use super::geometry::dist;
 use super::handshake::Link;
+use super::places::{places_on_path, position_tolerance};
 use super::session::Session;
-use super::stops::{OFF_PATH_NOTE, with_tool_off};
-use super::tracker::{dist, line_ref, seg_dist};
+use super::stops::{OFF_PATH_NOTE, refused_with_tool_off};
+use super::tracker::AMBIGUOUS_STOP_NOTE;
 use crate::job::Job;
 use crate::journal::{Journal, JournalState};
 use crate::transport::Transport;
-use std::collections::BTreeMap;
 
 /// What a resume sends.
 #[derive(Debug, Clone, Default)]
@@ -43,8 +46,12 @@ pub(super) fn settle<T: Transport + ?Sized>(
     let Some(mut st) = prior else {
         return Ok(ResumePlan::default());
     };
-    let restarted = link.restarted;
-    let trusted = !restarted && !link.unlocked && !sess.alarm_lock;
+    // A banner after the handshake is a restart too.
+    let restarted = link.restarted || sess.restarts() > link.restarts_before;
+    let tol = position_tolerance(&sess.settings);
+    let homes = sess.settings.get(&22).is_some_and(|v| *v != 0.0);
+    let disagrees = evidence::disagreement(st.stop.as_ref(), link.found.as_ref(), homes, tol);
+    let trusted = !restarted && !link.unlocked && !sess.alarm_lock && disagrees.is_none();
     // Work position without the controller's G92 offset: the frame of the job's geometry.
     let g92 = link.frame.g92;
     let here = if trusted {
@@ -53,9 +60,9 @@ pub(super) fn settle<T: Transport + ?Sized>(
     } else {
         None
     };
-    let tol = position_tolerance(&sess.settings);
     let rx = sess.s.rx_size();
-    if let Some(r) = resolve_resume(job, &st, opts.resume_from, here, rx, tol, restarted)? {
+    let lost = restarted || disagrees.is_some();
+    if let Some(r) = resolve_resume(job, &st, opts.resume_from, here, rx, tol, lost)? {
         if let Some(j) = journal.as_mut() {
             j.resolved(r.from, r.cut);
             if let Some((k, p)) = r.partial {
@@ -71,11 +78,12 @@ pub(super) fn settle<T: Transport + ?Sized>(
         }
         st.partial = r.partial;
     }
-    let notice = match reestablish_position(sess, job, &st, link, opts) {
+    let why = position_lost(&st, link, restarted, disagrees);
+    let notice = match reestablish_position(sess, job, &st, link, opts, why) {
         Ok(n) => n,
         // Nothing moved; the tool is switched off all the same, as on every stop.
         Err(e @ (SendError::PositionUnknown { .. } | SendError::OriginNotConfirmed { .. })) => {
-            return Err(with_tool_off(sess, journal, e));
+            return Err(refused_with_tool_off(sess, journal, e));
         }
         Err(e) => return Err(e),
     };
@@ -112,11 +120,21 @@ pub(super) fn settle<T: Transport + ?Sized>(
 }
 
 /// Why the machine position cannot be trusted since the journal was written, if it cannot:
-/// the controller restarted (a banner at connect: power-up or the DTR reset of opening the
-/// port), was unlocked with `$X` without homing, or reset or alarmed during the interrupted run.
-fn position_lost(st: &JournalState, link: &Link) -> Option<String> {
-    if link.restarted {
+/// the controller restarted (a banner it was not asked for, at any moment since the port was
+/// opened: power-up or the DTR reset of opening the port), does not agree with the journal's
+/// stop record (`disagrees`: a power cycle or reset while nothing was connected), was
+/// unlocked with `$X` without homing, or reset or alarmed during the interrupted run.
+fn position_lost(
+    st: &JournalState,
+    link: &Link,
+    restarted: bool,
+    disagrees: Option<String>,
+) -> Option<String> {
+    if restarted {
         return Some("the controller restarted when the port was opened (or lost power)".into());
+    }
+    if disagrees.is_some() {
+        return disagrees;
     }
     if link.unlocked {
         return Some("the controller was in alarm and was unlocked with $X, not homed".into());
@@ -136,9 +154,10 @@ fn reestablish_position<T: Transport + ?Sized>(
     st: &JournalState,
     link: &Link,
     opts: &SendOptions,
+    why: Option<String>,
 ) -> Result<Option<String>, SendError> {
     let started = st.done.iter().any(|d| *d) || st.partial.is_some() || opts.resume_from.is_some();
-    let Some(why) = position_lost(st, link).filter(|_| started) else {
+    let Some(why) = why.filter(|_| started) else {
         return Ok(None);
     };
     if sess.settings.get(&22).is_some_and(|v| *v != 0.0) {
@@ -196,86 +215,6 @@ pub(super) struct Resolution {
     pub partial: Option<(usize, [f64; 3])>,
 }
 
-/// Where on line `i`'s path the work position `p` lies: `Some(true)` at its end, `Some(false)`
-/// strictly inside it (not at its start), `None` off it. Arcs are tested against their chords,
-/// which is where GRBL moves.
-fn locate_on_line(job: &Job, i: usize, p: [f64; 3], tol: f64) -> Option<bool> {
-    let l = &job.lines[i];
-    if !l.moves || l.length <= 0.0 {
-        return None;
-    }
-    let (a, b) = (job.start_of(i), job.end_of(i));
-    if dist(p, b) <= tol {
-        return Some(true);
-    }
-    if dist(p, a) <= tol {
-        return None;
-    }
-    let on = if l.arc.len() >= 2 {
-        l.arc.windows(2).any(|w| seg_dist(p, w[0], w[1]) <= tol)
-    } else {
-        seg_dist(p, a, b) <= tol
-    };
-    on.then_some(false)
-}
-
-/// The places in the job, among lines `range` (skipping those `skip` says), where the machine
-/// standing at work position `p` may be: `(cut, partial)` = every line before `cut` has run, and
-/// `partial` = line `cut` was stopped part-way at `p`. Candidates that touch (consecutive lines
-/// meeting at a vertex `p` lies within tolerance of, or endpoints separated only by lines that
-/// do not move) are one place in the job: for a stop inside a line the later line wins (finishing
-/// it from `p` leaves out at most the tolerance of the earlier one, and repeats nothing); for an
-/// endpoint the earlier one (the non-moving lines are sent again, which only re-applies modal
-/// state). More than one group means the path passes `p` more than once.
-pub(super) fn places_on_path(
-    job: &Job,
-    p: [f64; 3],
-    range: std::ops::RangeInclusive<usize>,
-    tol: f64,
-    skip: impl Fn(usize) -> bool,
-) -> Vec<(usize, Option<[f64; 3]>)> {
-    let first = *range.start();
-    let mut cuts: Vec<(usize, Option<[f64; 3]>)> = Vec::new();
-    let mut matched: Vec<usize> = Vec::new();
-    if dist(p, job.start_of(first)) <= tol {
-        cuts.push((first, None));
-    }
-    for i in range {
-        if skip(i) {
-            continue;
-        }
-        match locate_on_line(job, i, p, tol) {
-            Some(true) => cuts.push((i + 1, None)),
-            Some(false) => cuts.push((i, Some(p))),
-            None => continue,
-        }
-        matched.push(i);
-    }
-    let mut groups: Vec<Vec<(usize, Option<[f64; 3]>)>> = Vec::new();
-    for c in cuts {
-        let touches = groups.last().and_then(|g| g.last()).is_some_and(|last| {
-            (last.0..c.0).all(|l| {
-                let line = &job.lines[l];
-                !line.moves || line.length <= 0.0 || matched.contains(&l)
-            })
-        });
-        match groups.last_mut() {
-            Some(g) if touches => g.push(c),
-            _ => groups.push(vec![c]),
-        }
-    }
-    groups
-        .into_iter()
-        .filter_map(|g| {
-            if g.iter().any(|c| c.1.is_some()) {
-                g.last().copied()
-            } else {
-                g.first().copied()
-            }
-        })
-        .collect()
-}
-
 /// Settles a resume (see [`Resolution`]): the operator's `--resume-from`; or the machine's
 /// position `here` (only when it is trustworthy) matched against the job's own geometry over the
 /// window of lines that may have run after the journal lost track (acknowledged but not
@@ -307,8 +246,15 @@ pub(super) fn resolve_resume(
         reason,
     };
     if let Some((a, b)) = st.uncertain {
-        let off_path = st.notes.iter().rev().find(|n| n.starts_with(OFF_PATH_NOTE));
-        let reason = match off_path {
+        let why = st
+            .notes
+            .iter()
+            .rev()
+            .find(|n| n.starts_with(OFF_PATH_NOTE) || n.starts_with(AMBIGUOUS_STOP_NOTE));
+        let reason = match why {
+            Some(n) if n.starts_with(AMBIGUOUS_STOP_NOTE) => format!(
+                "the interrupted run {n}; a resume from the first of these lines would cut again what may have been cut"
+            ),
             Some(n) => format!(
                 "the interrupted run stopped because {n}: a line damaged on the link ran elsewhere, and which of these lines ran as written is not known"
             ),
@@ -385,19 +331,4 @@ fn window_end(job: &Job, last_acked: usize, rx: usize) -> usize {
         upper += 1;
     }
     upper
-}
-
-/// Half a step on the coarsest axis plus the 3-decimal rounding of status reports: how far a
-/// reported position may sit from a programmed point that was reached.
-pub(super) fn position_tolerance(settings: &BTreeMap<u16, f64>) -> f64 {
-    let min_steps = (100..=102)
-        .filter_map(|n| settings.get(&n).copied())
-        .filter(|v| *v > 0.0 && v.is_finite())
-        .fold(f64::INFINITY, f64::min);
-    let half_step = if min_steps.is_finite() {
-        0.5 / min_steps
-    } else {
-        0.5 / 250.0
-    };
-    half_step + 0.0011
 }

@@ -27,14 +27,37 @@ pub(super) struct Session<'a, T: Transport + ?Sized> {
     pub(super) setup_seq: u32,
     /// Banners seen so far.
     pub(super) resets: u64,
+    /// Banners this sender caused (its own soft resets, leaving check mode).
+    pub(super) resets_caused: u64,
     /// The last `[GC:...]` parser state (`$G`).
     pub(super) last_gc: Option<String>,
     /// Other `[...]` feedback (`$#` lines), at most [`FEEDBACK_KEPT`]; cleared by whoever reads it.
     pub(super) feedback: Vec<String>,
 }
 
+/// First status poll after opening, and the poll interval after it while booting.
+const BOOT_POLL: Duration = Duration::from_millis(100);
+
 /// Feedback lines kept for the reader of `$#` (it prints ten).
 const FEEDBACK_KEPT: usize = 64;
+
+/// What a session learnt about the controller, carried from one session on a link to the next
+/// (a console between jobs): everything but the transport.
+#[derive(Debug, Clone)]
+pub(super) struct Known {
+    s: Streamer,
+    status: Option<StatusReport>,
+    status_seq: u64,
+    wco: [f64; 3],
+    report_inches: bool,
+    version: String,
+    blocks: usize,
+    settings: BTreeMap<u16, f64>,
+    alarm_lock: bool,
+    setup_seq: u32,
+    resets: u64,
+    resets_caused: u64,
+}
 
 impl<'a, T: Transport + ?Sized> Session<'a, T> {
     /// A session on `t`, knowing nothing of the controller yet.
@@ -54,9 +77,68 @@ impl<'a, T: Transport + ?Sized> Session<'a, T> {
             alarm_lock: false,
             setup_seq: 0,
             resets: 0,
+            resets_caused: 0,
             last_gc: None,
             feedback: Vec::new(),
         }
+    }
+
+    /// A session on `t` that goes on from what an earlier one on the same link learnt.
+    pub(super) fn resume(t: &'a mut T, k: Known) -> Self {
+        Session {
+            t,
+            s: k.s,
+            last_rx: Instant::now(),
+            status: k.status,
+            status_seq: k.status_seq,
+            wco: k.wco,
+            report_inches: k.report_inches,
+            version: k.version,
+            blocks: k.blocks,
+            settings: k.settings,
+            messages: Vec::new(),
+            alarm_lock: k.alarm_lock,
+            setup_seq: k.setup_seq,
+            resets: k.resets,
+            resets_caused: k.resets_caused,
+            last_gc: None,
+            feedback: Vec::new(),
+        }
+    }
+
+    /// What this session learnt, for the next one on the same link.
+    pub(super) fn known(&self) -> Known {
+        Known {
+            s: self.s.clone(),
+            status: self.status.clone(),
+            status_seq: self.status_seq,
+            wco: self.wco,
+            report_inches: self.report_inches,
+            version: self.version.clone(),
+            blocks: self.blocks,
+            settings: self.settings.clone(),
+            alarm_lock: self.alarm_lock,
+            setup_seq: self.setup_seq,
+            resets: self.resets,
+            resets_caused: self.resets_caused,
+        }
+    }
+
+    /// Soft-resets the controller (0x18); its banner is this sender's doing, not a restart.
+    pub(super) fn soft_reset(&mut self) {
+        self.s.realtime(0x18);
+        self.reset_caused();
+    }
+
+    /// A banner is coming that this sender caused (a soft reset, leaving check mode).
+    pub(super) fn reset_caused(&mut self) {
+        self.resets_caused += 1;
+    }
+
+    /// Banners nobody here asked for: the controller restarted by itself (power, a reset on
+    /// opening the port, a watchdog) that many times.
+    pub(super) fn restarts(&self) -> u64 {
+        self.resets.saturating_sub(self.resets_caused)
     }
 
     pub(super) fn write(&mut self) -> Result<(), TransportError> {
@@ -112,6 +194,36 @@ impl<'a, T: Transport + ?Sized> Session<'a, T> {
             }
         }
         Ok(events)
+    }
+
+    /// Waits up to `boot_wait` for the controller to show that it runs: its banner (it just
+    /// started: power-up, or the reset of opening the port after its bootloader) or an answer to
+    /// `?`, asked every [`BOOT_POLL`] (it was running already; a controller in its bootloader
+    /// answers nothing). True for a banner; a banner later than this is still seen as a restart
+    /// (see `handshake::connect`).
+    pub(super) fn wait_boot(&mut self, boot_wait: Duration) -> Result<bool, TransportError> {
+        let (resets, seq) = (self.resets, self.status_seq);
+        let t0 = Instant::now();
+        let mut poll = t0 + BOOT_POLL;
+        while t0.elapsed() < boot_wait {
+            if self.resets > resets {
+                // Let the push messages after the banner (an alarm lock) arrive.
+                let settle = Instant::now() + Duration::from_millis(30);
+                while Instant::now() < settle {
+                    self.pump(Duration::from_millis(10))?;
+                }
+                return Ok(true);
+            }
+            if self.status_seq != seq {
+                return Ok(false);
+            }
+            if Instant::now() >= poll {
+                self.s.realtime(b'?');
+                poll = Instant::now() + BOOT_POLL;
+            }
+            self.pump(READ_SLICE)?;
+        }
+        Ok(self.resets > resets)
     }
 
     pub(super) fn wait_banner(&mut self, timeout: Duration) -> Result<bool, TransportError> {

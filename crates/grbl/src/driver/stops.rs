@@ -2,8 +2,10 @@
 //! operator's abort. Each locates the machine on the path, journals why, and returns the error.
 
 use super::error::SendError;
+use super::error::line_ref;
+use super::evidence;
 use super::session::{Session, transport};
-use super::tracker::{Tracker, line_ref};
+use super::tracker::Tracker;
 use super::watch::Deviation;
 use super::{ABORT_CYCLE_ALARM, READ_SLICE, SendOptions};
 use crate::codes::{alarm_is_critical, alarm_meaning};
@@ -97,7 +99,7 @@ pub(super) fn on_alarm<T: Transport + ?Sized>(
     if alarm_is_critical(code) {
         // GRBL blocks everything until reset; position is reported after it.
         sess.s.forget_in_flight();
-        sess.s.realtime(0x18);
+        sess.soft_reset();
         let _ = sess.wait_banner(opts.banner_timeout);
     }
     if code == ABORT_CYCLE_ALARM {
@@ -239,6 +241,31 @@ pub(super) fn stop_with_reset<T: Transport + ?Sized>(
     reset_held(sess, journal)
 }
 
+/// Stops at a program pause (`M0`, line `line`) the controller has reached: every line
+/// before it ran (GRBL finished their motion before pausing) and so did the pause, which the
+/// journal records; then the soft reset, which keeps the position of a machine standing
+/// still. A resume continues after the pause, from where the machine stands.
+pub(super) fn stop_at_pause<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    job: &Job,
+    line: usize,
+    tracker: &mut Tracker,
+    journal: &mut Option<Journal>,
+) -> Result<(), SendError> {
+    sess.s.set_feeding(false);
+    sess.s.clear_queue();
+    tracker.confirm_below(job, line, journal);
+    if let Some(j) = journal.as_mut() {
+        j.ack(line);
+    }
+    tracker.ack(job, line, journal);
+    tracker.confirm_below(job, line + 1, journal);
+    if let Some(Tag::Job(i)) = sess.s.last_sent() {
+        tracker.last_sent = Some(tracker.last_sent.map_or(i, |l| l.max(i)));
+    }
+    reset_held(sess, journal)
+}
+
 /// Feed hold (so that a reset does not lose the position: a reset in motion is `ALARM:3`),
 /// then waits until the machine stands.
 fn hold_still<T: Transport + ?Sized>(
@@ -278,7 +305,7 @@ fn reset_held<T: Transport + ?Sized>(
     journal: &mut Option<Journal>,
 ) -> Result<(), SendError> {
     sess.s.forget_in_flight();
-    sess.s.realtime(0x18);
+    sess.soft_reset();
     let _ = sess.wait_banner(Duration::from_secs(3));
     if let Some(j) = journal.as_mut() {
         j.note("stopped: feed hold, soft reset");
@@ -327,14 +354,19 @@ pub(super) fn stop_off_path<T: Transport + ?Sized>(
 /// lines are in doubt).
 pub(super) const OFF_PATH_NOTE: &str = "the machine left the job's path";
 
-/// The operator's abort: feed hold, soft reset, tool off (confirmed by `$G`).
+/// The operator's abort: feed hold, soft reset, tool off (confirmed by `$G`). `at_pause`: the
+/// machine stands at this line's program pause (`M0`), which it reached.
 pub(super) fn abort<T: Transport + ?Sized>(
     sess: &mut Session<'_, T>,
     job: &Job,
+    at_pause: Option<usize>,
     tracker: &mut Tracker,
     journal: &mut Option<Journal>,
 ) -> Result<SendError, SendError> {
-    stop_with_reset(sess, job, tracker, journal)?;
+    match at_pause {
+        Some(line) => stop_at_pause(sess, job, line, tracker, journal)?,
+        None => stop_with_reset(sess, job, tracker, journal)?,
+    }
     if let Some(j) = journal.as_mut() {
         j.note("aborted by the user (feed hold, soft reset, tool off)");
     }
@@ -413,9 +445,32 @@ pub(super) fn tool_off<T: Transport + ?Sized>(sess: &mut Session<'_, T>) -> bool
     TOOL_OFF_WORDS.iter().all(|w| has(w)) && (!laser || has("S0"))
 }
 
-/// `err`, or — when the tool-off sequence after the stop could not be confirmed — `err` with
-/// that warning.
+/// `err` after a stop of a run: the tool switched off (see [`tool_off`]) and, the machine
+/// standing still, what the controller says journaled as the run's stop record (see
+/// `evidence`); or — when the tool-off sequence could not be confirmed — `err` with that
+/// warning.
 pub(super) fn with_tool_off<T: Transport + ?Sized>(
+    sess: &mut Session<'_, T>,
+    journal: &mut Option<Journal>,
+    err: SendError,
+) -> SendError {
+    let err = refused_with_tool_off(sess, journal, err);
+    if let Some(j) = journal.as_mut()
+        && let Some(r) = evidence::read(sess, STOP_RECORD_WAIT)
+    {
+        j.stopped_at(&r);
+        let _ = j.sync();
+    }
+    err
+}
+
+/// Longest wait for each answer the stop record needs (a status, `$#`, `$G`).
+const STOP_RECORD_WAIT: Duration = Duration::from_secs(3);
+
+/// `err` with the tool switched off, as [`with_tool_off`] but without a stop record: for a
+/// resume refused before anything moved, whose controller is not where the journal's stop
+/// record says (that record must still count for the next attempt).
+pub(super) fn refused_with_tool_off<T: Transport + ?Sized>(
     sess: &mut Session<'_, T>,
     journal: &mut Option<Journal>,
     err: SendError,

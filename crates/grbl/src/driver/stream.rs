@@ -4,13 +4,15 @@
 //! finish, which checks that the machine ended where the job ends.
 
 use super::check::job_uses_unknown_moves;
+use super::error::line_ref;
 use super::error::{LineError, SendError};
+use super::geometry::{add, dist};
 use super::progress::{Phase, Progress, eta};
 use super::session::{Session, stop_noted, transport};
 use super::stops::{
-    abort, on_alarm, on_reset, stop_off_path, stop_unexpected, stop_with_reset, with_tool_off,
+    abort, on_alarm, on_reset, stop_at_pause, stop_off_path, stop_unexpected, with_tool_off,
 };
-use super::tracker::{Tracker, add, dist, line_ref};
+use super::tracker::Tracker;
 use super::watch::{off_path, state_on_path};
 use super::{
     CancelToken, JOURNAL_FSYNC_INTERVAL, POSITION_TOL_MM, PausePolicy, READ_SLICE, SendOptions,
@@ -223,7 +225,15 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
     fn control(&mut self, cancel: &CancelToken) -> Result<(), SendError> {
         let c = cancel.take();
         if c.abort {
-            return Err(abort(self.sess, self.job, self.tracker, self.journal)?);
+            // At a program pause the machine stands where the pause is: everything before it ran.
+            let at_pause = self.paused.filter(|p| !p.1).map(|p| p.0);
+            return Err(abort(
+                self.sess,
+                self.job_t,
+                at_pause,
+                self.tracker,
+                self.journal,
+            )?);
         }
         if c.hold && !self.holding {
             self.sess.s.realtime(b'!');
@@ -343,7 +353,25 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
         }
     }
 
-    /// The job paused itself (`M0`): resume, abort or wait, as the options say.
+    /// The job line whose `M0` the controller has reached, if it has: the `M0` is the oldest
+    /// line in flight, the machine stands in a completed hold, and it stands where
+    /// the lines before the pause end. GRBL runs every queued motion before it pauses
+    /// (`protocol_buffer_synchronize` in `gc_execute_line`), so then every line before the
+    /// pause has run; a hold anywhere else is someone else's (a hold button, the door).
+    fn pause_reached(&self) -> Option<usize> {
+        let st = self.sess.status.as_ref()?;
+        // Not Idle: GRBL may report Idle with blocks queued before it parses the `M0` (it
+        // starts the cycle only then), standing where the path may pass again.
+        if st.state != (MachineState::Hold { complete: true }) {
+            return None;
+        }
+        let line = self.pausing_line()?;
+        let here = self.sess.work_position()?;
+        (dist(here, self.job.start_of(line)) <= self.tracker.pos_tol).then_some(line)
+    }
+
+    /// The job paused itself (`M0`) and the controller has reached the pause: every line
+    /// before it ran. Resume, abort or wait, as the options say.
     fn program_pause(&mut self, line: usize, progress: &mut Progress) -> Result<(), SendError> {
         if self.paused.is_some_and(|p| p.0 == line) {
             return Ok(());
@@ -357,7 +385,7 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
             PausePolicy::Resume => self.resume_pause(),
             PausePolicy::Wait => progress.paused_at = Some(line_ref(self.job, line)),
             PausePolicy::Abort => {
-                stop_with_reset(self.sess, self.job, self.tracker, self.journal)?;
+                stop_at_pause(self.sess, self.job_t, line, self.tracker, self.journal)?;
                 let err = SendError::PausedByJob {
                     line: line_ref(self.job, line),
                     last_done: self.tracker.last_done(self.job),
@@ -449,9 +477,8 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
             state,
             Some(MachineState::Hold { .. }) | Some(MachineState::Door(_))
         );
-        if held
-            && !self.holding
-            && let Some(line) = self.pausing_line()
+        if !self.holding
+            && let Some(line) = self.pause_reached()
         {
             return self.program_pause(line, progress);
         }

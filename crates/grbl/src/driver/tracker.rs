@@ -1,22 +1,14 @@
 //! Which job lines are acknowledged and which are known executed in this run (an `ok` only means
-//! "queued"), and the geometry helpers that place the machine on the job's path.
+//! "queued").
 
 use super::SEGMENT_BUFFER;
-use super::error::LineRef;
-use super::resume::{places_on_path, position_tolerance};
+use super::error::{LineRef, line_ref};
+use super::places::{places_on_path, position_tolerance};
 use super::session::Session;
 use crate::job::Job;
 use crate::journal::Journal;
 use crate::transport::Transport;
 use std::collections::VecDeque;
-
-pub(super) fn line_ref(job: &Job, i: usize) -> LineRef {
-    LineRef {
-        index: i,
-        source_line: job.lines[i].source_line,
-        text: job.lines[i].text.clone(),
-    }
-}
 
 /// Bookkeeping of which job lines are acknowledged / known executed in this run.
 pub(super) struct Tracker {
@@ -172,11 +164,26 @@ impl Tracker {
         let upto = upto.min(job.len().saturating_sub(1)).max(first);
         let prior = &self.prior_done;
         let places = places_on_path(job, pos, first..=upto, self.pos_tol, |i| prior[i]);
-        // Ambiguous (the path passes here twice): the earliest place confirms least.
-        let Some(&(cut, partial)) = places.first() else {
+        // Ambiguous (the path passes here twice): the earliest place confirms least, and the
+        // lines from there to the last place may have run: a resume must not pass over them
+        // without the operator's `--resume-from`.
+        let (Some(&(cut, partial)), Some(&(last, _))) = (places.first(), places.last()) else {
             return;
         };
         self.confirm_below(job, cut, journal);
+        if last > cut
+            && let Some(j) = journal.as_mut()
+        {
+            j.note(&format!(
+                "{AMBIGUOUS_STOP_NOTE}: the machine stood at X{:.3} Y{:.3} Z{:.3} (work), which the path passes {} times",
+                pos[0],
+                pos[1],
+                pos[2],
+                places.len()
+            ));
+            j.uncertain(cut, last.min(job.len() - 1));
+            return;
+        }
         if cut < job.len()
             && let Some(j) = journal.as_mut()
         {
@@ -202,6 +209,10 @@ impl Tracker {
     }
 }
 
+/// How the journal's note of a stop at a place the job's path passes more than once begins (a
+/// resume names it as the reason the lines are in doubt).
+pub(super) const AMBIGUOUS_STOP_NOTE: &str = "stopped where the job's path passes twice";
+
 /// A line at least this long moves some axis by at least one step (its longest component is at
 /// least its length / √3), so GRBL plans it; `$100-$102` (default 250 steps/mm).
 fn min_motion(settings: &std::collections::BTreeMap<u16, f64>) -> f64 {
@@ -211,29 +222,4 @@ fn min_motion(settings: &std::collections::BTreeMap<u16, f64>) -> f64 {
         .map(|v| 1.0 / v)
         .fold(0.0, f64::max);
     3f64.sqrt() * coarsest_step
-}
-
-pub(super) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-pub(super) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
-
-pub(super) fn seg_dist(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
-    dist(p, nearest_on_segment(p, a, b))
-}
-
-/// The point of segment `a`–`b` nearest to `p`.
-pub(super) fn nearest_on_segment(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-    let ap = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
-    let l2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
-    let t = if l2 > 0.0 {
-        ((ap[0] * ab[0] + ap[1] * ab[1] + ap[2] * ab[2]) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    [a[0] + ab[0] * t, a[1] + ab[1] * t, a[2] + ab[2] * t]
 }

@@ -5,7 +5,8 @@
 //! and the RX buffer hold everything in between; an arc runs before its `ok`); a machine found
 //! farther than the tolerance from every segment of that stretch is off the job's path.
 
-use super::tracker::{Tracker, dist, nearest_on_segment};
+use super::geometry::{dist, nearest_on_segment};
+use super::tracker::Tracker;
 use crate::job::Job;
 use crate::response::MachineState;
 

@@ -1,9 +1,19 @@
-//! [`StreamArgs`]: where and how to stream a job, as flags of `flatcut send` and `flatcut run`.
+//! [`StreamArgs`]: where and how to stream a job, as flags of `flatcut send` and `flatcut run`,
+//! and what they mean to the device library: the [`Target`] and the sender's options.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+use flatcut_device::sim::{
+    DEFAULT_INJECTED_ALARM, DEFAULT_INJECTED_ERROR, Faults, SimArgs, line_code,
+};
+use flatcut_device::{SimMachine, SimSetup, Target};
 
 /// GRBL 1.1's default baud rate (`config.h`).
 pub const DEFAULT_BAUD: u32 = 115_200;
+/// Default `--boot-wait`: [`flatcut_device::grbl::SendOptions::DEFAULT_BANNER_TIMEOUT`].
+pub const DEFAULT_BOOT_WAIT_MS: u64 =
+    flatcut_device::grbl::SendOptions::DEFAULT_BANNER_TIMEOUT.as_millis() as u64;
 /// Default time scale of the embedded simulator: fast enough that a demo job finishes in
 /// seconds, slow enough that the progress bar, feed hold and status polling are exercised.
 pub const DEFAULT_SIM_SPEED: f64 = 50.0;
@@ -57,11 +67,17 @@ pub struct StreamArgs {
     pub discard_offsets: bool,
     /// Stop the job when a status report places the machine farther than this from the stretch
     /// of the job's path it can be on (a line damaged on the link runs elsewhere), mm.
-    #[arg(long, value_name = "MM", default_value_t = flatcut_grbl::SendOptions::DEFAULT_POSITION_TOLERANCE, value_parser = crate::values::positive_mm)]
+    #[arg(long, value_name = "MM", default_value_t = flatcut_device::grbl::SendOptions::DEFAULT_POSITION_TOLERANCE, value_parser = crate::values::positive_mm)]
     pub position_tolerance: f64,
-    /// Stream a laser job (its header says it needs `$32=1`) to a controller with `$32=0`.
+    /// Stream a laser job (its header says it needs `$32=1`) to a controller with `$32=0`
+    /// (`flatcut send --force`; `flatcut run --force` sets it too).
     #[arg(skip)]
     pub force_laser: bool,
+    /// How long a controller may take to start after the port opens (the reset of opening it,
+    /// then its bootloader) before it must have said something, ms. A banner that comes later
+    /// still counts as a restart.
+    #[arg(long, value_name = "MS", default_value_t = DEFAULT_BOOT_WAIT_MS)]
+    pub boot_wait: u64,
     /// Journal of acknowledged and executed lines (default: `<job>.journal`).
     #[arg(long, value_name = "PATH")]
     pub journal: Option<PathBuf>,
@@ -78,6 +94,10 @@ pub struct StreamArgs {
     /// (repeatable; `flatcut run` sets the machine profile's rates, accelerations and travel).
     #[arg(long = "sim-set", value_name = "N=VALUE")]
     pub sim_set: Vec<String>,
+    /// The machine the embedded simulator is (from a machine profile: its rates,
+    /// accelerations and work area); `None`: GRBL's defaults.
+    #[arg(skip)]
+    pub sim_machine: Option<SimMachine>,
     /// Write every motion the embedded simulator executed as JSON lines.
     #[arg(long, value_name = "PATH")]
     pub sim_trace: Option<PathBuf>,
@@ -116,14 +136,16 @@ impl Default for StreamArgs {
             origin_confirmed: false,
             accept_changed_job: false,
             discard_offsets: false,
-            position_tolerance: flatcut_grbl::SendOptions::DEFAULT_POSITION_TOLERANCE,
+            position_tolerance: flatcut_device::grbl::SendOptions::DEFAULT_POSITION_TOLERANCE,
             on_pause: None,
             force_laser: false,
+            boot_wait: DEFAULT_BOOT_WAIT_MS,
             journal: None,
             sim_speed: DEFAULT_SIM_SPEED,
             sim_instant: false,
             sim_laser: false,
             sim_set: Vec::new(),
+            sim_machine: None,
             sim_trace: None,
             sim_svg: None,
             quiet: false,
@@ -200,6 +222,11 @@ impl StreamArgs {
         self.sim_trace = Some(path.into());
         self
     }
+    /// Adds a `--sim-set N=VALUE`.
+    pub fn with_sim_set(mut self, setting: impl Into<String>) -> Self {
+        self.sim_set.push(setting.into());
+        self
+    }
     /// Sets [`StreamArgs::quiet`].
     pub fn with_quiet(mut self, on: bool) -> Self {
         self.quiet = on;
@@ -218,6 +245,109 @@ impl StreamArgs {
     pub fn uses_sim(&self) -> bool {
         self.port.is_none()
     }
+
+    /// The device the flags name: `--port` at `--baud`, or the embedded simulator as the
+    /// `--sim-*` flags set it up. Errors name the flag.
+    pub fn target(&self) -> anyhow::Result<Target> {
+        Ok(match &self.port {
+            Some(p) => Target::Port {
+                path: p.clone(),
+                baud: self.baud,
+            },
+            None => Target::Simulator(self.sim_setup()?),
+        })
+    }
+
+    /// The embedded simulator the `--sim-*` flags describe.
+    pub fn sim_setup(&self) -> anyhow::Result<SimSetup> {
+        let flags = SimArgs {
+            set: self.sim_set.clone(),
+            ..SimArgs::default()
+        };
+        let settings = flags
+            .settings()
+            .map_err(|e| anyhow::anyhow!("{}", e.to_string().replacen("--set", "--sim-set", 1)))?;
+        let faults = Faults {
+            error_at_line: self
+                .sim_error_at
+                .as_deref()
+                .map(|a| line_code(a, DEFAULT_INJECTED_ERROR, "--sim-error-at"))
+                .transpose()?,
+            alarm_at_line: self
+                .sim_alarm_at
+                .as_deref()
+                .map(|a| line_code(a, DEFAULT_INJECTED_ALARM, "--sim-alarm-at"))
+                .transpose()?,
+            hangup_at_line: self.sim_hangup_at,
+            reset_at_line: self.sim_reset_at,
+            drop_digit_at_line: self.sim_drop_digit_at,
+            ..Faults::default()
+        };
+        Ok(SimSetup {
+            machine: self.sim_machine,
+            settings,
+            laser: self.sim_laser,
+            speed: self.sim_speed,
+            instant: self.sim_instant,
+            baud: self.baud,
+            faults,
+        })
+    }
+
+    /// How messages name the device: the port and its baud rate, or the simulator.
+    pub fn describe(&self) -> String {
+        match &self.port {
+            Some(p) => format!("{p} at {} baud", self.baud),
+            None if self.sim_machine.is_some() => {
+                "the embedded simulator (set up from the machine profile)".into()
+            }
+            None if self.sim_set.is_empty() => "the embedded simulator (GRBL defaults)".into(),
+            None => "the embedded simulator (GRBL defaults and --sim-set)".into(),
+        }
+    }
+
+    /// The sender's options for a job whose journal is `journal`; `resume_from` is the
+    /// `--resume-from` line as an index among the job's lines.
+    pub fn send_options(
+        &self,
+        journal: &Path,
+        resume_from: Option<usize>,
+    ) -> flatcut_device::grbl::SendOptions {
+        flatcut_device::grbl::SendOptions::default()
+            .with_unlock(self.unlock)
+            .with_check(self.check)
+            .with_resume(self.resume || resume_from.is_some())
+            .with_resume_from(resume_from)
+            .with_journal(journal)
+            .with_origin_confirmed(self.origin_confirmed)
+            .with_accept_changed_job(self.accept_changed_job)
+            .with_discard_offsets(self.discard_offsets)
+            .with_position_tolerance(Some(self.position_tolerance))
+            .with_on_pause(self.pause_policy())
+            .with_force_laser(self.force_laser)
+            .with_banner_timeout(std::time::Duration::from_millis(self.boot_wait))
+    }
+
+    /// The job line `--resume-from` names (a line number of the file), as an index among the
+    /// lines the sender streams.
+    pub fn resume_index(
+        &self,
+        job: &flatcut_device::grbl::Job,
+        name: &str,
+    ) -> anyhow::Result<Option<usize>> {
+        self.resume_from
+            .map(|line| {
+                job.lines
+                    .iter()
+                    .position(|l| l.source_line >= line)
+                    .with_context(|| {
+                        format!(
+                            "--resume-from {line}: the job {name} has nothing to send from line {line} on"
+                        )
+                    })
+            })
+            .transpose()
+    }
 }
 
 /// `--on-pause`: what to do when the job pauses itself (M0).
@@ -233,8 +363,8 @@ pub enum OnPause {
 
 impl StreamArgs {
     /// The pause policy: `--on-pause`, else wait and ask on a terminal, abort without one.
-    pub fn pause_policy(&self) -> flatcut_grbl::PausePolicy {
-        use flatcut_grbl::PausePolicy;
+    pub fn pause_policy(&self) -> flatcut_device::grbl::PausePolicy {
+        use flatcut_device::grbl::PausePolicy;
         use std::io::IsTerminal;
         match self.on_pause {
             Some(OnPause::Abort) => PausePolicy::Abort,

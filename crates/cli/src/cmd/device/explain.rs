@@ -1,9 +1,9 @@
 //! What a stopped send tells the operator: the sender's error, and what to do next.
 
-use flatcut_grbl::SendError;
+use flatcut_device::grbl::SendError;
 use std::path::Path;
 
-use super::StreamArgs;
+use super::args::StreamArgs;
 
 /// A send that stopped: the sender's error, and what to do next. Its message is the whole story
 /// (the sender's message names the line, the code's meaning and the last line executed), so it
@@ -95,6 +95,13 @@ pub(super) fn explain(
         SendError::ResumeFromOutOfRange { .. } => {
             Some("--resume-from takes a line number of the file that has a line to send.".to_string())
         }
+        SendError::OutOfTravel { .. } if args.uses_sim() => Some(if args.sim_machine.is_some() {
+            "The embedded simulator is the machine the profile describes: the job must fit its work area."
+                .to_string()
+        } else {
+            "The embedded simulator is GRBL's default machine (200 mm of travel on each axis): give it the machine's profile with --profile, or its travel with --sim-set 130=X --sim-set 131=Y."
+                .to_string()
+        }),
         SendError::OffsetsUnknown { .. } => Some(
             "Let the controller come to Idle and try again, or add --discard-offsets to run in G54 without G92."
                 .to_string(),
@@ -124,7 +131,7 @@ pub(super) fn explain(
             );
         }
         if let SendError::Alarm { code, .. } = &e
-            && flatcut_grbl::codes::alarm_is_critical(*code)
+            && flatcut_device::grbl::codes::alarm_is_critical(*code)
         {
             h.push_str(
                 " (the controller will be alarm-locked: home it first, or add --unlock only if \

@@ -1,12 +1,13 @@
-//! Signals during a send: the process-wide Ctrl-C (SIGTERM, SIGHUP) handler, and the prompt
-//! thread that turns them into feed hold, resume or abort.
+//! Signals: the process-wide Ctrl-C (SIGTERM, SIGHUP) handler, which the binary installs once
+//! at start ([`install_handler`]), and the prompt thread that turns a signal during a send into
+//! feed hold, resume or abort.
 
 use std::io::{BufRead, IsTerminal, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::sync::{Arc, Mutex, OnceLock};
 
-use flatcut_grbl::CancelToken;
+use flatcut_device::grbl::CancelToken;
 use indicatif::{ProgressBar, ProgressDrawTarget};
 
 /// What the prompt thread hears about.
@@ -32,7 +33,11 @@ static SINK: Mutex<Vec<(u64, Sender<Ev>, Option<CancelToken>)>> = Mutex::new(Vec
 static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 static HANDLER: OnceLock<Result<(), String>> = OnceLock::new();
 
-fn install_handler() -> Result<(), String> {
+/// Installs the process's handler of SIGINT, SIGTERM and SIGHUP (once; later calls say how the
+/// first went). Without a send or a simulator registered, a signal removes the command's
+/// temporary outputs and ends the process (130). An embedding program that owns its signals
+/// does not call it.
+pub fn install_handler() -> Result<(), String> {
     HANDLER
         .get_or_init(|| {
             ctrlc::set_handler(|| {
@@ -54,13 +59,6 @@ fn install_handler() -> Result<(), String> {
         .clone()
 }
 
-/// Installs the signal handler for a command that writes files, so SIGINT, SIGTERM and SIGHUP
-/// remove its temporary outputs before the process ends. When the handler cannot be installed
-/// (an embedding program owns the signals) the outputs are still cleaned on every other path.
-pub(crate) fn install_signal_cleanup() {
-    let _ = install_handler();
-}
-
 /// A registration with the Ctrl-C handler; unregisters on drop.
 pub(super) struct Interrupts {
     id: u64,
@@ -69,20 +67,19 @@ pub(super) struct Interrupts {
 }
 
 impl Interrupts {
-    /// Registers a receiver of Ctrl-C (SIGTERM, SIGHUP); `cancel` is aborted directly when
-    /// nothing listens any more.
-    pub(super) fn register(cancel: Option<CancelToken>) -> anyhow::Result<Interrupts> {
-        install_handler().map_err(|e| anyhow::anyhow!("cannot install the Ctrl-C handler: {e}"))?;
+    /// Registers a receiver of Ctrl-C (SIGTERM, SIGHUP) with the handler [`install_handler`]
+    /// put in place; `cancel` is aborted directly when nothing listens any more.
+    pub(super) fn register(cancel: Option<CancelToken>) -> Interrupts {
         let (tx, rx) = channel();
         let id = NEXT_ID.fetch_add(1, Ordering::Relaxed);
         SINK.lock()
             .unwrap_or_else(|p| p.into_inner())
             .push((id, tx.clone(), cancel));
-        Ok(Interrupts {
+        Interrupts {
             id,
             tx,
             rx: Mutex::new(Some(rx)),
-        })
+        }
     }
 
     pub(super) fn take_receiver(&self) -> Receiver<Ev> {
@@ -106,13 +103,14 @@ impl Drop for Interrupts {
     }
 }
 
-/// Blocks until Ctrl-C (for `flatcut sim`). Errors if no handler can be installed.
-pub(crate) fn wait_for_interrupt() -> anyhow::Result<()> {
-    let i = Interrupts::register(None)?;
+/// Blocks until Ctrl-C (for `flatcut sim`); the binary's handler must be in place
+/// ([`install_handler`]).
+pub fn wait_for_interrupt() {
+    let i = Interrupts::register(None);
     let rx = i.take_receiver();
     loop {
         match rx.recv() {
-            Ok(Ev::Interrupt) | Err(_) => return Ok(()),
+            Ok(Ev::Interrupt) | Err(_) => return,
             Ok(_) => {}
         }
     }

@@ -1,10 +1,11 @@
 //! Tests of the device layer: the status line, fault flags, the journal path and the simulated bed.
 
-use super::display::status_text;
-use super::*;
-use flatcut_grbl::MachineState;
-use flatcut_grbl::Progress;
-use flatcut_grbl::driver::Phase;
+use super::args::{DEFAULT_SIM_SPEED, StreamArgs};
+use super::status::status_text;
+use flatcut_device::Target;
+use flatcut_device::grbl::driver::Phase;
+use flatcut_device::grbl::{Job, MachineState, Progress, SendOptions};
+use std::path::PathBuf;
 use std::time::Duration;
 
 fn progress() -> Progress {
@@ -58,16 +59,18 @@ fn journal_path_and_sim_bed() {
         PathBuf::from("j")
     );
     assert!(a.uses_sim() && !a.clone().with_port("/dev/ttyUSB0").uses_sim());
-    // A 600 x 150 mm job: the simulated bed grows in X only, to 610 mm.
-    let job = Job::parse("G0 X0 Y0\nG1 X600 Y150 F1000\n").unwrap();
-    let cfg = sim_config(&job, &a).unwrap();
-    assert_eq!(cfg.settings, vec![(130, 610.0)]);
+    // The simulated machine is GRBL's, or the profile's: it does not grow to fit a job.
+    let Ok(Target::Simulator(s)) = a.target() else {
+        panic!("not the simulator")
+    };
+    let cfg = s.config().unwrap();
+    assert!(cfg.settings.is_empty());
     assert_eq!(cfg.time_scale, DEFAULT_SIM_SPEED);
     let bad = StreamArgs {
         sim_speed: 0.0,
         ..StreamArgs::default()
     };
-    assert!(sim_config(&job, &bad).is_err());
+    assert!(bad.target().unwrap().check().is_err());
 }
 
 /// A terminal output that blocks at its first write until released (a terminal paused with
@@ -96,33 +99,34 @@ impl std::io::Write for PausedTerminal {
 }
 
 /// Issue 14, item 5: a terminal that stops reading (Ctrl-S) does not stop the stream: the
-/// whole job streams to firmware-sim while the printer's output is blocked, and everything
-/// (the feed notice first, the final line last) is printed once the terminal reads again.
+/// whole job streams to firmware-sim while the view's output is blocked (the device never
+/// waits for a subscriber), and everything (the feed notice first, the final line last) is
+/// printed once the terminal reads again.
 #[test]
 fn a_paused_terminal_does_not_stall_the_stream() {
-    use super::printer::{Printer, View};
-    use flatcut_firmware_sim::SimConfig;
+    use super::view::View;
+    use flatcut_device::{Device, DeviceEvent, JobRequest, SimSetup};
     use std::sync::atomic::AtomicBool;
     use std::sync::{Arc, Mutex};
 
     let (release, rx) = std::sync::mpsc::channel();
     let out = Arc::new(Mutex::new(Vec::new()));
-    let mut printer = Printer::spawn(
-        View {
-            bar: indicatif::ProgressBar::hidden(),
-            interactive: false,
-            plain: true,
-            plain_interval: Duration::ZERO,
-            notices: true,
-            eta_scale: None,
-            prompting: Arc::new(AtomicBool::new(false)),
-        },
-        Box::new(PausedTerminal {
+    let mut view = View {
+        bar: indicatif::ProgressBar::hidden(),
+        interactive: false,
+        plain: true,
+        plain_interval: Duration::ZERO,
+        notices: true,
+        eta_scale: None,
+        prompting: Arc::new(AtomicBool::new(false)),
+        out: Box::new(PausedTerminal {
             release: rx,
             released: false,
             out: out.clone(),
         }),
-    );
+        last_plain: std::time::Instant::now(),
+        notices_shown: 0,
+    };
     // 300 strokes along Y at F3000 on a controller at GRBL's default 500 mm/min.
     let mut text = String::from("G21 G90\n");
     for i in 1..=300 {
@@ -133,36 +137,43 @@ fn a_paused_terminal_does_not_stall_the_stream() {
         ));
     }
     let job = Job::parse(&text).unwrap();
-    let sim = PtySim::spawn(SimConfig::default().with_instant_motion(true)).unwrap();
-    let mut port = flatcut_grbl::open_port(sim.path().to_str().unwrap(), 115_200).unwrap();
+    let device = Device::open(Target::Simulator(SimSetup::default().with_instant(true))).unwrap();
+    let events = device.subscribe();
     let opts = SendOptions::default().with_banner_timeout(Duration::from_millis(500));
-    let rep = flatcut_grbl::send_job(
-        &mut port,
-        &job,
-        &opts,
-        &mut |p| printer.show(p),
-        &flatcut_grbl::CancelToken::new(),
-    )
-    .unwrap();
-    drop(port);
-    let trace = sim.stop().trace;
+    let handle = device
+        .start(JobRequest::new("strokes", job.clone()).with_options(opts))
+        .unwrap();
+    let watcher = std::thread::spawn(move || {
+        while let Some(e) = events.recv() {
+            match e {
+                DeviceEvent::Progress(p) => view.show(&p),
+                DeviceEvent::JobFinished { .. } => break,
+                _ => {}
+            }
+        }
+    });
+    let rep = handle.wait().unwrap().report;
+    let trace = device.close().sim.unwrap().trace;
     assert_eq!(rep.lines_sent, job.len());
     assert_eq!(trace.len(), job.motions().len());
     // Nothing reached the terminal while it was paused.
     assert!(out.lock().unwrap().is_empty());
     release.send(()).unwrap();
-    printer.finish();
+    watcher.join().unwrap();
     let printed = String::from_utf8(out.lock().unwrap().clone()).unwrap();
     let lines: Vec<&str> = printed.lines().collect();
-    // The notice comes before any line of the stream; ticks the paused terminal missed were
-    // dropped, the final one was not.
+    // The notice comes before any line of the stream (only the line of the connection, which
+    // the paused terminal held, comes first); ticks the paused terminal missed were dropped,
+    // the final one was not.
     let warning = lines.iter().position(|l| {
         l.starts_with(
             "warning: the job asks F3000 (line 2) but the controller's Y max rate ($111) is 500 mm/min",
         )
     });
-    let streaming = lines.iter().position(|l| l.starts_with("streaming:"));
-    assert!(warning.is_some() && warning < streaming, "{printed}");
+    let first_of_stream = lines
+        .iter()
+        .position(|l| !l.starts_with("connecting:") && !l.starts_with("warning:"));
+    assert!(warning.is_some() && warning < first_of_stream, "{printed}");
     assert!(lines.len() < 20, "{printed}");
     assert_eq!(
         lines.iter().filter(|l| l.starts_with("warning:")).count(),

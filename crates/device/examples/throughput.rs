@@ -4,7 +4,7 @@
 //!    of streaming against baud/10; the target is at least 90 %).
 //! 2. Real-time motion on a job of short segments: how often the simulated planner ran dry.
 //!
-//! Run: `cargo run --release -p flatcut-grbl --example throughput [lines] [segments] [runs]`
+//! Run: `cargo run --release -p flatcut-device --example throughput [lines] [segments] [runs]`
 //! (`segments` 0 skips part 2; `runs` repeats part 1, default 5).
 
 use flatcut_firmware_sim::{PtySim, SimConfig};
