@@ -16,9 +16,10 @@ use flatcut_surface::patch::bspline::MAX_DEGREE;
 use flatcut_surface::patch::{Analytic, BSplinePatch};
 
 use crate::StepError;
+use crate::assembly::Placement;
 use crate::attrs::{Attrs, describe, number};
 use crate::file::{Instance, StepFile, Value};
-use crate::geom::{Curve, Surface};
+use crate::geom::{Curve, Spline, Surface};
 
 /// Longest chain of references followed from one instance (a B-rep is about 12 deep: shell,
 /// face, bound, loop, oriented edge, edge, curve, placement, direction).
@@ -64,6 +65,9 @@ pub struct Reader<'f> {
     pub mm: f64,
     /// Radians per plane-angle unit.
     pub rad: f64,
+    /// Where the body being read sits (an assembly instance): applied to every point and
+    /// direction of model space as it is read. Set with [`Reader::place`].
+    xf: Placement,
     stack: Vec<u64>,
     curves: BTreeMap<(u64, bool), Arc<Curve>>,
     surfaces: BTreeMap<u64, Arc<Surface>>,
@@ -105,9 +109,19 @@ impl<'f> Reader<'f> {
             file,
             mm: 1.0,
             rad: 1.0,
+            xf: Placement::IDENTITY,
             stack: Vec::new(),
             curves: BTreeMap::new(),
             surfaces: BTreeMap::new(),
+        }
+    }
+
+    /// Reads what follows as placed by `xf` (the geometry cache is per placement).
+    pub fn place(&mut self, xf: Placement) {
+        if xf != self.xf {
+            self.xf = xf;
+            self.curves.clear();
+            self.surfaces.clear();
         }
     }
 
@@ -172,8 +186,12 @@ impl<'f> Reader<'f> {
                     format!("expected {want} coordinates, found {}", c.len()),
                 ));
             }
-            let s = if space == Space::Model { r.mm } else { 1.0 };
-            Ok(DVec3::new(c[0], c[1], c.get(2).copied().unwrap_or(0.0)) * s)
+            let p = DVec3::new(c[0], c[1], c.get(2).copied().unwrap_or(0.0));
+            Ok(if space == Space::Model {
+                r.xf.point(p * r.mm)
+            } else {
+                p
+            })
         })
     }
 
@@ -212,8 +230,11 @@ impl<'f> Reader<'f> {
             if m.is_nan() || m < 0.0 {
                 return Err(a.bad(2, "magnitude", format!("must be >= 0, got {m}")));
             }
-            let s = if space == Space::Model { r.mm } else { 1.0 };
-            Ok(d.normalize() * m * s)
+            Ok(if space == Space::Model {
+                r.xf.vector(d.normalize() * m * r.mm)
+            } else {
+                d.normalize() * m
+            })
         })
     }
 
@@ -235,7 +256,7 @@ impl<'f> Reader<'f> {
                     None if z.normalize().dot(DVec3::X).abs() > 1.0 - 1e-12 => DVec3::Y,
                     None => DVec3::X,
                 };
-                Frame::new(o, z, Some(x)).map_err(bad)
+                Frame::new(o, r.xf.vector(z), Some(r.xf.vector(x))).map_err(bad)
             } else if inst.is("AXIS2_PLACEMENT_2D") {
                 let a = Attrs::of(inst, &inst.parts[0]);
                 let o = r.point2(a.reference(1, "location")?, id)?.extend(0.0);
@@ -529,7 +550,7 @@ impl<'f> Reader<'f> {
                         Some(d) => r.direction(d, ax)?,
                         None => DVec3::Z,
                     };
-                    Ok((p, d))
+                    Ok((p, r.xf.vector(d)))
                 })?;
                 Analytic::revolution(c, p, d).map_err(bad)?
             }
@@ -634,9 +655,9 @@ impl<'f> Reader<'f> {
             }
         };
         let bad = |e: SurfaceError| StepError::entity(id, &name, e.to_string());
-        Ok(Surface::Spline(
+        Ok(Surface::Spline(Spline::new(
             BSplinePatch::new(du, dv, knots_u, knots_v, nu, nv, pts, weights).map_err(bad)?,
-        ))
+        )))
     }
 
     /// The length and plane-angle units of a representation context (`#id`), if it states them.
