@@ -9,6 +9,7 @@ use flatcut_design::StepPiece;
 use flatcut_geom::{Aabb3, Tolerances};
 use flatcut_mesh::tessellate::TessOptions;
 use flatcut_mesh::{MeshStats, TriMesh};
+use flatcut_step::heal::Repair;
 use flatcut_step::{Model, Tessellation, face_area};
 use flatcut_surface::ParamSurface;
 use serde::Serialize;
@@ -51,6 +52,8 @@ pub struct StepFace {
     pub gaussian_curvature: Option<Range2>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub developable: Option<bool>,
+    /// What healing repaired in the face, its loops and its edges (empty for a clean face).
+    pub repairs: Vec<Repair>,
     /// Why the face cannot be used.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
@@ -75,6 +78,8 @@ pub struct StepEdge {
 pub struct StepSummary {
     pub unit: StepUnit,
     pub schemas: Vec<String>,
+    /// The largest defect healed (mm): `--heal-tolerance`, or a fraction of the model's size.
+    pub heal_limit_mm: f64,
     pub shells: Vec<StepShell>,
     pub faces: Vec<StepFace>,
     pub edges: Vec<StepEdge>,
@@ -159,6 +164,7 @@ pub fn summarise_model(model: &Model, tol: &Tolerances) -> StepSummary {
             bbox_mm: None,
             gaussian_curvature: None,
             developable: None,
+            repairs: f.repairs.clone(),
             error: None,
         };
         let figures = (|| -> Result<(), String> {
@@ -166,6 +172,9 @@ pub fn summarise_model(model: &Model, tol: &Tolerances) -> StepSummary {
             out.surface = Some(g.surface.name());
             let t = Tessellation::new(model, &[i], tol, &TessOptions::DEFAULT)
                 .map_err(|e| e.to_string())?;
+            if let Some(fm) = t.faces.first() {
+                out.repairs.clone_from(&fm.repairs);
+            }
             let s = sample(model, &t);
             out.area_mm2 = Some(face_area(model, i).map_err(|e| e.to_string())?);
             out.bbox_mm = Some([s.bbox.min.to_array(), s.bbox.max.to_array()]);
@@ -212,6 +221,7 @@ pub fn summarise_model(model: &Model, tol: &Tolerances) -> StepSummary {
             stated: model.units.stated,
         },
         schemas: model.schemas.clone(),
+        heal_limit_mm: model.heal_mm,
         shells: model
             .shells
             .iter()
@@ -239,14 +249,18 @@ pub fn summarise_piece(
     tol: &Tolerances,
 ) -> PieceSummary {
     let stats = MeshStats::of(mesh);
-    let area: f64 = sp
-        .faces
-        .iter()
-        .map(|&f| face_area(&sp.model, f).unwrap_or(0.0))
-        .sum();
-    let s = match Tessellation::new(&sp.model, &sp.faces, tol, &TessOptions::DEFAULT) {
-        Ok(t) => sample(&sp.model, &t),
-        Err(_) => Sampled::none(),
+    let (area, s) = match sp.source.tessellation(tol) {
+        Ok((model, t)) => {
+            let area = sp
+                .faces
+                .iter()
+                .map(|&f| face_area(&model, f).unwrap_or(0.0))
+                .sum();
+            let mut mine = t.as_ref().clone();
+            mine.faces.retain(|f| sp.faces.contains(&f.face));
+            (area, sample(&model, &mine))
+        }
+        Err(_) => (0.0, Sampled::none()),
     };
     let bbox = s.bbox.union(&mesh.bbox());
     PieceSummary {

@@ -51,6 +51,7 @@ pub mod pieces;
 pub mod pipeline;
 pub mod project;
 pub mod run;
+pub mod sanity;
 pub mod splitting;
 
 pub use flatcut_darts as darts;
