@@ -39,7 +39,7 @@ mod step;
 mod step_seams;
 mod units;
 
-pub use assemble::{AssembledPiece, Assembly};
+pub use assemble::{AssembledPiece, Assembly, PartRegions};
 pub use build::PieceGeometry;
 pub use error::DesignError;
 pub use load::Design;
