@@ -97,6 +97,21 @@ pub struct FaceGeometry {
     pub bounds: Vec<Bound>,
 }
 
+impl FaceGeometry {
+    /// The face the other way round (in a shell used reversed): its normal and its loops
+    /// reversed, so it bounds the same region.
+    pub fn reversed(mut self) -> Self {
+        self.same_sense = !self.same_sense;
+        for b in &mut self.bounds {
+            b.uses.reverse();
+            for u in &mut b.uses {
+                u.forward = !u.forward;
+            }
+        }
+        self
+    }
+}
+
 /// A face of the model.
 #[derive(Clone, Debug)]
 pub struct Face {
@@ -204,6 +219,7 @@ impl Model {
         if tops.is_empty() {
             return Err(StepError::NoShells);
         }
+        loose_surfaces(file, &mut b.r)?;
         let contexts = representation_contexts(file, &mut b.r)?;
         let fallback = unique_units(file, &mut b.r)?;
         let bodies: Vec<u64> = tops.iter().map(|t| t.0).collect();
@@ -278,6 +294,34 @@ impl Model {
     pub fn vertex_bbox(&self) -> Aabb3 {
         Aabb3::from_points(self.vertices.iter().map(|v| v.point))
     }
+}
+
+/// Refuses a file whose shapes hold surfaces outside any shell (a `GEOMETRIC_SET` of bounded
+/// or trimmed surfaces beside the solids): only shells' faces are read, and the model would
+/// come in without them, with less area than the file has.
+fn loose_surfaces(file: &StepFile, r: &mut Reader) -> Result<(), StepError> {
+    for set in file.ids_of_type("GEOMETRIC_SET") {
+        let items = r.visit(set, set, |_, inst| {
+            let a = Attrs::of(inst, &inst.parts[0]);
+            a.refs(1, "elements")
+        })?;
+        for item in items {
+            let Some(t) = file.type_of(item) else {
+                continue;
+            };
+            let t = t.to_ascii_uppercase();
+            if t.ends_with("_SURFACE") || t.ends_with("_FACE") {
+                return Err(StepError::entity(
+                    set,
+                    "GEOMETRIC_SET",
+                    format!(
+                        "holds the surface #{item} ({t}) outside any shell: flatcut reads the faces of shells only, and the model would come in without it"
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The top-level shape items and their shells `(shell, closed)`, in item order.
@@ -485,11 +529,24 @@ impl<'f> Builder<'f> {
         index: usize,
         seen: &mut BTreeMap<(u64, usize), usize>,
     ) -> Result<Vec<usize>, StepError> {
-        let face_ids = self.r.visit(sid, from, |_, inst| {
+        // An oriented shell (a solid's void, written reversed) is its element's faces, each
+        // reversed when the orientation is false.
+        let (element, reversed) = self.r.visit(sid, from, |_, inst| {
+            let a = Attrs::of(inst, &inst.parts[0]);
+            let t = a.name.to_ascii_uppercase();
+            if t == "ORIENTED_CLOSED_SHELL" || t == "ORIENTED_OPEN_SHELL" {
+                Ok((a.reference(2, "element")?, !a.boolean(3, "orientation")?))
+            } else {
+                Ok((sid, false))
+            }
+        })?;
+        let face_ids = self.r.visit(element, sid, |_, inst| {
             let a = Attrs::of(inst, &inst.parts[0]);
             let t = a.name.to_ascii_uppercase();
             if t != "CLOSED_SHELL" && t != "OPEN_SHELL" {
-                return Err(a.fail("expected CLOSED_SHELL or OPEN_SHELL"));
+                return Err(
+                    a.fail("expected CLOSED_SHELL, OPEN_SHELL or an ORIENTED_CLOSED_SHELL of one")
+                );
             }
             a.refs(1, "cfs_faces")
         })?;
@@ -502,7 +559,9 @@ impl<'f> Builder<'f> {
             let k = self.faces.len();
             seen.insert((fid, self.instance), k);
             // A face that cannot be read keeps its number and its error.
-            let geometry = self.face(fid, sid);
+            let geometry = self
+                .face(fid, sid)
+                .map(|g| if reversed { g.reversed() } else { g });
             if let Ok(g) = &geometry {
                 for u in g.bounds.iter().flat_map(|b| &b.uses) {
                     self.edges[u.edge].faces.push(k);

@@ -630,7 +630,23 @@ impl Tessellation {
     /// twice the same way (a face that took the complement of its region). A check that shares
     /// nothing with the per-face ones: it sees the faces together.
     fn check_closed(&self, model: &Model, shell: &crate::model::Shell) -> Result<(), StepError> {
-        let (mesh, _) = self.welded_with_ids(Some(&shell.faces));
+        let (mesh, new_id) = self.welded_with_ids(Some(&shell.faces));
+        // Edges the file's own topology leaves free (one use in the shell: a shell flagged
+        // closed that is not) may stay open; every other mesh edge must be shared.
+        let mut free: std::collections::BTreeSet<(u32, u32)> = std::collections::BTreeSet::new();
+        for e in &self.edges {
+            let uses = model.edges[e.edge]
+                .faces
+                .iter()
+                .filter(|f| shell.faces.contains(f))
+                .count();
+            if uses == 1 {
+                for w in e.vertices.windows(2) {
+                    let (a, b) = (new_id[w[0] as usize], new_id[w[1] as usize]);
+                    free.insert((a.min(b), a.max(b)));
+                }
+            }
+        }
         let refuse = |a: u32, b: u32, what: String| {
             let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
             let at = 0.5 * (pa + pb);
@@ -685,6 +701,7 @@ impl Tessellation {
             .iter()
             .filter(|(_, e)| e.is_boundary())
             .map(|(k, _)| *k)
+            .filter(|&(a, b)| !free.contains(&(a.min(b), a.max(b))))
             .collect();
         if let Some(&(a, b)) = open.first() {
             let length: f64 = open
