@@ -779,6 +779,47 @@ fn fit_between(lp: &mut [LoopPt], lo: f64, per: f64) -> bool {
     true
 }
 
+/// The loop once around from point `start`, its points past the end moved by `wrap` in u (the
+/// loop's winding), ending on the start's copy.
+fn around_from(lp: &[LoopPt], start: usize, wrap: f64) -> Vec<LoopPt> {
+    let n = lp.len();
+    (0..=n)
+        .map(|k| {
+            let mut p = lp[(start + k) % n];
+            if start + k >= n {
+                p.uv.x += wrap;
+            }
+            if k == n {
+                p.along = None;
+            }
+            p
+        })
+        .collect()
+}
+
+/// The points of a cut line moved by `shift` in (u, v), forwards or backwards.
+fn line_points(trim: &Trim, line: &[(DVec2, usize)], shift: DVec2, backwards: bool) -> Vec<LoopPt> {
+    let pt = |&(q, e): &(DVec2, usize)| LoopPt {
+        uv: q + shift,
+        pos: trim.extra[e],
+        origin: Origin::Extra(e),
+        along: None,
+    };
+    if backwards {
+        line.iter().rev().map(pt).collect()
+    } else {
+        line.iter().map(pt).collect()
+    }
+}
+
+/// Records a cut line from `from` through the line's points to `to`.
+fn record_cut(trim: &mut Trim, from: Origin, line: &[(DVec2, usize)], to: Origin) {
+    let mut cut = vec![from];
+    cut.extend(line.iter().map(|&(_, e)| Origin::Extra(e)));
+    cut.push(to);
+    trim.cuts.push(cut);
+}
+
 /// A cap: the winding loop `lp` (going `w` = ±1 times around u) closed through the pole on its
 /// region's side by a cut line at the u of one of its points.
 fn cap(
@@ -821,20 +862,9 @@ fn cap(
             continue;
         }
         holes.clone_from_slice(&moved);
-        let mut out: Vec<LoopPt> = Vec::new();
-        let n = lp.len();
         let wp = per * w as f64;
         // Around once from the anchor.
-        for k in 0..=n {
-            let mut p = lp[(ai + k) % n];
-            if ai + k >= n {
-                p.uv.x += wp;
-            }
-            if k == n {
-                p.along = None;
-            }
-            out.push(p);
-        }
+        let mut out = around_from(lp, ai, wp);
         // Up the cut line at u + w·per, along the pole, and down at u.
         let line = cut_points(inp, a, top, trim);
         let pole_pos = s.eval(a.x, pole_v);
@@ -842,14 +872,7 @@ fn cap(
             trim.extra.push(pole_pos);
             Origin::Extra(trim.extra.len() - 1)
         });
-        for &(q, e) in &line {
-            out.push(LoopPt {
-                uv: q + DVec2::new(wp, 0.0),
-                pos: trim.extra[e],
-                origin: Origin::Extra(e),
-                along: None,
-            });
-        }
+        out.extend(line_points(trim, &line, DVec2::new(wp, 0.0), false));
         for uv in [top + DVec2::new(wp, 0.0), top] {
             out.push(LoopPt {
                 uv,
@@ -858,18 +881,8 @@ fn cap(
                 along: None,
             });
         }
-        for &(q, e) in line.iter().rev() {
-            out.push(LoopPt {
-                uv: q,
-                pos: trim.extra[e],
-                origin: Origin::Extra(e),
-                along: None,
-            });
-        }
-        let mut cut = vec![lp[ai].origin];
-        cut.extend(line.iter().map(|&(_, e)| Origin::Extra(e)));
-        cut.push(pole_origin);
-        trim.cuts.push(cut);
+        out.extend(line_points(trim, &line, DVec2::ZERO, true));
+        record_cut(trim, lp[ai].origin, &line, pole_origin);
         // The anchor's copy a period on closes the loop against the first point: drop it.
         return Ok(dedup_closing(out));
     }
@@ -1033,29 +1046,15 @@ fn whole_surface(
             let bottom = cut_points(inp, DVec2::new(u0, v0), DVec2::new(u0 + pu, v0), trim);
             let side = cut_points(inp, DVec2::new(u0, v0), DVec2::new(u0, v0 + pv), trim);
             out.push(pt(trim, DVec2::new(u0, v0), c));
-            for &(q, e) in &bottom {
-                out.push(pt(trim, q, Origin::Extra(e)));
-            }
+            out.extend(line_points(trim, &bottom, DVec2::ZERO, false));
             out.push(pt(trim, DVec2::new(u0 + pu, v0), c));
-            for &(q, e) in &side {
-                out.push(pt(trim, q + DVec2::new(pu, 0.0), Origin::Extra(e)));
-            }
+            out.extend(line_points(trim, &side, DVec2::new(pu, 0.0), false));
             out.push(pt(trim, DVec2::new(u0 + pu, v0 + pv), c));
-            for &(q, e) in bottom.iter().rev() {
-                out.push(pt(trim, q + DVec2::new(0.0, pv), Origin::Extra(e)));
-            }
+            out.extend(line_points(trim, &bottom, DVec2::new(0.0, pv), true));
             out.push(pt(trim, DVec2::new(u0, v0 + pv), c));
-            for &(q, e) in side.iter().rev() {
-                out.push(pt(trim, q, Origin::Extra(e)));
-            }
-            let mut cut = vec![c];
-            cut.extend(bottom.iter().map(|&(_, e)| Origin::Extra(e)));
-            cut.push(c);
-            trim.cuts.push(cut);
-            let mut cut = vec![c];
-            cut.extend(side.iter().map(|&(_, e)| Origin::Extra(e)));
-            cut.push(c);
-            trim.cuts.push(cut);
+            out.extend(line_points(trim, &side, DVec2::ZERO, true));
+            record_cut(trim, c, &bottom, c);
+            record_cut(trim, c, &side, c);
         }
         // A sphere: between its poles, cut along one meridian.
         None => {
@@ -1074,18 +1073,11 @@ fn whole_surface(
             let line = cut_points(inp, a, b, trim);
             out.push(pt(trim, a, ps));
             out.push(pt(trim, a + DVec2::new(pu, 0.0), ps));
-            for &(q, e) in &line {
-                out.push(pt(trim, q + DVec2::new(pu, 0.0), Origin::Extra(e)));
-            }
+            out.extend(line_points(trim, &line, DVec2::new(pu, 0.0), false));
             out.push(pt(trim, b + DVec2::new(pu, 0.0), pn));
             out.push(pt(trim, b, pn));
-            for &(q, e) in line.iter().rev() {
-                out.push(pt(trim, q, Origin::Extra(e)));
-            }
-            let mut cut = vec![ps];
-            cut.extend(line.iter().map(|&(_, e)| Origin::Extra(e)));
-            cut.push(pn);
-            trim.cuts.push(cut);
+            out.extend(line_points(trim, &line, DVec2::ZERO, true));
+            record_cut(trim, ps, &line, pn);
         }
     }
     Ok(out)
@@ -1139,26 +1131,8 @@ fn band(
                 continue;
             }
             let line = cut_points(inp, a, b, trim);
-            let mut out: Vec<LoopPt> = Vec::new();
-            let n = lower.len();
-            for k in 0..=n {
-                let mut p = lower[(ai + k) % n];
-                if ai + k >= n {
-                    p.uv.x += wp;
-                }
-                if k == n {
-                    p.along = None;
-                }
-                out.push(p);
-            }
-            for &(q, e) in &line {
-                out.push(LoopPt {
-                    uv: q + DVec2::new(wp, 0.0),
-                    pos: trim.extra[e],
-                    origin: Origin::Extra(e),
-                    along: None,
-                });
-            }
+            let mut out = around_from(lower, ai, wp);
+            out.extend(line_points(trim, &line, DVec2::new(wp, 0.0), false));
             // Around the upper loop once from its point (going the other way round).
             let m = upper.len();
             for k in 0..=m {
@@ -1172,18 +1146,8 @@ fn band(
                 }
                 out.push(p);
             }
-            for &(q, e) in line.iter().rev() {
-                out.push(LoopPt {
-                    uv: q,
-                    pos: trim.extra[e],
-                    origin: Origin::Extra(e),
-                    along: None,
-                });
-            }
-            let mut cut = vec![lower[ai].origin];
-            cut.extend(line.iter().map(|&(_, e)| Origin::Extra(e)));
-            cut.push(upper[bi].origin);
-            trim.cuts.push(cut);
+            out.extend(line_points(trim, &line, DVec2::ZERO, true));
+            record_cut(trim, lower[ai].origin, &line, upper[bi].origin);
             return Ok(dedup_closing(out));
         }
     }
