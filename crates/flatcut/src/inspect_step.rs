@@ -35,6 +35,17 @@ pub struct StepShell {
     pub faces: Vec<usize>,
 }
 
+/// A body (a solid or surface model) and how many times the assembly places it: the instances
+/// of one body are one part cut `quantity` times.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StepBody {
+    pub entity: u64,
+    pub name: String,
+    pub quantity: usize,
+    /// The shells of its instances.
+    pub shells: Vec<usize>,
+}
+
 /// One face (keys are a stable contract). Without `error`, all figures are present.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StepFace {
@@ -81,8 +92,36 @@ pub struct StepSummary {
     /// The largest defect healed (mm): `--heal-tolerance`, or a fraction of the model's size.
     pub heal_limit_mm: f64,
     pub shells: Vec<StepShell>,
+    /// The bodies and their quantities (an assembly places a body once per instance).
+    pub bodies: Vec<StepBody>,
     pub faces: Vec<StepFace>,
     pub edges: Vec<StepEdge>,
+}
+
+/// The model's bodies in file order, each with the number of its instances.
+fn bodies(model: &Model) -> Vec<StepBody> {
+    let mut out: Vec<StepBody> = Vec::new();
+    for inst in &model.instances {
+        if !out.iter().any(|b| b.entity == inst.body) {
+            out.push(StepBody {
+                entity: inst.body,
+                name: inst.name.clone(),
+                quantity: 0,
+                shells: Vec::new(),
+            });
+        }
+    }
+    for b in &mut out {
+        b.quantity = model
+            .instances
+            .iter()
+            .filter(|i| i.body == b.entity)
+            .count();
+        b.shells = (0..model.shells.len())
+            .filter(|&s| model.instances[model.shells[s].instance].body == b.entity)
+            .collect();
+    }
+    out
 }
 
 /// Figures of a set of faces from their tessellation: bounding box, Gaussian and mean curvature
@@ -233,6 +272,7 @@ pub fn summarise_model(model: &Model, tol: &Tolerances) -> StepSummary {
                 faces: s.faces.clone(),
             })
             .collect(),
+        bodies: bodies(model),
         faces,
         edges,
     }
@@ -315,6 +355,14 @@ impl std::fmt::Display for StepSummary {
                 s.entity,
                 if s.closed { "closed" } else { "open" },
                 s.faces.len()
+            )?;
+        }
+        for b in self.bodies.iter().filter(|b| b.quantity > 1) {
+            let name = if b.name.is_empty() { "body" } else { &b.name };
+            writeln!(
+                f,
+                "  {name} (#{}): placed {} times (shells {:?})",
+                b.entity, b.quantity, b.shells
             )?;
         }
         writeln!(f, "  faces")?;
