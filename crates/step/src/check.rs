@@ -228,7 +228,7 @@ mod tests {
         let s = Surface::Analytic(Analytic::sphere(Frame::WORLD, 40.0).unwrap());
         let zone = rect(0.0, 1.5, -0.3, 1.1, 6);
         let exact = 1600.0 * 1.5 * (1.1f64.sin() - (-0.3f64).sin());
-        let a = trim_area(&s, &[zone.clone()]);
+        let a = trim_area(&s, std::slice::from_ref(&zone));
         assert!((a - exact).abs() < 1e-9 * exact, "{a} vs {exact}");
         // The whole sphere, and with the zone as a clockwise hole.
         let all = rect(0.0, TAU, -0.5 * PI, 0.5 * PI, 4);

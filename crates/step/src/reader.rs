@@ -810,7 +810,7 @@ impl KnotForm {
                 .collect(),
             Self::QuasiUniform => ends(count - degree, 1),
             Self::Bezier => {
-                if (count - 1) % degree != 0 {
+                if !(count - 1).is_multiple_of(degree) {
                     return None;
                 }
                 ends((count - 1) / degree, degree)

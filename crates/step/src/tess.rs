@@ -126,7 +126,7 @@ fn sample_edge(model: &Model, g: &EdgeGeometry, tol: f64) -> Samples {
 
 /// The pole tolerance of a model (mm).
 fn pole_tol(model: &Model) -> f64 {
-    (POLE_REL * model.size_mm).max(1e-9).min(1e-3)
+    (POLE_REL * model.size_mm).clamp(1e-9, 1e-3)
 }
 
 /// The region of face `index` from the current edge samples.

@@ -356,10 +356,11 @@ fn edge_parts(
         let (a, b) = (w[0], w[1]);
         let mut seg: Vec<LoopPt> = pts[a..=b].to_vec();
         // Beyond a split, the pole point takes the parameter of the side it starts.
-        if a > 0 && b > a {
-            if let Some(d) = free[a] {
-                seg[0].uv[d] = pts[a + 1].uv[d];
-            }
+        if a > 0
+            && b > a
+            && let Some(d) = free[a]
+        {
+            seg[0].uv[d] = pts[a + 1].uv[d];
         }
         runs.push(Part {
             edge: inp.model.edges[u.edge].entity,
