@@ -6,6 +6,7 @@ mod dart_drawing;
 mod darts;
 mod dxf;
 mod fuzz;
+mod genus;
 mod hpgl;
 mod licences;
 mod material;

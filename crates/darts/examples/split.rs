@@ -1,5 +1,6 @@
 //! Splits a mesh into pieces within limits: `split MESH.obj STRETCH COMPRESS [OUT-PREFIX]`
-//! writes `OUT-PREFIX-<k>.obj` per piece.
+//! writes `OUT-PREFIX-<k>.obj` per piece. A mesh that is not a disk (closed, of any genus, or
+//! with several boundary loops) is opened first.
 
 use flatcut_darts::limits::Band;
 use flatcut_darts::split::{SplitOptions, split};
@@ -13,17 +14,20 @@ fn main() {
     let c: f64 = args[3].parse().unwrap();
     let t0 = std::time::Instant::now();
     let params = FlattenParams::new(Method::Isometric);
-    let closed = flatcut_mesh::Topology::build(&mesh)
-        .unwrap()
-        .boundary_loops
-        .is_empty();
+    let disk = flatcut_mesh::check_disk(&mesh).is_ok();
+    let max_pieces = std::env::var("MAX_PIECES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(SplitOptions::DEFAULT_MAX_PIECES);
     let opts = SplitOptions {
         band: Band::from_pct(Some(s), Some(c)),
-        max_pieces: SplitOptions::DEFAULT_MAX_PIECES,
+        max_pieces,
         keep_out: None,
+        visibility: Default::default(),
+        time_limit: None,
     };
-    let result = if closed {
-        flatcut_darts::split::split_closed(&mesh, &params, &opts)
+    let result = if !disk {
+        flatcut_darts::split::split_surface(&mesh, &params, &opts)
     } else {
         let f = flatten(&mesh, &params).unwrap();
         split(&mesh, &f.uv, &params, &opts)

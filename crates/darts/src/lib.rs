@@ -16,13 +16,16 @@
 //! **Architecture invariant:** the flattening itself is the flattener's (its kernel and its
 //! Newton solver); this crate decides where to cut and proves the limits with that solver.
 
+pub mod crossing;
 pub mod cut;
 pub mod embed;
 pub mod fit;
 pub mod keepout;
 pub mod limits;
+pub mod open;
 pub mod place;
 pub mod relaxed;
+pub mod seam_cost;
 pub mod solve;
 pub mod split;
 pub mod threads;
@@ -255,6 +258,13 @@ pub enum DartError {
         apart_mm: f64,
         at: DVec3,
     },
+    /// The parts of a split, each within the limits, still include one whose flat outline
+    /// crosses itself, and no further cut the split may make undoes it.
+    #[error(
+        "split into {parts} parts, one still overlaps itself flat near ({:.2}, {:.2}, {:.2}): no pattern can be cut from it (it needs more parts or more time)",
+        at.x, at.y, at.z
+    )]
+    SplitOverlap { parts: usize, at: DVec3 },
     #[error("internal error (please report): {0}")]
     Internal(String),
 }

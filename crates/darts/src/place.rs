@@ -28,7 +28,6 @@
 
 use flatcut_flatten::nonlinear::kernel::rest_frames;
 use flatcut_flatten::{FlattenParams, Method, flatten};
-use flatcut_geom::polygon::first_self_intersection;
 use flatcut_geom::{DVec2, DVec3};
 use flatcut_mesh::{Topology, TriMesh, check_disk};
 
@@ -441,23 +440,7 @@ pub fn place(mesh: &TriMesh, x0: &[DVec2], opts: &DartOptions) -> Result<Darted,
 /// Where the flat outline of `mesh` in the map `x` crosses itself (the 3D position of the
 /// boundary vertex nearest the first crossing), or `None` when every boundary loop is simple.
 fn outline_overlap(mesh: &TriMesh, x: &[DVec2]) -> Result<Option<DVec3>, DartError> {
-    let topo = Topology::build(mesh)?;
-    for l in &topo.boundary_loops {
-        let pts: Vec<DVec2> = l.iter().map(|&v| x[v as usize]).collect();
-        if let Some((_, _, p)) = first_self_intersection(&pts) {
-            let nearest = l
-                .iter()
-                .min_by(|&&a, &&b| {
-                    x[a as usize]
-                        .distance_squared(p)
-                        .total_cmp(&x[b as usize].distance_squared(p))
-                })
-                .copied()
-                .unwrap_or(0);
-            return Ok(Some(mesh.positions[nearest as usize]));
-        }
-    }
-    Ok(None)
+    Ok(crate::crossing::outline_crossing(mesh, x)?.map(|v| mesh.positions[v as usize]))
 }
 
 /// The final map of an outcome that held the limits, fitted as `fit` says, with the fit it has

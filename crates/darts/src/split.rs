@@ -12,17 +12,35 @@
 //!    [`flatcut_mesh::lines`]), so the cut is a smooth line the sewer can follow.
 //! 2. **Choice.** A chord that splits the piece into two disks, neither smaller than
 //!    [`MIN_AREA_SHARE`] of it, is scored by the larger of the two halves' limit excess, each half
-//!    flattened on its own (isometric, without limits). The lowest score wins, the shorter cut on
-//!    a tie.
+//!    flattened on its own (isometric, without limits). The lowest score wins, the cheaper seam
+//!    on a tie (below).
 //! 3. **All pieces together.** The pieces are flattened together, the two sides of every seam
 //!    kept at equal lengths edge by edge and the limits held ([`flatcut_flatten::assembly`]); while
 //!    a piece is still beyond the limits and fewer than `max_pieces` exist, the worst is split
 //!    again.
 //!
-//! A closed surface (a ball, a cushion) cannot be flattened at all: [`split_closed`] first cuts
-//! it open along its middle section ([`opening_loop`]) into two disks and goes on from those.
-//! New parts are judged flattened on their own with the limits held; all parts are flattened
-//! together only when they look done (step 3 is then the proof, or it sends the loop on).
+//! A surface that is not a disk (closed, of any genus, or with several boundary loops) cannot be
+//! flattened at all: [`split_surface`] first opens it into disks ([`crate::open`]: its handles
+//! cut along short loops, its holes joined, a sphere slit) and goes on from those. New parts are
+//! judged flattened on their own with the limits held; all parts are flattened together only
+//! when they look done (step 3 is then the proof, or it sends the loop on).
+//!
+//! Among the chords, one whose two halves both come within the limits, or that ties on the
+//! excess within [`SCORE_TIE`], is chosen by its seam cost ([`crate::seam_cost`]: length weighted
+//! by visibility, and turning) before its excess. The chords are judged side by side (rayon,
+//! results taken in the order of the candidates, so the choice does not depend on the threads),
+//! each half by [`CANDIDATE_ITERS`] Newton steps at most: enough to rank them.
+//!
+//! A part within the limits can still overlap itself flat (a long limb or a ring laid out past
+//! a full turn): its outline crossing itself ([`crate::crossing`]) makes it a piece to cut like
+//! one beyond the limits, by chords through the face at the crossing and by its necks (the
+//! shortest ways across it from points round its outline); candidates whose halves overlap
+//! themselves rank last. A split that cannot undo an overlap within its pieces or time is an
+//! error ([`DartError::SplitOverlap`]), never a result.
+//!
+//! The loop stops early on its time limit (returning the best split so far, `timed_out`) and
+//! on the flattening hooks' cancel flag (an error; the candidates not yet judged are skipped);
+//! it reports its progress through them.
 //!
 //! The seams between the final pieces are found by their coincident vertices
 //! ([`flatcut_mesh::mating::coincident_seams`]): a cut's vertices are copied to both of its sides
@@ -43,7 +61,11 @@ use flatcut_mesh::mating::{MatingSeam, coincident_seams};
 use flatcut_mesh::regions::split_along_lines;
 use flatcut_mesh::{Topology, TriMesh, check_disk};
 
+use rayon::prelude::*;
+
+use crate::crossing::outline_crossing;
 use crate::limits::{Band, Limits, face_excess};
+use crate::seam_cost::{SeamCost, Visibility};
 use crate::{DartError, KeepOut};
 
 /// How far inside the limits (log strain, 0.001 % of stretch) the assembled parts are held: the
@@ -57,6 +79,10 @@ const CHORD_SAMPLES: usize = 16;
 /// Neither side of a cut may be smaller than this share of the piece's area: a sliver cut off
 /// the rim relieves nothing and is a piece no one wants to sew.
 pub const MIN_AREA_SHARE: f64 = 0.05;
+/// Excesses (log strain) this close count as a tie, broken by the seam cost.
+pub const SCORE_TIE: f64 = 2e-3;
+/// Newton steps a candidate's half is flattened with to rank the candidates.
+pub const CANDIDATE_ITERS: usize = 12;
 
 /// What to split for.
 #[derive(Clone, Debug, PartialEq)]
@@ -67,10 +93,14 @@ pub struct SplitOptions {
     pub max_pieces: usize,
     /// Vertices of the piece no cut may pass (no_cut regions, marks), as for darts; `None`: none.
     pub keep_out: Option<KeepOut>,
+    /// Where seams should hide (its flags index the piece's vertices).
+    pub visibility: Visibility,
+    /// Time after which the best split so far is returned (`timed_out`).
+    pub time_limit: Option<std::time::Duration>,
 }
 
 impl SplitOptions {
-    pub const DEFAULT_MAX_PIECES: usize = 8;
+    pub const DEFAULT_MAX_PIECES: usize = 32;
 }
 
 /// A piece split into pieces.
@@ -88,6 +118,8 @@ pub struct Split {
     pub feasible: bool,
     /// Where the largest excess is (3D).
     pub worst_3d: DVec3,
+    /// The time limit ended the search before the limits were met or the pieces ran out.
+    pub timed_out: bool,
 }
 
 impl Split {
@@ -109,37 +141,34 @@ pub fn split(
 ) -> Result<Split, DartError> {
     let mut first = mesh.clone();
     first.flat = Some(x0.to_vec());
-    split_on(mesh, vec![first], Vec::new(), params, opts)
+    split_on(mesh, vec![first], Vec::new(), true, params, opts)
 }
 
-/// Splits a closed surface (no boundary, such as a ball or a cushion): it is first cut open
-/// along [`opening_loop`] into two disks, flattened together, and then split as [`split`]
-/// does. The opening cut is the first of the result's `cuts`.
-pub fn split_closed(
+/// Splits a surface that is not a disk (closed, of any genus, or with several boundary loops):
+/// it is first opened into disks ([`crate::open::open_surface`]), each flattened on its own, and
+/// then split as [`split`] does (the seams of the opening held equal from the first joint solve
+/// on). The opening cuts are the first of the result's `cuts`.
+pub fn split_surface(
     mesh: &TriMesh,
     params: &FlattenParams,
     opts: &SplitOptions,
 ) -> Result<Split, DartError> {
-    let (a, b, path) = open(mesh)?;
-    let mut pieces = vec![a, b];
-    flatten_together(&mut pieces, &held_params(params, opts))?;
-    split_on(mesh, pieces, vec![path], params, opts)
-}
-
-/// A closed surface cut open along [`opening_loop`]: its two halves (disks) and the cut.
-pub fn open(mesh: &TriMesh) -> Result<(TriMesh, TriMesh, Vec<DVec3>), DartError> {
-    let loop3 = opening_loop(mesh).ok_or_else(|| {
-        DartError::Placement(
-            "the closed surface has no section through its middle to open it along".into(),
-        )
-    })?;
-    let mut bare = mesh.clone();
-    bare.flat = None;
-    cut_in_two(&bare, loop3, mesh.area()).ok_or_else(|| {
-        DartError::Placement(
-            "cutting the closed surface along its middle section did not give two disks (is it a sphere-like surface, genus 0?)".into(),
-        )
-    })
+    let mut vis = opts.visibility.clone();
+    if let Some(k) = &opts.keep_out {
+        vis.blocked = k.blocked.clone();
+    }
+    let opened = crate::open::open_surface(mesh, &vis)?;
+    // Each opened part flattened on its own, without limits: where the loop cuts next is all
+    // this map is for (the joint solve with the limits held is the last step).
+    let free = isometric(params)
+        .with_max_stretch_pct(None)
+        .with_max_compress_pct(None);
+    let mut pieces = opened.pieces;
+    for p in &mut pieces {
+        let f = flatcut_flatten::flatten(p, &free).map_err(DartError::Flatten)?;
+        p.flat = Some(f.uv);
+    }
+    split_on(mesh, pieces, opened.cuts, false, params, opts)
 }
 
 /// The flattening parameters that hold the limits of `opts` (a little inside them).
@@ -154,39 +183,74 @@ fn held_params(params: &FlattenParams, opts: &SplitOptions) -> FlattenParams {
         .with_max_compress_pct(compress_pct(inside))
 }
 
-/// The greedy loop of the module documentation from `pieces` (each flattened), the cuts made
-/// so far being `cuts`; `mesh` is the piece the keep-out of `opts` is indexed by.
+/// The greedy loop of the module documentation from `pieces` (each flattened; `together` when
+/// flattened together with their seams and limits), the cuts made so far being `cuts`; `mesh`
+/// is the piece the keep-out of `opts` is indexed by.
 fn split_on(
     mesh: &TriMesh,
     mut pieces: Vec<TriMesh>,
     mut cuts: Vec<Vec<DVec3>>,
+    mut together: bool,
     params: &FlattenParams,
     opts: &SplitOptions,
 ) -> Result<Split, DartError> {
     let held = held_params(params, opts);
-    let guard = Guard::new(mesh, opts.keep_out.as_ref());
+    let guard = Guard::new(mesh, opts.keep_out.as_ref(), &opts.visibility);
+    let started = std::time::Instant::now();
+    let mut timed_out = false;
     // New parts are judged flattened on their own with the limits held; the parts are flattened
     // together (seams equal) only when that says they are done, and split further if the seams
     // then push one beyond the limits.
-    let mut together = pieces.len() == 1;
     loop {
+        if params.hooks.cancelled() {
+            return Err(cancelled());
+        }
         let (w, excess, face) = worst(&pieces, opts.band)?;
-        let full = pieces.len() >= opts.max_pieces.max(1);
-        if (excess <= 0.0 || full) && !together {
+        let crossing = first_crossing(&pieces)?;
+        params.hooks.report(&flatcut_flatten::FlattenProgress {
+            stage: "split",
+            iteration: pieces.len(),
+            max_iterations: opts.max_pieces,
+            energy: excess,
+            elapsed: started.elapsed(),
+        });
+        timed_out |= opts.time_limit.is_some_and(|t| started.elapsed() >= t);
+        let full = pieces.len() >= opts.max_pieces.max(1) || timed_out;
+        let done = excess <= 0.0 && crossing.is_none();
+        if (done || full) && !together {
             flatten_together(&mut pieces, &held)?;
             together = true;
             continue;
         }
-        let next = if excess <= 0.0 || full {
-            None
+        // The piece to cut: the worst beyond the limits, else one that overlaps itself flat
+        // (cut through the face at the crossing).
+        let target = if excess > 0.0 {
+            Some((w, face))
         } else {
-            best_cut(&pieces[w], face, opts.band, params, &guard)?
+            crossing.map(|(k, v)| (k, face_at(&pieces[k], v)))
         };
-        let Some((a, b, cut)) = next else {
+        let next = match target {
+            Some((k, t)) if !full => {
+                best_cut(&pieces[k], t, excess <= 0.0, opts.band, params, &guard)?
+                    .map(|cut| (k, cut))
+            }
+            _ => None,
+        };
+        if params.hooks.cancelled() {
+            return Err(cancelled());
+        }
+        let Some((k, (a, b, cut))) = next else {
             if !together {
                 flatten_together(&mut pieces, &held)?;
                 together = true;
                 continue;
+            }
+            // Never a piece that overlaps itself: no pattern can be cut from it.
+            if let Some((k, v)) = crossing {
+                return Err(DartError::SplitOverlap {
+                    parts: pieces.len(),
+                    at: pieces[k].positions[v as usize],
+                });
             }
             let seams = seams_of(&pieces);
             return Ok(Split {
@@ -196,6 +260,7 @@ fn split_on(
                 cuts,
                 excess,
                 feasible: excess <= 0.0,
+                timed_out: timed_out && excess > 0.0,
             });
         };
         let mut parts = [a, b];
@@ -204,11 +269,41 @@ fn split_on(
             p.flat = Some(f.uv);
         }
         let [a, b] = parts;
-        pieces[w] = a;
+        pieces[k] = a;
         pieces.push(b);
         cuts.push(cut);
         together = false;
     }
+}
+
+/// The error of a split stopped by the flattening hooks' cancel flag.
+fn cancelled() -> DartError {
+    DartError::Flatten(flatcut_flatten::FlattenError::Cancelled {
+        method: Method::Isometric,
+    })
+}
+
+/// The first piece whose flat outline crosses itself, and the boundary vertex nearest the
+/// crossing ([`crate::crossing`]).
+fn first_crossing(pieces: &[TriMesh]) -> Result<Option<(usize, u32)>, DartError> {
+    for (k, p) in pieces.iter().enumerate() {
+        let x = p
+            .flat
+            .as_deref()
+            .ok_or_else(|| DartError::Internal("a split piece has no map".into()))?;
+        if let Some(v) = outline_crossing(p, x)? {
+            return Ok(Some((k, v)));
+        }
+    }
+    Ok(None)
+}
+
+/// A face of `mesh` at vertex `v` (the first, 0 when none).
+fn face_at(mesh: &TriMesh, v: u32) -> usize {
+    mesh.triangles
+        .iter()
+        .position(|t| t.contains(&v))
+        .unwrap_or(0)
 }
 
 /// `params` with the isometric method (no material's grain): the one that holds seams and limits
@@ -274,9 +369,12 @@ fn flatten_together(pieces: &mut [TriMesh], params: &FlattenParams) -> Result<()
 
 /// The best cut of `piece` (see the module documentation): its two sides (unflattened maps are
 /// replaced by each side's own) and the cut's 3D path. `None` when no chord splits the piece.
+/// With `necks`, the shortest ways across the piece from points round its outline are judged
+/// too ([`necks`]).
 fn best_cut(
     piece: &TriMesh,
     worst_face: usize,
+    necks: bool,
     band: Band,
     params: &FlattenParams,
     guard: &Guard,
@@ -291,161 +389,173 @@ fn best_cut(
     };
     let outline: Vec<DVec2> = rim.iter().map(|&v| x[v as usize]).collect();
     let rim3: Vec<DVec3> = rim.iter().map(|&v| piece.positions[v as usize]).collect();
-    let free = isometric(params)
+    let mut free = isometric(params)
         .with_max_stretch_pct(None)
-        .with_max_compress_pct(None);
+        .with_max_compress_pct(None)
+        .with_hooks(flatcut_flatten::FlattenHooks::default());
+    free.max_iters = free.max_iters.min(CANDIDATE_ITERS);
+    free.time_limit = None;
     let area = piece.area();
     let tri = piece.triangles[worst_face];
     let mut centres = vec![tri.iter().map(|&v| x[v as usize]).sum::<DVec2>() / 3.0];
     centres.extend(polygon::area_centroid(&outline).filter(|&c| polygon::contains(&outline, c)));
     let mut bare = piece.clone();
     bare.flat = None;
-    let mut best: Option<(f64, f64, TriMesh, TriMesh, Vec<DVec3>)> = None;
-    for &c in &centres {
-        for k in 0..DIRECTIONS {
-            let d = DVec2::from_angle(std::f64::consts::PI * k as f64 / DIRECTIONS as f64);
-            let Some(points) = chord_on_surface(piece, x, &outline, &rim3, c, d) else {
-                continue;
-            };
-            let Some((a, b, path)) = cut_in_two(&bare, points, area) else {
-                continue;
-            };
-            if guard.blocks(&path) {
-                continue;
-            }
-            let mut sides = [a, b];
-            let (Some(sa), Some(sb)) = (
-                alone_excess(&mut sides[0], &free, band),
-                alone_excess(&mut sides[1], &free, band),
-            ) else {
-                continue;
-            };
-            let score = sa.max(sb);
-            let length = polyline_length(&path);
-            let better = best
-                .as_ref()
-                .is_none_or(|(s, l, ..)| score < *s || (score == *s && length < *l));
-            if score.is_finite() && better {
-                let [a, b] = sides;
-                best = Some((score, length, a, b, path));
-            }
-        }
-    }
-    Ok(best.map(|(_, _, a, b, path)| (a, b, path)))
-}
-
-/// Where a closed surface is cut open: its section by the plane through its centroid that
-/// holds its two longest directions (normal to the direction of least spread of its vertices),
-/// the longest loop of that section, as points on the surface (closed: the last is the first).
-/// The seam round a cushion's edge, a ball's equator, a sausage's length.
-pub fn opening_loop(mesh: &TriMesh) -> Option<Vec<DVec3>> {
-    let n = mesh.positions.len() as f64;
-    let c = mesh.positions.iter().sum::<DVec3>() / n;
-    let cov = mesh
-        .positions
+    let mut lines: Vec<Line> = centres
         .iter()
-        .fold(flatcut_geom::DMat3::ZERO, |m, p| {
-            let d = *p - c;
-            m + flatcut_geom::DMat3::from_cols(d * d.x, d * d.y, d * d.z)
-        });
-    let normal = least_spread(cov)?;
-    // Signed distances, with vertices on the plane moved to its positive side so that every
-    // crossing lies inside an edge.
-    let side: Vec<f64> = mesh
-        .positions
-        .iter()
-        .map(|p| {
-            let s = (*p - c).dot(normal);
-            if s == 0.0 { f64::MIN_POSITIVE } else { s }
+        .flat_map(|&c| {
+            (0..DIRECTIONS).map(move |k| {
+                Line::Chord(
+                    c,
+                    DVec2::from_angle(std::f64::consts::PI * k as f64 / DIRECTIONS as f64),
+                )
+            })
         })
         .collect();
-    let key = |a: u32, b: u32| (a.min(b), a.max(b));
-    let mut next: std::collections::BTreeMap<(u32, u32), Vec<(u32, u32)>> = Default::default();
-    for t in &mesh.triangles {
-        let crossed: Vec<(u32, u32)> = (0..3)
-            .map(|k| (t[k], t[(k + 1) % 3]))
-            .filter(|&(a, b)| (side[a as usize] > 0.0) != (side[b as usize] > 0.0))
-            .map(|(a, b)| key(a, b))
-            .collect();
-        if let [e, f] = crossed[..] {
-            next.entry(e).or_default().push(f);
-            next.entry(f).or_default().push(e);
-        }
+    if necks {
+        lines.extend(self::necks(piece, rim).into_iter().map(Line::Path));
     }
-    let at = |(a, b): (u32, u32)| {
-        let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
-        let (sa, sb) = (side[a as usize], side[b as usize]);
-        pa.lerp(pb, sa / (sa - sb))
-    };
-    let mut seen = std::collections::BTreeSet::new();
-    let mut best: Vec<DVec3> = Vec::new();
-    for &start in next.keys() {
-        if seen.contains(&start) {
-            continue;
-        }
-        let (mut prev, mut cur) = (start, start);
-        let mut pts = Vec::new();
-        loop {
-            seen.insert(cur);
-            pts.push(at(cur));
-            let Some(&n) = next[&cur].iter().find(|&&e| e != prev) else {
-                break;
+    // Judged side by side; taken in the candidates' order.
+    let judged: Vec<Option<Candidate>> = lines
+        .par_iter()
+        .map(|line| {
+            if params.hooks.cancelled() {
+                return None;
+            }
+            let points = match line {
+                Line::Chord(c, d) => chord_on_surface(piece, x, &outline, &rim3, *c, *d)?,
+                Line::Path(p) => p.clone(),
             };
-            (prev, cur) = (cur, n);
-            if cur == start {
-                let closes = pts.len() >= 3;
-                if closes && polyline_length(&pts) > polyline_length(&best) {
-                    pts.push(pts[0]);
-                    best = pts;
-                }
-                break;
+            let (a, b, path) = cut_in_two(&bare, points, area)?;
+            if guard.blocks(&path) {
+                return None;
             }
-            if seen.contains(&cur) {
-                break;
-            }
+            let mut sides = [a, b];
+            let sa = alone_excess(&mut sides[0], &free, band)?;
+            let sb = alone_excess(&mut sides[1], &free, band)?;
+            let score = sa.max(sb);
+            let crossed = sides
+                .iter()
+                .filter(|s| {
+                    s.flat
+                        .as_deref()
+                        .is_none_or(|x| !matches!(outline_crossing(s, x), Ok(None)))
+                })
+                .count();
+            score.is_finite().then(|| Candidate {
+                crossed,
+                score,
+                cost: guard.cost(&path).total(),
+                sides,
+                path,
+            })
+        })
+        .collect();
+    let mut best: Option<Candidate> = None;
+    for c in judged.into_iter().flatten() {
+        if best.as_ref().is_none_or(|b| c.beats(b)) {
+            best = Some(c);
         }
     }
-    // At most OPENING_POINTS points: the trace joins them along the surface.
-    if best.len() > OPENING_POINTS {
-        let step = best.len() as f64 / OPENING_POINTS as f64;
-        let last = best[best.len() - 1];
-        best = (0..OPENING_POINTS)
-            .map(|k| best[(k as f64 * step) as usize])
-            .chain(std::iter::once(last))
-            .collect();
-    }
-    (best.len() >= 4).then_some(best)
+    Ok(best.map(|c| {
+        let [a, b] = c.sides;
+        (a, b, c.path)
+    }))
 }
 
-/// Points of an opening loop given to the trace.
-const OPENING_POINTS: usize = 64;
+/// A line a piece may be cut along: a chord of its flat outline (through a centre, along a
+/// direction), or a path on its surface (3D points).
+enum Line {
+    Chord(DVec2, DVec2),
+    Path(Vec<DVec3>),
+}
 
-/// The unit eigenvector of the smallest eigenvalue of a symmetric positive semi-definite 3×3
-/// matrix: power iteration on its shifted complement (`tr·I − M`, whose largest eigenvalue is
-/// M's smallest), deterministic from a fixed start.
-fn least_spread(m: flatcut_geom::DMat3) -> Option<DVec3> {
-    let tr = m.x_axis.x + m.y_axis.y + m.z_axis.z;
-    let shifted = flatcut_geom::DMat3::from_diagonal(DVec3::splat(tr)) - m;
-    let mut v = DVec3::new(0.577, 0.5773, 0.5774).normalize();
-    for _ in 0..200 {
-        v = (shifted * v).try_normalize()?;
+/// Rim vertices a neck is sought from, evenly round the outline.
+const NECK_STARTS: usize = 16;
+
+/// Necks of the piece: from each of [`NECK_STARTS`] vertices evenly round its outline `rim`, the
+/// shortest edge path across the piece to the nearest rim vertex at least twice as far round the
+/// outline as across. Cutting a piece that overlaps itself flat (a long limb, a ring past a full
+/// turn) across such a neck parts its overlapping ends, where a chord of its tangled flat map
+/// need not.
+fn necks(piece: &TriMesh, rim: &[u32]) -> Vec<Vec<DVec3>> {
+    let n = rim.len();
+    if n < 4 {
+        return Vec::new();
     }
-    Some(v)
+    let p = &piece.positions;
+    let mut along = vec![0.0; n];
+    for i in 1..n {
+        along[i] = along[i - 1] + p[rim[i - 1] as usize].distance(p[rim[i] as usize]);
+    }
+    let round = along[n - 1] + p[rim[n - 1] as usize].distance(p[rim[0] as usize]);
+    let cost = vec![1.0; p.len()];
+    (0..NECK_STARTS.min(n))
+        .into_par_iter()
+        .filter_map(|k| {
+            let i = k * n / NECK_STARTS.min(n);
+            let d = flatcut_mesh::geodesic::distances_from(piece, rim[i]);
+            let (j, _) = (0..n)
+                .filter(|&j| {
+                    let a = (along[i] - along[j]).abs();
+                    a.min(round - a) >= 2.0 * d[rim[j] as usize]
+                })
+                .map(|j| (j, d[rim[j] as usize]))
+                .filter(|(_, dj)| dj.is_finite() && *dj > 0.0)
+                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))?;
+            let path = flatcut_mesh::cut_graph::shortest_path(piece, &cost, rim[i], rim[j])?;
+            Some(path.iter().map(|&v| p[v as usize]).collect())
+        })
+        .collect()
+}
+
+/// A chord judged: how many of its two halves overlap themselves flattened alone, the larger
+/// excess of the two, its seam cost, the halves and the cut's 3D path.
+struct Candidate {
+    crossed: usize,
+    score: f64,
+    cost: f64,
+    sides: [TriMesh; 2],
+    path: Vec<DVec3>,
+}
+
+impl Candidate {
+    /// Fewer halves that overlap themselves first, then lower excess; where both are within the
+    /// limits, or tie within [`SCORE_TIE`], the cheaper seam.
+    fn beats(&self, other: &Candidate) -> bool {
+        if self.crossed != other.crossed {
+            return self.crossed < other.crossed;
+        }
+        let both_within = self.score <= 0.0 && other.score <= 0.0;
+        if both_within || (self.score - other.score).abs() <= SCORE_TIE {
+            self.cost < other.cost
+        } else {
+            self.score < other.score
+        }
+    }
 }
 
 /// The keep-out of the piece being split, in 3D: the parts are new meshes, so a cut is checked
 /// against the original piece's vertices, a path point taking the flag of its nearest one.
 struct Guard {
-    positions: Vec<DVec3>,
+    mesh: TriMesh,
     blocked: Vec<bool>,
+    /// The seams' visibility factor at every vertex.
+    factors: Vec<f64>,
 }
 
 impl Guard {
-    fn new(mesh: &TriMesh, keep_out: Option<&KeepOut>) -> Self {
+    fn new(mesh: &TriMesh, keep_out: Option<&KeepOut>, visibility: &Visibility) -> Self {
         Self {
-            positions: mesh.positions.clone(),
+            mesh: mesh.clone(),
             blocked: keep_out.map_or_else(Vec::new, |k| k.blocked.clone()),
+            factors: visibility.vertex_factors(mesh),
         }
+    }
+
+    /// What a cut along `path` costs as a seam.
+    fn cost(&self, path: &[DVec3]) -> SeamCost {
+        SeamCost::of_points(&self.mesh, &self.factors, path)
     }
 
     /// True when some point of the cut lies at a blocked vertex's place.
@@ -454,7 +564,7 @@ impl Guard {
             return false;
         }
         path.iter().any(|&p| {
-            let v = flatcut_mesh::seams::nearest_vertex(&self.positions, p) as usize;
+            let v = flatcut_mesh::seams::nearest_vertex(&self.mesh.positions, p) as usize;
             self.blocked.get(v).copied().unwrap_or(false)
         })
     }

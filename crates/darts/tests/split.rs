@@ -56,6 +56,8 @@ fn options(pct: f64, max_pieces: usize) -> SplitOptions {
         band: Band::from_pct(Some(pct), Some(pct)),
         max_pieces,
         keep_out: None,
+        visibility: Default::default(),
+        time_limit: None,
     }
 }
 
@@ -211,4 +213,116 @@ fn cuts_keep_out_of_no_cut_regions_and_marks() {
             assert!(!keep.is_blocked(v), "a cut passes the kept-out disc at {p}");
         }
     }
+}
+
+/// A helical ramp of `turns` turns between radii `r0` and `r1` (mm), rising `rise` mm a turn, of
+/// `n` × `m` quads: nearly developable (its Gaussian curvature is tiny), and laid flat it winds
+/// round more than a full turn, so its flat outline crosses itself.
+fn ramp(r0: f64, r1: f64, rise: f64, turns: f64, n: usize, m: usize) -> TriMesh {
+    let mut positions = Vec::new();
+    for i in 0..=n {
+        let a = std::f64::consts::TAU * turns * i as f64 / n as f64;
+        for j in 0..=m {
+            let r = r0 + (r1 - r0) * j as f64 / m as f64;
+            positions.push(DVec3::new(
+                r * a.cos(),
+                r * a.sin(),
+                rise * a / std::f64::consts::TAU,
+            ));
+        }
+    }
+    let id = |i: usize, j: usize| (i * (m + 1) + j) as u32;
+    let mut triangles = Vec::new();
+    for i in 0..n {
+        for j in 0..m {
+            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    TriMesh::new(positions, triangles)
+}
+
+/// Pairs of non-adjacent boundary edges of the map `x` that cross (by orientation signs,
+/// independently of the crate's sweep).
+fn outline_crossings(mesh: &TriMesh, x: &[DVec2]) -> usize {
+    let topo = Topology::build(mesh).unwrap();
+    let edges: Vec<(u32, u32)> = topo
+        .boundary_loops
+        .iter()
+        .flat_map(|l| (0..l.len()).map(move |i| (l[i], l[(i + 1) % l.len()])))
+        .collect();
+    let orient = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a);
+    let mut n = 0;
+    for (i, &(a, b)) in edges.iter().enumerate() {
+        for &(c, d) in &edges[i + 1..] {
+            if a == c || a == d || b == c || b == d {
+                continue;
+            }
+            let [pa, pb, pc, pd] = [a, b, c, d].map(|v| x[v as usize]);
+            if orient(pc, pd, pa) * orient(pc, pd, pb) < 0.0
+                && orient(pa, pb, pc) * orient(pa, pb, pd) < 0.0
+            {
+                n += 1;
+            }
+        }
+    }
+    n
+}
+
+#[test]
+fn a_piece_that_overlaps_itself_flat_is_cut_until_no_part_does() {
+    let mesh = ramp(40.0, 52.0, 20.0, 1.4, 84, 3);
+    let x0 = isometric(&mesh);
+    assert!(
+        outline_crossings(&mesh, &x0) > 0,
+        "the ramp laid flat does not overlap itself"
+    );
+    let params = FlattenParams::new(Method::Isometric);
+    let s = split(&mesh, &x0, &params, &options(5.0, 8)).unwrap();
+    assert!(s.feasible, "excess {}", s.excess);
+    assert!(s.pieces.len() >= 2);
+    let mut area = 0.0;
+    for (k, p) in s.pieces.iter().enumerate() {
+        let x = p.flat.as_deref().unwrap();
+        assert_eq!(outline_crossings(p, x), 0, "part {k} overlaps itself");
+        for t in 0..p.triangles.len() {
+            let (s1, s2, det) = stretches(p, x, t);
+            assert!(det > 0.0 && s1 <= 1.05 + 1e-9 && s2 >= 0.95 - 1e-9);
+        }
+        area += p.area();
+    }
+    assert!((area - mesh.area()).abs() < 1e-9 * mesh.area());
+    // Refused, not returned, when one piece is all the split may make.
+    let e = split(&mesh, &x0, &params, &options(5.0, 1)).unwrap_err();
+    assert!(
+        matches!(e, flatcut_darts::DartError::SplitOverlap { parts: 1, .. }),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_cancelled_split_stops_with_the_cancel_error() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let mesh = saddle(200.0, 24);
+    let x0 = isometric(&mesh);
+    // The flag is set at the split's first progress report, before any chord is judged.
+    let flag = Arc::new(AtomicBool::new(false));
+    let set = flag.clone();
+    let hooks = flatcut_flatten::FlattenHooks::default()
+        .with_cancel(flag.clone())
+        .with_progress(Arc::new(move |p: &flatcut_flatten::FlattenProgress| {
+            if p.stage == "split" {
+                set.store(true, Ordering::Relaxed);
+            }
+        }));
+    let params = FlattenParams::new(Method::Isometric).with_hooks(hooks);
+    let e = split(&mesh, &x0, &params, &options(3.0, 8)).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            flatcut_darts::DartError::Flatten(flatcut_flatten::FlattenError::Cancelled { .. })
+        ),
+        "{e}"
+    );
 }

@@ -296,6 +296,23 @@ pub(crate) fn check_piece(p: &PieceDef, s: f64) -> Result<(), DesignError> {
             )));
         }
     }
+    for (k, region) in p.seam_hidden_regions.iter().enumerate() {
+        check_points(&ctx, s, &format!("seam_hidden_regions {k}"), region)?;
+        if region.len() < 3 {
+            return Err(ctx.err(format!(
+                "seam_hidden_regions {k} has {} points; a region needs at least 3",
+                region.len()
+            )));
+        }
+    }
+    if let Some(d) = p.seam_hidden {
+        let len = d.iter().map(|c| c * c).sum::<f64>().sqrt();
+        if !len.is_finite() || len == 0.0 {
+            return Err(ctx.err(format!(
+                "seam_hidden {d:?} is not a direction (it needs a finite, non-zero length)"
+            )));
+        }
+    }
     if let Some(g) = p.grain.as_ref().and_then(GrainDef::line) {
         check_points(&ctx, s, "grain", g)?;
         if g[0] == g[1] {

@@ -296,6 +296,14 @@ pub struct PieceDef {
     /// Regions no dart or cut may cross: polygons of points on the surface.
     #[serde(default)]
     pub no_cut: Vec<Vec<P3>>,
+    /// The side seams should face where the pattern must cut a closed or split surface (a
+    /// direction, e.g. `[0, 0, -1]`: the underside); seams there cost half as much.
+    #[serde(default)]
+    pub seam_hidden: Option<P3>,
+    /// Regions where seams hide (polygons of points on the surface, like `no_cut`): seams cost a
+    /// third as much there.
+    #[serde(default)]
+    pub seam_hidden_regions: Vec<Vec<P3>>,
     /// Position in the file (0-based), set at load time.
     #[serde(skip)]
     pub index: usize,
@@ -326,6 +334,8 @@ impl PieceDef {
             material_properties: None,
             darts: None,
             no_cut: Vec::new(),
+            seam_hidden: None,
+            seam_hidden_regions: Vec::new(),
             index: 0,
             file,
             mesh_scale: 1.0,

@@ -119,7 +119,7 @@ pub(crate) fn scale_piece(p: &mut PieceDef, s: f64) {
     if let Some(g) = p.grain.as_mut().and_then(GrainDef::line_mut) {
         g.iter_mut().for_each(|q| sp(q, s));
     }
-    for region in &mut p.no_cut {
+    for region in p.no_cut.iter_mut().chain(p.seam_hidden_regions.iter_mut()) {
         region.iter_mut().for_each(|q| sp(q, s));
     }
     p.mesh_scale = s;

@@ -236,7 +236,8 @@ pub fn is_out_of_limits(e: &PipelineError) -> bool {
         PipelineError::Darts {
             source: DartError::Infeasible { .. }
                 | DartError::Overlap { .. }
-                | DartError::LegsApart { .. },
+                | DartError::LegsApart { .. }
+                | DartError::SplitOverlap { .. },
             ..
         }
     )

@@ -210,10 +210,15 @@ fn attach_seams_among(flats: &mut [Flat], idx: &[usize], seams: &[MatingSeam]) {
     let reports: Vec<(usize, usize, MatingSeamReport)> = {
         let meshes: Vec<&TriMesh> = idx.iter().map(|&k| &flats[k].mesh).collect();
         let names: Vec<&str> = idx.iter().map(|&k| flats[k].name.as_str()).collect();
+        let def = idx.iter().find_map(|&k| flats[k].def.as_ref());
+        let costs = crate::splitting::seam_costs(&meshes, seams, def);
         seams
             .iter()
-            .filter_map(|s| {
-                let r = flatcut_report::measure_seam(s, &meshes, &names)?;
+            .zip(costs)
+            .filter_map(|(s, c)| {
+                let mut r = flatcut_report::measure_seam(s, &meshes, &names)?;
+                r.visibility_cost_mm = Some(c.visible_mm);
+                r.turning_deg = Some(c.turning_rad.to_degrees());
                 Some((idx[s.sides[0].piece], idx[s.sides[1].piece], r))
             })
             .collect()

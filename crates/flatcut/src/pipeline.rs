@@ -149,18 +149,20 @@ pub fn flatten_loaded(
 ) -> Result<FlatDesign, PipelineError> {
     check_unique_names(&design)?;
     let mut asm = design.assemble(base, tol)?;
-    // Nothing flattens a closed surface: one that may be split is flattened as one half of
-    // itself here and split from the whole afterwards.
+    // Nothing flattens a surface that is not a disk (closed, of any genus, with several
+    // boundary loops): one that may be split is flattened opened here as a stand-in and split
+    // from the whole afterwards ([`crate::splitting::split_surface_piece`]).
     let mut closed: std::collections::BTreeMap<usize, TriMesh> = Default::default();
     if split.is_some() {
         for (k, p) in asm.pieces.iter_mut().enumerate() {
-            if flatcut_mesh::Topology::build(&p.mesh).is_ok_and(|t| t.boundary_loops.is_empty()) {
-                let (half, _, _) =
-                    flatcut_darts::split::open(&p.mesh).map_err(|source| PipelineError::Darts {
+            if crate::splitting::needs_opening(&p.mesh) {
+                let opened = flatcut_darts::open::open_surface(&p.mesh, &Default::default())
+                    .map_err(|source| PipelineError::Darts {
                         piece: p.def.name.clone(),
                         source,
                     })?;
-                closed.insert(k, std::mem::replace(&mut p.mesh, half));
+                let stand_in = opened.pieces.into_iter().next().unwrap_or_default();
+                closed.insert(k, std::mem::replace(&mut p.mesh, stand_in));
             }
         }
     }
@@ -355,7 +357,7 @@ fn split_where_wanted(
             None => params.clone(),
         };
         let parts = match closed.get(&k) {
-            Some(whole) => crate::splitting::split_closed_piece(piece, whole, &limits, settings)?,
+            Some(whole) => crate::splitting::split_surface_piece(piece, whole, &limits, settings)?,
             None => crate::splitting::split_piece(piece, &limits, settings)?,
         };
         let base = out.len();

@@ -2,9 +2,14 @@
 //! Where the cuts go is [`flatcut_darts::split`]'s; here each part becomes a piece of the
 //! pattern: named `<piece>-1`, `<piece>-2`, … (numbered as the cuts made them), with its share of
 //! the piece's marks and notches, the piece's grain, and two balance notches on every new seam at
-//! a third and two thirds of its length, so the sewer matches the parts point to point.
+//! a third and two thirds of its length, so the sewer matches the parts point to point. A
+//! surface that is not a disk (closed, of any genus, or with several boundary loops) is opened
+//! first ([`flatcut_darts::open`]); the design's `seam_hidden` direction, `seam_hidden_regions`
+//! and `no_cut` regions say where its seams go ([`flatcut_darts::seam_cost`]), and every seam's
+//! length and visibility-weighted length are kept for the report.
 
 use flatcut_darts::DartError;
+use flatcut_darts::seam_cost::{SeamCost, Visibility};
 use flatcut_darts::split::{SplitOptions, split};
 use flatcut_design::{MarkDef, PieceDef};
 use flatcut_flatten::FlattenParams;
@@ -21,12 +26,15 @@ use crate::pipeline::{FlatNotch, FlatPiece, PipelineError};
 pub struct SplitSettings {
     /// Most parts one piece may become.
     pub max_pieces: usize,
+    /// Time after which a piece's best split so far is taken, with a warning.
+    pub time_limit: Option<std::time::Duration>,
 }
 
 impl Default for SplitSettings {
     fn default() -> Self {
         Self {
             max_pieces: SplitOptions::DEFAULT_MAX_PIECES,
+            time_limit: None,
         }
     }
 }
@@ -71,23 +79,63 @@ pub fn split_piece(
     into_parts(piece, s, settings)
 }
 
-/// Splits a closed piece (`whole`, no boundary: a ball, a cushion) into parts within the limits
-/// of `params` (at least two: it is opened first, [`flatcut_darts::split::split_closed`]);
-/// `piece` carries its design (its mesh is not used).
-pub fn split_closed_piece(
+/// Splits a piece whose surface (`whole`) is not a disk — closed (a ball, a plush toy), of any
+/// genus (a ring, a boot with eyelets) or with several boundary loops — into parts within the
+/// limits of `params`: it is opened first ([`flatcut_darts::split::split_surface`]); `piece`
+/// carries its design (its mesh is not used).
+pub fn split_surface_piece(
     piece: FlatPiece,
     whole: &TriMesh,
     params: &FlattenParams,
     settings: &SplitSettings,
 ) -> Result<SplitPieces, PipelineError> {
     let opts = options(&piece, whole, params, settings)?;
-    let s = flatcut_darts::split::split_closed(whole, params, &opts).map_err(|source| {
+    let s = flatcut_darts::split::split_surface(whole, params, &opts).map_err(|source| {
         PipelineError::Darts {
             piece: piece.def.name.clone(),
             source,
         }
     })?;
     into_parts(piece, s, settings)
+}
+
+/// True for a surface no flattening takes as it is but an opening can: one that is not a disk
+/// because it is closed, has handles or several boundary loops, or several parts.
+pub fn needs_opening(mesh: &TriMesh) -> bool {
+    use flatcut_mesh::TopologyError as E;
+    matches!(
+        flatcut_mesh::check_disk(mesh),
+        Err(E::NoBoundary
+            | E::SeveralBoundaries { .. }
+            | E::NotADisk { .. }
+            | E::SeveralComponents { .. })
+    )
+}
+
+/// Where seams should hide on `mesh`, from the piece's design: its `seam_hidden` direction and
+/// `seam_hidden_regions` (no_cut regions are the keep-out's).
+pub fn visibility(def: &PieceDef, mesh: &TriMesh) -> Result<Visibility, PipelineError> {
+    let mut hidden = flatcut_darts::KeepOut::none(mesh);
+    for (i, region) in def.seam_hidden_regions.iter().enumerate() {
+        let pts: Vec<DVec3> = region.iter().map(|p| DVec3::from_array(*p)).collect();
+        hidden
+            .block_region(mesh, &pts, i)
+            .map_err(|e| PipelineError::Piece {
+                piece: def.name.clone(),
+                reason: format!("seam_hidden_regions {i}: {e}"),
+            })?;
+    }
+    Ok(Visibility {
+        hidden_dir: def
+            .seam_hidden
+            .and_then(|d| DVec3::from_array(d).try_normalize()),
+        hidden: if def.seam_hidden_regions.is_empty() {
+            Vec::new()
+        } else {
+            hidden.blocked
+        },
+        blocked: Vec::new(),
+    })
 }
 
 /// What a split of `piece` (its surface `mesh`) is for: the limits of `params`, the most parts,
@@ -102,6 +150,8 @@ fn options(
         band: flatcut_darts::Band::from_pct(params.max_stretch_pct, params.max_compress_pct),
         max_pieces: settings.max_pieces,
         keep_out: Some(darting::keep_out(Some(&piece.def), mesh)?),
+        visibility: visibility(&piece.def, mesh)?,
+        time_limit: settings.time_limit,
     })
 }
 
@@ -112,7 +162,19 @@ fn into_parts(
     settings: &SplitSettings,
 ) -> Result<SplitPieces, PipelineError> {
     let name = piece.def.name.clone();
-    if !s.feasible {
+    // The stand-in's own warnings do not carry over to the parts.
+    let mut timed_out_warning = None;
+    if s.timed_out {
+        // The best split found in the time: written, its excess left to the report's check.
+        timed_out_warning = Some(format!(
+            "{name}: the split's time limit ended the search at {} parts, {:.2} % beyond the limits near ({:.1}, {:.1}, {:.1}); this is the best split found",
+            s.pieces.len(),
+            flatcut_darts::excess_pct(s.excess),
+            s.worst_3d.x,
+            s.worst_3d.y,
+            s.worst_3d.z
+        ));
+    } else if !s.feasible {
         return Err(PipelineError::Darts {
             piece: name,
             source: DartError::Infeasible {
@@ -159,11 +221,51 @@ fn into_parts(
             seam.notches.push(SeamNotch { name: notch, index });
         }
     }
+    if let (Some(w), Some(first)) = (timed_out_warning, parts.first_mut()) {
+        first.info.warnings.push(w);
+    }
     Ok(SplitPieces {
         pieces: parts,
         seams,
         cut_mm,
     })
+}
+
+/// What each seam costs as a seam (length, visibility-weighted length, turning): the pieces
+/// welded by their coincident vertices into the surface they were cut from, its visibility
+/// factors taken with the design of `def` (its hidden side and regions; curvature alone
+/// without one).
+pub fn seam_costs(
+    meshes: &[&TriMesh],
+    seams: &[MatingSeam],
+    def: Option<&PieceDef>,
+) -> Vec<SeamCost> {
+    if seams.is_empty() {
+        return Vec::new();
+    }
+    let mut all = TriMesh::default();
+    for m in meshes {
+        let base = all.positions.len() as u32;
+        all.positions.extend_from_slice(&m.positions);
+        all.triangles
+            .extend(m.triangles.iter().map(|t| t.map(|v| v + base)));
+    }
+    let (positions, map) = flatcut_mesh::weld::weld_points(&all.positions, 0.0);
+    let surface = TriMesh::new(
+        positions,
+        all.triangles
+            .iter()
+            .map(|t| t.map(|v| map[v as usize]))
+            .collect(),
+    );
+    let vis = def
+        .and_then(|d| visibility(d, &surface).ok())
+        .unwrap_or_default();
+    let factors = vis.vertex_factors(&surface);
+    seams
+        .iter()
+        .map(|s| SeamCost::of_points(&surface, &factors, &s.points_3d(0, meshes)))
+        .collect()
 }
 
 /// The 3D grain of a piece: its material's warp where the flattening chose or followed one, else

@@ -6,11 +6,13 @@
 //! **Architecture invariant:** this crate knows 3D surfaces and 2D maps of them, but nothing of
 //! patterns, sheets or machines.
 
+pub mod cut_graph;
 pub mod disk;
 pub mod distortion;
 pub mod geodesic;
 pub mod grain_strain;
 pub mod grid;
+pub mod intersect;
 pub mod io;
 pub mod joins;
 pub mod lines;

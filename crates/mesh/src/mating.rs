@@ -167,17 +167,27 @@ pub fn coincident_seams(meshes: &[&TriMesh], names: &[&str]) -> Vec<MatingSeam> 
         edges.push(e);
     }
     // The partner of boundary edge (a, b) of mesh i on mesh j, if any.
+    // The partner edge is the boundary edge of mesh j between copies of the two ends (any copy:
+    // where a cut branches or ends, one point has several, or on one mesh only itself); an
+    // edge is never its own partner.
     let partner = |i: usize, a: u32, b: u32, j: usize| -> Option<(u32, u32)> {
-        let find = |v: u32| {
-            at.get(&key(meshes[i].positions[v as usize]))?
-                .iter()
-                .find(|&&(m, w)| m == j && (m != i || w != v))
-                .map(|&(_, w)| w)
+        let copies = |v: u32| -> Vec<u32> {
+            at.get(&key(meshes[i].positions[v as usize]))
+                .map(|s| {
+                    s.iter()
+                        .filter(|&&(m, _)| m == j)
+                        .map(|&(_, w)| w)
+                        .collect()
+                })
+                .unwrap_or_default()
         };
-        let (pa, pb) = (find(a)?, find(b)?);
-        edges[j]
-            .contains(&(pa.min(pb), pa.max(pb)))
-            .then_some((pa, pb))
+        let (ca, cb) = (copies(a), copies(b));
+        ca.iter()
+            .flat_map(|&pa| cb.iter().map(move |&pb| (pa, pb)))
+            .find(|&(pa, pb)| {
+                let k = (pa.min(pb), pa.max(pb));
+                !(i == j && k == (a.min(b), a.max(b))) && pa != pb && edges[j].contains(&k)
+            })
     };
     let mut out: Vec<MatingSeam> = Vec::new();
     for i in 0..meshes.len() {

@@ -30,6 +30,13 @@ pub struct MatingSeamReport {
     /// |side a − side b| in the plane.
     pub mismatch_mm: f64,
     pub notches: Vec<NotchOffset>,
+    /// Its length weighted by how visible it is (mm; less than `length_3d_mm` where it hides in
+    /// a crease or on the hidden side), when measured.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub visibility_cost_mm: Option<f64>,
+    /// How much it turns on the surface (degrees; 0 for a straight seam), when measured.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub turning_deg: Option<f64>,
 }
 
 impl MatingSeamReport {
@@ -74,5 +81,7 @@ pub fn measure_seam(
                 offset_mm: [s2[0][n.index], s2[1][n.index]],
             })
             .collect(),
+        visibility_cost_mm: None,
+        turning_deg: None,
     })
 }

@@ -64,13 +64,18 @@ pub struct FlattenArgs {
     pub dart_fit: DartFit,
     /// `auto`: split a piece that exceeds --max-stretch/--max-compress, and that darts (when
     /// asked for too) cannot bring within them, into parts sewn together along new seams (with
-    /// balance notches), every part within the limits; a closed surface (a ball) is cut open
-    /// along its middle first.
+    /// balance notches), every part within the limits; a surface that is not a disk (closed, of
+    /// any genus, or with several boundary loops: a plush toy, a ring, a boot with eyelets) is
+    /// opened first along short loops round its handles (a sphere along a slit).
     #[arg(long, value_name = "MODE", value_parser = parse_split)]
     pub split: Option<DartMode>,
     /// Most parts one piece may be split into.
     #[arg(long, value_name = "N", default_value_t = SplitSettings::default().max_pieces, value_parser = values::piece_count)]
     pub max_pieces: usize,
+    /// Time limit of one piece's split in seconds: when it runs out, the best split found so
+    /// far is written, with a warning (and exit code 3 while a face is beyond the limits).
+    #[arg(long, value_name = "S", value_parser = values::seconds)]
+    pub split_time: Option<std::time::Duration>,
     /// The material of pieces that name none: leather, woven-cotton, canvas, knit,
     /// carbon-prepreg, sailcloth, or a material file (TOML). Flattens with the orthotropic
     /// energy along each piece's grain (chosen when the piece has none) and checks the limits
@@ -212,6 +217,7 @@ impl FlattenArgs {
         );
         Ok(Some(SplitSettings {
             max_pieces: self.max_pieces,
+            time_limit: self.split_time,
         }))
     }
 
