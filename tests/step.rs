@@ -1,6 +1,7 @@
 //! STEP models through the whole tool: `inspect` of a file in inches, developable faces and
-//! smooth groups that flatten with no distortion, a project whose design is a STEP file, and the
-//! bundled kayak skin.
+//! smooth groups that flatten with no distortion, a project whose design is a STEP file, the
+//! bundled kayak skin, and the seams of real models: every shared edge one mating seam of its
+//! full length.
 
 use std::path::{Path, PathBuf};
 
@@ -213,4 +214,131 @@ fn the_kayak_skin_is_cut_from_its_cad_model() {
     for f in ["pattern.svg", "pattern.dxf", "layout-1.svg", "job-1.gcode"] {
         assert!(out.path().join(f).is_file(), "{f}");
     }
+}
+
+fn corpus(name: &str) -> PathBuf {
+    root().join("crates/step/tests/corpus").join(name)
+}
+
+/// The length of a seam side: its polyline on the piece's mesh.
+fn side_length(a: &flatcut::design::Assembly, side: &flatcut::mesh::mating::SeamSide) -> f64 {
+    let m = &a.pieces[side.piece].mesh;
+    side.vertices
+        .windows(2)
+        .map(|w| m.positions[w[0] as usize].distance(m.positions[w[1] as usize]))
+        .sum()
+}
+
+#[test]
+fn every_edge_of_a_filleted_box_is_one_mating_seam_of_its_full_length() {
+    // A 60 × 40 × 30 box with every edge filleted R 6 (OCCT): 26 faces, each a piece. Its 48
+    // edges are 24 straight fillet edges (2 × (4 × 48 + 4 × 28 + 4 × 18) mm) and 24 quarter
+    // circles of R 6 where the fillets meet the sphere corners; once each fillet's end arc and
+    // the corner beside it were sampled apart (T-junctions) and most arcs left unsewn.
+    let path = corpus("occt_box_filleted.step");
+    let design = flatcut::design::Design::load(&path).unwrap();
+    let tol = Tolerances::DEFAULT.with_chord_mm(0.1);
+    let a = design.assemble(path.parent().unwrap(), &tol).unwrap();
+    assert_eq!(a.pieces.len(), 26);
+    let lines = 2.0 * (4.0 * 48.0 + 4.0 * 28.0 + 4.0 * 18.0);
+    let arcs = 24.0 * 3.0 * std::f64::consts::PI;
+    let mut total = 0.0;
+    for s in &a.seams {
+        let (l0, l1) = (side_length(&a, &s.sides[0]), side_length(&a, &s.sides[1]));
+        assert!((l0 - l1).abs() < 1e-9, "{}: sides {l0} and {l1} mm", s.name);
+        total += l0;
+    }
+    assert_eq!(a.seams.len(), 48);
+    // The arcs' chords at 0.1 mm fall short of the arcs by 1e-3 relative at most.
+    assert!(
+        (total - (lines + arcs)).abs() < 1e-3 * (lines + arcs),
+        "seams total {total} mm, edges {} mm",
+        lines + arcs
+    );
+    // The pieces weld back into the closed box: every boundary edge of a piece is on a seam.
+    let boundary: usize = a
+        .pieces
+        .iter()
+        .map(|p| {
+            flatcut::mesh::Topology::build(&p.mesh)
+                .unwrap()
+                .boundary_loops
+                .iter()
+                .map(Vec::len)
+                .sum::<usize>()
+        })
+        .sum();
+    let on_seams: usize = a
+        .seams
+        .iter()
+        .flat_map(|s| &s.sides)
+        .map(|s| s.vertices.len() - 1)
+        .sum();
+    assert_eq!(boundary, on_seams, "boundary edges not on a seam");
+}
+
+#[test]
+fn a_disk_sewn_to_a_sphere_rim_is_sewn_along_the_rim_once() {
+    // A sphere R 100 cut at y = 50 (OCCT): a disk of radius √7500 sewn to the sphere's rim. The
+    // rim was once reported as seams of twice its length (and the sphere's face read as the cap
+    // it leaves out).
+    let path = corpus("occt_sphere_cut_y.step");
+    let design = flatcut::design::Design::load(&path).unwrap();
+    let tol = Tolerances::DEFAULT.with_chord_mm(0.1);
+    let a = design.assemble(path.parent().unwrap(), &tol).unwrap();
+    let rim = 2.0 * std::f64::consts::PI * 7500f64.sqrt();
+    let total: f64 = a.seams.iter().map(|s| side_length(&a, &s.sides[0])).sum();
+    for s in &a.seams {
+        let (l0, l1) = (side_length(&a, &s.sides[0]), side_length(&a, &s.sides[1]));
+        assert!((l0 - l1).abs() < 1e-9, "{}: sides {l0} and {l1} mm", s.name);
+    }
+    assert!(
+        (total - rim).abs() < 1e-3 * rim,
+        "seams total {total} mm, the rim {rim} mm"
+    );
+    let disk = a
+        .pieces
+        .iter()
+        .find(|p| p.mesh.positions.iter().all(|q| (q.y - 50.0).abs() < 1e-6))
+        .expect("the disk");
+    let area = disk.mesh.area();
+    let want = std::f64::consts::PI * 7500.0;
+    assert!((area - want).abs() < 2e-3 * want, "disk {area} mm², {want}");
+}
+
+#[test]
+fn an_assembly_places_its_instances_and_counts_them() {
+    // One 40 × 30 × 20 box placed three times by an OCCT (XCAF) assembly, the third turned 30°
+    // about z: three shells where OCCT puts them (the corpus test compares the centre of area
+    // with OCCT's), and one body of quantity 3.
+    let r = flatcut::inspect::inspect_file(&corpus("occt_assembly.step"), &Tolerances::DEFAULT)
+        .unwrap();
+    let j = serde_json::to_value(&r).unwrap();
+    assert_eq!(j["shells"].as_array().unwrap().len(), 3);
+    let bodies = j["bodies"].as_array().unwrap();
+    assert_eq!(bodies.len(), 1, "{bodies:?}");
+    assert_eq!(bodies[0]["quantity"], 3);
+    let faces = j["faces"].as_array().unwrap();
+    assert_eq!(faces.len(), 18);
+    let area: f64 = faces.iter().map(|f| f["area_mm2"].as_f64().unwrap()).sum();
+    assert!((area - 3.0 * 5200.0).abs() < 1e-6 * area, "{area}");
+    // The turned box reaches furthest in x at its part corner (40, 0): (100, 0) + 40 (cos 30°,
+    // sin 30°), and in y at (40, 30) turned: 40 sin 30° + 30 cos 30°.
+    let c = 30f64.to_radians();
+    let max = |k: usize| {
+        faces
+            .iter()
+            .map(|f| f["bbox_mm"][1][k].as_f64().unwrap())
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    assert!(
+        (max(0) - (100.0 + 40.0 * c.cos())).abs() < 1e-6,
+        "{}",
+        max(0)
+    );
+    assert!(
+        (max(1) - (40.0 * c.sin() + 30.0 * c.cos())).abs() < 1e-6,
+        "{}",
+        max(1)
+    );
 }

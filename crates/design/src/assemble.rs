@@ -6,7 +6,7 @@
 //! another becomes several seams, `name-1`, `name-2`, … in the line's direction); its notches
 //! are named `line 1`, `line 2`, … in the order given. A region that no piece names, or a piece
 //! that names no region, is an error that says where. Pieces expanded from one STEP model are
-//! joined along the edges their faces share ([`crate::step_seams`]).
+//! sewn along every edge their faces share, each edge one seam ([`crate::step_seams`]).
 
 use std::path::Path;
 
@@ -55,8 +55,6 @@ impl Design {
                 notch_marks: Vec::new(),
             });
         }
-        // Found before the notch marks split the pieces' boundaries one side at a time.
-        let step_joins = crate::step_seams::shared_edge_joins(&out.pieces, self.joins.len());
         for part in &self.parts {
             split_part(part, base_dir, tol, &mut out)?;
         }
@@ -85,10 +83,12 @@ impl Design {
                 });
             }
         }
-        for j in self.joins.iter().chain(&step_joins) {
+        for j in &self.joins {
             let seam = crate::join::join_seam(&self.source, j, &mut out.pieces)?;
             out.seams.push(seam);
         }
+        out.seams
+            .extend(crate::step_seams::shared_edge_seams(&out.pieces, tol)?);
         Ok(out)
     }
 }

@@ -14,15 +14,21 @@
 //! When the design is loaded, such a piece expands into its pieces: one per face or per smooth
 //! group (named `<name>-f<first face>` when there are several), each carrying the model it was
 //! read from, so the file is read once. Seams, marks and grain need a piece that stays one.
+//!
+//! The faces all the pieces of one model take are tessellated together, once per chordal
+//! tolerance and healing limit ([`StepSource::tessellation`]): every edge is sampled once, so two
+//! pieces along a shared edge have the very same points there, and the edge is a mating seam of
+//! its full length ([`crate::step_seams`]).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use flatcut_geom::{DVec3, Tolerances};
 use flatcut_mesh::TriMesh;
 use flatcut_mesh::tessellate::TessOptions;
-use flatcut_step::{Model, StepError, Tessellation};
+use flatcut_step::heal::HealOptions;
+use flatcut_step::{Model, StepError, StepFile, Tessellation};
 use serde::Deserialize;
 
 use crate::error::Ctx;
@@ -54,9 +60,68 @@ pub enum StepGroup {
     Smooth,
 }
 
+/// A model and its tessellation at one chordal tolerance and healing limit.
+type Tessellated = Result<(Arc<Model>, Arc<Tessellation>), StepError>;
+
+/// A STEP file read once for a design: the indexed file, the model read with the default
+/// healing, the faces the design's pieces take from it, and their tessellations.
+#[derive(Debug)]
+pub struct StepSource {
+    file: StepFile,
+    /// The model read with the default healing limit.
+    pub model: Arc<Model>,
+    /// The faces the design's pieces take from the model, ascending.
+    pub faces: Vec<usize>,
+    /// Tessellations by (chordal tolerance, healing limit) bits.
+    cache: Mutex<BTreeMap<(u64, u64), Tessellated>>,
+}
+
+impl StepSource {
+    fn new(file: StepFile, model: Model, faces: Vec<usize>) -> Self {
+        Self {
+            file,
+            model: Arc::new(model),
+            faces,
+            cache: Mutex::new(BTreeMap::new()),
+        }
+    }
+
+    /// The model healed within `heal` mm (`None`: the default limit).
+    pub fn model_for(&self, heal: Option<f64>) -> Result<Arc<Model>, StepError> {
+        match heal {
+            None => Ok(self.model.clone()),
+            Some(h) => {
+                Model::from_file_with(&self.file, &HealOptions { limit_mm: Some(h) }).map(Arc::new)
+            }
+        }
+    }
+
+    /// The model (healed within `tol.heal_mm`) and the tessellation of all the faces the design
+    /// takes from it at `tol.chord_mm`, made once.
+    pub fn tessellation(&self, tol: &Tolerances) -> Tessellated {
+        let key = (
+            tol.chord_mm.to_bits(),
+            tol.heal_mm.map_or(u64::MAX, f64::to_bits),
+        );
+        if let Ok(cache) = self.cache.lock()
+            && let Some(t) = cache.get(&key)
+        {
+            return t.clone();
+        }
+        let made = self.model_for(tol.heal_mm).and_then(|m| {
+            Tessellation::new(&m, &self.faces, tol, &TessOptions::DEFAULT)
+                .map(|t| (m.clone(), Arc::new(t)))
+        });
+        if let Ok(mut cache) = self.cache.lock() {
+            cache.insert(key, made.clone());
+        }
+        made
+    }
+}
+
 /// A STEP model read once and shared by the pieces expanded from it (compared by identity).
 #[derive(Clone, Debug)]
-pub struct StepModel(pub Arc<Model>);
+pub struct StepModel(pub Arc<StepSource>);
 
 impl PartialEq for StepModel {
     fn eq(&self, other: &Self) -> bool {
@@ -64,19 +129,20 @@ impl PartialEq for StepModel {
     }
 }
 
-/// The geometry of a STEP piece: faces of a model, meshed together.
+/// The geometry of a STEP piece: faces of a model, meshed with all the faces the design takes
+/// from it.
 #[derive(Clone, Debug)]
 pub struct StepPiece {
-    pub model: Arc<Model>,
+    pub source: Arc<StepSource>,
     pub faces: Vec<usize>,
 }
 
 impl StepPiece {
-    /// The piece's mesh to `tol.chord_mm`: the faces welded at their shared edges, cut to a disk
+    /// The piece's mesh to `tol.chord_mm`: its faces welded at their shared edges, cut to a disk
     /// where they can be (see [`Tessellation::piece_mesh`]).
     pub fn mesh(&self, tol: &Tolerances) -> Result<TriMesh, StepError> {
-        let t = Tessellation::new(&self.model, &self.faces, tol, &TessOptions::DEFAULT)?;
-        Ok(t.piece_mesh(&self.model, &self.faces))
+        let (m, t) = self.source.tessellation(tol)?;
+        Ok(t.piece_mesh(&m, &self.faces))
     }
 }
 
@@ -91,10 +157,10 @@ pub(crate) fn check_faces(ctx: &Ctx, faces: &StepFaces) -> Result<(), DesignErro
     }
 }
 
-fn read_model(ctx: &Ctx, path: &Path) -> Result<Arc<Model>, DesignError> {
-    Model::read(path)
-        .map(Arc::new)
-        .map_err(|e| ctx.err(format!("{}: {e}", path.display())))
+fn read_file(ctx: &Ctx, path: &Path) -> Result<(StepFile, Model), DesignError> {
+    let file = StepFile::read(path).map_err(|e| ctx.err(format!("{}: {e}", path.display())))?;
+    let model = Model::from_file(&file).map_err(|e| ctx.err(format!("{}: {e}", path.display())))?;
+    Ok((file, model))
 }
 
 /// The face numbers a selection names, checked against the model.
@@ -120,33 +186,53 @@ fn selected(ctx: &Ctx, model: &Model, faces: &StepFaces) -> Result<Vec<usize>, D
 /// Expands every `type = "step"` piece into its pieces (see the module documentation); STEP
 /// files are resolved against `base_dir` and each is read once.
 pub(crate) fn expand(pieces: Vec<PieceDef>, base_dir: &Path) -> Result<Vec<PieceDef>, DesignError> {
-    let mut models: BTreeMap<PathBuf, Arc<Model>> = BTreeMap::new();
-    let mut out = Vec::with_capacity(pieces.len());
-    for p in pieces {
+    // Read every file once and find the faces each piece takes.
+    let mut read: BTreeMap<PathBuf, (StepFile, Model)> = BTreeMap::new();
+    let mut chosen: Vec<Option<(PathBuf, Vec<usize>)>> = Vec::with_capacity(pieces.len());
+    for p in &pieces {
         let SurfaceDef::Step {
             file,
             faces,
-            group,
             model: None,
+            ..
         } = &p.surface
         else {
+            chosen.push(None);
+            continue;
+        };
+        let ctx = Ctx::of(p);
+        let path = base_dir.join(file);
+        if !read.contains_key(&path) {
+            let r = read_file(&ctx, &path)?;
+            read.insert(path.clone(), r);
+        }
+        let model = &read[&path].1;
+        chosen.push(Some((path, selected(&ctx, model, faces)?)));
+    }
+    // One source per file, with the union of the faces its pieces take.
+    let mut sources: BTreeMap<PathBuf, Arc<StepSource>> = BTreeMap::new();
+    for (path, (file, model)) in read {
+        let mut faces: Vec<usize> = chosen
+            .iter()
+            .flatten()
+            .filter(|(p, _)| *p == path)
+            .flat_map(|(_, f)| f.iter().copied())
+            .collect();
+        faces.sort_unstable();
+        faces.dedup();
+        sources.insert(path, Arc::new(StepSource::new(file, model, faces)));
+    }
+    let mut out = Vec::with_capacity(pieces.len());
+    for (p, ch) in pieces.into_iter().zip(chosen) {
+        let (Some((path, chosen)), SurfaceDef::Step { file, group, .. }) = (ch, &p.surface) else {
             out.push(p);
             continue;
         };
         let ctx = Ctx::of(&p);
-        let path = base_dir.join(file);
-        let model = match models.get(&path) {
-            Some(m) => m.clone(),
-            None => {
-                let m = read_model(&ctx, &path)?;
-                models.insert(path.clone(), m.clone());
-                m
-            }
-        };
-        let chosen = selected(&ctx, &model, faces)?;
+        let source = sources[&path].clone();
         let groups: Vec<Vec<usize>> = match group {
             StepGroup::Face => chosen.iter().map(|&f| vec![f]).collect(),
-            StepGroup::Smooth => model.smooth_groups(&chosen),
+            StepGroup::Smooth => source.model.smooth_groups(&chosen),
         };
         let several = groups.len() > 1;
         if several
@@ -159,6 +245,7 @@ pub(crate) fn expand(pieces: Vec<PieceDef>, base_dir: &Path) -> Result<Vec<Piece
                 groups.len()
             )));
         }
+        let file = file.clone();
         for g in groups {
             let mut q = p.clone();
             if several {
@@ -168,7 +255,7 @@ pub(crate) fn expand(pieces: Vec<PieceDef>, base_dir: &Path) -> Result<Vec<Piece
                 file: file.clone(),
                 faces: StepFaces::List(g),
                 group: StepGroup::Face,
-                model: Some(StepModel(model.clone())),
+                model: Some(StepModel(source.clone())),
             };
             out.push(q);
         }
@@ -208,17 +295,22 @@ pub(crate) fn build(p: &PieceDef, base_dir: &Path) -> Result<StepPiece, DesignEr
     else {
         return Err(ctx.err("not a STEP piece".into()));
     };
-    let model = match model {
+    let source = match model {
         Some(m) => m.0.clone(),
-        None => read_model(&ctx, &base_dir.join(file))?,
+        None => {
+            let (f, m) = read_file(&ctx, &base_dir.join(file))?;
+            let chosen = selected(&ctx, &m, faces)?;
+            Arc::new(StepSource::new(f, m, chosen))
+        }
     };
-    let faces = selected(&ctx, &model, faces)?;
+    let faces = selected(&ctx, &source.model, faces)?;
     for &f in &faces {
-        model
+        source
+            .model
             .face(f)
             .map_err(|e| ctx.err(format!("step: face {f}: {e}")))?;
     }
-    Ok(StepPiece { model, faces })
+    Ok(StepPiece { source, faces })
 }
 
 /// The polyline of the edge with STEP entity number `entity` as the surface of `p` (a `step`
@@ -231,6 +323,7 @@ pub(crate) fn edge_points(
 ) -> Result<Vec<DVec3>, String> {
     let sp = build(p, base_dir).map_err(|e| e.to_string())?;
     let index = sp
+        .source
         .model
         .edges
         .iter()
@@ -238,8 +331,7 @@ pub(crate) fn edge_points(
         .ok_or_else(|| {
             format!("#{entity} is not an edge of the model (`flatcut inspect` lists its edges)")
         })?;
-    let t = Tessellation::new(&sp.model, &sp.faces, tol, &TessOptions::DEFAULT)
-        .map_err(|e| e.to_string())?;
+    let (_, t) = sp.source.tessellation(tol).map_err(|e| e.to_string())?;
     t.edge_polyline(index)
         .ok_or_else(|| format!("edge #{entity} bounds none of the chosen faces"))
 }

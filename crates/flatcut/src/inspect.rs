@@ -110,7 +110,10 @@ pub fn inspect_file(path: &Path, tol: &Tolerances) -> Result<InspectReport, Desi
         flatcut_design::SurfaceDef::Step { model: Some(m), .. }
             if flatcut_step::is_step_path(path) =>
         {
-            Some(crate::inspect_step::summarise_model(&m.0, tol))
+            let model =
+                m.0.model_for(tol.heal_mm)
+                    .unwrap_or_else(|_| m.0.model.clone());
+            Some(crate::inspect_step::summarise_model(&model, tol))
         }
         _ => None,
     });

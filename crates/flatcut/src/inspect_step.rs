@@ -9,6 +9,7 @@ use flatcut_design::StepPiece;
 use flatcut_geom::{Aabb3, Tolerances};
 use flatcut_mesh::tessellate::TessOptions;
 use flatcut_mesh::{MeshStats, TriMesh};
+use flatcut_step::heal::Repair;
 use flatcut_step::{Model, Tessellation, face_area};
 use flatcut_surface::ParamSurface;
 use serde::Serialize;
@@ -34,6 +35,17 @@ pub struct StepShell {
     pub faces: Vec<usize>,
 }
 
+/// A body (a solid or surface model) and how many times the assembly places it: the instances
+/// of one body are one part cut `quantity` times.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StepBody {
+    pub entity: u64,
+    pub name: String,
+    pub quantity: usize,
+    /// The shells of its instances.
+    pub shells: Vec<usize>,
+}
+
 /// One face (keys are a stable contract). Without `error`, all figures are present.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StepFace {
@@ -51,6 +63,8 @@ pub struct StepFace {
     pub gaussian_curvature: Option<Range2>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub developable: Option<bool>,
+    /// What healing repaired in the face, its loops and its edges (empty for a clean face).
+    pub repairs: Vec<Repair>,
     /// Why the face cannot be used.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
@@ -75,9 +89,39 @@ pub struct StepEdge {
 pub struct StepSummary {
     pub unit: StepUnit,
     pub schemas: Vec<String>,
+    /// The largest defect healed (mm): `--heal-tolerance`, or a fraction of the model's size.
+    pub heal_limit_mm: f64,
     pub shells: Vec<StepShell>,
+    /// The bodies and their quantities (an assembly places a body once per instance).
+    pub bodies: Vec<StepBody>,
     pub faces: Vec<StepFace>,
     pub edges: Vec<StepEdge>,
+}
+
+/// The model's bodies in file order, each with the number of its instances.
+fn bodies(model: &Model) -> Vec<StepBody> {
+    let mut out: Vec<StepBody> = Vec::new();
+    for inst in &model.instances {
+        if !out.iter().any(|b| b.entity == inst.body) {
+            out.push(StepBody {
+                entity: inst.body,
+                name: inst.name.clone(),
+                quantity: 0,
+                shells: Vec::new(),
+            });
+        }
+    }
+    for b in &mut out {
+        b.quantity = model
+            .instances
+            .iter()
+            .filter(|i| i.body == b.entity)
+            .count();
+        b.shells = (0..model.shells.len())
+            .filter(|&s| model.instances[model.shells[s].instance].body == b.entity)
+            .collect();
+    }
+    out
 }
 
 /// Figures of a set of faces from their tessellation: bounding box, Gaussian and mean curvature
@@ -159,6 +203,7 @@ pub fn summarise_model(model: &Model, tol: &Tolerances) -> StepSummary {
             bbox_mm: None,
             gaussian_curvature: None,
             developable: None,
+            repairs: f.repairs.clone(),
             error: None,
         };
         let figures = (|| -> Result<(), String> {
@@ -166,6 +211,9 @@ pub fn summarise_model(model: &Model, tol: &Tolerances) -> StepSummary {
             out.surface = Some(g.surface.name());
             let t = Tessellation::new(model, &[i], tol, &TessOptions::DEFAULT)
                 .map_err(|e| e.to_string())?;
+            if let Some(fm) = t.faces.first() {
+                out.repairs.clone_from(&fm.repairs);
+            }
             let s = sample(model, &t);
             out.area_mm2 = Some(face_area(model, i).map_err(|e| e.to_string())?);
             out.bbox_mm = Some([s.bbox.min.to_array(), s.bbox.max.to_array()]);
@@ -212,6 +260,7 @@ pub fn summarise_model(model: &Model, tol: &Tolerances) -> StepSummary {
             stated: model.units.stated,
         },
         schemas: model.schemas.clone(),
+        heal_limit_mm: model.heal_mm,
         shells: model
             .shells
             .iter()
@@ -223,6 +272,7 @@ pub fn summarise_model(model: &Model, tol: &Tolerances) -> StepSummary {
                 faces: s.faces.clone(),
             })
             .collect(),
+        bodies: bodies(model),
         faces,
         edges,
     }
@@ -239,14 +289,18 @@ pub fn summarise_piece(
     tol: &Tolerances,
 ) -> PieceSummary {
     let stats = MeshStats::of(mesh);
-    let area: f64 = sp
-        .faces
-        .iter()
-        .map(|&f| face_area(&sp.model, f).unwrap_or(0.0))
-        .sum();
-    let s = match Tessellation::new(&sp.model, &sp.faces, tol, &TessOptions::DEFAULT) {
-        Ok(t) => sample(&sp.model, &t),
-        Err(_) => Sampled::none(),
+    let (area, s) = match sp.source.tessellation(tol) {
+        Ok((model, t)) => {
+            let area = sp
+                .faces
+                .iter()
+                .map(|&f| face_area(&model, f).unwrap_or(0.0))
+                .sum();
+            let mut mine = t.as_ref().clone();
+            mine.faces.retain(|f| sp.faces.contains(&f.face));
+            (area, sample(&model, &mine))
+        }
+        Err(_) => (0.0, Sampled::none()),
     };
     let bbox = s.bbox.union(&mesh.bbox());
     PieceSummary {
@@ -301,6 +355,14 @@ impl std::fmt::Display for StepSummary {
                 s.entity,
                 if s.closed { "closed" } else { "open" },
                 s.faces.len()
+            )?;
+        }
+        for b in self.bodies.iter().filter(|b| b.quantity > 1) {
+            let name = if b.name.is_empty() { "body" } else { &b.name };
+            writeln!(
+                f,
+                "  {name} (#{}): placed {} times (shells {:?})",
+                b.entity, b.quantity, b.shells
             )?;
         }
         writeln!(f, "  faces")?;

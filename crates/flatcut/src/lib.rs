@@ -52,6 +52,7 @@ pub mod pipeline;
 pub mod plot;
 pub mod project;
 pub mod run;
+pub mod sanity;
 pub mod splitting;
 
 pub use flatcut_darts as darts;

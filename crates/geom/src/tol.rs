@@ -19,6 +19,9 @@ pub struct Tolerances {
     pub weld_mm: f64,
     /// Relative tolerance of iterative numerical methods (arc length, Newton, quadrature).
     pub rel: f64,
+    /// The largest defect of an imported CAD model healed (gaps, edges off their faces), in mm;
+    /// `None`: the importer's default (a fraction of the model's size).
+    pub heal_mm: Option<f64>,
 }
 
 impl Tolerances {
@@ -36,6 +39,7 @@ impl Tolerances {
         fit_mm: Self::DEFAULT_FIT_MM,
         weld_mm: Self::DEFAULT_WELD_MM,
         rel: Self::DEFAULT_REL,
+        heal_mm: None,
     };
 
     pub const fn with_chord_mm(mut self, v: f64) -> Self {
@@ -50,6 +54,11 @@ impl Tolerances {
 
     pub const fn with_weld_mm(mut self, v: f64) -> Self {
         self.weld_mm = v;
+        self
+    }
+
+    pub const fn with_heal_mm(mut self, v: Option<f64>) -> Self {
+        self.heal_mm = v;
         self
     }
 }

@@ -38,6 +38,4 @@ pub use stats::MeshStats;
 pub use tessellate::{TessError, tessellate, tessellate_model, tessellate_patches};
 pub use topology::{Topology, TopologyError, check_disk};
 pub use trimesh::TriMesh;
-pub use trimmed::{
-    TrimError, TrimPoint, TrimmedFace, TrimmedMesh, tessellate_trimmed, trimmed_area,
-};
+pub use trimmed::{TrimError, TrimPoint, TrimmedFace, TrimmedMesh, tessellate_trimmed};

@@ -61,62 +61,6 @@ const RULING_SNAP_REL: f64 = 1e-9;
 /// spade rejects coordinates of magnitude below its MIN_ALLOWED_VALUE (≈ 1e-142); smaller ones
 /// are rounded to zero.
 const TINY: f64 = 1e-100;
-/// Dunavant's 7-point degree-5 rule on a triangle: barycentric coordinates and weights.
-const DUNAVANT7: [([f64; 3], f64); 7] = [
-    ([1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0], 0.225),
-    (
-        [
-            0.059_715_871_789_770,
-            0.470_142_064_105_115,
-            0.470_142_064_105_115,
-        ],
-        0.132_394_152_788_506,
-    ),
-    (
-        [
-            0.470_142_064_105_115,
-            0.059_715_871_789_770,
-            0.470_142_064_105_115,
-        ],
-        0.132_394_152_788_506,
-    ),
-    (
-        [
-            0.470_142_064_105_115,
-            0.470_142_064_105_115,
-            0.059_715_871_789_770,
-        ],
-        0.132_394_152_788_506,
-    ),
-    (
-        [
-            0.797_426_985_353_087,
-            0.101_286_507_323_456,
-            0.101_286_507_323_456,
-        ],
-        0.125_939_180_544_827,
-    ),
-    (
-        [
-            0.101_286_507_323_456,
-            0.797_426_985_353_087,
-            0.101_286_507_323_456,
-        ],
-        0.125_939_180_544_827,
-    ),
-    (
-        [
-            0.101_286_507_323_456,
-            0.101_286_507_323_456,
-            0.797_426_985_353_087,
-        ],
-        0.125_939_180_544_827,
-    ),
-];
-/// Deepest subdivision of one triangle in the area quadrature (4^depth pieces at most); the
-/// triangles of a tessellation are small enough that one or two levels suffice.
-const AREA_MAX_DEPTH: u32 = 4;
-
 /// A point of a trim loop.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TrimPoint {
@@ -143,6 +87,11 @@ pub struct TrimmedFace<'a> {
 pub struct TrimmedMesh {
     pub mesh: TriMesh,
     pub vertex: Vec<Option<u32>>,
+    /// The area in (u, v) of the triangulation's triangles, each with its own corners' (u, v)
+    /// (a pole is one vertex of the mesh but a run of points in (u, v)), triangles collapsed at
+    /// a pole included: equal to the area the loops bound when the triangles tile the region
+    /// the loops bound (the caller compares).
+    pub cover_uv: f64,
 }
 
 /// Why a trimmed face could not be tessellated.
@@ -161,6 +110,10 @@ pub enum TrimError {
         "the trim loops cross each other in (u, v) near ({u:.6}, {v:.6}): the face's boundary is not a valid region"
     )]
     LoopsCross { u: f64, v: f64 },
+    #[error(
+        "the trim loops run twice along one segment near ({u:.6}, {v:.6}) in (u, v): the face's boundary is not a valid region"
+    )]
+    LoopsOverlap { u: f64, v: f64 },
     #[error(
         "the face needs more than {limit} vertices at chordal tolerance {chord_mm} mm; raise the tolerance"
     )]
@@ -375,8 +328,13 @@ fn loops_cdt(
     for (lp, hs) in loops.iter().zip(&loop_handles) {
         for k in 0..hs.len() {
             let (a, b) = (hs[k], hs[(k + 1) % hs.len()]);
-            if a == b || cdt.exists_constraint(a, b) {
+            if a == b {
                 continue;
+            }
+            if cdt.exists_constraint(a, b) {
+                // Two loop segments along one line: the loops run back over themselves.
+                let uv = 0.5 * (lp[k].1 + lp[(k + 1) % lp.len()].1);
+                return Err(TrimError::LoopsOverlap { u: uv.x, v: uv.y });
             }
             if cdt.try_add_constraint(a, b).is_empty() {
                 let uv = 0.5 * (lp[k].1 + lp[(k + 1) % lp.len()].1);
@@ -489,16 +447,18 @@ pub fn tessellate_trimmed(
     }
     let mut verts = Verts::default();
     let loops = loop_vertices(face.loops, &mut verts)?;
+    let mut cover = 0.0;
     let triangles = if face.ruled {
-        ruled_mesh(face.surface, &loops, &mut verts, tol, opts)?
+        ruled_mesh(face.surface, &loops, &mut verts, tol, opts, &mut cover)?
     } else {
-        cdt_mesh(face.surface, &loops, &mut verts, tol, opts)?
+        cdt_mesh(face.surface, &loops, &mut verts, tol, opts, &mut cover)?
     };
     let mut mesh = TriMesh::new(verts.pos, triangles);
     mesh.params = Some(verts.uv);
     Ok(TrimmedMesh {
         mesh,
         vertex: verts.id,
+        cover_uv: cover,
     })
 }
 
@@ -509,6 +469,7 @@ fn cdt_mesh(
     verts: &mut Verts,
     tol: &Tolerances,
     opts: &TessOptions,
+    cover: &mut f64,
 ) -> Result<Vec<[u32; 3]>, TrimError> {
     let (lo, hi) = bounds(loops);
     let scale = plane_scale(s, lo, hi, tol.chord_mm, opts.max_normal_turn);
@@ -588,6 +549,7 @@ fn cdt_mesh(
         if !inside[f.fix().index()] {
             continue;
         }
+        *cover += uv_area(f.positions().map(|p| DVec2::new(p.x, p.y) / scale));
         let t = f.vertices().map(|v| v.data().local);
         if t[0] != t[1] && t[1] != t[2] && t[2] != t[0] {
             tris.push(t);
@@ -699,6 +661,7 @@ fn ruled_mesh(
     verts: &mut Verts,
     tol: &Tolerances,
     opts: &TessOptions,
+    cover: &mut f64,
 ) -> Result<Vec<[u32; 3]>, TrimError> {
     let (lo, hi) = bounds(loops);
     let snap = RULING_SNAP_REL * (hi.x - lo.x).abs().max(f64::MIN_POSITIVE);
@@ -843,17 +806,36 @@ fn ruled_mesh(
             };
             let left = chain(&on_ruling[i], bot.left, top.left);
             let right = chain(&on_ruling[i + 1], bot.right, top.right);
-            zip(&left, &right, &verts.uv, &mut tris);
+            let corner = |l: u32, u: f64| DVec2::new(u, verts.uv[l as usize].y);
+            zip(
+                &left,
+                &right,
+                &verts.uv,
+                &mut tris,
+                &mut |t: [(u32, bool); 3]| {
+                    let c = t.map(|(l, on_left)| corner(l, rulings[i + usize::from(!on_left)]));
+                    *cover += uv_area(c);
+                },
+            );
         }
     }
     Ok(tris)
 }
 
 /// Triangulates the strip between the left chain and the right chain (both bottom to top),
-/// counter-clockwise in (u, v), skipping triangles with a repeated vertex.
-fn zip(left: &[u32], right: &[u32], uv: &[DVec2], out: &mut Vec<[u32; 3]>) {
+/// counter-clockwise in (u, v), skipping triangles with a repeated vertex; `each` sees every
+/// triangle, skipped ones too, with each corner's side (true: left).
+fn zip(
+    left: &[u32],
+    right: &[u32],
+    uv: &[DVec2],
+    out: &mut Vec<[u32; 3]>,
+    each: &mut dyn FnMut([(u32, bool); 3]),
+) {
     let (mut i, mut j) = (0usize, 0usize);
-    let mut push = |t: [u32; 3]| {
+    let mut push = |t: [(u32, bool); 3]| {
+        each(t);
+        let t = t.map(|x| x.0);
         if t[0] != t[1] && t[1] != t[2] && t[2] != t[0] {
             out.push(t);
         }
@@ -867,78 +849,18 @@ fn zip(left: &[u32], right: &[u32], uv: &[DVec2], out: &mut Vec<[u32; 3]>) {
             uv[left[i + 1] as usize].y <= uv[right[j + 1] as usize].y
         };
         if advance_left {
-            push([left[i], right[j], left[i + 1]]);
+            push([(left[i], true), (right[j], false), (left[i + 1], true)]);
             i += 1;
         } else {
-            push([left[i], right[j], right[j + 1]]);
+            push([(left[i], true), (right[j], false), (right[j + 1], false)]);
             j += 1;
         }
     }
 }
 
-/// The area (mm²) of the trimmed face: ∬ |S_u × S_v| du dv over the region the loops bound,
-/// by adaptive Dunavant quadrature over the triangles in (u, v) of the face's tessellation at
-/// chordal tolerance `chord_mm` (small triangles, where the rule converges at once), to relative
-/// accuracy `rel` per triangle. The loops should follow the trim curves closely: the area between
-/// a loop chord and its curve is not counted.
-pub fn trimmed_area(
-    s: &dyn ParamSurface,
-    loops: &[Vec<TrimPoint>],
-    chord_mm: f64,
-    rel: f64,
-) -> Result<f64, TrimError> {
-    let tol = Tolerances::DEFAULT.with_chord_mm(chord_mm);
-    let m = tessellate_trimmed(
-        &TrimmedFace {
-            surface: s,
-            loops,
-            ruled: false,
-        },
-        &tol,
-        &TessOptions::DEFAULT,
-    )?;
-    let uv = m.mesh.params.as_deref().unwrap_or(&[]);
-    Ok(m.mesh
-        .triangles
-        .iter()
-        .map(|t| area_adaptive(s, t.map(|v| uv[v as usize]), rel, AREA_MAX_DEPTH))
-        .sum())
-}
-
-fn area_rule(s: &dyn ParamSurface, t: [DVec2; 3]) -> f64 {
-    let jac = 0.5 * (t[1] - t[0]).perp_dot(t[2] - t[0]).abs();
-    DUNAVANT7
-        .iter()
-        .map(|(b, w)| {
-            let q = t[0] * b[0] + t[1] * b[1] + t[2] * b[2];
-            let (_, su, sv) = s.deriv1(q.x, q.y);
-            let a = su.cross(sv).length();
-            w * if a.is_finite() { a } else { 0.0 }
-        })
-        .sum::<f64>()
-        * jac
-}
-
-fn area_adaptive(s: &dyn ParamSurface, t: [DVec2; 3], rel: f64, depth: u32) -> f64 {
-    let whole = area_rule(s, t);
-    let m = [
-        0.5 * (t[0] + t[1]),
-        0.5 * (t[1] + t[2]),
-        0.5 * (t[2] + t[0]),
-    ];
-    let kids = [
-        [t[0], m[0], m[2]],
-        [m[0], t[1], m[1]],
-        [m[2], m[1], t[2]],
-        [m[0], m[1], m[2]],
-    ];
-    let parts: f64 = kids.iter().map(|k| area_rule(s, *k)).sum();
-    if depth == 0 || (parts - whole).abs() <= rel * parts.abs() {
-        return parts;
-    }
-    kids.iter()
-        .map(|k| area_adaptive(s, *k, rel, depth - 1))
-        .sum()
+/// The signed area of a (u, v) triangle.
+fn uv_area(t: [DVec2; 3]) -> f64 {
+    0.5 * (t[1] - t[0]).perp_dot(t[2] - t[0])
 }
 
 #[cfg(test)]
@@ -1054,7 +976,7 @@ mod tests {
     }
 
     #[test]
-    fn exact_area_of_a_spherical_zone() {
+    fn the_triangles_tile_the_loops_region() {
         let s = sphere();
         let mut id = 0;
         let lp = sample_loop(
@@ -1068,9 +990,54 @@ mod tests {
             8,
             &mut id,
         );
-        let a = trimmed_area(&s, &[lp], 0.01, 1e-12).unwrap();
-        let exact = 1600.0 * 1.5 * (1.1f64.sin() - (-0.3f64).sin());
-        assert!((a - exact).abs() < 1e-9 * exact, "{a} vs {exact}");
+        let m = tessellate_trimmed(
+            &TrimmedFace {
+                surface: &s,
+                loops: &[lp],
+                ruled: false,
+            },
+            &Tolerances::DEFAULT.with_chord_mm(0.01),
+            &TessOptions::DEFAULT,
+        )
+        .unwrap();
+        let want = 1.5 * 1.4;
+        assert!(
+            (m.cover_uv - want).abs() < 1e-12 * want,
+            "{} vs {want}",
+            m.cover_uv
+        );
+    }
+
+    #[test]
+    fn a_loop_that_runs_back_over_itself_is_an_error() {
+        let s = Analytic::plane(Frame::WORLD);
+        let pts = [
+            (0.0, 0.0),
+            (10.0, 0.0),
+            (10.0, 10.0),
+            (10.0, 0.0),
+            (0.0, 10.0),
+        ];
+        let lp: Vec<TrimPoint> = pts
+            .iter()
+            .enumerate()
+            .map(|(k, &(u, v))| TrimPoint {
+                uv: DVec2::new(u, v),
+                pos: s.eval(u, v),
+                vertex: k as u32,
+            })
+            .collect();
+        let e = tessellate_trimmed(
+            &TrimmedFace {
+                surface: &s,
+                loops: &[lp],
+                ruled: false,
+            },
+            &Tolerances::DEFAULT,
+            &TessOptions::DEFAULT,
+        )
+        .unwrap_err();
+        assert!(matches!(e, TrimError::LoopsOverlap { .. }), "{e}");
     }
 
     #[test]

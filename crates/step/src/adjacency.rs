@@ -6,7 +6,6 @@ use flatcut_geom::{DVec2, DVec3};
 use flatcut_surface::{ParamCurve, ParamSurface};
 
 use crate::model::{FaceGeometry, Model};
-use crate::tess::TRIM_GAP_MM;
 
 /// Two faces meet smoothly when their normals differ by less than this along their whole common
 /// edge (radians; 1°). Fillets and G1 blends meet within round-off; a crease of a degree is a
@@ -74,7 +73,8 @@ impl Model {
         (1..=SMOOTH_SAMPLES).all(|k| {
             let t = eg.t0 + (eg.t1 - eg.t0) * k as f64 / (SMOOTH_SAMPLES + 1) as f64;
             let p = eg.curve.eval(t);
-            match (normal_at(eg, fa, p, t), normal_at(eg, fb, p, t)) {
+            let gap = self.heal_mm;
+            match (normal_at(eg, fa, p, t, gap), normal_at(eg, fb, p, t, gap)) {
                 (Some(na), Some(nb)) => na.angle_between(nb) < SMOOTH_MAX_ANGLE,
                 // A singular point (a pole) says nothing either way.
                 _ => true,
@@ -83,15 +83,22 @@ impl Model {
     }
 }
 
-/// The face's outward normal at the point `p` of one of its edges (curve parameter `t`).
-fn normal_at(eg: &crate::model::EdgeGeometry, f: &FaceGeometry, p: DVec3, t: f64) -> Option<DVec3> {
+/// The face's outward normal at the point `p` of one of its edges (curve parameter `t`), when the
+/// edge lies within `gap` mm of the face's surface there.
+fn normal_at(
+    eg: &crate::model::EdgeGeometry,
+    f: &FaceGeometry,
+    p: DVec3,
+    t: f64,
+    gap: f64,
+) -> Option<DVec3> {
     let hint: Option<DVec2> = eg
         .pcurves
         .iter()
         .find(|pc| pc.surface_entity == f.surface_entity)
         .map(|pc| pc.curve.eval(t).truncate());
     let uv = f.surface.param_of(p, hint);
-    if f.surface.eval(uv.x, uv.y).distance(p) > TRIM_GAP_MM {
+    if f.surface.eval(uv.x, uv.y).distance(p) > gap {
         return None;
     }
     let (_, su, sv) = f.surface.deriv1(uv.x, uv.y);

@@ -4,14 +4,23 @@
 //! ([`BSplinePatch`]). Lengths are in mm (converted when read).
 //!
 //! [`Surface::param_of`] finds the (u, v) of a point of the surface: in closed form for the
-//! analytic kinds, by Newton iteration on the squared distance for patches (from a hint, or from
-//! the best point of a sample grid), to [`PROJECT_ACCURACY`].
+//! analytic kinds (both branches of a cone's two nappes and of a spindle torus tried), by Newton
+//! iteration on the squared distance for patches (from a hint, or from the best point of a sample
+//! grid), to [`PROJECT_ACCURACY`].
+//!
+//! The shape of a surface's parameter space, which trimming needs: the periods of its periodic
+//! directions ([`Surface::periods`]: the angles of the elementary and swept surfaces, and a patch
+//! whose opposite sides meet, evaluated modulo its domain — [`Spline`]), and its poles
+//! ([`Surface::free_direction`]: points where one parameter does not move the point, a sphere's
+//! poles or a cone's apex).
 
+use std::f64::consts::{PI, TAU};
 use std::sync::Arc;
 
 use flatcut_geom::{DVec2, DVec3};
 use flatcut_surface::curve::{BSpline, Ellipse, Line, Nurbs, Polyline};
-use flatcut_surface::patch::{Analytic, BSplinePatch};
+use flatcut_surface::patch::analytic::unwrap_angle;
+use flatcut_surface::patch::{Analytic, AnalyticKind, BSplinePatch};
 use flatcut_surface::{Domain2, ParamCurve, ParamSurface, SurfaceDerivs};
 
 /// Parameter points projected onto a patch converge to within this distance of their closest
@@ -24,6 +33,11 @@ const PROJECT_MAX_STEPS: usize = 60;
 const PROJECT_SAMPLES: usize = 8;
 /// At most this many samples per direction for that start.
 const PROJECT_MAX_SAMPLES: usize = 96;
+/// A patch whose opposite sides lie within this fraction of its size of each other, point for
+/// point, is closed in that direction.
+const CLOSED_REL: f64 = 1e-7;
+/// Points compared along a side to decide that a patch is closed, or a side collapsed.
+const SIDE_SAMPLES: usize = 12;
 
 /// A curve of the model (3D, mm) or of a parameter space (z = 0, unscaled).
 #[derive(Clone, Debug)]
@@ -135,7 +149,82 @@ impl ParamCurve for Curve {
 #[derive(Clone, Debug)]
 pub enum Surface {
     Analytic(Analytic),
-    Spline(BSplinePatch),
+    Spline(Spline),
+}
+
+/// A B-spline or NURBS patch, and the directions in which its opposite sides meet (a tube, a
+/// ring): those are periodic with the domain's width as period, evaluated modulo the domain.
+#[derive(Clone, Debug)]
+pub struct Spline {
+    pub patch: BSplinePatch,
+    /// The period of u and of v, when the patch closes on itself in that direction.
+    pub period: [Option<f64>; 2],
+}
+
+impl Spline {
+    /// The patch, with its closed directions found by comparing its opposite sides.
+    pub fn new(patch: BSplinePatch) -> Self {
+        let d = patch.domain();
+        let size = flatcut_geom::Aabb3::from_points(patch.points().iter().copied()).diagonal();
+        let tol = (CLOSED_REL * size).max(1e-12);
+        let side = |t: f64, along_u: bool, at_start: bool| -> DVec3 {
+            let (u, v) = if along_u {
+                (
+                    d.u.0 + (d.u.1 - d.u.0) * t,
+                    if at_start { d.v.0 } else { d.v.1 },
+                )
+            } else {
+                (
+                    if at_start { d.u.0 } else { d.u.1 },
+                    d.v.0 + (d.v.1 - d.v.0) * t,
+                )
+            };
+            patch.eval(u, v)
+        };
+        let ts: Vec<f64> = (0..=SIDE_SAMPLES)
+            .map(|k| k as f64 / SIDE_SAMPLES as f64)
+            .collect();
+        // Closed in u: the sides u = u0 and u = u1 (which run along v) coincide and are not points.
+        let closed = |along_u: bool| {
+            let a: Vec<DVec3> = ts.iter().map(|&t| side(t, along_u, true)).collect();
+            let b: Vec<DVec3> = ts.iter().map(|&t| side(t, along_u, false)).collect();
+            let len: f64 = a.windows(2).map(|w| w[0].distance(w[1])).sum();
+            len > 100.0 * tol && a.iter().zip(&b).all(|(p, q)| p.distance(*q) <= tol)
+        };
+        let period = [
+            closed(false).then_some(d.u.1 - d.u.0),
+            closed(true).then_some(d.v.1 - d.v.0),
+        ];
+        Self { patch, period }
+    }
+
+    /// (u, v) brought into the domain in the closed directions.
+    fn wrap(&self, u: f64, v: f64) -> (f64, f64) {
+        let d = self.patch.domain();
+        let w = |x: f64, lo: f64, p: Option<f64>| match p {
+            Some(p) if x < lo || x > lo + p => lo + (x - lo).rem_euclid(p),
+            _ => x,
+        };
+        (w(u, d.u.0, self.period[0]), w(v, d.v.0, self.period[1]))
+    }
+}
+
+impl ParamSurface for Spline {
+    fn domain(&self) -> Domain2 {
+        self.patch.domain()
+    }
+    fn eval(&self, u: f64, v: f64) -> DVec3 {
+        let (u, v) = self.wrap(u, v);
+        self.patch.eval(u, v)
+    }
+    fn deriv1(&self, u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
+        let (u, v) = self.wrap(u, v);
+        self.patch.deriv1(u, v)
+    }
+    fn deriv2(&self, u: f64, v: f64) -> SurfaceDerivs {
+        let (u, v) = self.wrap(u, v);
+        self.patch.deriv2(u, v)
+    }
 }
 
 impl Surface {
@@ -144,7 +233,7 @@ impl Surface {
     pub fn name(&self) -> &'static str {
         match self {
             Surface::Analytic(a) => a.name(),
-            Surface::Spline(s) if s.is_rational() => "nurbs",
+            Surface::Spline(s) if s.patch.is_rational() => "nurbs",
             Surface::Spline(_) => "bspline",
         }
     }
@@ -160,20 +249,119 @@ impl Surface {
     /// analytic kinds are unwrapped to the period nearest `near`.
     pub fn param_of(&self, p: DVec3, near: Option<DVec2>) -> DVec2 {
         match self {
-            Surface::Analytic(a) => a.param_of(p, near),
+            Surface::Analytic(a) => analytic_param_of(a, p, near),
             Surface::Spline(s) => {
-                let start = near.unwrap_or_else(|| sample_start(s, p));
-                project(s, p, start)
+                let start = near.unwrap_or_else(|| sample_start(&s.patch, p));
+                let uv = project(s, p, start);
+                match near {
+                    // Periodic directions continue from the hint.
+                    Some(n) => DVec2::new(
+                        s.period[0].map_or(uv.x, |pd| uv.x + pd * ((n.x - uv.x) / pd).round()),
+                        s.period[1].map_or(uv.y, |pd| uv.y + pd * ((n.y - uv.y) / pd).round()),
+                    ),
+                    None => uv,
+                }
             }
         }
     }
+
+    /// The periods of u and v (`None` for a direction that is not periodic).
+    pub fn periods(&self) -> [Option<f64>; 2] {
+        match self {
+            Surface::Analytic(a) => {
+                let (pu, pv) = a.periodic();
+                [pu.then_some(TAU), pv.then_some(TAU)]
+            }
+            Surface::Spline(s) => s.period,
+        }
+    }
+
+    /// The direction (0 = u, 1 = v) in which the parameter does not move the point at `uv` —
+    /// a pole of a sphere, a cone's apex, a collapsed side of a patch — when a whole period (or
+    /// the domain's width) of it covers less than `tol` mm.
+    pub fn free_direction(&self, uv: DVec2, tol: f64) -> Option<usize> {
+        let (_, su, sv) = self.deriv1(uv.x, uv.y);
+        let d = self.domain();
+        let [pu, pv] = self.periods();
+        let span = [pu.unwrap_or(d.u.1 - d.u.0), pv.unwrap_or(d.v.1 - d.v.0)];
+        let moves = [su.length() * span[0], sv.length() * span[1]];
+        match (moves[0] <= tol, moves[1] <= tol) {
+            (true, false) => Some(0),
+            (false, true) => Some(1),
+            _ => None,
+        }
+    }
+
+    /// The value of v beyond `v` (towards larger v when `up`) where the surface closes in a
+    /// pole (a sphere's pole, a cone's apex, the end of a meridian on the axis of a surface of
+    /// revolution, a collapsed side of a patch), if it has one: the side a loop winding once
+    /// around u bounds, with the pole as the rest of the boundary.
+    pub fn pole_beyond(&self, v: f64, up: bool, tol: f64) -> Option<f64> {
+        let candidate = match self {
+            Surface::Analytic(a) => match &a.kind {
+                AnalyticKind::Sphere { .. } => Some(if up { 0.5 * PI } else { -0.5 * PI }),
+                AnalyticKind::Cone { radius, semi_angle } => Some(-radius / semi_angle.tan()),
+                AnalyticKind::Revolution { curve } => {
+                    let (t0, t1) = curve.domain();
+                    Some(if up { t1 } else { t0 })
+                }
+                _ => None,
+            },
+            Surface::Spline(s) => {
+                let d = s.patch.domain();
+                Some(if up { d.v.1 } else { d.v.0 })
+            }
+        }?;
+        if (candidate > v) != up {
+            return None;
+        }
+        // A pole: the whole circle of u at that v is one point.
+        let d = self.domain();
+        let span = self.periods()[0].unwrap_or(d.u.1 - d.u.0);
+        let a = self.eval(d.u.0, candidate);
+        let closes = (1..=SIDE_SAMPLES).all(|k| {
+            self.eval(d.u.0 + span * k as f64 / SIDE_SAMPLES as f64, candidate)
+                .distance(a)
+                <= tol
+        });
+        closes.then_some(candidate)
+    }
+}
+
+/// The (u, v) of `p` on an analytic surface: the closed form, and for a cone (both nappes) and
+/// a torus (a spindle torus, whose tube crosses its axis, reaches a point from both half-planes)
+/// the other branch too, whichever lies nearer.
+fn analytic_param_of(a: &Analytic, p: DVec3, near: Option<DVec2>) -> DVec2 {
+    let uv = a.param_of(p, near);
+    let other = match &a.kind {
+        AnalyticKind::Cone { .. } => DVec2::new(uv.x + PI, uv.y),
+        AnalyticKind::Torus { major, .. } => {
+            let q = a.frame.local(p);
+            let v = q.z.atan2(-q.x.hypot(q.y) - major);
+            DVec2::new(uv.x + PI, v)
+        }
+        _ => return uv,
+    };
+    let other = match near {
+        Some(n) => DVec2::new(
+            unwrap_angle(other.x, n.x),
+            if a.periodic().1 {
+                unwrap_angle(other.y, n.y)
+            } else {
+                other.y
+            },
+        ),
+        None => DVec2::new(unwrap_angle(other.x, 0.0), other.y),
+    };
+    let gap = |w: DVec2| a.eval(w.x, w.y).distance(p);
+    if gap(other) < gap(uv) { other } else { uv }
 }
 
 impl ParamSurface for Surface {
     fn domain(&self) -> Domain2 {
         match self {
             Surface::Analytic(a) => a.domain(),
-            Surface::Spline(s) => s.domain(),
+            Surface::Spline(s) => s.patch.domain(),
         }
     }
     fn eval(&self, u: f64, v: f64) -> DVec3 {
@@ -196,8 +384,20 @@ impl ParamSurface for Surface {
     }
 }
 
-fn clamp_to(d: &Domain2, uv: DVec2) -> DVec2 {
-    DVec2::new(uv.x.clamp(d.u.0, d.u.1), uv.y.clamp(d.v.0, d.v.1))
+/// `uv` kept in the domain `d`, except in the periodic directions (`period` set).
+fn clamp_to(d: &Domain2, period: [Option<f64>; 2], uv: DVec2) -> DVec2 {
+    DVec2::new(
+        if period[0].is_some() {
+            uv.x
+        } else {
+            uv.x.clamp(d.u.0, d.u.1)
+        },
+        if period[1].is_some() {
+            uv.y
+        } else {
+            uv.y.clamp(d.v.0, d.v.1)
+        },
+    )
 }
 
 /// The best point of a sample grid over the patch's domain (more samples for more knot spans).
@@ -227,11 +427,11 @@ fn sample_start(s: &BSplinePatch, p: DVec3) -> DVec2 {
     best.1
 }
 
-/// Newton iteration on |S(u, v) − p|² from `start`, kept in the domain, with step halving when a
-/// step does not bring the point closer.
-pub fn project(s: &dyn ParamSurface, p: DVec3, start: DVec2) -> DVec2 {
+/// Newton iteration on |S(u, v) − p|² from `start`, kept in the domain (but for the patch's
+/// periodic directions), with step halving when a step does not bring the point closer.
+pub fn project(s: &Spline, p: DVec3, start: DVec2) -> DVec2 {
     let d = s.domain();
-    let mut uv = clamp_to(&d, start);
+    let mut uv = clamp_to(&d, s.period, start);
     let mut dist = s.eval(uv.x, uv.y).distance(p);
     for _ in 0..PROJECT_MAX_STEPS {
         let (q, su, sv) = s.deriv1(uv.x, uv.y);
@@ -246,7 +446,7 @@ pub fn project(s: &dyn ParamSurface, p: DVec3, start: DVec2) -> DVec2 {
         let mut lambda = 1.0;
         let mut moved = false;
         for _ in 0..12 {
-            let next = clamp_to(&d, uv + step * lambda);
+            let next = clamp_to(&d, s.period, uv + step * lambda);
             let nd = s.eval(next.x, next.y).distance(p);
             if nd <= dist {
                 let len = (s.eval(next.x, next.y) - s.eval(uv.x, uv.y)).length();
@@ -283,7 +483,9 @@ mod tests {
         }
         let k5 = vec![0.0, 0.0, 0.0, 0.0, 0.5, 1.0, 1.0, 1.0, 1.0];
         let k4 = vec![0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0];
-        let s = Surface::Spline(BSplinePatch::new(3, 3, k5, k4, 5, 4, pts, None).unwrap());
+        let s = Surface::Spline(Spline::new(
+            BSplinePatch::new(3, 3, k5, k4, 5, 4, pts, None).unwrap(),
+        ));
         for &(u, v) in &[(0.1, 0.2), (0.77, 0.9), (0.5, 0.5), (0.0, 1.0)] {
             let p = s.eval(u, v);
             let uv = s.param_of(p, None);

@@ -16,19 +16,25 @@
 //! cannot be used keeps its number and error while the others load.
 
 pub mod adjacency;
+pub mod assembly;
 pub mod attrs;
+pub mod check;
 pub mod error;
 pub mod file;
 pub mod geom;
+pub mod heal;
 pub mod lexer;
 pub mod model;
 pub mod reader;
 pub mod tess;
+pub mod trim;
 
 pub use error::StepError;
 pub use file::StepFile;
 pub use geom::{Curve, Surface};
-pub use model::{Bound, Edge, EdgeGeometry, EdgeUse, Face, FaceGeometry, Model, Shell, Vertex};
+pub use model::{
+    BodyInstance, Bound, Edge, EdgeGeometry, EdgeUse, Face, FaceGeometry, Model, Shell, Vertex,
+};
 pub use reader::Units;
 pub use tess::{EdgeMesh, FaceMesh, Tessellation, face_area};
 

@@ -20,25 +20,44 @@ use flatcut_surface::ParamCurve;
 use flatcut_surface::curve::nearest_from_samples;
 
 use crate::StepError;
+use crate::assembly::Placement;
 use crate::attrs::Attrs;
 use crate::file::{Instance, StepFile, Value};
 use crate::geom::{Curve, Surface};
+use crate::heal::{HealOptions, Repair};
 use crate::reader::{Reader, Space, Units};
 
-/// A vertex farther than this from its edge's curve makes the edge unusable (mm): CAD files
-/// keep vertices within micrometres; this catches wrong references, not sloppy tolerances.
-pub const VERTEX_ON_CURVE_MM: f64 = 0.1;
+/// A curve whose length over an edge is below this (mm) makes a degenerate edge when the edge
+/// starts and ends at one vertex (an edge at a pole).
+const DEGENERATE_MM: f64 = 1e-7;
+/// Points compared to decide that a closed curve has zero length.
+const DEGENERATE_SAMPLES: usize = 8;
 /// Accuracy of locating a vertex on its curve (mm).
 const LOCATE_ACCURACY: f64 = 1e-10;
 /// Samples per curve span when locating a vertex on a spline or polyline.
 const LOCATE_SAMPLES_PER_SPAN: usize = 8;
 
-/// A shell: a connected set of faces (closed: bounds a solid).
+/// A shell: a connected set of faces (closed: bounds a solid), in one instance of its body.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Shell {
     pub entity: u64,
     pub closed: bool,
     pub faces: Vec<usize>,
+    /// The body instance (index into [`Model::instances`]).
+    pub instance: usize,
+}
+
+/// One placement of a body (a solid or shell-based surface model) in the world: an assembly
+/// places a body as often as it uses it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodyInstance {
+    /// The body's instance number (`MANIFOLD_SOLID_BREP`, `SHELL_BASED_SURFACE_MODEL`, …).
+    pub body: u64,
+    /// The body's name in the file.
+    pub name: String,
+    /// Which of the body's instances (0 for the first).
+    pub copy: usize,
+    pub placement: Placement,
 }
 
 /// A vertex: its position in mm.
@@ -78,6 +97,21 @@ pub struct FaceGeometry {
     pub bounds: Vec<Bound>,
 }
 
+impl FaceGeometry {
+    /// The face the other way round (in a shell used reversed): its normal and its loops
+    /// reversed, so it bounds the same region.
+    pub fn reversed(mut self) -> Self {
+        self.same_sense = !self.same_sense;
+        for b in &mut self.bounds {
+            b.uses.reverse();
+            for u in &mut b.uses {
+                u.forward = !u.forward;
+            }
+        }
+        self
+    }
+}
+
 /// A face of the model.
 #[derive(Clone, Debug)]
 pub struct Face {
@@ -85,6 +119,8 @@ pub struct Face {
     pub shell: usize,
     /// The face's geometry, or why it cannot be used.
     pub geometry: Result<FaceGeometry, StepError>,
+    /// What healing changed in the face's topology (loops reversed, vertices merged).
+    pub repairs: Vec<Repair>,
 }
 
 /// A curve in a surface's parameter space that the file gives for an edge (a `PCURVE`).
@@ -104,6 +140,10 @@ pub struct EdgeGeometry {
     pub t0: f64,
     pub t1: f64,
     pub pcurves: Vec<Pcurve>,
+    /// The edge has no length: one vertex, a curve of zero extent (an edge at a pole).
+    pub degenerate: bool,
+    /// How far its vertices lie from the curve (mm).
+    pub off_curve_mm: f64,
 }
 
 /// An edge of the model and the faces whose loops use it (a face twice for a seam).
@@ -112,6 +152,8 @@ pub struct Edge {
     pub entity: u64,
     pub geometry: Result<EdgeGeometry, StepError>,
     pub faces: Vec<usize>,
+    /// What healing changed in the edge.
+    pub repairs: Vec<Repair>,
 }
 
 /// A STEP model: shells, faces, edges and vertices in mm.
@@ -126,28 +168,47 @@ pub struct Model {
     pub faces: Vec<Face>,
     pub edges: Vec<Edge>,
     pub vertices: Vec<Vertex>,
+    /// The placed bodies, in order (one per body for a file that is no assembly).
+    pub instances: Vec<BodyInstance>,
+    /// The diagonal of the vertices' bounding box (mm).
+    pub size_mm: f64,
+    /// The largest defect healed (mm).
+    pub heal_mm: f64,
 }
 
-/// Builds the model while walking the topology.
+/// Builds the model while walking the topology (entities are keyed by instance number and body
+/// instance: an assembly's second copy of a body gets faces, edges and vertices of its own).
 struct Builder<'f> {
     r: Reader<'f>,
+    instance: usize,
     faces: Vec<Face>,
     edges: Vec<Edge>,
-    edge_of: BTreeMap<u64, usize>,
+    edge_of: BTreeMap<(u64, usize), usize>,
     vertices: Vec<Vertex>,
-    vertex_of: BTreeMap<u64, Result<usize, StepError>>,
+    vertex_of: BTreeMap<(u64, usize), Result<usize, StepError>>,
 }
 
 impl Model {
-    /// Reads a `.step`/`.stp` file.
+    /// Reads a `.step`/`.stp` file, healing with the default limit.
     pub fn read(path: &Path) -> Result<Model, StepError> {
-        Self::from_file(&StepFile::read(path)?)
+        Self::read_with(path, &HealOptions::default())
     }
 
-    /// Builds the model of an indexed file.
+    /// Reads a `.step`/`.stp` file, healing within `heal`.
+    pub fn read_with(path: &Path, heal: &HealOptions) -> Result<Model, StepError> {
+        Self::from_file_with(&StepFile::read(path)?, heal)
+    }
+
+    /// Builds the model of an indexed file, healing with the default limit.
     pub fn from_file(file: &StepFile) -> Result<Model, StepError> {
+        Self::from_file_with(file, &HealOptions::default())
+    }
+
+    /// Builds the model of an indexed file, healing within `heal`.
+    pub fn from_file_with(file: &StepFile, heal: &HealOptions) -> Result<Model, StepError> {
         let mut b = Builder {
             r: Reader::new(file),
+            instance: 0,
             faces: Vec::new(),
             edges: Vec::new(),
             edge_of: BTreeMap::new(),
@@ -158,9 +219,13 @@ impl Model {
         if tops.is_empty() {
             return Err(StepError::NoShells);
         }
+        loose_surfaces(file, &mut b.r)?;
         let contexts = representation_contexts(file, &mut b.r)?;
         let fallback = unique_units(file, &mut b.r)?;
+        let bodies: Vec<u64> = tops.iter().map(|t| t.0).collect();
+        let placements = crate::assembly::placements(file, &mut b.r, &bodies)?;
         let mut shells = Vec::new();
+        let mut instances = Vec::new();
         let mut first_units = None;
         let mut seen_faces = BTreeMap::new();
         for (item, shell_ids) in tops {
@@ -170,27 +235,50 @@ impl Model {
             }
             .or_else(|| fallback.clone())
             .unwrap_or_else(Units::assumed_mm);
-            b.r.mm = units.mm;
-            b.r.rad = units.rad;
-            first_units.get_or_insert(units);
-            for (sid, closed) in shell_ids {
-                let index = shells.len();
-                let faces = b.shell(sid, item, index, &mut seen_faces)?;
-                shells.push(Shell {
-                    entity: sid,
-                    closed,
-                    faces,
+            first_units.get_or_insert(units.clone());
+            let name = crate::assembly::body_name(&mut b.r, item);
+            let places = placements
+                .get(&item)
+                .cloned()
+                .unwrap_or_else(|| vec![Placement::IDENTITY]);
+            for (copy, placement) in places.into_iter().enumerate() {
+                b.instance = instances.len();
+                instances.push(BodyInstance {
+                    body: item,
+                    name: name.clone(),
+                    copy,
+                    placement,
                 });
+                b.r.mm = units.mm;
+                b.r.rad = units.rad;
+                b.r.place(placement);
+                for &(sid, closed) in &shell_ids {
+                    let index = shells.len();
+                    let faces = b.shell(sid, item, index, &mut seen_faces)?;
+                    shells.push(Shell {
+                        entity: sid,
+                        closed,
+                        faces,
+                        instance: b.instance,
+                    });
+                }
             }
         }
-        Ok(Model {
+        let size_mm = Aabb3::from_points(b.vertices.iter().map(|v| v.point)).diagonal();
+        let size_mm = if size_mm.is_finite() { size_mm } else { 0.0 };
+        let mut model = Model {
             schemas: file.schemas.clone(),
             units: first_units.unwrap_or_else(Units::assumed_mm),
             shells,
             faces: b.faces,
             edges: b.edges,
             vertices: b.vertices,
-        })
+            instances,
+            size_mm,
+            heal_mm: heal.limit_for(size_mm),
+        };
+        model.heal();
+        Ok(model)
     }
 
     /// The geometry of face `index`, or its error.
@@ -206,6 +294,34 @@ impl Model {
     pub fn vertex_bbox(&self) -> Aabb3 {
         Aabb3::from_points(self.vertices.iter().map(|v| v.point))
     }
+}
+
+/// Refuses a file whose shapes hold surfaces outside any shell (a `GEOMETRIC_SET` of bounded
+/// or trimmed surfaces beside the solids): only shells' faces are read, and the model would
+/// come in without them, with less area than the file has.
+fn loose_surfaces(file: &StepFile, r: &mut Reader) -> Result<(), StepError> {
+    for set in file.ids_of_type("GEOMETRIC_SET") {
+        let items = r.visit(set, set, |_, inst| {
+            let a = Attrs::of(inst, &inst.parts[0]);
+            a.refs(1, "elements")
+        })?;
+        for item in items {
+            let Some(t) = file.type_of(item) else {
+                continue;
+            };
+            let t = t.to_ascii_uppercase();
+            if t.ends_with("_SURFACE") || t.ends_with("_FACE") {
+                return Err(StepError::entity(
+                    set,
+                    "GEOMETRIC_SET",
+                    format!(
+                        "holds the surface #{item} ({t}) outside any shell: flatcut reads the faces of shells only, and the model would come in without it"
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The top-level shape items and their shells `(shell, closed)`, in item order.
@@ -312,14 +428,15 @@ fn unique_units(file: &StepFile, r: &mut Reader) -> Result<Option<Units>, StepEr
     Ok(found)
 }
 
-/// Where on `curve` the edge from `p0` to `p1` lies: `(t0, t1)`.
+/// Where on `curve` the edge from `p0` to `p1` lies: `(t0, t1)`, whether it is degenerate (one
+/// vertex, no length) and how far its vertices lie from the curve (mm).
 fn edge_range(
     curve: &Curve,
     p0: DVec3,
     p1: DVec3,
     closed: bool,
     same_sense: bool,
-) -> Result<(f64, f64), String> {
+) -> Result<(f64, f64, bool, f64), String> {
     use std::f64::consts::TAU;
     let (t0, t1) = match curve {
         Curve::Line(l) => (l.param_of(p0), l.param_of(p1)),
@@ -335,14 +452,24 @@ fn edge_range(
         }
         _ => {
             let (a, b) = curve.domain();
-            let ends_meet = curve.eval(a).distance(curve.eval(b)) <= VERTEX_ON_CURVE_MM * 1e-3;
+            let ends_meet = curve.eval(a).distance(curve.eval(b)) <= 1e-4;
             if closed {
                 if !ends_meet {
-                    return Err(
-                        "the edge starts and ends at one vertex but its curve is open".into(),
-                    );
+                    // One vertex on an open curve: the edge is the curve's point nearest it
+                    // (no length), else the file is wrong.
+                    let (t, d) =
+                        nearest_from_samples(curve, p0, LOCATE_ACCURACY, &[a, 0.5 * (a + b), b]);
+                    if d > DEGENERATE_MM {
+                        return Err(
+                            "the edge starts and ends at one vertex but its curve is open".into(),
+                        );
+                    }
+                    (t, t)
+                } else if same_sense {
+                    (a, b)
+                } else {
+                    (b, a)
                 }
-                if same_sense { (a, b) } else { (b, a) }
             } else {
                 let mut ts = Vec::new();
                 let mut br = curve.breakpoints();
@@ -358,7 +485,7 @@ fn edge_range(
                 let locate = |p: DVec3, at_start: bool| {
                     let (t, _) = nearest_from_samples(curve, p, LOCATE_ACCURACY, &ts);
                     // On a closed curve a vertex at the seam is both ends: pick by direction.
-                    if ends_meet && (curve.eval(a).distance(p) <= VERTEX_ON_CURVE_MM * 1e-3) {
+                    if ends_meet && (curve.eval(a).distance(p) <= 1e-4) {
                         if same_sense == at_start { a } else { b }
                     } else {
                         t
@@ -368,19 +495,30 @@ fn edge_range(
             }
         }
     };
-    for (t, p, which) in [(t0, p0, "start"), (t1, p1, "end")] {
+    let mut off = 0.0f64;
+    for (t, p) in [(t0, p0), (t1, p1)] {
         let d = curve.eval(t).distance(p);
-        if d.is_nan() || d > VERTEX_ON_CURVE_MM {
+        if d.is_nan() {
             return Err(format!(
-                "its {which} vertex is {d:.3} mm from its {} (more than {VERTEX_ON_CURVE_MM} mm)",
+                "its {} cannot be evaluated at its vertices",
                 curve.name()
             ));
         }
+        off = off.max(d);
     }
-    if t0 == t1 {
+    // No length: a degenerate edge when it starts and ends at one vertex.
+    let length: f64 = (0..DEGENERATE_SAMPLES)
+        .map(|k| {
+            let a = t0 + (t1 - t0) * k as f64 / DEGENERATE_SAMPLES as f64;
+            let b = t0 + (t1 - t0) * (k + 1) as f64 / DEGENERATE_SAMPLES as f64;
+            curve.eval(a).distance(curve.eval(b))
+        })
+        .sum();
+    let degenerate = t0 == t1 || length <= DEGENERATE_MM;
+    if degenerate && !closed {
         return Err("the edge has zero length on its curve".into());
     }
-    Ok((t0, t1))
+    Ok((t0, t1, degenerate, off))
 }
 
 impl<'f> Builder<'f> {
@@ -389,26 +527,41 @@ impl<'f> Builder<'f> {
         sid: u64,
         from: u64,
         index: usize,
-        seen: &mut BTreeMap<u64, usize>,
+        seen: &mut BTreeMap<(u64, usize), usize>,
     ) -> Result<Vec<usize>, StepError> {
-        let face_ids = self.r.visit(sid, from, |_, inst| {
+        // An oriented shell (a solid's void, written reversed) is its element's faces, each
+        // reversed when the orientation is false.
+        let (element, reversed) = self.r.visit(sid, from, |_, inst| {
+            let a = Attrs::of(inst, &inst.parts[0]);
+            let t = a.name.to_ascii_uppercase();
+            if t == "ORIENTED_CLOSED_SHELL" || t == "ORIENTED_OPEN_SHELL" {
+                Ok((a.reference(2, "element")?, !a.boolean(3, "orientation")?))
+            } else {
+                Ok((sid, false))
+            }
+        })?;
+        let face_ids = self.r.visit(element, sid, |_, inst| {
             let a = Attrs::of(inst, &inst.parts[0]);
             let t = a.name.to_ascii_uppercase();
             if t != "CLOSED_SHELL" && t != "OPEN_SHELL" {
-                return Err(a.fail("expected CLOSED_SHELL or OPEN_SHELL"));
+                return Err(
+                    a.fail("expected CLOSED_SHELL, OPEN_SHELL or an ORIENTED_CLOSED_SHELL of one")
+                );
             }
             a.refs(1, "cfs_faces")
         })?;
         let mut out = Vec::with_capacity(face_ids.len());
         for fid in face_ids {
-            if let Some(&k) = seen.get(&fid) {
+            if let Some(&k) = seen.get(&(fid, self.instance)) {
                 out.push(k);
                 continue;
             }
             let k = self.faces.len();
-            seen.insert(fid, k);
+            seen.insert((fid, self.instance), k);
             // A face that cannot be read keeps its number and its error.
-            let geometry = self.face(fid, sid);
+            let geometry = self
+                .face(fid, sid)
+                .map(|g| if reversed { g.reversed() } else { g });
             if let Ok(g) = &geometry {
                 for u in g.bounds.iter().flat_map(|b| &b.uses) {
                     self.edges[u.edge].faces.push(k);
@@ -418,6 +571,7 @@ impl<'f> Builder<'f> {
                 entity: fid,
                 shell: index,
                 geometry,
+                repairs: Vec::new(),
             });
             out.push(k);
         }
@@ -518,7 +672,7 @@ impl<'f> Builder<'f> {
     }
 
     fn vertex(&mut self, vid: u64, from: u64) -> Result<usize, StepError> {
-        if let Some(v) = self.vertex_of.get(&vid) {
+        if let Some(v) = self.vertex_of.get(&(vid, self.instance)) {
             return v.clone();
         }
         let r = self
@@ -531,13 +685,13 @@ impl<'f> Builder<'f> {
                 self.vertices.push(Vertex { entity: vid, point });
                 self.vertices.len() - 1
             });
-        self.vertex_of.insert(vid, r.clone());
+        self.vertex_of.insert((vid, self.instance), r.clone());
         r
     }
 
     /// The index of edge `#eid`, reading it the first time.
     fn edge(&mut self, eid: u64, from: u64) -> Result<usize, StepError> {
-        if let Some(&e) = self.edge_of.get(&eid) {
+        if let Some(&e) = self.edge_of.get(&(eid, self.instance)) {
             return Ok(e);
         }
         // The edge must at least be an EDGE_CURVE to take a number.
@@ -560,8 +714,9 @@ impl<'f> Builder<'f> {
             entity: eid,
             geometry,
             faces: Vec::new(),
+            repairs: Vec::new(),
         });
-        self.edge_of.insert(eid, k);
+        self.edge_of.insert((eid, self.instance), k);
         Ok(k)
     }
 
@@ -580,8 +735,9 @@ impl<'f> Builder<'f> {
         let curve = self.r.curve(gid, eid, Space::Model)?;
         let pcurves = self.pcurves(gid, eid);
         let (p0, p1) = (self.vertices[start].point, self.vertices[end].point);
-        let (t0, t1) = edge_range(&curve, p0, p1, start == end, same_sense)
-            .map_err(|m| StepError::entity(eid, "EDGE_CURVE", m))?;
+        let (t0, t1, degenerate, off_curve_mm) =
+            edge_range(&curve, p0, p1, start == end, same_sense)
+                .map_err(|m| StepError::entity(eid, "EDGE_CURVE", m))?;
         Ok(EdgeGeometry {
             curve,
             start,
@@ -589,6 +745,8 @@ impl<'f> Builder<'f> {
             t0,
             t1,
             pcurves,
+            degenerate,
+            off_curve_mm,
         })
     }
 

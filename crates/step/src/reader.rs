@@ -16,9 +16,10 @@ use flatcut_surface::patch::bspline::MAX_DEGREE;
 use flatcut_surface::patch::{Analytic, BSplinePatch};
 
 use crate::StepError;
+use crate::assembly::Placement;
 use crate::attrs::{Attrs, describe, number};
 use crate::file::{Instance, StepFile, Value};
-use crate::geom::{Curve, Surface};
+use crate::geom::{Curve, Spline, Surface};
 
 /// Longest chain of references followed from one instance (a B-rep is about 12 deep: shell,
 /// face, bound, loop, oriented edge, edge, curve, placement, direction).
@@ -64,6 +65,9 @@ pub struct Reader<'f> {
     pub mm: f64,
     /// Radians per plane-angle unit.
     pub rad: f64,
+    /// Where the body being read sits (an assembly instance): applied to every point and
+    /// direction of model space as it is read. Set with [`Reader::place`].
+    xf: Placement,
     stack: Vec<u64>,
     curves: BTreeMap<(u64, bool), Arc<Curve>>,
     surfaces: BTreeMap<u64, Arc<Surface>>,
@@ -105,9 +109,19 @@ impl<'f> Reader<'f> {
             file,
             mm: 1.0,
             rad: 1.0,
+            xf: Placement::IDENTITY,
             stack: Vec::new(),
             curves: BTreeMap::new(),
             surfaces: BTreeMap::new(),
+        }
+    }
+
+    /// Reads what follows as placed by `xf` (the geometry cache is per placement).
+    pub fn place(&mut self, xf: Placement) {
+        if xf != self.xf {
+            self.xf = xf;
+            self.curves.clear();
+            self.surfaces.clear();
         }
     }
 
@@ -172,8 +186,12 @@ impl<'f> Reader<'f> {
                     format!("expected {want} coordinates, found {}", c.len()),
                 ));
             }
-            let s = if space == Space::Model { r.mm } else { 1.0 };
-            Ok(DVec3::new(c[0], c[1], c.get(2).copied().unwrap_or(0.0)) * s)
+            let p = DVec3::new(c[0], c[1], c.get(2).copied().unwrap_or(0.0));
+            Ok(if space == Space::Model {
+                r.xf.point(p * r.mm)
+            } else {
+                p
+            })
         })
     }
 
@@ -212,8 +230,11 @@ impl<'f> Reader<'f> {
             if m.is_nan() || m < 0.0 {
                 return Err(a.bad(2, "magnitude", format!("must be >= 0, got {m}")));
             }
-            let s = if space == Space::Model { r.mm } else { 1.0 };
-            Ok(d.normalize() * m * s)
+            Ok(if space == Space::Model {
+                r.xf.vector(d.normalize() * m * r.mm)
+            } else {
+                d.normalize() * m
+            })
         })
     }
 
@@ -235,7 +256,7 @@ impl<'f> Reader<'f> {
                     None if z.normalize().dot(DVec3::X).abs() > 1.0 - 1e-12 => DVec3::Y,
                     None => DVec3::X,
                 };
-                Frame::new(o, z, Some(x)).map_err(bad)
+                Frame::new(o, r.xf.vector(z), Some(r.xf.vector(x))).map_err(bad)
             } else if inst.is("AXIS2_PLACEMENT_2D") {
                 let a = Attrs::of(inst, &inst.parts[0]);
                 let o = r.point2(a.reference(1, "location")?, id)?.extend(0.0);
@@ -293,7 +314,10 @@ impl<'f> Reader<'f> {
                     Self::finite_positive(&a, 3, "semi_axis_2", a.real(3, "semi_axis_2")? * scale)?;
                 Ok(Curve::Conic(Ellipse::new(f, r1, r2).map_err(bad)?))
             }
-            "B_SPLINE_CURVE_WITH_KNOTS" => self.bspline_curve(inst, space),
+            "B_SPLINE_CURVE_WITH_KNOTS"
+            | "UNIFORM_CURVE"
+            | "QUASI_UNIFORM_CURVE"
+            | "BEZIER_CURVE" => self.bspline_curve(inst, space),
             "POLYLINE" => {
                 let pts = a
                     .refs(1, "points")?
@@ -424,23 +448,20 @@ impl<'f> Reader<'f> {
         let id = inst.id;
         let name = inst.type_name();
         let unsupported = || StepError::entity(id, &name, "not supported");
+        let form = KnotForm::of(inst, "CURVE");
         let (curve, knots, knot_idx, rational) = if inst.parts.len() == 1 {
             let a = Attrs::of(inst, &inst.parts[0]);
-            a.expect_len(9)?;
+            a.expect_len(if form.is_some() { 6 } else { 9 })?;
             (a, a, (6, 7), None)
         } else {
             let c = inst.part("B_SPLINE_CURVE").ok_or_else(unsupported)?;
-            let k = inst
-                .part("B_SPLINE_CURVE_WITH_KNOTS")
-                .ok_or_else(unsupported)?;
+            let k = match form {
+                Some(_) => c,
+                None => inst
+                    .part("B_SPLINE_CURVE_WITH_KNOTS")
+                    .ok_or_else(unsupported)?,
+            };
             let r = inst.part("RATIONAL_B_SPLINE_CURVE");
-            if inst.parts.iter().any(|p| {
-                ["BEZIER_CURVE", "UNIFORM_CURVE", "QUASI_UNIFORM_CURVE"]
-                    .iter()
-                    .any(|n| p.name.eq_ignore_ascii_case(n))
-            }) {
-                return Err(unsupported());
-            }
             (
                 Attrs::of(inst, c),
                 Attrs::of(inst, k),
@@ -456,7 +477,12 @@ impl<'f> Reader<'f> {
             .into_iter()
             .map(|p| self.coords(p, id, space))
             .collect::<Result<Vec<_>, _>>()?;
-        let kv = Self::knot_vector(&knots, knot_idx, degree, pts.len())?;
+        let kv = match form {
+            Some(f) => f.knots(degree, pts.len()).ok_or_else(|| {
+                StepError::entity(id, &name, "its control points do not fit its knot form")
+            })?,
+            None => Self::knot_vector(&knots, knot_idx, degree, pts.len())?,
+        };
         let bad = |e: SurfaceError| StepError::entity(id, &name, e.to_string());
         match rational {
             None => Ok(Curve::BSpline(BSpline::new(degree, kv, pts).map_err(bad)?)),
@@ -529,11 +555,14 @@ impl<'f> Reader<'f> {
                         Some(d) => r.direction(d, ax)?,
                         None => DVec3::Z,
                     };
-                    Ok((p, d))
+                    Ok((p, r.xf.vector(d)))
                 })?;
                 Analytic::revolution(c, p, d).map_err(bad)?
             }
-            "B_SPLINE_SURFACE_WITH_KNOTS" => return self.bspline_surface(inst),
+            "B_SPLINE_SURFACE_WITH_KNOTS"
+            | "UNIFORM_SURFACE"
+            | "QUASI_UNIFORM_SURFACE"
+            | "BEZIER_SURFACE" => return self.bspline_surface(inst),
             "RECTANGULAR_TRIMMED_SURFACE" => {
                 // The face's loops bound the part used; the basis surface carries the geometry.
                 return Ok((*self.surface(a.reference(1, "basis_surface")?, id)?).clone());
@@ -547,22 +576,19 @@ impl<'f> Reader<'f> {
         let id = inst.id;
         let name = inst.type_name();
         let unsupported = || StepError::entity(id, &name, "not supported");
+        let form = KnotForm::of(inst, "SURFACE");
         let (surf, knots, rational) = if inst.parts.len() == 1 {
             let a = Attrs::of(inst, &inst.parts[0]);
-            a.expect_len(13)?;
+            a.expect_len(if form.is_some() { 8 } else { 13 })?;
             (a, a, None)
         } else {
-            if inst.parts.iter().any(|p| {
-                ["BEZIER_SURFACE", "UNIFORM_SURFACE", "QUASI_UNIFORM_SURFACE"]
-                    .iter()
-                    .any(|n| p.name.eq_ignore_ascii_case(n))
-            }) {
-                return Err(unsupported());
-            }
             let s = inst.part("B_SPLINE_SURFACE").ok_or_else(unsupported)?;
-            let k = inst
-                .part("B_SPLINE_SURFACE_WITH_KNOTS")
-                .ok_or_else(unsupported)?;
+            let k = match form {
+                Some(_) => s,
+                None => inst
+                    .part("B_SPLINE_SURFACE_WITH_KNOTS")
+                    .ok_or_else(unsupported)?,
+            };
             (
                 Attrs::of(inst, s),
                 Attrs::of(inst, k),
@@ -601,8 +627,20 @@ impl<'f> Reader<'f> {
         }
         let (nu, nv) = (rows.len(), nv.unwrap_or(0));
         let (mu, mv, ku, kv) = if simple { (8, 9, 10, 11) } else { (0, 1, 2, 3) };
-        let knots_u = Self::knot_vector(&knots, (mu, ku), du, nu)?;
-        let knots_v = Self::knot_vector(&knots, (mv, kv), dv, nv)?;
+        let (knots_u, knots_v) = match form {
+            Some(f) => {
+                let misfit =
+                    || StepError::entity(id, &name, "its control points do not fit its knot form");
+                (
+                    f.knots(du, nu).ok_or_else(misfit)?,
+                    f.knots(dv, nv).ok_or_else(misfit)?,
+                )
+            }
+            None => (
+                Self::knot_vector(&knots, (mu, ku), du, nu)?,
+                Self::knot_vector(&knots, (mv, kv), dv, nv)?,
+            ),
+        };
         let weights = match rational {
             None => None,
             Some(r) => {
@@ -634,9 +672,9 @@ impl<'f> Reader<'f> {
             }
         };
         let bad = |e: SurfaceError| StepError::entity(id, &name, e.to_string());
-        Ok(Surface::Spline(
+        Ok(Surface::Spline(Spline::new(
             BSplinePatch::new(du, dv, knots_u, knots_v, nu, nv, pts, weights).map_err(bad)?,
-        ))
+        )))
     }
 
     /// The length and plane-angle units of a representation context (`#id`), if it states them.
@@ -725,5 +763,84 @@ impl<'f> Reader<'f> {
             }
             Ok((UnitKind::Other, 1.0, name))
         })
+    }
+}
+
+/// The knot vectors ISO 10303-42 implies for B-splines written without knots: uniform,
+/// quasi-uniform (clamped, uniform inside) and piecewise Bézier.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum KnotForm {
+    Uniform,
+    QuasiUniform,
+    Bezier,
+}
+
+impl KnotForm {
+    /// The form an instance names (`UNIFORM_CURVE`, `QUASI_UNIFORM_SURFACE`, …), for `kind`
+    /// `"CURVE"` or `"SURFACE"`; `None` when it gives its knots.
+    fn of(inst: &Instance<'_>, kind: &str) -> Option<Self> {
+        inst.parts.iter().find_map(|p| {
+            let n = p.name.to_ascii_uppercase();
+            let base = n.strip_suffix(kind)?;
+            match base {
+                "UNIFORM_" => Some(Self::Uniform),
+                "QUASI_UNIFORM_" => Some(Self::QuasiUniform),
+                "BEZIER_" => Some(Self::Bezier),
+                _ => None,
+            }
+        })
+    }
+
+    /// The knot vector of `count` control points of `degree` (None when they do not fit).
+    fn knots(self, degree: usize, count: usize) -> Option<Vec<f64>> {
+        if degree == 0 || count <= degree {
+            return None;
+        }
+        let ends = |segments: usize, inner: usize| {
+            let mut k = vec![0.0; degree + 1];
+            for s in 1..segments {
+                k.extend(std::iter::repeat_n(s as f64, inner));
+            }
+            k.extend(std::iter::repeat_n(segments as f64, degree + 1));
+            k
+        };
+        let out = match self {
+            Self::Uniform => (0..count + degree + 1)
+                .map(|i| i as f64 - degree as f64)
+                .collect(),
+            Self::QuasiUniform => ends(count - degree, 1),
+            Self::Bezier => {
+                if !(count - 1).is_multiple_of(degree) {
+                    return None;
+                }
+                ends((count - 1) / degree, degree)
+            }
+        };
+        Some(out)
+    }
+}
+
+#[cfg(test)]
+mod knot_form_tests {
+    use super::KnotForm;
+
+    #[test]
+    fn implied_knot_vectors() {
+        // 5 cubic control points: quasi-uniform 0 0 0 0 1 2 2 2 2; uniform -3 … 5.
+        assert_eq!(
+            KnotForm::QuasiUniform.knots(3, 5),
+            Some(vec![0.0, 0.0, 0.0, 0.0, 1.0, 2.0, 2.0, 2.0, 2.0])
+        );
+        assert_eq!(
+            KnotForm::Uniform.knots(3, 5),
+            Some((-3..=5).map(f64::from).collect())
+        );
+        // Two cubic Bézier segments share their middle point: 7 points.
+        assert_eq!(
+            KnotForm::Bezier.knots(3, 7),
+            Some(vec![0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0, 2.0])
+        );
+        assert_eq!(KnotForm::Bezier.knots(3, 6), None);
+        assert_eq!(KnotForm::QuasiUniform.knots(3, 3), None);
     }
 }

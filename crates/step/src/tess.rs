@@ -3,95 +3,49 @@
 //! 1. Every edge bounding a chosen face is sampled once, from its start vertex to its end vertex,
 //!    to the chordal tolerance; its end points are the model's vertices. Both faces of the edge
 //!    use exactly these points, with the same vertex ids, so the shell welds without cracks or
-//!    T-junctions.
-//! 2. Each face's loops are mapped to its surface's (u, v): by the analytic surfaces' inverse, or
-//!    for spline patches by Newton projection ([`crate::geom::PROJECT_ACCURACY`]) started from the
-//!    file's `PCURVE` at the same curve parameter when there is one, else from the previous loop
-//!    point. A loop point farther than [`TRIM_GAP_MM`] from the surface makes the face unusable
-//!    (the edge is not on the face). Periodic parameters are unwrapped along each loop, holes are
-//!    moved to the outer loop's period, and a side of the domain that collapses to one point (a
-//!    pole) becomes a run of loop points sharing that point's vertex.
+//!    T-junctions, and every shared edge is one polyline on both sides.
+//! 2. Each face's region is built in its surface's (u, v) by [`crate::trim`]: independent of
+//!    where its loops start, through poles and along seams, with the points it adds (cut lines,
+//!    poles) its own.
 //! 3. Developable faces (plane aside: cylinder, cone, extrusion) are meshed along rulings (see
 //!    [`flatcut_mesh::trimmed`]); each ruling that crosses an edge puts a point on that edge (for
-//!    both faces), repeated until no face needs another point (at most [`MAX_RULING_ROUNDS`]).
+//!    both faces), and an edge that runs through a pole gets a point there, repeated until no
+//!    face needs another point (at most [`MAX_RULING_ROUNDS`]).
 //! 4. Each face is triangulated by [`flatcut_mesh::tessellate_trimmed`] and oriented by its
 //!    normal (the surface normal, reversed when the face's `same_sense` is false).
+//! 5. Before anything is returned, [`crate::check`] compares every face's area on its trimmed
+//!    domain (Green's theorem on the loops) with the area its triangles cover and with the
+//!    triangles' own area, and every edge's polyline with its curve's length: a disagreement
+//!    beyond 0.1 % is an error naming the face or edge.
 
 use std::collections::BTreeMap;
-use std::f64::consts::{PI, TAU};
 
 use flatcut_geom::{DVec2, DVec3, Tolerances};
 use flatcut_mesh::tessellate::TessOptions;
-use flatcut_mesh::{TriMesh, TrimPoint, TrimmedFace, tessellate_trimmed, trimmed_area};
+use flatcut_mesh::{TriMesh, TrimPoint, TrimmedFace, TrimmedMesh, tessellate_trimmed};
+use flatcut_surface::ParamCurve;
 use flatcut_surface::curve::flatten_with_breaks;
 use flatcut_surface::patch::AnalyticKind;
-use flatcut_surface::{ParamCurve, ParamSurface};
 
 use crate::StepError;
+use crate::check::{self, AREA_REL};
 use crate::geom::{Curve, Surface};
+use crate::heal::Repair;
 use crate::model::{EdgeGeometry, FaceGeometry, Model};
+use crate::trim::{self, LoopPt, Origin, Samples, Seg, Trim, TrimInput};
 
-/// A loop point farther than this from the face's surface (mm) means the edge does not lie on
-/// the face: CAD files keep edges within micrometres of their faces.
-pub const TRIM_GAP_MM: f64 = 0.1;
-/// Rounds of putting ruling crossings on edges (each round only adds points).
+/// Rounds of putting ruling crossings and pole points on edges (each round only adds points).
 pub const MAX_RULING_ROUNDS: usize = 8;
-/// Angular step of the points of a pole run on a curved face (radians of the collapsed
-/// parameter): 64 per turn.
-const POLE_STEP: f64 = PI / 32.0;
 /// Bisection steps when locating a ruling's crossing on an edge curve.
 const CROSSING_STEPS: usize = 80;
 /// Relative size (of the parameter range) below which two rulings are one.
 const RULING_SNAP_REL: f64 = 1e-9;
-/// Relative accuracy per triangle of the area quadrature.
-const AREA_REL: f64 = 1e-10;
-/// Chordal tolerance (fraction of the model's size) of the triangles the area is integrated on.
-const AREA_MESH_REL: f64 = 1e-3;
-/// The area is integrated over loops sampled this finely (fraction of the face's size): the
-/// sliver between a chord and its curve is then ~1e-6 of the area.
+/// The area of [`face_area`] is integrated over loops sampled this finely (fraction of the
+/// model's size): the sliver between a chord and its curve is then ~1e-6 of the area.
 const AREA_CHORD_REL: f64 = 1e-5;
-
-/// The samples of one edge from its start vertex to its end vertex.
-#[derive(Clone, Debug)]
-struct Samples {
-    ts: Vec<f64>,
-    pts: Vec<DVec3>,
-}
-
-/// Where a loop point comes from: edge sample `index` of edge slot `slot`, or a vertex of a
-/// pole run.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Origin {
-    Sample { slot: usize, index: usize },
-    Pole { vertex: usize },
-}
-
-#[derive(Clone, Copy, Debug)]
-struct LoopPt {
-    uv: DVec2,
-    pos: DVec3,
-    origin: Origin,
-    /// The model vertex this point is, if any.
-    vertex: Option<usize>,
-}
-
-/// A segment of a loop along one edge: samples `i` → `j` of edge slot `slot`, at `ua` → `ub`
-/// (the u of both ends on the face, after the loop's period alignment).
-#[derive(Clone, Copy, Debug)]
-struct Seg {
-    lp: usize,
-    slot: usize,
-    i: usize,
-    j: usize,
-    ua: f64,
-    ub: f64,
-}
-
-/// The (u, v) loops of a face and the edge segments they run along.
-struct Loops {
-    loops: Vec<Vec<LoopPt>>,
-    segs: Vec<Seg>,
-}
+/// A point whose whole circle of one parameter is shorter than this fraction of the model's
+/// size (and than 1 µm) is a pole.
+const POLE_REL: f64 = 1e-7;
 
 /// The mesh of one face.
 #[derive(Clone, Debug)]
@@ -103,6 +57,13 @@ pub struct FaceMesh {
     pub global: Vec<u32>,
     /// Meshed along rulings (exactly developable).
     pub ruled: bool,
+    /// The area of the face's trimmed domain (mm², Green's theorem on its loops).
+    pub trim_area_mm2: f64,
+    /// Lines (shell vertex ids) along which the face was cut open in (u, v) though no edge
+    /// runs there: a piece is cut there again after welding.
+    pub cuts: Vec<Vec<u32>>,
+    /// What healing changed for this face (its edges' repairs included).
+    pub repairs: Vec<Repair>,
 }
 
 /// An edge's points in the shell mesh, from its start vertex to its end vertex.
@@ -115,7 +76,8 @@ pub struct EdgeMesh {
 /// The tessellation of chosen faces: shell vertices shared by all faces, one mesh per face.
 #[derive(Clone, Debug)]
 pub struct Tessellation {
-    /// Shell vertex positions (mm): model vertices first, then edge samples, then face interiors.
+    /// Shell vertex positions (mm): model vertices first, then edge samples, then the points the
+    /// faces added, then face interiors.
     pub positions: Vec<DVec3>,
     pub faces: Vec<FaceMesh>,
     /// The edges bounding the faces, in edge order.
@@ -130,8 +92,16 @@ fn face_err(model: &Model, index: usize, message: impl Into<String>) -> StepErro
     }
 }
 
-/// Samples the edge's curve from `t0` to `t1` within `tol`, ends at the exact vertices.
+/// Samples the edge's curve from `t0` to `t1` within `tol`, ends at the exact vertices (a
+/// degenerate edge: its vertex twice).
 fn sample_edge(model: &Model, g: &EdgeGeometry, tol: f64) -> Samples {
+    if g.degenerate {
+        let p = model.vertices[g.start].point;
+        return Samples {
+            ts: vec![g.t0, g.t1],
+            pts: vec![p, p],
+        };
+    }
     let (lo, hi) = (g.t0.min(g.t1), g.t0.max(g.t1));
     let mut breaks = vec![lo];
     breaks.extend(
@@ -154,270 +124,145 @@ fn sample_edge(model: &Model, g: &EdgeGeometry, tol: f64) -> Samples {
     }
 }
 
-/// Shape of a face's parameter space: which directions are periodic angles.
-fn periodic(s: &Surface) -> (bool, bool) {
-    match s {
-        Surface::Analytic(a) => a.periodic(),
-        Surface::Spline(_) => (false, false),
-    }
+/// The pole tolerance of a model (mm).
+fn pole_tol(model: &Model) -> f64 {
+    (POLE_REL * model.size_mm).clamp(1e-9, 1e-3)
 }
 
-/// The pcurve of `edge` on the face's surface to start projections from: for a seam (two
-/// pcurves on one surface) the one continuing from `prev`.
-fn pick_pcurve(
-    g: &EdgeGeometry,
-    surface_entity: u64,
-    t_first: f64,
-    prev: Option<DVec2>,
-) -> Option<&Curve> {
-    let mut best: Option<(&Curve, f64)> = None;
-    for p in g
-        .pcurves
-        .iter()
-        .filter(|p| p.surface_entity == surface_entity)
-    {
-        let d = prev.map_or(0.0, |q| p.curve.eval(t_first).truncate().distance(q));
-        if best.is_none_or(|b| d < b.1) {
-            best = Some((p.curve.as_ref(), d));
-        }
-    }
-    best.map(|b| b.0)
-}
-
-/// Builds the (u, v) loops of a face from the current edge samples.
-fn face_loops(
+/// The region of face `index` from the current edge samples.
+#[allow(clippy::too_many_arguments)]
+fn face_trim(
     model: &Model,
     index: usize,
-    f: &FaceGeometry,
+    g: &FaceGeometry,
     slot_of: &BTreeMap<usize, usize>,
     samples: &[Samples],
     rulings: Option<&[f64]>,
-) -> Result<Loops, StepError> {
-    let s = f.surface.as_ref();
-    let mut loops: Vec<Vec<LoopPt>> = Vec::new();
-    let mut segs: Vec<Seg> = Vec::new();
-    for b in &f.bounds {
-        if b.uses.is_empty() {
-            continue;
-        }
-        let mut lp: Vec<LoopPt> = Vec::new();
-        for u in &b.uses {
-            let g = model.edges[u.edge]
-                .geometry
-                .as_ref()
-                .map_err(|e| face_err(model, index, e.to_string()))?;
-            let slot = slot_of[&u.edge];
-            let sm = &samples[slot];
-            let n = sm.pts.len();
-            let order: Vec<usize> = if u.forward {
-                (0..n).collect()
-            } else {
-                (0..n).rev().collect()
-            };
-            let prev = lp.last().map(|p| p.uv);
-            let mut prev_sample: Option<(usize, f64)> = None;
-            let pc = match s {
-                Surface::Spline(_) => pick_pcurve(g, f.surface_entity, sm.ts[order[0]], prev),
-                Surface::Analytic(_) => None,
-            };
-            for k in order {
-                let p = sm.pts[k];
-                let last = lp.last().map(|q| q.uv);
-                let hint = match pc {
-                    Some(c) => Some(c.eval(sm.ts[k]).truncate()),
-                    None => last,
-                };
-                let mut uv = s.param_of(p, hint);
-                // Angles continue from the previous point (a pcurve may sit a period away).
-                if let (Some(l), (pu, pv)) = (last, periodic(s)) {
-                    if pu {
-                        uv.x = flatcut_surface::patch::analytic::unwrap_angle(uv.x, l.x);
-                    }
-                    if pv {
-                        uv.y = flatcut_surface::patch::analytic::unwrap_angle(uv.y, l.y);
-                    }
-                }
-                let gap = s.eval(uv.x, uv.y).distance(p);
-                if gap.is_nan() || gap > TRIM_GAP_MM {
-                    return Err(face_err(
-                        model,
-                        index,
-                        format!(
-                            "edge #{} is {gap:.3} mm from the face's surface (more than {TRIM_GAP_MM} mm)",
-                            model.edges[u.edge].entity
-                        ),
-                    ));
-                }
-                let vertex = if k == 0 {
-                    Some(g.start)
-                } else if k == n - 1 {
-                    Some(g.end)
-                } else {
-                    None
-                };
-                let pt = LoopPt {
-                    uv,
-                    pos: p,
-                    origin: Origin::Sample { slot, index: k },
-                    vertex,
-                };
-                if let Some((i, ua)) = prev_sample {
-                    segs.push(Seg {
-                        lp: loops.len(),
-                        slot,
-                        i,
-                        j: k,
-                        ua,
-                        ub: uv.x,
-                    });
-                }
-                prev_sample = Some((k, uv.x));
-                if let Some(q) = lp.last()
-                    && q.vertex.is_some()
-                    && q.vertex == vertex
-                    && q.uv.distance(uv) <= 1e-12 * (1.0 + uv.length())
-                {
-                    continue;
-                }
-                lp.push(pt);
-            }
-        }
-        // Closing: a last point equal to the first is dropped.
-        if lp.len() > 1 {
-            let (a, z) = (lp[0], lp[lp.len() - 1]);
-            if a.vertex.is_some()
-                && a.vertex == z.vertex
-                && a.uv.distance(z.uv) <= 1e-12 * (1.0 + a.uv.length())
-            {
-                lp.pop();
-            }
-        }
-        loops.push(fill_poles(lp, rulings));
-    }
-    align_periods(s, &mut loops, &mut segs);
-    check_closure(model, index, s, &loops)?;
-    Ok(Loops { loops, segs })
+    chord: f64,
+) -> Result<Trim, StepError> {
+    trim::build(&TrimInput {
+        model,
+        index,
+        face: g,
+        slot_of,
+        samples,
+        rulings,
+        chord,
+        heal: model.heal_mm,
+        pole_tol: pole_tol(model),
+    })
 }
 
-/// Inserts the run of points of a pole between consecutive loop points that are the same model
-/// vertex at different (u, v): on every ruling for a ruled face, else every [`POLE_STEP`].
-fn fill_poles(lp: Vec<LoopPt>, rulings: Option<&[f64]>) -> Vec<LoopPt> {
-    let n = lp.len();
-    let mut out = Vec::with_capacity(n);
-    for k in 0..n {
-        let (a, b) = (lp[k], lp[(k + 1) % n]);
-        out.push(a);
-        let same = a.vertex.is_some() && a.vertex == b.vertex;
-        if !same || a.uv.distance(b.uv) <= 1e-9 * (1.0 + a.uv.length()) {
-            continue;
-        }
-        let vertex = a.vertex.unwrap_or(0);
-        let mut ts: Vec<f64> = match rulings {
-            Some(r) => {
-                let (u0, u1) = (a.uv.x.min(b.uv.x), a.uv.x.max(b.uv.x));
-                r.iter()
-                    .filter(|&&u| u > u0 && u < u1)
-                    .map(|&u| (u - a.uv.x) / (b.uv.x - a.uv.x))
-                    .collect()
+/// Loops oriented by their nesting: counter-clockwise at even depth, clockwise at odd — the
+/// region the even–odd rule of the triangulation takes, as Green's theorem must see it.
+fn oriented_by_nesting(loops: &[Vec<LoopPt>]) -> Vec<Vec<DVec2>> {
+    let uv: Vec<Vec<DVec2>> = loops
+        .iter()
+        .map(|lp| lp.iter().map(|p| p.uv).collect())
+        .collect();
+    let inside = |lp: &[DVec2], q: DVec2| {
+        let mut c = false;
+        for k in 0..lp.len() {
+            let (a, b) = (lp[k], lp[(k + 1) % lp.len()]);
+            if (a.y > q.y) != (b.y > q.y) && a.x + (q.y - a.y) / (b.y - a.y) * (b.x - a.x) > q.x {
+                c = !c;
             }
-            None => {
-                let d = (b.uv - a.uv).abs().max_element();
-                let m = (d / POLE_STEP).ceil().max(1.0) as usize;
-                (1..m).map(|i| i as f64 / m as f64).collect()
-            }
-        };
-        ts.sort_by(f64::total_cmp);
-        for t in ts {
-            let uv = a.uv + (b.uv - a.uv) * t;
-            out.push(LoopPt {
-                uv,
-                pos: a.pos,
-                origin: Origin::Pole { vertex },
-                vertex: Some(vertex),
-            });
         }
-    }
-    out
-}
-
-fn signed_area(lp: &[LoopPt]) -> f64 {
-    let n = lp.len();
-    (0..n)
-        .map(|k| lp[k].uv.perp_dot(lp[(k + 1) % n].uv))
-        .sum::<f64>()
-        * 0.5
-}
-
-/// Moves the loops other than the outer (largest) one by whole periods into its range.
-fn align_periods(s: &Surface, loops: &mut [Vec<LoopPt>], segs: &mut [Seg]) {
-    let (pu, pv) = periodic(s);
-    if !(pu || pv) || loops.len() < 2 {
-        return;
-    }
-    let outer = (0..loops.len())
-        .max_by(|&a, &b| {
-            signed_area(&loops[a])
-                .abs()
-                .total_cmp(&signed_area(&loops[b]).abs())
-        })
-        .unwrap_or(0);
-    let mid = |lp: &[LoopPt]| {
-        let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
-        for p in lp {
-            lo = lo.min(p.uv);
-            hi = hi.max(p.uv);
-        }
-        0.5 * (lo + hi)
+        c
     };
-    let c = mid(&loops[outer]);
-    for (i, lp) in loops.iter_mut().enumerate() {
-        if i == outer {
-            continue;
-        }
-        let m = mid(lp);
-        let shift = DVec2::new(
-            if pu {
-                TAU * ((c.x - m.x) / TAU).round()
+    let area = |lp: &[DVec2]| -> f64 {
+        (0..lp.len())
+            .map(|k| lp[k].perp_dot(lp[(k + 1) % lp.len()]))
+            .sum::<f64>()
+    };
+    uv.iter()
+        .enumerate()
+        .map(|(i, lp)| {
+            let probe = if lp.len() > 1 {
+                0.5 * (lp[0] + lp[1])
             } else {
-                0.0
-            },
-            if pv {
-                TAU * ((c.y - m.y) / TAU).round()
-            } else {
-                0.0
-            },
-        );
-        for p in lp.iter_mut() {
-            p.uv += shift;
-        }
-        for sg in segs.iter_mut().filter(|sg| sg.lp == i) {
-            sg.ua += shift.x;
-            sg.ub += shift.x;
-        }
-    }
+                lp[0]
+            };
+            let depth = uv
+                .iter()
+                .enumerate()
+                .filter(|(j, other)| *j != i && inside(other, probe))
+                .count();
+            let ccw = area(lp) > 0.0;
+            let mut out = lp.clone();
+            if ccw != (depth % 2 == 0) {
+                out.reverse();
+            }
+            out
+        })
+        .collect()
 }
 
-/// A loop whose (u, v) does not close (it winds once around a periodic direction: a band face
-/// with no seam edge) cannot be triangulated in the parameter plane.
-fn check_closure(
+/// The independent checks of one face (see [`crate::check`]): its triangles tile the region
+/// its loops bound in (u, v), and their area agrees with the area of that region on the surface.
+fn check_face(
     model: &Model,
     index: usize,
     s: &Surface,
-    loops: &[Vec<LoopPt>],
+    loops: &[Vec<DVec2>],
+    trim_area: f64,
+    tm: &TrimmedMesh,
+    chord: f64,
 ) -> Result<(), StepError> {
-    let (pu, pv) = periodic(s);
-    for lp in loops {
-        let (a, z) = (lp[0].uv, lp[lp.len() - 1].uv);
-        let d = (a - z).abs();
-        if (pu && d.x > PI) || (pv && d.y > PI) {
-            return Err(face_err(
-                model,
-                index,
-                "a loop winds around the periodic surface without a seam edge: not supported",
-            ));
-        }
+    let region_uv: f64 = loops
+        .iter()
+        .map(|lp| {
+            0.5 * (0..lp.len())
+                .map(|k| lp[k].perp_dot(lp[(k + 1) % lp.len()]))
+                .sum::<f64>()
+        })
+        .sum();
+    let scale = loops
+        .iter()
+        .flatten()
+        .fold(0.0f64, |a, p| a.max(p.abs().max_element()))
+        .max(1.0);
+    if (tm.cover_uv - region_uv).abs() > 1e-9 * region_uv.abs() + 1e-12 * scale * scale {
+        return Err(face_err(
+            model,
+            index,
+            format!(
+                "its triangles cover {:.6} of its (u, v) domain's {region_uv:.6} ({:+.4} %): the face's region could not be built",
+                tm.cover_uv,
+                100.0 * (tm.cover_uv - region_uv) / region_uv.abs().max(f64::MIN_POSITIVE)
+            ),
+        ));
+    }
+    let flat = tm.mesh.area();
+    let uv = tm.mesh.params.as_deref().unwrap_or(&[]);
+    let allowance = AREA_REL + check::chordal_allowance(s, uv, chord);
+    let tiny = 1e-9 * model.size_mm * model.size_mm;
+    if (flat - trim_area).abs() > allowance * trim_area.abs() + tiny {
+        return Err(face_err(
+            model,
+            index,
+            format!(
+                "its triangles have {flat:.4} mm², its trimmed domain {trim_area:.4} mm² ({:+.3} %, more than the {:.3} % the chordal tolerance allows)",
+                100.0 * (flat - trim_area) / trim_area.abs().max(f64::MIN_POSITIVE),
+                100.0 * allowance
+            ),
+        ));
     }
     Ok(())
+}
+
+/// The repairs of a face: its own, its edges', and those of its region.
+fn face_repairs(model: &Model, index: usize, g: &FaceGeometry, t: &Trim) -> Vec<Repair> {
+    let mut out = model.faces[index].repairs.clone();
+    let mut seen = Vec::new();
+    for u in g.bounds.iter().flat_map(|b| &b.uses) {
+        if !seen.contains(&u.edge) {
+            seen.push(u.edge);
+            out.extend(model.edges[u.edge].repairs.iter().cloned());
+        }
+    }
+    out.extend(t.repairs.iter().cloned());
+    out
 }
 
 /// The u-step between rulings that keeps a developable face within `tol`, if it has one.
@@ -528,7 +373,8 @@ fn crossing(curve: &Curve, s: &Surface, (ta, ua): (f64, f64), (tb, ub): (f64, f6
 }
 
 impl Tessellation {
-    /// Tessellates the faces (indices into `model.faces`) to `tol.chord_mm`.
+    /// Tessellates the faces (indices into `model.faces`) to `tol.chord_mm`, and checks the
+    /// result ([`crate::check`]).
     pub fn new(
         model: &Model,
         faces: &[usize],
@@ -542,6 +388,7 @@ impl Tessellation {
                 message: format!("chordal tolerance must be > 0 mm, got {}", tol.chord_mm),
             });
         }
+        let chord = tol.chord_mm;
         let mut geoms: Vec<(usize, &FaceGeometry)> = Vec::with_capacity(faces.len());
         for &i in faces {
             let g = model.face(i).map_err(|e| match e {
@@ -552,10 +399,12 @@ impl Tessellation {
         }
         // Edges of the faces, sampled once.
         let mut slot_of: BTreeMap<usize, usize> = BTreeMap::new();
-        for (_, g) in &geoms {
+        let mut users: BTreeMap<usize, usize> = BTreeMap::new();
+        for (i, g) in &geoms {
             for u in g.bounds.iter().flat_map(|b| &b.uses) {
                 let n = slot_of.len();
                 slot_of.entry(u.edge).or_insert(n);
+                users.entry(u.edge).or_insert(*i);
             }
         }
         let mut slots: Vec<usize> = vec![0; slot_of.len()];
@@ -564,44 +413,75 @@ impl Tessellation {
         }
         let mut samples: Vec<Samples> = Vec::with_capacity(slots.len());
         for &e in &slots {
-            let g = model.edges[e].geometry.as_ref().map_err(|err| {
-                let f = model.edges[e].faces.first().copied().unwrap_or(0);
-                face_err(model, f, err.to_string())
-            })?;
-            samples.push(sample_edge(model, g, tol.chord_mm));
+            let g = model.edges[e]
+                .geometry
+                .as_ref()
+                .map_err(|err| face_err(model, users[&e], err.to_string()))?;
+            samples.push(sample_edge(model, g, chord));
         }
-        // Rulings of the developable faces put points on their edges.
+        // Rulings of the developable faces and pole crossings put points on their edges.
         let ruled: Vec<bool> = geoms
             .iter()
             .map(|(_, g)| g.surface.is_ruled_developable() && g.surface.name() != "plane")
             .collect();
+        let mut active: Vec<bool> = vec![true; geoms.len()];
         for _ in 0..MAX_RULING_ROUNDS {
             let mut changed = false;
+            let mut next = vec![false; geoms.len()];
             for (k, (i, g)) in geoms.iter().enumerate() {
-                if !ruled[k] {
+                if !active[k] {
                     continue;
                 }
-                let fl = face_loops(model, *i, g, &slot_of, &samples, None)?;
-                let (rulings, snap) = face_rulings(&g.surface, &fl.loops, tol.chord_mm);
-                changed |=
-                    split_at_rulings(model, g, &fl.segs, &rulings, snap, &slots, &mut samples);
+                let t = face_trim(model, *i, g, &slot_of, &samples, None, chord)?;
+                if !t.wants.is_empty() {
+                    changed |= insert_samples(model, &slots, &mut samples, &t.wants);
+                    next[k] = true;
+                }
+                if ruled[k] {
+                    let (rulings, snap) = face_rulings(&g.surface, &t.loops, chord);
+                    let added =
+                        split_at_rulings(model, g, &t.segs, &rulings, snap, &slots, &mut samples);
+                    changed |= added;
+                    next[k] |= added;
+                }
             }
             if !changed {
                 break;
             }
+            // Faces sharing an edge with a face that changed its edges look again.
+            active = next;
+            for (k, (_, g)) in geoms.iter().enumerate() {
+                if ruled[k] {
+                    active[k] = true;
+                }
+                let _ = g;
+            }
+        }
+        for (sl, &e) in slots.iter().enumerate() {
+            if let Ok(g) = &model.edges[e].geometry
+                && !g.degenerate
+            {
+                check::edge_length(g.curve.as_ref(), &samples[sl].ts, &samples[sl].pts, chord)
+                    .map_err(|m| {
+                        face_err(
+                            model,
+                            users[&e],
+                            format!("edge #{}: {m}", model.edges[e].entity),
+                        )
+                    })?;
+            }
         }
         // Shell vertex ids: model vertices, then edge samples in edge order.
         let mut positions: Vec<DVec3> = model.vertices.iter().map(|v| v.point).collect();
-        let mut sample_id: Vec<Vec<u32>> = Vec::with_capacity(samples.len());
         let mut edges_out = Vec::new();
         let mut order: Vec<usize> = (0..slots.len()).collect();
         order.sort_by_key(|&s| slots[s]);
-        let mut ids_of_slot: Vec<Vec<u32>> = vec![Vec::new(); slots.len()];
+        let mut sample_id: Vec<Vec<u32>> = vec![Vec::new(); slots.len()];
         for &sl in &order {
             let g = model.edges[slots[sl]]
                 .geometry
                 .as_ref()
-                .map_err(|e| face_err(model, 0, e.to_string()))?;
+                .map_err(|e| face_err(model, users[&slots[sl]], e.to_string()))?;
             let n = samples[sl].pts.len();
             let mut ids = Vec::with_capacity(n);
             ids.push(g.start as u32);
@@ -614,30 +494,36 @@ impl Tessellation {
                 edge: slots[sl],
                 vertices: ids.clone(),
             });
-            ids_of_slot[sl] = ids;
+            sample_id[sl] = ids;
         }
-        sample_id.extend(ids_of_slot);
         // Faces.
         let mut face_meshes = Vec::with_capacity(geoms.len());
         for (k, (i, g)) in geoms.iter().enumerate() {
             let rulings = if ruled[k] {
-                let fl = face_loops(model, *i, g, &slot_of, &samples, None)?;
-                Some(face_rulings(&g.surface, &fl.loops, tol.chord_mm).0)
+                let t = face_trim(model, *i, g, &slot_of, &samples, None, chord)?;
+                Some(face_rulings(&g.surface, &t.loops, chord).0)
             } else {
                 None
             };
-            let loops = face_loops(model, *i, g, &slot_of, &samples, rulings.as_deref())?.loops;
-            let trim: Vec<Vec<TrimPoint>> = loops
+            let t = face_trim(model, *i, g, &slot_of, &samples, rulings.as_deref(), chord)?;
+            let first_extra = positions.len() as u32;
+            positions.extend(t.extra.iter().copied());
+            let id_of = |o: Origin| -> u32 {
+                match o {
+                    Origin::Sample { slot, index } => sample_id[slot][index],
+                    Origin::Vertex(v) => v as u32,
+                    Origin::Extra(e) => first_extra + e as u32,
+                }
+            };
+            let trim_pts: Vec<Vec<TrimPoint>> = t
+                .loops
                 .iter()
                 .map(|lp| {
                     lp.iter()
                         .map(|p| TrimPoint {
                             uv: p.uv,
                             pos: p.pos,
-                            vertex: match p.origin {
-                                Origin::Sample { slot, index } => sample_id[slot][index],
-                                Origin::Pole { vertex } => vertex as u32,
-                            },
+                            vertex: id_of(p.origin),
                         })
                         .collect()
                 })
@@ -645,17 +531,20 @@ impl Tessellation {
             let tm = tessellate_trimmed(
                 &TrimmedFace {
                     surface: g.surface.as_ref(),
-                    loops: &trim,
+                    loops: &trim_pts,
                     ruled: ruled[k],
                 },
                 tol,
                 opts,
             )
             .map_err(|e| face_err(model, *i, e.to_string()))?;
+            let oriented = oriented_by_nesting(&t.loops);
+            let trim_area = check::trim_area(&g.surface, &oriented);
+            check_face(model, *i, &g.surface, &oriented, trim_area, &tm, chord)?;
             let mut mesh = tm.mesh;
             if !g.same_sense {
-                for t in &mut mesh.triangles {
-                    t.swap(1, 2);
+                for tri in &mut mesh.triangles {
+                    tri.swap(1, 2);
                 }
             }
             let global: Vec<u32> = tm
@@ -675,13 +564,26 @@ impl Tessellation {
                 mesh,
                 global,
                 ruled: ruled[k],
+                trim_area_mm2: trim_area,
+                cuts: t
+                    .cuts
+                    .iter()
+                    .map(|c| c.iter().map(|&o| id_of(o)).collect())
+                    .collect(),
+                repairs: face_repairs(model, *i, g, &t),
             });
         }
-        Ok(Tessellation {
+        let out = Tessellation {
             positions,
             faces: face_meshes,
             edges: edges_out,
-        })
+        };
+        for shell in model.shells.iter().filter(|sh| sh.closed) {
+            if shell.faces.iter().all(|f| faces.contains(f)) {
+                out.check_closed(model, shell)?;
+            }
+        }
+        Ok(out)
     }
 
     /// One mesh of the faces (all when `faces` is `None`), welded at shared vertices, with only
@@ -723,6 +625,101 @@ impl Tessellation {
         (TriMesh::new(positions, triangles), new_id)
     }
 
+    /// A closed shell's faces must weld into a closed, consistently oriented mesh: no edge open
+    /// (an edge sampled differently on its two faces, a face missing a part) and none used
+    /// twice the same way (a face that took the complement of its region). A check that shares
+    /// nothing with the per-face ones: it sees the faces together.
+    fn check_closed(&self, model: &Model, shell: &crate::model::Shell) -> Result<(), StepError> {
+        let (mesh, new_id) = self.welded_with_ids(Some(&shell.faces));
+        // Edges the file's own topology leaves free (one use in the shell: a shell flagged
+        // closed that is not) may stay open; every other mesh edge must be shared.
+        let mut free: std::collections::BTreeSet<(u32, u32)> = std::collections::BTreeSet::new();
+        for e in &self.edges {
+            let uses = model.edges[e.edge]
+                .faces
+                .iter()
+                .filter(|f| shell.faces.contains(f))
+                .count();
+            if uses == 1 {
+                for w in e.vertices.windows(2) {
+                    let (a, b) = (new_id[w[0] as usize], new_id[w[1] as usize]);
+                    free.insert((a.min(b), a.max(b)));
+                }
+            }
+        }
+        let refuse = |a: u32, b: u32, what: String| {
+            let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+            let at = 0.5 * (pa + pb);
+            let faces: Vec<String> = self
+                .faces
+                .iter()
+                .filter(|f| shell.faces.contains(&f.face))
+                .filter(|f| {
+                    let has = |p: DVec3| f.mesh.positions.iter().any(|q| q.distance(p) <= 1e-9);
+                    has(pa) && has(pb)
+                })
+                .map(|f| format!("face {} (#{})", f.face, model.faces[f.face].entity))
+                .collect();
+            StepError::Entity {
+                id: shell.entity,
+                name: "CLOSED_SHELL".into(),
+                message: format!(
+                    "the tessellated faces do not close the shell: {what} at ({:.3}, {:.3}, {:.3}) mm{}",
+                    at.x,
+                    at.y,
+                    at.z,
+                    if faces.is_empty() {
+                        String::new()
+                    } else {
+                        format!(", on {}", faces.join(" and "))
+                    }
+                ),
+            }
+        };
+        let topo = match flatcut_mesh::Topology::build(&mesh) {
+            Ok(t) => t,
+            Err(flatcut_mesh::TopologyError::InconsistentOrientation { a, b, .. }) => {
+                return Err(refuse(
+                    a,
+                    b,
+                    "two faces run the same way along an edge".into(),
+                ));
+            }
+            Err(flatcut_mesh::TopologyError::NonManifoldEdge { a, b, count }) => {
+                return Err(refuse(a, b, format!("an edge bounds {count} triangles")));
+            }
+            Err(e) => {
+                return Err(StepError::Entity {
+                    id: shell.entity,
+                    name: "CLOSED_SHELL".into(),
+                    message: format!("the tessellated faces do not close the shell: {e}"),
+                });
+            }
+        };
+        let open: Vec<(u32, u32)> = topo
+            .edges
+            .iter()
+            .filter(|(_, e)| e.is_boundary())
+            .map(|(k, _)| *k)
+            .filter(|&(a, b)| !free.contains(&(a.min(b), a.max(b))))
+            .collect();
+        if let Some(&(a, b)) = open.first() {
+            let length: f64 = open
+                .iter()
+                .map(|&(a, b)| mesh.positions[a as usize].distance(mesh.positions[b as usize]))
+                .sum();
+            return Err(refuse(
+                a,
+                b,
+                format!(
+                    "{} edge(s) open, {length:.3} mm in all, the first",
+                    open.len()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// The mesh of one face, by face index.
     pub fn face(&self, face: usize) -> Option<&FaceMesh> {
         self.faces.iter().find(|f| f.face == face)
@@ -752,17 +749,48 @@ impl Tessellation {
             return flatcut_mesh::cut_to_disk(&fm.mesh, &[]).unwrap_or_else(|_| fm.mesh.clone());
         }
         let (mesh, new_id) = self.welded_with_ids(Some(faces));
-        let seams: Vec<Vec<u32>> = self
+        let map = |ids: &[u32]| -> Vec<u32> { ids.iter().map(|&v| new_id[v as usize]).collect() };
+        let mut seams: Vec<Vec<u32>> = self
             .edges
             .iter()
             .filter(|e| {
                 let fs = &model.edges[e.edge].faces;
                 fs.len() == 2 && fs[0] == fs[1] && faces.contains(&fs[0])
             })
-            .map(|e| e.vertices.iter().map(|&v| new_id[v as usize]).collect())
+            .map(|e| map(&e.vertices))
             .collect();
+        for fm in self.faces.iter().filter(|f| faces.contains(&f.face)) {
+            seams.extend(fm.cuts.iter().map(|c| map(c)));
+        }
         flatcut_mesh::cut_to_disk(&mesh, &seams).unwrap_or(mesh)
     }
+}
+
+/// Adds samples at the curve parameters asked for (slot, t); true if any was added.
+fn insert_samples(
+    model: &Model,
+    slots: &[usize],
+    samples: &mut [Samples],
+    wants: &[(usize, f64)],
+) -> bool {
+    let mut added = false;
+    for &(slot, t) in wants {
+        let Ok(eg) = &model.edges[slots[slot]].geometry else {
+            continue;
+        };
+        let sm = &mut samples[slot];
+        let increasing = sm.ts[sm.ts.len() - 1] > sm.ts[0];
+        let pos = sm
+            .ts
+            .partition_point(|&x| if increasing { x < t } else { x > t });
+        if pos == 0 || pos >= sm.ts.len() || sm.ts[pos] == t || sm.ts[pos - 1] == t {
+            continue;
+        }
+        sm.ts.insert(pos, t);
+        sm.pts.insert(pos, eg.curve.eval(t));
+        added = true;
+    }
+    added
 }
 
 /// Puts a point on every edge segment of the face that a ruling crosses; true if any was added.
@@ -796,34 +824,17 @@ fn split_at_rulings(
     }
     inserts.sort_by(|x, y| x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)));
     inserts.dedup_by(|x, y| x.0 == y.0 && x.1 == y.1);
-    let mut added = false;
-    for (slot, t) in inserts {
-        let Ok(eg) = &model.edges[slots[slot]].geometry else {
-            continue;
-        };
-        let sm = &mut samples[slot];
-        let increasing = sm.ts[sm.ts.len() - 1] > sm.ts[0];
-        let pos = sm
-            .ts
-            .partition_point(|&x| if increasing { x < t } else { x > t });
-        if pos == 0 || pos >= sm.ts.len() || sm.ts[pos] == t || sm.ts[pos - 1] == t {
-            continue;
-        }
-        sm.ts.insert(pos, t);
-        sm.pts.insert(pos, eg.curve.eval(t));
-        added = true;
-    }
-    added
+    insert_samples(model, slots, samples, &inserts)
 }
 
-/// The area of face `index` (mm²): the integral of |S_u × S_v| over the region its loops bound,
-/// with the loops sampled to [`AREA_CHORD_REL`] of the model's size.
+/// The area of face `index` (mm²): the integral of |S_u × S_v| over the region its loops bound
+/// (Green's theorem, [`check::trim_area`]), with the loops sampled to [`AREA_CHORD_REL`] of the
+/// model's size.
 pub fn face_area(model: &Model, index: usize) -> Result<f64, StepError> {
     let g = model
         .face(index)
         .map_err(|e| face_err(model, index, e.to_string()))?;
-    let size = model.vertex_bbox().diagonal().max(f64::MIN_POSITIVE);
-    let tol = (AREA_CHORD_REL * size).max(1e-9);
+    let tol = (AREA_CHORD_REL * model.size_mm).max(1e-9);
     let mut slot_of = BTreeMap::new();
     let mut samples = Vec::new();
     for u in g.bounds.iter().flat_map(|b| &b.uses) {
@@ -837,25 +848,6 @@ pub fn face_area(model: &Model, index: usize) -> Result<f64, StepError> {
         slot_of.insert(u.edge, samples.len());
         samples.push(sample_edge(model, eg, tol));
     }
-    let loops = face_loops(model, index, g, &slot_of, &samples, None)?.loops;
-    // Every point its own id: the quadrature runs in (u, v), where a pole run is a side of the
-    // domain, not one point.
-    let mut next = 0u32;
-    let trim: Vec<Vec<TrimPoint>> = loops
-        .iter()
-        .map(|lp| {
-            lp.iter()
-                .map(|p| {
-                    next += 1;
-                    TrimPoint {
-                        uv: p.uv,
-                        pos: p.pos,
-                        vertex: next,
-                    }
-                })
-                .collect()
-        })
-        .collect();
-    trimmed_area(g.surface.as_ref(), &trim, AREA_MESH_REL * size, AREA_REL)
-        .map_err(|e| face_err(model, index, e.to_string()))
+    let t = face_trim(model, index, g, &slot_of, &samples, None, tol)?;
+    Ok(check::trim_area(&g.surface, &oriented_by_nesting(&t.loops)))
 }

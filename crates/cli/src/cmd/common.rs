@@ -30,6 +30,10 @@ pub struct FlattenArgs {
     /// Chordal tolerance of the tessellation in mm.
     #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_name = "MM", value_parser = values::positive_mm)]
     pub chord: f64,
+    /// The largest defect of a STEP model healed, in mm (gaps between edges, edges off their
+    /// faces); beyond it the file is refused [default: 0.2 % of the model's size].
+    #[arg(long, value_name = "MM", value_parser = values::positive_mm)]
+    pub heal_tolerance: Option<f64>,
     /// Iteration cap of every stage of a piece's flattening, over all the solves of the stage:
     /// the method's own solve (minmax, boundary-isometric and orthotropic: their start and their
     /// descent, two stages), the material limits, the joint solve of pieces sewn together
@@ -230,7 +234,9 @@ impl FlattenArgs {
             "--chord must be a positive length in mm, got {}",
             self.chord
         );
-        Ok(Tolerances::DEFAULT.with_chord_mm(self.chord))
+        Ok(Tolerances::DEFAULT
+            .with_chord_mm(self.chord)
+            .with_heal_mm(self.heal_tolerance))
     }
 }
 
@@ -415,6 +421,11 @@ pub fn report_limits(flats: &[Flat], seam_tolerance: f64, flips: bool) -> bool {
     for line in flatcut::flat::materials_over(flats)
         .into_iter()
         .chain(flatcut::flat::seams_over(flats, seam_tolerance))
+        .chain(
+            flatcut::sanity::insane(flats)
+                .iter()
+                .map(ToString::to_string),
+        )
     {
         eprintln!("{line}");
         over = true;

@@ -16,6 +16,10 @@ pub struct Args {
     /// Chordal tolerance of the tessellation in mm.
     #[arg(long, default_value_t = Tolerances::DEFAULT_CHORD_MM, value_parser = crate::values::positive_mm)]
     pub chord: f64,
+    /// The largest defect of a STEP model healed, in mm (gaps between edges, edges off their
+    /// faces); beyond it the file is refused [default: 0.2 % of the model's size].
+    #[arg(long, value_name = "MM", value_parser = crate::values::positive_mm)]
+    pub heal_tolerance: Option<f64>,
 }
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
@@ -24,7 +28,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         "--chord must be a positive length in mm, got {}",
         a.chord
     );
-    let tol = Tolerances::DEFAULT.with_chord_mm(a.chord);
+    let tol = Tolerances::DEFAULT
+        .with_chord_mm(a.chord)
+        .with_heal_mm(a.heal_tolerance);
     let report = flatcut::inspect::inspect_file(&a.file, &tol)
         .with_context(|| format!("cannot inspect {}", a.file.display()))?;
     if a.json {

@@ -325,6 +325,7 @@ fn report_stage(
     for line in flat::materials_over(flats)
         .into_iter()
         .chain(flat::seams_over(flats, opts.seam_tolerance_mm))
+        .chain(crate::sanity::insane(flats).iter().map(ToString::to_string))
     {
         obs.event(&Event::Warning {
             stage: Stage::Report,
