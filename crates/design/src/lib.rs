@@ -56,6 +56,8 @@ pub use units::Axes;
 pub use step::{StepFaces, StepGroup, StepModel, StepPiece};
 
 #[cfg(test)]
+mod edge_tests;
+#[cfg(test)]
 mod part_tests;
 #[cfg(test)]
 mod tests;

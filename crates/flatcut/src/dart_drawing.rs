@@ -136,23 +136,24 @@ fn cap(
     let mut prev = ms;
     let mut walked = 0.0;
     let start = if back { from } else { to };
+    let mut reached = false;
     for k in 1..n {
         let i = if back { (start + n - k) % n } else { (start + k) % n };
         let p = outline[i];
         walked += prev.distance(p);
         if let Some(q) = ray_crossing(apex, fold, prev, p) {
             side.push(q);
+            reached = true;
             break;
         }
         side.push(p);
         prev = p;
         if walked > 4.0 * mouth.max(1e-9) {
-            return None;
+            break;
         }
     }
-    let q = *side.last()?;
-    if ray_crossing(apex, fold, prev, q).is_none() && side.len() > 1 {
-        // the walk ended without reaching the fold
+    if !reached {
+        // the pressed side's outline turns away before it reaches the fold
         return None;
     }
     let half: Vec<DVec2> = side.iter().map(|p| reflect(*p, us)).collect();
@@ -390,6 +391,32 @@ mod tests {
         // symmetric about the centre line x = 50
         for (a, b) in c.iter().zip(c.iter().rev()) {
             assert!((a.x + b.x - 100.0).abs() < 1e-9 && (a.y - b.y).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn an_oblique_darts_cap_peaks_and_folds_flat_onto_the_pressed_side() {
+        // the point leans toward +x: the legs meet the edge y = 0 at 76° and 63°
+        let apex = v(70., 40.);
+        let outline = vec![v(0., 0.), v(40., 0.), apex, v(60., 0.), v(100., 0.), v(100., 60.), v(0., 60.)];
+        for pressed in [0, 1] {
+            let c = cap(&outline, 1, 3, 0, pressed, apex).unwrap();
+            let (ms, edge_x) = if pressed == 0 { (v(40., 0.), -1.0) } else { (v(60., 0.), 1.0) };
+            let us = (ms - apex).normalize();
+            // the half next to the pressed leg folds onto the pressed side's edge, y = 0 beyond
+            // the mouth; the other half mirrors it about the dart's centre line
+            let half = c.len() / 2 + 1;
+            let near: Vec<DVec2> = if pressed == 0 { c[..half].to_vec() } else { c[c.len() - half..].to_vec() };
+            for p in &near {
+                let f = apex + 2.0 * (*p - apex).dot(us) * us - (*p - apex);
+                assert!(f.y.abs() < 1e-9 && (f.x - ms.x) * edge_x >= -1e-9, "{p} folds to {f}");
+            }
+            // pressed toward the leg the point leans to, the intake's edge dips into the piece
+            // (cut away so the folded intake stays behind the edge); the other way it peaks
+            let rise = c.iter().map(|p| -p.y).fold(f64::NEG_INFINITY, f64::max);
+            let dip = c.iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max);
+            let (want, got) = if pressed == 0 { ("peak", rise) } else { ("dip", dip) };
+            assert!(got > 1.0, "pressed {pressed}: the cap's {want} is {got} mm: {c:?}");
         }
     }
 
