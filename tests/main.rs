@@ -11,6 +11,7 @@ mod material;
 mod nest;
 mod pipeline;
 mod regressions;
+mod serve;
 mod shoe;
 mod step;
 mod stream;

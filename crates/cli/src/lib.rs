@@ -46,6 +46,9 @@ pub enum Command {
     Sim(cmd::sim::Args),
     /// The whole job: design → flatten → report → pattern → nest → G-code → send.
     Run(cmd::run::Args),
+    /// The workbench in the browser: draw style lines on the 3D form, see the pieces and their
+    /// strain live, nest, and run the cutter.
+    Serve(cmd::serve::Args),
 }
 
 /// Exit code when a material or distortion limit is exceeded.
@@ -121,6 +124,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Send(a) => cmd::send::run(a),
         Command::Sim(a) => cmd::sim::run(a),
         Command::Run(a) => cmd::run::run(a),
+        Command::Serve(a) => cmd::serve::run(a),
     }
 }
 

@@ -117,6 +117,119 @@ fn named(msg: String, k: usize, part: &PartDef) -> String {
     msg.replacen(&format!("line {k}"), &format!("line {k} '{name}'"), 1)
 }
 
+/// A part's surface split along its style lines: the surface mesh with the lines embedded, its
+/// regions and seams, and which `[[part.piece]]` names each region (`None`: no piece does yet).
+/// What a design editor shows while lines are drawn; [`Design::assemble`] refuses a part with a
+/// region no piece names.
+#[derive(Clone, Debug)]
+pub struct PartRegions {
+    /// The part's surface with its lines as mesh edges.
+    pub mesh: TriMesh,
+    /// Per line, its vertex path in `mesh`.
+    pub lines: Vec<Vec<u32>>,
+    /// Per line, the vertices of its notches in `mesh`.
+    pub notches: Vec<Vec<u32>>,
+    /// The regions and the seams between them.
+    pub split: flatcut_mesh::regions::Split,
+    /// Per region, the `[[part.piece]]`s whose `at` falls in it (one in a design that
+    /// assembles).
+    pub pieces_of_region: Vec<Vec<usize>>,
+    /// The part's `[[part.edge]]`s found on its outline (their ends are vertices of `mesh`).
+    pub edges: Vec<OutlineEdge>,
+}
+
+impl PartRegions {
+    /// A point of region `r` near the middle of its surface (for an `at` that names it).
+    pub fn inner_point(&self, r: usize) -> DVec3 {
+        inner_point(&self.split.regions[r].mesh)
+    }
+
+    /// The region of the surface point nearest to `p`, and its distance from the surface.
+    pub fn region_at(&self, p: DVec3) -> Option<(usize, f64)> {
+        let bvh = Bvh::new(&self.mesh.positions, &self.mesh.triangles);
+        let (f, _, d) = bvh.nearest(&self.mesh.positions, &self.mesh.triangles, p)?;
+        Some((self.split.region_of_face[f] as usize, d))
+    }
+}
+
+impl PartDef {
+    /// Tessellates the part's surface (mesh files resolved against `base_dir`), embeds its lines
+    /// and splits it into regions, each with the piece that names it, if any. Errors name the
+    /// part and the line; a region named by none or by several pieces is not an error here.
+    pub fn regions(&self, base_dir: &Path, tol: &Tolerances) -> Result<PartRegions, DesignError> {
+        let part = self;
+        let surface = part
+            .surface_piece()
+            .mesh(base_dir, tol)
+            .map_err(|e| part.err(bare(e)))?;
+        let specs: Vec<LineSpec> = part
+            .lines
+            .iter()
+            .enumerate()
+            .map(|(k, l)| {
+                let points = match l.edge {
+                    Some(e) => crate::step::edge_points(&part.surface_piece(), base_dir, tol, e)
+                        .map_err(|m| part.err(format!("line {k} '{}': {m}", l.name)))?,
+                    None => l.points.iter().map(|p| DVec3::from_array(*p)).collect(),
+                };
+                Ok(LineSpec {
+                    points,
+                    notches: l.notches.iter().map(|p| DVec3::from_array(*p)).collect(),
+                })
+            })
+            .collect::<Result<_, DesignError>>()?;
+        let mut embedded = embed_lines(&surface, &specs).map_err(|e| {
+            let k = match &e {
+                flatcut_mesh::lines::LineError::TooShort { line }
+                | flatcut_mesh::lines::LineError::OffSurface { line, .. }
+                | flatcut_mesh::lines::LineError::NotchOffLine { line, .. }
+                | flatcut_mesh::lines::LineError::LooseEnd { line, .. }
+                | flatcut_mesh::lines::LineError::LeavesSurface { line, .. }
+                | flatcut_mesh::lines::LineError::Lost { line, .. } => *line,
+                _ => 0,
+            };
+            part.err(named(e.to_string(), k, part))
+        })?;
+        // The part's edges, their ends made vertices of its outline before it is split.
+        let edges = crate::edge::find(&mut embedded.mesh, &part.edges)
+            .map_err(|(edge, msg)| part.err(format!("edge '{edge}': {msg}")))?;
+        let split = split_along_lines(&embedded.mesh, &embedded.lines).map_err(|e| {
+            let k = match &e {
+                flatcut_mesh::regions::RegionError::NotAnEdge { line, .. }
+                | flatcut_mesh::regions::RegionError::AlongBoundary { line, .. } => *line,
+                _ => 0,
+            };
+            part.err(named(e.to_string(), k, part))
+        })?;
+        // Which piece names which region.
+        let mesh = &embedded.mesh;
+        let bvh = Bvh::new(&mesh.positions, &mesh.triangles);
+        let far = OFF_SURFACE_REL * mesh.bbox().diagonal();
+        let mut pieces_of_region: Vec<Vec<usize>> = vec![Vec::new(); split.regions.len()];
+        for (k, p) in part.pieces.iter().enumerate() {
+            let at = DVec3::from_array(p.at);
+            let (f, _, d) = bvh
+                .nearest(&mesh.positions, &mesh.triangles, at)
+                .ok_or_else(|| part.err("the surface has no triangles".into()))?;
+            if d > far {
+                return Err(part.err(format!(
+                    "piece {k} '{}': `at` ({:.2}, {:.2}, {:.2}) is {d:.2} mm from the surface",
+                    p.name, at.x, at.y, at.z
+                )));
+            }
+            pieces_of_region[split.region_of_face[f] as usize].push(k);
+        }
+        Ok(PartRegions {
+            mesh: embedded.mesh,
+            lines: embedded.lines,
+            notches: embedded.notches,
+            split,
+            pieces_of_region,
+            edges,
+        })
+    }
+}
+
 /// Splits a part along its style lines into its pieces and seams.
 fn split_part(
     part: &PartDef,
@@ -124,74 +237,22 @@ fn split_part(
     tol: &Tolerances,
     out: &mut Assembly,
 ) -> Result<(), DesignError> {
-    let surface = part
-        .surface_piece()
-        .mesh(base_dir, tol)
-        .map_err(|e| part.err(bare(e)))?;
-    let specs: Vec<LineSpec> = part
-        .lines
-        .iter()
-        .enumerate()
-        .map(|(k, l)| {
-            let points = match l.edge {
-                Some(e) => crate::step::edge_points(&part.surface_piece(), base_dir, tol, e)
-                    .map_err(|m| part.err(format!("line {k} '{}': {m}", l.name)))?,
-                None => l.points.iter().map(|p| DVec3::from_array(*p)).collect(),
-            };
-            Ok(LineSpec {
-                points,
-                notches: l.notches.iter().map(|p| DVec3::from_array(*p)).collect(),
-            })
-        })
-        .collect::<Result<_, DesignError>>()?;
-    let mut embedded = embed_lines(&surface, &specs).map_err(|e| {
-        let k = match &e {
-            flatcut_mesh::lines::LineError::TooShort { line }
-            | flatcut_mesh::lines::LineError::OffSurface { line, .. }
-            | flatcut_mesh::lines::LineError::NotchOffLine { line, .. }
-            | flatcut_mesh::lines::LineError::LooseEnd { line, .. }
-            | flatcut_mesh::lines::LineError::LeavesSurface { line, .. }
-            | flatcut_mesh::lines::LineError::Lost { line, .. } => *line,
-            _ => 0,
-        };
-        part.err(named(e.to_string(), k, part))
-    })?;
-    // The part's edges, their ends made vertices of its outline before it is split.
-    let part_edges = crate::edge::find(&mut embedded.mesh, &part.edges)
-        .map_err(|(edge, msg)| part.err(format!("edge '{edge}': {msg}")))?;
-    let split = split_along_lines(&embedded.mesh, &embedded.lines).map_err(|e| {
-        let k = match &e {
-            flatcut_mesh::regions::RegionError::NotAnEdge { line, .. }
-            | flatcut_mesh::regions::RegionError::AlongBoundary { line, .. } => *line,
-            _ => 0,
-        };
-        part.err(named(e.to_string(), k, part))
-    })?;
-    // Which piece names which region.
-    let mesh = &embedded.mesh;
-    let bvh = Bvh::new(&mesh.positions, &mesh.triangles);
-    let far = OFF_SURFACE_REL * mesh.bbox().diagonal();
-    let mut piece_of_region: Vec<Option<usize>> = vec![None; split.regions.len()];
-    for (k, p) in part.pieces.iter().enumerate() {
-        let at = DVec3::from_array(p.at);
-        let (f, _, d) = bvh
-            .nearest(&mesh.positions, &mesh.triangles, at)
-            .ok_or_else(|| part.err("the surface has no triangles".into()))?;
-        if d > far {
-            return Err(part.err(format!(
-                "piece {k} '{}': `at` ({:.2}, {:.2}, {:.2}) is {d:.2} mm from the surface",
-                p.name, at.x, at.y, at.z
-            )));
-        }
-        let r = split.region_of_face[f] as usize;
-        if let Some(j) = piece_of_region[r] {
+    let regions = part.regions(base_dir, tol)?;
+    let split = &regions.split;
+    for ks in &regions.pieces_of_region {
+        if let [j, k, ..] = ks[..] {
+            let at = part.pieces[k].at;
             return Err(part.err(format!(
                 "pieces {j} '{}' and {k} '{}' name the same region (near ({:.1}, {:.1}, {:.1})): a style line between them is missing or does not close",
-                part.pieces[j].name, p.name, at.x, at.y, at.z
+                part.pieces[j].name, part.pieces[k].name, at[0], at[1], at[2]
             )));
         }
-        piece_of_region[r] = Some(k);
     }
+    let piece_of_region: Vec<Option<usize>> = regions
+        .pieces_of_region
+        .iter()
+        .map(|ks| ks.first().copied())
+        .collect();
     if let Some(r) = piece_of_region.iter().position(Option::is_none) {
         let reg = &split.regions[r];
         let c = inner_point(&reg.mesh);
@@ -234,7 +295,7 @@ fn split_part(
                 def.name
             ))
         })?;
-        def.outline_edges = part_edges.clone();
+        def.outline_edges = regions.edges.clone();
         out.pieces.push(AssembledPiece {
             def,
             part: Some(part.name.clone()),
@@ -251,9 +312,9 @@ fn split_part(
             } else {
                 format!("{}-{}", line.name, i + 1)
             };
-            let path = &embedded.lines[k];
+            let path = &regions.lines[k];
             let mut notches = Vec::new();
-            for (j, &nv) in embedded.notches[k].iter().enumerate() {
+            for (j, &nv) in regions.notches[k].iter().enumerate() {
                 if let Some(at) = run.path_index.iter().position(|&p| path[p] == nv) {
                     notches.push(SeamNotch {
                         name: format!("{} {}", line.name, j + 1),
@@ -275,6 +336,7 @@ fn split_part(
     }
     Ok(())
 }
+
 
 /// The allowance a style line gives the pieces on its two sides along one of its seams: its
 /// `allowance_mm`, or for a lapped seam 0 on the piece on top (cut raw) and the underlay on the

@@ -41,7 +41,7 @@ mod step;
 mod step_seams;
 mod units;
 
-pub use assemble::{AssembledPiece, Assembly};
+pub use assemble::{AssembledPiece, Assembly, PartRegions};
 pub use build::PieceGeometry;
 pub use edge::{EdgeDef, EdgeKind, OutlineEdge};
 pub use error::DesignError;

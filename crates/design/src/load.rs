@@ -71,13 +71,21 @@ impl Design {
             path: path.to_path_buf(),
             source,
         })?;
+        Self::from_file_text(&text, path)
+    }
+
+    /// A design file's text as [`Design::load`] reads it from `path` (JSON for a `.json` path,
+    /// else TOML; STEP pieces expanded from the files they name, relative to the path's
+    /// directory), without reading the file: an editor's unsaved text.
+    pub fn from_file_text(text: &str, path: &Path) -> Result<Design, DesignError> {
+        let name = path.display().to_string();
         let is_json = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("json"));
         let mut d = if is_json {
-            Self::from_json_str(&text, &name)
+            Self::from_json_str(text, &name)
         } else {
-            Self::from_toml_str(&text, &name)
+            Self::from_toml_str(text, &name)
         }?;
         d.pieces = crate::step::expand(d.pieces, path.parent().unwrap_or(Path::new(".")))?;
         Ok(d)

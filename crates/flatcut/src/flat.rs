@@ -115,7 +115,7 @@ pub fn flatten_and_report(
     limits: Limits,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Vec<Flat>, PipelineError> {
-    let FlatDesign { pieces, seams, .. } = pipeline::flatten_design(
+    let flat = pipeline::flatten_design(
         path,
         tol,
         params,
@@ -124,6 +124,35 @@ pub fn flatten_and_report(
         limits.material.as_ref(),
         progress,
     )?;
+    report_flat_design(flat, &limits)
+}
+
+/// [`flatten_and_report`] of a design already loaded (an editor's design in memory); mesh and
+/// STEP files it names are resolved against `base`, the design file's directory.
+pub fn flatten_and_report_loaded(
+    design: flatcut_design::Design,
+    base: &Path,
+    tol: &Tolerances,
+    params: &FlattenParams,
+    limits: Limits,
+    progress: &mut dyn FnMut(&str, usize, usize),
+) -> Result<Vec<Flat>, PipelineError> {
+    let flat = pipeline::flatten_loaded(
+        design,
+        base,
+        tol,
+        params,
+        limits.darts.as_ref(),
+        limits.split.as_ref(),
+        limits.material.as_ref(),
+        progress,
+    )?;
+    report_flat_design(flat, &limits)
+}
+
+/// Reports every flattened piece of a design and measures its mating seams into the reports.
+fn report_flat_design(flat: FlatDesign, limits: &Limits) -> Result<Vec<Flat>, PipelineError> {
+    let FlatDesign { pieces, seams, .. } = flat;
     let mut flats = pieces
         .into_iter()
         .map(

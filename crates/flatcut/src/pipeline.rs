@@ -133,8 +133,24 @@ pub fn flatten_design(
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<FlatDesign, PipelineError> {
     let design = Design::load(path)?;
-    check_unique_names(&design)?;
     let base = path.parent().unwrap_or(Path::new("."));
+    flatten_loaded(design, base, tol, params, darts, split, material, progress)
+}
+
+/// [`flatten_design`] of a design already loaded (an editor's design in memory); mesh and STEP
+/// files it names are resolved against `base`, the design file's directory.
+#[allow(clippy::too_many_arguments)]
+pub fn flatten_loaded(
+    design: Design,
+    base: &Path,
+    tol: &Tolerances,
+    params: &FlattenParams,
+    darts: Option<&DartSettings>,
+    split: Option<&crate::splitting::SplitSettings>,
+    material: Option<&MaterialSpec>,
+    progress: &mut dyn FnMut(&str, usize, usize),
+) -> Result<FlatDesign, PipelineError> {
+    check_unique_names(&design)?;
     let sizes = design.sizes(base)?;
     let count = sizes.len();
     let mut out = FlatDesign {

@@ -64,16 +64,19 @@ fn sequential(t: f64) -> [u8; 3] {
     interp(&STOPS, t)
 }
 
+/// The diverging map's colours, evenly spaced from −1 (blue: compression) through 0 (white) to
+/// +1 (red: stretch); the workbench's page draws its heat maps with them too.
+pub const DIVERGING_STOPS: [[f64; 3]; 5] = [
+    [33.0, 102.0, 172.0],
+    [146.0, 197.0, 222.0],
+    [247.0, 247.0, 247.0],
+    [244.0, 165.0, 130.0],
+    [178.0, 24.0, 43.0],
+];
+
 /// A diverging map: blue (negative) – white (0) – red (positive), t in [−1, 1].
 fn diverging(t: f64) -> [u8; 3] {
-    const STOPS: [[f64; 3]; 5] = [
-        [33.0, 102.0, 172.0],
-        [146.0, 197.0, 222.0],
-        [247.0, 247.0, 247.0],
-        [244.0, 165.0, 130.0],
-        [178.0, 24.0, 43.0],
-    ];
-    interp(&STOPS, 0.5 * (t + 1.0))
+    interp(&DIVERGING_STOPS, 0.5 * (t + 1.0))
 }
 
 fn interp(stops: &[[f64; 3]], t: f64) -> [u8; 3] {

@@ -18,7 +18,7 @@ pub mod per_face;
 pub mod seams;
 
 pub use darts::DartReport;
-pub use draw::{Column, heatmap_svg, histogram_svg, html_report, render_png};
+pub use draw::{Column, DIVERGING_STOPS, heatmap_svg, histogram_svg, html_report, render_png};
 pub use grain::GrainReport;
 pub use measure::{
     BoundarySegment, FaceMeasure, Measure, Region, Report, ReportError, ReportOptions, Stats,

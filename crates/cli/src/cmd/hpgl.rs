@@ -30,14 +30,11 @@ pub struct Args {
     pub flatten: FlattenArgs,
 }
 
-/// Chordal tolerance used when reading SVGs and DXFs (mm).
-const READ_CHORD_MM: f64 = 0.02;
-
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let profile = Profile::resolve(&a.profile)?;
     let colours = profile.colour_table()?;
     let drawing = if common::is_pattern_file(&a.file) {
-        common::read_pattern_file(&a.file, READ_CHORD_MM, &colours)?
+        common::read_pattern_file(&a.file, flatcut::plot::READ_CHORD_MM, &colours)?
     } else {
         super::gcode::load_drawing(&a.file, &a.piece, &a.flatten, &colours)?
     };

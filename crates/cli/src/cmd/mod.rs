@@ -12,4 +12,5 @@ pub mod ports;
 pub mod report;
 pub mod run;
 pub mod send;
+pub mod serve;
 pub mod sim;

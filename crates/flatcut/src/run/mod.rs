@@ -107,11 +107,39 @@ pub fn run_project(
     opts: &RunOptions,
     obs: &mut dyn Observer,
 ) -> Result<ProjectOutputs, RunError> {
-    let mut files = Vec::new();
-    check_order(project)?;
-    let flats = timed(obs, Stage::Flatten, &flatten_detail(project)?, |obs| {
-        flatten_stage(project, opts, obs, &mut files)
-    })?;
+    let flats = flatten_project(project, None, opts, obs)?;
+    finish_project(project, flats, opts, obs)
+}
+
+/// The flatten stage of [`run_project`] alone: every piece flattened within the project's
+/// limits and reported. `design`: the project's design as edited in memory, in place of its
+/// file (mesh and STEP files it names still resolve against the file's directory).
+pub fn flatten_project(
+    project: &Project,
+    design: Option<&flatcut_design::Design>,
+    opts: &RunOptions,
+    obs: &mut dyn Observer,
+) -> Result<Vec<Flat>, RunError> {
+    check_order(project, design)?;
+    timed(obs, Stage::Flatten, &flatten_detail(project)?, |obs| {
+        flatten_stage(project, design, opts, obs)
+    })
+}
+
+/// Every stage of [`run_project`] after the flattening, on pieces [`flatten_project`] gave.
+pub fn finish_project(
+    project: &Project,
+    flats: Vec<Flat>,
+    opts: &RunOptions,
+    obs: &mut dyn Observer,
+) -> Result<ProjectOutputs, RunError> {
+    let mut files: Vec<OutputFile> = flats
+        .iter()
+        .map(|f| OutputFile {
+            name: format!("{}.obj", file_safe(&f.name)),
+            bytes: flatcut_mesh::io::obj_string(&f.mesh).into_bytes(),
+        })
+        .collect();
     let limits_exceeded = timed(obs, Stage::Report, "", |obs| {
         report_stage(&flats, opts, obs, &mut files)
     })?;
@@ -167,12 +195,22 @@ fn timed<T>(
 
 /// Refuses an `[order]` that names a size the design's grading does not have, or any size of a
 /// design without grading, before anything is flattened.
-fn check_order(project: &Project) -> Result<(), RunError> {
+fn check_order(
+    project: &Project,
+    design: Option<&flatcut_design::Design>,
+) -> Result<(), RunError> {
     let Some(order) = &project.order else {
         return Ok(());
     };
     let path = project.design_path();
-    let design = flatcut_design::Design::load(&path).map_err(PipelineError::from)?;
+    let loaded;
+    let design = match design {
+        Some(d) => d,
+        None => {
+            loaded = flatcut_design::Design::load(&path).map_err(PipelineError::from)?;
+            &loaded
+        }
+    };
     let sizes: Vec<&str> = design
         .grading
         .as_ref()
@@ -230,12 +268,12 @@ fn limits(project: &Project) -> Limits {
     }
 }
 
-/// Flattens every piece of the design (`<piece>.obj` each).
+/// Flattens every piece of the design (its file, or `design` in its place).
 fn flatten_stage(
     project: &Project,
+    design: Option<&flatcut_design::Design>,
     opts: &RunOptions,
     obs: &mut dyn Observer,
-    files: &mut Vec<OutputFile>,
 ) -> Result<Vec<Flat>, RunError> {
     let m = method(project)?;
     let params = FlattenParams::new(m)
@@ -243,20 +281,26 @@ fn flatten_stage(
         .with_max_compress_pct(project.material.max_compress_pct)
         .with_hooks(opts.flatten_hooks.clone());
     let tol = Tolerances::DEFAULT.with_chord_mm(opts.chord_mm);
-    let flats = flat::load_flat(
-        &project.design_path(),
-        &tol,
-        &params,
-        limits(project),
-        &mut |name, k, n| {
-            obs.event(&Event::Progress {
-                stage: Stage::Flatten,
-                done: k,
-                total: n,
-                what: name,
-            })
-        },
-    )?;
+    let mut progress = |name: &str, k, n| {
+        obs.event(&Event::Progress {
+            stage: Stage::Flatten,
+            done: k,
+            total: n,
+            what: name,
+        })
+    };
+    let path = project.design_path();
+    let flats = match design {
+        Some(d) => flat::flatten_and_report_loaded(
+            d.clone(),
+            path.parent().unwrap_or(std::path::Path::new(".")),
+            &tol,
+            &params,
+            limits(project),
+            &mut progress,
+        )?,
+        None => flat::load_flat(&path, &tol, &params, limits(project), &mut progress)?,
+    };
     for f in &flats {
         if let Some(info) = &f.info {
             for w in &info.warnings {
@@ -266,10 +310,6 @@ fn flatten_stage(
                 });
             }
         }
-        files.push(OutputFile {
-            name: format!("{}.obj", file_safe(&f.name)),
-            bytes: flatcut_mesh::io::obj_string(&f.mesh).into_bytes(),
-        });
     }
     Ok(flats)
 }

@@ -1,0 +1,273 @@
+// The workbench in a real browser: headless Chromium (Debian's /usr/bin/chromium) driven by
+// playwright-core against `flatcut serve` on the bundled shoe.
+//
+//   node tools/web/browser-test.mjs --flatcut target/debug/flatcut [--screenshots docs]
+//
+// Steps: load the shoe; add a style line by clicking on the rendered surface at known screen
+// points (the projections of surface points from the server's own mesh); see the piece count
+// go from 4 to 5 and the heat map's colours on the new piece, in 3D and flat; download the pattern
+// and compare it with `flatcut run`'s bytes for the saved design; stream a job to the embedded
+// simulator and watch its progress events to the end (a "todo" line while the device panel is
+// not built). Prints one line per step and "N passed, N failed". Without Chromium it fails when FLATCUT_BROWSER_TEST=required (as CI
+// sets it), and otherwise says it skipped.
+
+import { spawn, execFileSync } from 'node:child_process';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+const repo = path.resolve(here, '../..');
+const args = process.argv.slice(2);
+const opt = (name, dflt) => {
+  const i = args.indexOf(name);
+  return i >= 0 ? args[i + 1] : dflt;
+};
+const flatcut = path.resolve(opt('--flatcut', path.join(repo, 'target/debug/flatcut')));
+const shots = opt('--screenshots', null);
+const chromium = process.env.CHROMIUM || '/usr/bin/chromium';
+const required = process.env.FLATCUT_BROWSER_TEST === 'required';
+
+let passed = 0;
+let failed = 0;
+const results = [];
+function step(name, ok, detail = '') {
+  results.push({ name, ok, detail });
+  if (ok) passed++; else failed++;
+  console.log(`${ok ? 'ok  ' : 'FAIL'} ${name}${detail ? ` — ${detail}` : ''}`);
+  if (!ok) throw new Error(`${name}: ${detail}`);
+}
+
+if (!fs.existsSync(chromium)) {
+  const msg = `no Chromium at ${chromium} (apt-get install chromium)`;
+  if (required) {
+    console.log(`FAIL browser: ${msg}`);
+    console.log('0 passed, 1 failed');
+    process.exit(1);
+  }
+  console.log(`skipped: ${msg}`);
+  process.exit(0);
+}
+if (!fs.existsSync(flatcut)) {
+  console.log(`FAIL flatcut binary: ${flatcut} does not exist (cargo build first)`);
+  console.log('0 passed, 1 failed');
+  process.exit(1);
+}
+
+const { chromium: pw } = await import('playwright-core');
+
+// The shoe, in a directory of its own (the workbench saves into it).
+const work = fs.mkdtempSync(path.join(os.tmpdir(), 'flatcut-browser-'));
+for (const f of ['project.toml', 'design.toml']) fs.copyFileSync(path.join(repo, 'patterns/shoe', f), path.join(work, f));
+
+const server = spawn(flatcut, ['serve', path.join(work, 'project.toml'), '--port', '0'], { stdio: ['ignore', 'pipe', 'pipe'] });
+let serverOut = '';
+server.stderr.on('data', (d) => { serverOut += d; });
+const url = await new Promise((resolve, reject) => {
+  const t = setTimeout(() => reject(new Error(`flatcut serve printed no address: ${serverOut}`)), 60000);
+  server.stdout.on('data', (d) => {
+    serverOut += d;
+    const m = /workbench: (http:\/\/\S+)/.exec(serverOut);
+    if (m) { clearTimeout(t); resolve(m[1]); }
+  });
+  server.on('exit', (c) => reject(new Error(`flatcut serve exited (${c}): ${serverOut}`)));
+});
+
+const browser = await pw.launch({
+  executablePath: chromium,
+  args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
+    '--disable-component-update', '--disable-sync', '--use-gl=angle', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
+});
+const context = await browser.newContext({ viewport: { width: 1600, height: 900 }, acceptDownloads: true });
+const page = await context.newPage();
+const pageErrors = [];
+page.on('pageerror', (e) => pageErrors.push(String(e)));
+const events = [];
+
+async function shot(name) {
+  if (!shots) return;
+  fs.mkdirSync(shots, { recursive: true });
+  await page.waitForTimeout(300);
+  await page.screenshot({ path: path.join(shots, `workbench-${name}.png`) });
+}
+
+/** The rendered colour at a page point of a canvas (CSS px), 0..255. */
+async function pixel(canvasId, x, y) {
+  return page.evaluate(([id, x, y]) => {
+    const c = document.getElementById(id);
+    const r = c.getBoundingClientRect();
+    const gl = c.getContext('webgl2') || c.getContext('webgl');
+    const px = new Uint8Array(4);
+    const sx = Math.round((x - r.left) * c.width / r.width);
+    const sy = Math.round(c.height - (y - r.top) * c.height / r.height);
+    gl.readPixels(sx, sy, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    return [px[0], px[1], px[2]];
+  }, [canvasId, x, y]);
+}
+
+let code = 0;
+try {
+  // 1. Load the shoe.
+  await page.goto(url);
+  await page.waitForFunction(() => window.__flatcut && window.__flatcut.state.flat && window.__flatcut.state.regions, null, { timeout: 120000 });
+  await page.exposeFunction('__event', (e) => events.push(e));
+  await page.evaluate(() => {
+    const es = new EventSource('/api/events');
+    for (const t of ['job', 'device']) es.addEventListener(t, (ev) => window.__event({ type: t, ...JSON.parse(ev.data) }));
+  });
+  const count0 = await page.textContent('#piece-count');
+  step('loads the shoe: 4 pieces flattened', /^4 pieces/.test(count0), count0);
+  await shot('pieces');
+
+  // 2. A style line by clicking on the rendered surface: from the medial featherline at x = 190 mm,
+  // up over the vamp, to the toe cap's line near the top.
+  const target = await page.evaluate(() => {
+    const part = window.__flatcut.state.regions.parts[0];
+    const P = part.mesh.positions;
+    const nearest = (t) => {
+      let best = null, bd = Infinity;
+      for (let i = 0; i < P.length; i += 3) {
+        const d = (P[i] - t[0]) ** 2 + (P[i + 1] - t[1]) ** 2 + (P[i + 2] - t[2]) ** 2;
+        if (d < bd) { bd = d; best = [P[i], P[i + 1], P[i + 2]]; }
+      }
+      return best;
+    };
+    const toe = part.lines.find((l) => l.name === 'toe-cap').path;
+    let onToe = toe[0], bd = Infinity;
+    for (const q of toe) { const d = (q[0] - 231) ** 2 + (q[1] + 8) ** 2 + (q[2] - 35) ** 2; if (d < bd) { bd = d; onToe = q; } }
+    return [nearest([190, -60, 0]), nearest([205, -35, 45]), onToe];
+  });
+  const screen = [];
+  for (const p of target) {
+    const s = await page.evaluate((p) => window.__flatcut.toScreen(p), p);
+    const hit = await page.evaluate(([x, y]) => window.__flatcut.pickAt(x, y), [s.x, s.y]);
+    const off = hit ? Math.hypot(hit.point[0] - p[0], hit.point[1] - p[1], hit.point[2] - p[2]) : Infinity;
+    step(`surface point (${p.map((x) => x.toFixed(1)).join(', ')}) is under screen point (${s.x.toFixed(0)}, ${s.y.toFixed(0)})`, off < 1.5, `${off.toFixed(2)} mm off`);
+    screen.push(s);
+  }
+  await page.click('[data-tool=line]');
+  for (const s of screen) await page.mouse.click(s.x, s.y);
+  await page.waitForFunction(() => /^5 pieces/.test(document.querySelector('#piece-count')?.textContent || ''), null, { timeout: 120000 });
+  await page.waitForFunction(() => window.__flatcut.timings.length > 0, null, { timeout: 10000 });
+  const timing = await page.evaluate(() => window.__flatcut.timings[0].closeToHeatMs);
+  const count1 = await page.textContent('#piece-count');
+  step('the third click closes a region: 5 pieces', /^5 pieces/.test(count1), `${count1}; click to heat map ${timing.toFixed(0)} ms`);
+
+  // 3. The heat map's colours on the new piece: flat (unlit, exact) and on the surface (lit: same
+  // hue).
+  await page.click('#tabs [data-tab=pieces]');
+  await page.click('tr.piece[data-name="upper 1"]');
+  await page.waitForTimeout(300);
+  // The centre of the piece's largest face on screen (away from its edges, which are blended).
+  const flat = await page.evaluate(() => {
+    const h = window.__flatcut;
+    const s = h.state;
+    const p = s.flat.pieces.find((x) => x.name === 'upper 1');
+    const T = p.mesh.triangles, F = p.mesh.flat;
+    let best = null, area = 0;
+    for (let f = 0; f < T.length / 3; f++) {
+      const q = [0, 1, 2].map((k) => h.flatToScreen([F[2 * T[3 * f + k]], F[2 * T[3 * f + k] + 1]]));
+      const a = Math.abs((q[1].x - q[0].x) * (q[2].y - q[0].y) - (q[2].x - q[0].x) * (q[1].y - q[0].y)) / 2;
+      if (a > area) { area = a; best = { f, x: (q[0].x + q[1].x + q[2].x) / 3, y: (q[0].y + q[1].y + q[2].y) / 3 }; }
+    }
+    const hit = best && h.flatAt(best.x, best.y);
+    if (!hit || hit.face !== best.f) return null;
+    return { x: best.x, y: best.y, strain: p.mesh.strain[best.f], scale: s.scale, stops: s.stops };
+  });
+  step('the new piece is drawn flat', !!flat);
+  const want = await page.evaluate(({ strain, scale, stops }) => {
+    const t = strain >= 0 ? strain / scale.stretch : strain / scale.compress;
+    const u = Math.min(1, Math.max(0, 0.5 * (t + 1))) * (stops.length - 1);
+    const i = Math.min(stops.length - 2, Math.floor(u)), f = u - i;
+    const c = [0, 1, 2].map((k) => stops[i][k] * (1 - f) + stops[i + 1][k] * f);
+    return Math.abs(t) > 1 ? c.map((x) => x * 0.55) : c;
+  }, flat);
+  const got = await pixel('c2d', flat.x, flat.y);
+  const diff = Math.max(...got.map((v, k) => Math.abs(v - want[k])));
+  step('its flat heat map has the report\'s colour for its strain', diff <= 3, `strain ${flat.strain.toFixed(2)} %: rgb(${got}) against rgb(${want.map(Math.round)})`);
+  // On the surface: at the new piece's most strained face in view, the pixel leans the way its
+  // strain does (red for stretch, blue for compression), and differs from the piece colours.
+  const spot = await page.evaluate(() => {
+    const h = window.__flatcut;
+    const k = h.state.flat.pieces.findIndex((x) => x.name === 'upper 1');
+    const p = h.state.flat.pieces[k];
+    const T = p.mesh.triangles, P = p.mesh.positions;
+    const faces = [...p.mesh.strain.keys()].sort((a, b) => Math.abs(p.mesh.strain[b]) - Math.abs(p.mesh.strain[a]));
+    for (const f of faces) {
+      const c = [0, 1, 2].map((i) => (P[3 * T[3 * f] + i] + P[3 * T[3 * f + 1] + i] + P[3 * T[3 * f + 2] + i]) / 3);
+      const s = h.toScreen(c);
+      const under = h.pieceAt(s.x, s.y);
+      if (under && under.piece === k && under.face === f) return { x: s.x, y: s.y, strain: p.mesh.strain[f] };
+    }
+    return null;
+  });
+  step('a face of the new piece is in view', !!spot);
+  const heat = await pixel('c3d', spot.x, spot.y);
+  await page.selectOption('#colour', 'pieces');
+  await page.waitForTimeout(200);
+  const plain = await pixel('c3d', spot.x, spot.y);
+  await page.selectOption('#colour', 'heat');
+  await page.waitForTimeout(200);
+  const lean = spot.strain >= 0 ? heat[0] - heat[2] : heat[2] - heat[0];
+  const changed = Math.max(...heat.map((v, k) => Math.abs(v - plain[k])));
+  step('on the surface the new piece shows its heat map', lean > 5 && changed > 10,
+    `strain ${spot.strain.toFixed(2)} %: rgb(${heat}) (piece colour rgb(${plain}))`);
+  await shot('heatmap');
+
+  // 4. The pattern: saved, downloaded, compared with `flatcut run`'s bytes for the saved design.
+  await page.click('#save');
+  await page.waitForFunction(() => document.querySelector('#saved').textContent === 'saved', null, { timeout: 30000 });
+  await page.click('#tabs [data-tab=seams]');
+  await shot('seams');
+  await page.click('#tabs [data-tab=pattern]');
+  const [download] = await Promise.all([
+    page.waitForEvent('download', { timeout: 120000 }),
+    page.click('a[download="pattern.svg"]'),
+  ]);
+  const got1 = fs.readFileSync(await download.path());
+  const out = path.join(work, 'out');
+  execFileSync(flatcut, ['run', path.join(work, 'project.toml'), '--no-send', '--quiet', '-o', out], { stdio: 'ignore' });
+  const cli = fs.readFileSync(path.join(out, 'pattern.svg'));
+  step('the downloaded pattern.svg is flatcut run\'s, byte for byte', Buffer.compare(got1, cli) === 0, `${got1.length} bytes; 5 pieces`);
+  await page.waitForFunction(() => document.getElementById('pattern-img')?.complete, null, { timeout: 60000 });
+  await shot('pattern');
+  await page.click('#tabs [data-tab=nest]');
+  await page.waitForSelector('#utilization', { timeout: 120000 });
+  await page.waitForFunction(() => document.getElementById('layout-img')?.complete, null, { timeout: 60000 });
+  const util = await page.textContent('#utilization');
+  step('the nest shows its utilisation', /Utilization [\d.]+ %/.test(util), util.trim().split('\n')[0]);
+  await shot('nest');
+
+  // 5. The device: a job streamed to the embedded simulator, its progress events to the end.
+  await page.click('#tabs [data-tab=device]');
+  const hasDevice = await page.evaluate(() => !!document.querySelector('#job-start'));
+  if (hasDevice) {
+    await page.click('#job-start');
+    await page.waitForFunction(() => window.__flatcut.lastJob && ['done', 'failed', 'stopped'].includes(window.__flatcut.lastJob.state), null, { timeout: 600000 });
+    const job = await page.evaluate(() => window.__flatcut.lastJob);
+    const progress = events.filter((e) => e.type === 'job' && e.progress);
+    const monotone = progress.every((e, i) => i === 0 || e.progress.lines_done >= progress[i - 1].progress.lines_done);
+    step('a job streams to the embedded simulator, progress to the end', job.state === 'done' && progress.length > 1 && monotone,
+      `${progress.length} progress events, state ${job.state}`);
+    await shot('device');
+  } else {
+    // Not a pass and not hidden: the device panel is unfinished (it waits for the device-session
+    // library), and the test says so on every run.
+    console.log('todo a job streams to the embedded simulator — not built: the device panel waits for the device-session library');
+  }
+  step('no script error on the page', pageErrors.length === 0, pageErrors.join('; '));
+} catch (e) {
+  if (!results.length || results[results.length - 1].ok) {
+    failed++;
+    console.log(`FAIL ${e.message.split('\n')[0]}`);
+  }
+  code = 1;
+} finally {
+  await browser.close().catch(() => {});
+  server.kill('SIGTERM');
+  await new Promise((r) => server.on('exit', r).once ? setTimeout(r, 5000) : r());
+  fs.rmSync(work, { recursive: true, force: true });
+}
+console.log(`${passed} passed, ${failed} failed`);
+process.exit(code || (failed ? 1 : 0));
