@@ -277,7 +277,9 @@ fn a_hemispheres_darts_have_smooth_legs_and_caps_that_fold_onto_the_pressed_side
         let idx: Vec<usize> = if ahead <= sew.len() / 2 {
             (0..=ahead).map(|j| (i0 + j) % sew.len()).collect()
         } else {
-            (0..=sew.len() - ahead).map(|j| (i0 + sew.len() - j) % sew.len()).collect()
+            (0..=sew.len() - ahead)
+                .map(|j| (i0 + sew.len() - j) % sew.len())
+                .collect()
         };
         let cap: Vec<DVec2> = idx
             .windows(2)
@@ -306,7 +308,10 @@ fn a_hemispheres_darts_have_smooth_legs_and_caps_that_fold_onto_the_pressed_side
             "dart {k}: mouth {:.2} mm, cap rises {rise:.3} mm, folded {fold:.3} mm off the pressed side",
             m0.distance(m1)
         );
-        assert!(fold < 0.12, "dart {k}: folded, the cap is {fold} mm off the pressed side");
+        assert!(
+            fold < 0.12,
+            "dart {k}: folded, the cap is {fold} mm off the pressed side"
+        );
     }
     eprintln!("{n} darts; legs stand off their neighbours' chords by at most {worst_kink:.4} mm");
     assert!(worst_kink < 0.1, "{worst_kink}");

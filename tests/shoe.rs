@@ -116,7 +116,10 @@ fn the_pattern_dxf_has_a_block_per_piece_with_its_own_text_and_reads_back() {
     ]);
     let g = std::fs::read_to_string(&job).unwrap();
     for name in piece_names() {
-        assert!(g.contains(&format!("{name}-cut-1")), "{name} cut in the job");
+        assert!(
+            g.contains(&format!("{name}-cut-1")),
+            "{name} cut in the job"
+        );
     }
 }
 
@@ -195,7 +198,11 @@ fn ezdxf_measures_every_edges_allowance_from_sew_line_to_cut_line() {
         want.sort_by(|a, b| a.0.cmp(b.0));
         assert_eq!(got.len(), want.len(), "{block}: {got:?}");
         for (g, w) in got.iter().zip(&want) {
-            assert_eq!((g.0.as_str(), g.1.as_str(), g.2), (w.0, w.1, w.2), "{block}");
+            assert_eq!(
+                (g.0.as_str(), g.1.as_str(), g.2),
+                (w.0, w.1, w.2),
+                "{block}"
+            );
             assert!((g.3 - w.2).abs() <= 0.02, "{block} {}: {} mm", g.0, g.3);
         }
     }
@@ -245,7 +252,10 @@ fn sizes_grade_evenly_and_the_order_is_nested_together() {
         let f = out.join(format!("graded-{}.svg", piece.replace(' ', "_")));
         let svg = std::fs::read_to_string(&f).unwrap();
         for size in SIZES {
-            assert!(svg.contains(&format!("id=\"size-{size}\"")), "{piece} {size}");
+            assert!(
+                svg.contains(&format!("id=\"size-{size}\"")),
+                "{piece} {size}"
+            );
         }
     }
 }
@@ -270,9 +280,10 @@ fn labels_are_readable_and_a_knife_job_says_its_pieces_are_unmarked() {
     // Measured on the pattern sheet, where every piece stands upright: the tallest single stroke
     // of a label is its cap height (capitals, digits and ascenders span it; descenders less).
     let pattern = std::fs::read_to_string(out.join("pattern.svg")).unwrap();
-    let pattern = flatcut::pattern::svg::read_svg(&pattern, "pattern.svg", 0.01, &Default::default())
-        .unwrap()
-        .drawing;
+    let pattern =
+        flatcut::pattern::svg::read_svg(&pattern, "pattern.svg", 0.01, &Default::default())
+            .unwrap()
+            .drawing;
     let mut cap: BTreeMap<String, f64> = BTreeMap::new();
     for s in pattern.strokes.iter().filter(|s| {
         s.kind == StrokeKind::Text && s.id.contains("-label-") && !s.id.contains("-label-lasting")
@@ -312,7 +323,12 @@ fn bad_edges_laps_and_sizes_are_refused_by_name_with_nothing_written() {
         (
             "an edge off the outline",
             Box::new(|d: &str| d.replacen("from = [-4, 0, 0]", "from = [120, 0, 90]", 1)),
-            vec!["part 0 'upper'", "edge 'featherline'", "`from`", "from the boundary"],
+            vec![
+                "part 0 'upper'",
+                "edge 'featherline'",
+                "`from`",
+                "from the boundary",
+            ],
         ),
         (
             "two edges that overlap",
@@ -328,7 +344,11 @@ fn bad_edges_laps_and_sizes_are_refused_by_name_with_nothing_written() {
         (
             "a lap naming a piece not beside the line",
             Box::new(|d: &str| d.replacen("lap = \"toe cap\"", "lap = \"lateral quarter\"", 1)),
-            vec!["line 'toe-cap'", "lap = \"lateral quarter\"", "not beside the line"],
+            vec![
+                "line 'toe-cap'",
+                "lap = \"lateral quarter\"",
+                "not beside the line",
+            ],
         ),
         (
             "a scale of zero",
@@ -367,8 +387,8 @@ fn bad_edges_laps_and_sizes_are_refused_by_name_with_nothing_written() {
             "--quiet",
             "--no-send",
         ];
-        let err = flatcut_cli::run(flatcut_cli::Cli::try_parse_from(args).unwrap())
-            .expect_err(what);
+        let err =
+            flatcut_cli::run(flatcut_cli::Cli::try_parse_from(args).unwrap()).expect_err(what);
         let err = format!("{err:#}");
         assert!(err.contains("design.toml"), "{what}: {err}");
         for w in want {

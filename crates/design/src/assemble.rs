@@ -337,7 +337,6 @@ fn split_part(
     Ok(())
 }
 
-
 /// The allowance a style line gives the pieces on its two sides along one of its seams: its
 /// `allowance_mm`, or for a lapped seam 0 on the piece on top (cut raw) and the underlay on the
 /// other. Every seam side becomes an edge of its piece named after the seam (the pieces' own
@@ -348,7 +347,10 @@ fn line_edges(
     seam: &MatingSeam,
     pieces: &mut [AssembledPiece],
 ) -> Result<(), DesignError> {
-    let names = seam.sides.each_ref().map(|s| pieces[s.piece].def.name.clone());
+    let names = seam
+        .sides
+        .each_ref()
+        .map(|s| pieces[s.piece].def.name.clone());
     if let Some(lap) = &line.lap {
         let what = format!("line '{}'", line.name);
         if names[0] == names[1] {

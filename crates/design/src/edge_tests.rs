@@ -55,7 +55,10 @@ fn a_part_edge_is_found_on_the_outline_and_shared_by_the_pieces_along_it() {
         let e = edges(&a, piece);
         // the hem, and the line's seam side (the pieces' own allowance)
         let hem = e.iter().find(|e| e.name == "hem").unwrap();
-        assert_eq!((hem.kind, hem.allowance_mm, hem.closed), (EdgeKind::Hem, Some(30.0), false));
+        assert_eq!(
+            (hem.kind, hem.allowance_mm, hem.closed),
+            (EdgeKind::Hem, Some(30.0), false)
+        );
         // the whole bottom side, from x = 0 to x = 200 at y = 0
         assert!(hem.points.iter().all(|p| p.y.abs() < 1e-9));
         assert_eq!(hem.points.first().unwrap().x, 0.0);
@@ -70,7 +73,10 @@ fn a_part_edge_is_found_on_the_outline_and_shared_by_the_pieces_along_it() {
         "[[part.edge]]\nname = \"rim\"\nfrom = [0, 0, 0]\nto = [0, 0, 0]\nallowance_mm = 5\nkind = \"fold\"\n",
     );
     let a = assemble(&text).unwrap();
-    let rim = edges(&a, "left").into_iter().find(|e| e.name == "rim").unwrap();
+    let rim = edges(&a, "left")
+        .into_iter()
+        .find(|e| e.name == "rim")
+        .unwrap();
     assert!(rim.closed);
     let len: f64 = (0..rim.points.len())
         .map(|i| rim.points[i].distance(rim.points[(i + 1) % rim.points.len()]))
@@ -95,7 +101,10 @@ fn a_lapped_line_cuts_the_top_piece_raw_and_gives_the_other_the_underlay() {
     let a = assemble(&sheet("allowance_mm = 4", "")).unwrap();
     for piece in ["left", "right"] {
         let e = edges(&a, piece);
-        assert_eq!(e.iter().find(|e| e.name == "middle").unwrap().allowance_mm, Some(4.0));
+        assert_eq!(
+            e.iter().find(|e| e.name == "middle").unwrap().allowance_mm,
+            Some(4.0)
+        );
     }
 }
 
@@ -106,10 +115,15 @@ fn err(text: &str) -> String {
 #[test]
 fn bad_edges_and_laps_are_refused_naming_file_part_and_edge() {
     let edge = |from: &str, to: &str, more: &str| {
-        format!("[[part.edge]]\nname = \"hem\"\nfrom = {from}\nto = {to}\nallowance_mm = 30\nkind = \"hem\"\n{more}")
+        format!(
+            "[[part.edge]]\nname = \"hem\"\nfrom = {from}\nto = {to}\nallowance_mm = 30\nkind = \"hem\"\n{more}"
+        )
     };
     let e = err(&sheet("", &edge("[0, 50, 40]", "[200, 0, 0]", "")));
-    assert!(e.starts_with("t.toml: part 0 'sheet': edge 'hem': `from`"), "{e}");
+    assert!(
+        e.starts_with("t.toml: part 0 'sheet': edge 'hem': `from`"),
+        "{e}"
+    );
     assert!(e.contains("from the boundary"), "{e}");
     let overlap = format!(
         "{}[[part.edge]]\nname = \"side\"\nfrom = [150, 0, 0]\nto = [200, 100, 0]\nallowance_mm = 12\n",
@@ -118,14 +132,26 @@ fn bad_edges_and_laps_are_refused_naming_file_part_and_edge() {
     let e = err(&sheet("", &overlap));
     assert!(e.contains("edge 'side': it overlaps edge 'hem'"), "{e}");
     let e = err(&sheet("lap = \"elsewhere\"", ""));
-    assert!(e.contains("line 0 'middle': lap = \"elsewhere\" names no piece"), "{e}");
+    assert!(
+        e.contains("line 0 'middle': lap = \"elsewhere\" names no piece"),
+        "{e}"
+    );
     let e = err(&sheet("lap = \"left\"\nallowance_mm = 3", ""));
     assert!(e.contains("give `allowance_mm` or `lap`"), "{e}");
     let e = err(&sheet("underlay_mm = 3", ""));
     assert!(e.contains("`underlay_mm` needs `lap`"), "{e}");
-    let e = err(&sheet("", "[[part.edge]]\nname = \"x\"\nfrom = [0, 0, 0]\nto = [9, 0, 0]\nkind = \"lasting\"\n"));
-    assert!(e.contains("edge 'x': a lasting edge needs its allowance_mm"), "{e}");
-    let e = err(&sheet("", "[[part.edge]]\nname = \"x\"\nfrom = [0, 0, 0]\nto = [9, 0, 0]\nkind = \"raw\"\nallowance_mm = 2\n"));
+    let e = err(&sheet(
+        "",
+        "[[part.edge]]\nname = \"x\"\nfrom = [0, 0, 0]\nto = [9, 0, 0]\nkind = \"lasting\"\n",
+    ));
+    assert!(
+        e.contains("edge 'x': a lasting edge needs its allowance_mm"),
+        "{e}"
+    );
+    let e = err(&sheet(
+        "",
+        "[[part.edge]]\nname = \"x\"\nfrom = [0, 0, 0]\nto = [9, 0, 0]\nkind = \"raw\"\nallowance_mm = 2\n",
+    ));
     assert!(e.contains("a raw edge is cut on the line"), "{e}");
 }
 
@@ -170,7 +196,10 @@ fn sizes_are_the_design_scaled_about_the_origin_per_axis() {
     assert_eq!(sizes[1].design.parts, d.parts);
     let a = s.assemble(Path::new("."), &TOL).unwrap();
     let bb = a.pieces[0].mesh.bbox();
-    assert!((bb.min.x - 10.0).abs() < 1e-9 && (bb.max.y - 80.0).abs() < 1e-9, "{bb:?}");
+    assert!(
+        (bb.min.x - 10.0).abs() < 1e-9 && (bb.max.y - 80.0).abs() < 1e-9,
+        "{bb:?}"
+    );
     // a design without grading is its one unnamed size
     let plain = Design::from_toml_str(&sheet("", ""), "t.toml").unwrap();
     let one = plain.sizes(Path::new(".")).unwrap();
@@ -186,16 +215,22 @@ fn bad_gradings_are_refused_naming_the_size() {
             .to_string()
     };
     let m = "[[grading.size]]\nname = \"M\"\n";
-    let x = e(&format!("{m}[[grading.size]]\nname = \"S\"\nscale = [1, -0.5, 1]\n"));
+    let x = e(&format!(
+        "{m}[[grading.size]]\nname = \"S\"\nscale = [1, -0.5, 1]\n"
+    ));
     assert!(x.starts_with("t.toml: [grading] size 'S': scale"), "{x}");
     assert!(x.contains("finite and > 0, got -0.5"), "{x}");
-    let x = e(&format!("{m}[[grading.size]]\nname = \"S\"\nscale = [0, 1, 1]\n"));
+    let x = e(&format!(
+        "{m}[[grading.size]]\nname = \"S\"\nscale = [0, 1, 1]\n"
+    ));
     assert!(x.contains("size 'S'") && x.contains("got 0"), "{x}");
     let x = e("[[grading.size]]\nname = \"S\"\nscale = [1, 1, 1]\n");
     assert!(x.contains("base = \"M\" is none of the sizes (S)"), "{x}");
     let x = e(&format!("{m}[[grading.size]]\nname = \"S\"\n"));
     assert!(x.contains("size 'S': give `scale"), "{x}");
-    let x = e(&format!("{m}[[grading.size]]\nname = \"M\"\nscale = [1, 1, 1]\n"));
+    let x = e(&format!(
+        "{m}[[grading.size]]\nname = \"M\"\nscale = [1, 1, 1]\n"
+    ));
     assert!(x.contains("two sizes have this name"), "{x}");
     // a size's own design must have the base's lines
     let dir = tempfile::tempdir().unwrap();
@@ -205,14 +240,18 @@ fn bad_gradings_are_refused_naming_the_size() {
     );
     std::fs::write(dir.path().join("s.toml"), own).unwrap();
     let d = Design::from_toml_str(
-        &graded(&format!("{m}[[grading.size]]\nname = \"S\"\ndesign = \"s.toml\"\n")),
+        &graded(&format!(
+            "{m}[[grading.size]]\nname = \"S\"\ndesign = \"s.toml\"\n"
+        )),
         "t.toml",
     )
     .unwrap();
     let x = d.sizes(dir.path()).unwrap_err().to_string();
     assert!(
         x.starts_with("t.toml: [grading] size 'S': ")
-            && x.contains("s.toml: part 'sheet': it has no line 'middle', which the base design has"),
+            && x.contains(
+                "s.toml: part 'sheet': it has no line 'middle', which the base design has"
+            ),
         "{x}"
     );
     // a sphere cannot be scaled differently per axis
@@ -222,6 +261,9 @@ fn bad_gradings_are_refused_naming_the_size() {
         .sizes(Path::new("."))
         .unwrap_err()
         .to_string();
-    assert!(x.contains("size 'L': piece 'ball': a sphere stays a sphere only"), "{x}");
+    assert!(
+        x.contains("size 'L': piece 'ball': a sphere stays a sphere only"),
+        "{x}"
+    );
     let _ = DVec3::ZERO;
 }

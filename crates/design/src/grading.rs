@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 use flatcut_geom::limits;
 use serde::Deserialize;
 
-use crate::units::{Axes, map_point, map_piece};
+use crate::units::{Axes, map_piece, map_point};
 use crate::{Design, DesignError, P3};
 
 /// A design's size run, as the file gives it (the origin in mm once loaded).
@@ -109,7 +109,9 @@ pub(crate) fn check(file: &str, g: &GradingDef, s: f64) -> Result<(), DesignErro
                 ));
             }
             (false, None, None) => {
-                return Err(e("give `scale = [sx, sy, sz]` or `design = \"file\"`".into()));
+                return Err(e(
+                    "give `scale = [sx, sy, sz]` or `design = \"file\"`".into()
+                ));
             }
             (false, Some(_), Some(_)) => {
                 return Err(e("give `scale` or `design`, not both".into()));
@@ -165,9 +167,13 @@ impl Design {
                             format!("{}: a size's design has no [grading] of its own", d.source),
                         ));
                     }
-                    same_names(self, &d)
-                        .map_err(|m| err(&self.source, Some(&z.name), format!("{}: {m}", d.source)))?;
-                    (d, path.parent().map_or(dir.to_path_buf(), Path::to_path_buf))
+                    same_names(self, &d).map_err(|m| {
+                        err(&self.source, Some(&z.name), format!("{}: {m}", d.source))
+                    })?;
+                    (
+                        d,
+                        path.parent().map_or(dir.to_path_buf(), Path::to_path_buf),
+                    )
                 }
                 (None, Some(sc)) if z.name != g.base => (
                     scaled(self, &Axes::about(g.origin, sc))
@@ -209,12 +215,18 @@ fn same_names(base: &Design, size: &Design) -> Result<(), String> {
     fn both<T>(what: &str, a: &[T], b: &[T], name: impl Fn(&T) -> &str) -> Result<(), String> {
         for x in a {
             if !b.iter().any(|y| name(y) == name(x)) {
-                return Err(format!("it has no {what} '{}', which the base design has", name(x)));
+                return Err(format!(
+                    "it has no {what} '{}', which the base design has",
+                    name(x)
+                ));
             }
         }
         for y in b {
             if !a.iter().any(|x| name(x) == name(y)) {
-                return Err(format!("it has a {what} '{}', which the base design has not", name(y)));
+                return Err(format!(
+                    "it has a {what} '{}', which the base design has not",
+                    name(y)
+                ));
             }
         }
         Ok(())

@@ -52,8 +52,8 @@ pub use schema::{
     Blend, CurveDef, DartPress, DartsDef, GrainDef, MarkDef, MarkKind, P3, PieceDef, PieceSize,
     SeamDef, SurfaceDef, Units,
 };
-pub use units::Axes;
 pub use step::{StepFaces, StepGroup, StepModel, StepPiece};
+pub use units::Axes;
 
 #[cfg(test)]
 mod edge_tests;

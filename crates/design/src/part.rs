@@ -240,9 +240,7 @@ pub(crate) fn check_part(p: &PartDef, s: f64) -> Result<(), DesignError> {
                 return Err(p.err(format!("{what}: `underlay_mm` needs `lap`")));
             }
             (Some(l), _, _) if !p.pieces.iter().any(|q| &q.name == l) => {
-                return Err(p.err(format!(
-                    "{what}: lap = \"{l}\" names no piece of the part"
-                )));
+                return Err(p.err(format!("{what}: lap = \"{l}\" names no piece of the part")));
             }
             _ => {}
         }

@@ -276,6 +276,9 @@ mod tests {
             }
         );
         let e = map_surface(&mut s, &Axes::about([0.0; 3], [2.0, 1.0, 1.0]), false).unwrap_err();
-        assert!(e.contains("cylinder") && e.contains("its own design"), "{e}");
+        assert!(
+            e.contains("cylinder") && e.contains("its own design"),
+            "{e}"
+        );
     }
 }

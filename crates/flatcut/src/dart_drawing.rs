@@ -138,7 +138,11 @@ fn cap(
     let start = if back { from } else { to };
     let mut reached = false;
     for k in 1..n {
-        let i = if back { (start + n - k) % n } else { (start + k) % n };
+        let i = if back {
+            (start + n - k) % n
+        } else {
+            (start + k) % n
+        };
         let p = outline[i];
         walked += prev.distance(p);
         if let Some(q) = ray_crossing(apex, fold, prev, p) {
@@ -355,7 +359,12 @@ mod tests {
     fn a_zigzag_leg_becomes_the_smooth_line_through_it() {
         // a straight 60 mm leg with 1 mm kinks every 5 mm
         let leg: Vec<DVec2> = (0..=12)
-            .map(|k| v(5.0 * k as f64, if k % 2 == 1 { 0.5 } else { -0.5 } * f64::from(k != 0 && k != 12)))
+            .map(|k| {
+                v(
+                    5.0 * k as f64,
+                    if k % 2 == 1 { 0.5 } else { -0.5 } * f64::from(k != 0 && k != 12),
+                )
+            })
             .collect();
         let s = smooth_leg(&leg, 0.02);
         assert_eq!(s[0], leg[0]);
@@ -379,7 +388,10 @@ mod tests {
         // pressed toward the leg at (40, 0): the outline there runs back along y = 0
         let c = cap(&outline, 1, 3, 0, 0, v(50., 40.)).unwrap();
         // the cap peaks on the dart's centre line, below the edge (outside the piece)
-        let peak = c.iter().copied().fold(v(0., f64::INFINITY), |a, b| if b.y < a.y { b } else { a });
+        let peak = c
+            .iter()
+            .copied()
+            .fold(v(0., f64::INFINITY), |a, b| if b.y < a.y { b } else { a });
         assert!((peak.x - 50.0).abs() < 1e-9 && peak.y < 0.0, "{c:?}");
         // folded, the cap's first half lands back on the pressed side's edge y = 0
         let apex = v(50., 40.);
@@ -398,25 +410,51 @@ mod tests {
     fn an_oblique_darts_cap_peaks_and_folds_flat_onto_the_pressed_side() {
         // the point leans toward +x: the legs meet the edge y = 0 at 76° and 63°
         let apex = v(70., 40.);
-        let outline = vec![v(0., 0.), v(40., 0.), apex, v(60., 0.), v(100., 0.), v(100., 60.), v(0., 60.)];
+        let outline = vec![
+            v(0., 0.),
+            v(40., 0.),
+            apex,
+            v(60., 0.),
+            v(100., 0.),
+            v(100., 60.),
+            v(0., 60.),
+        ];
         for pressed in [0, 1] {
             let c = cap(&outline, 1, 3, 0, pressed, apex).unwrap();
-            let (ms, edge_x) = if pressed == 0 { (v(40., 0.), -1.0) } else { (v(60., 0.), 1.0) };
+            let (ms, edge_x) = if pressed == 0 {
+                (v(40., 0.), -1.0)
+            } else {
+                (v(60., 0.), 1.0)
+            };
             let us = (ms - apex).normalize();
             // the half next to the pressed leg folds onto the pressed side's edge, y = 0 beyond
             // the mouth; the other half mirrors it about the dart's centre line
             let half = c.len() / 2 + 1;
-            let near: Vec<DVec2> = if pressed == 0 { c[..half].to_vec() } else { c[c.len() - half..].to_vec() };
+            let near: Vec<DVec2> = if pressed == 0 {
+                c[..half].to_vec()
+            } else {
+                c[c.len() - half..].to_vec()
+            };
             for p in &near {
                 let f = apex + 2.0 * (*p - apex).dot(us) * us - (*p - apex);
-                assert!(f.y.abs() < 1e-9 && (f.x - ms.x) * edge_x >= -1e-9, "{p} folds to {f}");
+                assert!(
+                    f.y.abs() < 1e-9 && (f.x - ms.x) * edge_x >= -1e-9,
+                    "{p} folds to {f}"
+                );
             }
             // pressed toward the leg the point leans to, the intake's edge dips into the piece
             // (cut away so the folded intake stays behind the edge); the other way it peaks
             let rise = c.iter().map(|p| -p.y).fold(f64::NEG_INFINITY, f64::max);
             let dip = c.iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max);
-            let (want, got) = if pressed == 0 { ("peak", rise) } else { ("dip", dip) };
-            assert!(got > 1.0, "pressed {pressed}: the cap's {want} is {got} mm: {c:?}");
+            let (want, got) = if pressed == 0 {
+                ("peak", rise)
+            } else {
+                ("dip", dip)
+            };
+            assert!(
+                got > 1.0,
+                "pressed {pressed}: the cap's {want} is {got} mm: {c:?}"
+            );
         }
     }
 

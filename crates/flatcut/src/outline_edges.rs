@@ -93,9 +93,8 @@ pub fn stretches(classes: &[Option<usize>], edges: &[OutlineEdge]) -> Vec<EdgeAl
 /// The middle of a flattened outline (its area centroid) and the piece's length direction
 /// there: the grain where there is one, else the longer side of its smallest bounding box.
 pub fn centre_line(outline: &[DVec2], grain: Option<DVec2>) -> (DVec2, DVec2) {
-    let centre = flatcut_geom::polygon::area_centroid(outline).unwrap_or_else(|| {
-        outline.iter().copied().sum::<DVec2>() / outline.len().max(1) as f64
-    });
+    let centre = flatcut_geom::polygon::area_centroid(outline)
+        .unwrap_or_else(|| outline.iter().copied().sum::<DVec2>() / outline.len().max(1) as f64);
     let dir = grain
         .filter(|d| d.length() > 0.0)
         .unwrap_or_else(|| DVec2::from_angle(-flatcut_pattern::piece::orientation(outline, None)));

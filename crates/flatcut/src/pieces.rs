@@ -68,7 +68,12 @@ pub fn codes(names: &[&str]) -> Vec<String> {
     out
 }
 
-fn build_one(f: &Flat, name: &str, code: String, s: &PieceSettings) -> Result<Piece, PipelineError> {
+fn build_one(
+    f: &Flat,
+    name: &str,
+    code: String,
+    s: &PieceSettings,
+) -> Result<Piece, PipelineError> {
     let ctx = PieceContext {
         def: f.def.as_ref(),
         report: Some(&f.report),
@@ -87,12 +92,19 @@ fn build_one(f: &Flat, name: &str, code: String, s: &PieceSettings) -> Result<Pi
 /// graded design, its name in the design and its as-drawn pattern piece in each size, in the
 /// grading's order (the mirrored side of a pair is its mirror image). Empty for a design
 /// without grading.
-pub fn graded_sets<'a>(flats: &[Flat], pieces: &'a [Piece]) -> Vec<(String, Vec<(String, &'a Piece)>)> {
+pub fn graded_sets<'a>(
+    flats: &[Flat],
+    pieces: &'a [Piece],
+) -> Vec<(String, Vec<(String, &'a Piece)>)> {
     let mut sets: Vec<(String, Vec<(String, &'a Piece)>)> = Vec::new();
     let mut at = 0;
     for f in flats {
         let drawn = pieces.get(at);
-        at += if f.mirrored > 0 && f.def.is_some() { 2 } else { 1 };
+        at += if f.mirrored > 0 && f.def.is_some() {
+            2
+        } else {
+            1
+        };
         let (Some(size), Some(p)) = (f.def.as_ref().and_then(|d| d.size.as_ref()), drawn) else {
             continue;
         };

@@ -641,8 +641,12 @@ pub fn piece_from_flat(
         None => None,
     };
     let drawn = draw_darts(ctx, mesh, flat, &outline, grain, opts.chord_tol);
-    let pressed: Vec<(&flatcut_darts::Dart, usize)> =
-        ctx.darts.iter().zip(&drawn).map(|(d, w)| (d, w.pressed)).collect();
+    let pressed: Vec<(&flatcut_darts::Dart, usize)> = ctx
+        .darts
+        .iter()
+        .zip(&drawn)
+        .map(|(d, w)| (d, w.pressed))
+        .collect();
     let (outline, ids, classes) =
         crate::dart_drawing::true_mouths(outline, ids, classes, &pressed, flat);
     let mut input = PieceInput::new(name, outline);
@@ -724,7 +728,10 @@ fn design_grain(
     };
     let (a, b) = (DVec3::from_array(a), DVec3::from_array(b));
     let q = flatcut_flatten::marks::to_plane(mesh, flat, &[a, b]);
-    match (q[0].or_else(|| near_flat(mesh, flat, a)), q[1].or_else(|| near_flat(mesh, flat, b))) {
+    match (
+        q[0].or_else(|| near_flat(mesh, flat, a)),
+        q[1].or_else(|| near_flat(mesh, flat, b)),
+    ) {
         (Some(a), Some(b)) if a.distance(b) > 0.0 => Ok(Some((a, b))),
         _ => Err(PipelineError::Piece {
             piece: name.into(),
@@ -763,10 +770,8 @@ fn draw_darts(
         }
         _ => None,
     };
-    let (centre, dir) = crate::outline_edges::centre_line(
-        outline,
-        grain.map(|(a, b)| b - a).or(ctx.grain_dir),
-    );
+    let (centre, dir) =
+        crate::outline_edges::centre_line(outline, grain.map(|(a, b)| b - a).or(ctx.grain_dir));
     ctx.darts
         .iter()
         .map(|d| {

@@ -164,9 +164,23 @@ fn fold(x: &Vertex, incoming: bool, mitre_limit: f64) -> Option<Parts> {
     // t: the turned edge; o: the other. `e` runs along the turned edge's sew line toward and past
     // the vertex, away from the turned edge's body.
     let (e, wt, nt, d_o, wo, no) = if incoming {
-        (x.dp, x.wp, right_normal(x.dp), x.dn, x.wn, right_normal(x.dn))
+        (
+            x.dp,
+            x.wp,
+            right_normal(x.dp),
+            x.dn,
+            x.wn,
+            right_normal(x.dn),
+        )
     } else {
-        (-x.dn, x.wn, right_normal(x.dn), x.dp, x.wp, right_normal(x.dp))
+        (
+            -x.dn,
+            x.wn,
+            right_normal(x.dn),
+            x.dp,
+            x.wp,
+            right_normal(x.dp),
+        )
     };
     if wt <= 0.0 {
         return None;
@@ -226,7 +240,10 @@ mod tests {
         );
         // X = (15, 0), P1 = (15, −40): the patch is the rectangle's corner
         let pts: Vec<DVec2> = p.add.iter().flatten().copied().collect();
-        assert!(pts.iter().any(|q| q.distance(v(15., -40.)) < 1e-9), "{pts:?}");
+        assert!(
+            pts.iter().any(|q| q.distance(v(15., -40.)) < 1e-9),
+            "{pts:?}"
+        );
         assert!(pts.iter().any(|q| q.distance(v(15., 0.)) < 1e-9));
     }
 
@@ -235,7 +252,12 @@ mod tests {
         let alpha = 0.3f64;
         let (wp, wn) = (40.0, 15.0);
         let mut p = Parts::default();
-        parts(&hem_corner(alpha, wp, wn), Corner::FoldIncoming, 4.0, &mut p);
+        parts(
+            &hem_corner(alpha, wp, wn),
+            Corner::FoldIncoming,
+            4.0,
+            &mut p,
+        );
         let (s, c) = alpha.sin_cos();
         // the side seam's cut line crosses the hem line at X = (wn / cos α, 0); its mirror image
         // meets the hem's cut line y = −wp at x = (wn − wp·sin α) / cos α

@@ -300,11 +300,7 @@ pub fn write_pieces(placed: &[PlacedPiece], layers: DxfLayers, chord_tol: f64) -
             notes,
         });
     }
-    write_blocks(
-        &unique_names(blocks),
-        Aabb2::from_points(bbox_pts),
-        layers,
-    )
+    write_blocks(&unique_names(blocks), Aabb2::from_points(bbox_pts), layers)
 }
 
 /// The annotation of a run of one allowance: `featherline: lasting 16.0 mm` (a run no edge

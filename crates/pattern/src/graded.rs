@@ -165,7 +165,9 @@ mod tests {
                     let (x, y) = xy.split_once(',').unwrap();
                     (x.parse::<f64>().unwrap(), y.parse::<f64>().unwrap())
                 })
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (x, y)| (a.min(x), b.max(y)))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (x, y)| {
+                    (a.min(x), b.max(y))
+                })
         };
         assert_eq!(corner("size-S"), corner("size-M"));
         assert_eq!(svg, graded_svg("panel", &[("S", &s), ("M", &m)]));

@@ -327,7 +327,10 @@ mod tests {
     #[test]
     fn square_mitred_is_a_bigger_square() {
         let sq = [v(0., 0.), v(100., 0.), v(100., 50.), v(0., 50.)];
-        let r = allowance(&sq, &[10.0; 4], &all(CornerStyle::Mitred, sq.len()),
+        let r = allowance(
+            &sq,
+            &[10.0; 4],
+            &all(CornerStyle::Mitred, sq.len()),
             DEFAULT_MITRE_LIMIT,
             1e-6,
         )
@@ -378,7 +381,11 @@ mod tests {
         .unwrap();
         assert_eq!(r.cut.len(), 4, "{:?}", r.cut);
         for q in [v(-8., -16.), v(108., -16.), v(108., 58.), v(-8., 58.)] {
-            assert!(r.cut.iter().any(|c| c.distance(q) < 1e-9), "{q} in {:?}", r.cut);
+            assert!(
+                r.cut.iter().any(|c| c.distance(q) < 1e-9),
+                "{q} in {:?}",
+                r.cut
+            );
         }
     }
 
@@ -453,7 +460,10 @@ mod tests {
     fn squared_corner_of_a_triangle_is_cut_at_the_width() {
         let tri = [v(0., 0.), v(100., 0.), v(50., 30.)];
         let w = 10.0;
-        let r = allowance(&tri, &[w; 3], &all(CornerStyle::Squared, tri.len()),
+        let r = allowance(
+            &tri,
+            &[w; 3],
+            &all(CornerStyle::Squared, tri.len()),
             DEFAULT_MITRE_LIMIT,
             1e-6,
         )
@@ -479,7 +489,10 @@ mod tests {
             v(28., 80.),
             v(0., 80.),
         ];
-        match allowance(&u, &[10.0; 8], &all(CornerStyle::Mitred, u.len()),
+        match allowance(
+            &u,
+            &[10.0; 8],
+            &all(CornerStyle::Mitred, u.len()),
             DEFAULT_MITRE_LIMIT,
             1e-6,
         ) {
@@ -491,7 +504,10 @@ mod tests {
         }
         // a 1 mm allowance keeps the slot open
         assert!(
-            allowance(&u, &[1.0; 8], &all(CornerStyle::Mitred, u.len()),
+            allowance(
+                &u,
+                &[1.0; 8],
+                &all(CornerStyle::Mitred, u.len()),
                 DEFAULT_MITRE_LIMIT,
                 1e-6
             )

@@ -195,10 +195,7 @@ fn timed<T>(
 
 /// Refuses an `[order]` that names a size the design's grading does not have, or any size of a
 /// design without grading, before anything is flattened.
-fn check_order(
-    project: &Project,
-    design: Option<&flatcut_design::Design>,
-) -> Result<(), RunError> {
+fn check_order(project: &Project, design: Option<&flatcut_design::Design>) -> Result<(), RunError> {
     let Some(order) = &project.order else {
         return Ok(());
     };

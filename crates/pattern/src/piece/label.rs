@@ -80,7 +80,11 @@ impl Piece {
     /// `toe cap 42 L`), or it has none.
     fn name_says_size(&self) -> bool {
         let l = &self.label;
-        let name = if l.name.is_empty() { &self.name } else { &l.name };
+        let name = if l.name.is_empty() {
+            &self.name
+        } else {
+            &l.name
+        };
         l.size.is_empty() || name.split_whitespace().any(|w| w == l.size)
     }
 

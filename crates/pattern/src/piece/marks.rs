@@ -1,8 +1,8 @@
 //! Marks on a piece: notches cut through the allowance at match marks, drill holes, drawn
 //! reference points, internal lines, and the checks on the grain line.
 
-use super::outline::{Outline, WELD};
 use super::edges::OutlineEdges;
+use super::outline::{Outline, WELD};
 use super::{MarkKind, NotchStyle, PatternError, PieceInput, PieceOptions, invalid, non_finite};
 use crate::poly;
 use flatcut_geom::DVec2;

@@ -152,20 +152,22 @@ fn named_edges_carry_their_allowance_and_the_rest_the_default() {
 #[test]
 fn a_lasting_margin_is_written_lasting_inside_it() {
     let mut input = PieceInput::new("quarter", rect(200., 100., 20));
-    input.edges.push(edge("featherline", EdgeKind::Lasting, Some(16.0), 0, 20));
+    input
+        .edges
+        .push(edge("featherline", EdgeKind::Lasting, Some(16.0), 0, 20));
     let p = Piece::build(&input, &PieceOptions::default().with_default_seam(8.0)).unwrap();
     assert!(!p.edge_labels.is_empty());
     // upright, in the margin below the bottom edge, at least the readable height
-    let (lo, hi) = p
-        .edge_labels
-        .iter()
-        .flatten()
-        .fold((DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)), |(lo, hi), q| {
-            (lo.min(*q), hi.max(*q))
-        });
+    let (lo, hi) = p.edge_labels.iter().flatten().fold(
+        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+        |(lo, hi), q| (lo.min(*q), hi.max(*q)),
+    );
     assert!(lo.y > -16.0 && hi.y < 0.0, "{lo} {hi}");
     assert!(hi.y - lo.y >= MIN_LABEL_HEIGHT, "{lo} {hi}");
-    assert!(hi.x - lo.x > 3.0 * (hi.y - lo.y), "written along the edge: {lo} {hi}");
+    assert!(
+        hi.x - lo.x > 3.0 * (hi.y - lo.y),
+        "written along the edge: {lo} {hi}"
+    );
     let d = p.to_drawing(1);
     assert!(
         d.strokes
@@ -177,12 +179,23 @@ fn a_lasting_margin_is_written_lasting_inside_it() {
 #[test]
 fn overlapping_or_misplaced_edges_are_refused_naming_them() {
     let mut input = PieceInput::new("front", rect(200., 100., 20));
-    input.edges.push(edge("hem", EdgeKind::Hem, Some(30.0), 0, 20));
-    input.edges.push(edge("side", EdgeKind::Seam, Some(10.0), 10, 40));
-    let e = Piece::build(&input, &PieceOptions::default()).unwrap_err().to_string();
-    assert!(e.contains("front") && e.contains("'hem' and 'side' overlap"), "{e}");
+    input
+        .edges
+        .push(edge("hem", EdgeKind::Hem, Some(30.0), 0, 20));
+    input
+        .edges
+        .push(edge("side", EdgeKind::Seam, Some(10.0), 10, 40));
+    let e = Piece::build(&input, &PieceOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("front") && e.contains("'hem' and 'side' overlap"),
+        "{e}"
+    );
     input.edges[1] = edge("side", EdgeKind::Seam, Some(10.0), 20, 99);
-    let e = Piece::build(&input, &PieceOptions::default()).unwrap_err().to_string();
+    let e = Piece::build(&input, &PieceOptions::default())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("edge 'side'") && e.contains("vertex 99"), "{e}");
 }
 
@@ -234,7 +247,8 @@ fn allowance_too_large_names_the_piece() {
     assert!(matches!(e, PatternError::AllowanceTooLarge { .. }), "{e}");
     assert!(e.to_string().contains("tongue"));
     let mut neg = PieceInput::new("heel", u);
-    neg.edges.push(edge("back", EdgeKind::Seam, Some(-1.0), 0, 4));
+    neg.edges
+        .push(edge("back", EdgeKind::Seam, Some(-1.0), 0, 4));
     assert!(matches!(
         Piece::build(&neg, &PieceOptions::default()),
         Err(PatternError::AllowanceTooLarge { .. })
