@@ -112,6 +112,9 @@ fn send(addr: SocketAddr, method: &str, path: &str, v: &Value) -> Answer {
     )
 }
 
+/// The sizes the shoe is graded in (40, 42, 44): the workbench flattens each.
+const SHOE_SIZES: usize = 3;
+
 /// The shoe project copied into a temporary directory (the workbench saves into it).
 fn shoe() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
@@ -366,8 +369,9 @@ fn serve_saves_the_design_back_keeping_comments_and_untouched_keys() {
 }
 
 /// A line drawn across the vamp closes a new region: it gets a piece of its own at once, the
-/// flattening has five pieces and a new mating seam, within the leather's limits; undo brings
-/// the four pieces back and redo the five; a loose line is refused with the loader's message.
+/// flattening has five pieces in each of the shoe's three sizes and a new mating seam per size,
+/// within the leather's limits; undo brings the four pieces back and redo the five; a loose line
+/// is refused with the loader's message.
 #[test]
 fn serve_a_line_across_the_vamp_makes_a_fifth_piece() {
     let dir = shoe();
@@ -376,7 +380,10 @@ fn serve_a_line_across_the_vamp_makes_a_fifth_piece() {
     let f = send(a, "POST", "/api/flatten", &json!({}));
     assert_eq!(f.status, 200, "{}", String::from_utf8_lossy(&f.body));
     let f = f.json();
-    assert_eq!(f["pieces"].as_array().unwrap().len(), 4);
+    assert_eq!(f["pieces"].as_array().unwrap().len(), 4 * SHOE_SIZES);
+    assert_eq!(f["pieces"][0]["name"], "toe cap 40");
+    assert_eq!(f["pieces"][0]["part"], "upper");
+    assert_eq!(f["pieces"][0]["size"], "40");
     let regions = get(a, "/api/regions").json();
     assert_eq!(regions["parts"][0]["regions"].as_array().unwrap().len(), 4);
     let pts = vamp_line(&regions);
@@ -413,7 +420,7 @@ fn serve_a_line_across_the_vamp_makes_a_fifth_piece() {
     assert_eq!(new["pairs"], 1);
     let f = send(a, "POST", "/api/flatten", &json!({})).json();
     let pieces = f["pieces"].as_array().unwrap();
-    assert_eq!(pieces.len(), 5);
+    assert_eq!(pieces.len(), 5 * SHOE_SIZES);
     for p in pieces {
         assert!(p["within_limits"].as_bool().unwrap(), "{}", p["name"]);
         let faces = p["faces"].as_u64().unwrap() as usize;
@@ -425,8 +432,8 @@ fn serve_a_line_across_the_vamp_makes_a_fifth_piece() {
     let seams = f["mating_seams"].as_array().unwrap();
     let cut = seams
         .iter()
-        .find(|s| s["name"] == "cut")
-        .expect("the new line is a seam");
+        .find(|s| s["name"] == "cut 42")
+        .expect("the new line is a seam in every size");
     assert!(cut["mismatch_mm"].as_f64().unwrap() < 0.1, "{cut}");
     let mut sides: Vec<&str> = cut["pieces"]
         .as_array()
@@ -435,7 +442,7 @@ fn serve_a_line_across_the_vamp_makes_a_fifth_piece() {
         .map(|v| v.as_str().unwrap())
         .collect();
     sides.sort();
-    assert_eq!(sides, ["upper 1", "vamp"]);
+    assert_eq!(sides, ["upper 1 42", "vamp 42"]);
     // Undo, redo.
     assert_eq!(http(a, "POST", "/api/design/undo", &[], b"").status, 200);
     assert_eq!(
@@ -443,7 +450,7 @@ fn serve_a_line_across_the_vamp_makes_a_fifth_piece() {
             .as_array()
             .unwrap()
             .len(),
-        4
+        4 * SHOE_SIZES
     );
     assert_eq!(http(a, "POST", "/api/design/redo", &[], b"").status, 200);
     assert_eq!(get(a, "/api/design").json(), tree);
