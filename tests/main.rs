@@ -7,6 +7,7 @@ mod darts;
 mod dxf;
 mod fuzz;
 mod hpgl;
+mod licences;
 mod material;
 mod nest;
 mod pipeline;

@@ -421,3 +421,26 @@ fn item15_a_square_given_at_45_degrees_comes_out_square_to_the_axes() {
         e.y
     );
 }
+
+/// A negative number after a flag is that flag's value, checked by the flag's own rule; clap
+/// would otherwise read `-5` as an unknown flag and hide the real complaint.
+#[test]
+fn a_negative_value_reaches_its_flags_check() {
+    use clap::Parser as _;
+    let err = flatcut_cli::Cli::try_parse_from([
+        "flatcut", "pattern", "x.toml", "-o", "x.svg", "--seam", "-5",
+    ])
+    .expect_err("a negative seam allowance is refused");
+    let text = err.to_string();
+    assert!(!text.contains("unexpected argument"), "{text}");
+    assert!(text.contains("--seam") && text.contains("-5"), "{text}");
+    // Every command takes negative numbers as values, not just the one above.
+    use clap::CommandFactory as _;
+    for sub in flatcut_cli::Cli::command().get_subcommands() {
+        assert!(
+            sub.is_allow_negative_numbers_set(),
+            "{} reads -5 as a flag",
+            sub.get_name()
+        );
+    }
+}

@@ -22,32 +22,46 @@ pub struct Cli {
     pub command: Command,
 }
 
+/// The commands. Each takes negative numbers as values (`--seam -5` reaches the value's own
+/// check instead of being read as a flag `-5`).
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Describe a design or mesh file: pieces, area, bounding box, curvature, developability.
+    #[command(allow_negative_numbers = true)]
     Inspect(cmd::inspect::Args),
     /// Flatten a design or mesh to the plane; writes an OBJ with the 2D map as `vt` (mm).
+    #[command(allow_negative_numbers = true)]
     Flatten(cmd::flatten::Args),
     /// Distortion report of flattened OBJs (or of a design, flattened first): JSON, SVG, PNG, HTML.
+    #[command(allow_negative_numbers = true)]
     Report(cmd::report::Args),
     /// Pattern piece(s) from a design or flattened OBJ: SVG in true mm, optional DXF.
+    #[command(allow_negative_numbers = true)]
     Pattern(cmd::pattern::Args),
     /// Nest pattern pieces on sheets, a roll or leather hides (or a benchmark instance).
+    #[command(allow_negative_numbers = true)]
     Nest(cmd::nest::Args),
     /// G-code for a pen plotter, drag knife or laser from a pattern SVG, design or flattened OBJ.
+    #[command(allow_negative_numbers = true)]
     Gcode(cmd::gcode::Args),
     /// HP-GL/1 for a vinyl cutter or pen plotter from a pattern SVG/DXF, design or flattened OBJ.
+    #[command(allow_negative_numbers = true)]
     Hpgl(cmd::hpgl::Args),
     /// List serial ports.
+    #[command(allow_negative_numbers = true)]
     Ports(cmd::ports::Args),
     /// Stream a G-code job to a GRBL controller, or HP-GL to a plotter (default: embedded simulators).
+    #[command(allow_negative_numbers = true)]
     Send(cmd::send::Args),
     /// Run the simulated GRBL controller on a pseudo-terminal.
+    #[command(allow_negative_numbers = true)]
     Sim(cmd::sim::Args),
     /// The whole job: design → flatten → report → pattern → nest → G-code → send.
+    #[command(allow_negative_numbers = true)]
     Run(cmd::run::Args),
     /// The workbench in the browser: draw style lines on the 3D form, see the pieces and their
     /// strain live, nest, and run the cutter.
+    #[command(allow_negative_numbers = true)]
     Serve(cmd::serve::Args),
 }
 
