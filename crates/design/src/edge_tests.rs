@@ -267,3 +267,53 @@ fn bad_gradings_are_refused_naming_the_size() {
     );
     let _ = DVec3::ZERO;
 }
+
+#[test]
+fn a_size_of_its_own_design_is_read_in_its_own_units_with_the_base_names() {
+    // size L: the sheet 1.2 times as long and 1.1 times as wide, written in cm, its line and
+    // pieces where the grade puts them
+    let dir = tempfile::tempdir().unwrap();
+    let own = r#"
+units = "cm"
+[[part]]
+name = "sheet"
+[part.surface]
+type = "bezier"
+degree = [1, 1]
+points = [[0, 0, 0], [0, 11, 0], [24, 0, 0], [24, 11, 0]]
+[[part.line]]
+name = "middle"
+points = [[12, 0, 0], [12, 11, 0]]
+[[part.piece]]
+name = "left"
+at = [6, 5.5, 0]
+seam_allowance_mm = 8
+[[part.piece]]
+name = "right"
+at = [18, 5.5, 0]
+"#;
+    std::fs::write(dir.path().join("l.toml"), own).unwrap();
+    let text = graded(
+        "[[grading.size]]\nname = \"M\"\n[[grading.size]]\nname = \"L\"\ndesign = \"l.toml\"\n",
+    );
+    let d = Design::from_toml_str(&text, "t.toml").unwrap();
+    let sizes = d.sizes(dir.path()).unwrap();
+    let names: Vec<_> = sizes.iter().map(|s| s.size.clone().unwrap()).collect();
+    assert_eq!(names, ["M", "L"]);
+    let l = &sizes[1];
+    assert_eq!(l.dir, dir.path());
+    assert!(l.design.grading.is_none());
+    // in mm, as every design is once loaded
+    assert_eq!(l.design.parts[0].lines[0].points[1], [120.0, 110.0, 0.0]);
+    let a = l.design.assemble(&l.dir, &TOL).unwrap();
+    let got: Vec<_> = a.pieces.iter().map(|p| p.def.name.as_str()).collect();
+    assert_eq!(got, ["left", "right"]);
+    let bb = a.pieces[0].mesh.bbox();
+    assert!(
+        bb.min.x.abs() < 1e-9 && (bb.max.x - 120.0).abs() < 1e-9 && (bb.max.y - 110.0).abs() < 1e-9,
+        "{bb:?}"
+    );
+    assert_eq!(a.seams.len(), 1);
+    // the base size is the design itself
+    assert_eq!(sizes[0].design.parts, d.parts);
+}
