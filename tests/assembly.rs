@@ -1,6 +1,6 @@
-//! Patterns that assemble, end to end: the shoe upper cut by style lines comes out with every
-//! mating seam's sides equally long and every notch at the same place on both, its pieces in
-//! left and right pairs, and the line's vertices at identical coordinates in the OBJs on either
+//! Patterns that assemble, end to end: the shoe upper cut by style lines comes out, in every size
+//! of its run, with every mating seam's sides equally long and every notch at the same place on
+//! both, its pieces in left and right pairs, and the line's vertices at identical coordinates in the OBJs on either
 //! side; every bundled folder's project runs within its limits; `flatten` refuses to exit 0 with
 //! a material limit broken and says where, and a limit it can meet it meets, by its own report
 //! and by the shared benchmark's kernel (shared/bench/metrics.py).
@@ -29,7 +29,13 @@ fn the_shoe_upper_assembles_seam_for_seam_and_notch_for_notch() {
     let seams = summary["mating_seams"].as_array().unwrap();
     let mut names: Vec<&str> = seams.iter().map(|s| s["name"].as_str().unwrap()).collect();
     names.sort_unstable();
-    assert_eq!(names, ["back", "toe-cap", "vamp-lateral", "vamp-medial"]);
+    // every seam in every size of the run
+    let mut want: Vec<String> = ["back", "toe-cap", "vamp-lateral", "vamp-medial"]
+        .iter()
+        .flat_map(|s| ["40", "42", "44"].map(|z| format!("{s} {z}")))
+        .collect();
+    want.sort();
+    assert_eq!(names, want);
     for s in seams {
         let name = s["name"].as_str().unwrap();
         let l = &s["length_2d_mm"];
@@ -46,7 +52,7 @@ fn the_shoe_upper_assembles_seam_for_seam_and_notch_for_notch() {
             );
         }
         let notches = s["notches"].as_array().unwrap();
-        let want = if name == "back" { 2 } else { 3 };
+        let want = if name.starts_with("back") { 2 } else { 3 };
         assert_eq!(notches.len(), want, "{name}");
         for n in notches {
             let o = &n["offset_mm"];
@@ -59,16 +65,17 @@ fn the_shoe_upper_assembles_seam_for_seam_and_notch_for_notch() {
             assert!(oa > 0.0 && oa < la, "{name}: notch inside the seam");
         }
     }
-    // Pairs: every piece as drawn (L) and mirrored (R), labelled so; four of each in the pieces.
+    // Pairs: every piece as drawn (L) and mirrored (R), labelled so; four of each in the pieces
+    // of each of the three sizes.
     let pieces = summary["pieces"].as_array().unwrap();
-    assert_eq!(pieces.len(), 4);
+    assert_eq!(pieces.len(), 12);
     assert!(
         pieces
             .iter()
             .all(|p| p["quantity"] == 1 && p["mirrored"] == 1)
     );
     let svg = std::fs::read_to_string(out.path().join("pattern.svg")).unwrap();
-    for side in ["L", "R"] {
+    for side in ["42_L", "42_R"] {
         for piece in ["toe_cap", "vamp", "lateral_quarter", "medial_quarter"] {
             assert!(
                 svg.contains(&format!("id=\"{piece}_{side}-1-cut\"")),
@@ -98,7 +105,7 @@ fn the_shoe_upper_assembles_seam_for_seam_and_notch_for_notch() {
             .map(str::to_string)
             .collect()
     };
-    let (cap, vamp) = (vertices("toe_cap.obj"), vertices("vamp.obj"));
+    let (cap, vamp) = (vertices("toe_cap_42.obj"), vertices("vamp_42.obj"));
     let shared = cap.iter().filter(|v| vamp.contains(v)).count();
     assert!(shared >= 20, "{shared} vertices shared by toe cap and vamp");
 }

@@ -15,6 +15,7 @@ mod pipeline;
 mod readme;
 mod regressions;
 mod serve;
+mod shoe;
 mod step;
 mod stream;
 mod tidy;

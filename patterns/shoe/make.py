@@ -16,6 +16,15 @@ opening and collar).
 Style lines: the toe cap along the old toe-cap stitch line (v = 0.62 of the vamp patch), the vamp
 line on each side from the top line down and forward to the featherline, and the back seam at the
 heel's centre line; three notches on each vamp line and on the toe cap, two on the back seam.
+
+Allowances by edge, as an upper is made: the toe cap lies on the vamp and the vamp on the
+quarters (lapped seams: the piece on top cut raw, the one under it with a 10 mm underlay), the
+back seam is closed face to face on a 2 mm margin, the featherline carries a 16 mm lasting margin
+(pulled over the last and cemented under the insole) and the top line a 5 mm allowance folded in.
+
+Grading: base size 42 (Paris points); 40 and 44 scaled about the heel's foot (the origin) by two
+Paris points (13.33 mm) on the 274 mm last length and two girth steps (5 mm each on a 245 mm ball
+girth) across and up, so length and girth grade differently, as lasts do.
 """
 
 import pathlib
@@ -147,12 +156,13 @@ def main():
         lines.append("]")
     lines.append("")
 
-    def line(name, pts, notches, comment):
+    def line(name, pts, notches, comment, finish):
         lines.append("[[part.line]]")
         lines.append(f"# {comment}")
         lines.append(f'name = "{name}"')
         lines.append("points = [" + ", ".join(p3(p) for p in pts) + "]")
         lines.append("notches = [" + ", ".join(p3(p) for p in notches) + "]")
+        lines.append(finish)
         lines.append("")
 
     toe = [vamp_at(u, TOE_V) for u in (0.0, 0.1, 0.25, 0.4, 0.5, 0.6, 0.75, 0.9, 1.0)]
@@ -160,7 +170,9 @@ def main():
         "toe-cap",
         toe,
         [vamp_at(u, TOE_V) for u in (0.25, 0.5, 0.75)],
-        "The toe cap along the old toe-cap stitch line, featherline to featherline.",
+        "The toe cap along the old toe-cap stitch line, featherline to featherline; lapped: the\n"
+        "# toe cap on top, cut raw, the vamp under it with the underlay.",
+        'lap = "toe cap"',
     )
     # The vamp line: from the top line at the throat (u = 0.7) down and forward to the
     # featherline 14 mm ahead of the quarter's old front edge.
@@ -170,19 +182,48 @@ def main():
         "vamp-lateral",
         [vamp_at(u, v) for u, v in vamp_uv],
         [vamp_at(u, v) for u, v in notch_uv],
-        "The lateral vamp line, top line to featherline.",
+        "The lateral vamp line, top line to featherline; lapped: the vamp on the quarter.",
+        'lap = "vamp"',
     )
     line(
         "vamp-medial",
         [vamp_at(1 - u, v) for u, v in vamp_uv],
         [vamp_at(1 - u, v) for u, v in notch_uv],
-        "The medial vamp line (the lateral one mirrored).",
+        "The medial vamp line (the lateral one mirrored); lapped: the vamp on the quarter.",
+        'lap = "vamp"',
     )
     line(
         "back",
         [bez(heel, t) for t in (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)],
         [bez(heel, t) for t in (0.35, 0.7)],
-        "The back seam at the heel's centre line, featherline to collar.",
+        "The back seam at the heel's centre line, featherline to collar: closed face to face.",
+        "allowance_mm = 2",
+    )
+
+    def edge(name, at, allowance, kind, comment):
+        lines.append("[[part.edge]]")
+        lines.append(f"# {comment}")
+        lines.append(f'name = "{name}"')
+        lines.append(f"from = {p3(at)}")
+        lines.append(f"to = {p3(at)}")
+        lines.append(f"allowance_mm = {allowance}")
+        lines.append(f'kind = "{kind}"')
+        lines.append("")
+
+    edge(
+        "featherline",
+        heel[0],
+        16,
+        "lasting",
+        "The whole featherline (from = to: the outline loop through the heel's foot): the\n"
+        "# lasting margin pulled over the last.",
+    )
+    edge(
+        "topline",
+        heel[3],
+        5,
+        "fold",
+        "The whole top line, throat and collar: folded in.",
     )
 
     def piece(name, at, grain, comment):
@@ -220,6 +261,21 @@ def main():
         [[100, -52, 20], [30, -40, 20]],
         "Grain fore-and-aft.",
     )
+    # Paris points: 6.667 mm of last length a size; girth 5 mm a size on a 245 mm ball girth.
+    length, girth = 274.0, 245.0
+    lines.append("[grading]")
+    lines.append("# Sizes 40 and 44 scaled about the heel's foot: length and girth grade differently.")
+    lines.append('base = "42"')
+    lines.append("origin = [0, 0, 0]")
+    for size in (40, 42, 44):
+        steps = size - 42
+        lines.append("[[grading.size]]")
+        lines.append(f'name = "{size}"')
+        if steps:
+            sx = 1 + steps * (20 / 3) / length
+            sg = 1 + steps * 5.0 / girth
+            lines.append(f"scale = [{sx:.5f}, {sg:.5f}, {sg:.5f}]")
+    lines.append("")
     (HERE / "design.toml").write_text("\n".join(lines))
 
 

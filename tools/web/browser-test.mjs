@@ -5,8 +5,8 @@
 //
 // Steps: load the shoe; add a style line by clicking on the rendered surface at known screen
 // points (the projections of surface points from the server's own mesh); see the piece count
-// go from 4 to 5 and the heat map's colours on the new piece, in 3D and flat; download the pattern
-// and compare it with `flatcut run`'s bytes for the saved design; stream a job to the embedded
+// go from 4 to 5 in each of the shoe's 3 sizes and the heat map's colours on the new piece, in
+// 3D and flat; download the pattern and compare it with `flatcut run`'s bytes for the saved design; stream a job to the embedded
 // simulator and watch its progress events to the end (a "todo" line while the device panel is
 // not built). Prints one line per step and "N passed, N failed". Without Chromium it fails when FLATCUT_BROWSER_TEST=required (as CI
 // sets it), and otherwise says it skipped.
@@ -117,7 +117,8 @@ try {
     for (const t of ['job', 'device']) es.addEventListener(t, (ev) => window.__event({ type: t, ...JSON.parse(ev.data) }));
   });
   const count0 = await page.textContent('#piece-count');
-  step('loads the shoe: 4 pieces flattened', /^4 pieces/.test(count0), count0);
+  // The shoe is graded in three sizes (40, 42, 44): each of its 4 pieces is flattened in each.
+  step('loads the shoe: 4 pieces in 3 sizes flattened', /^12 pieces/.test(count0), count0);
   await shot('pieces');
 
   // 2. A style line by clicking on the rendered surface: from the medial featherline at x = 190 mm,
@@ -148,22 +149,22 @@ try {
   }
   await page.click('[data-tool=line]');
   for (const s of screen) await page.mouse.click(s.x, s.y);
-  await page.waitForFunction(() => /^5 pieces/.test(document.querySelector('#piece-count')?.textContent || ''), null, { timeout: 120000 });
+  await page.waitForFunction(() => /^15 pieces/.test(document.querySelector('#piece-count')?.textContent || ''), null, { timeout: 120000 });
   await page.waitForFunction(() => window.__flatcut.timings.length > 0, null, { timeout: 10000 });
   const timing = await page.evaluate(() => window.__flatcut.timings[0].closeToHeatMs);
   const count1 = await page.textContent('#piece-count');
-  step('the third click closes a region: 5 pieces', /^5 pieces/.test(count1), `${count1}; click to heat map ${timing.toFixed(0)} ms`);
+  step('the third click closes a region: 5 pieces in 3 sizes', /^15 pieces/.test(count1), `${count1}; click to heat map ${timing.toFixed(0)} ms`);
 
   // 3. The heat map's colours on the new piece: flat (unlit, exact) and on the surface (lit: same
   // hue).
   await page.click('#tabs [data-tab=pieces]');
-  await page.click('tr.piece[data-name="upper 1"]');
+  await page.click('tr.piece[data-name="upper 1 42"]');
   await page.waitForTimeout(300);
   // The centre of the piece's largest face on screen (away from its edges, which are blended).
   const flat = await page.evaluate(() => {
     const h = window.__flatcut;
     const s = h.state;
-    const p = s.flat.pieces.find((x) => x.name === 'upper 1');
+    const p = s.flat.pieces.find((x) => x.name === 'upper 1 42');
     const T = p.mesh.triangles, F = p.mesh.flat;
     let best = null, area = 0;
     for (let f = 0; f < T.length / 3; f++) {
@@ -190,7 +191,7 @@ try {
   // strain does (red for stretch, blue for compression), and differs from the piece colours.
   const spot = await page.evaluate(() => {
     const h = window.__flatcut;
-    const k = h.state.flat.pieces.findIndex((x) => x.name === 'upper 1');
+    const k = h.state.flat.pieces.findIndex((x) => x.name === 'upper 1 42');
     const p = h.state.flat.pieces[k];
     const T = p.mesh.triangles, P = p.mesh.positions;
     const faces = [...p.mesh.strain.keys()].sort((a, b) => Math.abs(p.mesh.strain[b]) - Math.abs(p.mesh.strain[a]));
@@ -229,7 +230,7 @@ try {
   const out = path.join(work, 'out');
   execFileSync(flatcut, ['run', path.join(work, 'project.toml'), '--no-send', '--quiet', '-o', out], { stdio: 'ignore' });
   const cli = fs.readFileSync(path.join(out, 'pattern.svg'));
-  step('the downloaded pattern.svg is flatcut run\'s, byte for byte', Buffer.compare(got1, cli) === 0, `${got1.length} bytes; 5 pieces`);
+  step('the downloaded pattern.svg is flatcut run\'s, byte for byte', Buffer.compare(got1, cli) === 0, `${got1.length} bytes; 5 pieces in 3 sizes`);
   await page.waitForFunction(() => document.getElementById('pattern-img')?.complete, null, { timeout: 60000 });
   await shot('pattern');
   await page.click('#tabs [data-tab=nest]');

@@ -18,7 +18,8 @@ use flatcut_mesh::nearest::Bvh;
 use flatcut_mesh::regions::split_along_lines;
 use flatcut_mesh::{TriMesh, check_disk};
 
-use crate::{Design, DesignError, PartDef, PieceDef};
+use crate::edge::{EdgeKind, OutlineEdge};
+use crate::{Design, DesignError, LineDef, PartDef, PieceDef};
 
 /// A piece to cut, with the mesh its flattening starts from.
 #[derive(Clone, Debug)]
@@ -48,10 +49,16 @@ impl Design {
             seams: Vec::new(),
         };
         for def in &self.pieces {
+            let mut mesh = def.mesh(base_dir, tol)?;
+            let mut def = def.clone();
+            def.outline_edges =
+                crate::edge::find(&mut mesh, &def.edges).map_err(|(edge, msg)| {
+                    crate::error::Ctx::of(&def).err(format!("edge '{edge}': {msg}"))
+                })?;
             out.pieces.push(AssembledPiece {
-                def: def.clone(),
+                def,
                 part: None,
-                mesh: def.mesh(base_dir, tol)?,
+                mesh,
                 notch_marks: Vec::new(),
             });
         }
@@ -127,6 +134,8 @@ pub struct PartRegions {
     /// Per region, the `[[part.piece]]`s whose `at` falls in it (one in a design that
     /// assembles).
     pub pieces_of_region: Vec<Vec<usize>>,
+    /// The part's `[[part.edge]]`s found on its outline (their ends are vertices of `mesh`).
+    pub edges: Vec<OutlineEdge>,
 }
 
 impl PartRegions {
@@ -169,7 +178,7 @@ impl PartDef {
                 })
             })
             .collect::<Result<_, DesignError>>()?;
-        let embedded = embed_lines(&surface, &specs).map_err(|e| {
+        let mut embedded = embed_lines(&surface, &specs).map_err(|e| {
             let k = match &e {
                 flatcut_mesh::lines::LineError::TooShort { line }
                 | flatcut_mesh::lines::LineError::OffSurface { line, .. }
@@ -181,6 +190,9 @@ impl PartDef {
             };
             part.err(named(e.to_string(), k, part))
         })?;
+        // The part's edges, their ends made vertices of its outline before it is split.
+        let edges = crate::edge::find(&mut embedded.mesh, &part.edges)
+            .map_err(|(edge, msg)| part.err(format!("edge '{edge}': {msg}")))?;
         let split = split_along_lines(&embedded.mesh, &embedded.lines).map_err(|e| {
             let k = match &e {
                 flatcut_mesh::regions::RegionError::NotAnEdge { line, .. }
@@ -213,6 +225,7 @@ impl PartDef {
             notches: embedded.notches,
             split,
             pieces_of_region,
+            edges,
         })
     }
 }
@@ -282,6 +295,7 @@ fn split_part(
                 def.name
             ))
         })?;
+        def.outline_edges = regions.edges.clone();
         out.pieces.push(AssembledPiece {
             def,
             part: Some(part.name.clone()),
@@ -308,15 +322,72 @@ fn split_part(
                     });
                 }
             }
-            out.seams.push(MatingSeam {
+            let seam = MatingSeam {
                 name,
                 sides: run.sides.clone().map(|s| SeamSide {
                     piece: index_of_region[s.piece],
                     vertices: s.vertices,
                 }),
                 notches,
-            });
+            };
+            line_edges(part, line, &seam, &mut out.pieces)?;
+            out.seams.push(seam);
         }
+    }
+    Ok(())
+}
+
+/// The allowance a style line gives the pieces on its two sides along one of its seams: its
+/// `allowance_mm`, or for a lapped seam 0 on the piece on top (cut raw) and the underlay on the
+/// other. Every seam side becomes an edge of its piece named after the seam (the pieces' own
+/// allowance where the line gives none), so each stretch of a pattern's outline is named.
+fn line_edges(
+    part: &PartDef,
+    line: &LineDef,
+    seam: &MatingSeam,
+    pieces: &mut [AssembledPiece],
+) -> Result<(), DesignError> {
+    let names = seam
+        .sides
+        .each_ref()
+        .map(|s| pieces[s.piece].def.name.clone());
+    if let Some(lap) = &line.lap {
+        let what = format!("line '{}'", line.name);
+        if names[0] == names[1] {
+            return Err(part.err(format!(
+                "{what}: lap = \"{lap}\": the line has '{}' on both sides, so nothing laps",
+                names[0]
+            )));
+        }
+        if !names.contains(lap) {
+            return Err(part.err(format!(
+                "{what}: lap = \"{lap}\" is not beside the line (seam '{}' lies between '{}' and '{}')",
+                seam.name, names[0], names[1]
+            )));
+        }
+    }
+    for (side, name) in seam.sides.iter().zip(&names) {
+        let (kind, allowance_mm) = match &line.lap {
+            Some(top) if top == name => (EdgeKind::Raw, Some(0.0)),
+            Some(_) => (
+                EdgeKind::Seam,
+                Some(line.underlay_mm.unwrap_or(LineDef::UNDERLAY_MM)),
+            ),
+            None => (EdgeKind::Seam, line.allowance_mm),
+        };
+        let piece = &mut pieces[side.piece];
+        let points = side
+            .vertices
+            .iter()
+            .map(|&v| piece.mesh.positions[v as usize])
+            .collect();
+        piece.def.outline_edges.push(OutlineEdge {
+            name: seam.name.clone(),
+            kind,
+            allowance_mm,
+            points,
+            closed: false,
+        });
     }
     Ok(())
 }

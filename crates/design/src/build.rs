@@ -329,10 +329,16 @@ impl PieceDef {
                 piece: ctx.piece.clone(),
                 source: Box::new(source),
             })?;
-            if self.mesh_scale != 1.0 {
-                m.positions.iter_mut().for_each(|p| *p *= self.mesh_scale);
-                if let Some(f) = &mut m.flat {
-                    f.iter_mut().for_each(|q| *q *= self.mesh_scale);
+            let map = self.mesh_map;
+            if !map.is_identity() {
+                m.positions
+                    .iter_mut()
+                    .for_each(|p| *p = flatcut_geom::DVec3::from_array(map.point(p.to_array())));
+                // A flat map scales with a uniform scale about the origin; under any other its
+                // lengths no longer match the surface's: it is dropped.
+                match (map.a[0] == map.a[1] && map.a[1] == map.a[2], &mut m.flat) {
+                    (true, Some(f)) => f.iter_mut().for_each(|q| *q *= map.a[0]),
+                    _ => m.flat = None,
                 }
                 if let Some(i) = m
                     .positions

@@ -5,7 +5,7 @@
 use flatcut_geom::limits::{self, MAX_CONTROL_POINTS, MAX_DEGREE, MAX_QUANTITY};
 
 use crate::error::Ctx;
-use crate::{CurveDef, DesignError, GrainDef, P3, PieceDef, SeamDef, SurfaceDef};
+use crate::{CurveDef, DartPress, DesignError, GrainDef, P3, PieceDef, SeamDef, SurfaceDef};
 
 /// Every coordinate finite and within range once converted to mm (`s` mm per design unit).
 fn check_points(ctx: &Ctx, s: f64, what: &str, pts: &[P3]) -> Result<(), DesignError> {
@@ -317,6 +317,15 @@ pub(crate) fn check_piece(p: &PieceDef, s: f64) -> Result<(), DesignError> {
         check_points(&ctx, s, "grain", g)?;
         if g[0] == g[1] {
             return Err(ctx.err("grain: the two points coincide (no direction)".into()));
+        }
+    }
+    if let Some(DartPress::Toward(q)) = &p.dart_press {
+        check_points(&ctx, s, "dart_press", &[*q])?;
+    }
+    for (k, e) in p.edges.iter().enumerate() {
+        e.check(s).map_err(|m| ctx.err(m))?;
+        if let Some(j) = p.edges[..k].iter().position(|o| o.name == e.name) {
+            return Err(ctx.err(format!("edge '{}': edge {j} has the same name", e.name)));
         }
     }
     Ok(())

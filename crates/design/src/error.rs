@@ -33,6 +33,12 @@ pub enum DesignError {
         part: String,
         msg: String,
     },
+    #[error("{file}: [grading]{}: {msg}", size.as_ref().map(|s| format!(" size '{s}'")).unwrap_or_default())]
+    Grading {
+        file: String,
+        size: Option<String>,
+        msg: String,
+    },
     #[error("{file}: join {index} '{join}': {msg}")]
     Join {
         file: String,

@@ -29,7 +29,9 @@
 mod assemble;
 mod build;
 mod check;
+mod edge;
 mod error;
+mod grading;
 mod join;
 mod load;
 pub mod material;
@@ -41,15 +43,20 @@ mod units;
 
 pub use assemble::{AssembledPiece, Assembly, PartRegions};
 pub use build::PieceGeometry;
+pub use edge::{EdgeDef, EdgeKind, OutlineEdge};
 pub use error::DesignError;
+pub use grading::{GradingDef, SizeDef, SizedDesign};
 pub use load::Design;
 pub use part::{JoinDef, JoinEdgeDef, LineDef, PartDef, PartPieceDef};
 pub use schema::{
-    Blend, CurveDef, DartsDef, GrainDef, MarkDef, MarkKind, P3, PieceDef, SeamDef, SurfaceDef,
-    Units,
+    Blend, CurveDef, DartPress, DartsDef, GrainDef, MarkDef, MarkKind, P3, PieceDef, PieceSize,
+    SeamDef, SurfaceDef, Units,
 };
 pub use step::{StepFaces, StepGroup, StepModel, StepPiece};
+pub use units::Axes;
 
+#[cfg(test)]
+mod edge_tests;
 #[cfg(test)]
 mod part_tests;
 #[cfg(test)]

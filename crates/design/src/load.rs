@@ -5,10 +5,10 @@ use std::path::Path;
 use flatcut_mesh::io::is_mesh_path;
 
 use crate::check::check_piece;
-use crate::part::{check_join, check_part, scale_join, scale_part};
+use crate::part::{check_join, check_part, map_join, map_part};
 use crate::schema::DesignFile;
-use crate::units::scale_piece;
-use crate::{DesignError, JoinDef, PartDef, PieceDef, SurfaceDef, Units};
+use crate::units::{Axes, map_piece};
+use crate::{DesignError, GradingDef, JoinDef, PartDef, PieceDef, SurfaceDef, Units};
 
 /// A loaded design: pieces with every length in mm.
 #[derive(Clone, Debug, PartialEq)]
@@ -20,6 +20,8 @@ pub struct Design {
     pub parts: Vec<PartDef>,
     /// Mating seams between edges of separate pieces.
     pub joins: Vec<JoinDef>,
+    /// The size run ([`Design::sizes`]); its origin in mm.
+    pub grading: Option<GradingDef>,
     /// Name of the source (file path or the name given to `from_*_str`).
     pub source: String,
 }
@@ -43,6 +45,7 @@ impl Design {
                 pieces: crate::step::design_pieces(path)?,
                 parts: Vec::new(),
                 joins: Vec::new(),
+                grading: None,
                 source: name,
             });
         }
@@ -60,6 +63,7 @@ impl Design {
                 pieces: vec![PieceDef::of_surface(stem, SurfaceDef::Mesh { file }, name)],
                 parts: Vec::new(),
                 joins: Vec::new(),
+                grading: None,
                 source: path.display().to_string(),
             });
         }
@@ -119,6 +123,7 @@ impl Design {
             });
         }
         let s = f.units.mm();
+        let to_mm = Axes::uniform(s);
         let mut pieces = f.pieces;
         for (i, p) in pieces.iter_mut().enumerate() {
             p.index = i;
@@ -126,7 +131,7 @@ impl Design {
             check_piece(p, s)?;
             p.resolve_pairs();
             if s != 1.0 {
-                scale_piece(p, s);
+                map_piece(p, &to_mm, true).map_err(|m| crate::error::Ctx::of(p).err(m))?;
             }
         }
         let mut parts = f.parts;
@@ -135,7 +140,7 @@ impl Design {
             p.file = name.to_string();
             check_part(p, s)?;
             if s != 1.0 {
-                scale_part(p, s);
+                map_part(p, &to_mm, true).map_err(|m| p.err(m))?;
             }
         }
         let mut joins = f.joins;
@@ -143,14 +148,20 @@ impl Design {
             j.index = i;
             check_join(name, j, s)?;
             if s != 1.0 {
-                scale_join(j, s);
+                map_join(j, &to_mm);
             }
+        }
+        let mut grading = f.grading;
+        if let Some(g) = &mut grading {
+            crate::grading::check(name, g, s)?;
+            crate::grading::scale(g, s);
         }
         Ok(Design {
             units: f.units,
             pieces,
             parts,
             joins,
+            grading,
             source: name.to_string(),
         })
     }

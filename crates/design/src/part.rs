@@ -12,6 +12,15 @@
 //! name = "vamp-quarter"
 //! points = [[x, y, z], ...]      # ends on the surface boundary or on another line
 //! notches = [[x, y, z], ...]     # optional: notches on this line, shared by both sides
+//! allowance_mm = 6               # optional: the allowance on both pieces along the line, or
+//! # lap = "vamp"                 # a lapped seam: the vamp on top, cut raw; the other piece
+//! # underlay_mm = 10             # gets the underlay (default 10 mm)
+//! [[part.edge]]                  # a stretch of the part's outline (see `crate::edge`)
+//! name = "featherline"
+//! from = [x, y, z]
+//! to = [x, y, z]
+//! allowance_mm = 16
+//! kind = "lasting"
 //! [[part.piece]]
 //! name = "vamp"
 //! at = [x, y, z]                 # a point inside the region: names it
@@ -29,7 +38,8 @@ use flatcut_geom::limits;
 use serde::Deserialize;
 
 use crate::check::check_piece;
-use crate::units::{scale_piece, sp};
+use crate::edge::{EdgeDef, check_allowance};
+use crate::units::{Axes, map_piece, map_point};
 use crate::{DesignError, GrainDef, MarkDef, P3, PieceDef, SurfaceDef};
 
 /// One surface cut into pieces by style lines.
@@ -40,6 +50,9 @@ pub struct PartDef {
     pub surface: SurfaceDef,
     #[serde(default, rename = "line")]
     pub lines: Vec<LineDef>,
+    /// Named stretches of the part's outline with their own allowance.
+    #[serde(default, rename = "edge")]
+    pub edges: Vec<EdgeDef>,
     #[serde(rename = "piece")]
     pub pieces: Vec<PartPieceDef>,
     /// Position among the parts (0-based), set at load time.
@@ -48,9 +61,9 @@ pub struct PartDef {
     /// The file the part came from, for error messages.
     #[serde(skip)]
     pub file: String,
-    /// Millimetres per design unit, applied to a mesh file when it is read.
-    #[serde(skip, default = "crate::schema::unit_scale")]
-    pub mesh_scale: f64,
+    /// The map from a mesh file's coordinates to mm (units, and a size's scale).
+    #[serde(skip, default = "crate::schema::no_map")]
+    pub mesh_map: Axes,
 }
 
 /// A style line on a part's surface.
@@ -68,6 +81,21 @@ pub struct LineDef {
     /// Notch positions on the line, shared by the pieces on both sides.
     #[serde(default)]
     pub notches: Vec<P3>,
+    /// The allowance (mm) of both pieces along the line, in place of their own.
+    #[serde(default)]
+    pub allowance_mm: Option<f64>,
+    /// A lapped seam: the piece named lies on top, its edge cut raw; the other gets
+    /// `underlay_mm`.
+    #[serde(default)]
+    pub lap: Option<String>,
+    /// The under piece's allowance along a lapped seam (mm; default [`LineDef::UNDERLAY_MM`]).
+    #[serde(default)]
+    pub underlay_mm: Option<f64>,
+}
+
+impl LineDef {
+    /// A lapped seam's underlay when the line gives none (mm): 8–10 mm is the trade's range.
+    pub const UNDERLAY_MM: f64 = 10.0;
 }
 
 /// A piece of a part: the region around `at`, with the keys of a `[[piece]]`.
@@ -137,7 +165,7 @@ impl PartDef {
     pub(crate) fn surface_piece(&self) -> PieceDef {
         PieceDef {
             index: self.index,
-            mesh_scale: self.mesh_scale,
+            mesh_map: self.mesh_map,
             ..PieceDef::of_surface(self.name.clone(), self.surface.clone(), self.file.clone())
         }
     }
@@ -155,7 +183,7 @@ impl PartDef {
             material: p.material.clone(),
             material_properties: p.material_properties.clone(),
             index: k,
-            mesh_scale: self.mesh_scale,
+            mesh_map: self.mesh_map,
             ..PieceDef::of_surface(p.name.clone(), self.surface.clone(), self.file.clone())
         }
     }
@@ -199,6 +227,28 @@ pub(crate) fn check_part(p: &PartDef, s: f64) -> Result<(), DesignError> {
         }
         if let Some(j) = p.lines[..k].iter().position(|o| o.name == l.name) {
             return Err(p.err(format!("{what}: line {j} has the same name")));
+        }
+        check_allowance(&what, l.allowance_mm).map_err(|m| p.err(m))?;
+        check_allowance(&format!("{what}: underlay_mm"), l.underlay_mm).map_err(|m| p.err(m))?;
+        match (&l.lap, l.allowance_mm, l.underlay_mm) {
+            (Some(_), Some(_), _) => {
+                return Err(p.err(format!(
+                    "{what}: give `allowance_mm` or `lap`, not both (a lapped seam's pieces get 0 and `underlay_mm`)"
+                )));
+            }
+            (None, _, Some(_)) => {
+                return Err(p.err(format!("{what}: `underlay_mm` needs `lap`")));
+            }
+            (Some(l), _, _) if !p.pieces.iter().any(|q| &q.name == l) => {
+                return Err(p.err(format!("{what}: lap = \"{l}\" names no piece of the part")));
+            }
+            _ => {}
+        }
+    }
+    for (k, e) in p.edges.iter().enumerate() {
+        e.check(s).map_err(|m| p.err(m))?;
+        if let Some(j) = p.edges[..k].iter().position(|o| o.name == e.name) {
+            return Err(p.err(format!("edge '{}': edge {j} has the same name", e.name)));
         }
     }
     for k in 0..p.pieces.len() {
@@ -267,37 +317,41 @@ pub(crate) fn check_join(file: &str, j: &JoinDef, s: f64) -> Result<(), DesignEr
     Ok(())
 }
 
-/// Scales a part's lengths by `s` (design units → mm).
-pub(crate) fn scale_part(p: &mut PartDef, s: f64) {
+/// Maps a part's lengths (design units → mm when `units`, or a size of a grading).
+pub(crate) fn map_part(p: &mut PartDef, m: &Axes, units: bool) -> Result<(), String> {
     let mut surf = p.surface_piece();
-    scale_piece(&mut surf, s);
+    map_piece(&mut surf, m, units)?;
     p.surface = surf.surface;
-    p.mesh_scale = s;
+    p.mesh_map = surf.mesh_map;
     for l in &mut p.lines {
         l.points
             .iter_mut()
             .chain(l.notches.iter_mut())
-            .for_each(|q| sp(q, s));
+            .for_each(|q| map_point(q, m));
+    }
+    for e in &mut p.edges {
+        e.map(m);
     }
     for k in &mut p.pieces {
-        sp(&mut k.at, s);
-        for m in &mut k.marks {
-            m.points.iter_mut().for_each(|q| sp(q, s));
+        map_point(&mut k.at, m);
+        for mk in &mut k.marks {
+            mk.points.iter_mut().for_each(|q| map_point(q, m));
         }
         if let Some(g) = k.grain.as_mut().and_then(GrainDef::line_mut) {
-            g.iter_mut().for_each(|q| sp(q, s));
+            g.iter_mut().for_each(|q| map_point(q, m));
         }
     }
+    Ok(())
 }
 
-/// Scales a join's points by `s`.
-pub(crate) fn scale_join(j: &mut JoinDef, s: f64) {
+/// Maps a join's points.
+pub(crate) fn map_join(j: &mut JoinDef, m: &Axes) {
     for e in [&mut j.a, &mut j.b] {
-        sp(&mut e.from, s);
-        sp(&mut e.to, s);
+        map_point(&mut e.from, m);
+        map_point(&mut e.to, m);
         if let Some(v) = &mut e.via {
-            sp(v, s);
+            map_point(v, m);
         }
     }
-    j.notches.iter_mut().for_each(|q| sp(q, s));
+    j.notches.iter_mut().for_each(|q| map_point(q, m));
 }

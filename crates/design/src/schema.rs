@@ -1,6 +1,7 @@
 //! The file's schema: what a design file may contain, as serde types (design units until loaded).
 
 use crate::step::{StepFaces, StepGroup, StepModel};
+use crate::units::Axes;
 use serde::Deserialize;
 
 /// Length units of a design file; every length is converted to mm once at load time.
@@ -304,15 +305,42 @@ pub struct PieceDef {
     /// third as much there.
     #[serde(default)]
     pub seam_hidden_regions: Vec<Vec<P3>>,
+    /// Which way each dart's intake is pressed when the dart is sewn (default: toward the
+    /// piece's centre line); the pattern trues the dart's mouth for it.
+    #[serde(default)]
+    pub dart_press: Option<DartPress>,
+    /// Named stretches of the piece's outline with their own allowance.
+    #[serde(default, rename = "edge")]
+    pub edges: Vec<crate::EdgeDef>,
     /// Position in the file (0-based), set at load time.
     #[serde(skip)]
     pub index: usize,
     /// The file the piece came from, for error messages.
     #[serde(skip)]
     pub file: String,
-    /// Millimetres per design unit, applied to mesh files when they are read.
-    #[serde(skip, default = "unit_scale")]
-    pub mesh_scale: f64,
+    /// The map from a mesh file's coordinates to mm (the design's units, and a size's scale),
+    /// applied when the file is read.
+    #[serde(skip, default = "no_map")]
+    pub mesh_map: Axes,
+    /// The stretches of its outline with their own allowance, found when the design is
+    /// assembled: its `[[piece.edge]]`s, its part's `[[part.edge]]`s (whole: the stretch of one
+    /// on this piece's outline counts) and the style lines beside it, each named after its
+    /// seam.
+    #[serde(skip)]
+    pub outline_edges: Vec<crate::OutlineEdge>,
+    /// The size of a graded design the piece is cut in, and its name in the design (set when
+    /// the sizes are flattened; the piece is then named `<piece> <size>`).
+    #[serde(skip)]
+    pub size: Option<PieceSize>,
+}
+
+/// A piece of one size of a graded design.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PieceSize {
+    /// The size's name.
+    pub size: String,
+    /// The piece's name in the design (without the size).
+    pub piece: String,
 }
 
 impl PieceDef {
@@ -336,9 +364,13 @@ impl PieceDef {
             no_cut: Vec::new(),
             seam_hidden: None,
             seam_hidden_regions: Vec::new(),
+            dart_press: None,
+            edges: Vec::new(),
             index: 0,
             file,
-            mesh_scale: 1.0,
+            mesh_map: Axes::IDENTITY,
+            outline_edges: Vec::new(),
+            size: None,
         }
     }
 
@@ -368,8 +400,45 @@ pub enum DartsDef {
     Off,
 }
 
-pub(crate) fn unit_scale() -> f64 {
-    1.0
+pub(crate) fn no_map() -> Axes {
+    Axes::IDENTITY
+}
+
+/// Which way a dart's intake is pressed when the dart is sewn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DartPress {
+    /// Toward the piece's centre line: the line through its middle along its grain (without a
+    /// grain, along its length).
+    Centre,
+    /// Toward the side of each dart that faces this point (on or near the surface).
+    Toward(P3),
+}
+
+impl DartPress {
+    pub(crate) fn point_mut(&mut self) -> Option<&mut P3> {
+        match self {
+            DartPress::Toward(p) => Some(p),
+            DartPress::Centre => None,
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for DartPress {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Point(P3),
+            Word(String),
+        }
+        match Raw::deserialize(d) {
+            Ok(Raw::Point(p)) => Ok(DartPress::Toward(p)),
+            Ok(Raw::Word(w)) if w == "centre" || w == "center" => Ok(DartPress::Centre),
+            _ => Err(serde::de::Error::custom(
+                "dart_press: expected \"centre\" or a point [x, y, z]",
+            )),
+        }
+    }
 }
 
 #[derive(Deserialize)]
@@ -383,4 +452,6 @@ pub(crate) struct DesignFile {
     pub(crate) parts: Vec<crate::PartDef>,
     #[serde(default, rename = "join")]
     pub(crate) joins: Vec<crate::JoinDef>,
+    #[serde(default)]
+    pub(crate) grading: Option<crate::GradingDef>,
 }

@@ -41,12 +41,14 @@
 //! Start reading at [`run`], then [`pipeline`].
 
 pub mod check;
+pub mod dart_drawing;
 pub mod dart_lines;
 pub mod darting;
 pub mod flat;
 pub mod inspect;
 pub mod inspect_step;
 pub mod material;
+pub mod outline_edges;
 pub mod pieces;
 pub mod pipeline;
 pub mod plot;

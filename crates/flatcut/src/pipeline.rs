@@ -120,7 +120,9 @@ pub struct FlatDesign {
 
 /// Loads a design (or a mesh file), builds its pieces and seams, and flattens them, the pieces
 /// joined by seams together ([`flatcut_flatten::assembly`]); `progress(piece, index, count)` is
-/// called for each piece before the solve.
+/// called for each piece before the solve. A graded design is flattened in every size, each
+/// with its own lines, notches, seams and limits: its pieces are named `<piece> <size>` (their
+/// `def.size` says which) and its seams `<seam> <size>`, size after size in the grading's order.
 pub fn flatten_design(
     path: &Path,
     tol: &Tolerances,
@@ -137,6 +139,7 @@ pub fn flatten_design(
 
 /// [`flatten_design`] of a design already loaded (an editor's design in memory); mesh and STEP
 /// files it names are resolved against `base`, the design file's directory.
+#[allow(clippy::too_many_arguments)]
 pub fn flatten_loaded(
     design: Design,
     base: &Path,
@@ -148,6 +151,82 @@ pub fn flatten_loaded(
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<FlatDesign, PipelineError> {
     check_unique_names(&design)?;
+    let sizes = design.sizes(base)?;
+    let count = sizes.len();
+    let mut out = FlatDesign {
+        design: design.clone(),
+        pieces: Vec::new(),
+        seams: Vec::new(),
+    };
+    for sized in sizes {
+        let first = out.pieces.len();
+        let (mut pieces, mut seams) = match &sized.size {
+            None => flatten_one(
+                &sized.design,
+                &sized.dir,
+                tol,
+                params,
+                darts,
+                split,
+                material,
+                progress,
+            )?,
+            Some(size) => flatten_one(
+                &sized.design,
+                &sized.dir,
+                tol,
+                params,
+                darts,
+                split,
+                material,
+                &mut |name, k, n| progress(&format!("{name} {size}"), first + k, n * count),
+            )?,
+        };
+        if let Some(size) = &sized.size {
+            for p in &mut pieces {
+                p.def.size = Some(flatcut_design::PieceSize {
+                    size: size.clone(),
+                    piece: p.def.name.clone(),
+                });
+                p.def.name = format!("{} {size}", p.def.name);
+            }
+            for s in &mut seams {
+                s.name = format!("{} {size}", s.name);
+            }
+        }
+        for s in &mut seams {
+            s.sides.iter_mut().for_each(|side| side.piece += first);
+        }
+        out.pieces.extend(pieces);
+        out.seams.extend(seams);
+    }
+    let mut seen = std::collections::BTreeMap::new();
+    for p in &out.pieces {
+        let safe = flatcut_pattern::safe_name(&p.def.name);
+        if let Some(first) = seen.insert(safe.clone(), p.def.name.clone()) {
+            return Err(PipelineError::NameClash {
+                file: design.source.clone(),
+                first,
+                second: p.def.name.clone(),
+                safe,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// The pieces and seams of one design (one size), flattened.
+#[allow(clippy::too_many_arguments)]
+fn flatten_one(
+    design: &Design,
+    base: &Path,
+    tol: &Tolerances,
+    params: &FlattenParams,
+    darts: Option<&DartSettings>,
+    split: Option<&crate::splitting::SplitSettings>,
+    material: Option<&MaterialSpec>,
+    progress: &mut dyn FnMut(&str, usize, usize),
+) -> Result<(Vec<FlatPiece>, Vec<MatingSeam>), PipelineError> {
     let mut asm = design.assemble(base, tol)?;
     // Nothing flattens a surface that is not a disk (closed, of any genus, with several
     // boundary loops): one that may be split is flattened opened here as a stand-in and split
@@ -306,19 +385,12 @@ pub fn flatten_loaded(
             }
         })
         .collect::<Result<Vec<_>, PipelineError>>()?;
-    let (pieces, seams) = match split {
-        Some(s) => {
-            split_where_wanted(pieces, asm.seams, &joined_copy, &closed, params, s, |def| {
-                crate::material::of_piece(def, base, material)
-            })?
-        }
-        None => (pieces, asm.seams),
-    };
-    Ok(FlatDesign {
-        design,
-        pieces,
-        seams,
-    })
+    match split {
+        Some(s) => split_where_wanted(pieces, asm.seams, &joined_copy, &closed, params, s, |def| {
+            crate::material::of_piece(def, base, material)
+        }),
+        None => Ok((pieces, asm.seams)),
+    }
 }
 
 /// Splits every piece no seam joins that is beyond its limits ([`crate::splitting`]); the parts
@@ -540,17 +612,22 @@ pub struct PieceContext<'a> {
     /// the grain line (through the piece's middle) when the design draws none, as for a grain
     /// the flattening chose (`grain = "auto"`).
     pub grain_dir: Option<DVec2>,
+    /// The short code the label writes where the piece has no room for a readable one (`None`:
+    /// the initials of its name).
+    pub code: Option<String>,
 }
 
 /// Longest step (mm) between samples of a stitch or placement line carried into the plane:
 /// fine enough that the drawn line follows the map's bending within a pen width.
 const LINE_STEP_MM: f64 = 1.0;
 
-/// Builds the pattern piece of a flattened mesh: the flattened boundary is the sew line, notches
-/// sit on their boundary vertices (inserted where they are, never snapped), drill/reference
-/// points, stitch lines and the grain line are carried through the map, the label carries the
-/// distortion summary, and the piece is turned with its grain along +x (without one, its
-/// minimum-area bounding box square to the axes, the longer side along x).
+/// Builds the pattern piece of a flattened mesh: the flattened boundary is the sew line, its
+/// stretches given the allowances of the design's edges and style lines they lie on
+/// ([`crate::outline_edges`]), notches sit on their boundary vertices (inserted where they are,
+/// never snapped), darts are drawn as a pattern maker draws them ([`crate::dart_drawing`]),
+/// drill/reference points, stitch lines and the grain line are carried through the map, the
+/// label carries the distortion summary, and the piece is turned with its grain along +x
+/// (without one, its minimum-area bounding box square to the axes, the longer side along x).
 pub fn piece_from_flat(
     name: &str,
     mesh: &TriMesh,
@@ -558,10 +635,26 @@ pub fn piece_from_flat(
     opts: &PieceOptions,
 ) -> Result<Piece, PipelineError> {
     let (outline, ids) = flat_boundary(name, mesh)?;
-    let (outline, ids) = bridge_darts(outline, ids, ctx.darts);
-    let flat = mesh.flat.as_ref().expect("checked by flat_boundary");
+    let flat = mesh.flat.as_deref().unwrap_or_default();
+    let edges: &[flatcut_design::OutlineEdge] = ctx.def.map_or(&[], |d| &d.outline_edges);
+    let classes = crate::outline_edges::classify(&ids, mesh, edges);
+    let grain = match ctx.def {
+        Some(def) => design_grain(name, def, mesh, flat)?,
+        None => None,
+    };
+    let drawn = draw_darts(ctx, mesh, flat, &outline, grain, opts.chord_tol);
+    let pressed: Vec<(&flatcut_darts::Dart, usize)> = ctx
+        .darts
+        .iter()
+        .zip(&drawn)
+        .map(|(d, w)| (d, w.pressed))
+        .collect();
+    let (outline, ids, classes) =
+        crate::dart_drawing::true_mouths(outline, ids, classes, &pressed, flat);
     let mut input = PieceInput::new(name, outline);
+    input.edges = crate::outline_edges::stretches(&classes, edges);
     input.corner_style = ctx.corner;
+    input.grain = grain;
     let mut opts = *opts;
     for n in ctx.notches {
         let k = ids
@@ -580,88 +673,20 @@ pub fn piece_from_flat(
         });
     }
     if let Some(def) = ctx.def {
-        for mark in &def.marks {
-            let pts: Vec<DVec3> = mark.points.iter().map(|p| DVec3::from_array(*p)).collect();
-            match mark.kind {
-                // Notch marks are boundary vertices of the mesh already (`ctx.notches`).
-                DesignMark::Notch => {}
-                DesignMark::Line if pts.len() >= 2 => {
-                    // Stitch and placement lines follow the surface: each 3D segment is
-                    // subdivided and every sample carried by its nearest surface point, so the
-                    // flat line bends as the map does.
-                    let q =
-                        flatcut_flatten::marks::polyline_to_plane(mesh, flat, &pts, LINE_STEP_MM);
-                    let line: Option<Vec<DVec2>> = q.into_iter().collect();
-                    let line = line.ok_or_else(|| PipelineError::Piece {
-                        piece: name.into(),
-                        reason: format!(
-                            "mark '{}': the line leaves the surface (a point is farther than {:.0} % of the part size from it)",
-                            mark.name,
-                            flatcut_flatten::marks::MAX_OFFSET_REL * 100.0
-                        ),
-                    })?;
-                    input.lines.push(line);
-                }
-                DesignMark::Point | DesignMark::Line => {
-                    // a one-point "line" is a reference point
-                    let kind = if mark.kind == DesignMark::Point {
-                        MarkKind::Drill
-                    } else {
-                        MarkKind::Point
-                    };
-                    for (q, p) in flatcut_flatten::marks::to_plane(mesh, flat, &pts)
-                        .into_iter()
-                        .zip(&pts)
-                    {
-                        let q = q.ok_or_else(|| PipelineError::Piece {
-                            piece: name.into(),
-                            reason: format!(
-                                "mark '{}': point ({:.2}, {:.2}, {:.2}) is not on the surface",
-                                mark.name, p.x, p.y, p.z
-                            ),
-                        })?;
-                        input.marks.push(Mark {
-                            kind,
-                            pos: q,
-                            boundary_index: None,
-                        });
-                    }
-                }
-            }
-        }
-        if let Some([a, b]) = def.grain.as_ref().and_then(|g| g.line()).copied() {
-            // A grain line is a direction drawn near the surface: points off the surface are
-            // carried by their nearest vertex rather than refused.
-            let (a, b) = (DVec3::from_array(a), DVec3::from_array(b));
-            let q = flatcut_flatten::marks::to_plane(mesh, flat, &[a, b]);
-            let near = |p: DVec3| {
-                (0..mesh.positions.len())
-                    .min_by(|&x, &y| {
-                        mesh.positions[x]
-                            .distance(p)
-                            .total_cmp(&mesh.positions[y].distance(p))
-                    })
-                    .map(|v| flat[v])
-            };
-            match (q[0].or_else(|| near(a)), q[1].or_else(|| near(b))) {
-                (Some(a), Some(b)) if a.distance(b) > 0.0 => input.grain = Some((a, b)),
-                _ => {
-                    return Err(PipelineError::Piece {
-                        piece: name.into(),
-                        reason: "the grain line's two points map to the same place".into(),
-                    });
-                }
-            }
-        }
+        design_marks(name, def, mesh, flat, &mut input)?;
         if let Some(w) = def.seam_allowance_mm {
             opts = opts.with_default_seam(w);
         }
         input.label = LabelInfo {
             name: name.into(),
-            size: ctx.size.clone(),
+            size: def
+                .size
+                .as_ref()
+                .map_or_else(|| ctx.size.clone(), |s| s.size.clone()),
             material: def.material.clone().unwrap_or_default(),
             quantity: def.quantity,
             distortion: None,
+            code: None,
         };
     }
     if input.grain.is_none()
@@ -669,8 +694,8 @@ pub fn piece_from_flat(
     {
         input.grain = flatcut_pattern::piece::grain_line_along(&input.outline, d);
     }
-    for d in ctx.darts {
-        dart_marks(&mut input, d, &ids, flat);
+    for (d, w) in ctx.darts.iter().zip(&drawn) {
+        crate::dart_drawing::dart_marks(&mut input, d, w, &ids);
     }
     if ctx.def.and_then(|d| d.seam_allowance_mm).is_none()
         && let Some(w) = ctx.seam_mm
@@ -683,109 +708,141 @@ pub fn piece_from_flat(
             r.stretch_max_pct, r.compress_max_pct, r.delta2_mean
         ));
     }
+    if let Some(code) = &ctx.code {
+        input.label.code = Some(code.clone());
+    }
     // The flattening leaves the piece at the solver's rotation: turn it square (grain along +x,
     // else its smallest bounding box) before it is built.
     input.orient();
     Ok(Piece::build(&input, &opts)?)
 }
 
-/// Where a dart's fold arrow sits: this fraction of the way from the mouth to the point (at
-/// most [`FOLD_ARROW_DEPTH_MM`] in), reaching this fraction of the way to the first leg.
-const FOLD_ARROW_DEPTH: f64 = 0.25;
-const FOLD_ARROW_DEPTH_MM: f64 = 15.0;
-const FOLD_ARROW_REACH: f64 = 0.8;
-/// Half-width of the fold arrow's head relative to its length.
-const FOLD_HEAD: f64 = 0.3;
-
-/// The outline with every dart closed across its mouth: a folded dart's wedge stays in the
-/// piece (its legs are sewn, its intake folded), so the sew line runs straight from mouth to
-/// mouth and the legs are drawn inside.
-fn bridge_darts(
-    outline: Vec<DVec2>,
-    ids: Vec<u32>,
-    darts: &[flatcut_darts::Dart],
-) -> (Vec<DVec2>, Vec<u32>) {
-    let n = ids.len();
-    let mut drop = vec![false; n];
-    for d in darts {
-        let at = |v: u32| ids.iter().position(|&i| i == v);
-        let apex = *d.legs.sides[0].last().unwrap_or(&d.legs.sides[0][0]);
-        let (Some(i0), Some(i1), Some(ia)) =
-            (at(d.legs.sides[0][0]), at(d.legs.sides[1][0]), at(apex))
-        else {
-            continue;
-        };
-        // The stretch between the mouths that holds the point.
-        let ahead = |from: usize, to: usize| (to + n - from) % n;
-        let (from, to) = if ahead(i0, ia) < ahead(i0, i1) {
-            (i0, i1)
-        } else {
-            (i1, i0)
-        };
-        let mut k = (from + 1) % n;
-        while k != to {
-            drop[k] = true;
-            k = (k + 1) % n;
-        }
+/// The design's grain line carried into the plane. A grain line is a direction drawn near the
+/// surface: points off the surface are carried by their nearest vertex rather than refused.
+fn design_grain(
+    name: &str,
+    def: &PieceDef,
+    mesh: &TriMesh,
+    flat: &[DVec2],
+) -> Result<Option<(DVec2, DVec2)>, PipelineError> {
+    let Some([a, b]) = def.grain.as_ref().and_then(|g| g.line()).copied() else {
+        return Ok(None);
+    };
+    let (a, b) = (DVec3::from_array(a), DVec3::from_array(b));
+    let q = flatcut_flatten::marks::to_plane(mesh, flat, &[a, b]);
+    match (
+        q[0].or_else(|| near_flat(mesh, flat, a)),
+        q[1].or_else(|| near_flat(mesh, flat, b)),
+    ) {
+        (Some(a), Some(b)) if a.distance(b) > 0.0 => Ok(Some((a, b))),
+        _ => Err(PipelineError::Piece {
+            piece: name.into(),
+            reason: "the grain line's two points map to the same place".into(),
+        }),
     }
-    outline
-        .into_iter()
-        .zip(ids)
-        .zip(&drop)
-        .filter(|(_, d)| !**d)
-        .map(|(p, _)| p)
-        .unzip()
 }
 
-/// The point a fraction `f` along a polyline's length.
-fn along(line: &[DVec2], f: f64) -> DVec2 {
-    let total: f64 = line.windows(2).map(|w| w[0].distance(w[1])).sum();
-    let mut left = f.clamp(0.0, 1.0) * total;
-    for w in line.windows(2) {
-        let l = w[0].distance(w[1]);
-        if left <= l && l > 0.0 {
-            return w[0].lerp(w[1], left / l);
-        }
-        left -= l;
-    }
-    line.last().copied().unwrap_or(DVec2::ZERO)
+/// The flat position of the mesh vertex nearest `p`.
+fn near_flat(mesh: &TriMesh, flat: &[DVec2], p: DVec3) -> Option<DVec2> {
+    (0..mesh.positions.len().min(flat.len()))
+        .min_by(|&x, &y| {
+            mesh.positions[x]
+                .distance(p)
+                .total_cmp(&mesh.positions[y].distance(p))
+        })
+        .map(|v| flat[v])
 }
 
-/// A folded dart on the pattern: its legs as a sew line inside the piece (mouth, point, mouth),
-/// a notch at each leg's mouth, the drill mark short of its point, and the fold arrow inside
-/// the wedge pointing to the leg the intake is pressed towards (its first leg).
-fn dart_marks(input: &mut PieceInput, d: &flatcut_darts::Dart, ids: &[u32], flat: &[DVec2]) {
-    let legs = d.leg_polylines(flat);
-    let mut sew = legs[0].clone();
-    sew.extend(legs[1].iter().rev().skip(1));
-    input.sew_lines.push(sew);
-    for v in [d.legs.sides[0][0], d.legs.sides[1][0]] {
-        if let Some(k) = ids.iter().position(|&i| i == v) {
-            input.marks.push(Mark {
-                kind: MarkKind::Notch,
-                pos: input.outline[k],
-                boundary_index: Some(k),
-            });
+/// The piece's darts as the pattern draws them: legs smoothed, and the side each intake is
+/// pressed toward (the design's `dart_press` point, or the piece's centre line).
+fn draw_darts(
+    ctx: &PieceContext<'_>,
+    mesh: &TriMesh,
+    flat: &[DVec2],
+    outline: &[DVec2],
+    grain: Option<(DVec2, DVec2)>,
+    chord_tol: f64,
+) -> Vec<crate::dart_drawing::DrawnDart> {
+    use crate::dart_drawing::{DrawnDart, pressed_leg, smooth_leg, toward_centre_line};
+    let toward = match ctx.def.and_then(|d| d.dart_press) {
+        Some(flatcut_design::DartPress::Toward(p)) => {
+            let p = DVec3::from_array(p);
+            flatcut_flatten::marks::to_plane(mesh, flat, &[p])[0]
+                .or_else(|| near_flat(mesh, flat, p))
+        }
+        _ => None,
+    };
+    let (centre, dir) =
+        crate::outline_edges::centre_line(outline, grain.map(|(a, b)| b - a).or(ctx.grain_dir));
+    ctx.darts
+        .iter()
+        .map(|d| {
+            let legs = d.leg_polylines(flat).map(|l| smooth_leg(&l, chord_tol));
+            let target = toward.unwrap_or_else(|| toward_centre_line(&legs, centre, dir));
+            let pressed = pressed_leg(&legs, target);
+            DrawnDart { legs, pressed }
+        })
+        .collect()
+}
+
+/// The design's marks of a piece carried into the plane: stitch and placement lines (following
+/// the surface), drill holes and reference points.
+fn design_marks(
+    name: &str,
+    def: &PieceDef,
+    mesh: &TriMesh,
+    flat: &[DVec2],
+    input: &mut PieceInput,
+) -> Result<(), PipelineError> {
+    for mark in &def.marks {
+        let pts: Vec<DVec3> = mark.points.iter().map(|p| DVec3::from_array(*p)).collect();
+        match mark.kind {
+            // Notch marks are boundary vertices of the mesh already (`ctx.notches`).
+            DesignMark::Notch => {}
+            DesignMark::Line if pts.len() >= 2 => {
+                // Stitch and placement lines follow the surface: each 3D segment is subdivided
+                // and every sample carried by its nearest surface point, so the flat line bends
+                // as the map does.
+                let q = flatcut_flatten::marks::polyline_to_plane(mesh, flat, &pts, LINE_STEP_MM);
+                let line: Option<Vec<DVec2>> = q.into_iter().collect();
+                let line = line.ok_or_else(|| PipelineError::Piece {
+                    piece: name.into(),
+                    reason: format!(
+                        "mark '{}': the line leaves the surface (a point is farther than {:.0} % of the part size from it)",
+                        mark.name,
+                        flatcut_flatten::marks::MAX_OFFSET_REL * 100.0
+                    ),
+                })?;
+                input.lines.push(line);
+            }
+            DesignMark::Point | DesignMark::Line => {
+                // a one-point "line" is a reference point
+                let kind = if mark.kind == DesignMark::Point {
+                    MarkKind::Drill
+                } else {
+                    MarkKind::Point
+                };
+                for (q, p) in flatcut_flatten::marks::to_plane(mesh, flat, &pts)
+                    .into_iter()
+                    .zip(&pts)
+                {
+                    let q = q.ok_or_else(|| PipelineError::Piece {
+                        piece: name.into(),
+                        reason: format!(
+                            "mark '{}': point ({:.2}, {:.2}, {:.2}) is not on the surface",
+                            mark.name, p.x, p.y, p.z
+                        ),
+                    })?;
+                    input.marks.push(Mark {
+                        kind,
+                        pos: q,
+                        boundary_index: None,
+                    });
+                }
+            }
         }
     }
-    input.marks.push(Mark {
-        kind: MarkKind::Drill,
-        pos: d.drill_2d,
-        boundary_index: None,
-    });
-    let depth = (FOLD_ARROW_DEPTH * d.leg_2d_mm[0]).min(FOLD_ARROW_DEPTH_MM);
-    let f = depth / d.leg_2d_mm[0].max(f64::MIN_POSITIVE);
-    let (q0, q1) = (along(&legs[0], f), along(&legs[1], f));
-    let c = 0.5 * (q0 + q1);
-    let len = FOLD_ARROW_REACH * c.distance(q0);
-    if len > 0.0 {
-        let dir = (q0 - c).normalize_or_zero();
-        let tip = c + dir * len;
-        let side = dir.perp() * (FOLD_HEAD * len);
-        let back = tip - dir * (FOLD_HEAD * len);
-        input.lines.push(vec![c, tip]);
-        input.lines.push(vec![back + side, tip, back - side]);
-    }
+    Ok(())
 }
 
 /// A rigid group of strokes nested as one item: a pattern piece's drawing in its own frame.
@@ -965,6 +1022,8 @@ fn place(d: &Drawing, pl: &Placement, instance: u32, item: u32) -> Drawing {
     out.pieces.truncate(1);
     for info in &mut out.pieces {
         info.piece = item * 10_000 + instance;
+        // each placed copy is one piece cut (its drawn label still says how many a set takes)
+        info.label.quantity = 1;
     }
     out
 }

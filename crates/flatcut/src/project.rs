@@ -23,6 +23,9 @@
 //! spacing_mm = 2.0
 //! [machine]
 //! profile = "pen"               # pen | knife | laser | path to a profile .toml
+//! [order]                       # optional, for a graded design: sets to cut per size
+//! S = 2                         # (every piece's quantity, both sides of a pair, times this)
+//! M = 4
 //! [device]
 //! # port = "/dev/ttyUSB0"       # the controller; "simulator" or absent: the embedded simulator
 //! baud = 115200                 # 1200..=2000000
@@ -165,6 +168,11 @@ pub struct Project {
     pub material: Material,
     pub sheet: Sheet,
     pub machine: Machine,
+    /// Sets to cut per size of a graded design (`S = 2`, `M = 4`): the nesting places every
+    /// piece of a size its quantity times this; sizes not named are not cut. Absent: one set
+    /// of every size.
+    #[serde(default)]
+    pub order: Option<std::collections::BTreeMap<String, u32>>,
     #[serde(default)]
     pub device: Device,
     /// The project file's directory (set at load time).
@@ -285,6 +293,20 @@ impl Project {
             && flatcut_flatten::Method::from_name(m).is_none()
         {
             return Err(format!("unknown method '{m}'"));
+        }
+        if let Some(order) = &self.order {
+            if let Some((size, n)) = order
+                .iter()
+                .find(|(_, n)| **n > flatcut_geom::limits::MAX_QUANTITY)
+            {
+                return Err(format!(
+                    "[order] {size} = {n}: at most {} sets per size",
+                    flatcut_geom::limits::MAX_QUANTITY
+                ));
+            }
+            if order.values().all(|n| *n == 0) {
+                return Err("[order] cuts nothing: give at least one size a count".into());
+            }
         }
         self.device.validate()
     }

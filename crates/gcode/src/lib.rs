@@ -14,6 +14,7 @@ pub mod cutter;
 pub mod emit;
 pub mod hpgl;
 pub mod knife;
+pub mod marking;
 pub mod order;
 pub mod plan;
 pub mod profile;
@@ -21,5 +22,6 @@ pub mod time;
 
 pub use emit::{GRBL_MAX_LINE, frame_job};
 pub use hpgl::{HpglError, HpglSummary};
+pub use marking::Marking;
 pub use plan::{GcodeError, GcodeOptions, Move, Plan, Summary, Toolpath, plan};
 pub use profile::{FlowControl, HpglConfig, Profile, ProfileError, ToolKind};

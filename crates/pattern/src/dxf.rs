@@ -1,14 +1,16 @@
 //! DXF export (R12, `AC1009`, ASCII) in the AAMA/ASTM D6673 structure that pattern CAD and
 //! cutter front ends import, or with descriptive layer names for laser/knife software.
 //!
-//! * [`DxfLayers::Aama`] (default): one `BLOCK` per piece instance, placed by an `INSERT` in
-//!   `ENTITIES`. Inside a block, by AAMA layer number: `1` boundary (the cut line) and the
-//!   piece's `TEXT` (`Piece Name:`, `Size:`, `Quantity:`, `Material:`), `2` turn points and
-//!   `3` curve points of the boundary (`POINT`s), `4` notches, `6` mirror (fold) lines, `7` the
-//!   grain line (one `LINE`), `8` internal lines, `11` internal cut-outs, `13` drill holes
-//!   (`POINT` at the centre), `14` the sew line (arcs kept as vertex bulges), `15` annotation
-//!   (the label's stroke text). R12 has no header variable for the drawing unit, so the unit is
-//!   stated as AAMA files state it, in a `TEXT` on layer 1 outside the blocks: `Units: METRIC`.
+//! * [`DxfLayers::Aama`] (default): one `BLOCK` per piece cut (each copy, side of a pair and
+//!   size its own), placed by an `INSERT` in `ENTITIES`. Inside a block, by AAMA layer number:
+//!   `1` boundary (the cut line) and the piece's `TEXT` (`Piece Name:`, `Size:`, `Quantity:`,
+//!   `Material:`), `2` turn points and `3` curve points of the boundary (`POINT`s), `4`
+//!   notches, `6` mirror (fold) lines, `7` the grain line (one `LINE`), `8` internal lines, `11`
+//!   internal cut-outs, `13` drill holes (`POINT` at the centre), `14` the sew line (arcs kept
+//!   as vertex bulges), `15` annotation (the label's stroke text, and a `TEXT` per run of one
+//!   allowance at its middle on the sew line: `featherline: lasting 16.0 mm`). R12 has no
+//!   header variable for the drawing unit, so the unit is stated as AAMA files state it, in a
+//!   `TEXT` on layer 1 outside the blocks: `Units: METRIC`.
 //! * [`DxfLayers::Named`]: the flat style laser and knife software reads — every stroke a
 //!   `POLYLINE` in `ENTITIES` on `CUT`, `DRAW`, `NOTCH`, `DRILL` or `TEXT`.
 //!
@@ -22,7 +24,7 @@
 
 use crate::drawing::{Drawing, Layer, PieceInfo, Stroke, StrokeKind};
 use crate::fit::{self, PathSeg};
-use crate::piece::{LabelInfo, PlacedPiece};
+use crate::piece::{LabelInfo, PieceEdge, PlacedPiece};
 use flatcut_geom::{Aabb2, DVec2};
 use std::fmt::Write;
 
@@ -236,60 +238,94 @@ struct Block<'a> {
     name: String,
     info: Option<&'a PieceInfo>,
     items: Vec<Item<'a>>,
+    /// Annotation `TEXT`s on layer 15 (where, what): each edge's allowance.
+    notes: Vec<(DVec2, String)>,
 }
 
 /// Writes a drawing; in the AAMA style every piece of the drawing is a block.
 pub fn write_drawing(d: &Drawing, layers: DxfLayers) -> String {
-    let blocks = blocks_of_drawing(d);
-    write_blocks(&blocks, d, layers)
+    let blocks = unique_names(blocks_of_drawing(d));
+    write_blocks(&blocks, d.bbox(), layers)
 }
 
-/// Writes placed pieces; the sew line keeps its fitted lines and arcs as bulge polylines
-/// (cubics are flattened within the piece's chord tolerance).
+/// Writes placed pieces, each its own block (AAMA: one block per piece cut, with its own piece
+/// text, whatever instance numbers the placements carry); the sew line keeps its fitted lines
+/// and arcs as bulge polylines (cubics are flattened within the piece's chord tolerance), and
+/// every run of one allowance is annotated on layer 15 with its name, kind and width.
 pub fn write_pieces(placed: &[PlacedPiece], layers: DxfLayers, chord_tol: f64) -> String {
     let drawings: Vec<Drawing> = placed.iter().map(|p| p.to_drawing()).collect();
-    let mut all = Drawing::default();
-    for d in &drawings {
-        all.strokes.extend(d.strokes.iter().cloned());
-        all.pieces.extend(d.pieces.iter().cloned());
-    }
-    let sews: Vec<Option<(Vec<DVec2>, Vec<f64>)>> = placed
-        .iter()
-        .map(|pp| {
-            (!pp.piece.sew.is_empty()).then(|| {
-                let (pts, bulges) = bulge_polyline(&pp.piece.sew, chord_tol);
-                let pl = pp.placement;
-                (
-                    pts.iter().map(|q| pl.apply(*q)).collect(),
-                    bulges
-                        .iter()
-                        .map(|b| if pl.mirror { -b } else { *b })
-                        .collect(),
-                )
+    let mut bbox_pts = Vec::new();
+    let mut blocks = Vec::with_capacity(placed.len());
+    for (pp, d) in placed.iter().zip(&drawings) {
+        let b = d.bbox();
+        bbox_pts.extend([b.min, b.max].into_iter().filter(|p| p.is_finite()));
+        let pl = pp.placement;
+        let sew = (!pp.piece.sew.is_empty()).then(|| {
+            let (pts, bulges) = bulge_polyline(&pp.piece.sew, chord_tol);
+            (
+                pts.iter().map(|q| pl.apply(*q)).collect::<Vec<_>>(),
+                bulges
+                    .iter()
+                    .map(|b| if pl.mirror { -b } else { *b })
+                    .collect::<Vec<_>>(),
+            )
+        });
+        let items = d
+            .strokes
+            .iter()
+            .filter(|s| s.points.len() >= 2)
+            .map(|s| {
+                // The piece's sew line (closed) is written as fitted; inner sew lines (dart
+                // legs, open) as drawn.
+                let fitted = (s.kind == StrokeKind::Sew && s.closed)
+                    .then_some(sew.as_ref())
+                    .flatten();
+                Item {
+                    stroke: s,
+                    points: fitted.map(|f| f.0.clone()),
+                    bulges: fitted.map(|f| f.1.clone()),
+                }
             })
-        })
-        .collect();
-    let mut blocks = blocks_of_drawing(&all);
-    for b in &mut blocks {
-        let Some(k) = b
-            .info
-            .and_then(|i| placed.iter().position(|p| p.instance == i.piece))
-        else {
-            continue;
-        };
-        for it in &mut b.items {
-            // The piece's sew line (closed) is written as fitted; inner sew lines (dart legs,
-            // open) as drawn.
-            if it.stroke.kind == StrokeKind::Sew
-                && it.stroke.closed
-                && let Some((pts, bulges)) = &sews[k]
-            {
-                it.points = Some(pts.clone());
-                it.bulges = Some(bulges.clone());
-            }
-        }
+            .collect();
+        let notes = pp
+            .piece
+            .edges
+            .iter()
+            .filter_map(|e| Some((pl.apply(midpoint(&e.sew)?), edge_note(e))))
+            .collect();
+        blocks.push(Block {
+            name: block_name(&pp.piece.label_with_name().name, pp.instance),
+            info: d.pieces.first(),
+            items,
+            notes,
+        });
     }
-    write_blocks(&blocks, &all, layers)
+    write_blocks(&unique_names(blocks), Aabb2::from_points(bbox_pts), layers)
+}
+
+/// The annotation of a run of one allowance: `featherline: lasting 16.0 mm` (a run no edge
+/// names: `seam 8.0 mm`).
+pub fn edge_note(e: &PieceEdge) -> String {
+    let what = format!("{} {:.1} mm", e.kind.name(), e.width);
+    if e.name.is_empty() {
+        what
+    } else {
+        format!("{}: {what}", e.name)
+    }
+}
+
+/// The point halfway along an open polyline.
+fn midpoint(line: &[DVec2]) -> Option<DVec2> {
+    let total: f64 = line.windows(2).map(|w| w[0].distance(w[1])).sum();
+    let mut left = 0.5 * total;
+    for w in line.windows(2) {
+        let l = w[0].distance(w[1]);
+        if left <= l && l > 0.0 {
+            return Some(w[0].lerp(w[1], left / l));
+        }
+        left -= l;
+    }
+    line.last().copied()
 }
 
 /// Groups the strokes by piece, in order of first appearance; strokes of no piece form a block
@@ -312,6 +348,7 @@ fn blocks_of_drawing(d: &Drawing) -> Vec<Block<'_>> {
                         name,
                         info,
                         items: Vec::new(),
+                        notes: Vec::new(),
                     },
                 ));
                 blocks.len() - 1
@@ -323,9 +360,13 @@ fn blocks_of_drawing(d: &Drawing) -> Vec<Block<'_>> {
             points: None,
         });
     }
-    // Unique block names (two pieces may share a name after sanitising).
+    blocks.into_iter().map(|(_, b)| b).collect()
+}
+
+/// Block names made unique (two pieces may share a name after sanitising): `_2`, `_3`, … added.
+fn unique_names(blocks: Vec<Block<'_>>) -> Vec<Block<'_>> {
     let mut out: Vec<Block<'_>> = Vec::with_capacity(blocks.len());
-    for (_, mut b) in blocks {
+    for mut b in blocks {
         if !b.name.is_empty() {
             let base = b.name.clone();
             let mut k = 2;
@@ -359,9 +400,9 @@ fn block_name(name: &str, instance: u32) -> String {
     format!("{clean}-{instance}")
 }
 
-fn write_blocks(blocks: &[Block<'_>], all: &Drawing, layers: DxfLayers) -> String {
+fn write_blocks(blocks: &[Block<'_>], extents: Aabb2, layers: DxfLayers) -> String {
     let mut w = Writer { out: String::new() };
-    header(&mut w, layers, all.bbox());
+    header(&mut w, layers, extents);
     if layers == DxfLayers::Aama {
         w.pair(0, "SECTION");
         w.pair(2, "BLOCKS");
@@ -382,9 +423,8 @@ fn write_blocks(blocks: &[Block<'_>], all: &Drawing, layers: DxfLayers) -> Strin
     w.pair(2, "ENTITIES");
     match layers {
         DxfLayers::Aama => {
-            let o = all.bbox();
-            let at = if o.min.is_finite() {
-                o.min
+            let at = if extents.min.is_finite() {
+                extents.min
             } else {
                 DVec2::ZERO
             };
@@ -422,6 +462,9 @@ fn write_blocks(blocks: &[Block<'_>], all: &Drawing, layers: DxfLayers) -> Strin
 /// boundary, and the piece's text.
 fn write_aama_piece(w: &mut Writer, b: &Block<'_>) {
     write_aama_items(w, &b.items);
+    for (at, note) in &b.notes {
+        w.text("15", *at, TEXT_HEIGHT_MM, note);
+    }
     if let Some(boundary) = b
         .items
         .iter()
@@ -642,6 +685,36 @@ mod tests {
         assert!(d.strokes.iter().any(|s| s.kind == StrokeKind::Text));
         assert!(d.strokes.iter().all(|s| s.piece == Some(0)));
         assert_eq!(text, write_pieces(&placed(&p), DxfLayers::Aama, 0.01));
+    }
+
+    #[test]
+    fn every_placed_piece_is_its_own_block_with_its_own_text() {
+        // three pieces, all instance 1 (a pattern sheet shows one of each): three blocks
+        let pieces = [piece("toe cap L"), piece("toe cap R"), piece("vamp L")];
+        let placed: Vec<PlacedPiece<'_>> = pieces
+            .iter()
+            .enumerate()
+            .map(|(k, p)| PlacedPiece {
+                piece: p,
+                instance: 1,
+                placement: Placement {
+                    translation: DVec2::new(150.0 * k as f64, 0.0),
+                    ..Placement::IDENTITY
+                },
+            })
+            .collect();
+        let text = write_pieces(&placed, DxfLayers::Aama, 0.01);
+        assert_eq!(text.matches("\n  0\nBLOCK\n").count(), 3);
+        assert_eq!(text.matches("\n  0\nINSERT\n").count(), 3);
+        for b in ["TOE_CAP_L-1", "TOE_CAP_R-1", "VAMP_L-1"] {
+            assert!(text.contains(&format!("  2\n{b}\n")), "block {b}");
+        }
+        let d = read_dxf(&text, 0.01).unwrap().drawing;
+        let names: Vec<&str> = d.pieces.iter().map(|i| i.label.name.as_str()).collect();
+        assert_eq!(names, ["toe cap L", "toe cap R", "vamp L"]);
+        assert_eq!(d.strokes.iter().filter(|s| s.is_outer()).count(), 3);
+        // each run of one allowance is annotated: here the default seam all round
+        assert_eq!(text.matches("seam 10.0 mm").count(), 3);
     }
 
     #[test]

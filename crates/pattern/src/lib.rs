@@ -6,11 +6,13 @@
 //! (the crate graph enforces it); the facade turns a flattened boundary into a piece.
 
 pub mod colours;
+pub mod corner;
 pub mod drawing;
 pub mod dxf;
 pub mod dxf_read;
 pub mod error;
 pub mod fit;
+pub mod graded;
 pub mod io;
 pub mod piece;
 pub mod poly;
@@ -24,7 +26,7 @@ pub use error::PatternError;
 pub use fit::PathSeg;
 pub use io::write_atomic;
 pub use piece::{
-    LabelInfo, Mark, MarkKind, NotchStyle, Piece, PieceInput, PieceOptions, PlacedPiece, Placement,
-    safe_name,
+    EdgeAllowance, EdgeKind, LabelInfo, MIN_LABEL_HEIGHT, Mark, MarkKind, NotchStyle, Piece,
+    PieceEdge, PieceInput, PieceOptions, PlacedPiece, Placement, safe_name,
 };
 pub use seam::CornerStyle;

@@ -2,18 +2,21 @@
 //! with pattern-maker corner styles.
 //!
 //! Construction: the allowance region is the union of the sew polygon, one strip per sew edge
-//! (the edge swept outward by its width) and one corner patch per convex vertex whose shape
-//! is the corner style. The union is computed by `geo`'s boolean operations (i_overlay, integer
-//! robust), which resolves every overlap a concave outline or a narrow neck produces, without
-//! the cusp/loop trimming a hand-rolled offset needs. The per-edge construction is what lets the
-//! width change from seam to seam (0 on a fold) — a uniform offset engine cannot. The call is
+//! (the edge swept outward by its width) and one corner patch per vertex ([`crate::corner`]:
+//! the corner style, the cut lines of different widths joined, or a turned allowance's corner
+//! reflected, which also clips off what lies beyond the reflection). The union is computed by
+//! `geo`'s boolean operations (i_overlay, integer robust), which resolves every overlap a
+//! concave outline or a narrow neck produces, without the cusp/loop trimming a hand-rolled
+//! offset needs. The per-edge construction is what lets the width change from edge to edge (a
+//! lasting margin beside a seam, 0 on a raw edge) — a uniform offset engine cannot. The call is
 //! guarded with `catch_unwind`, and the result is validated independently: one closed simple
-//! ring, no trapped holes, every sew point inside, and no cut point closer to a sew edge than
-//! that edge's width.
+//! ring, no trapped holes, every sew point inside, and no cut point closer to the inside of a
+//! sew edge than that edge's width.
 
+use crate::corner::{self, Corner, right_normal};
 use crate::poly;
 use flatcut_geom::DVec2;
-use geo::{Coord, LineString, Polygon};
+use geo::{BooleanOps, Coord, LineString, Polygon};
 
 /// How the allowance is closed at a convex corner of the sew line.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -24,21 +27,24 @@ pub enum CornerStyle {
     Mitred,
     /// The corner is cut square to the bisector at the larger width from the sew corner.
     Squared,
-    /// The allowance of the incoming seam ends on the mirror image of the outgoing sew line
-    /// (as it lies when the allowance is folded back along the incoming seam), so the folded
-    /// allowance matches the neighbouring seam: Seamly2D's "by first edge symmetry".
+    /// The allowance of the incoming seam ends on the mirror image of the outgoing seam's cut
+    /// line about the incoming sew line (as it lies when the allowance is folded back along the
+    /// incoming seam), so the folded allowance matches the neighbouring seam: Seamly2D's "by
+    /// first edge symmetry" ([`crate::corner`]).
     Reflected,
 }
 
 /// A mitre longer than this many widths is squared off instead (the usual CAD mitre limit; a
 /// 4× mitre is reached at a turn of about 150°).
 pub const DEFAULT_MITRE_LIMIT: f64 = 4.0;
+/// A needle of the cut line this thin (mm) is dropped: far below any cutter, far above the
+/// union's integer rounding.
+const COLLINEAR_MM: f64 = 1e-5;
+/// A vertex this close (mm) to the segment between its neighbours is dropped.
+const STRAIGHT_MM: f64 = 1e-9;
 /// Holes in the allowance region smaller than this (mm²) are numerical slivers, not trapped
 /// material.
 const HOLE_AREA_EPS: f64 = 1e-3;
-/// Corner patches of vertices turning less than this (radians) are skipped for equal widths:
-/// the neighbouring strips already overlap within this chord sagitta.
-const TURN_EPS: f64 = 1e-9;
 
 /// Result of the offset: the cut ring (CCW, no repeated end point).
 #[derive(Clone, Debug)]
@@ -51,19 +57,6 @@ pub struct SeamResult {
 pub enum SeamFailure {
     TooLarge(String),
     Engine(String),
-}
-
-fn right_normal(d: DVec2) -> DVec2 {
-    DVec2::new(d.y, -d.x)
-}
-
-fn line_intersect(a: DVec2, da: DVec2, b: DVec2, db: DVec2) -> Option<DVec2> {
-    let den = da.perp_dot(db);
-    if den.abs() < 1e-12 {
-        return None;
-    }
-    let t = (b - a).perp_dot(db) / den;
-    Some(a + da * t)
 }
 
 fn push_ccw(out: &mut Vec<Vec<DVec2>>, ring: Vec<DVec2>) {
@@ -79,11 +72,11 @@ fn push_ccw(out: &mut Vec<Vec<DVec2>>, ring: Vec<DVec2>) {
 }
 
 /// Builds the cut line of a CCW simple sew polygon `sew` with width `widths[i]` on edge
-/// `i` (vertex i → i+1).
+/// `i` (vertex i → i+1), each vertex closed as `corners[i]` says.
 pub fn allowance(
     sew: &[DVec2],
     widths: &[f64],
-    style: CornerStyle,
+    corners: &[Corner],
     mitre_limit: f64,
     tol: f64,
 ) -> Result<SeamResult, SeamFailure> {
@@ -91,7 +84,10 @@ pub fn allowance(
     let dir: Vec<DVec2> = (0..n)
         .map(|i| (sew[(i + 1) % n] - sew[i]).normalize_or_zero())
         .collect();
-    let mut parts: Vec<Vec<DVec2>> = vec![sew.to_vec()];
+    let mut parts = corner::Parts {
+        add: vec![sew.to_vec()],
+        clip: Vec::new(),
+    };
     for i in 0..n {
         let w = widths[i];
         if w <= 0.0 || dir[i] == DVec2::ZERO {
@@ -99,86 +95,39 @@ pub fn allowance(
         }
         let o = right_normal(dir[i]) * w;
         let (a, b) = (sew[i], sew[(i + 1) % n]);
-        push_ccw(&mut parts, vec![a, b, b + o, a + o]);
+        push_ccw(&mut parts.add, vec![a, b, b + o, a + o]);
     }
     for i in 0..n {
         let ip = (i + n - 1) % n;
-        let (dp, dn) = (dir[ip], dir[i]);
-        let (wp, wn) = (widths[ip], widths[i]);
-        if (wp <= 0.0 && wn <= 0.0) || dp == DVec2::ZERO || dn == DVec2::ZERO {
-            continue;
-        }
-        let v = sew[i];
-        let turn = dp.perp_dot(dn);
-        let a = v + right_normal(dp) * wp;
-        let b = v + right_normal(dn) * wn;
-        if turn <= TURN_EPS && (wp - wn).abs() <= 1e-12 {
-            continue; // concave or straight with equal widths: the strips overlap
-        }
-        if turn <= TURN_EPS {
-            push_ccw(&mut parts, vec![v, a, b]);
-            continue;
-        }
-        let wmax = wp.max(wn);
-        let mitre = line_intersect(a, dp, b, dn);
-        let squared = |parts: &mut Vec<Vec<DVec2>>| {
-            // cut perpendicular to the outward bisector at distance wmax from v
-            let bis = (right_normal(dp) + right_normal(dn)).normalize_or_zero();
-            let q = v + bis * wmax;
-            let perp = DVec2::new(-bis.y, bis.x);
-            let pa = line_intersect(a, dp, q, perp).unwrap_or(a);
-            let pb = line_intersect(b, dn, q, perp).unwrap_or(b);
-            push_ccw(parts, vec![v, a, pa, pb, b]);
+        let vertex = corner::Vertex {
+            v: sew[i],
+            dp: dir[ip],
+            dn: dir[i],
+            wp: widths[ip],
+            wn: widths[i],
         };
-        match style {
-            CornerStyle::Mitred => match mitre {
-                Some(m) if m.distance(v) <= mitre_limit * wmax => {
-                    push_ccw(&mut parts, vec![v, a, m, b])
-                }
-                _ => squared(&mut parts),
-            },
-            CornerStyle::Squared => match mitre {
-                Some(m) if m.distance(v) <= wmax * (1.0 + 1e-9) => {
-                    push_ccw(&mut parts, vec![v, a, m, b])
-                }
-                _ => squared(&mut parts),
-            },
-            CornerStyle::Reflected => {
-                // mirror of the outgoing sew direction about the incoming sew line
-                let r = 2.0 * dn.dot(dp) * dp - dn;
-                let p1 = line_intersect(a, dp, v, r).filter(|p| (*p - a).dot(dp) >= 0.0);
-                match p1 {
-                    Some(p1) if p1.distance(v) <= mitre_limit * wmax => {
-                        let p2 = line_intersect(b, dn, v, r)
-                            .filter(|p| {
-                                (*p - b).dot(dn) <= 0.0 && p.distance(v) <= mitre_limit * wmax
-                            })
-                            .unwrap_or_else(|| {
-                                // foot of p1 on the outgoing cut line
-                                b + dn * (p1 - b).dot(dn)
-                            });
-                        push_ccw(&mut parts, vec![v, a, p1, p2, b]);
-                    }
-                    _ => match mitre {
-                        Some(m) if m.distance(v) <= mitre_limit * wmax => {
-                            push_ccw(&mut parts, vec![v, a, m, b])
-                        }
-                        _ => squared(&mut parts),
-                    },
-                }
-            }
-        }
+        corner::parts(&vertex, corners[i], mitre_limit, &mut parts);
     }
     check_crossing(sew, widths, tol)?;
-    let polys: Vec<Polygon<f64>> = parts
-        .iter()
-        .map(|r| {
-            let ls: Vec<Coord<f64>> = r.iter().map(|p| Coord { x: p.x, y: p.y }).collect();
-            Polygon::new(LineString::from(ls), vec![])
-        })
-        .collect();
-    let union = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| geo::unary_union(&polys)))
-        .map_err(|_| SeamFailure::Engine("polygon union panicked".into()))?;
+    let polygons = |rings: &[Vec<DVec2>]| -> Vec<Polygon<f64>> {
+        rings
+            .iter()
+            .map(|r| {
+                let ls: Vec<Coord<f64>> = r.iter().map(|p| Coord { x: p.x, y: p.y }).collect();
+                Polygon::new(LineString::from(ls), vec![])
+            })
+            .collect()
+    };
+    let (add, clip) = (polygons(&parts.add), polygons(&parts.clip));
+    let union = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let u = geo::unary_union(&add);
+        if clip.is_empty() {
+            u
+        } else {
+            u.difference(&geo::unary_union(&clip))
+        }
+    }))
+    .map_err(|_| SeamFailure::Engine("polygon union panicked".into()))?;
     if union.0.is_empty() {
         return Err(SeamFailure::Engine("polygon union is empty".into()));
     }
@@ -210,7 +159,7 @@ pub fn allowance(
     if poly::signed_area(&cut) < 0.0 {
         cut.reverse();
     }
-    cut = drop_collinear(&cut, 1e-9);
+    cut = drop_collinear(&cut, COLLINEAR_MM);
     validate(sew, widths, &cut, tol, mitre_limit)?;
     Ok(SeamResult { cut })
 }
@@ -251,22 +200,42 @@ fn check_crossing(sew: &[DVec2], widths: &[f64], tol: f64) -> Result<(), SeamFai
     Ok(())
 }
 
+/// Drops every vertex that lies between its two neighbours on the line through them (within
+/// [`STRAIGHT_MM`]), or beyond one of them within `eps` (a needle: the union's rounding can
+/// leave a hair where two parts' edges run along each other), until none is left.
 fn drop_collinear(p: &[DVec2], eps: f64) -> Vec<DVec2> {
-    let n = p.len();
-    if n < 4 {
-        return p.to_vec();
+    let mut ring = p.to_vec();
+    loop {
+        let n = ring.len();
+        if n < 4 {
+            return ring;
+        }
+        let flat = |i: usize| {
+            let (a, b, c) = (ring[(i + n - 1) % n], ring[i], ring[(i + 1) % n]);
+            let (off, t) = poly::seg_nearest(a, c, b);
+            let between = t > 0.0 && t < 1.0;
+            let longest = a.distance(b).max(b.distance(c)).max(a.distance(c));
+            let needle = !between && (b - a).perp_dot(c - a).abs() <= eps * longest;
+            off <= STRAIGHT_MM || needle
+        };
+        let keep: Vec<bool> = (0..n).map(|i| !flat(i)).collect();
+        if keep.iter().all(|k| *k) {
+            return ring;
+        }
+        // drop every other flat vertex per pass, so two neighbours are never both dropped on
+        // the strength of each other
+        let mut dropped_prev = false;
+        let mut next = Vec::with_capacity(n);
+        for (i, q) in ring.iter().enumerate() {
+            if !keep[i] && !dropped_prev {
+                dropped_prev = true;
+                continue;
+            }
+            dropped_prev = false;
+            next.push(*q);
+        }
+        ring = next;
     }
-    let keep: Vec<bool> = (0..n)
-        .map(|i| {
-            let (a, b, c) = (p[(i + n - 1) % n], p[i], p[(i + 1) % n]);
-            poly::seg_nearest(a, c, b).0 > eps
-        })
-        .collect();
-    p.iter()
-        .zip(keep)
-        .filter(|(_, k)| *k)
-        .map(|(q, _)| *q)
-        .collect()
 }
 
 /// Independent checks of a cut ring against its sew ring.
@@ -298,10 +267,17 @@ fn validate(
     let n = sew.len();
     let wmax = widths.iter().copied().fold(0.0, f64::max);
     for c in cut {
-        // no cut point closer to an edge than its width (it would eat into that seam)
+        // no cut point outside an edge closer to it than its width (it would eat into that
+        // seam); beside an edge's end the corner decides the shape (a narrower neighbour, a
+        // reflected hem corner), and a point behind an edge (a raw edge's cut line meeting a
+        // lasting margin at an acute corner) is not in its allowance
         for i in 0..n {
-            let (d, _) = poly::seg_nearest(sew[i], sew[(i + 1) % n], *c);
-            if d < widths[i] - tol {
+            let (a, b) = (sew[i], sew[(i + 1) % n]);
+            let (d, t) = poly::seg_nearest(a, b, *c);
+            let outside = (b - a).perp_dot(*c - a) < 0.0;
+            let len = a.distance(b);
+            let inner = t * len > tol && (1.0 - t) * len > tol;
+            if outside && inner && d < widths[i] - tol {
                 return bad(format!(
                     "cut point ({:.3}, {:.3}) is {d:.3} mm from edge {i}, narrower than its {:.3} mm allowance",
                     c.x, c.y, widths[i]
@@ -328,10 +304,20 @@ mod tests {
         DVec2::new(x, y)
     }
 
-    /// Max over cut vertices of |dist to sew| and the min: for a uniform width with mitred
-    /// corners every cut point is at least w away and edge points exactly w.
+    /// The same corner style at every vertex of an `n`-gon.
+    fn all(style: CornerStyle, n: usize) -> Vec<Corner> {
+        vec![Corner::Join(style); n]
+    }
+
+    /// The least and largest distance to the sew line over the cut line's vertices and edge
+    /// midpoints: for a uniform width every cut point is at least w away and edge points
+    /// exactly w.
     fn dist_range(sew: &[DVec2], cut: &[DVec2]) -> (f64, f64) {
-        let ds: Vec<f64> = cut.iter().map(|c| poly::dist_to_closed(sew, *c)).collect();
+        let n = cut.len();
+        let ds: Vec<f64> = (0..n)
+            .flat_map(|i| [cut[i], 0.5 * (cut[i] + cut[(i + 1) % n])])
+            .map(|c| poly::dist_to_closed(sew, c))
+            .collect();
         (
             ds.iter().copied().fold(f64::INFINITY, f64::min),
             ds.iter().copied().fold(0.0, f64::max),
@@ -344,7 +330,7 @@ mod tests {
         let r = allowance(
             &sq,
             &[10.0; 4],
-            CornerStyle::Mitred,
+            &all(CornerStyle::Mitred, sq.len()),
             DEFAULT_MITRE_LIMIT,
             1e-6,
         )
@@ -354,12 +340,12 @@ mod tests {
     }
 
     #[test]
-    fn fold_edge_has_zero_allowance() {
+    fn raw_edge_has_zero_allowance() {
         let sq = [v(0., 0.), v(100., 0.), v(100., 50.), v(0., 50.)];
         let r = allowance(
             &sq,
             &[10.0, 10.0, 10.0, 0.0],
-            CornerStyle::Mitred,
+            &all(CornerStyle::Mitred, 4),
             DEFAULT_MITRE_LIMIT,
             1e-6,
         )
@@ -369,6 +355,107 @@ mod tests {
         assert!(minx.abs() < 1e-9);
     }
 
+    /// The vertices of `cut` that turn clockwise (a notch or step into the allowance).
+    fn reflex(cut: &[DVec2]) -> Vec<DVec2> {
+        let n = cut.len();
+        (0..n)
+            .filter(|&i| {
+                let (a, b, c) = (cut[(i + n - 1) % n], cut[i], cut[(i + 1) % n]);
+                (b - a).perp_dot(c - b) < -1e-9
+            })
+            .map(|i| cut[i])
+            .collect()
+    }
+
+    #[test]
+    fn a_lasting_margin_beside_seams_meets_them_at_mitred_corners() {
+        // 16 mm along the bottom, 8 mm elsewhere: the cut line is a rectangle, no notch
+        let sq = [v(0., 0.), v(100., 0.), v(100., 50.), v(0., 50.)];
+        let r = allowance(
+            &sq,
+            &[16.0, 8.0, 8.0, 8.0],
+            &all(CornerStyle::Mitred, 4),
+            DEFAULT_MITRE_LIMIT,
+            1e-6,
+        )
+        .unwrap();
+        assert_eq!(r.cut.len(), 4, "{:?}", r.cut);
+        for q in [v(-8., -16.), v(108., -16.), v(108., 58.), v(-8., 58.)] {
+            assert!(
+                r.cut.iter().any(|c| c.distance(q) < 1e-9),
+                "{q} in {:?}",
+                r.cut
+            );
+        }
+    }
+
+    #[test]
+    fn different_widths_at_a_concave_corner_leave_no_notch() {
+        // an L: the inner corner (60, 40) joins a 16 mm edge to an 8 mm one
+        let l = [
+            v(0., 0.),
+            v(100., 0.),
+            v(100., 40.),
+            v(60., 40.),
+            v(60., 100.),
+            v(0., 100.),
+        ];
+        let widths = [8.0, 8.0, 16.0, 8.0, 8.0, 8.0];
+        let r = allowance(
+            &l,
+            &widths,
+            &all(CornerStyle::Mitred, 6),
+            DEFAULT_MITRE_LIMIT,
+            1e-6,
+        )
+        .unwrap();
+        // the 16 mm line y = 56 meets the 8 mm line x = 68 at (68, 56): the only reflex vertex
+        assert_eq!(reflex(&r.cut), vec![v(68., 56.)], "{:?}", r.cut);
+    }
+
+    /// A flared skirt panel: hem along the bottom (40 mm, turned up), side seams leaning in by
+    /// `alpha` (15 mm), waist 10 mm.
+    fn flared(alpha: f64) -> (Vec<DVec2>, [f64; 4], Vec<Corner>) {
+        let (h, b) = (200.0, 200.0);
+        let t = b * 0.5 - h * alpha.tan();
+        let sew = vec![v(-b / 2., 0.), v(b / 2., 0.), v(t, h), v(-t, h)];
+        let mut corners = all(CornerStyle::Mitred, 4);
+        corners[0] = Corner::FoldOutgoing;
+        corners[1] = Corner::FoldIncoming;
+        (sew, [40.0, 15.0, 10.0, 15.0], corners)
+    }
+
+    #[test]
+    fn a_turned_hem_folds_onto_the_side_seams_cut_lines() {
+        for alpha in [0.0f64, 0.15, 0.35] {
+            let (sew, widths, corners) = flared(alpha);
+            let r = allowance(&sew, &widths, &corners, DEFAULT_MITRE_LIMIT, 1e-6).unwrap();
+            // every cut point below the hem line, folded up about it, lies on or inside the
+            // side seams' cut lines and reaches them at the hem's ends
+            let below: Vec<DVec2> = r.cut.iter().copied().filter(|p| p.y < -1e-9).collect();
+            assert!(!below.is_empty());
+            let (s, c) = alpha.sin_cos();
+            let right = |p: DVec2| (p - v(100. + 15. * c, 15. * s)).perp_dot(v(-s, c));
+            let left = |p: DVec2| (p - v(-100. - 15. * c, 15. * s)).perp_dot(v(-s, -c));
+            let mut reach = (f64::INFINITY, f64::INFINITY);
+            for p in &below {
+                let f = v(p.x, -p.y);
+                // (i_overlay rounds to its integer grid: a few nanometres)
+                assert!(
+                    right(f) <= 1e-6 && left(f) <= 1e-6,
+                    "α {alpha}: {p} folds to {f}: {} {}",
+                    right(f),
+                    left(f)
+                );
+                reach = (reach.0.min(-right(f)), reach.1.min(-left(f)));
+            }
+            assert!(reach.0 < 1e-6 && reach.1 < 1e-6, "α {alpha}: {reach:?}");
+            // the hem itself stays 40 mm deep
+            let deepest = below.iter().map(|p| p.y).fold(0.0, f64::min);
+            assert!((deepest + 40.0).abs() < 1e-6, "{deepest}");
+        }
+    }
+
     #[test]
     fn squared_corner_of_a_triangle_is_cut_at_the_width() {
         let tri = [v(0., 0.), v(100., 0.), v(50., 30.)];
@@ -376,7 +463,7 @@ mod tests {
         let r = allowance(
             &tri,
             &[w; 3],
-            CornerStyle::Squared,
+            &all(CornerStyle::Squared, tri.len()),
             DEFAULT_MITRE_LIMIT,
             1e-6,
         )
@@ -405,7 +492,7 @@ mod tests {
         match allowance(
             &u,
             &[10.0; 8],
-            CornerStyle::Mitred,
+            &all(CornerStyle::Mitred, u.len()),
             DEFAULT_MITRE_LIMIT,
             1e-6,
         ) {
@@ -420,7 +507,7 @@ mod tests {
             allowance(
                 &u,
                 &[1.0; 8],
-                CornerStyle::Mitred,
+                &all(CornerStyle::Mitred, u.len()),
                 DEFAULT_MITRE_LIMIT,
                 1e-6
             )
@@ -446,7 +533,7 @@ mod tests {
                                  w in 0.5f64..15.0, phase in 0.0f64..std::f64::consts::TAU, style in 0usize..3) {
             let sew = star(k, r_in, r_in + extra, phase);
             let style = [CornerStyle::Mitred, CornerStyle::Squared, CornerStyle::Reflected][style];
-            let r = allowance(&sew, &vec![w; sew.len()], style, DEFAULT_MITRE_LIMIT, 1e-6).unwrap();
+            let r = allowance(&sew, &vec![w; sew.len()], &all(style, sew.len()), DEFAULT_MITRE_LIMIT, 1e-6).unwrap();
             let (dmin, dmax) = dist_range(&sew, &r.cut);
             prop_assert!(dmin >= w - 1e-6, "dmin {dmin} < w {w}");
             prop_assert!(dmax <= DEFAULT_MITRE_LIMIT * w + 1e-6);
@@ -464,7 +551,7 @@ mod tests {
             let h = g / 2.0;
             let sew = vec![v(0., 0.), v(40., 0.), v(40., 20.0 - h), v(60., 20.0 - h), v(60., 0.), v(100., 0.),
                            v(100., 40.), v(60., 40.), v(60., 20.0 + h), v(40., 20.0 + h), v(40., 40.), v(0., 40.)];
-            match allowance(&sew, &vec![w; sew.len()], CornerStyle::Mitred, DEFAULT_MITRE_LIMIT, 1e-6) {
+            match allowance(&sew, &vec![w; sew.len()], &all(CornerStyle::Mitred, sew.len()), DEFAULT_MITRE_LIMIT, 1e-6) {
                 Ok(r) => {
                     let (dmin, _) = dist_range(&sew, &r.cut);
                     prop_assert!(dmin >= w - 1e-6);

@@ -338,6 +338,7 @@ fn regions_json(
             Err(e) => {
                 let mut bare = p.clone();
                 bare.lines.clear();
+                bare.edges.clear();
                 let surface = bare.regions(base, tol).ok();
                 crate::views::part_error_view(p, k, surface.as_ref(), &e.to_string())
             }

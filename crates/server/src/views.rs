@@ -77,6 +77,20 @@ pub fn part_view(design: &Design, k: usize, regions: &PartRegions) -> Json {
             })
         })
         .collect();
+    let edges: Vec<Json> = regions
+        .edges
+        .iter()
+        .map(|e| {
+            let path: Vec<[f64; 3]> = e.points.iter().map(|&p| point(p)).collect();
+            json!({
+                "name": e.name,
+                "kind": e.kind.name(),
+                "allowance_mm": e.allowance_mm,
+                "closed": e.closed,
+                "path": path,
+            })
+        })
+        .collect();
     let grain: Vec<Json> = part
         .pieces
         .iter()
@@ -95,6 +109,7 @@ pub fn part_view(design: &Design, k: usize, regions: &PartRegions) -> Json {
         "region_of_face": regions.split.region_of_face,
         "regions": reg,
         "lines": lines,
+        "edges": edges,
         "boundary": boundary,
         "error": null,
     })
@@ -115,6 +130,7 @@ pub fn part_error_view(
                 pieces: Vec::new(),
                 parts: vec![part.clone()],
                 joins: Vec::new(),
+                grading: None,
                 source: String::new(),
             };
             bare.parts[0].lines.clear();
@@ -141,6 +157,9 @@ pub fn part_error_view(
 pub struct PieceView<'a> {
     pub name: &'a str,
     pub part: Option<String>,
+    /// The size of a graded design's piece.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub size: Option<String>,
     pub quantity: u32,
     pub mirrored: u32,
     pub faces: usize,
@@ -173,7 +192,13 @@ pub fn flatten_view(
     revision: u64,
     elapsed_s: f64,
 ) -> Json {
-    let part_of = |name: &str| {
+    // A graded design's pieces are named `<piece> <size>`: their part is the design piece's.
+    let part_of = |f: &Flat| {
+        let name = f
+            .def
+            .as_ref()
+            .and_then(|d| d.size.as_ref())
+            .map_or(f.name.as_str(), |s| s.piece.as_str());
         design
             .parts
             .iter()
@@ -197,7 +222,12 @@ pub fn flatten_view(
             });
             PieceView {
                 name: &f.name,
-                part: part_of(&f.name),
+                part: part_of(f),
+                size: f
+                    .def
+                    .as_ref()
+                    .and_then(|d| d.size.as_ref())
+                    .map(|s| s.size.clone()),
                 quantity: f.quantity,
                 mirrored: f.mirrored,
                 faces: f.report.faces,

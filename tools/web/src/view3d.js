@@ -77,7 +77,7 @@ export class View3D {
       this.scene.add(this.groups[k]);
     }
     this.pick = [];        // per part: its indexed surface mesh (invisible, for picking)
-    this.heatMeshes = [];  // per flattened piece
+    this.heatMeshes = [];  // per flattened piece drawn
     this.handles = [];     // {mesh, part, line, point}
     this.mode = 'heat';
     this.diag = 100;
@@ -184,11 +184,15 @@ export class View3D {
     if (point >= 0) this.handles.push({ mesh: m, part, line, point });
   }
 
-  /** The flattened pieces (POST /api/flatten) as heat maps on the surface; grain arrows. */
+  /** The flattened pieces (POST /api/flatten) as heat maps on the surface; grain arrows. Of a
+   * graded design's pieces only those of the selected piece's size are drawn (the sizes lie
+   * over each other); picking still answers with the piece's index in `pieces`. */
   setPieces(pieces, scale, stops, selected) {
     this.clear('heat');
     this.heatMeshes = [];
+    const size = pieces.find((p) => p.name === selected)?.size;
     pieces.forEach((p, k) => {
+      if (p.size !== size) return;
       const { positions, triangles, strain } = p.mesh;
       const g = faceColoured(positions, triangles, (f) => heatColour(stops, scale, strain[f] ?? 0));
       const mesh = new THREE.Mesh(g, surfaceMaterial());

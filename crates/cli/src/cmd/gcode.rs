@@ -77,6 +77,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         s.travel_length_mm,
         hms(s.est_time_s)
     );
+    crate::outln!(
+        "{}",
+        flatcut::gcode::Marking::of(&profile, &drawing).note(&profile.name)
+    );
     crate::outln!("wrote {}", a.output.display());
     if a.frame {
         crate::outln!("wrote {} (bounding box, tool off)", frame.display());

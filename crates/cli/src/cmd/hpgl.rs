@@ -51,6 +51,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         s.cut_length_mm,
         s.travel_length_mm
     );
+    crate::outln!(
+        "{}",
+        flatcut::gcode::Marking::of(&profile, &drawing).note(&profile.name)
+    );
     crate::outln!("wrote {}", a.output.display());
     Ok(ExitCode::SUCCESS)
 }

@@ -295,6 +295,10 @@ fn print_summary(
         s.travel_length_mm,
         super::gcode::hms(s.est_time_s)
     );
+    crate::outln!("labels       {}", s.labels);
+    for (code, name) in &s.label_codes {
+        crate::outln!("             {code} = {name}");
+    }
     for l in stream_lines {
         crate::outln!("stream       {l}");
     }

@@ -120,6 +120,7 @@ pub fn flatten_project(
     opts: &RunOptions,
     obs: &mut dyn Observer,
 ) -> Result<Vec<Flat>, RunError> {
+    check_order(project, design)?;
     timed(obs, Stage::Flatten, &flatten_detail(project)?, |obs| {
         flatten_stage(project, design, opts, obs)
     })
@@ -142,8 +143,8 @@ pub fn finish_project(
     let limits_exceeded = timed(obs, Stage::Report, "", |obs| {
         report_stage(&flats, opts, obs, &mut files)
     })?;
-    let pieces = timed(obs, Stage::Pattern, "", |_| {
-        pattern_stage(project, &flats, &mut files)
+    let pieces = timed(obs, Stage::Pattern, "", |obs| {
+        pattern_stage(project, &flats, obs, &mut files)
     })?;
     let (layout, stock) = timed(obs, Stage::Nest, "", |obs| {
         nest_stage(project, &pieces, opts, obs)
@@ -151,7 +152,14 @@ pub fn finish_project(
     let (profile, sheets) = timed(obs, Stage::Gcode, "", |_| {
         gcode_stage(project, &layout, stock, &mut files)
     })?;
-    let summary = summarise(project, &flats, &layout, &sheets, limits_exceeded);
+    let summary = summarise(
+        project,
+        &flats,
+        &pieces,
+        &layout,
+        (&profile, &sheets),
+        limits_exceeded,
+    );
     files.push(OutputFile {
         name: "summary.json".into(),
         bytes: json(&summary),
@@ -183,6 +191,48 @@ fn timed<T>(
         elapsed: t0.elapsed(),
     });
     Ok(out)
+}
+
+/// Refuses an `[order]` that names a size the design's grading does not have, or any size of a
+/// design without grading, before anything is flattened.
+fn check_order(project: &Project, design: Option<&flatcut_design::Design>) -> Result<(), RunError> {
+    let Some(order) = &project.order else {
+        return Ok(());
+    };
+    let path = project.design_path();
+    let loaded;
+    let design = match design {
+        Some(d) => d,
+        None => {
+            loaded = flatcut_design::Design::load(&path).map_err(PipelineError::from)?;
+            &loaded
+        }
+    };
+    let sizes: Vec<&str> = design
+        .grading
+        .as_ref()
+        .map(|g| g.sizes.iter().map(|z| z.name.as_str()).collect())
+        .unwrap_or_default();
+    for size in order.keys() {
+        if !sizes.contains(&size.as_str()) {
+            return Err(RunError::Project {
+                project: project.name.clone(),
+                message: if sizes.is_empty() {
+                    format!(
+                        "[order] names size '{size}', but {} has no [grading]",
+                        path.display()
+                    )
+                } else {
+                    format!(
+                        "[order] names size '{size}', which the grading of {} has not (its sizes: {})",
+                        path.display(),
+                        sizes.join(", ")
+                    )
+                },
+            });
+        }
+    }
+    Ok(())
 }
 
 fn method(project: &Project) -> Result<Method, RunError> {
@@ -343,10 +393,13 @@ fn region_line(piece: &str, r: &Region) -> String {
     )
 }
 
-/// Pattern pieces, laid out in a row (`pattern.svg`, `pattern.dxf`).
+/// Pattern pieces, laid out in a row per size (`pattern.svg`, `pattern.dxf`), and for a graded
+/// design the graded nest of every piece (`graded-<piece>.svg`); a warning for every piece
+/// whose label could not be written at a readable height.
 fn pattern_stage(
     project: &Project,
     flats: &[Flat],
+    obs: &mut dyn Observer,
     files: &mut Vec<OutputFile>,
 ) -> Result<Vec<Piece>, RunError> {
     let settings = PieceSettings {
@@ -354,6 +407,20 @@ fn pattern_stage(
         ..PieceSettings::default()
     };
     let pieces = pieces::build_pieces(flats, &settings)?;
+    for p in &pieces {
+        if p.label_height < flatcut_pattern::MIN_LABEL_HEIGHT - 1e-9 {
+            obs.event(&Event::Warning {
+                stage: Stage::Pattern,
+                message: &format!(
+                    "piece '{}': its label ({}) is written {:.1} mm high, below the {} mm a cutter reads: the piece has no room for more",
+                    p.name,
+                    p.label_text.join(" / "),
+                    p.label_height,
+                    flatcut_pattern::MIN_LABEL_HEIGHT
+                ),
+            });
+        }
+    }
     let placed = pieces::row_layout(&pieces);
     files.push(OutputFile {
         name: "pattern.svg".into(),
@@ -368,6 +435,13 @@ fn pattern_stage(
         )
         .into_bytes(),
     });
+    for (name, sizes) in pieces::graded_sets(flats, &pieces) {
+        let sizes: Vec<(&str, &Piece)> = sizes.iter().map(|(s, p)| (s.as_str(), *p)).collect();
+        files.push(OutputFile {
+            name: format!("graded-{}.svg", file_safe(&name)),
+            bytes: flatcut_pattern::graded::graded_svg(&name, &sizes).into_bytes(),
+        });
+    }
     Ok(pieces)
 }
 
@@ -391,8 +465,18 @@ pub fn stock(project: &Project) -> Result<Stock, RunError> {
     }
 }
 
-/// Nests every piece (both sides of a pair), as many times as its label says, on the project's
-/// stock.
+/// How many of a pattern piece the job cuts: its label's quantity (per set), times the sets
+/// the project's `[order]` asks of its size.
+fn cut_count(project: &Project, p: &Piece) -> usize {
+    let per_set = p.label.quantity as usize;
+    match &project.order {
+        Some(order) => per_set * order.get(&p.label.size).copied().unwrap_or(0) as usize,
+        None => per_set,
+    }
+}
+
+/// Nests every piece (both sides of a pair), as many times as its label says (times its size's
+/// `[order]`), on the project's stock.
 fn nest_stage(
     project: &Project,
     pieces: &[Piece],
@@ -402,13 +486,17 @@ fn nest_stage(
     let stock = stock(project)?;
     let groups: Vec<NestGroup> = pieces
         .iter()
-        .map(|p| {
-            let mut g = NestGroup::from_piece(p, p.label.quantity as usize, false);
-            // The nesting keeps a grain line along the material's grain by the material's rule
-            // (one way, either way, or not at all) within its tolerance, mirrored copies too.
-            g.grain_directions = project.material.grain_rule();
-            g.grain_tolerance_deg = project.material.grain_tolerance();
-            g
+        .filter_map(|p| {
+            let n = cut_count(project, p);
+            (n > 0).then(|| {
+                let mut g = NestGroup::from_piece(p, n, false);
+                // The nesting keeps a grain line along the material's grain by the material's
+                // rule (one way, either way, or not at all) within its tolerance, mirrored
+                // copies too.
+                g.grain_directions = project.material.grain_rule();
+                g.grain_tolerance_deg = project.material.grain_tolerance();
+                g
+            })
         })
         .collect();
     let nopts = NestOptions::DEFAULT
@@ -481,15 +569,26 @@ fn gcode_stage(
 fn summarise(
     project: &Project,
     flats: &[Flat],
+    pieces: &[Piece],
     layout: &Layout,
-    sheets: &[SheetJob],
+    (profile, sheets): (&flatcut_gcode::Profile, &[SheetJob]),
     limits_exceeded: Vec<String>,
 ) -> RunSummary {
     let r = &layout.result;
+    let mut all = flatcut_pattern::Drawing::default();
+    for s in sheets {
+        all.strokes.extend(s.drawing.strokes.iter().cloned());
+    }
     RunSummary {
         cut_length_mm: sheets.iter().map(|s| s.summary.cut_length_mm).sum(),
         est_time_s: sheets.iter().map(|s| s.summary.est_time_s).sum(),
         gcode_lines: sheets.iter().map(|s| s.summary.lines).sum(),
+        label_codes: pieces
+            .iter()
+            .filter(|p| p.label_text.len() == 1 && p.label_text[0] == p.label_code())
+            .map(|p| (p.label_code(), p.name.clone()))
+            .collect(),
+        labels: flatcut_gcode::Marking::of(profile, &all).note(&profile.name),
         limits_exceeded,
         mating_seams: flat::mating_seams(flats),
         pieces: flats

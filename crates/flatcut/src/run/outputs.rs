@@ -47,6 +47,12 @@ pub struct RunSummary {
     pub cut_length_mm: f64,
     pub est_time_s: f64,
     pub gcode_lines: usize,
+    /// The short codes written on pieces too small for a readable label, and the pieces they
+    /// stand for.
+    pub label_codes: std::collections::BTreeMap<String, String>,
+    /// What the jobs write on the pieces: their labels, or that the profile leaves them
+    /// unmarked ([`flatcut_gcode::Marking`]).
+    pub labels: String,
     /// One line per region beyond the material limits and per mating seam beyond the seam
     /// tolerance.
     pub limits_exceeded: Vec<String>,

@@ -1,5 +1,5 @@
 //! A piece as strokes on layers: what is cut (cut line, notches, drill holes), drawn (sew line,
-//! points, internal and grain lines) and engraved (the label).
+//! points, internal and grain lines) and engraved (the label, LASTING in a lasting margin).
 
 use super::Piece;
 use crate::drawing::{Drawing, Layer, PieceInfo, Stroke, StrokeKind};
@@ -93,6 +93,14 @@ impl Piece {
                 st.clone(),
                 false,
                 format!("label-{}", k + 1),
+            ));
+        }
+        for (k, st) in self.edge_labels.iter().enumerate() {
+            s.push(mk(
+                StrokeKind::Text,
+                st.clone(),
+                false,
+                format!("label-lasting-{}", k + 1),
             ));
         }
         Drawing {

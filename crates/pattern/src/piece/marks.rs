@@ -1,11 +1,15 @@
 //! Marks on a piece: notches cut through the allowance at match marks, drill holes, drawn
 //! reference points, internal lines, and the checks on the grain line.
 
+use super::edges::OutlineEdges;
 use super::outline::{Outline, WELD};
-use super::seams::SeamSegments;
 use super::{MarkKind, NotchStyle, PatternError, PieceInput, PieceOptions, invalid, non_finite};
 use crate::poly;
 use flatcut_geom::DVec2;
+
+/// Depth of a notch on an edge cut raw (mm): a nick a cutter sees, shallow enough not to show
+/// on the top piece of a lapped seam.
+const RAW_NICK_MM: f64 = 1.0;
 
 /// The marks of a piece as they are cut and drawn.
 pub(super) struct PlacedMarks {
@@ -24,7 +28,7 @@ pub(super) struct PlacedMarks {
 pub(super) fn place_marks(
     input: &PieceInput,
     outline: &Outline,
-    segments: &SeamSegments,
+    edges: &OutlineEdges,
     sew: &[DVec2],
     cut: &[DVec2],
     opts: &PieceOptions,
@@ -38,7 +42,7 @@ pub(super) fn place_marks(
     for (k, m) in input.marks.iter().enumerate() {
         match m.kind {
             MarkKind::Notch => {
-                let v = segments.mark_vertex[k]
+                let v = edges.mark_vertex[k]
                     .map(|i| outline.points[i])
                     .unwrap_or(m.pos);
                 out.notches.push(notch(sew, cut, v, opts));
@@ -80,10 +84,11 @@ fn notch(sew: &[DVec2], cut: &[DVec2], v: DVec2, opts: &PieceOptions) -> Vec<DVe
     let out = DVec2::new(tangent.y, -tangent.x);
     let reach = poly::ray_hit(cut, p - out * 1e-9, out).unwrap_or(0.0);
     let at_cut = p + out * reach;
+    // a notch on an edge cut raw (no allowance) is only nicked into the piece
     let depth = if reach > 1e-6 {
         opts.notch_depth.min(0.75 * reach)
     } else {
-        opts.notch_depth
+        opts.notch_depth.min(RAW_NICK_MM)
     };
     let tip = at_cut - out * depth;
     match opts.notch_style {

@@ -3,12 +3,14 @@
 //!
 //! Input is a flattened boundary (closed polyline in mm, counter-clockwise) with marks; the
 //! piece is built by [`Piece::build`] and turned into a [`Drawing`] by [`Piece::to_drawing`].
-//! Seam segments: the boundary is divided at the marks that carry a `boundary_index`, in
-//! boundary order; segment `j` runs from the `j`-th such mark to the next (with none, the whole
-//! boundary is segment 0). `seam_widths` gives one width per segment (or one for all).
+//! Allowances by edge: named stretches of the outline ([`EdgeAllowance`]) carry their own width
+//! and kind (seam, hem, fold, lasting, raw); the rest of the outline takes
+//! [`PieceOptions::default_seam`].
 
 mod allowance;
 mod draw;
+mod edge_marks;
+mod edges;
 mod grain_line;
 mod label;
 #[cfg(test)]
@@ -17,12 +19,13 @@ mod marks;
 mod orient;
 mod outline;
 mod placement;
-mod seams;
 mod sew;
 #[cfg(test)]
 mod tests;
 
+pub use edges::{EdgeAllowance, EdgeKind};
 pub use grain_line::grain_line_along;
+pub use label::short_code;
 pub use orient::orientation;
 pub use placement::{PlacedPiece, Placement};
 
@@ -65,6 +68,10 @@ pub struct LabelInfo {
     pub quantity: u32,
     /// One-line distortion summary from the flattening report (e.g. "AREA 1.2% MAX 3.4%").
     pub distortion: Option<String>,
+    /// The short code written where the piece has no room for a readable label (`None`: the
+    /// initials of the name, [`Piece::label_code`]).
+    #[serde(default)]
+    pub code: Option<String>,
 }
 
 /// Everything a piece is built from.
@@ -85,9 +92,10 @@ pub struct PieceInput {
     pub sew_lines: Vec<Vec<DVec2>>,
     /// Grain line as two points in the flat frame (direction carried through the map).
     pub grain: Option<(DVec2, DVec2)>,
-    /// Seam width per seam segment (see the module doc); empty = the default width everywhere,
-    /// one value = that width everywhere; 0 on a folded edge.
-    pub seam_widths: Vec<f64>,
+    /// Named stretches of the outline with their own allowance (see the module doc); they must
+    /// not overlap.
+    #[serde(default)]
+    pub edges: Vec<EdgeAllowance>,
     pub corner_style: CornerStyle,
     pub label: LabelInfo,
     /// Names of the notch marks, by mark index (a mating seam's notch carries the seam's name
@@ -112,7 +120,7 @@ impl PieceInput {
             lines: Vec::new(),
             sew_lines: Vec::new(),
             grain: None,
-            seam_widths: Vec::new(),
+            edges: Vec::new(),
             corner_style: CornerStyle::default(),
             mark_names: Vec::new(),
         }
@@ -139,7 +147,7 @@ pub struct PieceOptions {
     pub chord_tol: f64,
     /// Turn (degrees) above which a boundary vertex is kept as a corner.
     pub corner_deg: f64,
-    /// Seam width used when `seam_widths` is empty (mm).
+    /// Seam width of the outline's edges no named stretch covers (mm).
     pub default_seam: f64,
     /// Mitre limit in widths.
     pub mitre_limit: f64,
@@ -244,7 +252,33 @@ pub struct Piece {
     pub label: LabelInfo,
     /// Label text strokes (open polylines).
     pub label_strokes: Vec<Vec<DVec2>>,
+    /// The lines the label writes (all of the label's, the first few, or its short code where
+    /// the piece has no room for more at [`MIN_LABEL_HEIGHT`]).
+    pub label_text: Vec<String>,
+    /// The label's cap height (mm); 0 without a label.
+    pub label_height: f64,
+    /// The outline as runs of one allowance: every named stretch and the default seam between
+    /// them, in sew-line order.
+    pub edges: Vec<PieceEdge>,
+    /// Text written inside the allowance of lasting edges (LASTING), strokes in mm.
+    pub edge_labels: Vec<Vec<DVec2>>,
     chord_tol: f64,
+}
+
+/// The smallest cap height (mm) a cutter reads on the cut piece: a label with less room is
+/// shortened, down to the piece's short code.
+pub const MIN_LABEL_HEIGHT: f64 = 3.0;
+
+/// A run of the sew line with one allowance: a named stretch or the default seam between them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PieceEdge {
+    /// The stretch's name (empty for the default seam).
+    pub name: String,
+    pub kind: EdgeKind,
+    /// Allowance (mm): the distance from the sew line to the cut line along the run.
+    pub width: f64,
+    /// The run's sew line, open, in order (mm).
+    pub sew: Vec<DVec2>,
 }
 
 /// A piece name made safe for element ids and file names: ASCII letters, digits, `-` and `_`
@@ -289,8 +323,12 @@ fn check_numbers(input: &PieceInput, opts: &PieceOptions) -> Result<(), PatternE
     if !input.marks.iter().all(|m| flatcut_geom::finite2(m.pos)) {
         return Err(non_finite(name, "marks"));
     }
-    if input.seam_widths.iter().any(|w| !w.is_finite()) {
-        return Err(non_finite(name, "seam widths"));
+    if input
+        .edges
+        .iter()
+        .any(|e| e.width.is_some_and(|w| !w.is_finite()))
+    {
+        return Err(non_finite(name, "edge widths"));
     }
     for (what, v) in [
         ("fit tolerance", opts.fit_tol),
@@ -305,19 +343,22 @@ fn check_numbers(input: &PieceInput, opts: &PieceOptions) -> Result<(), PatternE
 
 impl Piece {
     /// Builds a piece; errors name the piece and what is wrong. The steps: the outline cleaned
-    /// ([`outline`]), the boundary divided into seam segments ([`seams`]), the sew line fitted
-    /// ([`sew`]), the allowance added ([`allowance`]), the marks and internal lines placed
-    /// ([`marks`]), and the label laid out ([`label`]).
+    /// ([`outline`]), the outline's edges given their allowances ([`edges`]), the sew line
+    /// fitted ([`sew`]), the allowance added ([`allowance`]), the marks and internal lines placed
+    /// ([`marks`]), the lasting edges labelled ([`edge_marks`]) and the label laid out
+    /// ([`label`]).
     pub fn build(input: &PieceInput, opts: &PieceOptions) -> Result<Piece, PatternError> {
         check_numbers(input, opts)?;
         let outline = outline::Outline::clean(&input.name, &input.outline)?;
-        let segments = seams::SeamSegments::of(input, &outline, opts.default_seam)?;
-        let sew = sew::SewLine::fit(&input.name, &outline, &segments, opts)?;
+        let edges = edges::OutlineEdges::of(input, &outline, opts.default_seam)?;
+        let sew = sew::SewLine::fit(&input.name, &outline, &edges, opts)?;
         let cut = allowance::cut_line(&input.name, &sew, input.corner_style, opts)?;
-        let placed = marks::place_marks(input, &outline, &segments, &sew.polyline, &cut, opts)?;
+        let placed = marks::place_marks(input, &outline, &edges, &sew.polyline, &cut, opts)?;
+        let runs = edge_marks::runs(input, &sew);
         let lines = marks::internal_lines(input, &cut, opts.chord_tol)?;
         let sew_lines = marks::inner_sew_lines(input, opts.chord_tol)?;
         marks::check_grain(input)?;
+        let edge_labels = edge_marks::lasting_labels(&runs, &sew.polyline, &cut);
         let mut piece = Piece {
             name: input.name.clone(),
             sew: sew.segs,
@@ -332,9 +373,13 @@ impl Piece {
             grain: input.grain,
             label: input.label.clone(),
             label_strokes: Vec::new(),
+            label_text: Vec::new(),
+            label_height: 0.0,
+            edges: runs,
+            edge_labels,
             chord_tol: opts.chord_tol,
         };
-        piece.label_strokes = piece.layout_label(opts.label_height);
+        piece.lay_out_label(opts.label_height);
         Ok(piece)
     }
 

@@ -119,26 +119,99 @@ fn rectangle_piece_has_allowance_notches_label() {
     }
 }
 
+/// A named stretch from `from` to `to` (outline vertices) of `kind` and `width`.
+fn edge(name: &str, kind: EdgeKind, width: Option<f64>, from: usize, to: usize) -> EdgeAllowance {
+    EdgeAllowance {
+        name: name.into(),
+        kind,
+        width,
+        from,
+        to,
+    }
+}
+
 #[test]
-fn per_segment_widths_between_marks_and_fold() {
-    // marks at the corners (0,0) [idx 0] and (200,0) [idx 20]: segment 0 is the bottom edge,
-    // segment 1 the rest; fold (0 mm) on the bottom
+fn named_edges_carry_their_allowance_and_the_rest_the_default() {
+    // vertices 0 and 20 are the bottom corners: the bottom cut raw, the rest 15 mm
     let mut input = PieceInput::new("front", rect(200., 100., 20));
-    input.marks.push(Mark {
-        kind: MarkKind::Point,
-        pos: DVec2::ZERO,
-        boundary_index: Some(0),
-    });
-    input.marks.push(Mark {
-        kind: MarkKind::Point,
-        pos: DVec2::new(200., 0.),
-        boundary_index: Some(20),
-    });
-    input.seam_widths = vec![0.0, 15.0];
-    let p = Piece::build(&input, &PieceOptions::default()).unwrap();
+    input.edges.push(edge("fold", EdgeKind::Raw, None, 0, 20));
+    let opts = PieceOptions::default().with_default_seam(15.0);
+    let p = Piece::build(&input, &opts).unwrap();
     let bb = p.bbox();
     assert!((bb.min.y - 0.0).abs() < 1e-9 && (bb.max.y - 115.0).abs() < 1e-9);
     assert!((bb.min.x + 15.0).abs() < 1e-9 && (bb.max.x - 215.0).abs() < 1e-9);
+    // two runs: the raw bottom (named) and the default seam round the rest
+    assert_eq!(p.edges.len(), 2, "{:?}", p.edges);
+    assert_eq!((p.edges[0].name.as_str(), p.edges[0].width), ("fold", 0.0));
+    assert_eq!((p.edges[1].name.as_str(), p.edges[1].width), ("", 15.0));
+    let len = |e: &PieceEdge| e.sew.windows(2).map(|w| w[0].distance(w[1])).sum::<f64>();
+    assert!((len(&p.edges[0]) - 200.0).abs() < 1e-9);
+    assert!((len(&p.edges[1]) - 400.0).abs() < 1e-9);
+}
+
+#[test]
+fn a_lasting_margin_is_written_lasting_inside_it() {
+    let mut input = PieceInput::new("quarter", rect(200., 100., 20));
+    input
+        .edges
+        .push(edge("featherline", EdgeKind::Lasting, Some(16.0), 0, 20));
+    let p = Piece::build(&input, &PieceOptions::default().with_default_seam(8.0)).unwrap();
+    assert!(!p.edge_labels.is_empty());
+    // upright, in the margin below the bottom edge, at least the readable height
+    let (lo, hi) = p.edge_labels.iter().flatten().fold(
+        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+        |(lo, hi), q| (lo.min(*q), hi.max(*q)),
+    );
+    assert!(lo.y > -16.0 && hi.y < 0.0, "{lo} {hi}");
+    assert!(hi.y - lo.y >= MIN_LABEL_HEIGHT, "{lo} {hi}");
+    assert!(
+        hi.x - lo.x > 3.0 * (hi.y - lo.y),
+        "written along the edge: {lo} {hi}"
+    );
+    let d = p.to_drawing(1);
+    assert!(
+        d.strokes
+            .iter()
+            .any(|s| s.id == "quarter-1-label-lasting-1" && s.kind == crate::StrokeKind::Text)
+    );
+}
+
+#[test]
+fn overlapping_or_misplaced_edges_are_refused_naming_them() {
+    let mut input = PieceInput::new("front", rect(200., 100., 20));
+    input
+        .edges
+        .push(edge("hem", EdgeKind::Hem, Some(30.0), 0, 20));
+    input
+        .edges
+        .push(edge("side", EdgeKind::Seam, Some(10.0), 10, 40));
+    let e = Piece::build(&input, &PieceOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("front") && e.contains("'hem' and 'side' overlap"),
+        "{e}"
+    );
+    input.edges[1] = edge("side", EdgeKind::Seam, Some(10.0), 20, 99);
+    let e = Piece::build(&input, &PieceOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("edge 'side'") && e.contains("vertex 99"), "{e}");
+}
+
+#[test]
+fn a_notch_on_a_raw_edge_is_a_nick() {
+    let mut input = PieceInput::new("vamp", rect(200., 100., 20));
+    input.edges.push(edge("lap", EdgeKind::Raw, None, 0, 20));
+    input.marks.push(Mark {
+        kind: MarkKind::Notch,
+        pos: DVec2::new(100., 0.),
+        boundary_index: None,
+    });
+    let p = Piece::build(&input, &PieceOptions::default()).unwrap();
+    let nt = &p.notches[0];
+    assert!(nt[0].distance(DVec2::new(100., 0.)) < 1e-6, "{nt:?}");
+    assert!((nt[0].distance(nt[1]) - 1.0).abs() < 1e-6, "{nt:?}");
 }
 
 #[test]
@@ -174,7 +247,8 @@ fn allowance_too_large_names_the_piece() {
     assert!(matches!(e, PatternError::AllowanceTooLarge { .. }), "{e}");
     assert!(e.to_string().contains("tongue"));
     let mut neg = PieceInput::new("heel", u);
-    neg.seam_widths = vec![-1.0];
+    neg.edges
+        .push(edge("back", EdgeKind::Seam, Some(-1.0), 0, 4));
     assert!(matches!(
         Piece::build(&neg, &PieceOptions::default()),
         Err(PatternError::AllowanceTooLarge { .. })
