@@ -73,7 +73,7 @@ pub fn split_piece(
     }
     let opts = options(&piece, &piece.mesh, params, settings)?;
     // Every flattening of the split draws on one stage: the split's.
-    let stage = params.stage_budget("split", std::time::Instant::now());
+    let stage = params.split_budget(std::time::Instant::now());
     let inside = params.clone().with_within(Some(stage.clone()));
     let s = split(&piece.mesh, &uv, &inside, &opts).map_err(|source| PipelineError::Darts {
         piece: piece.def.name.clone(),
@@ -93,7 +93,7 @@ pub fn split_surface_piece(
     settings: &SplitSettings,
 ) -> Result<SplitPieces, PipelineError> {
     let opts = options(&piece, whole, params, settings)?;
-    let stage = params.stage_budget("split", std::time::Instant::now());
+    let stage = params.split_budget(std::time::Instant::now());
     let inside = params.clone().with_within(Some(stage.clone()));
     let s = flatcut_darts::split::split_surface(whole, &inside, &opts).map_err(|source| {
         PipelineError::Darts {

@@ -34,6 +34,8 @@ pub struct FlattenParams {
     /// Iteration cap of the stages of many solves (the material limits, the darts, the split),
     /// over all their solves; each solve also stops at `max_iters`.
     pub stage_iters: usize,
+    /// Iteration cap of the split's stage, over all the solves of its candidate cuts.
+    pub split_iters: usize,
     /// Relative decrease of the energy below which a nonlinear method stops.
     pub rel_tolerance: f64,
     /// Relative length error below which a developable input counts as developable (`developable`).
@@ -63,6 +65,11 @@ impl FlattenParams {
         self.budget_of(name, self.stage_iters, started)
     }
 
+    /// The budget of the split's stage ([`Self::split_iters`]).
+    pub fn split_budget(&self, started: std::time::Instant) -> crate::Budget {
+        self.budget_of("split", self.split_iters, started)
+    }
+
     /// A stage's budget with `cap` iterations (inside [`Self::within`]: that stage's).
     fn budget_of(
         &self,
@@ -87,6 +94,10 @@ impl FlattenParams {
     /// steps on the bench's 20k hemisphere, toe and cap at ±3 %, the split of the 20k saddle
     /// 577.
     pub const DEFAULT_STAGE_ITERS: usize = 2000;
+    /// The default cap of the split's stage: opening a closed surface and ranking every cut's
+    /// candidates flattens both halves of each, so a ball split into 9 parts takes some 10,000
+    /// Newton steps; the split's own time limit (`--split-time`) is what bounds it in practice.
+    pub const DEFAULT_SPLIT_ITERS: usize = 100_000;
     /// `minmax`'s default cap: 200 L-BFGS steps for each of its descent's five sharpness
     /// stages.
     pub const DEFAULT_MINMAX_ITERS: usize = 1000;
@@ -101,6 +112,7 @@ impl FlattenParams {
             pins: Vec::new(),
             max_iters: Self::default_max_iters(method),
             stage_iters: Self::DEFAULT_STAGE_ITERS,
+            split_iters: Self::DEFAULT_SPLIT_ITERS,
             rel_tolerance: Self::DEFAULT_REL_TOLERANCE,
             developable_tolerance: Self::DEFAULT_DEVELOPABLE_TOLERANCE,
             time_limit: None,
@@ -137,6 +149,7 @@ impl FlattenParams {
     pub fn with_max_iters(mut self, n: usize) -> Self {
         self.max_iters = n;
         self.stage_iters = n;
+        self.split_iters = n;
         self
     }
 

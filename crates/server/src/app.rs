@@ -134,6 +134,11 @@ impl IntoResponse for ApiError {
     }
 }
 
+/// The body of a request whose route takes none (`POST /api/flatten` with `{}`), read and
+/// dropped: a connection closed with request bytes unread is reset by the kernel, and the client
+/// loses the answer it was reading.
+pub type Unread = axum::body::Bytes;
+
 /// The whole application: API routes, assets, the body limit and the access guard.
 pub fn router(app: Arc<App>, guard: Guard) -> Router {
     use crate::{design_routes as d, solve_routes as s};

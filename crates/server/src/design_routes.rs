@@ -1,6 +1,7 @@
 //! The routes that read and change the design: health, the design tree, undo/redo/save, style
 //! lines, regions and their names, and the event stream.
 
+use crate::app::Unread;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -187,7 +188,7 @@ async fn change<A: Send + 'static, B: Send + 'static>(
 }
 
 /// `POST /api/design/undo`.
-pub async fn undo(State(app): AppState) -> Result<Json<Value>, ApiError> {
+pub async fn undo(State(app): AppState, _body: Unread) -> Result<Json<Value>, ApiError> {
     app.bench().undo()?;
     app.design_changed("undo");
     crate::solve_routes::prefetch(&app);
@@ -195,7 +196,7 @@ pub async fn undo(State(app): AppState) -> Result<Json<Value>, ApiError> {
 }
 
 /// `POST /api/design/redo`.
-pub async fn redo(State(app): AppState) -> Result<Json<Value>, ApiError> {
+pub async fn redo(State(app): AppState, _body: Unread) -> Result<Json<Value>, ApiError> {
     app.bench().redo()?;
     app.design_changed("redo");
     crate::solve_routes::prefetch(&app);
@@ -203,7 +204,7 @@ pub async fn redo(State(app): AppState) -> Result<Json<Value>, ApiError> {
 }
 
 /// `POST /api/design/save`: writes the design to its file (comments and untouched keys kept).
-pub async fn save(State(app): AppState) -> Result<Json<Value>, ApiError> {
+pub async fn save(State(app): AppState, _body: Unread) -> Result<Json<Value>, ApiError> {
     let path = app.bench().save()?.display().to_string();
     app.design_changed("save");
     let mut v = state_json(&app);

@@ -4,6 +4,7 @@
 //! the pattern, the nest and the jobs. Long solves tell their progress on `/api/events` and can
 //! be cancelled.
 
+use crate::app::Unread;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
@@ -138,7 +139,7 @@ pub fn prefetch(app: &Arc<App>) {
 
 /// `POST /api/flatten`: every piece flattened within the project's limits, with its figures, heat
 /// map and meshes, and the mating seams (see API.md for the keys).
-pub async fn flatten(State(app): AppState) -> Result<Response, ApiError> {
+pub async fn flatten(State(app): AppState, _body: Unread) -> Result<Response, ApiError> {
     let f = flattened(&app).await?;
     Ok((
         [
@@ -154,7 +155,7 @@ pub async fn flatten(State(app): AppState) -> Result<Response, ApiError> {
 }
 
 /// `POST /api/flatten/cancel`: stops the running solve (and nest).
-pub async fn cancel(State(app): AppState) -> axum::Json<serde_json::Value> {
+pub async fn cancel(State(app): AppState, _body: Unread) -> axum::Json<serde_json::Value> {
     let a = lock(&app.flatten).cancel();
     let b = lock(&app.finish).cancel();
     axum::Json(json!({ "cancelled": a || b }))

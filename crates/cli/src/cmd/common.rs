@@ -38,8 +38,8 @@ pub struct FlattenArgs {
     /// the method's own solve (minmax, boundary-isometric and orthotropic: their start and their
     /// descent, two stages), the material limits, the joint solve of pieces sewn together
     /// (seams), the darts, the split. Each stage's count is printed; a piece takes at most N
-    /// times its stages [default: 200; minmax's descent: 1000; the limits, the darts and the
-    /// split: 2000].
+    /// times its stages [default: 200; minmax's descent: 1000; the limits and the darts: 2000;
+    /// the split: 100,000].
     #[arg(long, value_name = "N", value_parser = values::iterations)]
     pub max_iters: Option<usize>,
     /// Time limit of every stage of a piece's flattening (the stages of --max-iters) in
