@@ -79,6 +79,16 @@ fn area3(o: &Obj) -> f64 {
         .sum()
 }
 
+/// Split wherever a piece is beyond ±5 %.
+const SPLIT_WITHIN_5_PCT: &[&str] = &[
+    "--max-stretch",
+    "5",
+    "--max-compress",
+    "5",
+    "--split",
+    "auto",
+];
+
 #[test]
 fn a_torus_is_opened_and_split_into_parts_within_the_limits_that_close_it_again() {
     let dir = tempfile::tempdir().unwrap();
@@ -178,19 +188,7 @@ fn a_surface_that_passes_through_itself_is_refused_naming_where() {
     }
     let file = dir.path().join("tets.obj");
     std::fs::write(&file, obj).unwrap();
-    let err = flatten(
-        &file,
-        dir.path(),
-        &[
-            "--max-stretch",
-            "5",
-            "--max-compress",
-            "5",
-            "--split",
-            "auto",
-        ],
-    )
-    .unwrap_err();
+    let err = flatten(&file, dir.path(), SPLIT_WITHIN_5_PCT).unwrap_err();
     assert!(
         err.contains("passes through itself") && err.contains("near ("),
         "{err}"
@@ -206,19 +204,7 @@ fn a_non_manifold_surface_is_refused_naming_the_edge() {
                f 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\nf 2 3 5\n";
     let file = dir.path().join("fin.obj");
     std::fs::write(&file, obj).unwrap();
-    let err = flatten(
-        &file,
-        dir.path(),
-        &[
-            "--max-stretch",
-            "5",
-            "--max-compress",
-            "5",
-            "--split",
-            "auto",
-        ],
-    )
-    .unwrap_err();
+    let err = flatten(&file, dir.path(), SPLIT_WITHIN_5_PCT).unwrap_err();
     assert!(err.contains("edge 1-2"), "{err}");
 }
 
