@@ -15,6 +15,17 @@ pub const BANNER: &str = "\r\nGrbl 1.1h ['$' for help]\r\n";
 pub const LINE_MAX: usize = 79;
 /// Executor time step, s. Small against the 10 ms segments GRBL plans (`ACCELERATION_TICKS_PER_SECOND` 100).
 const STEP_S: f64 = 0.001;
+/// What is left of the step idle delay below this, s, is clock rounding: the delay is over.
+const IDLE_LOCK_EPS: f64 = 1e-9;
+/// `DWELL_TIME_STEP` (`config.h`), s: `delay_sec` waits in whole steps of it.
+const DWELL_TIME_STEP_S: f64 = 0.05;
+
+/// How long `G4 P<p>` waits: `delay_sec` loops `ceil(1000 / DWELL_TIME_STEP × p)` times over
+/// `DWELL_TIME_STEP` ms, in the Uno's single precision (`P0.01` waits 50 ms).
+fn dwell_seconds(p: f64) -> f64 {
+    let steps = (20.0f32 * p as f32).ceil();
+    f64::from(steps.max(0.0)) * DWELL_TIME_STEP_S
+}
 /// Build date string of `$I` (`grbl.h`).
 const BUILD: &str = "1.1h.20190830";
 /// Time the ATmega328P needs to program one EEPROM byte, s (datasheet: 3.3 ms). GRBL keeps interrupts off while it
@@ -119,6 +130,10 @@ pub struct Grbl {
     planner: Planner,
     instant: bool,
     dwell_left: f64,
+    /// `st_go_idle`'s `delay_ms($1)` after the steppers stop, s left: the main loop waits.
+    idle_lock_left: f64,
+    /// The steppers were running at the end of the last executor step.
+    stepping: bool,
     out: Vec<u8>,
     clock: f64,
     records: BTreeMap<usize, Record>,
@@ -211,6 +226,8 @@ impl Grbl {
             planner,
             instant: config.instant_motion,
             dwell_left: 0.0,
+            idle_lock_left: 0.0,
+            stepping: false,
             out: Vec::new(),
             clock: 0.0,
             records: BTreeMap::new(),
@@ -307,6 +324,7 @@ impl Grbl {
             && self.planner.blocks.is_empty()
             && self.rx.is_empty()
             && self.dwell_left <= 0.0
+            && self.idle_lock_left <= 0.0
     }
     /// Takes the bytes answered so far.
     pub fn take_output(&mut self) -> Vec<u8> {
@@ -729,6 +747,8 @@ impl Grbl {
         self.active_motion = None;
         self.after_ok = AfterOk::Nothing;
         self.dwell_left = 0.0;
+        self.idle_lock_left = 0.0;
+        self.stepping = false;
         self.eeprom_left = 0.0;
         self.hold_complete = false;
         self.jog_cancel = false;
@@ -858,6 +878,7 @@ impl Grbl {
         while left > 0.0 {
             let busy = !self.planner.blocks.is_empty()
                 || self.dwell_left > 0.0
+                || self.idle_lock_left > 0.0
                 || self.door_restore_left > 0.0
                 || self.eeprom_left > 0.0;
             if !busy {
@@ -894,6 +915,12 @@ impl Grbl {
         if self.dwell_left > 0.0 {
             self.dwell_left -= h;
         }
+        if self.idle_lock_left > 0.0 {
+            self.idle_lock_left -= h;
+            if self.idle_lock_left <= IDLE_LOCK_EPS {
+                self.idle_lock_left = 0.0;
+            }
+        }
         if self.eeprom_left > 0.0 {
             self.eeprom_left -= h;
         }
@@ -919,6 +946,17 @@ impl Grbl {
             self.stats.planner_starvations += 1;
         }
         let stopped = self.planner.v <= 0.0 || self.planner.blocks.is_empty();
+        // The steppers stop when the planner runs empty or a hold has braked to rest: then
+        // `st_go_idle` holds them for `$1` ms in the stepper interrupt, and only after that does
+        // the main loop see the cycle stop (Idle, or the hold complete).
+        let stepping = !(self.planner.blocks.is_empty() || holding && stopped);
+        if self.stepping && !stepping && self.state != State::Homing {
+            self.idle_lock_left = self.settings.step_idle_delay_s();
+        }
+        self.stepping = stepping;
+        if self.idle_lock_left > 0.0 {
+            return;
+        }
         match self.state {
             State::Cycle if self.planner.blocks.is_empty() => self.state = State::Idle,
             State::Hold | State::Door if !self.hold_complete && stopped => {
@@ -990,7 +1028,8 @@ impl Grbl {
     /// The main loop of `protocol.c`: finish the line in execution, then read and execute more lines.
     fn process(&mut self) {
         loop {
-            if self.critical || self.state == State::Sleep {
+            // The stepper interrupt's `delay_ms($1)` holds the main loop too.
+            if self.critical || self.state == State::Sleep || self.idle_lock_left > 0.0 {
                 return;
             }
             if self.line_active || !self.pending.is_empty() {
@@ -1209,7 +1248,7 @@ impl Grbl {
                 }
                 Action::Dwell(p) => {
                     if !check {
-                        self.dwell_left = p;
+                        self.dwell_left = dwell_seconds(p);
                         self.pending.push_front(Action::Sync);
                         return false;
                     }

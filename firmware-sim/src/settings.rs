@@ -111,6 +111,16 @@ pub fn fmt_float(value: f64, decimals: usize) -> String {
 }
 
 impl Settings {
+    /// How long `st_go_idle` holds the steppers when they stop (`delay_ms($1)`), s: `$1=255`
+    /// keeps them enabled and does not wait.
+    pub fn step_idle_delay_s(&self) -> f64 {
+        if self.idle_delay_ms == 255 {
+            0.0
+        } else {
+            f64::from(self.idle_delay_ms) / 1000.0
+        }
+    }
+
     /// Stores `$parameter=value` with GRBL's checks (`settings_store_global_setting`).
     pub fn store(&mut self, parameter: u32, value: f64) -> Result<(), Status> {
         if value < 0.0 {

@@ -355,3 +355,50 @@ fn planner_fill_blocks_parsing_and_ok() {
         5
     );
 }
+
+/// `$1`: when the steppers stop, `st_go_idle` holds them `$1` ms inside the stepper interrupt, so
+/// the controller reports Run that long after the motion ended and only then Idle; `$1=255`
+/// keeps them enabled and does not wait. A dwell lasts whole 50 ms steps (`delay_sec`).
+#[test]
+fn step_idle_delay_holds_the_cycle_after_every_stop() {
+    let idle_after = |cfg: SimConfig, program: &[u8]| {
+        let mut g = grbl(cfg);
+        g.receive_all(program);
+        let mut moved_until = None;
+        while g.clock() < 60.0 {
+            g.tick(0.001);
+            if moved_until.is_none() && g.trace().len() == 1 {
+                moved_until = Some(g.trace()[0].t_end);
+            }
+            if g.state() == State::Idle && g.is_quiescent() {
+                break;
+            }
+        }
+        (g.clock(), moved_until.unwrap())
+    };
+    let (idle, moved) = idle_after(SimConfig::default(), b"G1 X10 F600\n");
+    assert!((idle - moved - 0.025).abs() < 0.0015, "{idle} {moved}");
+    let (idle, moved) = idle_after(
+        SimConfig::default().with_setting(1, 255.0),
+        b"G1 X10 F600\n",
+    );
+    assert!(idle - moved < 0.0015, "{idle} {moved}");
+    // The delay comes before a dwell starts; P0.01 waits one 50 ms step.
+    let (idle, moved) = idle_after(SimConfig::default(), b"G1 X10 F600\nG4 P0.01\n");
+    assert!((idle - moved - 0.075).abs() < 0.0015, "{idle} {moved}");
+}
+
+/// GRBL 1.1h runs an inverse-time arc's chords at F × segments mm/min (`mc_arc` multiplies the
+/// feed and clears the inverse-time flag), not in 1/F minutes.
+#[test]
+fn inverse_time_arc_runs_at_f_times_segments() {
+    let mut g = grbl(SimConfig::default().with_setting(1, 255.0));
+    // Quarter circle r = 10 at $12 = 0.002: 39 chords, so F2 runs at 78 mm/min = 1.3 mm/s.
+    run_program(&mut g, "G0 X10\nG93 G3 X0 Y10 I-10 J0 F2");
+    let seg = g.trace().last().unwrap().clone();
+    let len = 39.0 * 20.0 * (std::f64::consts::FRAC_PI_4 / 39.0).sin();
+    // Cruise plus the ramps up and down (v/a); in 1/F minutes it would have taken 30 s.
+    let want = len / 1.3 + 1.3 / 10.0;
+    let t = seg.t_end - seg.t_start;
+    assert!((t - want).abs() < 0.1, "{t} vs {want}");
+}

@@ -24,8 +24,9 @@ pub struct SimMachine {
 
 impl SimMachine {
     /// The `$N=VALUE` settings of a GRBL controller that is this machine: `$110-$112` = its
-    /// rates, `$120-$122` = its accelerations, `$11` = its junction deviation, `$130/$131` = its
-    /// work area; steps/mm lowered where GRBL's 30 kHz step rate would refuse the rate at them.
+    /// rates, `$120-$122` = its accelerations, `$11` = its junction deviation, `$1` = its step idle
+    /// delay, `$130/$131` = its work area; steps/mm lowered where GRBL's 30 kHz step rate would
+    /// refuse the rate at them.
     pub fn settings(&self) -> Vec<(u16, f64)> {
         let m = &self.limits;
         let mut out = Vec::new();
@@ -37,6 +38,7 @@ impl SimMachine {
             out.push((120 + n, m.accel[a]));
         }
         out.push((11, m.junction_deviation));
+        out.push((1, (m.step_idle_delay * 1000.0).round().clamp(0.0, 254.0)));
         out.push((130, self.work_area[0]));
         out.push((131, self.work_area[1]));
         out

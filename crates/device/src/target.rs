@@ -6,6 +6,9 @@ use crate::embedded::SimSetup;
 use crate::error::DeviceError;
 
 /// Where jobs go.
+// A target is made once per session and moved rarely: boxing the simulator's set-up would change
+// the variant's public shape for nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
 pub enum Target {
     /// A serial port: a GRBL controller, or a pseudo-terminal such as `flatcut sim`'s.

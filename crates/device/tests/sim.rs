@@ -405,12 +405,31 @@ fn refuses_to_resume_another_job() {
     assert!(e.to_string().contains("different job"), "{e}");
 }
 
-/// The time estimate against the simulated planner on virtual time (lines fed as GRBL's RX
-/// buffer frees, so the planner stays full): short diagonal zig-zags, whose junction speed
-/// depends on the acceleration along the junction vector, and long straight strokes.
+/// A job's estimate with controller `settings`, and the time the simulated controller with those
+/// settings takes to run it on virtual time (lines fed as GRBL's RX buffer frees, so the planner
+/// stays full as behind a character-counting sender).
+fn estimate_and_simulated(text: &str, settings: &[(u16, f64)]) -> (f64, f64) {
+    use flatcut_firmware_sim::Grbl;
+    let limits = flatcut_grbl::MachineLimits::from_settings(&settings.iter().copied().collect());
+    let job = Job::parse_with(text, &limits).unwrap();
+    let mut g = Grbl::new(&SimConfig {
+        settings: settings.to_vec(),
+        ..SimConfig::default()
+    });
+    for l in &job.lines {
+        while g.rx_free() < l.text.len() + 1 {
+            g.tick(0.001);
+        }
+        g.receive_all(format!("{}\n", l.text).as_bytes());
+    }
+    g.run_until_idle(3600.0);
+    (job.total_time, g.clock())
+}
+
+/// The time estimate against the simulated planner: short diagonal zig-zags, whose junction
+/// speed depends on the acceleration along the junction vector, and long straight strokes.
 #[test]
 fn estimate_matches_the_simulated_machine() {
-    use flatcut_firmware_sim::Grbl;
     for (name, dx, dy, feed, n, within) in [
         ("0.5 mm 90° zig-zag at F1500", 0.5, 0.5, 1500.0, 400, 0.002),
         ("5 mm strokes at F3000", 0.012, 5.0, 3000.0, 200, 0.002),
@@ -423,23 +442,46 @@ fn estimate_matches_the_simulated_machine() {
                 (i % 2) as f64 * dy
             ));
         }
-        let job = Job::parse(&text).unwrap();
-        let mut g = Grbl::new(&SimConfig::default());
-        for l in &job.lines {
-            while g.rx_free() < l.text.len() + 1 {
-                g.tick(0.001);
-            }
-            g.receive_all(format!("{}\n", l.text).as_bytes());
-        }
-        g.run_until_idle(3600.0);
-        let sim = g.clock();
-        let est = job.total_time;
+        let (est, sim) = estimate_and_simulated(&text, &[]);
         assert!(
             (est - sim).abs() <= within * sim,
             "{name}: estimate {est:.2} s, simulated {sim:.2} s"
         );
         eprintln!("{name}: estimate {est:.3} s, simulated {sim:.3} s");
     }
+}
+
+/// The lampshade's plotter job (its profile's rates and accelerations) with GRBL's default step
+/// idle delay `$1 = 25`: 237 pen lifts and drops each stop the machine, and each stop holds it
+/// 25 ms (about 3 % of the job). The estimate counts them as the simulated controller spends
+/// them: with `$1 = 255` (no delay) both drop by the same amount.
+#[test]
+fn estimate_counts_the_step_idle_delay_on_the_lampshade() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../patterns/golden/lampshade/job-1.gcode"
+    );
+    let text = std::fs::read_to_string(path).unwrap();
+    let plotter = |idle_ms: f64| {
+        let mut s = vec![(1, idle_ms), (11, 0.01), (130, 1200.0), (131, 914.0)];
+        for a in 0..3 {
+            s.push((110 + a, 6000.0));
+            s.push((120 + a, 500.0));
+        }
+        s
+    };
+    let (est, sim) = estimate_and_simulated(&text, &plotter(25.0));
+    let (est_off, sim_off) = estimate_and_simulated(&text, &plotter(255.0));
+    eprintln!(
+        "lampshade, $1=25: estimate {est:.2} s, simulated {sim:.2} s ({:+.2} %); $1=255: \
+         estimate {est_off:.2} s, simulated {sim_off:.2} s",
+        100.0 * (est - sim) / sim
+    );
+    assert!((est - sim).abs() <= 0.005 * sim, "{est} vs {sim}");
+    // The stops' share: 25 ms at each of the job's stops, the same in both.
+    let (d_est, d_sim) = (est - est_off, sim - sim_off);
+    assert!(d_sim > 0.02 * sim, "{d_sim}");
+    assert!((d_est - d_sim).abs() <= 0.02 * d_sim, "{d_est} vs {d_sim}");
 }
 
 /// Issue 14, item 5: with homing and soft limits GRBL allows machine coordinates −travel..0

@@ -21,7 +21,8 @@ pub enum Motion {
 
 /// The machine a profile describes, as the motion model sees it: its travel speed is the max
 /// rate of every axis (GRBL's `G0` speed is `$110-$112`), its acceleration that of every axis;
-/// steps/mm and `$12` stay at GRBL's defaults (the profile does not say them).
+/// steps/mm, `$12` and the step idle delay `$1` stay at GRBL's defaults (the profile does not say
+/// them).
 pub fn limits(profile: &Profile) -> Limits {
     Limits {
         steps_per_mm: Limits::GRBL_DEFAULT.steps_per_mm,
@@ -29,6 +30,7 @@ pub fn limits(profile: &Profile) -> Limits {
         accel: [profile.accel_mm_s2; 3],
         junction_deviation: profile.junction_deviation_mm,
         arc_tolerance: Limits::GRBL_DEFAULT.arc_tolerance,
+        step_idle_delay: Limits::GRBL_DEFAULT.step_idle_delay,
     }
 }
 
@@ -69,6 +71,7 @@ mod tests {
         let l = Limits {
             max_rate: [6000.0; 3],
             accel: [100.0; 3],
+            step_idle_delay: 0.0,
             ..Limits::GRBL_DEFAULT
         };
         let t = estimate(&[mv([0.0; 3], [100.0, 0.0, 0.0], 3600.0)], &l);
@@ -81,6 +84,7 @@ mod tests {
         let l = Limits {
             max_rate: [6000.0; 3],
             accel: [100.0; 3],
+            step_idle_delay: 0.0,
             ..Limits::GRBL_DEFAULT
         };
         // Triangle: t = 2 sqrt(L/a).

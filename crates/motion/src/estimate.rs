@@ -3,7 +3,9 @@
 //! is emptied (dwells, spindle changes, program pauses). Junction speeds follow GRBL's
 //! junction-deviation rule; a backward pass (able to stop at the end of every planned sequence)
 //! and a forward pass (reachable from the previous exit) give each block's entry speed, and the
-//! block's time is that of its trapezoidal (or triangular) profile.
+//! block's time is that of its trapezoidal (or triangular) profile. Every stop after motion (the
+//! planner emptied, and the job's end) adds the step idle delay `$1`, and a dwell lasts whole
+//! 50 ms steps, as GRBL's `delay_sec` counts it.
 
 use crate::limits::{Limits, axis_limited};
 use crate::profile::trapezoid_time;
@@ -11,6 +13,8 @@ use crate::profile::trapezoid_time;
 /// Direction cosine above which two consecutive moves count as straight on (or reversed): GRBL's
 /// `planner.c` uses the same 0.999999 before applying the junction-deviation formula.
 const STRAIGHT_JUNCTION_COS: f64 = 0.999999;
+/// GRBL's `DWELL_TIME_STEP` (`config.h`), s: `delay_sec` waits in whole steps of it.
+const DWELL_TIME_STEP: f64 = 0.05;
 
 /// How fast a move is asked to run.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -48,8 +52,11 @@ struct Block {
 pub struct Estimator {
     limits: Limits,
     blocks: Vec<Block>,
+    /// Dwells and the step idle delays of stops, per tag.
     dwells: Vec<(usize, f64)>,
     sync_next: bool,
+    /// A block was planned since the planner last emptied (the steppers are running).
+    moving: bool,
 }
 
 impl Estimator {
@@ -60,6 +67,7 @@ impl Estimator {
             blocks: Vec::new(),
             dwells: Vec::new(),
             sync_next: true,
+            moving: false,
         }
     }
 
@@ -68,16 +76,31 @@ impl Estimator {
         &self.limits
     }
 
-    /// The planner is emptied here (the next move starts from rest).
+    /// The planner is emptied here (the next move starts from rest). When the machine was
+    /// moving, its stop costs the step idle delay (`st_go_idle`), counted to the last move.
     pub fn sync(&mut self) {
         self.sync_next = true;
+        if let Some(stop) = self.stop_delay() {
+            self.dwells.push(stop);
+        }
+        self.moving = false;
     }
 
-    /// A dwell of `seconds` (`G4`): the planner empties, then the machine waits.
+    /// The step idle delay of the stop after the moves planned so far: (last move's tag, s).
+    fn stop_delay(&self) -> Option<(usize, f64)> {
+        let delay = self.limits.step_idle_delay;
+        let last = self.blocks.last().filter(|_| self.moving)?;
+        (delay > 0.0 && delay.is_finite()).then_some((last.tag, delay))
+    }
+
+    /// A dwell of `seconds` (`G4`): the planner empties, then the machine waits, in whole
+    /// `DWELL_TIME_STEP`s: GRBL 1.1h's `delay_sec` loops `ceil(20 × P)` times over 50 ms, in
+    /// single precision (`G4 P0.01` waits 50 ms).
     pub fn dwell(&mut self, tag: usize, seconds: f64) {
         self.sync();
         if seconds > 0.0 && seconds.is_finite() {
-            self.dwells.push((tag, seconds));
+            let steps = (20.0f32 * seconds as f32).ceil();
+            self.dwells.push((tag, f64::from(steps) * DWELL_TIME_STEP));
         }
     }
 
@@ -117,6 +140,7 @@ impl Estimator {
             sync_before: self.sync_next,
         });
         self.sync_next = false;
+        self.moving = true;
     }
 
     /// Consecutive straight moves through `points` (an arc's chords, say).
@@ -134,7 +158,7 @@ impl Estimator {
                 *slot += t;
             }
         }
-        for &(tag, s) in &self.dwells {
+        for &(tag, s) in self.dwells.iter().chain(&self.stop_delay()) {
             if let Some(slot) = out.get_mut(tag) {
                 *slot += s;
             }
@@ -142,9 +166,11 @@ impl Estimator {
         out
     }
 
-    /// Seconds for the whole job.
+    /// Seconds for the whole job (its last stop included).
     pub fn total(&self) -> f64 {
-        self.block_times().iter().sum::<f64>() + self.dwells.iter().map(|d| d.1).sum::<f64>()
+        let end = self.stop_delay();
+        let waits: f64 = self.dwells.iter().chain(&end).map(|d| d.1).sum();
+        self.block_times().iter().sum::<f64>() + waits
     }
 
     /// Per-block times of GRBL's planner (`planner.c`). The junction acceleration is the
@@ -220,10 +246,11 @@ mod tests {
     use super::*;
     use approx::assert_relative_eq;
 
-    /// 10 mm/s² on every axis, feeds never capped.
+    /// 10 mm/s² on every axis, feeds never capped, no step idle delay.
     fn fast() -> Limits {
         Limits {
             max_rate: [6000.0; 3],
+            step_idle_delay: 0.0,
             ..Limits::GRBL_DEFAULT
         }
     }
@@ -281,12 +308,16 @@ mod tests {
     #[test]
     fn rates_dwells_syncs_and_tags() {
         // Rapids run at $110 (500 mm/min by default): 60 mm.
-        let mut e = Estimator::new(&Limits::GRBL_DEFAULT);
+        let slow = Limits {
+            step_idle_delay: 0.0,
+            ..Limits::GRBL_DEFAULT
+        };
+        let mut e = Estimator::new(&slow);
         e.segment(0, [0.0; 3], [60.0, 0.0, 0.0], Feed::Rapid);
         let g0 = trapezoid_time(60.0, 0.0, 0.0, 500.0 / 60.0, 10.0);
         assert_relative_eq!(e.total(), g0, epsilon = 1e-9);
         // A feed above the axis rate is capped by it.
-        let mut capped = Estimator::new(&Limits::GRBL_DEFAULT);
+        let mut capped = Estimator::new(&slow);
         capped.segment(0, [0.0; 3], [60.0, 0.0, 0.0], Feed::PerMinute(3000.0));
         assert_relative_eq!(capped.total(), g0, epsilon = 1e-9);
         // A dwell adds its time and stops the planner between two collinear moves.
@@ -316,9 +347,40 @@ mod tests {
             trapezoid_time(50.0, 0.0, 0.0, 10.0, 10.0),
             epsilon = 1e-9
         );
+        // A dwell waits whole 50 ms steps: P0.01 is 50 ms, P0.15 is 150 ms.
+        let mut short = Estimator::new(&fast());
+        short.dwell(0, 0.01);
+        short.dwell(1, 0.15);
+        assert_relative_eq!(short.total(), 0.2, epsilon = 1e-12);
         // Zero-length moves vanish.
         let mut z = Estimator::new(&fast());
         z.segment(0, [1.0; 3], [1.0; 3], Feed::Rapid);
         assert_eq!(z.total(), 0.0);
+    }
+
+    /// `$1`: every stop after motion waits the step idle delay (`st_go_idle`), counted to the
+    /// move before it; a dwell or spindle sync with no motion before it does not, nor does
+    /// `$1=255`.
+    #[test]
+    fn step_idle_delay_at_every_stop_after_motion() {
+        let l = Limits {
+            step_idle_delay: Limits::step_idle_delay_of(25.0),
+            ..fast()
+        };
+        let f = Feed::PerMinute(600.0);
+        let leg = trapezoid_time(50.0, 0.0, 0.0, 10.0, 10.0);
+        let mut e = Estimator::new(&l);
+        e.sync(); // nothing moved yet: no delay
+        e.segment(0, [0.0; 3], [50.0, 0.0, 0.0], f);
+        e.dwell(1, 1.0); // stop: 25 ms, then the dwell
+        e.sync(); // no motion since: nothing
+        e.segment(2, [50.0, 0.0, 0.0], [100.0, 0.0, 0.0], f); // the job's end: 25 ms
+        assert_relative_eq!(e.total(), 2.0 * leg + 1.0 + 0.05, epsilon = 1e-9);
+        let per = e.per_tag(3);
+        assert_relative_eq!(per[0], leg + 0.025, epsilon = 1e-9);
+        assert_relative_eq!(per[1], 1.0, epsilon = 1e-12);
+        assert_relative_eq!(per[2], leg + 0.025, epsilon = 1e-9);
+        assert_eq!(Limits::step_idle_delay_of(255.0), 0.0);
+        assert_eq!(Limits::step_idle_delay_of(0.0), 0.0);
     }
 }

@@ -1,5 +1,6 @@
 //! The controller settings the motion model needs: GRBL's `$100-$102` (steps/mm), `$110-$112`
-//! (max rate), `$120-$122` (acceleration), `$11` (junction deviation) and `$12` (arc tolerance).
+//! (max rate), `$120-$122` (acceleration), `$11` (junction deviation), `$12` (arc tolerance) and
+//! `$1` (step idle delay).
 
 /// Motion limits of a GRBL machine. Rates in mm/min, accelerations in mm/s², lengths in mm.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -14,18 +15,33 @@ pub struct Limits {
     pub junction_deviation: f64,
     /// Arc tolerance, mm (`$12`): the chord error `mc_arc` allows.
     pub arc_tolerance: f64,
+    /// Step idle delay, s (`$1` / 1000; 0 for `$1=255`, which keeps the motors enabled): each time
+    /// the machine comes to a stop, `st_go_idle` holds the steppers this long (a blocking
+    /// `delay_ms`) before the controller goes on.
+    pub step_idle_delay: f64,
 }
 
 impl Limits {
     /// GRBL 1.1h's `DEFAULTS_GENERIC` (`defaults.h`): 250 steps/mm, 500 mm/min, 10 mm/s²,
-    /// `$11` = 0.01 mm, `$12` = 0.002 mm.
+    /// `$11` = 0.01 mm, `$12` = 0.002 mm, `$1` = 25 ms.
     pub const GRBL_DEFAULT: Limits = Limits {
         steps_per_mm: [250.0; 3],
         max_rate: [500.0; 3],
         accel: [10.0; 3],
         junction_deviation: 0.01,
         arc_tolerance: 0.002,
+        step_idle_delay: 0.025,
     };
+
+    /// The step idle delay, s, of a `$1` setting in ms: 255 keeps the motors enabled and never
+    /// waits (`st_go_idle`).
+    pub fn step_idle_delay_of(setting_ms: f64) -> f64 {
+        if setting_ms == 255.0 || setting_ms.is_nan() || setting_ms <= 0.0 {
+            0.0
+        } else {
+            setting_ms / 1000.0
+        }
+    }
 }
 
 impl Default for Limits {

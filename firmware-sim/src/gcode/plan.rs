@@ -289,8 +289,10 @@ fn arc_moves(
     let denom = (tol * (2.0 * radius - tol)).max(1e-12).sqrt();
     let segments = ((0.5 * angular * radius).abs() / denom).floor().min(1.0e6) as usize;
     let mut moves = Vec::with_capacity(segments.max(1));
+    // `mc_arc` multiplies an inverse-time feed by the segment count and clears the inverse-time
+    // flag: the chords run at F × segments mm/min, whatever their length.
     let (seg_feed, seg_inverse) = if inverse_time && segments > 0 {
-        (feed * segments as f64, true)
+        (feed * segments as f64, false)
     } else {
         (feed, inverse_time)
     };

@@ -2,11 +2,12 @@
 //! `mc_arc` splits them into.
 
 use super::modal::{ModalState, MotionMode};
-use flatcut_motion::arc_chords;
+use flatcut_motion::{ArcChords, mc_arc};
 
-/// Points along an arc (endpoints included), split into chords the way GRBL's `mc_arc` does
-/// (segments = angle·r / sqrt(tol·(2r − tol))). Falls back to the straight chord for an invalid
-/// arc (GRBL would reject it with error:33/34; check mode reports that).
+/// An arc split into chords the way GRBL's `mc_arc` does (segments = |½·angle·r| /
+/// √(tol·(2r − tol)), floored), with the radius GRBL's parser hands it: `hypot(I, J)`, or `|R|`.
+/// Falls back to the straight chord for an invalid arc (GRBL would reject it with error:33/34;
+/// check mode reports that).
 pub(super) fn arc_points(
     st: &ModalState,
     start: [f64; 3],
@@ -14,7 +15,11 @@ pub(super) fn arc_points(
     ijk: [Option<f64>; 3],
     r_word: Option<f64>,
     tol: f64,
-) -> Vec<[f64; 3]> {
+) -> ArcChords {
+    let straight = ArcChords {
+        points: vec![start, target],
+        segments: 0,
+    };
     let (a0, a1, lin) = match st.plane {
         18 => (2, 0, 1),
         19 => (1, 2, 0),
@@ -23,13 +28,13 @@ pub(super) fn arc_points(
     let cw = st.motion == MotionMode::ArcCw;
     let (sx, sy) = (start[a0], start[a1]);
     let (tx, ty) = (target[a0], target[a1]);
-    let (cx, cy) = if let Some(r) = r_word {
+    let ((cx, cy), radius) = if let Some(r) = r_word {
         // GRBL gcode.c: centre from radius; negative R = the long way round.
         let (x, y) = (tx - sx, ty - sy);
         let d2 = x * x + y * y;
         let h2 = 4.0 * r * r - d2;
         if d2 <= 0.0 || h2 < 0.0 {
-            return vec![start, target];
+            return straight;
         }
         let mut h = -h2.sqrt() / d2.sqrt();
         if !cw {
@@ -38,9 +43,11 @@ pub(super) fn arc_points(
         if r < 0.0 {
             h = -h;
         }
-        (sx + 0.5 * (x - y * h), sy + 0.5 * (y + x * h))
+        ((sx + 0.5 * (x - y * h), sy + 0.5 * (y + x * h)), r.abs())
     } else {
-        (sx + ijk[a0].unwrap_or(0.0), sy + ijk[a1].unwrap_or(0.0))
+        let (i, j) = (ijk[a0].unwrap_or(0.0), ijk[a1].unwrap_or(0.0));
+        ((sx + i, sy + j), i.hypot(j))
     };
-    arc_chords(start, target, [cx, cy], (a0, a1, lin), cw, tol)
+    let offset = [cx - sx, cy - sy];
+    mc_arc(start, target, offset, radius, (a0, a1, lin), cw, tol)
 }

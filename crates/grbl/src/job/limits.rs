@@ -4,11 +4,12 @@ use flatcut_motion::Limits;
 use std::collections::BTreeMap;
 
 /// What the sender needs to know of a controller's settings: the motion model's limits
-/// (`$100-$102`, `$110-$112`, `$120-$122`, `$11`, `$12`) for the estimate, and `$32`, `$130-$132`,
+/// (`$100-$102`, `$110-$112`, `$120-$122`, `$11`, `$12`, `$1`) for the estimate, and `$32`, `$130-$132`,
 /// `$22` for the checks before a job runs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MachineLimits {
-    /// Steps/mm, max rates, accelerations, junction deviation and arc tolerance.
+    /// Steps/mm, max rates, accelerations, junction deviation, arc tolerance and step idle
+    /// delay.
     pub motion: Limits,
     /// Laser mode (`$32`): spindle changes do not stop the planner.
     pub laser_mode: bool,
@@ -47,6 +48,7 @@ impl MachineLimits {
         }
         m.junction_deviation = get(11, m.junction_deviation);
         m.arc_tolerance = get(12, m.arc_tolerance);
+        m.step_idle_delay = Limits::step_idle_delay_of(get(1, m.step_idle_delay * 1000.0));
         l.laser_mode = get(32, 0.0) != 0.0;
         l.homing = get(22, 0.0) != 0.0;
         l

@@ -328,7 +328,8 @@ impl Interpreter {
                     w.ijk.map(|o| o.map(|v| v * scale)),
                     w.r.map(|v| v * scale),
                     self.arc_tolerance,
-                );
+                )
+                .points;
                 m.length = pts.windows(2).map(|p| dist(p[0], p[1])).sum();
                 m.arc = pts.iter().map(|p| add(*p, st.g92)).collect();
             }

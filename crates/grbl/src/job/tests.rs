@@ -59,11 +59,12 @@ fn modal_state_units_distance_and_feed() {
 fn arc_length_and_extent() {
     // Quarter circle of radius 10 about the origin, CCW from (10,0) to (0,10).
     let job = Job::parse("G0X10Y0\nG3X0Y10I-10J0F600\n").unwrap();
-    let exact = std::f64::consts::FRAC_PI_2 * 10.0;
-    // Chords of sagitta <= 0.002 mm shorten the length by a relative ~ tol/(3r)·... < 1e-4.
+    // `mc_arc`'s 39 chords (floor(½·π/2·10 / √(0.002·19.998))): 39 · 2r · sin(π/4 / 39).
+    let chords = |n: f64, sweep: f64| n * 20.0 * (sweep / (2.0 * n)).sin();
+    let exact = chords(39.0, std::f64::consts::FRAC_PI_2);
     assert!(
-        (job.lines[1].length - exact).abs() < 1e-3,
-        "{}",
+        (job.lines[1].length - exact).abs() < 1e-4,
+        "{} vs {exact}",
         job.lines[1].length
     );
     let (lo, hi) = job.extent.unwrap();
@@ -74,7 +75,12 @@ fn arc_length_and_extent() {
     assert_relative_eq!(r.lines[1].length, job.lines[1].length, epsilon = 1e-9);
     // Full circle when start == end.
     let full = Job::parse("G0X10Y0\nG2X10Y0I-10J0F600\n").unwrap();
-    assert!((full.lines[1].length - 20.0 * std::f64::consts::PI).abs() < 4e-3);
+    let exact = chords(157.0, std::f64::consts::TAU);
+    assert!(
+        (full.lines[1].length - exact).abs() < 1e-4,
+        "{} vs {exact}",
+        full.lines[1].length
+    );
 }
 
 #[test]
@@ -92,18 +98,21 @@ fn trapezoid_times_match_kinematics() {
         epsilon = 1e-12
     );
     // Feeds are capped by $110-$112; lift the cap so F600 (10 mm/s) is what runs.
+    // No step idle delay ($1) here: the stops are timed on their own below.
     let fast = MachineLimits {
         motion: Limits {
             max_rate: [6000.0; 3],
+            step_idle_delay: 0.0,
             ..Limits::GRBL_DEFAULT
         },
         ..MachineLimits::DEFAULT
     };
     let parse = |t: &str| Job::parse_with(t, &fast).unwrap();
-    // With the default 500 mm/min cap the same move runs at 8.33 mm/s.
+    // With the default 500 mm/min cap the same move runs at 8.33 mm/s, and its stop at the end
+    // holds the steppers for the default $1 = 25 ms.
     assert_relative_eq!(
         Job::parse("G1X100F600").unwrap().total_time,
-        trapezoid_time(100.0, 0.0, 0.0, 500.0 / 60.0, 10.0),
+        trapezoid_time(100.0, 0.0, 0.0, 500.0 / 60.0, 10.0) + 0.025,
         epsilon = 1e-9
     );
     let one = parse("G1X100F600\n");
@@ -134,11 +143,11 @@ fn trapezoid_times_match_kinematics() {
     let vj = (ja * 0.01 * sin_half / (1.0 - sin_half)).sqrt();
     let expect = 2.0 * trapezoid_time(50.0, 0.0, vj, 10.0, 10.0);
     assert_relative_eq!(corner.total_time, expect, epsilon = 1e-9);
-    // Rapids run at $110 (500 mm/min default): 60 mm → 7.2 s cruise plus ramps.
+    // Rapids run at $110 (500 mm/min default): 60 mm → 7.2 s cruise plus ramps, plus $1.
     let g0 = Job::parse("G0X60\n").unwrap();
     assert_relative_eq!(
         g0.total_time,
-        trapezoid_time(60.0, 0.0, 0.0, 500.0 / 60.0, 10.0),
+        trapezoid_time(60.0, 0.0, 0.0, 500.0 / 60.0, 10.0) + 0.025,
         epsilon = 1e-9
     );
 }
@@ -202,7 +211,9 @@ fn machine_limits_from_settings() {
     s.insert(121, 50.0);
     s.insert(132, 30.0);
     s.insert(32, 1.0);
+    s.insert(1, 100.0);
     let l = MachineLimits::from_settings(&s);
+    assert_eq!(l.motion.step_idle_delay, 0.1);
     assert_eq!(l.motion.max_rate, [3000.0, 500.0, 500.0]);
     assert_eq!(l.motion.accel, [10.0, 50.0, 10.0]);
     assert_eq!(l.max_travel, [200.0, 200.0, 30.0]);
@@ -211,9 +222,12 @@ fn machine_limits_from_settings() {
     job.retime(&l);
     assert_relative_eq!(
         job.total_time,
-        trapezoid_time(60.0, 0.0, 0.0, 50.0, 10.0),
+        trapezoid_time(60.0, 0.0, 0.0, 50.0, 10.0) + 0.1,
         epsilon = 1e-9
     );
+    // $1 = 255 keeps the motors enabled: no wait at a stop.
+    s.insert(1, 255.0);
+    assert_eq!(MachineLimits::from_settings(&s).motion.step_idle_delay, 0.0);
 }
 
 #[test]

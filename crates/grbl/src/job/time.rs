@@ -41,7 +41,7 @@ impl Job {
             if !line.moves {
                 continue;
             }
-            let pts: Vec<[f64; 3]> = match after.motion {
+            let arc = match after.motion {
                 MotionMode::ArcCw | MotionMode::ArcCcw => {
                     let mut st = before.clone();
                     st.plane = after.plane;
@@ -62,19 +62,24 @@ impl Job {
                             _ => {}
                         }
                     }
-                    arc_points(
+                    Some(arc_points(
                         &st,
                         before.position,
                         after.position,
                         ijk,
                         r,
                         limits.motion.arc_tolerance,
-                    )
+                    ))
                 }
-                _ => vec![before.position, after.position],
+                _ => None,
             };
+            let split = arc.as_ref().map_or(0, |a| a.segments);
             let feed = if after.motion == MotionMode::Rapid {
                 Feed::Rapid
+            } else if after.inverse_time && split > 0 {
+                // `mc_arc` multiplies an inverse-time feed by its segment count and runs the
+                // chords as mm/min (GRBL 1.1h's own arithmetic, whatever the arc's length).
+                Feed::PerMinute(after.feed * split as f64)
             } else if after.inverse_time {
                 Feed::InverseTime {
                     f: after.feed,
@@ -83,6 +88,7 @@ impl Job {
             } else {
                 Feed::PerMinute(after.feed)
             };
+            let pts = arc.map_or_else(|| vec![before.position, after.position], |a| a.points);
             est.polyline(i, &pts, feed);
         }
         let times = est.per_tag(self.lines.len());
