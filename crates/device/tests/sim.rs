@@ -523,11 +523,54 @@ fn program_pause_aborts_without_an_operator_and_resumes_when_asked() {
         "{e}"
     );
     assert!(e.to_string().contains("tool off"), "{e}");
+    // The pausing line is named once, with its text.
+    let msg = e.to_string();
+    assert!(
+        msg.contains("paused itself at line 3 (`M0`) and") && !msg.contains("(M0)"),
+        "{msg}"
+    );
     let o = opts().with_on_pause(flatcut_grbl::PausePolicy::Resume);
     run(&sim, &job, &o).expect("resumed after the pause");
     let trace = sim.stop().trace;
     assert_eq!(trace.iter().filter(|s| s.text == "G1X3").count(), 1);
     assert!(!trace.iter().any(|s| s.text == "G1X2" && s.line < 5));
+}
+
+/// Progress by path length from the first line: a job this short lies wholly in GRBL's buffers,
+/// so no line is known executed until it ends, yet the progress follows the machine along its
+/// path (from the same status report as the position), and never goes back.
+#[test]
+fn progress_follows_the_machine_from_the_first_line() {
+    let job = Job::parse("G21 G90\nG1 X10 F600\nG1 X20\nG1 Y10\nG1 X0 Y0\n").unwrap();
+    let sim = spawn(SimConfig::default().with_time_scale(5.0));
+    let o = opts()
+        .with_status_interval(Duration::from_millis(40))
+        .with_progress_interval(Duration::from_millis(40));
+    let mut seen = Vec::new();
+    flatcut_testkit::pty::send_with(sim.path(), &job, &o, &CancelToken::new(), &mut |p| {
+        if matches!(p.phase, Phase::Streaming | Phase::Finishing) {
+            seen.push((p.lines_done, p.length_done, p.position));
+        }
+    })
+    .unwrap();
+    sim.stop();
+    assert!(seen.windows(2).all(|w| w[1].1 >= w[0].1), "{seen:?}");
+    let on_first_move: Vec<_> = seen
+        .iter()
+        .filter_map(|&(done, len, pos)| {
+            let [x, y, _] = pos?;
+            (done == 0 && y == 0.0 && x > 1.0 && x < 9.0).then_some((len, x))
+        })
+        .collect();
+    assert!(!on_first_move.is_empty(), "{seen:?}");
+    for (len, x) in on_first_move {
+        assert!((len - x).abs() < 0.02, "{len} mm shown at X{x}");
+    }
+    assert!(
+        seen.iter()
+            .any(|&(done, len, _)| done == 0 && len > 20.0 && len < 30.0),
+        "{seen:?}"
+    );
 }
 
 /// Issue 14, item 5: a laser job (M3 keeps the laser on while stopped) stopped by a rejected
@@ -694,7 +737,20 @@ fn resume_after_a_restart_asks_the_operator_and_moves_only_on_yes() {
     );
     assert_tool_off_journaled(&jp);
     let yes = spawn(SimConfig::default().with_instant_motion(true));
+    let remaining = Journal::read(&jp).unwrap().remaining();
     let rep = run(&yes, &job, &resume.with_operator(Some(operator(true)))).expect("resumed");
+    // The estimate is what the resumed run sent, not the whole job's: the lines left, and the
+    // preambles' travel to where each stretch of them starts (the line the controller refused
+    // is one stretch, the lines after those that ran behind it another).
+    let left: f64 = remaining.iter().map(|&i| job.lines[i].time).sum();
+    assert!(
+        rep.estimated_time >= left
+            && rep.estimated_time <= 1.1 * left
+            && rep.estimated_time < 0.8 * job.total_time,
+        "estimated {} s, the lines left {left} s, the whole job {} s",
+        rep.estimated_time,
+        job.total_time
+    );
     assert_notice(&rep, |n| {
         n.starts_with("resuming on the operator's word, asked")
     });

@@ -269,7 +269,7 @@ pub enum SendError {
     LaserModeOff,
     /// The job paused itself (`M0`) with nobody to resume it: the run was aborted.
     #[error(
-        "the job paused itself at {line} (M0) and the pause policy (abort, the default without a terminal) aborted the run: soft reset sent, tool off. Last line known executed: {}",
+        "the job paused itself at {line} and the pause policy (abort, the default without a terminal) aborted the run: soft reset sent, tool off. Last line known executed: {}",
         opt_line(last_done)
     )]
     PausedByJob {

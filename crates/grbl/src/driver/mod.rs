@@ -12,9 +12,10 @@
 //! One idea per module: [`options`], [`control`] and [`progress`] are the API around a send;
 //! `session` is the connection, [`console`] keeps one open between jobs, `handshake` connects, `evidence` compares the controller with the journal's stop
 //! record, `resume` settles what an interrupted run left in doubt, `check` runs the checks before motion, `stream` streams, `tracker` keeps the
-//! books of what ran, `watch` checks the reported position against the job's path, `stops` stops a run, and [`send_job`] reads as handshake → check → stream
+//! books of what ran, `along` places the machine on the path for progress, `watch` checks the reported position against the job's path, `stops` stops a run, and [`send_job`] reads as handshake → check → stream
 //! → finish.
 
+mod along;
 mod check;
 pub mod confirm;
 pub mod console;
@@ -163,6 +164,20 @@ fn run_job<T: crate::transport::Transport + ?Sized>(
 
     let mut tracker = Tracker::new(job, sess, plan.prior_done.as_deref());
     let queued = stream::queue(sess, job, &tracker, plan.resume_at);
+    // A resumed run's estimate is what it sends, from where the machine stands.
+    let estimated_time = if tracker.previously_done > 0 || queued.lines < job.len() {
+        let here = JobStart {
+            wcs: link.frame.wcs,
+            g92: link.frame.g92,
+            position: sess.work_position().unwrap_or_default(),
+        };
+        remaining_time(&queued.texts, &here, &limits).unwrap_or_else(|| {
+            let left = (0..job.len()).filter(|&i| !tracker.done[i]);
+            left.map(|i| job.lines[i].time).sum()
+        })
+    } else {
+        job.total_time
+    };
     let streamed = Stream::new(
         sess,
         (job, job),
@@ -189,10 +204,19 @@ fn run_job<T: crate::transport::Transport + ?Sized>(
         total_time: t0.elapsed(),
         max_in_flight_bytes: sess.s.max_in_flight_bytes(),
         final_position,
-        estimated_time: job.total_time,
+        estimated_time,
         checked: opts.check,
         notices,
     })
+}
+
+/// The estimated time of `texts` (what a resumed run sends: preambles and the lines left) on a
+/// controller standing at `here` with `limits`; `None` if they do not parse as one program.
+fn remaining_time(texts: &[String], here: &JobStart, limits: &MachineLimits) -> Option<f64> {
+    let mut program = texts.join("\n");
+    program.push('\n');
+    let job = Job::parse_with(&program, limits).ok()?;
+    Some(job.rebased(here, limits).total_time)
 }
 
 /// The journal of a send, what it said before this run, and what changed in the job since

@@ -130,7 +130,8 @@ pub struct SendReport {
     pub max_in_flight_bytes: usize,
     /// Final work position, mm.
     pub final_position: Option<[f64; 3]>,
-    /// Estimated job time with the machine's settings, s.
+    /// Estimated time of what this run sent with the machine's settings, s: the whole job, or
+    /// on a resume what remained (preambles included, from where the machine stood).
     pub estimated_time: f64,
     /// Whether a `$C` pass ran first.
     pub checked: bool,
@@ -138,12 +139,14 @@ pub struct SendReport {
     pub notices: Vec<String>,
 }
 
-/// ETA: the remaining estimated motion time, scaled by how the machine kept up with the
-/// estimate so far (clamped so one stall cannot make the figure absurd).
-pub(super) fn eta(tr: &Tracker, elapsed: Duration) -> Duration {
-    let remaining = (tr.time_total - tr.time_done).max(0.0);
-    let ratio = if tr.time_done_run > 2.0 {
-        (elapsed.as_secs_f64() / tr.time_done_run).clamp(0.5, 2.0)
+/// ETA: the remaining estimated motion time (less `ahead` s of lines the machine has passed but
+/// nobody confirmed yet), scaled by how the machine kept up with the estimate so far (clamped
+/// so one stall cannot make the figure absurd).
+pub(super) fn eta(tr: &Tracker, elapsed: Duration, ahead: f64) -> Duration {
+    let remaining = (tr.time_total - tr.time_done - ahead).max(0.0);
+    let run = tr.time_done_run + ahead;
+    let ratio = if run > 2.0 {
+        (elapsed.as_secs_f64() / run).clamp(0.5, 2.0)
     } else {
         1.0
     };

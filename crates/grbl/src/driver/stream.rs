@@ -3,6 +3,7 @@
 //! controls, keeps the books and the journal, and notices every way a run can go wrong; and the
 //! finish, which checks that the machine ended where the job ends.
 
+use super::along::ahead_of_confirmed;
 use super::check::job_uses_unknown_moves;
 use super::error::line_ref;
 use super::error::{LineError, SendError};
@@ -30,6 +31,8 @@ pub(super) struct Queued {
     pub lines: usize,
     /// Resume preamble lines, in order (indexed by `Tag::Preamble`).
     pub preamble: Vec<String>,
+    /// Every text queued, preamble and job lines, in the order they go out.
+    pub texts: Vec<String>,
 }
 
 /// Queues every line not yet done: each contiguous run that does not start at the top of the
@@ -45,6 +48,7 @@ pub(super) fn queue<T: Transport + ?Sized>(
     let mut q = Queued {
         lines: 0,
         preamble: Vec::new(),
+        texts: Vec::new(),
     };
     let mut i = 0;
     while i < n {
@@ -60,6 +64,7 @@ pub(super) fn queue<T: Transport + ?Sized>(
             for p in pre {
                 let tag = Tag::Preamble(q.preamble.len() as u32);
                 sess.s.push(tag, p.clone(), SendMode::CharCount);
+                q.texts.push(p.clone());
                 q.preamble.push(p);
             }
             job.resume_line(i)
@@ -71,6 +76,7 @@ pub(super) fn queue<T: Transport + ?Sized>(
                 LineKind::Gcode => SendMode::CharCount,
                 LineKind::System | LineKind::EepromWrite => SendMode::SendResponse,
             };
+            q.texts.push(text.clone());
             sess.s.push(Tag::Job(i), std::mem::take(&mut text), mode);
             q.lines += 1;
             i += 1;
@@ -120,6 +126,8 @@ pub(super) struct Stream<'s, 'a, T: Transport + ?Sized> {
     /// The position tolerance (mm) when the reported position is checked against the job's
     /// path; `None` when it is not (not asked, or a job moving where this model cannot follow).
     watch_tol: Option<f64>,
+    /// The path length shown so far, mm: progress never goes back.
+    shown_length: f64,
 }
 
 /// Tag of the `G4 P0.01` the sender appends to find out that the planner is empty: GRBL answers
@@ -166,6 +174,7 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
             synced: false,
             paused: None,
             watch_tol,
+            shown_length: 0.0,
         }
     }
 
@@ -563,10 +572,21 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
         }
         progress.lines_acked = self.tracker.acked_count;
         progress.lines_done = self.tracker.done_count;
-        progress.length_done = self.tracker.length_done;
+        // Where the machine stands on the lines not confirmed yet counts too: a status report
+        // places it on the path from the first line on.
+        let ahead = match self.sess.work_position() {
+            Some(p) if self.failure.is_none() => {
+                let tol = 4.0 * self.tracker.pos_tol;
+                ahead_of_confirmed(self.job_t, self.tracker, p, tol).unwrap_or_default()
+            }
+            _ => Default::default(),
+        };
+        let length = (self.tracker.length_done + ahead.length).min(self.job.total_length);
+        self.shown_length = self.shown_length.max(length);
+        progress.length_done = self.shown_length;
         progress.elapsed = self.start.elapsed();
         progress.bytes_written = self.sess.s.bytes_written() - self.bytes_before;
-        progress.eta = Some(eta(self.tracker, self.start.elapsed()));
+        progress.eta = Some(eta(self.tracker, self.start.elapsed(), ahead.time));
         observer(progress);
         self.last_progress = Instant::now();
     }

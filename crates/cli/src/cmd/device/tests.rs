@@ -45,6 +45,21 @@ fn status_line_shows_path_fraction_eta_state_and_position() {
         ..p
     };
     assert!(status_text(&held, Some(1.0)).contains("Hold:0 (held)"));
+    // The job's own pause says so, naming the line once.
+    let paused = Progress {
+        state: Some(MachineState::Hold { complete: true }),
+        paused_at: Some(flatcut_device::grbl::driver::LineRef {
+            index: 6,
+            source_line: 7,
+            text: "M0".into(),
+        }),
+        ..progress()
+    };
+    let text = status_text(&paused, Some(1.0));
+    assert!(
+        text.ends_with("· paused by the job at line 7 (`M0`)") && text.matches("M0").count() == 1,
+        "{text}"
+    );
 }
 
 #[test]
