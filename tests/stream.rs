@@ -628,6 +628,99 @@ fn signal_aborts_with_the_tool_off(signal: &str) {
     assert!(!st.finished && st.done_count() > 0);
 }
 
+/// Environment variable naming the working directory of [`sim_child_process`].
+const SIM_CHILD_ENV: &str = "FLATCUT_SIM_CHILD_DIR";
+
+/// `flatcut sim` in a process of its own for [`flatcut_sim_power_cycles_on_sigusr1`] (a board
+/// with auto-reset off, so only the power cycle loses its position). Without the variable set it
+/// is the parent's run and does nothing.
+#[test]
+fn sim_child_process() {
+    let Some(dir) = std::env::var_os(SIM_CHILD_ENV) else {
+        return;
+    };
+    flatcut_cli::install_signal_handler().unwrap();
+    let link = PathBuf::from(dir).join("ttyGRBL");
+    let cli = parse_command_line([
+        "flatcut",
+        "sim",
+        "--link",
+        link.to_str().unwrap(),
+        "--no-dtr-reset",
+        "--instant",
+    ])
+    .unwrap();
+    let code = flatcut_cli::run(cli).unwrap();
+    assert_eq!(code, std::process::ExitCode::SUCCESS);
+}
+
+/// `flatcut sim` passes SIGUSR1 on as a power cycle: the position a client left it at survives
+/// closing and reopening the port (no auto-reset), and is lost after the signal, as the board's
+/// is when its power goes; Ctrl-C still stops it cleanly.
+#[test]
+fn flatcut_sim_power_cycles_on_sigusr1() {
+    use flatcut_grbl::Transport;
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    use std::sync::mpsc::channel;
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().unwrap();
+    let mut child = child_test("stream::sim_child_process", SIM_CHILD_ENV, dir.path())
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (tx, said) = channel();
+    let stderr = child.stderr.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        for l in BufReader::new(stderr).lines().map_while(Result::ok) {
+            let _ = tx.send(l);
+        }
+    });
+    let wait_for = |what: &str| {
+        let t0 = Instant::now();
+        while t0.elapsed() < Duration::from_secs(30) {
+            if let Ok(l) = said.recv_timeout(Duration::from_millis(100))
+                && l.contains(what)
+            {
+                return;
+            }
+        }
+        panic!("the simulator never said {what:?}");
+    };
+    wait_for("power-cycles it");
+    let link = dir.path().join("ttyGRBL");
+    let ask = |text: &str, until: &str| -> String {
+        let mut port = flatcut_grbl::open_port(link.to_str().unwrap(), 115_200).unwrap();
+        port.write_all(text.as_bytes()).unwrap();
+        let (mut acc, mut buf, t0) = (String::new(), [0u8; 256], Instant::now());
+        while !acc.contains(until) && t0.elapsed() < Duration::from_secs(5) {
+            let n = port.read(&mut buf, Duration::from_millis(50)).unwrap_or(0);
+            acc.push_str(&String::from_utf8_lossy(&buf[..n]));
+        }
+        acc
+    };
+    let moved = ask("G1 X5 F600\n?", ">\r\n");
+    assert!(moved.contains("ok") && moved.contains("MPos:5.000,0.000,0.000"), "{moved:?}");
+    assert!(ask("?", ">\r\n").contains("MPos:5.000,0.000,0.000"));
+    let kill = |sig: &str| {
+        let st = std::process::Command::new("kill")
+            .args([sig, &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(st.success());
+    };
+    kill("-USR1");
+    wait_for("power cycle (SIGUSR1)");
+    let after = ask("?", ">\r\n");
+    assert!(after.contains("MPos:0.000,0.000,0.000"), "{after:?}");
+    kill("-INT");
+    wait_for("simulator stopped");
+    assert!(child.wait().unwrap().success());
+    reader.join().unwrap();
+}
+
 /// Writes the lampshade project into `dir` with `device` as its `[device]` section.
 fn lampshade_project(dir: &Path, device: &str) -> PathBuf {
     let src = crate::pipeline::root().join("patterns/lampshade");

@@ -162,6 +162,7 @@ mod tests {
             (110, 5000.0),
             (121, 400.0),
             (11, 0.01),
+            (1, 25.0),
             (130, 600.0),
             (131, 400.0),
         ] {
@@ -171,7 +172,7 @@ mod tests {
         // a job.
         assert_eq!(cfg.settings.first(), Some(&(32, 1.0)));
         assert_eq!(cfg.settings.last(), Some(&(130, 610.0)));
-        assert_eq!(cfg.settings.len(), 1 + 9 + 1 + 2 + 1);
+        assert_eq!(cfg.settings.len(), 1 + 9 + 2 + 2 + 1);
         // A rate GRBL's step rate cannot reach at 250 steps/mm lowers the steps/mm.
         let fast = SimMachine {
             limits: Limits {

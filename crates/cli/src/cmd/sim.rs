@@ -1,6 +1,9 @@
 //! `flatcut sim`: the simulated GRBL 1.1h controller on a pseudo-terminal, in the foreground
 //! until Ctrl-C, for any sender (including `flatcut send --port`). Its flags are the
-//! `firmware-sim` binary's own ([`flatcut_device::sim::SimArgs`]).
+//! `firmware-sim` binary's own ([`flatcut_device::sim::SimArgs`]). SIGUSR1 power-cycles the
+//! controller as the `firmware-sim` binary does (position and G92 lost, the banner after
+//! `--boot-ms`, unheard when no client has the port open), so an operator can try what a resume
+//! does after a restart the sender did not see.
 
 use std::process::ExitCode;
 
@@ -29,12 +32,15 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         }
         None => crate::outln!("{}", sim.path().display()),
     }
-    eprintln!(
-        "simulated GRBL 1.1h at {} baud; connect with `flatcut send JOB --port {}`; Ctrl-C stops",
-        a.baud,
-        a.link.as_deref().unwrap_or(sim.path()).display()
-    );
-    wait_for_interrupt();
+    let port = a.link.as_deref().unwrap_or(sim.path()).display().to_string();
+    power_cycles_on_sigusr1(&sim, || {
+        eprintln!(
+            "simulated GRBL 1.1h at {} baud; connect with `flatcut send JOB --port {port}`; `kill -USR1 {}` power-cycles it; Ctrl-C stops",
+            a.baud,
+            std::process::id()
+        );
+        wait_for_interrupt();
+    })?;
     let report = sim.stop();
     if let Some(path) = &a.report {
         let summary = serde_json::json!({
@@ -56,4 +62,41 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         report.sim_time
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// Runs `until` while every SIGUSR1 the process gets power-cycles `sim` (tokio's signal handling,
+/// which lives beside the Ctrl-C handler, on a thread of its own); the handler is in place before
+/// `until` starts, and the thread stops listening when `until` returns.
+fn power_cycles_on_sigusr1(sim: &PtySim, until: impl FnOnce()) -> anyhow::Result<()> {
+    use tokio::signal::unix::{SignalKind, signal};
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_io()
+        .build()
+        .context("cannot start the signal listener")?;
+    let mut usr1 = {
+        let _in_runtime = rt.enter();
+        signal(SignalKind::user_defined1()).context("cannot listen for SIGUSR1")?
+    };
+    let (stop, mut stopped) = tokio::sync::oneshot::channel::<()>();
+    std::thread::scope(|scope| {
+        scope.spawn(|| {
+            rt.block_on(async {
+                loop {
+                    tokio::select! {
+                        got = usr1.recv() => {
+                            if got.is_none() {
+                                break;
+                            }
+                            sim.power_cycle();
+                            eprintln!("power cycle (SIGUSR1): position and G92 lost, the banner as at power-up");
+                        }
+                        _ = &mut stopped => break,
+                    }
+                }
+            });
+        });
+        until();
+        let _ = stop.send(());
+    });
+    Ok(())
 }
