@@ -702,7 +702,10 @@ fn flatcut_sim_power_cycles_on_sigusr1() {
         acc
     };
     let moved = ask("G1 X5 F600\n?", ">\r\n");
-    assert!(moved.contains("ok") && moved.contains("MPos:5.000,0.000,0.000"), "{moved:?}");
+    assert!(
+        moved.contains("ok") && moved.contains("MPos:5.000,0.000,0.000"),
+        "{moved:?}"
+    );
     assert!(ask("?", ">\r\n").contains("MPos:5.000,0.000,0.000"));
     let kill = |sig: &str| {
         let st = std::process::Command::new("kill")
@@ -713,7 +716,13 @@ fn flatcut_sim_power_cycles_on_sigusr1() {
     };
     kill("-USR1");
     wait_for("power cycle (SIGUSR1)");
-    let after = ask("?", ">\r\n");
+    // The simulator's thread takes the power cycle on its next turn (milliseconds).
+    let t0 = Instant::now();
+    let mut after = ask("?", ">\r\n");
+    while !after.contains("MPos:0.000,0.000,0.000") && t0.elapsed() < Duration::from_secs(2) {
+        std::thread::sleep(Duration::from_millis(50));
+        after = ask("?", ">\r\n");
+    }
     assert!(after.contains("MPos:0.000,0.000,0.000"), "{after:?}");
     kill("-INT");
     wait_for("simulator stopped");

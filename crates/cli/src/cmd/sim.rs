@@ -32,7 +32,12 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         }
         None => crate::outln!("{}", sim.path().display()),
     }
-    let port = a.link.as_deref().unwrap_or(sim.path()).display().to_string();
+    let port = a
+        .link
+        .as_deref()
+        .unwrap_or(sim.path())
+        .display()
+        .to_string();
     power_cycles_on_sigusr1(&sim, || {
         eprintln!(
             "simulated GRBL 1.1h at {} baud; connect with `flatcut send JOB --port {port}`; `kill -USR1 {}` power-cycles it; Ctrl-C stops",

@@ -55,10 +55,9 @@ fn status_line_shows_path_fraction_eta_state_and_position() {
         }),
         ..progress()
     };
-    let text = status_text(&paused, Some(1.0));
-    assert!(
-        text.ends_with("· paused by the job at line 7 (`M0`)") && text.matches("M0").count() == 1,
-        "{text}"
+    assert_eq!(
+        status_text(&paused, Some(1.0)),
+        " 25.0% of path · ETA 2:05 · Hold:0 · paused by the job at line 7 (`M0`) · X10.000 Y5.250 Z-0.500"
     );
 }
 
