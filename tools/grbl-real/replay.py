@@ -200,9 +200,10 @@ class Replay:
         code2, out2 = self.send(job, *flags)
         # The job's first 7 lines (G21 G90, the first square, the M0) ran before the pause.
         rest = "(7 done in earlier runs)" in out2
+        first = "" if paused and executed else f" ({tail(out)})"
         self.record("C", paused and executed and code2 == 0 and rest,
                     f"abort at the pause: exit {code}, {'named' if paused else 'NOT named'}, "
-                    f"{'lines up to the M0 executed' if executed else 'NOT all executed'}; "
+                    f"{'lines up to the M0 executed' if executed else 'NOT all executed'}{first}; "
                     f"resume: exit {code2}, {'first square not sent again' if rest else tail(out2)}")
 
     def case_g92(self):
