@@ -5,6 +5,7 @@
 
 use super::geometry::{dist, nearest_on_segment};
 use super::tracker::Tracker;
+use super::watch::{line_chords, stretch};
 use crate::job::Job;
 
 /// Path length and estimated time of the lines not yet known executed that the machine has
@@ -18,41 +19,23 @@ pub(super) struct Ahead {
 }
 
 /// Where the machine reported at work position `wpos` stands on the stretch of the path it can
-/// be on (see the module docs): the first place within `tol` mm, so a path passing the same
-/// point twice counts the earlier pass. `None` when it is on none of it (a resume's preamble
-/// still travelling, a change of work frame inside the stretch, nothing sent yet).
+/// be on ([`stretch`]): the first place within `tol` mm, so a path passing the same point twice
+/// counts the earlier pass. `None` when it is on none of it, or the stretch cannot be placed.
 pub(super) fn ahead_of_confirmed(
     job: &Job,
     tracker: &mut Tracker,
     wpos: [f64; 3],
     tol: f64,
+    preamble_first: bool,
 ) -> Option<Ahead> {
-    let lo = tracker.first_open();
-    let hi = tracker.last_sent?;
-    if lo >= job.len() {
-        return None;
-    }
-    let hi = hi.max(lo).min(job.len() - 1);
-    let (first, after) = (&job.lines[lo].before, job.state_before(hi + 1));
-    if first.g92 != after.g92 || first.wcs != after.wcs {
-        return None;
-    }
+    let (lo, hi, g) = stretch(job, tracker, preamble_first)?;
     // The job's geometry is G92-free; the report is in the G92 frame.
-    let g = first.g92;
     let p = [wpos[0] + g[0], wpos[1] + g[1], wpos[2] + g[2]];
     let mut passed = Ahead::default();
     for i in lo..=hi {
         let l = &job.lines[i];
-        if tracker.done[i] || !l.moves || l.length <= 0.0 {
-            continue;
-        }
-        let chords: Vec<[f64; 3]> = if l.arc.len() >= 2 {
-            l.arc.clone()
-        } else {
-            vec![job.start_of(i), job.end_of(i)]
-        };
         let mut run = 0.0;
-        for w in chords.windows(2) {
+        for w in line_chords(job, i).windows(2) {
             let q = nearest_on_segment(p, w[0], w[1]);
             if dist(p, q) <= tol {
                 let into = (run + dist(w[0], q)).min(l.length);
@@ -63,8 +46,10 @@ pub(super) fn ahead_of_confirmed(
             }
             run += dist(w[0], w[1]);
         }
-        passed.length += l.length;
-        passed.time += l.time;
+        if l.moves && l.length > 0.0 {
+            passed.length += l.length;
+            passed.time += l.time;
+        }
     }
     None
 }

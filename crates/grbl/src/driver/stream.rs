@@ -577,7 +577,8 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
         let ahead = match self.sess.work_position() {
             Some(p) if self.failure.is_none() => {
                 let tol = 4.0 * self.tracker.pos_tol;
-                ahead_of_confirmed(self.job_t, self.tracker, p, tol).unwrap_or_default()
+                let pre = !self.preamble.is_empty();
+                ahead_of_confirmed(self.job_t, self.tracker, p, tol, pre).unwrap_or_default()
             }
             _ => Default::default(),
         };

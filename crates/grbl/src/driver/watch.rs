@@ -33,18 +33,17 @@ pub(super) fn state_on_path(state: MachineState) -> bool {
     )
 }
 
-/// Checks the reported work position `wpos` against the stretch of `job` the machine can be on
-/// now (see the module docs); `None` when it lies within `tol` mm of it, or when this report
-/// cannot be checked: nothing sent yet, a resume preamble still travelling to the first line
-/// of a run, a change of work frame (G92, G54..G59) inside the stretch (GRBL reports in the
-/// parser's frame, which runs ahead of the motion).
-pub(super) fn off_path(
+/// The stretch of `job` the machine can be on now (see the module docs): lines `lo..=hi`, and the
+/// G92 offset that turns a reported work position into the job's G92-free frame; `None` when a
+/// report cannot be placed on it: nothing sent yet, every line done, a resume preamble still
+/// travelling to the first line of a run (`preamble_first`: the run at line 0 has one), lines
+/// done earlier inside it, or a change of work frame (G92, G54..G59) inside it (GRBL reports in
+/// the parser's frame, which runs ahead of the motion).
+pub(super) fn stretch(
     job: &Job,
     tracker: &mut Tracker,
-    wpos: [f64; 3],
-    tol: f64,
     preamble_first: bool,
-) -> Option<Deviation> {
+) -> Option<(usize, usize, [f64; 3])> {
     let lo = tracker.first_open();
     let hi = tracker.last_sent?;
     if lo >= job.len() {
@@ -65,21 +64,37 @@ pub(super) fn off_path(
     if first.g92 != after.g92 || first.wcs != after.wcs {
         return None;
     }
+    Some((lo, hi, first.g92))
+}
+
+/// The straight pieces line `i` moves along (an arc's chords, where GRBL moves); empty for a
+/// line that does not move.
+pub(super) fn line_chords(job: &Job, i: usize) -> Vec<[f64; 3]> {
+    let l = &job.lines[i];
+    if !l.moves || l.length <= 0.0 {
+        Vec::new()
+    } else if l.arc.len() >= 2 {
+        l.arc.clone()
+    } else {
+        vec![job.start_of(i), job.end_of(i)]
+    }
+}
+
+/// Checks the reported work position `wpos` against the [`stretch`] of `job` the machine can be
+/// on now; `None` when it lies within `tol` mm of it, or when this report cannot be checked.
+pub(super) fn off_path(
+    job: &Job,
+    tracker: &mut Tracker,
+    wpos: [f64; 3],
+    tol: f64,
+    preamble_first: bool,
+) -> Option<Deviation> {
+    let (lo, hi, g) = stretch(job, tracker, preamble_first)?;
     // The job's geometry is G92-free; the report is in the G92 frame.
-    let g = first.g92;
     let p = [wpos[0] + g[0], wpos[1] + g[1], wpos[2] + g[2]];
     let mut best = (dist(p, job.start_of(lo)), job.start_of(lo));
     for i in lo..=hi {
-        let l = &job.lines[i];
-        if !l.moves || l.length <= 0.0 {
-            continue;
-        }
-        let chords: Vec<[f64; 3]> = if l.arc.len() >= 2 {
-            l.arc.clone()
-        } else {
-            vec![job.start_of(i), job.end_of(i)]
-        };
-        for w in chords.windows(2) {
+        for w in line_chords(job, i).windows(2) {
             let q = nearest_on_segment(p, w[0], w[1]);
             let d = dist(p, q);
             if d < best.0 {
