@@ -56,6 +56,9 @@ pub enum RepairKind {
     Pcurve,
     /// Two vertices at (nearly) one point, used by consecutive edges: merged.
     VertexMerge,
+    /// An edge used out and back by consecutive uses of a loop, turning where the surface has
+    /// no pole: a slit of zero width inside the face (an internal edge), dropped from the loop.
+    Slit,
 }
 
 /// One repair, on the entity it concerns.

@@ -164,6 +164,11 @@ pub(crate) fn build(inp: &TrimInput) -> Result<Trim, StepError> {
         let (lp, winding) = join(inp, &parts, periods, sigma)?;
         placed.push((lp, winding));
     }
+    if placed.is_empty() && inp.face.bounds.iter().any(|b| !b.uses.is_empty()) {
+        return Err(
+            inp.err("every loop of the face is a slit (edges out and back): it bounds no region")
+        );
+    }
     if placed.is_empty() {
         let lp = whole_surface(inp, &[], &mut trim)?;
         placed.push((lp, [0, 0]));
@@ -203,7 +208,50 @@ fn chain(inp: &TrimInput, b: &Bound, repairs: &mut Vec<Repair>) -> Result<Vec<Ed
             "the loop's edges are out of order or flagged the wrong way: chained by their vertices",
         ));
     }
-    Ok(out)
+    Ok(without_slits(inp, out, repairs))
+}
+
+/// The loop without its slits: an edge used out and back by consecutive uses (cyclically),
+/// turning at a point that is not a pole, bounds nothing — the face lies on both sides of it
+/// (an internal edge, as some systems write where a face was split and merged again). Both uses
+/// are dropped, repeatedly, so a loop made only of slits becomes empty. An edge out to a pole
+/// and back (a sphere's seam where no pole edge is written) is kept: the pole closes the region.
+fn without_slits(
+    inp: &TrimInput,
+    mut uses: Vec<EdgeUse>,
+    repairs: &mut Vec<Repair>,
+) -> Vec<EdgeUse> {
+    let s = inp.surface();
+    loop {
+        let n = uses.len();
+        let slit = (0..n).find(|&k| {
+            let (a, b) = (uses[k], uses[(k + 1) % n]);
+            if n < 2 || a.edge != b.edge || a.forward == b.forward {
+                return false;
+            }
+            let Ok(g) = inp.geometry(a.edge) else {
+                return false;
+            };
+            let turn = if a.forward { g.end } else { g.start };
+            let p = inp.model.vertices[turn].point;
+            s.free_direction(s.param_of(p, None), inp.pole_tol)
+                .is_none()
+        });
+        let Some(k) = slit else {
+            return uses;
+        };
+        let edge = uses[k].edge;
+        repairs.push(Repair::new(
+            RepairKind::Slit,
+            inp.model.edges[edge].entity,
+            0.0,
+            "the loop runs out and back along this edge (a slit inside the face): dropped from the loop",
+        ));
+        let next = (k + 1) % n;
+        let (hi, lo) = (k.max(next), k.min(next));
+        uses.remove(hi);
+        uses.remove(lo);
+    }
 }
 
 /// The (u, v) of an edge's samples on the face, continuous along the edge, from its start.
