@@ -588,10 +588,15 @@ fn join(
         }
         // `shift` is now the move of part 0 after going once around: the winding.
         let winding = shift;
-        // Drop the repeated first point of a closed loop.
-        if lp.len() > 1 && free[n - 1].is_none() && winding == [0, 0] {
+        // Drop the repeated first point of a closed loop; of a loop going around, the first
+        // point again a period along (the loop's next point after its last).
+        if lp.len() > 1 && free[n - 1].is_none() {
             let (a, z) = (lp[0], lp[lp.len() - 1]);
-            if a.origin == z.origin {
+            let again =
+                a.uv + (0..2).fold(DVec2::ZERO, |acc, d| acc + per_shift(periods, winding, d));
+            if a.origin == z.origin
+                && (winding == [0, 0] || z.uv.distance(again) <= 1e-9 * (1.0 + again.length()))
+            {
                 lp.pop();
             }
         }
