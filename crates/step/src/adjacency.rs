@@ -96,7 +96,7 @@ fn normal_at(
         .pcurves
         .iter()
         .find(|pc| pc.surface_entity == f.surface_entity)
-        .map(|pc| pc.curve.eval(t).truncate());
+        .map(|pc| f.surface.from_file(pc.curve.eval(t).truncate()));
     let uv = f.surface.param_of(p, hint);
     if f.surface.eval(uv.x, uv.y).distance(p) > gap {
         return None;

@@ -265,10 +265,7 @@ fn edge_uv(inp: &TrimInput, slot: usize, g: &EdgeGeometry) -> Vec<DVec2> {
     let mut out: Vec<DVec2> = Vec::with_capacity(sm.pts.len());
     for (k, p) in sm.pts.iter().enumerate() {
         let hint = match (pc, out.last()) {
-            (Some(c), _) => {
-                let h = c.eval(sm.ts[k]).truncate();
-                Some(h)
-            }
+            (Some(c), _) => Some(s.from_file(c.eval(sm.ts[k]).truncate())),
             (None, last) => last.copied(),
         };
         let mut uv = s.param_of(*p, hint);
