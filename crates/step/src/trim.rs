@@ -90,6 +90,10 @@ pub(crate) struct Trim {
     pub repairs: Vec<Repair>,
     /// Samples the face needs on its edges (where an edge runs through a pole): (slot, t).
     pub wants: Vec<(usize, f64)>,
+    /// The face's normal is the opposite of what its `same_sense` says: its loops agree with
+    /// the neighbours' (each shared edge used once each way) but run the wrong way round on its
+    /// surface, so the flag is the one in error.
+    pub flip: bool,
 }
 
 /// What building a face's region needs.
@@ -969,10 +973,21 @@ fn outer_for_holes(
     if signed_area(&loops[k]) * sigma == 0.0 {
         return Err(inp.err("its outer loop bounds no area"));
     }
+    let face = &inp.model.faces[inp.index];
+    if shares_edges(inp) {
+        trim.flip = true;
+        trim.repairs.push(Repair::new(
+            RepairKind::Orientation,
+            face.entity,
+            0.0,
+            "the face's loops run the wrong way round on its surface but agree with its neighbours': its normal is the opposite of its same_sense flag",
+        ));
+        return Ok(());
+    }
     reverse_loop(&mut loops[k]);
     trim.repairs.push(Repair::new(
         RepairKind::Orientation,
-        inp.model.faces[inp.index].entity,
+        face.entity,
         0.0,
         "the face's outer loop runs the wrong way round (the face on its outside, on a surface that does not close): reversed",
     ));
@@ -981,6 +996,17 @@ fn outer_for_holes(
 
 /// Whether the surface closes on itself so that a face may be all of it but holes: periodic in
 /// u and either periodic in v or closed at a pole at both ends.
+/// True when an edge of the face's loops is used by another face too: the loops' directions
+/// are then fixed by the shell (the reader oriented them against their neighbours').
+fn shares_edges(inp: &TrimInput) -> bool {
+    inp.face.bounds.iter().flat_map(|b| &b.uses).any(|u| {
+        inp.model.edges[u.edge]
+            .faces
+            .iter()
+            .any(|&f| f != inp.index)
+    })
+}
+
 fn whole_surface_closes(inp: &TrimInput) -> bool {
     let s = inp.surface();
     let d = s.domain();
