@@ -116,6 +116,25 @@ def torus_halves(keep_outer):
     return BRepAlgoAPI_Common(torus, cyl).Shape()
 
 
+def cylinder_panels():
+    """A tube (R 30, 80 long) as two half-cylinder sheets, each its own open shell: their
+    edges along the two lines where they meet are separate edges, to be sewn."""
+    from OCP.BRep import BRep_Builder
+    from OCP.TopoDS import TopoDS_Compound, TopoDS_Shell
+    from OCP.gp import gp_Cylinder, gp_Ax3
+    cyl = gp_Cylinder(gp_Ax3(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 30.0)
+    builder = BRep_Builder()
+    compound = TopoDS_Compound()
+    builder.MakeCompound(compound)
+    for u0, u1 in [(0.0, math.pi), (math.pi, 2.0 * math.pi)]:
+        face = BRepBuilderAPI_MakeFace(cyl, u0, u1, 0.0, 80.0).Face()
+        shell = TopoDS_Shell()
+        builder.MakeShell(shell)
+        builder.Add(shell, face)
+        builder.Add(compound, shell)
+    return compound
+
+
 def cone_apex():
     """A cone to its apex, cut by an inclined plane."""
     cone = BRepPrimAPI_MakeCone(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 40.0, 0.0, 60.0).Shape()
@@ -167,6 +186,7 @@ MODELS = {
     "occt_torus": (torus_full, "MM", "AP214IS"),
     "occt_cone_apex": (cone_apex, "MM", "AP203"),
     "occt_torus_outer": (lambda: torus_halves(True), "MM", "AP214IS"),
+    "occt_cylinder_panels": (cylinder_panels, "MM", "AP214IS"),
     "occt_torus_inner": (lambda: torus_halves(False), "MM", "AP242DIS"),
     "occt_capsule": (cylinder_sphere, "MM", "AP242DIS"),
 }

@@ -49,6 +49,10 @@ impl Model {
             let (Some(ka), Some(kb)) = (pos(a), pos(b)) else {
                 continue;
             };
+            // Bodies sewn together meet at a seam, never in one piece.
+            if self.faces[a].shell != self.faces[b].shell {
+                continue;
+            }
             if self.meet_smoothly(e, a, b) {
                 let (ra, rb) = (find(&mut parent, ka), find(&mut parent, kb));
                 if ra != rb {
