@@ -1,7 +1,7 @@
 //! STEP models through the whole tool: `inspect` of a file in inches, developable faces and
 //! smooth groups that flatten with no distortion, a project whose design is a STEP file, the
 //! bundled kayak skin, and the seams of real models: every shared edge one mating seam of its
-//! full length.
+//! full length, and separate sheet bodies sewn where they meet.
 
 use std::path::{Path, PathBuf};
 
@@ -304,6 +304,33 @@ fn a_disk_sewn_to_a_sphere_rim_is_sewn_along_the_rim_once() {
     let area = disk.mesh.area();
     let want = std::f64::consts::PI * 7500.0;
     assert!((area - want).abs() < 2e-3 * want, "disk {area} mm², {want}");
+}
+
+#[test]
+fn separate_sheet_bodies_meet_at_mating_seams() {
+    // A tube of two half-cylinder sheets (R 30, 80 long), each its own shell with edges of its
+    // own (OCCT): the two 80 mm lines where they meet were two free borders each, no seam. Sewn,
+    // they are two mating seams of their full length, equal on both sides, and the pieces'
+    // boundaries off the seams are the two end circles.
+    let path = corpus("occt_cylinder_panels.step");
+    let design = flatcut::design::Design::load(&path).unwrap();
+    let tol = Tolerances::DEFAULT.with_chord_mm(0.05);
+    let a = design.assemble(path.parent().unwrap(), &tol).unwrap();
+    assert_eq!(a.pieces.len(), 2);
+    assert_eq!(
+        a.seams.len(),
+        2,
+        "{:?}",
+        a.seams.iter().map(|s| &s.name).collect::<Vec<_>>()
+    );
+    for s in &a.seams {
+        let (l0, l1) = (side_length(&a, &s.sides[0]), side_length(&a, &s.sides[1]));
+        assert!(
+            (l0 - 80.0).abs() < 1e-9 && (l1 - 80.0).abs() < 1e-9,
+            "{}: {l0}, {l1}",
+            s.name
+        );
+    }
 }
 
 #[test]

@@ -181,7 +181,11 @@ fn sheets_of_separate_shells_are_sewn_where_they_meet() {
     .unwrap();
     let topo = Topology::build(&t.welded(None)).unwrap();
     assert_eq!(topo.component_count, 1);
-    assert_eq!(topo.boundary_loops.len(), 2, "only the end circles are free");
+    assert_eq!(
+        topo.boundary_loops.len(),
+        2,
+        "only the end circles are free"
+    );
     for f in &t.faces {
         let sewn = f
             .repairs
