@@ -1028,25 +1028,7 @@ mod tests {
             (10.0, 0.0),
             (0.0, 10.0),
         ];
-        let lp: Vec<TrimPoint> = pts
-            .iter()
-            .enumerate()
-            .map(|(k, &(u, v))| TrimPoint {
-                uv: DVec2::new(u, v),
-                pos: s.eval(u, v),
-                vertex: k as u32,
-            })
-            .collect();
-        let e = tessellate_trimmed(
-            &TrimmedFace {
-                surface: &s,
-                loops: &[lp],
-                ruled: false,
-            },
-            &Tolerances::DEFAULT,
-            &TessOptions::DEFAULT,
-        )
-        .unwrap_err();
+        let e = plane_face(&s, &[plane_loop(&s, &pts, 0)]).unwrap_err();
         assert!(matches!(e, TrimError::LoopsOverlap { .. }), "{e}");
     }
 
@@ -1125,41 +1107,39 @@ mod tests {
     #[test]
     fn crossing_loops_are_an_error() {
         let s = Analytic::plane(Frame::WORLD);
-        let mk = |pts: &[(f64, f64)], base: u32| -> Vec<TrimPoint> {
-            pts.iter()
-                .enumerate()
-                .map(|(k, &(u, v))| TrimPoint {
-                    uv: DVec2::new(u, v),
-                    pos: s.eval(u, v),
-                    vertex: base + k as u32,
-                })
-                .collect()
-        };
-        let a = mk(&[(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0)], 0);
-        let b = mk(&[(5.0, 5.0), (15.0, 5.0), (15.0, 15.0), (5.0, 15.0)], 10);
-        let e = tessellate_trimmed(
-            &TrimmedFace {
-                surface: &s,
-                loops: &[a, b],
-                ruled: false,
-            },
-            &Tolerances::DEFAULT,
-            &TessOptions::DEFAULT,
-        )
-        .unwrap_err();
+        let a = plane_loop(&s, &[(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0)], 0);
+        let b = plane_loop(
+            &s,
+            &[(5.0, 5.0), (15.0, 5.0), (15.0, 15.0), (5.0, 15.0)],
+            10,
+        );
+        let e = plane_face(&s, &[a, b]).unwrap_err();
         assert!(matches!(e, TrimError::LoopsCross { .. }), "{e}");
     }
 
-    /// A square loop on a plane from its corner points, one vertex each.
-    fn plane_square(s: &Analytic, pts: &[(f64, f64)]) -> Vec<TrimPoint> {
+    /// A loop on a plane through the given (u, v) points, one vertex each from `first`.
+    fn plane_loop(s: &Analytic, pts: &[(f64, f64)], first: u32) -> Vec<TrimPoint> {
         pts.iter()
             .enumerate()
             .map(|(k, &(u, v))| TrimPoint {
                 uv: DVec2::new(u, v),
                 pos: s.eval(u, v),
-                vertex: k as u32,
+                vertex: first + k as u32,
             })
             .collect()
+    }
+
+    /// The untrimmed-plane tessellation of `loops` at the default tolerances.
+    fn plane_face(s: &Analytic, loops: &[Vec<TrimPoint>]) -> Result<TrimmedMesh, TrimError> {
+        tessellate_trimmed(
+            &TrimmedFace {
+                surface: s,
+                loops,
+                ruled: false,
+            },
+            &Tolerances::DEFAULT,
+            &TessOptions::DEFAULT,
+        )
     }
 
     #[test]
@@ -1167,42 +1147,21 @@ mod tests {
         // HiCAD writes plane axes with components of 1e-17 and 1e-33: a corner lands at
         // v = 1.8e-45, below spade's smallest accepted magnitude (2^-142).
         let s = Analytic::plane(Frame::WORLD);
-        let lp = plane_square(
-            &s,
-            &[
-                (-100.0, 1.7789921910373654e-45),
-                (0.0, 0.0),
-                (0.0, 100.0),
-                (-100.0, 100.0),
-            ],
-        );
-        let m = tessellate_trimmed(
-            &TrimmedFace {
-                surface: &s,
-                loops: &[lp],
-                ruled: false,
-            },
-            &Tolerances::DEFAULT,
-            &TessOptions::DEFAULT,
-        )
-        .unwrap();
+        let corners = [
+            (-100.0, 1.7789921910373654e-45),
+            (0.0, 0.0),
+            (0.0, 100.0),
+            (-100.0, 100.0),
+        ];
+        let m = plane_face(&s, &[plane_loop(&s, &corners, 0)]).unwrap();
         assert!((m.cover_uv - 1e4).abs() < 1e-9, "{}", m.cover_uv);
     }
 
     #[test]
     fn a_loop_beyond_the_triangulators_range_is_named() {
         let s = Analytic::plane(Frame::WORLD);
-        let lp = plane_square(&s, &[(0.0, 0.0), (1e61, 0.0), (1e61, 1e61), (0.0, 1e61)]);
-        let e = tessellate_trimmed(
-            &TrimmedFace {
-                surface: &s,
-                loops: &[lp],
-                ruled: false,
-            },
-            &Tolerances::DEFAULT,
-            &TessOptions::DEFAULT,
-        )
-        .unwrap_err();
+        let corners = [(0.0, 0.0), (1e61, 0.0), (1e61, 1e61), (0.0, 1e61)];
+        let e = plane_face(&s, &[plane_loop(&s, &corners, 0)]).unwrap_err();
         assert!(matches!(e, TrimError::OutOfRange { index: 0, .. }), "{e}");
     }
 }
