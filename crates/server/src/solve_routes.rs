@@ -162,17 +162,18 @@ pub async fn cancel(State(app): AppState, _body: Unread) -> axum::Json<serde_jso
 }
 
 /// Every stage after the flattening for the design as it is now.
-async fn finished(app: &Arc<App>) -> Result<Arc<Finished>, ApiError> {
+pub(crate) async fn finished(app: &Arc<App>) -> Result<Arc<Finished>, ApiError> {
     let flat = flattened(app).await?;
     let project = app.bench().opened.project.clone();
     let events = app.events.clone();
     let opts = app.run.clone();
     let flats = flat.flats.clone();
-    let rx = lock(&app.finish).get_or_start(flat.revision, move |_cancel| {
+    let revision = flat.revision;
+    let rx = lock(&app.finish).get_or_start(revision, move |_cancel| {
         let mut obs = observer(events);
         let outputs =
             flatcut::run::finish_project(&project, flats, &opts, &mut obs).map_err(run_error)?;
-        Ok(Finished { outputs })
+        Ok(Finished { revision, outputs })
     });
     task::wait(rx).await
 }
