@@ -41,7 +41,10 @@ pub struct App {
     bench: Mutex<Bench>,
     pub events: Events,
     pub run: RunOptions,
+    /// The live flattening: a graded design's base size (every piece of an ungraded one).
     pub flatten: Mutex<Slot<Flattened>>,
+    /// Every size of a graded design: for the pattern, nest and jobs, and on demand.
+    pub graded: Mutex<Slot<Flattened>>,
     pub finish: Mutex<Slot<Finished>>,
     /// The last regions view: (revision, JSON text).
     pub regions: Mutex<Option<(u64, Arc<String>)>>,
@@ -58,6 +61,7 @@ impl App {
             events,
             run: RunOptions::default(),
             flatten: Mutex::new(Slot::default()),
+            graded: Mutex::new(Slot::default()),
             finish: Mutex::new(Slot::default()),
             regions: Mutex::new(None),
         }

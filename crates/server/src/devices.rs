@@ -36,7 +36,7 @@ pub const DEFAULT_SIM_SPEED: f64 = 50.0;
 pub struct OpenRequest {
     /// `simulator` or a serial port's path.
     pub device: String,
-    /// Baud rate of a port (GRBL's 115200 when absent).
+    /// Baud rate of the link (GRBL's 115200 when absent); the simulator's link is paced at it.
     pub baud: Option<u32>,
     /// The simulator's time scale (1: real time).
     pub speed: Option<f64>,
@@ -562,11 +562,14 @@ fn target(req: &OpenRequest, profile: &Profile) -> Result<Target, PanelError> {
                 "speed {speed}: the simulator's time scale is a number in (0, 1000]"
             )));
         }
-        let setup = SimSetup::default()
+        let mut setup = SimSetup::default()
             .with_machine(machine(profile))
             .with_speed(speed)
             .with_instant(req.instant)
             .with_laser(profile.kind == flatcut::gcode::ToolKind::Laser);
+        if let Some(b) = req.baud {
+            setup.baud = b;
+        }
         return Ok(Target::Simulator(setup));
     }
     if req.device.is_empty() {

@@ -179,6 +179,7 @@ impl Server {
             shutdown.await;
             app.events.close();
             app::lock(&app.flatten).cancel();
+            app::lock(&app.graded).cancel();
             app::lock(&app.finish).cancel();
             // A running job stops with the tool off and its journal written before the
             // server ends.
