@@ -369,7 +369,8 @@ fn serve_saves_the_design_back_keeping_comments_and_untouched_keys() {
 }
 
 /// A line drawn across the vamp closes a new region: it gets a piece of its own at once, the
-/// flattening has five pieces in each of the shoe's three sizes and a new mating seam per size,
+/// live flattening has five pieces in the base size (the graded run's own base-size pieces),
+/// every size has five and a new mating seam per size,
 /// within the leather's limits; undo brings the four pieces back and redo the five; a loose line
 /// is refused with the loader's message.
 #[test]
@@ -377,13 +378,19 @@ fn serve_a_line_across_the_vamp_makes_a_fifth_piece() {
     let dir = shoe();
     let srv = serve(&dir.path().join("project.toml"));
     let a = srv.addr();
+    // Live, the graded shoe is flattened in its base size, 42.
     let f = send(a, "POST", "/api/flatten", &json!({}));
     assert_eq!(f.status, 200, "{}", String::from_utf8_lossy(&f.body));
     let f = f.json();
-    assert_eq!(f["pieces"].as_array().unwrap().len(), 4 * SHOE_SIZES);
-    assert_eq!(f["pieces"][0]["name"], "toe cap 40");
+    assert_eq!(f["pieces"].as_array().unwrap().len(), 4);
+    assert_eq!(f["sizes"], json!(["40", "42", "44"]));
+    assert_eq!(f["pieces"][0]["name"], "toe cap 42");
     assert_eq!(f["pieces"][0]["part"], "upper");
-    assert_eq!(f["pieces"][0]["size"], "40");
+    assert_eq!(f["pieces"][0]["size"], "42");
+    assert_eq!(
+        send(a, "POST", "/api/flatten?sizes=some", &json!({})).status,
+        400
+    );
     let regions = get(a, "/api/regions").json();
     assert_eq!(regions["parts"][0]["regions"].as_array().unwrap().len(), 4);
     let pts = vamp_line(&regions);
@@ -418,9 +425,22 @@ fn serve_a_line_across_the_vamp_makes_a_fifth_piece() {
     // It takes the vamp's settings (the piece across the new line).
     assert_eq!(new["seam_allowance_mm"], 8);
     assert_eq!(new["pairs"], 1);
-    let f = send(a, "POST", "/api/flatten", &json!({})).json();
+    let base = send(a, "POST", "/api/flatten", &json!({})).json();
+    assert_eq!(base["pieces"].as_array().unwrap().len(), 5);
+    let f = send(a, "POST", "/api/flatten?sizes=all", &json!({})).json();
     let pieces = f["pieces"].as_array().unwrap();
     assert_eq!(pieces.len(), 5 * SHOE_SIZES);
+    // The base size live is the base size of the graded run.
+    let upper = |v: &Value| {
+        v["pieces"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["name"] == "upper 1 42")
+            .unwrap()["stretch_max_pct"]
+            .clone()
+    };
+    assert_eq!(upper(&base), upper(&f));
     for p in pieces {
         assert!(p["within_limits"].as_bool().unwrap(), "{}", p["name"]);
         let faces = p["faces"].as_u64().unwrap() as usize;
@@ -450,7 +470,7 @@ fn serve_a_line_across_the_vamp_makes_a_fifth_piece() {
             .as_array()
             .unwrap()
             .len(),
-        4 * SHOE_SIZES
+        4
     );
     assert_eq!(http(a, "POST", "/api/design/redo", &[], b"").status, 200);
     assert_eq!(get(a, "/api/design").json(), tree);
@@ -555,4 +575,231 @@ fn serve_events_tell_every_page_the_design_changed() {
     srv.stop().unwrap();
     let mut rest = String::new();
     r.read_to_string(&mut rest).unwrap();
+}
+
+/// The lampshade project copied into a temporary directory (the jobs' journals go beside it).
+fn lampshade() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for f in ["project.toml", "design.toml", "plotter-a0.toml"] {
+        std::fs::copy(
+            root().join("patterns/lampshade").join(f),
+            dir.path().join(f),
+        )
+        .unwrap();
+    }
+    dir
+}
+
+/// Polls `GET /api/jobs/{id}` until `done` holds (at most 120 s).
+fn job_until(a: SocketAddr, id: u64, what: &str, done: impl Fn(&Value) -> bool) -> Value {
+    let t0 = std::time::Instant::now();
+    loop {
+        let j = get(a, &format!("/api/jobs/{id}")).json();
+        if done(&j) {
+            return j;
+        }
+        let st = j["state"].as_str().unwrap();
+        assert!(
+            !["done", "failed", "stopped"].contains(&st) || what == "ended",
+            "job {id} ended before it {what}: {j}"
+        );
+        assert!(
+            t0.elapsed() < Duration::from_secs(120),
+            "job {id} never {what}: {j}"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// Job lines of the lampshade's sheet before its outlines (its labels, drawn stroke over stroke).
+const CUT_LAYER: u64 = 1500;
+
+fn lines_done(j: &Value) -> u64 {
+    j["progress"]["lines_done"].as_u64().unwrap_or(0)
+}
+
+/// Whether two positions agree within a step of the machine (the simulator moves in whole steps,
+/// the job's coordinates are not on their grid).
+fn near(a: [f64; 3], b: [f64; 3]) -> bool {
+    (0..3).all(|i| (a[i] - b[i]).abs() <= 0.01)
+}
+
+/// The job's motions `(text, end)` of lines `0..end` that move the machine by at least a step
+/// (a shorter move rounds to where the machine stands, and the simulator makes none).
+fn motions_before(job: &flatcut_grbl::Job, end: usize) -> Vec<(String, [f64; 3])> {
+    (0..end.min(job.len()))
+        .filter(|&i| job.lines[i].moves && job.lines[i].length >= 0.01)
+        .map(|i| (job.lines[i].text.clone(), job.end_of(i)))
+        .collect()
+}
+
+/// The device panel over HTTP on the lampshade: the project's device is the embedded
+/// simulator; a job streams from the run's G-code, a second is refused while it runs; a stop
+/// leaves the tool off. After the simulator was closed (its position lost) a resume asks
+/// whether the origin is where it was and on a yes completes the job. A job paused (the machine
+/// holds where it is) and resumed runs to its end, motion for motion the G-code's moves. Then the server is stopped during a job: the job stops with the tool off, and the
+/// simulator executed exactly the lines before the one the journal says it stopped in, and that
+/// one up to where the journal says. (Four jobs at 200× real time on a 1 Mbaud link.)
+#[test]
+fn serve_streams_jobs_to_the_simulator_and_stops_them_with_the_tool_off() {
+    use flatcut_testkit::trace::joined;
+    let dir = lampshade();
+    let srv = serve(&dir.path().join("project.toml"));
+    let app = srv.app.clone();
+    let a = srv.addr();
+    let d = get(a, "/api/devices").json();
+    assert_eq!(d["project_device"], "simulator");
+    let ids: Vec<&Value> = d["devices"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| &x["id"])
+        .collect();
+    assert!(ids.contains(&&json!("simulator")), "{d}");
+    assert_eq!(d["open"]["open"], false);
+    let c = send(
+        a,
+        "POST",
+        "/api/devices/connect",
+        &json!({"device": "simulator", "speed": 200, "baud": 1_000_000}),
+    );
+    assert_eq!(c.status, 200, "{}", String::from_utf8_lossy(&c.body));
+    assert_eq!(c.json()["controller"]["version"], "1.1h");
+    let gcode = get(a, "/api/job.gcode").body;
+    let job = flatcut_grbl::Job::parse(std::str::from_utf8(&gcode).unwrap()).unwrap();
+    // A job, and a second refused while it runs.
+    let r = send(a, "POST", "/api/jobs", &json!({"sheet": 1}));
+    assert_eq!(r.status, 201, "{}", String::from_utf8_lossy(&r.body));
+    assert_eq!(r.json()["id"], 1);
+    assert_eq!(send(a, "POST", "/api/jobs", &json!({})).status, 409);
+    assert_eq!(get(a, "/api/jobs/9").status, 404);
+    // Into the outlines (the labels before them pass over their own strokes, where a resume
+    // cannot tell which stroke ran and refuses).
+    job_until(a, 1, "reached the outlines", |j| lines_done(j) > CUT_LAYER);
+    assert_eq!(send(a, "POST", "/api/jobs/1/stop", &json!({})).status, 200);
+    let stopped = job_until(a, 1, "stopped", |j| j["state"] == "stopped");
+    assert!(
+        stopped["message"].as_str().unwrap().contains("tool off"),
+        "{stopped}"
+    );
+    // The simulator closed: a new one starts with its position lost, so the resume asks.
+    let closed = send(a, "POST", "/api/devices/close", &json!({})).json();
+    assert_eq!(closed["closed"], "simulator");
+    assert!(closed["sim"]["motions"].as_array().unwrap().len() > 1000);
+    let r = send(a, "POST", "/api/jobs", &json!({"sheet": 1, "resume": true}));
+    assert_eq!(r.status, 201, "{}", String::from_utf8_lossy(&r.body));
+    let asked = job_until(a, 2, "asked", |j| !j["question"].is_null());
+    assert_eq!(asked["state"], "asking");
+    let q = &asked["question"];
+    assert!(
+        q["text"]
+            .as_str()
+            .unwrap()
+            .contains("position is not known"),
+        "{q}"
+    );
+    assert_eq!(q["prompt"], "Is the work origin where it was? [y/N] ");
+    let r = send(
+        a,
+        "POST",
+        "/api/jobs/2/answer",
+        &json!({"question": q["id"], "yes": true}),
+    );
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    assert_eq!(
+        send(
+            a,
+            "POST",
+            "/api/jobs/2/answer",
+            &json!({"question": q["id"], "yes": true})
+        )
+        .status,
+        409,
+        "a question is answered once"
+    );
+    let done = job_until(a, 2, "ended", |j| {
+        ["done", "failed", "stopped"].contains(&j["state"].as_str().unwrap())
+    });
+    assert_eq!(done["state"], "done", "{done}");
+    assert!(done["report"]["previously_done"].as_u64().unwrap() > CUT_LAYER);
+    let before = get(a, "/api/devices/sim").json()["motions"]
+        .as_array()
+        .unwrap()
+        .len();
+    // A whole job, paused and resumed once: the simulator made the G-code's moves, each once,
+    // in order.
+    assert_eq!(send(a, "POST", "/api/jobs", &json!({})).status, 201);
+    job_until(a, 3, "ran 500 lines", |j| lines_done(j) > 500);
+    assert_eq!(send(a, "POST", "/api/jobs/3/hold", &json!({})).status, 200);
+    let held = job_until(a, 3, "held", |j| {
+        j["state"] == "held" && j["progress"]["machine_state"] == "Hold:0"
+    });
+    std::thread::sleep(Duration::from_millis(300));
+    let still = get(a, "/api/jobs/3").json();
+    assert_eq!(still["progress"]["position"], held["progress"]["position"]);
+    assert_eq!(
+        still["progress"]["lines_done"],
+        held["progress"]["lines_done"]
+    );
+    assert_eq!(
+        send(a, "POST", "/api/jobs/3/resume", &json!({})).status,
+        200
+    );
+    let on = held["progress"]["lines_done"].as_u64().unwrap() + 20;
+    job_until(a, 3, "went on", |j| {
+        j["state"] == "running" && lines_done(j) > on
+    });
+    let whole = job_until(a, 3, "ended", |j| {
+        ["done", "failed", "stopped"].contains(&j["state"].as_str().unwrap())
+    });
+    assert_eq!(whole["state"], "done", "{whole}");
+    let after = get(a, "/api/devices/sim").json()["motions"]
+        .as_array()
+        .unwrap()
+        .len();
+    // The server stopped during a job.
+    assert_eq!(send(a, "POST", "/api/jobs", &json!({})).status, 201);
+    job_until(a, 4, "reached the outlines", |j| lines_done(j) > CUT_LAYER);
+    srv.stop().unwrap();
+    let fourth = app.devices.job(4).unwrap();
+    assert_eq!(fourth["state"], "stopped", "{fourth}");
+    let sim = app.devices.last_sim().unwrap().trace;
+    let ran = joined(&sim[before..after]);
+    let want = motions_before(&job, job.len());
+    assert_eq!(ran.len(), want.len(), "motions of a whole job");
+    for (k, (text, to)) in want.iter().enumerate() {
+        assert_eq!(&ran[k].text, text, "motion {k}");
+        assert!(
+            near(ran[k].to, *to),
+            "motion {k}: ran to {:?}, the job {to:?}",
+            ran[k].to
+        );
+    }
+    let journal = flatcut_grbl::Journal::read(dir.path().join("job-1.gcode.journal")).unwrap();
+    assert!(!journal.finished);
+    let stop = journal.stop.expect("a stop record");
+    assert!(stop.modal.contains("M5"), "{}", stop.modal);
+    // The journal and the simulator agree: the machine stopped part-way through the line the
+    // journal names (`P`), where it says, having run every line before it and nothing after.
+    let (part, at) = journal.partial.expect("stopped part-way through a line");
+    assert!(!journal.done[part..].iter().any(|&d| d));
+    let want = motions_before(&job, part);
+    let ran = joined(&sim[after..]);
+    // The line stopped in may not have moved yet (or moves nothing: a dwell, a tool command).
+    let cut = ran.len() > want.len();
+    assert_eq!(ran.len(), want.len() + usize::from(cut), "motions executed");
+    for (k, (text, to)) in want.iter().enumerate() {
+        assert_eq!(&ran[k].text, text, "motion {k}");
+        assert!(
+            near(ran[k].to, *to),
+            "motion {k}: ran to {:?}, the job {to:?}",
+            ran[k].to
+        );
+    }
+    let end = ran.last().unwrap();
+    if cut {
+        assert_eq!(end.text, job.lines[part].text);
+    }
+    assert!(near(end.to, at), "{end:?} against {at:?}");
+    assert_eq!(stop.machine, end.to);
 }

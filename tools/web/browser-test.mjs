@@ -5,10 +5,12 @@
 //
 // Steps: load the shoe; add a style line by clicking on the rendered surface at known screen
 // points (the projections of surface points from the server's own mesh); see the piece count
-// go from 4 to 5 in each of the shoe's 3 sizes and the heat map's colours on the new piece, in
-// 3D and flat; download the pattern and compare it with `flatcut run`'s bytes for the saved design; stream a job to the embedded
-// simulator and watch its progress events to the end (a "todo" line while the device panel is
-// not built). Prints one line per step and "N passed, N failed". Without Chromium it fails when FLATCUT_BROWSER_TEST=required (as CI
+// go from 4 to 5 (in the shoe's base size; every size in the pattern) and the heat map's colours on the new piece, in
+// 3D and flat; download the pattern and compare it with `flatcut run`'s bytes for the saved design; stream sheet 1's job
+// from the device panel to the embedded simulator, pause and resume it once, watch its progress
+// events to the end, and check the simulator's executed motions against the G-code's moves
+// (each once, in order, the same end point); then Ctrl-C the server during a job and check
+// the job stopped with the tool off and its journal says so. Prints one line per step and "N passed, N failed". Without Chromium it fails when FLATCUT_BROWSER_TEST=required (as CI
 // sets it), and otherwise says it skipped.
 
 import { spawn, execFileSync } from 'node:child_process';
@@ -117,8 +119,9 @@ try {
     for (const t of ['job', 'device']) es.addEventListener(t, (ev) => window.__event({ type: t, ...JSON.parse(ev.data) }));
   });
   const count0 = await page.textContent('#piece-count');
-  // The shoe is graded in three sizes (40, 42, 44): each of its 4 pieces is flattened in each.
-  step('loads the shoe: 4 pieces in 3 sizes flattened', /^12 pieces/.test(count0), count0);
+  // The shoe is graded in three sizes (40, 42, 44): live, its 4 pieces are flattened in the base
+  // size (42); the pattern, nest and jobs have every size.
+  step('loads the shoe: 4 pieces flattened in its base size', /^4 pieces in size 42/.test(count0), count0);
   await shot('pieces');
 
   // 2. A style line by clicking on the rendered surface: from the medial featherline at x = 190 mm,
@@ -149,11 +152,11 @@ try {
   }
   await page.click('[data-tool=line]');
   for (const s of screen) await page.mouse.click(s.x, s.y);
-  await page.waitForFunction(() => /^15 pieces/.test(document.querySelector('#piece-count')?.textContent || ''), null, { timeout: 120000 });
+  await page.waitForFunction(() => /^5 pieces/.test(document.querySelector('#piece-count')?.textContent || ''), null, { timeout: 120000 });
   await page.waitForFunction(() => window.__flatcut.timings.length > 0, null, { timeout: 10000 });
   const timing = await page.evaluate(() => window.__flatcut.timings[0].closeToHeatMs);
   const count1 = await page.textContent('#piece-count');
-  step('the third click closes a region: 5 pieces in 3 sizes', /^15 pieces/.test(count1), `${count1}; click to heat map ${timing.toFixed(0)} ms`);
+  step('the third click closes a region: 5 pieces', /^5 pieces/.test(count1), `${count1}; click to heat map ${timing.toFixed(0)} ms`);
 
   // 3. The heat map's colours on the new piece: flat (unlit, exact) and on the surface (lit: same
   // hue).
@@ -216,6 +219,14 @@ try {
     `strain ${spot.strain.toFixed(2)} %: rgb(${heat}) (piece colour rgb(${plain}))`);
   await shot('heatmap');
 
+  // Every size on demand: the base size's 5 pieces in each of the 3 sizes.
+  await page.check('#all-sizes');
+  await page.waitForFunction(() => /^15 pieces/.test(document.querySelector('#piece-count')?.textContent || ''), null, { timeout: 300000 });
+  const allSizes = await page.textContent('#piece-count');
+  await page.uncheck('#all-sizes');
+  await page.waitForFunction(() => /^5 pieces/.test(document.querySelector('#piece-count')?.textContent || ''), null, { timeout: 60000 });
+  step('every size flattened on demand: 5 pieces in 3 sizes', /^15 pieces/.test(allSizes), allSizes);
+
   // 4. The pattern: saved, downloaded, compared with `flatcut run`'s bytes for the saved design.
   await page.click('#save');
   await page.waitForFunction(() => document.querySelector('#saved').textContent === 'saved', null, { timeout: 30000 });
@@ -240,24 +251,96 @@ try {
   step('the nest shows its utilisation', /Utilization [\d.]+ %/.test(util), util.trim().split('\n')[0]);
   await shot('nest');
 
-  // 5. The device: a job streamed to the embedded simulator, its progress events to the end.
+  // 5. The device: sheet 1's job streamed from the panel to the embedded simulator (the default
+  // device, set up as the project's machine), paused and resumed once, watched to its end; then
+  // what the simulator executed is checked against the G-code itself.
   await page.click('#tabs [data-tab=device]');
-  const hasDevice = await page.evaluate(() => !!document.querySelector('#job-start'));
-  if (hasDevice) {
-    await page.click('#job-start');
-    await page.waitForFunction(() => window.__flatcut.lastJob && ['done', 'failed', 'stopped'].includes(window.__flatcut.lastJob.state), null, { timeout: 600000 });
-    const job = await page.evaluate(() => window.__flatcut.lastJob);
-    const progress = events.filter((e) => e.type === 'job' && e.progress);
-    const monotone = progress.every((e, i) => i === 0 || e.progress.lines_done >= progress[i - 1].progress.lines_done);
-    step('a job streams to the embedded simulator, progress to the end', job.state === 'done' && progress.length > 1 && monotone,
-      `${progress.length} progress events, state ${job.state}`);
-    await shot('device');
-  } else {
-    // Not a pass and not hidden: the device panel is unfinished (it waits for the device-session
-    // library), and the test says so on every run.
-    console.log('todo a job streams to the embedded simulator — not built: the device panel waits for the device-session library');
+  await page.waitForSelector('#job-start:not([disabled])', { timeout: 60000 });
+  await page.waitForSelector('#job-svg', { timeout: 120000 });
+  const jobState = () => page.evaluate(() => window.__flatcut.lastJob);
+  await page.click('#job-start');
+  await page.waitForFunction(() => { const j = window.__flatcut.lastJob; return j && j.state === 'running' && j.progress && j.progress.lines_done > 50; }, null, { timeout: 120000 });
+  await page.click('#job-hold');
+  await page.waitForFunction(() => { const j = window.__flatcut.lastJob; return j.state === 'held' && j.progress.machine_state === 'Hold:0'; }, null, { timeout: 30000 });
+  const held = await jobState();
+  await page.waitForTimeout(1000);
+  const still = await jobState();
+  await shot('device');
+  const same = still.progress.lines_done === held.progress.lines_done
+    && still.progress.position.every((v, k) => Math.abs(v - held.progress.position[k]) < 1e-9);
+  step('pause holds the machine where it is', still.state === 'held' && same,
+    `held at line ${held.progress.lines_done} of ${held.progress.lines_total}, ${held.progress.position.map((v) => v.toFixed(2)).join(', ')} mm; 1 s later line ${still.progress.lines_done}`);
+  await page.click('#job-resume');
+  await page.waitForFunction(() => ['done', 'failed', 'stopped'].includes(window.__flatcut.lastJob.state), null, { timeout: 600000 });
+  const job = await jobState();
+  const progress = events.filter((e) => e.type === 'job' && e.id === job.id && e.progress);
+  const monotone = progress.every((e, i) => i === 0 || e.progress.lines_done >= progress[i - 1].progress.lines_done);
+  const resumedAfter = progress.some((e) => e.progress.lines_done > held.progress.lines_done && e.state === 'running');
+  step('a job streams to the embedded simulator, progress to the end', job.state === 'done' && progress.length > 1 && monotone && resumedAfter
+    && job.progress.lines_done === job.progress.lines_total,
+  `${progress.length} progress events, ${job.progress.lines_done} of ${job.progress.lines_total} lines, state ${job.state}: ${job.message}`);
+  const shown = await page.textContent('#job-state');
+  step('the panel says the job is done', shown === 'done', shown);
+  // What the simulator executed, motion by motion, against the G-code's own moves.
+  const [gcode, sim] = await page.evaluate(async () => [
+    await (await fetch('/api/job.gcode?sheet=1')).text(),
+    await (await fetch('/api/devices/sim')).json(),
+  ]);
+  const moves = [];
+  let pos = [0, 0, 0];
+  let mode = null;
+  for (const raw of gcode.split('\n')) {
+    const line = raw.replace(/\(.*?\)/g, '').replace(/;.*/, '').replace(/\s+/g, '').toUpperCase();
+    if (!line) continue;
+    if (/G91(?!\d)/.test(line)) throw new Error('the job uses relative moves; this check reads absolute ones');
+    const g = /G0*([0-3])(?![\d.])/.exec(line);
+    if (g) mode = Number(g[1]);
+    const to = [...pos];
+    let moved = false;
+    for (const [k, ax] of ['X', 'Y', 'Z'].entries()) {
+      const m = new RegExp(`${ax}(-?[\\d.]+)`).exec(line);
+      if (m) { to[k] = Number(m[1]); moved = true; }
+    }
+    if (moved && mode != null && to.some((v, k) => Math.abs(v - pos[k]) > 1e-9)) {
+      moves.push({ text: line, to, length: Math.hypot(...to.map((v, k) => v - pos[k])) });
+      pos = to;
+    }
   }
+  // A line the hold stopped part-way is one motion resumed: its two pieces are joined.
+  const ran = [];
+  for (const m of sim.motions.filter((m) => m.from.some((v, k) => Math.abs(v - m.to[k]) > 1e-9))) {
+    const last = ran[ran.length - 1];
+    if (last && last.line === m.line && last.to.every((v, k) => Math.abs(v - m.from[k]) < 1e-6)) last.to = m.to; else ran.push({ ...m });
+  }
+  const near = (a, b) => a.every((v, k) => Math.abs(v - b[k]) <= 0.01);
+  // Walk both in order: each executed motion is the G-code's next move, at its end point within
+  // 0.01 mm (the machine's step); a move the simulator did not make must be shorter than a
+  // step of the machine (its target rounds to where the machine stands).
+  let i = 0, k = 0, tiny = 0, bad = null;
+  while (i < moves.length && !bad) {
+    if (ran[k] && ran[k].text === moves[i].text && near(ran[k].to, moves[i].to)) { i++; k++; }
+    else if (moves[i].length < 0.01) { tiny++; i++; }
+    else bad = { at: i, ran: ran[k], want: moves[i] };
+  }
+  if (!bad && k < ran.length) bad = { at: i, ran: ran[k], want: 'nothing more' };
+  const end = ran[ran.length - 1]?.to || [NaN, NaN, NaN];
+  step('the simulator executed the G-code\'s moves, each once, in order', !bad && near(end, pos),
+    `${k} motions executed of the G-code's ${moves.length} moves (${tiny} shorter than 0.01 mm, below a step)${bad ? `; first difference at move ${bad.at}: ran ${JSON.stringify(bad.ran)}, the G-code ${JSON.stringify(bad.want)}` : ''}; ended at ${end.map((v) => v.toFixed(3)).join(', ')} mm (the G-code: ${pos.map((v) => v.toFixed(3)).join(', ')})`);
   step('no script error on the page', pageErrors.length === 0, pageErrors.join('; '));
+
+  // 6. Ctrl-C to the server while a job runs: the job stops with the tool off, its journal says
+  // so, and the server ends cleanly.
+  await page.evaluate(() => fetch('/api/jobs', { method: 'POST', headers: { 'content-type': 'application/json' }, body: '{"sheet":2}' }));
+  await page.waitForFunction(() => { const j = window.__flatcut.lastJob; return j && j.sheet === 2 && j.progress && j.progress.lines_done > 50; }, null, { timeout: 120000 });
+  const exited = new Promise((r) => server.on('exit', (c, sig) => r({ c, sig })));
+  server.kill('SIGINT');
+  const ended = await Promise.race([exited, new Promise((r) => setTimeout(() => r(null), 30000))]);
+  const journal = fs.readFileSync(path.join(work, 'job-2.gcode.journal'), 'utf8').trim().split('\n');
+  const stopRecord = journal.filter((l) => l.startsWith('S ')).pop() || '';
+  const done = journal.some((l) => l === 'D');
+  step('Ctrl-C stops the running job with the tool off and ends the server', !!ended && ended.c === 0 && !done
+    && / M5( |$)/.test(stopRecord) && journal.some((l) => l.startsWith('N tool off')),
+  `exit ${ended ? ended.c ?? ended.sig : 'none within 30 s'}; journal ends: ${journal.slice(-3).join(' | ')}`);
 } catch (e) {
   if (!results.length || results[results.length - 1].ok) {
     failed++;
@@ -266,8 +349,10 @@ try {
   code = 1;
 } finally {
   await browser.close().catch(() => {});
-  server.kill('SIGTERM');
-  await new Promise((r) => server.on('exit', r).once ? setTimeout(r, 5000) : r());
+  if (server.exitCode === null && server.signalCode === null) {
+    server.kill('SIGTERM');
+    await new Promise((r) => { server.on('exit', r); setTimeout(r, 5000); });
+  }
   fs.rmSync(work, { recursive: true, force: true });
 }
 console.log(`${passed} passed, ${failed} failed`);

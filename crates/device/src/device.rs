@@ -64,11 +64,13 @@ enum Op {
         feed: f64,
     },
     Command(String),
+    SimReport,
 }
 
 enum Reply {
     Info(ControllerInfo),
     Status(Option<MachineStatus>),
+    Sim(Option<SimReport>),
     Done,
 }
 
@@ -235,6 +237,16 @@ impl Device {
     /// Sends one line (a `$` command, a G-code line) and waits for its `ok`.
     pub fn command(&self, line: &str) -> Result<(), DeviceError> {
         self.op(Op::Command(line.to_string())).map(|_| ())
+    }
+
+    /// What the embedded simulator executed so far (its trace, counters and simulated time)
+    /// without closing it, as [`Device::close`] gives it at the end; `None` on a serial port.
+    /// Refused while a job runs.
+    pub fn sim_report(&self) -> Result<Option<SimReport>, DeviceError> {
+        match self.op(Op::SimReport)? {
+            Reply::Sim(r) => Ok(r),
+            _ => Err(self.closed()),
+        }
     }
 
     /// Starts a job; refused while another runs. Its progress, notices, pauses and questions
@@ -419,6 +431,11 @@ impl Worker {
                 c.command(&line, o.command_timeout)?;
                 Reply::Done
             }
+            Op::SimReport => Reply::Sim(self.sim.as_ref().map(|s| SimReport {
+                trace: s.trace(),
+                stats: s.stats(),
+                sim_time: s.sim_time(),
+            })),
         })
     }
 

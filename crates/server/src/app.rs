@@ -14,6 +14,7 @@ use flatcut::run::{ProjectOutputs, RunOptions};
 use serde_json::json;
 
 use crate::bench::Bench;
+use crate::devices::Devices;
 use crate::events::Events;
 use crate::guard::Guard;
 use crate::task::Slot;
@@ -30,6 +31,8 @@ pub struct Flattened {
 
 /// Everything after the flattening, for one revision: the files `flatcut run` writes.
 pub struct Finished {
+    /// The design revision they were made for.
+    pub revision: u64,
     pub outputs: ProjectOutputs,
 }
 
@@ -38,19 +41,27 @@ pub struct App {
     bench: Mutex<Bench>,
     pub events: Events,
     pub run: RunOptions,
+    /// The live flattening: a graded design's base size (every piece of an ungraded one).
     pub flatten: Mutex<Slot<Flattened>>,
+    /// Every size of a graded design: for the pattern, nest and jobs, and on demand.
+    pub graded: Mutex<Slot<Flattened>>,
     pub finish: Mutex<Slot<Finished>>,
     /// The last regions view: (revision, JSON text).
     pub regions: Mutex<Option<(u64, Arc<String>)>>,
+    /// The device panel: the device open and the jobs streamed to it.
+    pub devices: Devices,
 }
 
 impl App {
     pub fn new(bench: Bench) -> App {
+        let events = Events::default();
         App {
             bench: Mutex::new(bench),
-            events: Events::default(),
+            devices: Devices::new(events.clone()),
+            events,
             run: RunOptions::default(),
             flatten: Mutex::new(Slot::default()),
+            graded: Mutex::new(Slot::default()),
             finish: Mutex::new(Slot::default()),
             regions: Mutex::new(None),
         }

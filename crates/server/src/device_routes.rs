@@ -1,32 +1,377 @@
-//! The device panel's routes: `GET /api/devices`, `POST /api/jobs`, `GET /api/jobs/{id}`.
-//! Not built yet: they answer 501 until the device-session library they stream through exists.
+//! The device panel's routes: the devices (`GET /api/devices`; connect, close, status, unlock,
+//! home, jog, frame), the jobs (`POST /api/jobs`, `GET /api/jobs/{id}`; hold, resume, stop, the
+//! answer to a question) and what the embedded simulator executed. Each blocking call to the
+//! device runs on a blocking thread; the state lives in `devices`.
 
 use std::sync::Arc;
 
+use axum::Json;
 use axum::Router;
+use axum::extract::{Path, State};
 use axum::http::StatusCode;
+use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
+use flatcut::gcode::Profile;
+use flatcut_device::DeviceError;
+use flatcut_device::grbl::{Job, Jog};
+use serde::Deserialize;
+use serde_json::{Value, json};
 
 use crate::app::{ApiError, App};
+use crate::devices::{OpenRequest, PanelError, SIMULATOR, StartJob, Steer};
 
-fn not_yet() -> ApiError {
-    ApiError {
-        status: StatusCode::NOT_IMPLEMENTED,
-        message: "the device panel is not built yet".into(),
+type AppState = State<Arc<App>>;
+
+impl From<PanelError> for ApiError {
+    fn from(e: PanelError) -> ApiError {
+        let status = match &e {
+            PanelError::Busy(_) | PanelError::NotOpen => StatusCode::CONFLICT,
+            PanelError::Bad(_) => StatusCode::BAD_REQUEST,
+            PanelError::NoJob(_) => StatusCode::NOT_FOUND,
+            PanelError::Device(d) => match d {
+                DeviceError::Busy { .. }
+                | DeviceError::NoJob { .. }
+                | DeviceError::NoQuestion(_)
+                | DeviceError::Closed { .. }
+                | DeviceError::Controller(_) => StatusCode::CONFLICT,
+                DeviceError::PortMissing { .. }
+                | DeviceError::Open { .. }
+                | DeviceError::SimConfig(_) => StatusCode::BAD_REQUEST,
+                _ => StatusCode::INTERNAL_SERVER_ERROR,
+            },
+        };
+        ApiError {
+            status,
+            message: chain(&e),
+        }
     }
 }
 
-async fn devices() -> ApiError {
-    not_yet()
+/// An error with its causes, as the command line prints them.
+fn chain(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut src = e.source();
+    while let Some(c) = src {
+        let t = c.to_string();
+        if !s.contains(&t) {
+            s.push_str(": ");
+            s.push_str(&t);
+        }
+        src = c.source();
+    }
+    s
 }
 
-async fn jobs() -> ApiError {
-    not_yet()
+/// Runs a blocking device call off the async threads.
+async fn blocking<T: Send + 'static>(
+    f: impl FnOnce() -> Result<T, ApiError> + Send + 'static,
+) -> Result<T, ApiError> {
+    tokio::task::spawn_blocking(f)
+        .await
+        .map_err(|e| ApiError::internal(format!("the device call stopped: {e}")))?
+}
+
+/// The project's machine profile (the simulator is set up as its machine).
+fn profile(app: &App) -> Result<Profile, ApiError> {
+    let spec = app.bench().opened.project.profile_spec();
+    Profile::resolve(&spec).map_err(|e| ApiError::bad(e.to_string()))
+}
+
+/// A JSON body that may be empty (`POST` with no body means the defaults).
+fn body<T: for<'de> Deserialize<'de> + Default>(bytes: &[u8]) -> Result<T, ApiError> {
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Ok(T::default());
+    }
+    serde_json::from_slice(bytes).map_err(|e| ApiError::bad(format!("the request body: {e}")))
+}
+
+/// `GET /api/devices`.
+async fn devices(State(app): AppState) -> Result<Json<Value>, ApiError> {
+    let project_device = app.bench().opened.project.device.clone();
+    let a = app.clone();
+    blocking(move || Ok(Json(a.devices.list(&project_device)))).await
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct ConnectBody {
+    /// `simulator` or a serial port (default: the project's device).
+    device: Option<String>,
+    baud: Option<u32>,
+    speed: Option<f64>,
+    #[serde(default)]
+    instant: bool,
+}
+
+/// `POST /api/devices/connect`: opens the device and connects (banner, `$I`, `$$`).
+async fn connect(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
+    let b: ConnectBody = body(&raw)?;
+    let project_device = app.bench().opened.project.device.clone();
+    let device = b.device.unwrap_or_else(|| {
+        if project_device.is_simulator() {
+            SIMULATOR.to_string()
+        } else {
+            project_device
+                .port
+                .clone()
+                .unwrap_or_else(|| SIMULATOR.into())
+        }
+    });
+    let req = OpenRequest {
+        device,
+        baud: b.baud.or(project_device.baud),
+        speed: b.speed,
+        instant: b.instant,
+    };
+    let profile = profile(&app)?;
+    let a = app.clone();
+    blocking(move || Ok(Json(a.devices.connect(&req, &profile)?))).await
+}
+
+/// `POST /api/devices/close`: closes the device (a running job stops, tool off); for the
+/// simulator, what it executed.
+async fn close(State(app): AppState, _b: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
+    let a = app.clone();
+    blocking(move || Ok(Json(a.devices.close().unwrap_or(json!({ "closed": null }))))).await
+}
+
+/// `GET /api/devices/status`: the controller's state and position now.
+async fn status(State(app): AppState) -> Result<Json<Value>, ApiError> {
+    let a = app.clone();
+    blocking(move || {
+        let s = a.devices.with_device(|d| d.status())?;
+        Ok(Json(json!({
+            "state": s.map(|s| s.state.name()),
+            "work": s.and_then(|s| s.work),
+            "machine": s.and_then(|s| s.machine),
+        })))
+    })
+    .await
+}
+
+/// `GET /api/devices/sim`: what the open embedded simulator executed so far.
+async fn sim(State(app): AppState) -> Result<Json<Value>, ApiError> {
+    let a = app.clone();
+    blocking(move || Ok(Json(a.devices.sim()?))).await
+}
+
+/// A command between jobs, answered `{ok: true}`.
+async fn command(
+    app: Arc<App>,
+    f: impl FnOnce(&flatcut_device::Device) -> Result<(), DeviceError> + Send + 'static,
+) -> Result<Json<Value>, ApiError> {
+    blocking(move || {
+        app.devices.with_device(f)?;
+        Ok(Json(json!({ "ok": true })))
+    })
+    .await
+}
+
+/// `POST /api/devices/unlock` (`$X`).
+async fn unlock(State(app): AppState, _b: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
+    command(app, |d| d.unlock()).await
+}
+
+/// `POST /api/devices/home` (`$H`).
+async fn home(State(app): AppState, _b: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
+    command(app, |d| d.home()).await
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct JogBody {
+    /// mm per axis.
+    by: [f64; 3],
+    /// mm/min.
+    feed: f64,
+}
+
+/// `POST /api/devices/jog` `{by: [x, y, z], feed}`.
+async fn jog(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
+    let b: JogBody = body(&raw)?;
+    if !(b.feed.is_finite() && b.feed > 0.0) || b.by.iter().any(|v| !v.is_finite()) {
+        return Err(ApiError::bad(
+            "a jog needs finite distances `by` (mm) and a feed > 0 (mm/min)",
+        ));
+    }
+    command(app, move |d| {
+        d.jog(Jog {
+            by: b.by,
+            feed: b.feed,
+        })
+    })
+    .await
+}
+
+/// `POST /api/devices/jog/cancel`.
+async fn jog_cancel(State(app): AppState, _b: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
+    command(app, |d| d.jog_cancel()).await
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct SheetBody {
+    sheet: Option<usize>,
+    /// Frame feed, mm/min.
+    feed: Option<f64>,
+    /// Continue the sheet's job from its journal.
+    #[serde(default)]
+    resume: bool,
+    /// Clear an alarm lock (`$X`) first: only when the machine position is known to be right.
+    #[serde(default)]
+    unlock: bool,
+}
+
+/// Default frame feed, mm/min.
+const FRAME_FEED: f64 = 2000.0;
+
+/// Sheet `n`'s job text (as `flatcut run` writes it) and the revision it was made for.
+async fn sheet_job(app: &Arc<App>, n: usize) -> Result<(String, String, u64), ApiError> {
+    if n == 0 {
+        return Err(ApiError::bad("sheets are numbered from 1"));
+    }
+    let f = crate::solve_routes::finished(app).await?;
+    let name = format!("job-{n}.gcode");
+    let file = f
+        .outputs
+        .files
+        .iter()
+        .find(|x| x.name == name)
+        .ok_or_else(|| ApiError {
+            status: StatusCode::NOT_FOUND,
+            message: format!("the run has no sheet {n}"),
+        })?;
+    let text = String::from_utf8(file.bytes.clone())
+        .map_err(|_| ApiError::internal(format!("{name} is not text")))?;
+    Ok((name, text, f.revision))
+}
+
+/// `POST /api/devices/frame` `{sheet, feed}`: traces the rectangle the sheet's job cuts in,
+/// tool off.
+async fn frame(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
+    let b: SheetBody = body(&raw)?;
+    let (name, text, _) = sheet_job(&app, b.sheet.unwrap_or(1)).await?;
+    let job = Job::parse(&text).map_err(|e| ApiError::bad(format!("{name}: {e}")))?;
+    let Some((lo, hi)) = job.extent else {
+        return Err(ApiError::bad(format!(
+            "{name} moves nowhere: nothing to frame"
+        )));
+    };
+    let feed = b.feed.unwrap_or(FRAME_FEED);
+    if !(feed.is_finite() && feed > 0.0) {
+        return Err(ApiError::bad("the frame's feed must be > 0 mm/min"));
+    }
+    command(app, move |d| d.frame([lo[0], lo[1]], [hi[0], hi[1]], feed)).await
+}
+
+/// `POST /api/jobs` `{sheet, resume, unlock}`: streams the sheet's `job-N.gcode` to the device
+/// open (by default the project's device, the embedded simulator as its machine); 201 with the
+/// job, 409 while another job runs.
+async fn start_job(State(app): AppState, raw: axum::body::Bytes) -> Result<Response, ApiError> {
+    let b: SheetBody = body(&raw)?;
+    let n = b.sheet.unwrap_or(1);
+    let (name, gcode, revision) = sheet_job(&app, n).await?;
+    let (project_device, journal) = {
+        let bench = app.bench();
+        let dir = bench
+            .opened
+            .design_path
+            .parent()
+            .map(std::path::Path::to_path_buf)
+            .unwrap_or_default();
+        (
+            bench.opened.project.device.clone(),
+            dir.join(format!("{name}.journal")),
+        )
+    };
+    let profile = profile(&app)?;
+    let job = StartJob {
+        name,
+        sheet: n,
+        revision,
+        gcode,
+        journal,
+        resume: b.resume,
+        unlock: b.unlock,
+    };
+    let a = app.clone();
+    let view = blocking(move || Ok(a.devices.start(job, &project_device, &profile)?)).await?;
+    Ok((StatusCode::CREATED, Json(view)).into_response())
+}
+
+/// `GET /api/jobs`: the jobs of this session.
+async fn jobs(State(app): AppState) -> Json<Value> {
+    Json(app.devices.jobs())
+}
+
+/// `GET /api/jobs/{id}`.
+async fn job(State(app): AppState, Path(id): Path<u64>) -> Result<Json<Value>, ApiError> {
+    Ok(Json(app.devices.job(id)?))
+}
+
+async fn steer(app: &App, id: u64, what: Steer) -> Result<Json<Value>, ApiError> {
+    Ok(Json(app.devices.steer(id, what)?))
+}
+
+/// `POST /api/jobs/{id}/hold`: feed hold.
+async fn hold(
+    State(app): AppState,
+    Path(id): Path<u64>,
+    _b: axum::body::Bytes,
+) -> Result<Json<Value>, ApiError> {
+    steer(&app, id, Steer::Hold).await
+}
+
+/// `POST /api/jobs/{id}/resume`: cycle start after a hold or the job's own pause.
+async fn resume(
+    State(app): AppState,
+    Path(id): Path<u64>,
+    _b: axum::body::Bytes,
+) -> Result<Json<Value>, ApiError> {
+    steer(&app, id, Steer::Resume).await
+}
+
+/// `POST /api/jobs/{id}/stop`: feed hold, soft reset, tool off; the journal says what ran.
+async fn stop(
+    State(app): AppState,
+    Path(id): Path<u64>,
+    _b: axum::body::Bytes,
+) -> Result<Json<Value>, ApiError> {
+    steer(&app, id, Steer::Stop).await
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AnswerBody {
+    question: u64,
+    yes: bool,
+}
+
+/// `POST /api/jobs/{id}/answer` `{question, yes}`.
+async fn answer(
+    State(app): AppState,
+    Path(id): Path<u64>,
+    Json(b): Json<AnswerBody>,
+) -> Result<Json<Value>, ApiError> {
+    Ok(Json(app.devices.answer(id, b.question, b.yes)?))
 }
 
 pub fn routes() -> Router<Arc<App>> {
     Router::new()
         .route("/api/devices", get(devices))
-        .route("/api/jobs", post(jobs))
-        .route("/api/jobs/{id}", get(jobs))
+        .route("/api/devices/connect", post(connect))
+        .route("/api/devices/close", post(close))
+        .route("/api/devices/status", get(status))
+        .route("/api/devices/sim", get(sim))
+        .route("/api/devices/unlock", post(unlock))
+        .route("/api/devices/home", post(home))
+        .route("/api/devices/jog", post(jog))
+        .route("/api/devices/jog/cancel", post(jog_cancel))
+        .route("/api/devices/frame", post(frame))
+        .route("/api/jobs", post(start_job).get(jobs))
+        .route("/api/jobs/{id}", get(job))
+        .route("/api/jobs/{id}/hold", post(hold))
+        .route("/api/jobs/{id}/resume", post(resume))
+        .route("/api/jobs/{id}/stop", post(stop))
+        .route("/api/jobs/{id}/answer", post(answer))
 }

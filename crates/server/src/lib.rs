@@ -11,19 +11,22 @@
 //! the server (DNS rebinding); bodies are limited to 32 MiB (413 beyond); only the embedded
 //! assets are served (no path reaches the disk); a design the loader refuses is 400 with the
 //! loader's located message and changes nothing; stopping the server (Ctrl-C, SIGTERM) cancels
-//! any solve.
+//! any solve and stops a running job with the tool off (its journal written).
 //!
 //! Module map: `opened` (what was opened), `document` (the TOML edited in place), `bench` (the
 //! design state: undo, redo, save), `edit` (lines and regions as tree edits), `views` (the
 //! JSON the page draws), `task` (per-revision computations), `events` (server-sent events),
 //! `guard` (host, token), `assets` (the page), `app` (state and routes), `design_routes`,
-//! `solve_routes`, `device_routes` (the handlers).
+//! `solve_routes`, `device_routes` (the handlers), `devices` (the device panel's state: the
+//! device open, its jobs, its events), `device_views` (their JSON).
 
 pub mod app;
 pub mod assets;
 pub mod bench;
 pub mod design_routes;
 pub mod device_routes;
+pub mod device_views;
+pub mod devices;
 pub mod document;
 pub mod edit;
 pub mod events;
@@ -176,7 +179,12 @@ impl Server {
             shutdown.await;
             app.events.close();
             app::lock(&app.flatten).cancel();
+            app::lock(&app.graded).cancel();
             app::lock(&app.finish).cancel();
+            // A running job stops with the tool off and its journal written before the
+            // server ends.
+            let closing = app.clone();
+            let _ = tokio::task::spawn_blocking(move || closing.devices.close()).await;
             let _ = stop_tx.send(true);
         });
         let mut servers = Vec::new();
@@ -198,45 +206,35 @@ impl Server {
     }
 }
 
-/// Runs `flatcut serve` to the end: a runtime of its own, the server, and Ctrl-C or SIGTERM to
-/// stop it. `started` is told where it listens before the first request is taken.
-pub fn run(opts: &ServeOptions, started: impl FnOnce(&Listening)) -> Result<(), ServeError> {
+/// Runs `flatcut serve` to the end: a runtime of its own, the server, until `wait_for_stop`
+/// returns (the binary passes its Ctrl-C, SIGTERM and SIGHUP handler's wait: signals belong to
+/// the program). `started` is told where it listens before the first request is taken. A job
+/// running then is stopped with the tool off before this returns.
+pub fn run(
+    opts: &ServeOptions,
+    started: impl FnOnce(&Listening),
+    wait_for_stop: impl FnOnce() + Send + 'static,
+) -> Result<(), ServeError> {
     let rt = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()?;
     rt.block_on(async {
         let server = Server::bind(opts).await?;
         started(&server.listening);
-        server.run(stop_signal()).await
+        let (tx, rx) = tokio::sync::oneshot::channel::<()>();
+        // A thread of its own: the wait blocks, and it is not the runtime's to wait for.
+        std::thread::Builder::new()
+            .name("flatcut-serve-stop".into())
+            .spawn(move || {
+                wait_for_stop();
+                let _ = tx.send(());
+            })?;
+        server
+            .run(async move {
+                let _ = rx.await;
+            })
+            .await
     })
-}
-
-/// Completes on Ctrl-C, SIGTERM or SIGHUP.
-async fn stop_signal() {
-    use tokio::signal::unix::{SignalKind, signal};
-    let mut term = signal(SignalKind::terminate()).ok();
-    let mut hup = signal(SignalKind::hangup()).ok();
-    let term = async {
-        match term.as_mut() {
-            Some(s) => {
-                s.recv().await;
-            }
-            None => std::future::pending().await,
-        }
-    };
-    let hup = async {
-        match hup.as_mut() {
-            Some(s) => {
-                s.recv().await;
-            }
-            None => std::future::pending().await,
-        }
-    };
-    tokio::select! {
-        _ = tokio::signal::ctrl_c() => {}
-        _ = term => {}
-        _ = hup => {}
-    }
 }
 
 /// A server running on a thread of its own (for tests and embedding): where it listens, and how

@@ -12,8 +12,10 @@ use std::time::Instant;
 use axum::extract::{Query, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
+use flatcut::design::Design;
 use flatcut::flatten::{FlattenError, FlattenHooks};
 use flatcut::pipeline::PipelineError;
+use flatcut::project::Project;
 use flatcut::run::{Event, RunError};
 use serde::Deserialize;
 use serde_json::json;
@@ -72,15 +74,57 @@ fn observer(events: Events) -> impl FnMut(&Event<'_>) {
     }
 }
 
-/// Starts (or joins) the flattening of the design as it is now and waits for it.
-pub async fn flattened(app: &Arc<App>) -> Result<Arc<Flattened>, ApiError> {
+/// Which sizes of a graded design a flattening covers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sizes {
+    /// The base size alone: what the page shows live after every edit (a graded design's
+    /// other sizes are the base scaled, so its lines, regions and strains are the base's).
+    Base,
+    /// Every size, as `flatcut run` flattens them: the pattern, nest and jobs, and on demand.
+    All,
+}
+
+/// The design and project to flatten for `sizes`: for the base size alone, the grading keeps
+/// only its base size and the project's `[order]` only that size (so its pieces are named and
+/// reported as in the graded run, `<piece> <base>`). `None`: the design is not graded, so the
+/// base is every size.
+fn base_only(design: &Design, project: &Project) -> Option<(Design, Project)> {
+    let g = design.grading.as_ref()?;
+    if !g.sizes.iter().any(|z| z.name == g.base) {
+        return None;
+    }
+    let mut d = design.clone();
+    let mut p = project.clone();
+    if let Some(g) = d.grading.as_mut() {
+        let base = g.base.clone();
+        g.sizes.retain(|z| z.name == base);
+        if let Some(order) = p.order.as_mut() {
+            order.retain(|size, _| *size == base);
+        }
+    }
+    Some((d, p))
+}
+
+/// Starts (or joins) the flattening of the design as it is now, in `sizes`, and waits for it.
+/// An ungraded design has one flattening for both.
+pub async fn flattened(app: &Arc<App>, sizes: Sizes) -> Result<Arc<Flattened>, ApiError> {
     let (design, project, revision) = {
         let b = app.bench();
         (b.design().clone(), b.opened.project.clone(), b.revision())
     };
+    let all_sizes: Vec<String> = design
+        .grading
+        .as_ref()
+        .map(|g| g.sizes.iter().map(|z| z.name.clone()).collect())
+        .unwrap_or_default();
+    let (design, project, slot) = match (sizes, base_only(&design, &project)) {
+        (Sizes::Base, Some((d, p))) => (d, p, &app.flatten),
+        (Sizes::All, Some(_)) => (design, project, &app.graded),
+        (_, None) => (design, project, &app.flatten),
+    };
     let events = app.events.clone();
     let opts = app.run.clone();
-    let rx = lock(&app.flatten).get_or_start(revision, move |cancel: Arc<AtomicBool>| {
+    let rx = lock(slot).get_or_start(revision, move |cancel: Arc<AtomicBool>| {
         let t0 = Instant::now();
         let progress_events = events.clone();
         let hooks = FlattenHooks::default()
@@ -106,17 +150,18 @@ pub async fn flattened(app: &Arc<App>) -> Result<Arc<Flattened>, ApiError> {
             project.material.max_stretch_pct,
             project.material.max_compress_pct,
         );
-        let view = crate::views::flatten_view(
-            &design,
-            &flats,
-            &mating,
-            limits,
-            revision,
-            t0.elapsed().as_secs_f64(),
-        );
+        let elapsed = t0.elapsed().as_secs_f64();
+        let mut view =
+            crate::views::flatten_view(&design, &flats, &mating, limits, revision, elapsed);
+        view["sizes"] = json!(all_sizes);
         events.publish(
             "flattened",
-            json!({ "revision": revision, "pieces": flats.len(), "elapsed_s": t0.elapsed().as_secs_f64() }),
+            json!({
+                "revision": revision,
+                "pieces": flats.len(),
+                "sizes": view["sizes"],
+                "elapsed_s": elapsed,
+            }),
         );
         Ok(Flattened {
             revision,
@@ -133,14 +178,34 @@ pub fn prefetch(app: &Arc<App>) {
     let app = app.clone();
     tokio::spawn(async move {
         // A failure is the page's to hear when it asks.
-        let _ = flattened(&app).await;
+        let _ = flattened(&app, Sizes::Base).await;
     });
 }
 
-/// `POST /api/flatten`: every piece flattened within the project's limits, with its figures, heat
-/// map and meshes, and the mating seams (see API.md for the keys).
-pub async fn flatten(State(app): AppState, _body: Unread) -> Result<Response, ApiError> {
-    let f = flattened(&app).await?;
+#[derive(Deserialize)]
+pub struct FlattenQuery {
+    /// `all`: every size of a graded design (default: the base size, the live preview).
+    sizes: Option<String>,
+}
+
+/// `POST /api/flatten[?sizes=all]`: every piece flattened within the project's limits, with its
+/// figures, heat map and meshes, and the mating seams (see API.md for the keys); of a graded
+/// design the base size, or with `sizes=all` every size.
+pub async fn flatten(
+    State(app): AppState,
+    Query(q): Query<FlattenQuery>,
+    _body: Unread,
+) -> Result<Response, ApiError> {
+    let sizes = match q.sizes.as_deref() {
+        None | Some("base") => Sizes::Base,
+        Some("all") => Sizes::All,
+        Some(other) => {
+            return Err(ApiError::bad(format!(
+                "sizes={other}: `base` (the default) or `all`"
+            )));
+        }
+    };
+    let f = flattened(&app, sizes).await?;
     Ok((
         [
             (header::CONTENT_TYPE, "application/json".to_string()),
@@ -157,22 +222,24 @@ pub async fn flatten(State(app): AppState, _body: Unread) -> Result<Response, Ap
 /// `POST /api/flatten/cancel`: stops the running solve (and nest).
 pub async fn cancel(State(app): AppState, _body: Unread) -> axum::Json<serde_json::Value> {
     let a = lock(&app.flatten).cancel();
+    let g = lock(&app.graded).cancel();
     let b = lock(&app.finish).cancel();
-    axum::Json(json!({ "cancelled": a || b }))
+    axum::Json(json!({ "cancelled": a || g || b }))
 }
 
 /// Every stage after the flattening for the design as it is now.
-async fn finished(app: &Arc<App>) -> Result<Arc<Finished>, ApiError> {
-    let flat = flattened(app).await?;
+pub(crate) async fn finished(app: &Arc<App>) -> Result<Arc<Finished>, ApiError> {
+    let flat = flattened(app, Sizes::All).await?;
     let project = app.bench().opened.project.clone();
     let events = app.events.clone();
     let opts = app.run.clone();
     let flats = flat.flats.clone();
-    let rx = lock(&app.finish).get_or_start(flat.revision, move |_cancel| {
+    let revision = flat.revision;
+    let rx = lock(&app.finish).get_or_start(revision, move |_cancel| {
         let mut obs = observer(events);
         let outputs =
             flatcut::run::finish_project(&project, flats, &opts, &mut obs).map_err(run_error)?;
-        Ok(Finished { outputs })
+        Ok(Finished { revision, outputs })
     });
     task::wait(rx).await
 }

@@ -1,5 +1,210 @@
-// The device panel. Not built yet: it needs the device-session library.
+// The device panel: the devices (serial ports and the embedded simulator, the project's own
+// first), connect, unlock, home, jog and frame; a sheet's job started, paused, resumed and
+// stopped, with its progress, ETA and the live position drawn over the sheet's layout; the
+// sender's questions (a resume whose machine position is unknown, an edited job) asked here.
+// Every page follows the same device and job through the `device` and `job` events.
 
-export function devicePanel(el) {
-  el.innerHTML = '<p class="muted">The device panel is not built yet.</p>';
+const esc = (s) => String(s).replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' }[c]));
+const mm = (p) => (p ? `X ${p[0].toFixed(2)}  Y ${p[1].toFixed(2)}  Z ${p[2].toFixed(2)}` : '–');
+const SVG = 'http://www.w3.org/2000/svg';
+
+function secs(s) {
+  if (s == null) return '–';
+  const m = Math.floor(s / 60);
+  return m ? `${m} min ${Math.round(s - 60 * m)} s` : `${s.toFixed(1)} s`;
+}
+
+/** The panel in `el`; `hooks` (the page's script hooks) get `onDevice`, `onJob` and `lastJob`. */
+export async function devicePanel(el, api, hooks) {
+  el.innerHTML = `<h3>Device</h3>
+    <div class="row"><select id="dev-select" aria-label="device"></select>
+      <label title="Time scale of the embedded simulator (1: real time)">speed <input id="dev-speed" type="number" min="0.1" max="1000" step="any" value="50" style="width:5em"></label>
+      <button id="dev-connect">Connect</button><button id="dev-close">Disconnect</button></div>
+    <p id="dev-state" class="dev-pos">not connected</p>
+    <div class="row"><button id="dev-unlock" title="Clear an alarm lock ($X): only when the position is known to be right">Unlock</button>
+      <button id="dev-home" title="Home the machine ($H)">Home</button>
+      <span>Jog <select id="jog-step" aria-label="jog step">${[0.1, 1, 10, 50].map((s) => `<option ${s === 10 ? 'selected' : ''}>${s}</option>`).join('')}</select> mm</span>
+      ${['X-', 'X+', 'Y-', 'Y+', 'Z-', 'Z+'].map((a) => `<button data-jog="${a}">${a.replace('-', '−')}</button>`).join('')}
+      <button id="dev-frame" title="Trace the rectangle the sheet's job cuts in, tool off">Frame</button></div>
+    <h3>Job</h3>
+    <div class="row">Sheet <select id="job-sheet"></select>
+      <label title="Continue the sheet's job from its journal after a stop"><input type="checkbox" id="job-resume-journal"> resume from the journal</label></div>
+    <div class="row"><button id="job-start">Start</button><button id="job-hold">Pause</button>
+      <button id="job-resume">Resume</button><button id="job-stop" title="Feed hold, soft reset, tool off">Stop</button></div>
+    <div class="row"><progress id="job-progress" max="1" value="0"></progress><span id="job-text" class="muted">no job</span></div>
+    <div id="job-question" hidden></div>
+    <div id="job-notices"></div>
+    <div id="job-view" class="drawing job-view"></div>`;
+  const $ = (id) => el.querySelector(`#${id}`);
+  let info;
+  try {
+    info = await api('GET', '/api/devices');
+  } catch (e) {
+    $('dev-state').textContent = e.message;
+    return;
+  }
+  const sel = $('dev-select');
+  const ids = info.devices.map((d) => d.id);
+  const order = [info.project_device, ...ids.filter((i) => i !== info.project_device)];
+  sel.innerHTML = order.filter((id) => ids.includes(id)).map((id) => {
+    const d = info.devices.find((x) => x.id === id);
+    const label = d.kind === 'simulator' ? 'embedded simulator (GRBL 1.1h)' : `${d.id} (${d.description})`;
+    return `<option value="${esc(d.id)}">${esc(label)}${id === info.project_device ? ' · the project\'s' : ''}</option>`;
+  }).join('');
+  if (info.open.open) sel.value = info.open.id;
+
+  let sheets = 1;
+  try { sheets = Math.max(1, (await api('GET', '/api/summary.json')).sheets); } catch { /* the run's error shows on start */ }
+  $('job-sheet').innerHTML = Array.from({ length: sheets }, (_, i) => `<option>${i + 1}</option>`).join('');
+
+  const view = { sheet: null, height: 0, dot: null };
+  async function showSheet(n) {
+    if (view.sheet === n) return;
+    view.sheet = n;
+    const box = $('job-view');
+    box.textContent = 'loading the layout…';
+    try {
+      const text = await api('GET', `/api/layout.svg?sheet=${n}`);
+      const svg = new DOMParser().parseFromString(text, 'image/svg+xml').documentElement;
+      const vb = (svg.getAttribute('viewBox') || '0 0 0 0').split(/\s+/).map(Number);
+      view.height = vb[3];
+      svg.removeAttribute('width');
+      svg.removeAttribute('height');
+      svg.setAttribute('id', 'job-svg');
+      // Where the tool is, over the layout (machine y is up, the drawing's down).
+      const g = document.createElementNS(SVG, 'g');
+      g.setAttribute('id', 'job-overlay');
+      g.setAttribute('visibility', 'hidden');
+      g.innerHTML = '<circle r="6" fill="none" stroke="#3b82c4" stroke-width="1.5"/><path d="M-10 0H10M0-10V10" stroke="#3b82c4" stroke-width="1"/><circle r="2" fill="#3b82c4"/>';
+      svg.append(g);
+      box.replaceChildren(document.importNode(svg, true));
+      view.dot = box.querySelector('#job-overlay');
+    } catch (e) {
+      box.textContent = e.message;
+    }
+  }
+  function mark(p) {
+    if (!p || !view.dot) return;
+    view.dot.setAttribute('transform', `translate(${p[0]} ${view.height - p[1]})`);
+    view.dot.setAttribute('visibility', 'visible');
+  }
+
+  let job = info.job;
+  let device = info.open;
+  const busy = () => job && !['done', 'failed', 'stopped'].includes(job.state);
+
+  function drawDevice() {
+    const d = device;
+    const open = d && d.open;
+    const st = open && d.status;
+    $('dev-state').textContent = open
+      ? `${d.description}${d.controller ? `, GRBL ${d.controller.version}` : ''} · ${st ? `${st.state} · ${mm(st.work)}` : 'connected'}`
+      : (d && d.message) || 'not connected';
+    $('dev-close').disabled = !open;
+    for (const id of ['dev-unlock', 'dev-home', 'dev-frame']) $(id).disabled = !open || busy();
+    for (const b of el.querySelectorAll('[data-jog]')) b.disabled = !open || busy();
+    $('dev-speed').disabled = sel.value !== 'simulator';
+    if (st && !busy() && st.work) mark(st.work);
+  }
+
+  function drawJob() {
+    const j = job;
+    hooks.lastJob = j;
+    const running = busy();
+    $('job-start').disabled = running;
+    $('job-hold').disabled = !running || j.state !== 'running';
+    $('job-resume').disabled = !running || !['held', 'paused'].includes(j.state);
+    $('job-stop').disabled = !running;
+    if (!j) return;
+    if (String(j.sheet) !== $('job-sheet').value && running) $('job-sheet').value = String(j.sheet);
+    const p = j.progress;
+    const frac = p ? p.fraction : 0;
+    $('job-progress').value = frac;
+    const what = {
+      running: 'running', held: 'paused (feed hold)', paused: 'paused by the job', asking: 'waiting for your answer',
+      done: 'done', failed: 'failed', stopped: 'stopped (tool off)',
+    }[j.state] || j.state;
+    $('job-text').innerHTML = `<strong id="job-state">${esc(what)}</strong> · ${esc(j.name)}
+      ${p ? ` · line ${p.lines_done} of ${p.lines_total} · ${(100 * frac).toFixed(1)} % of the path · ETA ${secs(p.eta_s)} · <span class="dev-pos">${mm(p.position)}</span>` : ''}
+      ${j.message && j.state !== 'done' ? `<br><span class="${j.state === 'failed' ? 'over' : 'muted'}">${esc(j.message)}</span>` : ''}`;
+    const q = $('job-question');
+    if (j.question) {
+      q.hidden = false;
+      q.innerHTML = `<p class="question">${esc(j.question.text).replace(/\n/g, '<br>')}</p>
+        <div class="row"><strong>${esc(j.question.prompt.replace(/\s*\[y\/N\]\s*$/, ''))}</strong>
+        <button id="answer-yes">Yes</button><button id="answer-no">No (stop)</button></div>`;
+      const answer = (yes) => act('POST', `/api/jobs/${j.id}/answer`, { question: j.question.id, yes });
+      q.querySelector('#answer-yes').addEventListener('click', () => answer(true));
+      q.querySelector('#answer-no').addEventListener('click', () => answer(false));
+    } else {
+      q.hidden = true;
+      q.innerHTML = '';
+    }
+    $('job-notices').innerHTML = j.notices.map((n) => `<p class="muted">${esc(n)}</p>`).join('');
+    if (p && p.position) mark(p.position);
+    drawDevice();
+  }
+
+  async function act(method, path, body) {
+    try {
+      return await api(method, path, body);
+    } catch (e) {
+      $('job-text').innerHTML = `<span class="over">${esc(e.message)}</span>`;
+      return null;
+    }
+  }
+
+  hooks.onDevice = (d) => {
+    if (d.event === 'restarted') { $('job-notices').insertAdjacentHTML('beforeend', `<p class="over">${esc(d.message)}</p>`); return; }
+    device = d;
+    drawDevice();
+  };
+  hooks.onJob = (j) => {
+    if (job && j.id < job.id) return;
+    if (!job || j.id !== job.id) showSheet(j.sheet);
+    job = j;
+    drawJob();
+  };
+
+  const connectBody = () => ({ device: sel.value, ...(sel.value === 'simulator' ? { speed: Number($('dev-speed').value) || 50 } : {}) });
+  $('dev-connect').addEventListener('click', async () => {
+    $('dev-state').textContent = 'connecting…';
+    const d = await act('POST', '/api/devices/connect', connectBody());
+    if (d) { device = d; drawDevice(); }
+  });
+  $('dev-close').addEventListener('click', () => act('POST', '/api/devices/close'));
+  $('dev-unlock').addEventListener('click', () => act('POST', '/api/devices/unlock'));
+  $('dev-home').addEventListener('click', () => act('POST', '/api/devices/home'));
+  $('dev-frame').addEventListener('click', () => act('POST', '/api/devices/frame', { sheet: Number($('job-sheet').value) }));
+  for (const b of el.querySelectorAll('[data-jog]')) {
+    b.addEventListener('click', () => {
+      const step = Number($('jog-step').value);
+      const by = [0, 0, 0];
+      by['XYZ'.indexOf(b.dataset.jog[0])] = b.dataset.jog[1] === '+' ? step : -step;
+      act('POST', '/api/devices/jog', { by, feed: b.dataset.jog[0] === 'Z' ? 300 : 2000 });
+    });
+  }
+  $('job-sheet').addEventListener('change', () => showSheet(Number($('job-sheet').value)));
+  $('job-start').addEventListener('click', async () => {
+    const sheet = Number($('job-sheet').value);
+    await showSheet(sheet);
+    // Opening the simulator at the speed asked for, unless a device is open.
+    if (!(device && device.open)) {
+      $('job-text').textContent = 'connecting…';
+      const d = await act('POST', '/api/devices/connect', connectBody());
+      if (!d) return;
+      device = d;
+    }
+    $('job-text').textContent = 'preparing the job…';
+    const j = await act('POST', '/api/jobs', { sheet, resume: $('job-resume-journal').checked });
+    if (j && (!job || j.id >= job.id)) { job = j; drawJob(); }
+  });
+  $('job-hold').addEventListener('click', () => job && act('POST', `/api/jobs/${job.id}/hold`));
+  $('job-resume').addEventListener('click', () => job && act('POST', `/api/jobs/${job.id}/resume`));
+  $('job-stop').addEventListener('click', () => job && act('POST', `/api/jobs/${job.id}/stop`));
+  sel.addEventListener('change', drawDevice);
+
+  await showSheet(job ? job.sheet : 1);
+  drawDevice();
+  if (job) drawJob(); else { hooks.lastJob = null; $('job-hold').disabled = $('job-resume').disabled = $('job-stop').disabled = true; }
 }

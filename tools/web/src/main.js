@@ -109,15 +109,18 @@ async function flatten() {
   status('flattening…');
   progress(0, 0);
   try {
-    const view = await api('POST', '/api/flatten');
-    if (view.revision < state.drawnFlat) return;
+    const all = $('all-sizes').checked;
+    const view = await api('POST', `/api/flatten${all ? '?sizes=all' : ''}`);
+    if (view.revision < state.drawnFlat || all !== $('all-sizes').checked) return;
     state.flat = view;
     state.drawnFlat = view.revision;
     state.scale = heatScale(view.pieces);
     state.stops = view.colour_map;
     if (!view.pieces.some((p) => p.name === state.selected)) state.selected = view.pieces[0]?.name ?? null;
     drawPieces(false);
-    status(`${view.pieces.length} pieces · ${view.elapsed_s.toFixed(2)} s`);
+    $('sizes-box').hidden = view.sizes.length < 2;
+    const base = view.sizes.length > 1 && !all ? view.pieces[0]?.size : null;
+    status(`${view.pieces.length} pieces${base ? ` in size ${base} of ${view.sizes.join(', ')}` : ''} · ${view.elapsed_s.toFixed(2)} s`);
     if (state.pendingClose && view.revision >= state.pendingClose.revision) {
       // The heat map of the new pieces is on the surface once this frame is drawn.
       const t0 = state.pendingClose.t0;
@@ -437,6 +440,7 @@ $('redo').addEventListener('click', redo);
 $('save').addEventListener('click', save);
 $('cancel').addEventListener('click', () => api('POST', '/api/flatten/cancel'));
 $('colour').addEventListener('change', (e) => v3.setMode(e.target.value));
+$('all-sizes').addEventListener('change', () => { state.drawnFlat = 0; flatten(); });
 for (const b of document.querySelectorAll('[data-tool]')) b.addEventListener('click', () => setTool(b.dataset.tool));
 
 function setTab(t) {
@@ -447,7 +451,7 @@ function setTab(t) {
   document.querySelector('main').classList.toggle('wide-side', ['pattern', 'nest', 'device'].includes(t));
   if (t === 'pattern') patternPanel($('tab-pattern'), state.drawnFlat);
   if (t === 'nest') nestPanel($('tab-nest'), state.drawnFlat, api);
-  if (t === 'device') devicePanel($('tab-device'), api);
+  if (t === 'device') devicePanel($('tab-device'), api, hooks);
 }
 for (const b of document.querySelectorAll('[data-tab]')) b.addEventListener('click', () => setTab(b.dataset.tab));
 hooks.setTab = setTab;

@@ -27,7 +27,9 @@ export function piecesPanel(el, view, selected, onSelect, onDarts) {
     ? `Material limits: stretch ${pct(p0.limit_stretch_pct)}, compression ${pct(p0.limit_compress_pct)}.`
     : 'No material limits in this project: the colours run to the largest strain.';
   const sel = view.pieces.find((p) => p.name === selected);
-  el.innerHTML = `<p id="piece-count">${view.pieces.length} pieces, flattened in ${view.elapsed_s.toFixed(2)} s (revision ${view.revision}).</p>
+  const graded = view.sizes.length > 1 && view.pieces.every((p) => p.size === view.pieces[0]?.size)
+    ? ` in size ${esc(view.pieces[0]?.size)}, the base of ${esc(view.sizes.join(', '))} (the others are graded for the pattern, nest and jobs; tick “all sizes” to see them)` : '';
+  el.innerHTML = `<p id="piece-count">${view.pieces.length} pieces${graded}, flattened in ${view.elapsed_s.toFixed(2)} s (revision ${view.revision}).</p>
     <p class="muted">${limits}</p>
     <table><thead><tr><th>piece</th><th>stretch</th><th>compress</th><th>cm²</th><th>darts</th><th>limits</th></tr></thead>
     <tbody>${rows}</tbody></table>${sel ? detail(sel) : ''}`;

@@ -29,21 +29,27 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         port: a.port,
         bind: a.bind,
     };
-    flatcut_server::run(&opts, |l| {
-        let mut text = String::new();
-        for addr in &l.addrs {
-            text.push_str(&format!("listening on {addr}\n"));
-        }
-        if let Some(t) = &l.token {
-            text.push_str(&format!("token (send it with every request): {t}\n"));
-        }
-        text.push_str(&format!("workbench: {}\nCtrl-C stops it\n", l.url));
-        // A closed standard output does not stop the server: its address is printed, or not.
-        let _ = crate::stdout::write(format_args!("{text}"));
-        if a.open {
-            open_browser(&l.url);
-        }
-    })?;
+    // Ctrl-C (SIGTERM, SIGHUP) comes through the binary's one handler: it stops the server,
+    // which stops a running job with the tool off.
+    flatcut_server::run(
+        &opts,
+        |l| {
+            let mut text = String::new();
+            for addr in &l.addrs {
+                text.push_str(&format!("listening on {addr}\n"));
+            }
+            if let Some(t) = &l.token {
+                text.push_str(&format!("token (send it with every request): {t}\n"));
+            }
+            text.push_str(&format!("workbench: {}\nCtrl-C stops it\n", l.url));
+            // A closed standard output does not stop the server: its address is printed, or not.
+            let _ = crate::stdout::write(format_args!("{text}"));
+            if a.open {
+                open_browser(&l.url);
+            }
+        },
+        super::device::wait_for_interrupt,
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 
