@@ -273,7 +273,7 @@ fn singular(d: &flatcut_surface::SurfaceDerivs) -> bool {
 }
 
 /// The fundamental forms at (u, v); at a singular point (a pole) their limit, evaluated a
-/// [`POLE_NUDGE`] step toward the domain's centre. `None` where the surface is singular on a
+/// `POLE_NUDGE` step toward the domain's centre. `None` where the surface is singular on a
 /// whole neighbourhood (a degenerate patch).
 pub fn forms_at(s: &dyn ParamSurface, u: f64, v: f64) -> Option<FundamentalForms> {
     let dd = s.deriv2(u, v);
