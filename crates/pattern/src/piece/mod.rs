@@ -2,7 +2,7 @@
 //! allowance, notches at match marks, drill holes, the grain line and a label.
 //!
 //! Input is a flattened boundary (closed polyline in mm, counter-clockwise) with marks; the
-//! piece is built by [`Piece::build`] and turned into a [`Drawing`] by [`Piece::to_drawing`].
+//! piece is built by [`Piece::build`] and turned into a [`Drawing`](crate::Drawing) by [`Piece::to_drawing`].
 //! Allowances by edge: named stretches of the outline ([`EdgeAllowance`]) carry their own width
 //! and kind (seam, hem, fold, lasting, raw); the rest of the outline takes
 //! [`PieceOptions::default_seam`].
@@ -343,10 +343,10 @@ fn check_numbers(input: &PieceInput, opts: &PieceOptions) -> Result<(), PatternE
 
 impl Piece {
     /// Builds a piece; errors name the piece and what is wrong. The steps: the outline cleaned
-    /// ([`outline`]), the outline's edges given their allowances ([`edges`]), the sew line
-    /// fitted ([`sew`]), the allowance added ([`allowance`]), the marks and internal lines placed
-    /// ([`marks`]), the lasting edges labelled ([`edge_marks`]) and the label laid out
-    /// ([`label`]).
+    /// (`outline`), the outline's edges given their allowances (`edges`), the sew line
+    /// fitted (`sew`), the allowance added (`allowance`), the marks and internal lines placed
+    /// (`marks`), the lasting edges labelled (`edge_marks`) and the label laid out
+    /// (`label`).
     pub fn build(input: &PieceInput, opts: &PieceOptions) -> Result<Piece, PatternError> {
         check_numbers(input, opts)?;
         let outline = outline::Outline::clean(&input.name, &input.outline)?;
