@@ -11,6 +11,7 @@
 //!
 //! Coordinates are millimetres in the caller's frame: text runs along a unit direction from an
 //! origin on its baseline, with a given cap height. No IO.
+#![warn(missing_docs)]
 
 mod compose;
 mod hershey;
