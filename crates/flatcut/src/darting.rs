@@ -15,7 +15,7 @@ use flatcut_geom::{DVec2, DVec3};
 use flatcut_mesh::TriMesh;
 use flatcut_report::DartReport;
 
-use crate::pipeline::PipelineError;
+use crate::error::PipelineError;
 
 /// How darts are placed when they are asked for.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -15,6 +15,7 @@ pub mod emit;
 pub mod hpgl;
 pub mod knife;
 pub mod marking;
+pub mod moves;
 pub mod order;
 pub mod plan;
 pub mod profile;

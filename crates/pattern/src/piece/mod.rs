@@ -23,16 +23,19 @@ mod sew;
 #[cfg(test)]
 mod tests;
 
+pub use crate::label_info::LabelInfo;
+pub use crate::placement::Placement;
 pub use edges::{EdgeAllowance, EdgeKind};
 pub use grain_line::grain_line_along;
 pub use label::short_code;
 pub use orient::orientation;
-pub use placement::{PlacedPiece, Placement};
+pub use placement::PlacedPiece;
 
 use crate::PatternError;
+use crate::corner::CornerStyle;
 use crate::fit::{self, PathSeg};
 use crate::poly;
-use crate::seam::{self, CornerStyle};
+use crate::seam;
 use flatcut_geom::{Aabb2, DVec2};
 use serde::{Deserialize, Serialize};
 
@@ -57,21 +60,6 @@ pub struct Mark {
     /// Index of the outline vertex the mark sits on, when it lies on the boundary (notches,
     /// seam ends). Notches without it snap to the nearest outline vertex.
     pub boundary_index: Option<usize>,
-}
-
-/// Label content.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct LabelInfo {
-    pub name: String,
-    pub size: String,
-    pub material: String,
-    pub quantity: u32,
-    /// One-line distortion summary from the flattening report (e.g. "AREA 1.2% MAX 3.4%").
-    pub distortion: Option<String>,
-    /// The short code written where the piece has no room for a readable label (`None`: the
-    /// initials of the name, [`Piece::label_code`]).
-    #[serde(default)]
-    pub code: Option<String>,
 }
 
 /// Everything a piece is built from.
