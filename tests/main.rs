@@ -7,6 +7,7 @@ mod darts;
 mod dxf;
 mod fuzz;
 mod genus;
+mod guide;
 mod hpgl;
 mod licences;
 mod material;

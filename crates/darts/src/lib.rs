@@ -16,6 +16,7 @@
 //! **Architecture invariant:** the flattening itself is the flattener's (its kernel and its
 //! Newton solver); this crate decides where to cut and proves the limits with that solver.
 
+pub mod band;
 pub mod crossing;
 pub mod cut;
 pub mod embed;

@@ -15,7 +15,7 @@
 use flatcut_flatten::nonlinear::kernel::{IsoEnergy, RestTri, singular_values};
 use flatcut_geom::DVec2;
 
-use crate::limits::Band;
+use crate::band::Band;
 
 /// Curvature kept beyond the yield point, relative to δ2's there: keeps Newton's system regular
 /// where the material yields.

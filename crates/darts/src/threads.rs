@@ -32,7 +32,7 @@ use flatcut_mesh::distortion::local_frame;
 use flatcut_mesh::grain_strain::DirectionalLimits;
 use nalgebra::{Matrix4, Vector4};
 
-use crate::limits::Band;
+use crate::band::Band;
 
 /// Faces within this distance (mm) of a grain line's middle hold its direction.
 pub const ANCHOR_RADIUS_MM: f64 = 10.0;

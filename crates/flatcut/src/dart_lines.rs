@@ -29,7 +29,7 @@ pub fn write(darts: &[Dart]) -> String {
     s
 }
 
-/// The darts written by [`write`] in the OBJ text `text` of `mesh` (its flat map `x`), measured
+/// The darts written by [`write()`] in the OBJ text `text` of `mesh` (its flat map `x`), measured
 /// again with their drill marks `drill_mm` short of their points. A line in a dart group that
 /// cannot be a sew line (an even vertex count, fewer than three, an index out of range) is an
 /// error naming its line.

@@ -1,6 +1,6 @@
 //! Darts in the pipeline: when a flattened piece exceeds its limits and darts are asked for
 //! (`--darts auto`, or `darts = "auto"` in the project or the piece), the piece is cut by
-//! [`flatcut_darts::place`] and flattened again with the limits held; where no dart can bring it
+//! [`flatcut_darts::place()`] and flattened again with the limits held; where no dart can bring it
 //! within them the pipeline fails with what was reached.
 //!
 //! What the design says about the piece keeps darts away: its `no_cut` regions, its marks
@@ -15,7 +15,7 @@ use flatcut_geom::{DVec2, DVec3};
 use flatcut_mesh::TriMesh;
 use flatcut_report::DartReport;
 
-use crate::pipeline::PipelineError;
+use crate::error::PipelineError;
 
 /// How darts are placed when they are asked for.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -15,61 +15,14 @@ use flatcut_surface::diffgeom::{self, FundamentalForms};
 use flatcut_surface::{DomainKind, ParamSurface};
 use serde::Serialize;
 
-/// A parametric patch is called developable when `max |K| · diag²` over its sample grid stays
-/// below this (dimensionless; a hemisphere is about 10, a cylinder 0 up to round-off).
-pub const DEVELOPABLE_SCALED_K: f64 = 1e-6;
-/// A mesh is called developable when no interior vertex has an angle defect above this (rad).
-pub const DEVELOPABLE_ANGLE_DEFECT: f64 = 1e-6;
+pub use crate::inspect_figures::{
+    DEVELOPABLE_ANGLE_DEFECT, DEVELOPABLE_SCALED_K, PieceSummary, Range2, Range3, forms_at,
+};
+
 /// Grid of sample cells per patch side for curvature extremes and the developability test.
 const SAMPLES_PER_SIDE: usize = 24;
-/// A sample is singular (a pole, a collapsed side) when |r_u × r_v| is below this fraction of
-/// max(|r_u|, |r_v|)². The scale is the larger tangent, not the product of both: at a pole one
-/// tangent is itself rounding noise, so a ratio to |r_u||r_v| (the angle between them) says
-/// nothing there. At the teapot's lid top and bottom centre the ratio is ~1e-17; at a regular
-/// point of a sane patch it is ≳ 1e-3.
-const SINGULAR_REL: f64 = 1e-8;
-/// Parameter step (fraction of the domain's span) by which a singular sample moves toward the
-/// domain's centre to evaluate the curvature there as its limit: 0/0 at the pole itself. The
-/// point moves ~1e-4 of the patch size (6e-3 mm on the teapot), so the curvature changes by
-/// that times its gradient, while r_u × r_v is already ~1e-4 relative, far above round-off.
-const POLE_NUDGE: f64 = 1e-4;
 /// Quadrature cells per patch side (each with a 16×16 Gauss–Legendre rule).
 const QUAD_CELLS: usize = 6;
-
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Range3 {
-    pub min: f64,
-    pub max: f64,
-    pub mean: f64,
-}
-
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Range2 {
-    pub min: f64,
-    pub max: f64,
-}
-
-/// One piece as `inspect --json` reports it (keys are a stable contract).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct PieceSummary {
-    pub name: String,
-    pub kind: &'static str,
-    pub quantity: u32,
-    pub area_mm2: f64,
-    pub bbox_mm: [[f64; 3]; 2],
-    /// Gaussian curvature in 1/mm² (mean: area-weighted).
-    pub gaussian_curvature: Range3,
-    /// Mean curvature in 1/mm (sign follows the normal r_u × r_v).
-    pub mean_curvature: Range2,
-    pub developable: bool,
-    /// `max |K| · diag²` (patches) or the largest interior angle defect in rad (meshes).
-    pub developability_measure: f64,
-    pub patches: usize,
-    pub vertices: usize,
-    pub triangles: usize,
-    pub boundary_loops: Option<usize>,
-    pub boundary_length_mm: f64,
-}
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct InspectReport {
@@ -262,36 +215,6 @@ fn for_each_sample(
             let (u, v) = (d.u.0 + a * (d.u.1 - d.u.0), d.v.0 + b * (d.v.1 - d.v.0));
             f(s.eval(u, v), forms_at(s, u, v));
         }
-    }
-}
-
-fn singular(d: &flatcut_surface::SurfaceDerivs) -> bool {
-    let scale = d.su.length_squared().max(d.sv.length_squared());
-    let area = d.su.cross(d.sv).length();
-    // NaN (a non-finite derivative) counts as singular too.
-    area.is_nan() || area <= SINGULAR_REL * scale
-}
-
-/// The fundamental forms at (u, v); at a singular point (a pole) their limit, evaluated a
-/// [`POLE_NUDGE`] step toward the domain's centre. `None` where the surface is singular on a
-/// whole neighbourhood (a degenerate patch).
-pub fn forms_at(s: &dyn ParamSurface, u: f64, v: f64) -> Option<FundamentalForms> {
-    let dd = s.deriv2(u, v);
-    if !singular(&dd) {
-        return FundamentalForms::from_derivs(&dd);
-    }
-    let d = s.domain();
-    let (uc, vc) = if s.domain_kind() == DomainKind::Triangle {
-        (1.0 / 3.0, 1.0 / 3.0)
-    } else {
-        (0.5 * (d.u.0 + d.u.1), 0.5 * (d.v.0 + d.v.1))
-    };
-    let step = |x: f64, c: f64, span: f64| x + (c - x).signum() * POLE_NUDGE * span;
-    let dd = s.deriv2(step(u, uc, d.u.1 - d.u.0), step(v, vc, d.v.1 - d.v.0));
-    if singular(&dd) {
-        None
-    } else {
-        FundamentalForms::from_derivs(&dd)
     }
 }
 

@@ -14,7 +14,7 @@ use flatcut_step::{Model, Tessellation, face_area};
 use flatcut_surface::ParamSurface;
 use serde::Serialize;
 
-use crate::inspect::{DEVELOPABLE_SCALED_K, PieceSummary, Range2, Range3, forms_at};
+use crate::inspect_figures::{DEVELOPABLE_SCALED_K, PieceSummary, Range2, Range3, forms_at};
 
 /// The length unit a STEP file states.
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -20,7 +20,7 @@ use flatcut_mesh::TriMesh;
 use flatcut_mesh::grain_strain::{central_face, centroid, pattern_direction_near, warp_at};
 use flatcut_report::GrainReport;
 
-use crate::pipeline::PipelineError;
+use crate::error::PipelineError;
 
 /// A piece's material and where its grain runs in the piece's flat map.
 #[derive(Clone, Debug, PartialEq)]

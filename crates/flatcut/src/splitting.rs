@@ -19,7 +19,8 @@ use flatcut_mesh::grain_strain::{central_face, centroid, pattern_direction_near}
 use flatcut_mesh::mating::{MatingSeam, SeamNotch, arc_lengths};
 
 use crate::darting;
-use crate::pipeline::{FlatNotch, FlatPiece, PipelineError};
+use crate::error::PipelineError;
+use crate::flat_piece::{FlatNotch, FlatPiece};
 
 /// How pieces are split when asked for.
 #[derive(Clone, Copy, Debug, PartialEq)]

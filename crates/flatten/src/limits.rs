@@ -75,7 +75,7 @@ impl Limits {
         })
     }
 
-    /// The limits the feasibility penalty aims at: drawn inside by `factor` × [`AIM_FRACTION`]
+    /// The limits the feasibility penalty aims at: drawn inside by `factor` × `AIM_FRACTION`
     /// of the band.
     pub fn aim(&self, factor: f64) -> Limits {
         let band = (self.hi - self.lo).min(AIM_BAND_CAP);

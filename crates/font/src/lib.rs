@@ -6,11 +6,12 @@
 //! The glyphs are Dr. A. V. Hershey's (Roman simplex for ASCII, Greek simplex, the mathematical
 //! symbols: `data/README.md` gives their source and use terms). Accented Latin letters are their
 //! canonical decomposition (a base letter and combining marks) with the marks drawn over or under
-//! the base ([`marks`]); ß, æ, œ, ø, ł, đ and the typographic quotes and dashes have stand-ins. A
+//! the base (`marks`); ß, æ, œ, ø, ł, đ and the typographic quotes and dashes have stand-ins. A
 //! character with no glyph is drawn as an empty box, never as another character.
 //!
 //! Coordinates are millimetres in the caller's frame: text runs along a unit direction from an
 //! origin on its baseline, with a given cap height. No IO.
+#![warn(missing_docs)]
 
 mod compose;
 mod hershey;

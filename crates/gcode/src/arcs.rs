@@ -9,7 +9,7 @@
 use flatcut_geom::DVec2;
 use flatcut_geom::num::{GoldenStop, golden_section_min};
 
-use crate::plan::Move;
+use crate::moves::Move;
 
 /// At least this many segments make an arc worth a line of G-code.
 pub const MIN_SEGMENTS: usize = 3;

@@ -8,7 +8,7 @@
 
 use flatcut_geom::DVec2;
 
-use crate::plan::Move;
+use crate::moves::Move;
 use crate::profile::KnifeConfig;
 
 /// Shortest segment kept when computing directions (mm): shorter ones carry no direction.

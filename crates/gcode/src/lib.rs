@@ -1,6 +1,6 @@
 //! G-code for pen plotters, drag knives and laser cutters, in the GRBL 1.1 dialect.
 //!
-//! [`plan`] turns a [`flatcut_pattern::Drawing`] into a [`Plan`]: strokes mapped into machine
+//! [`plan()`] turns a [`flatcut_pattern::Drawing`] into a [`Plan`]: strokes mapped into machine
 //! coordinates, ordered (engrave, draw, inner cuts, outer cuts; travel minimised by nearest
 //! neighbour and 2-opt), compensated (drag-knife blade offset with corner swivels and overcut) and
 //! arc-fitted. [`Plan::to_gcode`] writes deterministic text; [`Plan::summary`] estimates run time
@@ -15,6 +15,7 @@ pub mod emit;
 pub mod hpgl;
 pub mod knife;
 pub mod marking;
+pub mod moves;
 pub mod order;
 pub mod plan;
 pub mod profile;

@@ -6,29 +6,9 @@ use flatcut_pattern::{Drawing, Layer};
 use crate::arcs;
 use crate::cutter;
 use crate::knife;
+pub use crate::moves::Move;
 use crate::order::{self, OrderItem};
 use crate::profile::{Profile, ToolKind};
-
-/// One motion while the tool works, in machine coordinates (mm).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Move {
-    Line(DVec2),
-    /// A circular arc to `to` around `center`, counter-clockwise (`G3`) or clockwise (`G2`).
-    Arc {
-        to: DVec2,
-        center: DVec2,
-        ccw: bool,
-    },
-}
-
-impl Move {
-    pub fn end(&self) -> DVec2 {
-        match *self {
-            Move::Line(p) => p,
-            Move::Arc { to, .. } => to,
-        }
-    }
-}
 
 /// A continuous tool-down path.
 #[derive(Clone, Debug, PartialEq)]

@@ -6,7 +6,9 @@ use serde::{Deserialize, Serialize};
 /// An axis-aligned box in 3D. An empty box has `min > max` componentwise.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Aabb3 {
+    /// The least corner (each coordinate the smallest of the points added).
     pub min: DVec3,
+    /// The greatest corner (each coordinate the largest of the points added).
     pub max: DVec3,
 }
 
@@ -26,11 +28,13 @@ impl Aabb3 {
         b
     }
 
+    /// Grows the box to contain `p`.
     pub fn add(&mut self, p: DVec3) {
         self.min = self.min.min(p);
         self.max = self.max.max(p);
     }
 
+    /// The smallest box containing both boxes.
     pub fn union(&self, o: &Self) -> Self {
         Self {
             min: self.min.min(o.min),
@@ -38,6 +42,7 @@ impl Aabb3 {
         }
     }
 
+    /// True when no point has been added (`min > max` on some axis).
     pub fn is_empty(&self) -> bool {
         self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
     }
@@ -51,6 +56,7 @@ impl Aabb3 {
         }
     }
 
+    /// The extent along each axis (zero for an empty box).
     pub fn size(&self) -> DVec3 {
         if self.is_empty() {
             DVec3::ZERO
@@ -63,7 +69,9 @@ impl Aabb3 {
 /// An axis-aligned box in 2D. An empty box has `min > max` componentwise.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Aabb2 {
+    /// The least corner (each coordinate the smallest of the points added).
     pub min: DVec2,
+    /// The greatest corner (each coordinate the largest of the points added).
     pub max: DVec2,
 }
 
@@ -74,6 +82,7 @@ impl Aabb2 {
         max: DVec2::splat(f64::NEG_INFINITY),
     };
 
+    /// The smallest box containing all points (empty for no points).
     pub fn from_points<I: IntoIterator<Item = DVec2>>(pts: I) -> Self {
         let mut b = Self::EMPTY;
         for p in pts {
@@ -82,11 +91,13 @@ impl Aabb2 {
         b
     }
 
+    /// Grows the box to contain `p`.
     pub fn add(&mut self, p: DVec2) {
         self.min = self.min.min(p);
         self.max = self.max.max(p);
     }
 
+    /// The smallest box containing both boxes.
     pub fn union(&self, o: &Self) -> Self {
         Self {
             min: self.min.min(o.min),
@@ -94,10 +105,12 @@ impl Aabb2 {
         }
     }
 
+    /// True when no point has been added (`min > max` on some axis).
     pub fn is_empty(&self) -> bool {
         self.min.x > self.max.x || self.min.y > self.max.y
     }
 
+    /// The extent along each axis (zero for an empty box).
     pub fn size(&self) -> DVec2 {
         if self.is_empty() {
             DVec2::ZERO
@@ -106,10 +119,12 @@ impl Aabb2 {
         }
     }
 
+    /// The extent along x (0 for an empty box).
     pub fn width(&self) -> f64 {
         self.size().x
     }
 
+    /// The extent along y (0 for an empty box).
     pub fn height(&self) -> f64 {
         self.size().y
     }

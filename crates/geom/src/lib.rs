@@ -5,6 +5,7 @@
 //! the edges (SVG writer, G-code writer, file readers), never here.
 //!
 //! **Architecture invariant:** this crate depends on no other workspace crate and does no IO.
+#![warn(missing_docs)]
 
 pub mod aabb;
 pub mod limits;

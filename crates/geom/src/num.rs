@@ -137,9 +137,13 @@ pub const GOLDEN_MAX_ITERS: usize = 200;
 /// Result of [`golden_section_min`]: the better of the two interior points and the final bracket.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GoldenMin {
+    /// The better of the two interior points.
     pub x: f64,
+    /// The function's value at `x`.
     pub fx: f64,
+    /// The final bracket's lower end.
     pub lo: f64,
+    /// The final bracket's upper end.
     pub hi: f64,
 }
 

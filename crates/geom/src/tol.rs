@@ -34,6 +34,7 @@ impl Tolerances {
     /// Relative accuracy default for numerical methods.
     pub const DEFAULT_REL: f64 = 1e-10;
 
+    /// Every tolerance at its default.
     pub const DEFAULT: Self = Self {
         chord_mm: Self::DEFAULT_CHORD_MM,
         fit_mm: Self::DEFAULT_FIT_MM,
@@ -42,21 +43,25 @@ impl Tolerances {
         heal_mm: None,
     };
 
+    /// These tolerances with the chord tolerance `v` mm.
     pub const fn with_chord_mm(mut self, v: f64) -> Self {
         self.chord_mm = v;
         self
     }
 
+    /// These tolerances with the outline-fitting tolerance `v` mm.
     pub const fn with_fit_mm(mut self, v: f64) -> Self {
         self.fit_mm = v;
         self
     }
 
+    /// These tolerances with the welding distance `v` mm.
     pub const fn with_weld_mm(mut self, v: f64) -> Self {
         self.weld_mm = v;
         self
     }
 
+    /// These tolerances with the largest defect healed `v` mm (`None`: the importer's default).
     pub const fn with_heal_mm(mut self, v: Option<f64>) -> Self {
         self.heal_mm = v;
         self

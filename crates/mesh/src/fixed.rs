@@ -4,7 +4,7 @@
 //!
 //! The fast path scales by 10⁶ in floating point and rounds to an integer. The product carries
 //! at most half an ulp of error, below 2.5·10⁻⁴ for |x| < 2⁴⁰/10⁶ (about 1.1·10⁶ mm, past the
-//! coordinate limit): wherever the scaled value is not within [`TIE_WINDOW`] of a half, that
+//! coordinate limit): wherever the scaled value is not within `TIE_WINDOW` of a half, that
 //! rounding is the rounding of the exact value, which is what the standard formatter prints.
 //! Values near a half, and values too large for the fast path, are formatted by the standard
 //! formatter itself.

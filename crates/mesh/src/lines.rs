@@ -11,7 +11,7 @@
 //! splitting the edge next to it (no sliver triangles), unless the line would then fold back onto
 //! itself or run along the boundary or another line; every other crossing splits the edge.
 //! New vertices lie on the old edges and faces; then the mesh around the lines is made
-//! well-shaped again ([`tidy`]: short edges collapsed, edges flipped), moving the surface by far
+//! well-shaped again (`tidy`: short edges collapsed, edges flipped), moving the surface by far
 //! less than its chordal tolerance and keeping every end and notch exactly.
 //!
 //! Notches are extra points of their line, inserted exactly where they project (never snapped to

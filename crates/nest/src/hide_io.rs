@@ -24,8 +24,11 @@ const CHORD_MM: f64 = 0.1;
 /// The file formats a hide can come in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum HideFormat {
+    /// The nester's own JSON description of a hide.
     Json,
+    /// A DXF drawing of the outline, its defects and zones.
     Dxf,
+    /// An SVG drawing of the outline, its defects and zones.
     Svg,
 }
 

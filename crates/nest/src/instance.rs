@@ -34,9 +34,11 @@ struct RawInstance {
 /// A strip-packing benchmark instance converted to nesting items.
 #[derive(Clone, Debug)]
 pub struct BenchInstance {
+    /// The instance's name (its file stem).
     pub name: String,
     /// Fixed strip height (the roll width).
     pub strip_height: f64,
+    /// The items to pack.
     pub items: Vec<NestItem>,
 }
 

@@ -19,6 +19,7 @@
 //! - Bounded: inputs are checked (finite, coordinates within [`MAX_COORD_MM`], stock within
 //!   [`MAX_STOCK_MM`], at most [`MAX_INSTANCES`] pieces and [`MAX_VERTICES`] per outline); the time limit and the cancel hook are honoured in
 //!   every phase; progress is reported per phase.
+#![warn(missing_docs)]
 
 mod bin;
 mod bins;

@@ -19,6 +19,7 @@ pub enum NestPhase {
 }
 
 impl NestPhase {
+    /// The phase's name in progress lines and JSON.
     pub fn name(self) -> &'static str {
         match self {
             NestPhase::Construct => "construct",
@@ -33,14 +34,18 @@ impl NestPhase {
 /// Reported while searching (on the calling thread).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NestProgress {
+    /// The phase the search is in.
     pub phase: NestPhase,
     /// Separation iterations so far.
     pub iteration: usize,
+    /// Wall-clock time since the search started.
     pub elapsed: Duration,
     /// Fraction of the budget used (iterations or time, whichever is further), 0..=1.
     pub budget_used: f64,
     /// Best feasible layout so far: used roll length, or the extent on the last sheet (mm).
     pub length: f64,
+    /// Sheets or hides the best layout uses.
     pub sheets: usize,
+    /// The best layout's utilization, percent.
     pub utilization: f64,
 }

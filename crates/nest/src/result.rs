@@ -18,10 +18,15 @@ pub struct PlacedInstance {
 /// An instance that could not be placed.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Unplaced {
+    /// Index of its item in the input.
     pub item: usize,
+    /// The item's name.
     pub name: String,
+    /// Copy number (0-based) among the item's copies of this side.
     pub copy: usize,
+    /// True for the mirrored side of a pair.
     pub mirrored: bool,
+    /// Why it could not be placed.
     pub reason: String,
 }
 
@@ -30,6 +35,7 @@ pub struct Unplaced {
 pub struct SheetUse {
     /// The hide's name, or `sheet N`.
     pub name: String,
+    /// Pieces placed on it.
     pub pieces: usize,
     /// Area of the pieces placed on it, mm².
     pub piece_area: f64,
@@ -42,7 +48,9 @@ pub struct SheetUse {
 /// The layout found.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NestResult {
+    /// Every instance placed, with where.
     pub placed: Vec<PlacedInstance>,
+    /// Every instance that could not be placed, with why.
     pub unplaced: Vec<Unplaced>,
     /// Placed piece area / used stock area, in percent: on a roll the used length × width, on
     /// sheets the sheets used, on hides the usable area of the hides used.
@@ -56,6 +64,7 @@ pub struct NestResult {
     pub sheet_use: Vec<SheetUse>,
     /// Utilization of the first feasible layout the search started from (percent).
     pub baseline_utilization: f64,
+    /// Used length of the first feasible layout (mm), as [`NestResult::length`].
     pub baseline_length: f64,
     /// Separation iterations run.
     pub iterations: usize,

@@ -7,12 +7,20 @@ use flatcut_geom::DVec2;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Stock {
     /// A roll of fixed `width` (y) whose used length (x) is minimised.
-    Roll { width: f64, max_length: Option<f64> },
+    Roll {
+        /// The roll's width, mm.
+        width: f64,
+        /// The longest length that may be used, mm (`None`: unbounded).
+        max_length: Option<f64>,
+    },
     /// Identical sheets `width` (x) × `height` (y); the number used is minimised, then the
     /// extent on the last one.
     Sheets {
+        /// Each sheet's width, mm.
         width: f64,
+        /// Each sheet's height, mm.
         height: f64,
+        /// The most sheets that may be used (`None`: unbounded).
         max_sheets: Option<usize>,
     },
 }
@@ -32,6 +40,7 @@ impl Stock {
 pub struct QualityZone {
     /// Grade 2.. (1 is first quality, the grade of the hide outside every zone; larger is worse).
     pub grade: u32,
+    /// The zone's outline on the hide, mm.
     pub outline: Vec<DVec2>,
 }
 

@@ -9,8 +9,23 @@
 //! The allowance beyond the mirror image (which the turned edge's own strip may reach when the
 //! corner is acute) is clipped off after the union.
 
-use crate::seam::CornerStyle;
 use flatcut_geom::DVec2;
+
+/// How the allowance is closed at a convex corner of the sew line.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CornerStyle {
+    /// The two cut lines are extended until they meet (up to the mitre limit, then squared).
+    #[default]
+    Mitred,
+    /// The corner is cut square to the bisector at the larger width from the sew corner.
+    Squared,
+    /// The allowance of the incoming seam ends on the mirror image of the outgoing seam's cut
+    /// line about the incoming sew line (as it lies when the allowance is folded back along the
+    /// incoming seam), so the folded allowance matches the neighbouring seam: Seamly2D's "by
+    /// first edge symmetry" (this module).
+    Reflected,
+}
 
 /// How the allowance is closed at one vertex of the sew line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

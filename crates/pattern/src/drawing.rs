@@ -9,7 +9,8 @@
 //! [`StrokeKind`] (what the line is on the pattern: boundary, notch, drill hole, grain line, …),
 //! so writers choose DXF layers and cut order from types, never from the stroke's id text.
 
-use crate::piece::{LabelInfo, Placement};
+use crate::label_info::LabelInfo;
+use crate::placement::Placement;
 use flatcut_geom::{Aabb2, DVec2};
 use serde::{Deserialize, Serialize};
 

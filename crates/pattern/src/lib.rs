@@ -14,13 +14,16 @@ pub mod error;
 pub mod fit;
 pub mod graded;
 pub mod io;
+pub mod label_info;
 pub mod piece;
+pub mod placement;
 pub mod poly;
 pub mod room;
 pub mod seam;
 pub mod svg;
 
 pub use colours::{ColourJob, ColourTable};
+pub use corner::CornerStyle;
 pub use drawing::{Drawing, Layer, PieceInfo, Stroke, StrokeKind};
 pub use error::PatternError;
 pub use fit::PathSeg;
@@ -29,4 +32,3 @@ pub use piece::{
     EdgeAllowance, EdgeKind, LabelInfo, MIN_LABEL_HEIGHT, Mark, MarkKind, NotchStyle, Piece,
     PieceEdge, PieceInput, PieceOptions, PlacedPiece, Placement, safe_name,
 };
-pub use seam::CornerStyle;

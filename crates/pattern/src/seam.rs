@@ -18,22 +18,6 @@ use crate::poly;
 use flatcut_geom::DVec2;
 use geo::{BooleanOps, Coord, LineString, Polygon};
 
-/// How the allowance is closed at a convex corner of the sew line.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum CornerStyle {
-    /// The two cut lines are extended until they meet (up to the mitre limit, then squared).
-    #[default]
-    Mitred,
-    /// The corner is cut square to the bisector at the larger width from the sew corner.
-    Squared,
-    /// The allowance of the incoming seam ends on the mirror image of the outgoing seam's cut
-    /// line about the incoming sew line (as it lies when the allowance is folded back along the
-    /// incoming seam), so the folded allowance matches the neighbouring seam: Seamly2D's "by
-    /// first edge symmetry" ([`crate::corner`]).
-    Reflected,
-}
-
 /// A mitre longer than this many widths is squared off instead (the usual CAD mitre limit; a
 /// 4× mitre is reached at a turn of about 150°).
 pub const DEFAULT_MITRE_LIMIT: f64 = 4.0;
@@ -298,6 +282,7 @@ fn validate(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::corner::CornerStyle;
     use proptest::prelude::*;
 
     fn v(x: f64, y: f64) -> DVec2 {

@@ -1,7 +1,7 @@
 //! The distortion report: how much a flattened piece stretches, where, and whether it stays
 //! within the material's limits.
 //!
-//! [`Report::compute`] measures a flattened [`TriMesh`] (3D positions plus a 2D position per
+//! [`Report::compute`] measures a flattened [`TriMesh`](flatcut_mesh::TriMesh) (3D positions plus a 2D position per
 //! vertex, mm) with Duncan's measures per face (μ1, μ2, δ1, δ2, area ratio, principal
 //! directions), aggregates them over the surface area, computes Duncan's global distortion δ0
 //! exactly (intrinsic distances in the flat piece against geodesic distances on the surface,

@@ -828,7 +828,7 @@ fn split_at_rulings(
 }
 
 /// The area of face `index` (mm²): the integral of |S_u × S_v| over the region its loops bound
-/// (Green's theorem, [`check::trim_area`]), with the loops sampled to [`AREA_CHORD_REL`] of the
+/// (Green's theorem, [`check::trim_area`]), with the loops sampled to `AREA_CHORD_REL` of the
 /// model's size.
 pub fn face_area(model: &Model, index: usize) -> Result<f64, StepError> {
     let g = model

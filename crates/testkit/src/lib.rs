@@ -5,6 +5,7 @@
 //!
 //! **Architecture invariant:** only ever a dev-dependency (tests/tidy.rs checks it), so it may
 //! depend on the simulator and the sender both.
+#![warn(missing_docs)]
 
 pub mod jobs;
 pub mod pty;

@@ -18,7 +18,7 @@ use super::common::{self, FlattenArgs, PieceArgs};
 pub struct Args {
     /// A pattern or layout SVG or DXF, a design, or a flattened OBJ.
     pub file: PathBuf,
-    /// vinyl, pen-hpgl, or a machine profile (.toml) with an [hpgl] section.
+    /// vinyl, pen-hpgl, or a machine profile (.toml) with an `[hpgl]` section.
     #[arg(long, default_value = "vinyl")]
     pub profile: String,
     /// The HP-GL job to write.

@@ -21,7 +21,7 @@ use super::device::{self, StreamArgs};
 pub struct Args {
     /// The project file (see patterns/README.md).
     pub project: PathBuf,
-    /// Output folder (default: out/<project name>).
+    /// Output folder (default: `out/<project name>`).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Stop after writing the G-code (do not stream).

@@ -4,16 +4,16 @@
 //!
 //! Duncan builds f1 in two steps: a conformal map whose boundary keeps its lengths (step 1),
 //! then, keeping that boundary, the map of least deviation (step 2). f1 lets the outline move
-//! with its lengths held instead ([`free_outline`]), which can only do better: on the bench's
+//! with its lengths held instead (`free_outline`), which can only do better: on the bench's
 //! 20k toe mean δ2 0.9518 against 0.9534 with step 1's outline held (on the caps and the
 //! hemisphere the two agree to 5 digits: the outline is a circle either way). That holds while
 //! the rim is no longer than the interior can take flat. Where it is longer, step 1's conformal
-//! metric has more area than the surface ([`rim_too_long`]; negative curvature stretches it,
+//! metric has more area than the surface (`rim_too_long`; negative curvature stretches it,
 //! positive curvature shrinks it), and a free outline has no smooth minimiser: it crimps at the
 //! scale of the mesh (the bench's 200k saddle: a sawtooth rim after 881 Newton steps and 357 s,
 //! 119× the isometric time), and a piece cut from it has a ragged edge. There f1 is Duncan's
 //! two steps: step 1's outline, closed with every edge at its 3D length, held while the
-//! interior relaxes ([`held_outline`]): 3 Newton steps to a smooth outline on the saddle.
+//! interior relaxes (`held_outline`): 3 Newton steps to a smooth outline on the saddle.
 //!
 //! The free outline: start from the isometric (δ2) map (the `isometric` method's own solve, from LSCM),
 //! which is flip-free and already close; then an

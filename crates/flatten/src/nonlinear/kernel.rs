@@ -5,8 +5,8 @@
 //! The projection follows Smith, de Goes & Kim, "Analytic eigensystems for isotropic distortion
 //! energies" (TOG 2019): for any energy of the singular values, the 4×4 Hessian in F-space has
 //! two "scaling" eigenvectors U diag(a) Vᵀ (a from the 2×2 Hessian of Ψ in σ), the symmetric
-//! off-diagonal mode U [[0,1],[1,0]] Vᵀ/√2 with eigenvalue (Ψ₁ − Ψ₂)/(σ₁ − σ₂) ("twist" below)
-//! and the skew, rotation-like mode U [[0,−1],[1,0]] Vᵀ/√2 with eigenvalue (Ψ₁ + Ψ₂)/(σ₁ + σ₂)
+//! off-diagonal mode U `[[0,1],[1,0]]` Vᵀ/√2 with eigenvalue (Ψ₁ − Ψ₂)/(σ₁ − σ₂) ("twist" below)
+//! and the skew, rotation-like mode U `[[0,−1],[1,0]]` Vᵀ/√2 with eigenvalue (Ψ₁ + Ψ₂)/(σ₁ + σ₂)
 //! ("flip" below, the one that goes negative). Clamping the eigenvalues at zero gives the projected
 //! Newton Hessian without any numerical eigensolver. Written here (not taken from a library)
 //! because no maintained Rust crate provides it and it is ~200 lines.

@@ -2,20 +2,20 @@
 //! values live in the order the factorisation reads them (the lower triangle of the matrix
 //! renumbered by the fill-reducing order) so that the per-triangle Hessians are scattered
 //! straight into precomputed slots, and the factorisation is the crate's one sparse
-//! Cholesky, [`crate::sparse::SpdSolver`] (faer; AMD, or nested dissection of the vertex graph
-//! from [`crate::sparse::NESTED_DISSECTION_FROM`] vertices; symbolic factorisation computed
-//! once and reused for every step; sequential below [`crate::sparse::PARALLEL_FACTOR_FROM`]
+//! Cholesky, `crate::sparse::SpdSolver` (faer; AMD, or nested dissection of the vertex graph
+//! from `crate::sparse::NESTED_DISSECTION_FROM` vertices; symbolic factorisation computed
+//! once and reused for every step; sequential below `crate::sparse::PARALLEL_FACTOR_FROM`
 //! factor values, the same bits with any number of threads above).
 //!
-//! The pattern is handed to [`crate::sparse::SymPattern`] in compressed-column form and then
-//! dropped; the slots are the solver's ([`crate::sparse::SpdSolver::slot`]), and the values are
+//! The pattern is handed to `crate::sparse::SymPattern` in compressed-column form and then
+//! dropped; the slots are the solver's (`crate::sparse::SpdSolver::slot`), and the values are
 //! the solver's own, the array its factorisation reads in place: no duplicate summing, no copy,
 //! no renumbering, no per-step assembly beyond the scatter.
 
 use crate::sparse::{Slots, SpdSolver, SymPattern};
 
 /// The relative residual a Newton direction is solved to where the factor is single precision
-/// (from [`crate::sparse::SINGLE_PRECISION_FROM`] factor values, about 300k faces). A Newton
+/// (from `crate::sparse::SINGLE_PRECISION_FROM` factor values, about 300k faces). A Newton
 /// step needs its direction to a few digits, not to the last: on a million-face cap the
 /// isometric solve takes the same 3 steps to the same δ2 at 1e-4 as at 1e-12, with 1–2 refinement
 /// steps per solve instead of 7.

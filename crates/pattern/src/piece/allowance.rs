@@ -6,7 +6,8 @@
 use super::sew::SewLine;
 use super::{PatternError, PieceOptions};
 use crate::corner::Corner;
-use crate::seam::{self, CornerStyle, SeamFailure};
+use crate::corner::CornerStyle;
+use crate::seam::{self, SeamFailure};
 use flatcut_geom::DVec2;
 
 /// The cut line around `sew` (CCW, closed).

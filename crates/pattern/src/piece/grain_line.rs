@@ -12,9 +12,9 @@ const CHORD_SHARE: f64 = 0.7;
 /// Parallel chords tried when the piece's centroid is outside it (a crescent, an L).
 const SCAN_CHORDS: usize = 32;
 
-/// The grain line of `outline` along `dir`: the middle [`CHORD_SHARE`] of the chord along
+/// The grain line of `outline` along `dir`: the middle `CHORD_SHARE` of the chord along
 /// `dir` through the area centroid, or, when the centroid is outside the piece, of the longest
-/// of [`SCAN_CHORDS`] parallel chords. `None` for a degenerate outline or direction.
+/// of `SCAN_CHORDS` parallel chords. `None` for a degenerate outline or direction.
 pub fn grain_line_along(outline: &[DVec2], dir: DVec2) -> Option<(DVec2, DVec2)> {
     let d = dir.try_normalize()?;
     if outline.len() < 3 {

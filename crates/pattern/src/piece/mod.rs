@@ -2,7 +2,7 @@
 //! allowance, notches at match marks, drill holes, the grain line and a label.
 //!
 //! Input is a flattened boundary (closed polyline in mm, counter-clockwise) with marks; the
-//! piece is built by [`Piece::build`] and turned into a [`Drawing`] by [`Piece::to_drawing`].
+//! piece is built by [`Piece::build`] and turned into a [`Drawing`](crate::Drawing) by [`Piece::to_drawing`].
 //! Allowances by edge: named stretches of the outline ([`EdgeAllowance`]) carry their own width
 //! and kind (seam, hem, fold, lasting, raw); the rest of the outline takes
 //! [`PieceOptions::default_seam`].
@@ -23,16 +23,19 @@ mod sew;
 #[cfg(test)]
 mod tests;
 
+pub use crate::label_info::LabelInfo;
+pub use crate::placement::Placement;
 pub use edges::{EdgeAllowance, EdgeKind};
 pub use grain_line::grain_line_along;
 pub use label::short_code;
 pub use orient::orientation;
-pub use placement::{PlacedPiece, Placement};
+pub use placement::PlacedPiece;
 
 use crate::PatternError;
+use crate::corner::CornerStyle;
 use crate::fit::{self, PathSeg};
 use crate::poly;
-use crate::seam::{self, CornerStyle};
+use crate::seam;
 use flatcut_geom::{Aabb2, DVec2};
 use serde::{Deserialize, Serialize};
 
@@ -57,21 +60,6 @@ pub struct Mark {
     /// Index of the outline vertex the mark sits on, when it lies on the boundary (notches,
     /// seam ends). Notches without it snap to the nearest outline vertex.
     pub boundary_index: Option<usize>,
-}
-
-/// Label content.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct LabelInfo {
-    pub name: String,
-    pub size: String,
-    pub material: String,
-    pub quantity: u32,
-    /// One-line distortion summary from the flattening report (e.g. "AREA 1.2% MAX 3.4%").
-    pub distortion: Option<String>,
-    /// The short code written where the piece has no room for a readable label (`None`: the
-    /// initials of the name, [`Piece::label_code`]).
-    #[serde(default)]
-    pub code: Option<String>,
 }
 
 /// Everything a piece is built from.
@@ -343,10 +331,10 @@ fn check_numbers(input: &PieceInput, opts: &PieceOptions) -> Result<(), PatternE
 
 impl Piece {
     /// Builds a piece; errors name the piece and what is wrong. The steps: the outline cleaned
-    /// ([`outline`]), the outline's edges given their allowances ([`edges`]), the sew line
-    /// fitted ([`sew`]), the allowance added ([`allowance`]), the marks and internal lines placed
-    /// ([`marks`]), the lasting edges labelled ([`edge_marks`]) and the label laid out
-    /// ([`label`]).
+    /// (`outline`), the outline's edges given their allowances (`edges`), the sew line
+    /// fitted (`sew`), the allowance added (`allowance`), the marks and internal lines placed
+    /// (`marks`), the lasting edges labelled (`edge_marks`) and the label laid out
+    /// (`label`).
     pub fn build(input: &PieceInput, opts: &PieceOptions) -> Result<Piece, PatternError> {
         check_numbers(input, opts)?;
         let outline = outline::Outline::clean(&input.name, &input.outline)?;

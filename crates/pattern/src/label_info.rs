@@ -1,0 +1,18 @@
+//! What a piece's label says: name, size, material, quantity, distortion and short code.
+
+use serde::{Deserialize, Serialize};
+
+/// Label content.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct LabelInfo {
+    pub name: String,
+    pub size: String,
+    pub material: String,
+    pub quantity: u32,
+    /// One-line distortion summary from the flattening report (e.g. "AREA 1.2% MAX 3.4%").
+    pub distortion: Option<String>,
+    /// The short code written where the piece has no room for a readable label (`None`: the
+    /// initials of the name, [`crate::Piece::label_code`]).
+    #[serde(default)]
+    pub code: Option<String>,
+}
