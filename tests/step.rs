@@ -1,7 +1,7 @@
 //! STEP models through the whole tool: `inspect` of a file in inches, developable faces and
 //! smooth groups that flatten with no distortion, a project whose design is a STEP file, the
 //! bundled kayak skin, and the seams of real models: every shared edge one mating seam of its
-//! full length.
+//! full length, and separate sheet bodies sewn where they meet.
 
 use std::path::{Path, PathBuf};
 
@@ -220,6 +220,14 @@ fn corpus(name: &str) -> PathBuf {
     root().join("crates/step/tests/corpus").join(name)
 }
 
+/// A corpus file assembled as a design (every face a piece) at chordal tolerance `chord` mm.
+fn assembled(name: &str, chord: f64) -> flatcut::design::Assembly {
+    let path = corpus(name);
+    let design = flatcut::design::Design::load(&path).unwrap();
+    let tol = Tolerances::DEFAULT.with_chord_mm(chord);
+    design.assemble(path.parent().unwrap(), &tol).unwrap()
+}
+
 /// The length of a seam side: its polyline on the piece's mesh.
 fn side_length(a: &flatcut::design::Assembly, side: &flatcut::mesh::mating::SeamSide) -> f64 {
     let m = &a.pieces[side.piece].mesh;
@@ -235,10 +243,7 @@ fn every_edge_of_a_filleted_box_is_one_mating_seam_of_its_full_length() {
     // edges are 24 straight fillet edges (2 × (4 × 48 + 4 × 28 + 4 × 18) mm) and 24 quarter
     // circles of R 6 where the fillets meet the sphere corners; once each fillet's end arc and
     // the corner beside it were sampled apart (T-junctions) and most arcs left unsewn.
-    let path = corpus("occt_box_filleted.step");
-    let design = flatcut::design::Design::load(&path).unwrap();
-    let tol = Tolerances::DEFAULT.with_chord_mm(0.1);
-    let a = design.assemble(path.parent().unwrap(), &tol).unwrap();
+    let a = assembled("occt_box_filleted.step", 0.1);
     assert_eq!(a.pieces.len(), 26);
     let lines = 2.0 * (4.0 * 48.0 + 4.0 * 28.0 + 4.0 * 18.0);
     let arcs = 24.0 * 3.0 * std::f64::consts::PI;
@@ -282,10 +287,7 @@ fn a_disk_sewn_to_a_sphere_rim_is_sewn_along_the_rim_once() {
     // A sphere R 100 cut at y = 50 (OCCT): a disk of radius √7500 sewn to the sphere's rim. The
     // rim was once reported as seams of twice its length (and the sphere's face read as the cap
     // it leaves out).
-    let path = corpus("occt_sphere_cut_y.step");
-    let design = flatcut::design::Design::load(&path).unwrap();
-    let tol = Tolerances::DEFAULT.with_chord_mm(0.1);
-    let a = design.assemble(path.parent().unwrap(), &tol).unwrap();
+    let a = assembled("occt_sphere_cut_y.step", 0.1);
     let rim = 2.0 * std::f64::consts::PI * 7500f64.sqrt();
     let total: f64 = a.seams.iter().map(|s| side_length(&a, &s.sides[0])).sum();
     for s in &a.seams {
@@ -304,6 +306,30 @@ fn a_disk_sewn_to_a_sphere_rim_is_sewn_along_the_rim_once() {
     let area = disk.mesh.area();
     let want = std::f64::consts::PI * 7500.0;
     assert!((area - want).abs() < 2e-3 * want, "disk {area} mm², {want}");
+}
+
+#[test]
+fn separate_sheet_bodies_meet_at_mating_seams() {
+    // A tube of two half-cylinder sheets (R 30, 80 long), each its own shell with edges of its
+    // own (OCCT): the two 80 mm lines where they meet were two free borders each, no seam. Sewn,
+    // they are two mating seams of their full length, equal on both sides, and the pieces'
+    // boundaries off the seams are the two end circles.
+    let a = assembled("occt_cylinder_panels.step", 0.05);
+    assert_eq!(a.pieces.len(), 2);
+    assert_eq!(
+        a.seams.len(),
+        2,
+        "{:?}",
+        a.seams.iter().map(|s| &s.name).collect::<Vec<_>>()
+    );
+    for s in &a.seams {
+        let (l0, l1) = (side_length(&a, &s.sides[0]), side_length(&a, &s.sides[1]));
+        assert!(
+            (l0 - 80.0).abs() < 1e-9 && (l1 - 80.0).abs() < 1e-9,
+            "{}: {l0}, {l1}",
+            s.name
+        );
+    }
 }
 
 #[test]

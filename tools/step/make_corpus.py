@@ -21,7 +21,7 @@ import pathlib
 import sys
 import time
 
-from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut, BRepAlgoAPI_Fuse
+from OCP.BRepAlgoAPI import BRepAlgoAPI_Common, BRepAlgoAPI_Cut, BRepAlgoAPI_Fuse
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepFilletAPI import BRepFilletAPI_MakeChamfer, BRepFilletAPI_MakeFillet
@@ -105,6 +105,36 @@ def torus_full():
     return BRepPrimAPI_MakeTorus(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 50.0, 15.0).Shape()
 
 
+def torus_halves(keep_outer):
+    """A torus (R 50, r 15) cut by the cylinder through its tube's crest: the outer half's torus
+    face runs across v = 0, its loops at v = 3pi/2 and pi/2 (the band between them is the one
+    the orientation names, a period up, not the inner one); the inner half's does not."""
+    torus = BRepPrimAPI_MakeTorus(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 50.0, 15.0).Shape()
+    cyl = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, -50), gp_Dir(0, 0, 1)), 50.0, 100.0).Shape()
+    if keep_outer:
+        return BRepAlgoAPI_Cut(torus, cyl).Shape()
+    return BRepAlgoAPI_Common(torus, cyl).Shape()
+
+
+def cylinder_panels():
+    """A tube (R 30, 80 long) as two half-cylinder sheets, each its own open shell: their
+    edges along the two lines where they meet are separate edges, to be sewn."""
+    from OCP.BRep import BRep_Builder
+    from OCP.TopoDS import TopoDS_Compound, TopoDS_Shell
+    from OCP.gp import gp_Cylinder, gp_Ax3
+    cyl = gp_Cylinder(gp_Ax3(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 30.0)
+    builder = BRep_Builder()
+    compound = TopoDS_Compound()
+    builder.MakeCompound(compound)
+    for u0, u1 in [(0.0, math.pi), (math.pi, 2.0 * math.pi)]:
+        face = BRepBuilderAPI_MakeFace(cyl, u0, u1, 0.0, 80.0).Face()
+        shell = TopoDS_Shell()
+        builder.MakeShell(shell)
+        builder.Add(shell, face)
+        builder.Add(compound, shell)
+    return compound
+
+
 def cone_apex():
     """A cone to its apex, cut by an inclined plane."""
     cone = BRepPrimAPI_MakeCone(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 40.0, 0.0, 60.0).Shape()
@@ -155,6 +185,9 @@ MODELS = {
     "occt_box_chamfered": (box_chamfered, "INCH", "AP242DIS"),
     "occt_torus": (torus_full, "MM", "AP214IS"),
     "occt_cone_apex": (cone_apex, "MM", "AP203"),
+    "occt_torus_outer": (lambda: torus_halves(True), "MM", "AP214IS"),
+    "occt_cylinder_panels": (cylinder_panels, "MM", "AP214IS"),
+    "occt_torus_inner": (lambda: torus_halves(False), "MM", "AP242DIS"),
     "occt_capsule": (cylinder_sphere, "MM", "AP242DIS"),
 }
 

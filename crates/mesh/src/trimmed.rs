@@ -58,9 +58,6 @@ const MAX_ANISOTROPY: f64 = 6.0;
 const RULING_ASPECT: f64 = 2.0;
 /// Two rulings closer than this fraction of the u range are one ruling (ruled method).
 const RULING_SNAP_REL: f64 = 1e-9;
-/// spade rejects coordinates of magnitude below its MIN_ALLOWED_VALUE (≈ 1e-142); smaller ones
-/// are rounded to zero.
-const TINY: f64 = 1e-100;
 /// A point of a trim loop.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TrimPoint {
@@ -104,6 +101,8 @@ pub enum TrimError {
     ShortLoop { index: usize },
     #[error("trim loop {index} has a non-finite (u, v) or point")]
     NonFinite { index: usize },
+    #[error("trim loop {index} has (u, v) = ({u}, {v}), beyond the triangulator's range (±3.2e60)")]
+    OutOfRange { index: usize, u: f64, v: f64 },
     #[error("the surface is not finite at (u, v) = ({u}, {v})")]
     SurfaceNonFinite { u: f64, v: f64 },
     #[error(
@@ -162,8 +161,15 @@ impl Verts {
     }
 }
 
+/// `x`, or 0 where spade would reject it as too small (below its `MIN_ALLOWED_VALUE`, 2^-142
+/// ≈ 1.8e-43): a CAD system's rounding noise, e.g. (u, v) = (−100, 1.8e-45) on a plane whose
+/// axes are written with components of 1e-17.
 fn tiny0(x: f64) -> f64 {
-    if x.abs() < TINY { 0.0 } else { x }
+    if x.abs() < spade::MIN_ALLOWED_VALUE {
+        0.0
+    } else {
+        x
+    }
 }
 
 /// Validates the loops and turns each into local vertex indices (consecutive points with the
@@ -310,7 +316,7 @@ fn loops_cdt(
     let mut handle: Vec<Option<FixedVertexHandle>> = vec![None; nverts];
     // One CDT vertex per loop point: pole runs share a local vertex but keep their own (u, v).
     let mut loop_handles: Vec<Vec<FixedVertexHandle>> = Vec::with_capacity(loops.len());
-    for lp in loops {
+    for (index, lp) in loops.iter().enumerate() {
         let mut hs = Vec::with_capacity(lp.len());
         for &(local, uv) in lp {
             let w = uv * scale;
@@ -319,7 +325,11 @@ fn loops_cdt(
                     pos: Point2::new(tiny0(w.x), tiny0(w.y)),
                     local,
                 })
-                .map_err(|_| TrimError::NonFinite { index: 0 })?;
+                .map_err(|_| TrimError::OutOfRange {
+                    index,
+                    u: uv.x,
+                    v: uv.y,
+                })?;
             handle[local as usize].get_or_insert(h);
             hs.push(h);
         }
@@ -1018,25 +1028,7 @@ mod tests {
             (10.0, 0.0),
             (0.0, 10.0),
         ];
-        let lp: Vec<TrimPoint> = pts
-            .iter()
-            .enumerate()
-            .map(|(k, &(u, v))| TrimPoint {
-                uv: DVec2::new(u, v),
-                pos: s.eval(u, v),
-                vertex: k as u32,
-            })
-            .collect();
-        let e = tessellate_trimmed(
-            &TrimmedFace {
-                surface: &s,
-                loops: &[lp],
-                ruled: false,
-            },
-            &Tolerances::DEFAULT,
-            &TessOptions::DEFAULT,
-        )
-        .unwrap_err();
+        let e = plane_face(&s, &[plane_loop(&s, &pts, 0)]).unwrap_err();
         assert!(matches!(e, TrimError::LoopsOverlap { .. }), "{e}");
     }
 
@@ -1115,28 +1107,61 @@ mod tests {
     #[test]
     fn crossing_loops_are_an_error() {
         let s = Analytic::plane(Frame::WORLD);
-        let mk = |pts: &[(f64, f64)], base: u32| -> Vec<TrimPoint> {
-            pts.iter()
-                .enumerate()
-                .map(|(k, &(u, v))| TrimPoint {
-                    uv: DVec2::new(u, v),
-                    pos: s.eval(u, v),
-                    vertex: base + k as u32,
-                })
-                .collect()
-        };
-        let a = mk(&[(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0)], 0);
-        let b = mk(&[(5.0, 5.0), (15.0, 5.0), (15.0, 15.0), (5.0, 15.0)], 10);
-        let e = tessellate_trimmed(
+        let a = plane_loop(&s, &[(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0)], 0);
+        let b = plane_loop(
+            &s,
+            &[(5.0, 5.0), (15.0, 5.0), (15.0, 15.0), (5.0, 15.0)],
+            10,
+        );
+        let e = plane_face(&s, &[a, b]).unwrap_err();
+        assert!(matches!(e, TrimError::LoopsCross { .. }), "{e}");
+    }
+
+    /// A loop on a plane through the given (u, v) points, one vertex each from `first`.
+    fn plane_loop(s: &Analytic, pts: &[(f64, f64)], first: u32) -> Vec<TrimPoint> {
+        pts.iter()
+            .enumerate()
+            .map(|(k, &(u, v))| TrimPoint {
+                uv: DVec2::new(u, v),
+                pos: s.eval(u, v),
+                vertex: first + k as u32,
+            })
+            .collect()
+    }
+
+    /// The untrimmed-plane tessellation of `loops` at the default tolerances.
+    fn plane_face(s: &Analytic, loops: &[Vec<TrimPoint>]) -> Result<TrimmedMesh, TrimError> {
+        tessellate_trimmed(
             &TrimmedFace {
-                surface: &s,
-                loops: &[a, b],
+                surface: s,
+                loops,
                 ruled: false,
             },
             &Tolerances::DEFAULT,
             &TessOptions::DEFAULT,
         )
-        .unwrap_err();
-        assert!(matches!(e, TrimError::LoopsCross { .. }), "{e}");
+    }
+
+    #[test]
+    fn rounding_noise_below_the_triangulators_range_is_zero() {
+        // HiCAD writes plane axes with components of 1e-17 and 1e-33: a corner lands at
+        // v = 1.8e-45, below spade's smallest accepted magnitude (2^-142).
+        let s = Analytic::plane(Frame::WORLD);
+        let corners = [
+            (-100.0, 1.7789921910373654e-45),
+            (0.0, 0.0),
+            (0.0, 100.0),
+            (-100.0, 100.0),
+        ];
+        let m = plane_face(&s, &[plane_loop(&s, &corners, 0)]).unwrap();
+        assert!((m.cover_uv - 1e4).abs() < 1e-9, "{}", m.cover_uv);
+    }
+
+    #[test]
+    fn a_loop_beyond_the_triangulators_range_is_named() {
+        let s = Analytic::plane(Frame::WORLD);
+        let corners = [(0.0, 0.0), (1e61, 0.0), (1e61, 1e61), (0.0, 1e61)];
+        let e = plane_face(&s, &[plane_loop(&s, &corners, 0)]).unwrap_err();
+        assert!(matches!(e, TrimError::OutOfRange { index: 0, .. }), "{e}");
     }
 }

@@ -49,6 +49,10 @@ impl Model {
             let (Some(ka), Some(kb)) = (pos(a), pos(b)) else {
                 continue;
             };
+            // Bodies sewn together meet at a seam, never in one piece.
+            if self.faces[a].shell != self.faces[b].shell {
+                continue;
+            }
             if self.meet_smoothly(e, a, b) {
                 let (ra, rb) = (find(&mut parent, ka), find(&mut parent, kb));
                 if ra != rb {
@@ -96,7 +100,7 @@ fn normal_at(
         .pcurves
         .iter()
         .find(|pc| pc.surface_entity == f.surface_entity)
-        .map(|pc| pc.curve.eval(t).truncate());
+        .map(|pc| f.surface.from_file(pc.curve.eval(t).truncate()));
     let uv = f.surface.param_of(p, hint);
     if f.surface.eval(uv.x, uv.y).distance(p) > gap {
         return None;

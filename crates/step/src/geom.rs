@@ -159,11 +159,40 @@ pub struct Spline {
     pub patch: BSplinePatch,
     /// The period of u and of v, when the patch closes on itself in that direction.
     pub period: [Option<f64>; 2],
+    /// The file's u domain `[a, b]` when the file's patch closes in v only: it is held turned
+    /// ([`BSplinePatch::turned`]), so that its closed direction is u as the trimming expects,
+    /// and the file's (u, v) (its p-curves) map to `(v, a + b − u)`.
+    pub turned: Option<(f64, f64)>,
 }
 
 impl Spline {
-    /// The patch, with its closed directions found by comparing its opposite sides.
+    /// The patch, with its closed directions found by comparing its opposite sides; a patch
+    /// closed in v only is turned so that it closes in u.
     pub fn new(patch: BSplinePatch) -> Self {
+        let s = Self::as_given(patch);
+        if let [None, Some(_)] = s.period
+            && let Ok(t) = s.patch.turned()
+        {
+            let d = s.patch.domain();
+            let mut out = Self::as_given(t);
+            if let [Some(_), None] = out.period {
+                out.turned = Some(d.u);
+                return out;
+            }
+        }
+        s
+    }
+
+    /// The (u, v) of this surface for a (u, v) of the file's patch (a p-curve's point).
+    pub fn from_file(&self, q: DVec2) -> DVec2 {
+        match self.turned {
+            Some((a, b)) => DVec2::new(q.y, a + b - q.x),
+            None => q,
+        }
+    }
+
+    /// The patch as given, with its closed directions found by comparing its opposite sides.
+    fn as_given(patch: BSplinePatch) -> Self {
         let d = patch.domain();
         let size = flatcut_geom::Aabb3::from_points(patch.points().iter().copied()).diagonal();
         let tol = (CLOSED_REL * size).max(1e-12);
@@ -195,7 +224,11 @@ impl Spline {
             closed(false).then_some(d.u.1 - d.u.0),
             closed(true).then_some(d.v.1 - d.v.0),
         ];
-        Self { patch, period }
+        Self {
+            patch,
+            period,
+            turned: None,
+        }
     }
 
     /// (u, v) brought into the domain in the closed directions.
@@ -242,6 +275,14 @@ impl Surface {
     /// extrusion): their lines u = const are straight and flat.
     pub fn is_ruled_developable(&self) -> bool {
         matches!(self, Surface::Analytic(a) if a.is_developable())
+    }
+
+    /// This surface's (u, v) for a (u, v) of the file's surface entity (a p-curve's point).
+    pub fn from_file(&self, q: DVec2) -> DVec2 {
+        match self {
+            Surface::Spline(s) => s.from_file(q),
+            Surface::Analytic(_) => q,
+        }
     }
 
     /// The (u, v) of the point of the surface nearest `p` (for a patch: the local minimum
@@ -467,6 +508,31 @@ pub fn project(s: &Spline, p: DVec3, start: DVec2) -> DVec2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_patch_closed_in_v_only_is_turned_to_close_in_u() {
+        // The exact NURBS cylinder: u along the axis, v around it (closed in v only).
+        let file = BSplinePatch::cylinder(DVec3::new(1.0, 2.0, 3.0), 40.0, 90.0).unwrap();
+        let s = Spline::new(file.clone());
+        assert!(s.turned.is_some());
+        assert!(
+            s.period[0].is_some() && s.period[1].is_none(),
+            "{:?}",
+            s.period
+        );
+        let surface = Surface::Spline(s);
+        for (u, v) in [(0.1, 0.2), (0.5, 0.75), (0.9, 0.05), (0.0, 1.0)] {
+            let q = surface.from_file(DVec2::new(u, v));
+            assert!(surface.eval(q.x, q.y).distance(file.eval(u, v)) < 1e-9);
+            let (_, fu, fv) = file.deriv1(u, v);
+            let (_, su, sv) = surface.deriv1(q.x, q.y);
+            let (nf, ns) = (fu.cross(fv).normalize(), su.cross(sv).normalize());
+            assert!(
+                nf.dot(ns) > 1.0 - 1e-9,
+                "the normal turned with the parameters"
+            );
+        }
+    }
 
     #[test]
     fn projection_onto_a_patch_finds_the_parameters() {

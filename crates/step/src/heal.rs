@@ -56,6 +56,12 @@ pub enum RepairKind {
     Pcurve,
     /// Two vertices at (nearly) one point, used by consecutive edges: merged.
     VertexMerge,
+    /// An edge used out and back by consecutive uses of a loop, turning where the surface has
+    /// no pole: a slit of zero width inside the face (an internal edge), dropped from the loop.
+    Slit,
+    /// A free edge of one shell runs along a free edge of another: sewn into one edge, a seam
+    /// between the bodies.
+    Sewn,
 }
 
 /// One repair, on the entity it concerns.
@@ -88,11 +94,13 @@ impl std::fmt::Display for Repair {
 
 impl crate::Model {
     /// Heals the model within `self.heal_mm`: vertices off their curves (reported, or the edge
-    /// refused beyond the limit), vertices of consecutive edges that do not meet (merged), and
-    /// loops running the same way as their neighbours' along their shared edges (reversed).
+    /// refused beyond the limit), vertices of consecutive edges that do not meet (merged), free
+    /// edges of different shells along one curve (sewn, [`crate::sew`]), and loops running the
+    /// same way as their neighbours' along their shared edges (reversed).
     pub(crate) fn heal(&mut self) {
         self.vertices_off_curves();
         self.merge_gaps();
+        self.sew_shells();
         self.orient_loops();
     }
 

@@ -26,6 +26,7 @@ pub mod heal;
 pub mod lexer;
 pub mod model;
 pub mod reader;
+pub mod sew;
 pub mod tess;
 pub mod trim;
 

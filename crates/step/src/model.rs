@@ -170,7 +170,8 @@ pub struct Model {
     pub vertices: Vec<Vertex>,
     /// The placed bodies, in order (one per body for a file that is no assembly).
     pub instances: Vec<BodyInstance>,
-    /// The diagonal of the vertices' bounding box (mm).
+    /// The diagonal of the bounding box of the vertices and of points along the edges (mm): a
+    /// full torus or sphere has one vertex, its size is in its edges.
     pub size_mm: f64,
     /// The largest defect healed (mm).
     pub heal_mm: f64,
@@ -264,8 +265,7 @@ impl Model {
                 }
             }
         }
-        let size_mm = Aabb3::from_points(b.vertices.iter().map(|v| v.point)).diagonal();
-        let size_mm = if size_mm.is_finite() { size_mm } else { 0.0 };
+        let size_mm = extent(&b.vertices, &b.edges);
         let mut model = Model {
             schemas: file.schemas.clone(),
             units: first_units.unwrap_or_else(Units::assumed_mm),
@@ -794,4 +794,23 @@ impl<'f> Builder<'f> {
         }
         out
     }
+}
+
+/// Points along each edge's curve: enough to see a closed edge's extent from its one vertex.
+const EXTENT_SAMPLES: usize = 8;
+
+/// The diagonal of the bounding box of the vertices and of [`EXTENT_SAMPLES`] points along each
+/// edge (mm); 0 for a model without finite points.
+fn extent(vertices: &[Vertex], edges: &[Edge]) -> f64 {
+    let along = edges
+        .iter()
+        .filter_map(|e| e.geometry.as_ref().ok())
+        .flat_map(|g| {
+            (1..EXTENT_SAMPLES).map(move |k| {
+                let t = g.t0 + (g.t1 - g.t0) * k as f64 / EXTENT_SAMPLES as f64;
+                g.curve.eval(t)
+            })
+        });
+    let d = Aabb3::from_points(vertices.iter().map(|v| v.point).chain(along)).diagonal();
+    if d.is_finite() { d } else { 0.0 }
 }

@@ -540,6 +540,16 @@ impl<'f> Reader<'f> {
                 let (r1, r2) = (a.real(2, "major_radius")?, a.real(3, "minor_radius")?);
                 Analytic::torus(f, r1 * mm, r2 * mm).map_err(bad)?
             }
+            // A spindle torus (minor radius above the major, its tube crossing the axis);
+            // `select_outer` names the part a face lies on (the apple or the lemon), and the
+            // torus's (u, v) reaches both: each point is found on the branch that passes through
+            // it (`analytic_param_of`), so the flag only has to be well formed.
+            "DEGENERATE_TOROIDAL_SURFACE" => {
+                let f = self.placement(a.reference(1, "position")?, id)?;
+                let (r1, r2) = (a.real(2, "major_radius")?, a.real(3, "minor_radius")?);
+                a.boolean(4, "select_outer")?;
+                Analytic::torus(f, r1 * mm, r2 * mm).map_err(bad)?
+            }
             "SURFACE_OF_LINEAR_EXTRUSION" => {
                 let c = self.curve(a.reference(1, "swept_curve")?, id, Space::Model)?;
                 let v = self.vector(a.reference(2, "extrusion_axis")?, id, Space::Model)?;

@@ -542,7 +542,7 @@ impl Tessellation {
             let trim_area = check::trim_area(&g.surface, &oriented);
             check_face(model, *i, &g.surface, &oriented, trim_area, &tm, chord)?;
             let mut mesh = tm.mesh;
-            if !g.same_sense {
+            if g.same_sense == t.flip {
                 for tri in &mut mesh.triangles {
                     tri.swap(1, 2);
                 }

@@ -90,6 +90,10 @@ pub(crate) struct Trim {
     pub repairs: Vec<Repair>,
     /// Samples the face needs on its edges (where an edge runs through a pole): (slot, t).
     pub wants: Vec<(usize, f64)>,
+    /// The face's normal is the opposite of what its `same_sense` says: its loops agree with
+    /// the neighbours' (each shared edge used once each way) but run the wrong way round on its
+    /// surface, so the flag is the one in error.
+    pub flip: bool,
 }
 
 /// What building a face's region needs.
@@ -164,6 +168,11 @@ pub(crate) fn build(inp: &TrimInput) -> Result<Trim, StepError> {
         let (lp, winding) = join(inp, &parts, periods, sigma)?;
         placed.push((lp, winding));
     }
+    if placed.is_empty() && inp.face.bounds.iter().any(|b| !b.uses.is_empty()) {
+        return Err(
+            inp.err("every loop of the face is a slit (edges out and back): it bounds no region")
+        );
+    }
     if placed.is_empty() {
         let lp = whole_surface(inp, &[], &mut trim)?;
         placed.push((lp, [0, 0]));
@@ -203,7 +212,50 @@ fn chain(inp: &TrimInput, b: &Bound, repairs: &mut Vec<Repair>) -> Result<Vec<Ed
             "the loop's edges are out of order or flagged the wrong way: chained by their vertices",
         ));
     }
-    Ok(out)
+    Ok(without_slits(inp, out, repairs))
+}
+
+/// The loop without its slits: an edge used out and back by consecutive uses (cyclically),
+/// turning at a point that is not a pole, bounds nothing — the face lies on both sides of it
+/// (an internal edge, as some systems write where a face was split and merged again). Both uses
+/// are dropped, repeatedly, so a loop made only of slits becomes empty. An edge out to a pole
+/// and back (a sphere's seam where no pole edge is written) is kept: the pole closes the region.
+fn without_slits(
+    inp: &TrimInput,
+    mut uses: Vec<EdgeUse>,
+    repairs: &mut Vec<Repair>,
+) -> Vec<EdgeUse> {
+    let s = inp.surface();
+    loop {
+        let n = uses.len();
+        let slit = (0..n).find(|&k| {
+            let (a, b) = (uses[k], uses[(k + 1) % n]);
+            if n < 2 || a.edge != b.edge || a.forward == b.forward {
+                return false;
+            }
+            let Ok(g) = inp.geometry(a.edge) else {
+                return false;
+            };
+            let turn = if a.forward { g.end } else { g.start };
+            let p = inp.model.vertices[turn].point;
+            s.free_direction(s.param_of(p, None), inp.pole_tol)
+                .is_none()
+        });
+        let Some(k) = slit else {
+            return uses;
+        };
+        let edge = uses[k].edge;
+        repairs.push(Repair::new(
+            RepairKind::Slit,
+            inp.model.edges[edge].entity,
+            0.0,
+            "the loop runs out and back along this edge (a slit inside the face): dropped from the loop",
+        ));
+        let next = (k + 1) % n;
+        let (hi, lo) = (k.max(next), k.min(next));
+        uses.remove(hi);
+        uses.remove(lo);
+    }
 }
 
 /// The (u, v) of an edge's samples on the face, continuous along the edge, from its start.
@@ -217,10 +269,7 @@ fn edge_uv(inp: &TrimInput, slot: usize, g: &EdgeGeometry) -> Vec<DVec2> {
     let mut out: Vec<DVec2> = Vec::with_capacity(sm.pts.len());
     for (k, p) in sm.pts.iter().enumerate() {
         let hint = match (pc, out.last()) {
-            (Some(c), _) => {
-                let h = c.eval(sm.ts[k]).truncate();
-                Some(h)
-            }
+            (Some(c), _) => Some(s.from_file(c.eval(sm.ts[k]).truncate())),
             (None, last) => last.copied(),
         };
         let mut uv = s.param_of(*p, hint);
@@ -540,10 +589,15 @@ fn join(
         }
         // `shift` is now the move of part 0 after going once around: the winding.
         let winding = shift;
-        // Drop the repeated first point of a closed loop.
-        if lp.len() > 1 && free[n - 1].is_none() && winding == [0, 0] {
+        // Drop the repeated first point of a closed loop; of a loop going around, the first
+        // point again a period along (the loop's next point after its last).
+        if lp.len() > 1 && free[n - 1].is_none() {
             let (a, z) = (lp[0], lp[lp.len() - 1]);
-            if a.origin == z.origin {
+            let again =
+                a.uv + (0..2).fold(DVec2::ZERO, |acc, d| acc + per_shift(periods, winding, d));
+            if a.origin == z.origin
+                && (winding == [0, 0] || z.uv.distance(again) <= 1e-9 * (1.0 + again.length()))
+            {
                 lp.pop();
             }
         }
@@ -919,10 +973,21 @@ fn outer_for_holes(
     if signed_area(&loops[k]) * sigma == 0.0 {
         return Err(inp.err("its outer loop bounds no area"));
     }
+    let face = &inp.model.faces[inp.index];
+    if shares_edges(inp) {
+        trim.flip = true;
+        trim.repairs.push(Repair::new(
+            RepairKind::Orientation,
+            face.entity,
+            0.0,
+            "the face's loops run the wrong way round on its surface but agree with its neighbours': its normal is the opposite of its same_sense flag",
+        ));
+        return Ok(());
+    }
     reverse_loop(&mut loops[k]);
     trim.repairs.push(Repair::new(
         RepairKind::Orientation,
-        inp.model.faces[inp.index].entity,
+        face.entity,
         0.0,
         "the face's outer loop runs the wrong way round (the face on its outside, on a surface that does not close): reversed",
     ));
@@ -931,6 +996,17 @@ fn outer_for_holes(
 
 /// Whether the surface closes on itself so that a face may be all of it but holes: periodic in
 /// u and either periodic in v or closed at a pole at both ends.
+/// True when an edge of the face's loops is used by another face too: the loops' directions
+/// are then fixed by the shell (the reader oriented them against their neighbours').
+fn shares_edges(inp: &TrimInput) -> bool {
+    inp.face.bounds.iter().flat_map(|b| &b.uses).any(|u| {
+        inp.model.edges[u.edge]
+            .faces
+            .iter()
+            .any(|&f| f != inp.index)
+    })
+}
+
 fn whole_surface_closes(inp: &TrimInput) -> bool {
     let s = inp.surface();
     let d = s.domain();

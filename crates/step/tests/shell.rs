@@ -156,3 +156,42 @@ fn developable_faces_are_meshed_exactly_developable() {
         }
     }
 }
+
+/// Two half-cylinder sheets, each its own open shell (OpenCASCADE wrote each face with edges of
+/// its own): the two lines where they meet are sewn into shared edges, so the welded tube has
+/// only its two end circles as boundary, and each sewing is reported on both faces.
+#[test]
+fn sheets_of_separate_shells_are_sewn_where_they_meet() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/corpus");
+    let model = Model::read(&dir.join("occt_cylinder_panels.step")).unwrap();
+    assert_eq!(model.shells.len(), 2);
+    assert_eq!(model.faces.len(), 2);
+    let shared = model
+        .edges
+        .iter()
+        .filter(|e| e.faces.len() == 2 && e.faces[0] != e.faces[1])
+        .count();
+    assert_eq!(shared, 2, "the two meeting lines are one edge each");
+    let t = Tessellation::new(
+        &model,
+        &[0, 1],
+        &Tolerances::DEFAULT.with_chord_mm(0.05),
+        &TessOptions::DEFAULT,
+    )
+    .unwrap();
+    let topo = Topology::build(&t.welded(None)).unwrap();
+    assert_eq!(topo.component_count, 1);
+    assert_eq!(
+        topo.boundary_loops.len(),
+        2,
+        "only the end circles are free"
+    );
+    for f in &t.faces {
+        let sewn = f
+            .repairs
+            .iter()
+            .filter(|r| r.kind == flatcut_step::heal::RepairKind::Sewn)
+            .count();
+        assert_eq!(sewn, 2, "face {}: {:?}", f.face, f.repairs);
+    }
+}

@@ -502,6 +502,38 @@ impl BSplinePatch {
         }
     }
 
+    /// The same surface with its parameters turned a quarter: `S'(s, t) = S(a + b − t, s)`
+    /// (`[a, b]` the u domain), so the new u runs along the old v and the normal
+    /// `S'_s × S'_t = S_u × S_v` is unchanged. A surface closed in v only is read this way round,
+    /// so that its closed direction is u.
+    pub fn turned(&self) -> Result<Self, SurfaceError> {
+        let (nu, nv) = (self.count_u, self.count_v);
+        let (a, b) = (self.knots_u[0], self.knots_u[self.knots_u.len() - 1]);
+        let knots_v: Vec<f64> = self.knots_u.iter().rev().map(|&k| a + b - k).collect();
+        // New pole (i', j') — i' along the new u (old v), j' along the new v (old u reversed).
+        let at = |ip: usize, jp: usize| (nu - 1 - jp) * nv + ip;
+        let points = (0..nv)
+            .flat_map(|ip| (0..nu).map(move |jp| (ip, jp)))
+            .map(|(ip, jp)| self.points[at(ip, jp)])
+            .collect();
+        let weights = self.weights.as_ref().map(|w| {
+            (0..nv)
+                .flat_map(|ip| (0..nu).map(move |jp| (ip, jp)))
+                .map(|(ip, jp)| w[at(ip, jp)])
+                .collect()
+        });
+        Self::new(
+            self.degree_v,
+            self.degree_u,
+            self.knots_v.clone(),
+            knots_v,
+            nv,
+            nu,
+            points,
+            weights,
+        )
+    }
+
     /// True for a rational patch.
     pub fn is_rational(&self) -> bool {
         self.weights.is_some()
@@ -1124,6 +1156,41 @@ mod tests {
             let shifted = BSplinePatch::new(3, 3, w.knots_u.clone(), w.knots_v.clone(), 10, 10,
                 w.points.iter().map(|p| *p + DVec3::new(1.0, 2.0, dz)).collect(), None).unwrap();
             prop_assert!((shifted.eval(u, v) - w.eval(u, v) - DVec3::new(1.0, 2.0, dz)).length() < 1e-11);
+        }
+    }
+    #[test]
+    fn a_turned_patch_is_the_same_surface_with_the_same_normal() {
+        // A bicubic NURBS patch with uneven knots: S'(s, t) = S(a + b - t, s).
+        let (nu, nv) = (5, 4);
+        let points: Vec<DVec3> = (0..nu)
+            .flat_map(|i| (0..nv).map(move |j| (i, j)))
+            .map(|(i, j)| {
+                DVec3::new(
+                    i as f64 * 10.0,
+                    j as f64 * 7.0,
+                    ((i * 3 + j * 5) % 7) as f64,
+                )
+            })
+            .collect();
+        let weights: Vec<f64> = (0..nu * nv).map(|k| 1.0 + 0.1 * (k % 3) as f64).collect();
+        let p = BSplinePatch::new(
+            3,
+            2,
+            vec![0.0, 0.0, 0.0, 0.0, 0.3, 1.0, 1.0, 1.0, 1.0],
+            vec![2.0, 2.0, 2.0, 2.5, 3.0, 3.0, 3.0],
+            nu,
+            nv,
+            points,
+            Some(weights),
+        )
+        .unwrap();
+        let q = p.turned().unwrap();
+        for (u, v) in [(0.1, 2.2), (0.5, 2.9), (0.95, 2.5), (0.3, 2.0)] {
+            let (s, t) = (v, 1.0 - u);
+            assert!(q.eval(s, t).distance(p.eval(u, v)) < 1e-12);
+            let (_, pu, pv) = p.deriv1(u, v);
+            let (_, qs, qt) = q.deriv1(s, t);
+            assert!((qs.cross(qt) - pu.cross(pv)).length() < 1e-9 * pu.cross(pv).length());
         }
     }
 }
