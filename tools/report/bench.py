@@ -23,8 +23,8 @@ surface is developable exactly and the unrolling (each strip between two rulings
 the angle between them) is an isometry of it; the only error of the figure is the OBJ's 10
 decimals. Each report runs in its own process under /usr/bin/time (wall time and peak memory of
 the whole command: reading the OBJ, measuring, writing the JSON), `--repeat` times; the table
-gives the median time, the largest peak memory, and the machine's load (`uptime`) before the
-runs. Run it on a quiet machine; it is a benchmark, never a test.
+gives the median wall and CPU (user + system) times, the largest peak memory, and the machine's
+highest one-minute load during the runs (on a shared machine the CPU time is the steadier one). Run it on a quiet machine; it is a benchmark, never a test.
 """
 import argparse
 import json
@@ -132,14 +132,14 @@ def load():
 
 
 def timed(cmd):
-    """Runs `cmd` under /usr/bin/time; returns (wall s, peak MB, exit code)."""
+    """Runs `cmd` under /usr/bin/time; returns (wall s, CPU s, peak MB, exit code)."""
     with tempfile.NamedTemporaryFile("r", suffix=".time") as tf:
-        p = subprocess.run(["/usr/bin/time", "-f", "%e %M", "-o", tf.name] + cmd,
+        p = subprocess.run(["/usr/bin/time", "-f", "%e %U %S %M", "-o", tf.name] + cmd,
                            capture_output=True, text=True)
         if p.returncode not in (0, 3):
             sys.stderr.write(p.stderr[-2000:])
-        wall, kb = open(tf.name).read().split()[-2:]
-    return float(wall), int(kb) / 1024.0, p.returncode
+        wall, user, system, kb = open(tf.name).read().split()[-4:]
+    return float(wall), float(user) + float(system), int(kb) / 1024.0, p.returncode
 
 
 def main():
@@ -155,8 +155,8 @@ def main():
     head = "| piece | faces | exact δ0 |"
     rule = "|---|---|---|"
     for label, _ in tools:
-        head += f" δ0 {label} | report s {label} | peak MB {label} |"
-        rule += "---|---|---|"
+        head += f" δ0 {label} | report s {label} | CPU s {label} | peak MB {label} |"
+        rule += "---|---|---|---|"
     print(head + " load |")
     print(rule + "---|")
     for name in names:
@@ -166,18 +166,20 @@ def main():
         row = f"| {name} | {len(F)} | {exact:.6f} |"
         loads = [load()]
         for label, binary in tools:
-            times, peaks = [], []
+            times, cpus, peaks = [], [], []
             d0 = float("nan")
             for k in range(a.repeat):
                 js = os.path.join(a.out, f"{name}.{label}.json")
-                wall, mb, code = timed([binary, "report", obj, "--json", js])
+                wall, cpu, mb, code = timed([binary, "report", obj, "--json", js])
                 times.append(wall)
+                cpus.append(cpu)
                 peaks.append(mb)
                 if code in (0, 3):
                     d0 = json.load(open(js))["delta0"]
             loads.append(load())
             d0s = "∞" if d0 is None else f"{d0:.6f}"
-            row += f" {d0s} | {statistics.median(times):.2f} | {max(peaks):.0f} |"
+            row += (f" {d0s} | {statistics.median(times):.2f} | {statistics.median(cpus):.2f} |"
+                    f" {max(peaks):.0f} |")
         print(row + f" {max(loads):.1f} |", flush=True)
 
 

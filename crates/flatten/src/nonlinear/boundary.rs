@@ -16,7 +16,8 @@
 //! interior relaxes (`held_outline`): 3 Newton steps to a smooth outline on the saddle.
 //!
 //! The free outline: start from the isometric (δ2) map (the `isometric` method's own solve, from LSCM),
-//! which is flip-free and already close; then an
+//! which is flip-free and already close, on the same problem (its pattern and symbolic
+//! factorisation serve every later solve: the boundary edges are mesh edges); then an
 //! augmented Lagrangian on the boundary lengths (c_e = (|e|² − L²)/L² = 0) solved by the
 //! flip-free projected Newton of [`super::newton`]. Once the lengths are within
 //! `INEXACT_ABOVE`, every Newton step moves the multipliers too (the SQP step of the
@@ -51,9 +52,9 @@
 use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
-use super::kernel::{GuardShape, GuardedGreen, RestTri, singular_values};
-use super::newton::{Budget, EarlyStop, EdgeTerms, MapProblem, run};
-use super::{ABS_DECREMENT_PER_AREA, isometric_run, mean_density, time_limit_warning, total_area};
+use super::kernel::{GuardShape, GuardedGreen, RestTri, SymDirichlet, singular_values};
+use super::newton::{Budget, EarlyStop, EdgeTerms, MapProblem, run, run_flat, to_flat};
+use super::{ABS_DECREMENT_PER_AREA, mean_density, time_limit_warning, total_area};
 use crate::conformal_boundary::{Closing, conformal_map, log_scale_factors};
 use crate::ops::{angle_sums, boundary_mask, corner_angles, count_flips, flat_corner_angles};
 use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
@@ -283,7 +284,29 @@ fn free_outline(
     let n = mesh.positions.len();
     let method = Method::BoundaryIsometric;
     let start = budget.next("isometric start", params.time_limit);
-    let iso = isometric_run(rest, n, x0, params, method, &start)?;
+    // One problem, one pattern and one symbolic factorisation for the isometric start and every
+    // outer iteration: the boundary edges are mesh edges, so the pattern is the same; only the
+    // energy, the multipliers and the weight change.
+    let iso_problem =
+        MapProblem::new(rest, n, SymDirichlet, None).map_err(|reason| FlattenError::Solver {
+            stage: "boundary-isometric",
+            reason,
+        })?;
+    let abs = ABS_DECREMENT_PER_AREA * total_area(rest);
+    let flat = to_flat(&x0);
+    drop(x0);
+    let (iso, iso_problem) = run_flat(
+        iso_problem,
+        flat,
+        params.max_iters,
+        params.rel_tolerance,
+        abs,
+        &start,
+    )
+    .map_err(|reason| FlattenError::NoConvergence { method, reason })?;
+    if iso.early == Some(EarlyStop::Cancelled) {
+        return Err(FlattenError::Cancelled { method });
+    }
     let mut timings = iso.timings;
     let mut early = iso.early;
     let mut iterations = iso.iterations;
@@ -298,15 +321,7 @@ fn free_outline(
         align: Vec::new(),
         pulls: Vec::new(),
     };
-    // One problem (and one symbolic factorisation) for every outer iteration: only the
-    // multipliers and the weight change between them.
-    let mut problem = Some(
-        MapProblem::new(rest, n, energy, Some(terms)).map_err(|reason| FlattenError::Solver {
-            stage: "boundary-isometric",
-            reason,
-        })?,
-    );
-    let abs = ABS_DECREMENT_PER_AREA * total_area(rest);
+    let mut problem = Some(iso_problem.with_energy(energy).with_edges(Some(terms)));
     let mut viol = max_boundary_error(&edges, &x).0;
     // The closest non-degenerate map so far: (largest relative boundary error, map).
     let mut best = (viol, x.clone());

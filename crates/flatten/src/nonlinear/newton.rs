@@ -8,6 +8,10 @@
 //! Every iterate is therefore flip-free if the start is. In the tail, where Newton converges
 //! fast, a chord step (the new gradient solved with the factorisation already made) follows a
 //! full step, and ends the solve when its decrement is below the tolerance (`CHORD_FAST`).
+//! Where edge lengths are held ([`EdgeTerms::hold`]) the chord steps move their multipliers
+//! too, and go on while the lengths come closer: once the map has converged only the lengths'
+//! last digits are left, and those need no new factorisation (on the bench's 200k toe f1 took
+//! 17 factorisations instead of 23).
 //!
 //! argmin drives the loop (termination, iteration cap, observers); the heavy work is our own on
 //! `Vec<f64>` parameters (crates.md §2: argmin has no sparse Hessians).
@@ -61,6 +65,9 @@ const CHORD_FAST: f64 = 0.1;
 /// Most chord steps after one Newton step (each is a gradient, two triangular solves and a line
 /// search: on the million-face toe four of them cost a fifth of the Newton step they save).
 const MAX_CHORDS: usize = 4;
+/// Most chord steps after one Newton step while held lengths are still off
+/// ([`EdgeTerms::hold`]): each must bring them [`HOLD_PROGRESS`] closer.
+const MAX_HOLD_CHORDS: usize = 8;
 
 /// Relative rise of a total energy that is within its round-off (a sum of up to millions of
 /// terms in double precision).
@@ -863,17 +870,34 @@ impl<E: TriEnergy> Solver<MapProblem<'_, E>, NState> for ProjectedNewton {
             let tolerance = self.abs_tolerance.max(self.rel_tolerance * en.abs());
             // While the chord steps keep converging fast (each gaining at most CHORD_FAST of
             // the step before), the next one too reuses the factorisation: a few of them cost
-            // less than one more Newton step's assembly and factorisation.
+            // less than one more Newton step's assembly and factorisation. While held lengths
+            // are still off, the chord steps move the multipliers too and go on while they
+            // bring the lengths closer (the map has converged; what is left is the lengths').
             let mut gained = self.last_decrease;
-            for _ in 0..MAX_CHORDS {
+            let mut held = held_error(p, &xn);
+            let most = if held.is_some() {
+                MAX_HOLD_CHORDS
+            } else {
+                MAX_CHORDS
+            };
+            for _ in 0..most {
                 let take = tolerance.max(CHORD_FAST * gained);
-                let Some(c) = chord_step(p, &xn, en, take, &mut self.line_search_time) else {
+                let Some(c) =
+                    chord_step(p, &xn, en, take, held.is_some(), &mut self.line_search_time)
+                else {
                     break;
                 };
                 gained = en - c.energy;
                 (xn, en) = (c.x, c.energy);
                 self.last_decrease = e0 - en;
                 self.converged = c.decrement <= tolerance;
+                if let Some(before) = held {
+                    held = held_error(p, &xn).filter(|&now| now <= HOLD_PROGRESS * before);
+                    if held.is_some() {
+                        continue;
+                    }
+                    break;
+                }
                 if self.converged || gained <= 0.0 {
                     break;
                 }
@@ -965,15 +989,26 @@ struct Chord {
     decrement: f64,
 }
 
+/// The largest relative error of the lengths a problem holds ([`EdgeTerms::hold`]) while it is
+/// above what is asked; `None` when no lengths are held or they are held closely enough.
+fn held_error<E>(p: &MapProblem<'_, E>, x: &[DVec2]) -> Option<f64> {
+    let e = p.edges.as_ref()?;
+    let hold = e.hold?;
+    Some(e.max_rel_error(x)).filter(|&now| now > hold)
+}
+
 /// A chord step from `x` (energy `e`): the direction from the last factorised Hessian and the
 /// gradient at `x`, taken when its decrement −g·d/2 is at most `take` (the map stays `x` where no
 /// step along it decreases the energy any more); `None` when the decrement is larger or the
-/// factorisation cannot be reused.
+/// factorisation cannot be reused. With `follow` the held lengths' multipliers move with the
+/// step ([`EdgeTerms::follow`]), and a step whose energy is level with `e` within its round-off
+/// is taken (near the constrained optimum what the lengths still change is below it).
 fn chord_step<E: TriEnergy>(
     p: &mut MapProblem<'_, E>,
     x: &[DVec2],
     e: f64,
     take: f64,
+    follow: bool,
     line_search_time: &mut Duration,
 ) -> Option<Chord> {
     let (_, g) = p.assemble(x, None);
@@ -987,11 +1022,28 @@ fn chord_step<E: TriEnergy>(
     let d = to_points(&dir);
     let searching = Instant::now();
     let tmax = p.max_step(x, &d);
-    let (x, energy) = match line_search(p, x, &d, e, gd, tmax) {
-        Some((_, xc, ec)) if ec < e => (xc, ec),
-        _ => (x.to_vec(), e),
+    let found = match line_search(p, x, &d, e, gd, tmax) {
+        Some((t, xc, ec)) if ec < e => Some((t, xc, ec)),
+        _ if follow => {
+            let t = (INVERSION_STEP_FRACTION * tmax).min(1.0);
+            let xc: Vec<DVec2> = x.iter().zip(&d).map(|(a, b)| *a + t * *b).collect();
+            let ec = p.total_energy(&xc);
+            (ec.is_finite() && ec - e <= ROUND_OFF_REL * e.abs()).then_some((t, xc, ec))
+        }
+        _ => None,
     };
     *line_search_time += searching.elapsed();
+    let (x, energy) = match found {
+        Some((t, xc, ec)) => match p.edges.as_mut().filter(|_| follow) {
+            Some(edges) => {
+                edges.follow(x, &d, t);
+                let ec = p.total_energy(&xc);
+                (xc, ec)
+            }
+            None => (xc, ec),
+        },
+        None => (x.to_vec(), e),
+    };
     Some(Chord {
         x,
         energy,
@@ -1007,7 +1059,8 @@ const MAX_DOUBLINGS: usize = 30;
 /// Armijo condition holds. Where the full step was accepted and the first inversion is farther,
 /// the step is doubled while the energy keeps falling: far from the optimum a barrier term 1/σ²
 /// lets Newton grow a crushed triangle by only a third per step (the model underestimates the
-/// decrease), and doubling covers in one step what would otherwise take many. Returns the step,
+/// decrease), and doubling covers in one step what would otherwise take many (not while held
+/// lengths' multipliers follow the step, [`EdgeTerms::hold`]). Returns the step,
 /// the new map and its energy, or `None` if no step decreases the energy enough.
 fn line_search<E: TriEnergy>(
     p: &MapProblem<'_, E>,
@@ -1026,7 +1079,10 @@ fn line_search<E: TriEnergy>(
         let en = p.total_energy(&xn);
         if armijo(t, en) {
             let mut best = (t, xn, en);
-            if t == 1.0 {
+            // Not while lengths are held: their multipliers follow the Newton step, which a
+            // longer one overshoots.
+            let holding = p.edges.as_ref().is_some_and(|e| e.hold.is_some());
+            if t == 1.0 && !holding {
                 for _ in 0..MAX_DOUBLINGS {
                     let t2 = (2.0 * best.0).min(limit);
                     if t2 <= best.0 {
