@@ -772,9 +772,10 @@ const KNOWN_CIRCLES: &[(&str, &[&str], &str)] = &[
     ),
     (
         "crates/server/src",
-        &["app", "device_routes", "task"],
+        &["app", "device_routes", "solve_routes", "task"],
         "the routes and the task slots use the app's state and error (app::App, ApiError), and \
-         the app mounts them; the state and error belong in a module below the routes",
+         the app mounts them (the device routes ask the solve routes for the finished pattern); \
+         the state and error belong in a module below the routes",
     ),
     (
         "crates/step/src",
