@@ -40,10 +40,10 @@ def timed(cmd):
 def parse(stderr):
     """Newton steps, faces and the stage times of flatten's `--timings` output."""
     out = {}
-    m = re.search(r"\((\d+) faces\)", stderr)
+    m = re.search(r"(\d+) faces", stderr)
     if m:
         out["faces"] = int(m.group(1))
-    m = re.search(r"^\s*(\d+) iterations", stderr, re.M)
+    m = re.search(r"(\d+) iterations", stderr)
     if m:
         out["steps"] = int(m.group(1))
     m = re.search(r"factorisation [\d.]+ s \((\d+)\)", stderr)

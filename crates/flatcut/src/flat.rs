@@ -3,6 +3,7 @@
 //! already carries its flat map.
 
 use std::path::Path;
+use std::time::{Duration, Instant};
 
 use flatcut_design::PieceDef;
 use flatcut_flatten::{FlattenInfo, FlattenParams};
@@ -39,6 +40,39 @@ pub struct Flat {
     /// The grain's direction in the map of a piece without a material whose grain line cannot
     /// be drawn from the design (a part of a split piece).
     pub grain_dir: Option<flatcut_geom::DVec2>,
+    /// Where the time went besides the solve (whose parts are in `info`).
+    pub times: PieceTimes,
+}
+
+/// Where a piece's time went besides the flattening's solve.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PieceTimes {
+    /// Reading the input and building its pieces and seams: the whole design's, the same for
+    /// each of its pieces.
+    pub read: Duration,
+    /// Computing the piece's distortion report.
+    pub report: Duration,
+}
+
+impl Flat {
+    /// The piece's flat OBJ, as `flatten` and `run` write it: the 3D vertices (`v`), one UV
+    /// per vertex in mm (`vt`), the faces, then each dart's sew line
+    /// ([`crate::dart_lines`]) for a later `pattern`, `report` or `run` to read back.
+    pub fn obj(&self) -> String {
+        flatcut_mesh::io::obj_string(&self.mesh) + &crate::dart_lines::write(&self.darts)
+    }
+}
+
+/// The heat map's columns: each piece under its name in capitals.
+pub fn columns(flats: &[Flat]) -> Vec<flatcut_report::Column<'_>> {
+    flats
+        .iter()
+        .map(|f| flatcut_report::Column {
+            title: f.name.to_uppercase(),
+            mesh: &f.mesh,
+            report: &f.report,
+        })
+        .collect()
 }
 
 /// Stretch and compression limits in percent, checked by the report, and whether darts may be
@@ -59,6 +93,7 @@ pub struct Limits {
 /// Reads a mesh file; when it already carries a flat map (`vt`), returns it as one reported piece
 /// named after the file. `Ok(None)`: the file is a 3D mesh that still needs flattening.
 pub fn read_flat_mesh(path: &Path, limits: &Limits) -> Result<Option<Flat>, PipelineError> {
+    let reading = Instant::now();
     let mesh = flatcut_mesh::read_mesh(path)?;
     let Some(x) = &mesh.flat else {
         return Ok(None);
@@ -89,8 +124,14 @@ pub fn read_flat_mesh(path: &Path, limits: &Limits) -> Result<Option<Flat>, Pipe
     } else {
         Vec::new()
     };
+    let read = reading.elapsed();
+    let reporting = Instant::now();
     let report =
         pipeline::report_piece(&name, &mesh, &[], limits.stretch_pct, limits.compress_pct)?;
+    let times = PieceTimes {
+        read,
+        report: reporting.elapsed(),
+    };
     Ok(Some(Flat {
         name,
         def: None,
@@ -103,6 +144,7 @@ pub fn read_flat_mesh(path: &Path, limits: &Limits) -> Result<Option<Flat>, Pipe
         darts,
         grain: None,
         grain_dir: None,
+        times,
     }))
 }
 
@@ -115,16 +157,9 @@ pub fn flatten_and_report(
     limits: Limits,
     progress: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Vec<Flat>, PipelineError> {
-    let flat = pipeline::flatten_design(
-        path,
-        tol,
-        params,
-        limits.darts.as_ref(),
-        limits.split.as_ref(),
-        limits.material.as_ref(),
-        progress,
-    )?;
-    report_flat_design(flat, &limits)
+    let design = flatcut_design::Design::load(path)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    flatten_and_report_loaded(design, base, tol, params, limits, progress)
 }
 
 /// [`flatten_and_report`] of a design already loaded (an editor's design in memory); mesh and
@@ -152,7 +187,12 @@ pub fn flatten_and_report_loaded(
 
 /// Reports every flattened piece of a design and measures its mating seams into the reports.
 fn report_flat_design(flat: FlatDesign, limits: &Limits) -> Result<Vec<Flat>, PipelineError> {
-    let FlatDesign { pieces, seams, .. } = flat;
+    let FlatDesign {
+        pieces,
+        seams,
+        read,
+        ..
+    } = flat;
     let mut flats = pieces
         .into_iter()
         .map(
@@ -166,6 +206,7 @@ fn report_flat_design(flat: FlatDesign, limits: &Limits) -> Result<Vec<Flat>, Pi
                  grain_dir,
              }| {
                 let marks: Vec<u32> = notches.iter().map(|n| n.vertex).collect();
+                let reporting = Instant::now();
                 let mut report = pipeline::report_piece(
                     &def.name,
                     &mesh,
@@ -179,6 +220,10 @@ fn report_flat_design(flat: FlatDesign, limits: &Limits) -> Result<Vec<Flat>, Pi
                         .as_ref()
                         .and_then(|g| crate::material::report(g, &mesh)),
                 );
+                let times = PieceTimes {
+                    read,
+                    report: reporting.elapsed(),
+                };
                 Ok(Flat {
                     name: def.name.clone(),
                     quantity: def.quantity,
@@ -191,6 +236,7 @@ fn report_flat_design(flat: FlatDesign, limits: &Limits) -> Result<Vec<Flat>, Pi
                     darts,
                     grain,
                     grain_dir,
+                    times,
                 })
             },
         )

@@ -2,6 +2,7 @@
 //! flatten them with their material, darts and splits, measured by the report.
 
 use std::path::Path;
+use std::time::{Duration, Instant};
 
 use flatcut_design::material::MaterialSpec;
 use flatcut_design::{Design, PieceDef};
@@ -48,6 +49,9 @@ pub struct FlatDesign {
     pub design: Design,
     pub pieces: Vec<FlatPiece>,
     pub seams: Vec<MatingSeam>,
+    /// Time spent reading the surfaces and building the pieces and seams (every size's), before
+    /// any flattening.
+    pub read: Duration,
 }
 
 /// Loads a design (or a mesh file), builds its pieces and seams, and flattens them, the pieces
@@ -89,10 +93,11 @@ pub fn flatten_loaded(
         design: design.clone(),
         pieces: Vec::new(),
         seams: Vec::new(),
+        read: Duration::ZERO,
     };
     for sized in sizes {
         let first = out.pieces.len();
-        let (mut pieces, mut seams) = match &sized.size {
+        let (mut pieces, mut seams, read) = match &sized.size {
             None => flatten_one(
                 &sized.design,
                 &sized.dir,
@@ -131,6 +136,7 @@ pub fn flatten_loaded(
         }
         out.pieces.extend(pieces);
         out.seams.extend(seams);
+        out.read += read;
     }
     let mut seen = std::collections::BTreeMap::new();
     for p in &out.pieces {
@@ -147,7 +153,8 @@ pub fn flatten_loaded(
     Ok(out)
 }
 
-/// The pieces and seams of one design (one size), flattened.
+/// The pieces and seams of one design (one size), flattened, and the time spent reading and
+/// building them.
 #[allow(clippy::too_many_arguments)]
 fn flatten_one(
     design: &Design,
@@ -158,8 +165,10 @@ fn flatten_one(
     split: Option<&crate::splitting::SplitSettings>,
     material: Option<&MaterialSpec>,
     progress: &mut dyn FnMut(&str, usize, usize),
-) -> Result<(Vec<FlatPiece>, Vec<MatingSeam>), PipelineError> {
+) -> Result<(Vec<FlatPiece>, Vec<MatingSeam>, Duration), PipelineError> {
+    let reading = Instant::now();
     let mut asm = design.assemble(base, tol)?;
+    let read = reading.elapsed();
     // Nothing flattens a surface that is not a disk (closed, of any genus, with several
     // boundary loops): one that may be split is flattened opened here as a stand-in and split
     // from the whole afterwards ([`crate::splitting::split_surface_piece`]).
@@ -180,22 +189,24 @@ fn flatten_one(
     for (k, p) in asm.pieces.iter().enumerate() {
         progress(&p.def.name, k, asm.pieces.len());
     }
-    let meshes: Vec<&TriMesh> = asm.pieces.iter().map(|p| &p.mesh).collect();
-    let flats =
-        flatcut_flatten::assembly::flatten_assembly(&meshes, &asm.seams, params).map_err(|e| {
-            match e {
-                flatcut_flatten::assembly::AssemblyError::Piece { piece, source } => {
-                    PipelineError::Flatten {
-                        piece: asm.pieces[piece].def.name.clone(),
-                        source,
-                    }
-                }
-                other => PipelineError::Piece {
-                    piece: design.source.clone(),
-                    reason: other.to_string(),
-                },
-            }
-        })?;
+    let joined: Vec<bool> = (0..asm.pieces.len())
+        .map(|k| {
+            asm.seams
+                .iter()
+                .any(|s| s.sides.iter().any(|d| d.piece == k))
+        })
+        .collect();
+    let materials = asm
+        .pieces
+        .iter()
+        .map(|p| crate::material::of_piece(&p.def, base, material))
+        .collect::<Result<Vec<_>, PipelineError>>()?;
+    // A free piece with a material is flattened by its material's energy alone (below); every
+    // other piece by the isotropic one, with the pieces its seams join.
+    let isotropic: Vec<bool> = (0..asm.pieces.len())
+        .map(|k| joined[k] || closed.contains_key(&k) || materials[k].is_none())
+        .collect();
+    let mut flats = flatten_isotropic(design, &asm, &isotropic, params)?.into_iter();
     let mut notches: Vec<Vec<FlatNotch>> = asm
         .pieces
         .iter()
@@ -219,24 +230,19 @@ fn flatten_one(
             }
         }
     }
-    let joined: Vec<bool> = (0..asm.pieces.len())
-        .map(|k| {
-            asm.seams
-                .iter()
-                .any(|s| s.sides.iter().any(|d| d.piece == k))
-        })
-        .collect();
     let joined_copy = joined.clone();
     let pieces = asm
         .pieces
         .into_iter()
-        .zip(flats)
+        .zip(materials)
         .zip(notches)
         .zip(joined)
         .enumerate()
-        .map(|(k, (((p, f), notches), joined))| {
-            let piece_material = crate::material::of_piece(&p.def, base, material)?;
-            if closed.contains_key(&k) {
+        .map(|(k, (((p, piece_material), notches), joined))| {
+            // Solved above exactly when the piece is flattened by the isotropic energy.
+            let f = if isotropic[k] { flats.next() } else { None };
+            match f {
+                Some(f) if closed.contains_key(&k) => {
                 // A stand-in until the split pass splits the whole.
                 let mut mesh = p.mesh;
                 mesh.flat = Some(f.uv);
@@ -249,7 +255,8 @@ fn flatten_one(
                     grain: None,
                     grain_dir: None,
                 })
-            } else if joined {
+                }
+                Some(f) if joined => {
                 let mut info = f.info;
                 if piece_material.is_some() {
                     info.warnings.push(format!(
@@ -274,7 +281,8 @@ fn flatten_one(
                     grain: None,
                     grain_dir: None,
                 })
-            } else {
+                }
+                f => {
                 let (f, grain, limits) = match &piece_material {
                     Some(m) => {
                         let (f, g) = crate::material::flatten(
@@ -293,7 +301,11 @@ fn flatten_one(
                         );
                         (f, Some(g), limits)
                     }
-                    None => (f, None, DartLimits::of(params)),
+                    None => (
+                        f.ok_or_else(|| unsolved(&p.def.name))?,
+                        None,
+                        DartLimits::of(params),
+                    ),
                 };
                 // Darts first; where they cannot help and splitting is asked for, the piece
                 // goes on whole to be split.
@@ -314,14 +326,62 @@ fn flatten_one(
                     Err(e) if darting::is_out_of_limits(&e) => whole.ok_or(e),
                     r => r,
                 }
+                }
             }
         })
         .collect::<Result<Vec<_>, PipelineError>>()?;
-    match split {
-        Some(s) => split_where_wanted(pieces, asm.seams, &joined_copy, &closed, params, s, |def| {
-            crate::material::of_piece(def, base, material)
-        }),
-        None => Ok((pieces, asm.seams)),
+    let (pieces, seams) = match split {
+        Some(s) => {
+            split_where_wanted(pieces, asm.seams, &joined_copy, &closed, params, s, |def| {
+                crate::material::of_piece(def, base, material)
+            })?
+        }
+        None => (pieces, asm.seams),
+    };
+    Ok((pieces, seams, read))
+}
+
+/// The isotropic flattening of every piece `wanted` marks (the others are left out of the
+/// solve), pieces joined by seams flattened together; in the order of the pieces.
+fn flatten_isotropic(
+    design: &Design,
+    asm: &flatcut_design::Assembly,
+    wanted: &[bool],
+    params: &FlattenParams,
+) -> Result<Vec<flatcut_flatten::Flattening>, PipelineError> {
+    let index: Vec<usize> = (0..asm.pieces.len()).filter(|&k| wanted[k]).collect();
+    let meshes: Vec<&TriMesh> = index.iter().map(|&k| &asm.pieces[k].mesh).collect();
+    // Seams join only pieces that are solved here: their sides renumbered among those.
+    let seams: Vec<MatingSeam> = asm
+        .seams
+        .iter()
+        .map(|s| {
+            let mut s = s.clone();
+            for side in &mut s.sides {
+                side.piece = index.partition_point(|&k| k < side.piece);
+            }
+            s
+        })
+        .collect();
+    flatcut_flatten::assembly::flatten_assembly(&meshes, &seams, params).map_err(|e| match e {
+        flatcut_flatten::assembly::AssemblyError::Piece { piece, source } => {
+            PipelineError::Flatten {
+                piece: asm.pieces[index[piece]].def.name.clone(),
+                source,
+            }
+        }
+        other => PipelineError::Piece {
+            piece: design.source.clone(),
+            reason: other.to_string(),
+        },
+    })
+}
+
+/// The error of a piece that should have been flattened and was not: a bug.
+fn unsolved(piece: &str) -> PipelineError {
+    PipelineError::Piece {
+        piece: piece.to_string(),
+        reason: "internal error: the piece was left out of the flattening".into(),
     }
 }
 

@@ -371,6 +371,10 @@ fn load_with(
                 r.compress_max_pct,
                 t0.elapsed().as_secs_f64()
             );
+            if !f.darts.is_empty() {
+                let total: f64 = f.darts.iter().map(|d| d.length_3d_mm).sum();
+                eprintln!("  {} darts, {total:.1} mm in all", f.darts.len());
+            }
             if let Some(g) = &r.grain {
                 eprintln!("{}", grain_line(g));
             }

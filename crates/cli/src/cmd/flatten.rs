@@ -31,126 +31,9 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> anyhow::Result<ExitCode> {
-    // A mesh that already carries `vt` is flattened again from its 3D shape. A mesh that may be
-    // split into several pieces goes the way of a design's pieces.
-    // Reading the mesh, the flattening's own parts and the report, for --timings.
-    let mut spent: Option<(Duration, flatcut::flatten::Timings, Duration)> = None;
-    let flats = if common::is_mesh(&a.file) && a.flatten.split.is_none() {
-        let reading = Instant::now();
-        let mut mesh = flatcut::mesh::read_mesh(&a.file).map_err(anyhow::Error::from)?;
-        let read = reading.elapsed();
-        mesh.flat = None;
-        let name = a
-            .file
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "mesh".into());
-        let (params, bar) = common::with_progress_bar(a.flatten.params()?);
-        let material = a.flatten.material()?;
-        // Checked before the solve: darts without limits are refused at once, not after it.
-        let settings = a.flatten.darts()?;
-        eprintln!(
-            "flattening '{name}' ({} faces) with {}",
-            mesh.triangles.len(),
-            match &material {
-                Some(m) => format!("{} for {}", flatcut::flatten::Method::Orthotropic, m.name),
-                None => params.method.to_string(),
-            }
-        );
-        let t0 = std::time::Instant::now();
-        let (f, grain) = match &material {
-            Some(m) => {
-                let (f, g) = flatcut::material::flatten(&name, &mesh, &params, m, None)
-                    .map_err(|e| anyhow::Error::new(e).context(a.file.display().to_string()))?;
-                (f, Some(g))
-            }
-            None => (
-                flatcut::flatten::flatten(&mesh, &params)
-                    .map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?,
-                None,
-            ),
-        };
-        bar.finish_and_clear();
-        let dart_limits = match (&material, &grain) {
-            (Some(m), Some(g)) => flatcut::material::dart_limits(&params, m, g, None, &mesh),
-            _ => flatcut::darting::DartLimits::of(&params),
-        };
-        let before = (mesh.clone(), f.uv.clone());
-        let flatcut::darting::Finished {
-            mesh: darted,
-            info,
-            darts,
-            grain_kept,
-        } = flatcut::darting::finish(
-            &name,
-            None,
-            mesh,
-            f.uv,
-            f.info,
-            &dart_limits,
-            settings.as_ref(),
-        )
-        .map_err(|e| anyhow::Error::new(e).context(a.file.display().to_string()))?;
-        mesh = darted;
-        let grain = grain.map(|g| {
-            if grain_kept {
-                g
-            } else {
-                let uv = mesh.flat.as_deref().unwrap_or_default();
-                flatcut::material::carry_over(&g, (&before.0, &before.1), (&mesh, uv))
-            }
-        });
-        if !darts.is_empty() {
-            let total: f64 = darts.iter().map(|d| d.length_3d_mm).sum();
-            eprintln!("  {} darts, {total:.1} mm in all", darts.len());
-        }
-        for w in &info.warnings {
-            eprintln!("warning: {w}");
-        }
-        let reporting = Instant::now();
-        let mut report = flatcut::pipeline::report_piece(
-            &name,
-            &mesh,
-            &[],
-            a.flatten.max_stretch,
-            a.flatten.max_compress,
-        )?;
-        spent = Some((read, info.timings, reporting.elapsed()));
-        report.darts = flatcut::darting::dart_reports(&darts);
-        report.set_grain(
-            grain
-                .as_ref()
-                .and_then(|g| flatcut::material::report(g, &mesh)),
-        );
-        eprintln!(
-            "  {} iterations{}, mean δ2 {:.6}, stretch max {:.2}%, compression max {:.2}%, {:.2} s",
-            info.iterations,
-            common::stage_counts(&info),
-            report.delta2_mean,
-            report.stretch_max_pct,
-            report.compress_max_pct,
-            t0.elapsed().as_secs_f64()
-        );
-        if let Some(g) = &report.grain {
-            eprintln!("{}", common::grain_line(g));
-        }
-        vec![common::Flat {
-            name,
-            def: None,
-            mesh,
-            report,
-            quantity: 1,
-            mirrored: 0,
-            notches: Vec::new(),
-            info: Some(info),
-            darts,
-            grain,
-            grain_dir: None,
-        }]
-    } else {
-        let limits = (a.flatten.max_stretch, a.flatten.max_compress);
-        common::flatten_again(&a.file, &a.flatten, limits, true)?
-    };
+    // A mesh that already carries `vt` is flattened again from its 3D shape.
+    let limits = (a.flatten.max_stretch, a.flatten.max_compress);
+    let flats = common::flatten_again(&a.file, &a.flatten, limits, true)?;
     let seam_tolerance = a.flatten.seam_tolerance;
     let writing = Instant::now();
     let mut out = OutputSet::new();
@@ -163,8 +46,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         } else {
             a.output.clone()
         };
-        let obj = flatcut::mesh::io::obj_string(&f.mesh) + &flatcut::dart_lines::write(&f.darts);
-        out.add(&path, obj.as_bytes())?;
+        out.add(&path, f.obj().as_bytes())?;
         lines.push(format!(
             "{}: {} vertices, {} faces, mean δ2 {:.6} -> {}",
             f.name,
@@ -185,22 +67,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     }
     out.commit()?;
     if a.timings {
-        let write = writing.elapsed().as_secs_f64();
-        match spent {
-            Some((read, t, report)) => eprintln!(
-                "  time: read {:.2} s, {t}, report {:.2} s, write {write:.2} s",
-                read.as_secs_f64(),
-                report.as_secs_f64()
-            ),
-            None => {
-                for f in &flats {
-                    if let Some(info) = &f.info {
-                        eprintln!("  time '{}': {}", f.name, info.timings);
-                    }
-                }
-                eprintln!("  time: write {write:.2} s");
-            }
-        }
+        print_timings(&flats, writing.elapsed());
     }
     for l in lines {
         crate::outln!("{l}");
@@ -212,4 +79,21 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::from(crate::EXIT_LIMIT));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// `--timings`: reading the input once, each piece's solve by its parts and its report, then
+/// writing the outputs.
+fn print_timings(flats: &[common::Flat], write: Duration) {
+    let read = flats.first().map_or(Duration::ZERO, |f| f.times.read);
+    eprintln!("  time: read {:.2} s", read.as_secs_f64());
+    for f in flats {
+        let solve = f.info.as_ref().map(|i| format!("{}, ", i.timings));
+        eprintln!(
+            "  time '{}': {}report {:.2} s",
+            f.name,
+            solve.unwrap_or_default(),
+            f.times.report.as_secs_f64()
+        );
+    }
+    eprintln!("  time: write {:.2} s", write.as_secs_f64());
 }

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use flatcut::report::{Column, Measure};
+use flatcut::report::Measure;
 
 use super::common::{self, FlattenArgs};
 use crate::output::OutputSet;
@@ -159,14 +159,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         };
         out.add(p, json.as_bytes())?;
     }
-    let cols: Vec<Column<'_>> = flats
-        .iter()
-        .map(|f| Column {
-            title: f.name.to_uppercase(),
-            mesh: &f.mesh,
-            report: &f.report,
-        })
-        .collect();
+    let cols = flatcut::flat::columns(&flats);
     if a.svg.is_some() || a.png.is_some() {
         let svg = flatcut::report::heatmap_svg(&cols, a.measure, a.glyphs);
         if let Some(p) = &a.svg {

@@ -25,7 +25,7 @@ use flatcut_geom::{DVec2, Tolerances};
 use flatcut_nest::{NestOptions, Stock};
 use flatcut_pattern::Piece;
 use flatcut_pattern::dxf::DxfLayers;
-use flatcut_report::{Column, Measure, Region};
+use flatcut_report::{Measure, Region};
 
 pub use events::{Event, Observer, Silent, Stage};
 pub use outputs::{OutputFile, PieceSummary, ProjectOutputs, RunSummary, SheetJob};
@@ -137,7 +137,7 @@ pub fn finish_project(
         .iter()
         .map(|f| OutputFile {
             name: format!("{}.obj", file_safe(&f.name)),
-            bytes: flatcut_mesh::io::obj_string(&f.mesh).into_bytes(),
+            bytes: f.obj().into_bytes(),
         })
         .collect();
     let limits_exceeded = timed(obs, Stage::Report, "", |obs| {
@@ -327,14 +327,7 @@ fn report_stage(
         name: "report.json".into(),
         bytes: json(&reports),
     });
-    let cols: Vec<Column<'_>> = flats
-        .iter()
-        .map(|f| Column {
-            title: f.name.to_uppercase(),
-            mesh: &f.mesh,
-            report: &f.report,
-        })
-        .collect();
+    let cols = flat::columns(&flats);
     let heat = flatcut_report::heatmap_svg(&cols, Measure::Stretch, false);
     let png = flatcut_report::render_png(&heat, None)?;
     files.push(OutputFile {
@@ -646,5 +639,44 @@ mod tests {
         let l = limits(&write(""));
         assert!(l.darts.is_none() && l.split.is_none());
         assert_eq!((l.stretch_pct, l.compress_pct), (Some(3.0), Some(3.0)));
+    }
+
+    /// A darted piece's OBJ from a run carries its darts' sew lines, as `flatten` writes it, and
+    /// reads back with the same darts (`run` once wrote the mesh alone).
+    #[test]
+    fn a_run_writes_a_darted_pieces_obj_with_its_darts() {
+        let dir = tempfile::tempdir().unwrap();
+        let cap = flatcut_flatten::testmesh::spherical_cap(100.0, 0.8, 12);
+        std::fs::write(
+            dir.path().join("cap.obj"),
+            flatcut_mesh::io::obj_string(&cap),
+        )
+        .unwrap();
+        let path = dir.path().join("project.toml");
+        std::fs::write(
+            &path,
+            "name = \"t\"\ndesign = \"cap.obj\"\ndarts = \"auto\"\n[material]\nname = \"m\"\nmax_stretch_pct = 5.0\nmax_compress_pct = 2.0\n[sheet]\nwidth_mm = 600.0\nheight_mm = 400.0\n[machine]\nprofile = \"pen\"\n",
+        )
+        .unwrap();
+        let project = Project::load(&path).unwrap();
+        let opts = RunOptions::default().with_nest_iters(1);
+        let out = run_project(&project, &opts, &mut Silent).unwrap();
+        let f = &out.flats[0];
+        assert!(!f.darts.is_empty(), "the cap needs darts at 5 % / 2 %");
+        let file = out.files.iter().find(|o| o.name == "cap.obj").unwrap();
+        assert_eq!(file.bytes, f.obj().into_bytes());
+        let text = String::from_utf8(file.bytes.clone()).unwrap();
+        assert_eq!(text.matches("\ng dart-").count(), f.darts.len());
+        let written = dir.path().join("flat.obj");
+        std::fs::write(&written, &text).unwrap();
+        let back = crate::flat::read_flat_mesh(&written, &Limits::default())
+            .unwrap()
+            .unwrap();
+        assert_eq!(back.darts.len(), f.darts.len());
+        for (a, b) in back.darts.iter().zip(&f.darts) {
+            assert_eq!(a.legs.sides, b.legs.sides);
+            // Measured again from the OBJ's printed coordinates.
+            assert!((a.length_3d_mm - b.length_3d_mm).abs() < 1e-4);
+        }
     }
 }
