@@ -13,7 +13,7 @@ pub mod num;
 pub mod polygon;
 pub mod tol;
 
-pub use aabb::{Aabb2, Aabb3};
+pub use aabb::{Aabb, Aabb2, Aabb3, Corner};
 pub use glam::{DMat2, DMat3, DVec2, DVec3};
 pub use tol::Tolerances;
 
