@@ -889,9 +889,9 @@ fn classify(
             });
         }
         // Loose strokes outside the blocks join the piece that holds them.
-        assign_by_containment(&mut strokes);
+        crate::plain_pieces::assign_by_containment(&mut strokes);
     } else {
-        find_pieces(&mut strokes);
+        crate::plain_pieces::find_pieces(&mut strokes);
         let n = strokes
             .iter()
             .filter_map(|s| s.piece)
@@ -950,56 +950,6 @@ fn kind_name(k: StrokeKind) -> &'static str {
 
 fn area(p: &[DVec2]) -> f64 {
     poly::signed_area(p).abs()
-}
-
-/// Plain files: every closed cut contour not inside another one is a piece boundary; strokes
-/// inside a boundary belong to its piece.
-fn find_pieces(strokes: &mut [Stroke]) {
-    let closed_cut: Vec<usize> = (0..strokes.len())
-        .filter(|&i| {
-            strokes[i].closed
-                && strokes[i].layer == Layer::Cut
-                && matches!(strokes[i].kind, StrokeKind::Boundary | StrokeKind::InnerCut)
-        })
-        .collect();
-    let inside = |a: usize, b: usize| {
-        area(&strokes[a].points) < area(&strokes[b].points)
-            && strokes[a]
-                .points
-                .iter()
-                .all(|q| poly::contains(&strokes[b].points, *q))
-    };
-    let outers: Vec<usize> = closed_cut
-        .iter()
-        .copied()
-        .filter(|&i| !closed_cut.iter().any(|&j| j != i && inside(i, j)))
-        .collect();
-    for (k, &i) in outers.iter().enumerate() {
-        strokes[i].kind = StrokeKind::Boundary;
-        strokes[i].piece = Some(k as u32);
-    }
-    for s in strokes
-        .iter_mut()
-        .filter(|s| s.kind == StrokeKind::Boundary && s.piece.is_none())
-    {
-        s.kind = StrokeKind::InnerCut;
-    }
-    assign_by_containment(strokes);
-}
-
-/// Gives strokes without a piece the piece whose boundary holds their first point.
-fn assign_by_containment(strokes: &mut [Stroke]) {
-    let outers: Vec<(u32, Vec<DVec2>)> = strokes
-        .iter()
-        .filter(|s| s.kind == StrokeKind::Boundary)
-        .filter_map(|s| s.piece.map(|p| (p, s.points.clone())))
-        .collect();
-    for s in strokes.iter_mut().filter(|s| s.piece.is_none()) {
-        let q = s.points[0];
-        if let Some((p, _)) = outers.iter().find(|(_, o)| poly::contains(o, q)) {
-            s.piece = Some(*p);
-        }
-    }
 }
 
 /// Joins open paths whose ends meet (within [`CHAIN_TOL_MM`]) into longer paths; a chain whose

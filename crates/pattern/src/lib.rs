@@ -17,6 +17,7 @@ pub mod io;
 pub mod label_info;
 pub mod piece;
 pub mod placement;
+pub mod plain_pieces;
 pub mod poly;
 pub mod room;
 pub mod seam;

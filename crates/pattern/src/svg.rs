@@ -663,37 +663,7 @@ pub fn read_svg(
         strokes.push(s);
     }
     if !ours {
-        // outer contours: closed cut strokes not inside another closed cut stroke
-        let closed_cut: Vec<usize> = (0..strokes.len())
-            .filter(|&i| strokes[i].closed && strokes[i].layer == Layer::Cut)
-            .collect();
-        let inside = |a: usize, b: usize| {
-            strokes[a]
-                .points
-                .iter()
-                .all(|q| poly::contains(&strokes[b].points, *q))
-        };
-        let outers: Vec<usize> = closed_cut
-            .iter()
-            .copied()
-            .filter(|&i| !closed_cut.iter().any(|&j| j != i && inside(i, j)))
-            .collect();
-        for (k, &i) in outers.iter().enumerate() {
-            strokes[i].kind = StrokeKind::Boundary;
-            strokes[i].piece = Some(k as u32);
-        }
-        for i in 0..strokes.len() {
-            if strokes[i].piece.is_some() {
-                continue;
-            }
-            let q = strokes[i].points[0];
-            if let Some(k) = outers
-                .iter()
-                .position(|&o| poly::contains(&strokes[o].points, q))
-            {
-                strokes[i].piece = Some(k as u32);
-            }
-        }
+        crate::plain_pieces::find_pieces(&mut strokes);
     }
     // The quantity and grain flatcut wrote, for each of its pieces found.
     let pieces = prefixes
@@ -852,6 +822,27 @@ mod tests {
             "{}",
             hole.length()
         );
+    }
+
+    /// DXF and SVG import share one rule for plain files: a contour is a hole of another only
+    /// when it is smaller and inside it. A square whose corners lie in a thin U's base and arms
+    /// is larger than the U and crosses it: no cutout of the U (the SVG copy without the area
+    /// test made it one), both are outlines; the circle inside the U's base is the U's hole.
+    #[test]
+    fn a_larger_contour_with_its_corners_inside_another_is_no_hole_of_it() {
+        let s = r##"<svg xmlns="http://www.w3.org/2000/svg" width="40mm" height="40mm" viewBox="0 0 40 40">
+            <polygon points="0,0 30,0 30,30 27,30 27,3 3,3 3,30 0,30" stroke="red" fill="none"/>
+            <polygon points="1,1 29,1 29,29 1,29" stroke="red" fill="none"/>
+            <circle cx="15" cy="1.5" r="1" stroke="red" fill="none"/></svg>"##;
+        let d = read_svg(s, "u.svg", 0.01, &ColourTable::default())
+            .unwrap()
+            .drawing;
+        let outers: Vec<&Stroke> = d.strokes.iter().filter(|s| s.is_outer()).collect();
+        assert_eq!(outers.len(), 2, "{:?}", d.strokes);
+        let holes: Vec<&Stroke> = d.strokes.iter().filter(|s| !s.is_outer()).collect();
+        assert_eq!(holes.len(), 1);
+        assert_eq!(holes[0].kind, StrokeKind::InnerCut);
+        assert!(holes[0].piece.is_some());
     }
 
     #[test]
