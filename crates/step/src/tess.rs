@@ -137,6 +137,7 @@ fn face_trim(
     g: &FaceGeometry,
     slot_of: &BTreeMap<usize, usize>,
     samples: &[Samples],
+    ruled: bool,
     rulings: Option<&[f64]>,
     chord: f64,
 ) -> Result<Trim, StepError> {
@@ -146,6 +147,7 @@ fn face_trim(
         face: g,
         slot_of,
         samples,
+        ruled,
         rulings,
         chord,
         heal: model.heal_mm,
@@ -432,7 +434,7 @@ impl Tessellation {
                 if !active[k] {
                     continue;
                 }
-                let t = face_trim(model, *i, g, &slot_of, &samples, None, chord)?;
+                let t = face_trim(model, *i, g, &slot_of, &samples, ruled[k], None, chord)?;
                 if !t.wants.is_empty() {
                     changed |= insert_samples(model, &slots, &mut samples, &t.wants);
                     next[k] = true;
@@ -500,12 +502,21 @@ impl Tessellation {
         let mut face_meshes = Vec::with_capacity(geoms.len());
         for (k, (i, g)) in geoms.iter().enumerate() {
             let rulings = if ruled[k] {
-                let t = face_trim(model, *i, g, &slot_of, &samples, None, chord)?;
+                let t = face_trim(model, *i, g, &slot_of, &samples, true, None, chord)?;
                 Some(face_rulings(&g.surface, &t.loops, chord).0)
             } else {
                 None
             };
-            let t = face_trim(model, *i, g, &slot_of, &samples, rulings.as_deref(), chord)?;
+            let t = face_trim(
+                model,
+                *i,
+                g,
+                &slot_of,
+                &samples,
+                ruled[k],
+                rulings.as_deref(),
+                chord,
+            )?;
             let first_extra = positions.len() as u32;
             positions.extend(t.extra.iter().copied());
             let id_of = |o: Origin| -> u32 {
@@ -848,6 +859,6 @@ pub fn face_area(model: &Model, index: usize) -> Result<f64, StepError> {
         slot_of.insert(u.edge, samples.len());
         samples.push(sample_edge(model, eg, tol));
     }
-    let t = face_trim(model, index, g, &slot_of, &samples, None, tol)?;
+    let t = face_trim(model, index, g, &slot_of, &samples, false, None, tol)?;
     Ok(check::trim_area(&g.surface, &oriented_by_nesting(&t.loops)))
 }
