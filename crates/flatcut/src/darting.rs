@@ -99,21 +99,25 @@ pub fn keep_out(def: Option<&PieceDef>, mesh: &TriMesh) -> Result<KeepOut, Pipel
     let Some(def) = def else {
         return Ok(k);
     };
-    let err = |reason: String| PipelineError::Piece {
-        piece: def.name.clone(),
-        reason,
-    };
     for (i, region) in def.no_cut.iter().enumerate() {
         let pts: Vec<DVec3> = region.iter().map(|p| DVec3::from_array(*p)).collect();
         k.block_region(mesh, &pts, i)
-            .map_err(|e| err(e.to_string()))?;
+            .map_err(|source| PipelineError::NoCut {
+                piece: def.name.clone(),
+                source,
+            })?;
     }
     for m in &def.marks {
         let pts: Vec<DVec3> = m.points.iter().map(|p| DVec3::from_array(*p)).collect();
         match m.kind {
-            MarkKind::Line if pts.len() >= 2 => k
-                .block_line(mesh, &pts)
-                .map_err(|e| err(format!("mark '{}': {e}", m.name)))?,
+            MarkKind::Line if pts.len() >= 2 => {
+                k.block_line(mesh, &pts)
+                    .map_err(|reason| PipelineError::MarkKeepOut {
+                        piece: def.name.clone(),
+                        mark: m.name.clone(),
+                        reason,
+                    })?
+            }
             _ => k.block_points(mesh, &pts, MARK_CLEARANCE_MM),
         }
     }
@@ -158,11 +162,10 @@ pub fn dart_piece(
         .map_err(|source| {
             let count = stage.count();
             if count.stopped {
-                PipelineError::Piece {
+                PipelineError::DartsStopped {
                     piece: name.to_string(),
-                    reason: format!(
-                        "darts: {source}, after the darts stopped at their cap ({count}; --max-iters, --flatten-time)"
-                    ),
+                    source,
+                    count,
                 }
             } else {
                 PipelineError::Darts {

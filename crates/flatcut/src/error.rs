@@ -25,8 +25,106 @@ pub enum PipelineError {
     Gcode(#[from] flatcut_gcode::GcodeError),
     #[error(transparent)]
     Mesh(#[from] flatcut_mesh::MeshIoError),
-    #[error("piece '{piece}': {reason}")]
-    Piece { piece: String, reason: String },
+    /// The piece's material file cannot be read or is invalid.
+    #[error("piece '{piece}': {source}")]
+    Material {
+        piece: String,
+        source: flatcut_design::material::MaterialError,
+    },
+    /// A file the piece is read from cannot be read.
+    #[error("piece '{piece}': {}: {source}", path.display())]
+    Read {
+        piece: String,
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
+    /// A flat OBJ's dart lines ([`crate::dart_lines`]) are not a dart's sew line.
+    #[error("piece '{piece}': {}: {reason}", path.display())]
+    DartLines {
+        piece: String,
+        path: std::path::PathBuf,
+        reason: String,
+    },
+    /// Pieces joined by seams cannot be flattened together.
+    #[error("{file}: {source}")]
+    Assembly {
+        file: String,
+        source: flatcut_flatten::assembly::AssemblyError,
+    },
+    /// The piece's mesh is not a surface the pattern can be drawn from.
+    #[error("piece '{piece}': {source}")]
+    Topology {
+        piece: String,
+        source: flatcut_mesh::TopologyError,
+    },
+    /// The piece has no flat map to draw.
+    #[error("piece '{piece}': the mesh has no flattening")]
+    NotFlattened { piece: String },
+    /// The flat piece has no outline.
+    #[error("piece '{piece}': the flattened mesh has no boundary")]
+    NoBoundary { piece: String },
+    /// A notch's vertex is not on the flat outline.
+    #[error("piece '{piece}': notch '{notch}' is not on the piece's outline")]
+    NotchOffOutline { piece: String, notch: String },
+    /// The grain line's two points fall on one point of the flat piece.
+    #[error("piece '{piece}': the grain line's two points map to the same place")]
+    GrainCollapsed { piece: String },
+    /// A line mark strays farther from the surface than `max_offset_pct` of the part's size.
+    #[error(
+        "piece '{piece}': mark '{mark}': the line leaves the surface (a point is farther than {max_offset_pct:.0} % of the part size from it)"
+    )]
+    LineOffSurface {
+        piece: String,
+        mark: String,
+        max_offset_pct: f64,
+    },
+    /// A point mark is not on the surface.
+    #[error(
+        "piece '{piece}': mark '{mark}': point ({:.2}, {:.2}, {:.2}) is not on the surface",
+        point.x, point.y, point.z
+    )]
+    PointOffSurface {
+        piece: String,
+        mark: String,
+        point: flatcut_geom::DVec3,
+    },
+    /// A `no_cut` region of the piece cannot be laid on its surface.
+    #[error("piece '{piece}': {source}")]
+    NoCut {
+        piece: String,
+        source: flatcut_darts::keepout::KeepOutError,
+    },
+    /// A line mark of the piece cannot be laid on its surface to keep darts clear of it.
+    #[error("piece '{piece}': mark '{mark}': {reason}")]
+    MarkKeepOut {
+        piece: String,
+        mark: String,
+        reason: String,
+    },
+    /// A `seam_hidden_regions` region of the piece cannot be laid on its surface.
+    #[error("piece '{piece}': seam_hidden_regions {index}: {source}")]
+    SeamHidden {
+        piece: String,
+        index: usize,
+        source: flatcut_darts::keepout::KeepOutError,
+    },
+    /// The darts failed after their stage ran out of iterations or time: a larger cap may help.
+    #[error(
+        "piece '{piece}': darts: {source}, after the darts stopped at their cap ({count}; --max-iters, --flatten-time)"
+    )]
+    DartsStopped {
+        piece: String,
+        source: flatcut_darts::DartError,
+        count: flatcut_flatten::StageCount,
+    },
+    /// A part of a split piece is named as another piece is.
+    #[error(
+        "piece '{piece}': a part of a split piece takes the name of another piece; rename that piece"
+    )]
+    SplitNameClash { piece: String },
+    /// A bug: the pipeline broke its own invariant.
+    #[error("piece '{piece}': internal error: {what}")]
+    Internal { piece: String, what: &'static str },
     #[error("piece '{piece}': {source}")]
     Darts {
         piece: String,
@@ -41,4 +139,39 @@ pub enum PipelineError {
         second: String,
         safe: String,
     },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Callers tell the causes apart by variant, and each message still names the piece and
+    /// what is wrong.
+    #[test]
+    fn errors_say_their_cause_by_variant_and_name_the_piece() {
+        let e = crate::piece_build::flat_boundary("vamp", &flatcut_mesh::TriMesh::default())
+            .unwrap_err();
+        assert!(matches!(&e, PipelineError::NotFlattened { piece } if piece == "vamp"));
+        assert_eq!(e.to_string(), "piece 'vamp': the mesh has no flattening");
+
+        let design = flatcut_design::Design::from_toml_str(
+            "[[piece]]\nname = \"cap\"\nmaterial_properties = \"no-such-cloth\"\n[piece.surface]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 10\n",
+            "d.toml",
+        )
+        .unwrap();
+        let e = crate::material::of_piece(&design.pieces[0], std::path::Path::new("."), None)
+            .unwrap_err();
+        assert!(matches!(
+            &e,
+            PipelineError::Material {
+                piece,
+                source: flatcut_design::material::MaterialError::NotFound { name, .. },
+            } if piece == "cap" && name == "no-such-cloth"
+        ));
+        assert!(
+            e.to_string()
+                .starts_with("piece 'cap': material 'no-such-cloth': no bundled material"),
+            "{e}"
+        );
+    }
 }

@@ -107,9 +107,10 @@ pub fn read_flat_mesh(path: &Path, limits: &Limits) -> Result<Option<Flat>, Pipe
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
     let darts = if is_obj {
-        let text = std::fs::read_to_string(path).map_err(|e| PipelineError::Piece {
+        let text = std::fs::read_to_string(path).map_err(|source| PipelineError::Read {
             piece: name.clone(),
-            reason: format!("{}: {e}", path.display()),
+            path: path.to_path_buf(),
+            source,
         })?;
         let drill = limits
             .darts
@@ -117,9 +118,12 @@ pub fn read_flat_mesh(path: &Path, limits: &Limits) -> Result<Option<Flat>, Pipe
             .map_or(flatcut_darts::DartOptions::DEFAULT_DRILL_OFFSET_MM, |d| {
                 d.drill_offset_mm
             });
-        crate::dart_lines::read(&text, &mesh, x, drill).map_err(|e| PipelineError::Piece {
-            piece: name.clone(),
-            reason: format!("{}: {e}", path.display()),
+        crate::dart_lines::read(&text, &mesh, x, drill).map_err(|reason| {
+            PipelineError::DartLines {
+                piece: name.clone(),
+                path: path.to_path_buf(),
+                reason,
+            }
         })?
     } else {
         Vec::new()

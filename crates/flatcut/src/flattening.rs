@@ -370,18 +370,18 @@ fn flatten_isotropic(
                 source,
             }
         }
-        other => PipelineError::Piece {
-            piece: design.source.clone(),
-            reason: other.to_string(),
+        source => PipelineError::Assembly {
+            file: design.source.clone(),
+            source,
         },
     })
 }
 
 /// The error of a piece that should have been flattened and was not: a bug.
 fn unsolved(piece: &str) -> PipelineError {
-    PipelineError::Piece {
+    PipelineError::Internal {
         piece: piece.to_string(),
-        reason: "internal error: the piece was left out of the flattening".into(),
+        what: "the piece was left out of the flattening",
     }
 }
 
@@ -440,11 +440,8 @@ fn split_where_wanted(
     let mut names = std::collections::BTreeSet::new();
     for p in &out {
         if !names.insert(p.def.name.as_str()) {
-            return Err(PipelineError::Piece {
+            return Err(PipelineError::SplitNameClash {
                 piece: p.def.name.clone(),
-                reason:
-                    "a part of a split piece takes the name of another piece; rename that piece"
-                        .into(),
             });
         }
     }

@@ -40,14 +40,12 @@ pub fn of_piece(
     run: Option<&MaterialSpec>,
 ) -> Result<Option<MaterialSpec>, PipelineError> {
     match &def.material_properties {
-        Some(spec) => {
-            MaterialSpec::load(spec, Some(base))
-                .map(Some)
-                .map_err(|e| PipelineError::Piece {
-                    piece: def.name.clone(),
-                    reason: e.to_string(),
-                })
-        }
+        Some(spec) => MaterialSpec::load(spec, Some(base))
+            .map(Some)
+            .map_err(|source| PipelineError::Material {
+                piece: def.name.clone(),
+                source,
+            }),
         None => Ok(run.cloned()),
     }
 }

@@ -14,21 +14,18 @@ use flatcut_pattern::poly::signed_area;
 /// The flattened boundary of a piece as a closed CCW polyline (first point not repeated) with the
 /// mesh vertex of each polyline point.
 pub fn flat_boundary(name: &str, mesh: &TriMesh) -> Result<(Vec<DVec2>, Vec<u32>), PipelineError> {
-    let flat = mesh.flat.as_ref().ok_or_else(|| PipelineError::Piece {
+    let flat = mesh
+        .flat
+        .as_ref()
+        .ok_or_else(|| PipelineError::NotFlattened { piece: name.into() })?;
+    let topo = flatcut_mesh::Topology::build(mesh).map_err(|source| PipelineError::Topology {
         piece: name.into(),
-        reason: "the mesh has no flattening".into(),
-    })?;
-    let topo = flatcut_mesh::Topology::build(mesh).map_err(|e| PipelineError::Piece {
-        piece: name.into(),
-        reason: e.to_string(),
+        source,
     })?;
     let lp = match topo.boundary_loops.len() {
         1 => topo.boundary_loops[0].clone(),
         0 => {
-            return Err(PipelineError::Piece {
-                piece: name.into(),
-                reason: "the flattened mesh has no boundary".into(),
-            });
+            return Err(PipelineError::NoBoundary { piece: name.into() });
         }
         n => {
             // The outer loop is the one with the largest enclosed area in the plane; holes are
@@ -118,13 +115,12 @@ pub fn piece_from_flat(
     input.grain = grain;
     let mut opts = *opts;
     for n in ctx.notches {
-        let k = ids
-            .iter()
-            .position(|&v| v == n.vertex)
-            .ok_or_else(|| PipelineError::Piece {
+        let k = ids.iter().position(|&v| v == n.vertex).ok_or_else(|| {
+            PipelineError::NotchOffOutline {
                 piece: name.into(),
-                reason: format!("notch '{}' is not on the piece's outline", n.name),
-            })?;
+                notch: n.name.clone(),
+            }
+        })?;
         input.mark_names.resize(input.marks.len(), String::new());
         input.mark_names.push(n.name.clone());
         input.marks.push(Mark {
@@ -196,10 +192,7 @@ fn design_grain(
         q[1].or_else(|| near_flat(mesh, flat, b)),
     ) {
         (Some(a), Some(b)) if a.distance(b) > 0.0 => Ok(Some((a, b))),
-        _ => Err(PipelineError::Piece {
-            piece: name.into(),
-            reason: "the grain line's two points map to the same place".into(),
-        }),
+        _ => Err(PipelineError::GrainCollapsed { piece: name.into() }),
     }
 }
 
@@ -266,13 +259,10 @@ fn design_marks(
                 // as the map does.
                 let q = flatcut_flatten::marks::polyline_to_plane(mesh, flat, &pts, LINE_STEP_MM);
                 let line: Option<Vec<DVec2>> = q.into_iter().collect();
-                let line = line.ok_or_else(|| PipelineError::Piece {
+                let line = line.ok_or_else(|| PipelineError::LineOffSurface {
                     piece: name.into(),
-                    reason: format!(
-                        "mark '{}': the line leaves the surface (a point is farther than {:.0} % of the part size from it)",
-                        mark.name,
-                        flatcut_flatten::marks::MAX_OFFSET_REL * 100.0
-                    ),
+                    mark: mark.name.clone(),
+                    max_offset_pct: flatcut_flatten::marks::MAX_OFFSET_REL * 100.0,
                 })?;
                 input.lines.push(line);
             }
@@ -287,12 +277,10 @@ fn design_marks(
                     .into_iter()
                     .zip(&pts)
                 {
-                    let q = q.ok_or_else(|| PipelineError::Piece {
+                    let q = q.ok_or_else(|| PipelineError::PointOffSurface {
                         piece: name.into(),
-                        reason: format!(
-                            "mark '{}': point ({:.2}, {:.2}, {:.2}) is not on the surface",
-                            mark.name, p.x, p.y, p.z
-                        ),
+                        mark: mark.name.clone(),
+                        point: *p,
                     })?;
                     input.marks.push(Mark {
                         kind,

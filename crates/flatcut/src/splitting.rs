@@ -126,9 +126,10 @@ pub fn visibility(def: &PieceDef, mesh: &TriMesh) -> Result<Visibility, Pipeline
         let pts: Vec<DVec3> = region.iter().map(|p| DVec3::from_array(*p)).collect();
         hidden
             .block_region(mesh, &pts, i)
-            .map_err(|e| PipelineError::Piece {
+            .map_err(|source| PipelineError::SeamHidden {
                 piece: def.name.clone(),
-                reason: format!("seam_hidden_regions {i}: {e}"),
+                index: i,
+                source,
             })?;
     }
     Ok(Visibility {
