@@ -165,7 +165,7 @@ pub fn dart_piece(
                 PipelineError::DartsStopped {
                     piece: name.to_string(),
                     source,
-                    count,
+                    count: Box::new(count),
                 }
             } else {
                 PipelineError::Darts {

@@ -115,7 +115,8 @@ pub enum PipelineError {
     DartsStopped {
         piece: String,
         source: flatcut_darts::DartError,
-        count: flatcut_flatten::StageCount,
+        /// Boxed: the error stays small for every caller.
+        count: Box<flatcut_flatten::StageCount>,
     },
     /// A part of a split piece is named as another piece is.
     #[error(

@@ -327,7 +327,7 @@ fn report_stage(
         name: "report.json".into(),
         bytes: json(&reports),
     });
-    let cols = flat::columns(&flats);
+    let cols = flat::columns(flats);
     let heat = flatcut_report::heatmap_svg(&cols, Measure::Stretch, false);
     let png = flatcut_report::render_png(&heat, None)?;
     files.push(OutputFile {
