@@ -253,6 +253,13 @@ impl Job {
             .collect()
     }
 
+    /// The first line to send from line `source_line` of the file on (1-based; a blank or
+    /// comment line names the next line that is sent): where an operator's "resume from line N"
+    /// continues. `None` when nothing is sent from there on.
+    pub fn first_line_from(&self, source_line: usize) -> Option<usize> {
+        self.lines.iter().position(|l| l.source_line >= source_line)
+    }
+
     /// Whether line `index` pauses the program (`M0`): GRBL holds the feed there and keeps
     /// the line's `ok` until cycle start.
     pub fn pauses(&self, index: usize) -> bool {
