@@ -807,7 +807,8 @@ fn serve_streams_jobs_to_the_simulator_and_stops_them_with_the_tool_off() {
 /// "Resume from line N" in the device panel (`POST /api/jobs` with `resume_from`, a line of the
 /// sheet's file): refused with 400 when nothing is sent from that line on; after a stop, the job
 /// continues from that line whatever the journal says (the operator looked at the work), as
-/// `flatcut send --resume-from` does: the lines before it count as run, the simulator runs the
+/// `flatcut send --resume-from` does: after the same question on the work origin (the panel's
+/// simulator counts as restarted), the lines before it count as run, the simulator runs the
 /// G-code's motions from that line on, each once, and the journal ends complete.
 #[test]
 fn serve_resumes_a_job_from_the_line_the_operator_names() {
