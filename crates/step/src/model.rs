@@ -3,7 +3,8 @@
 //! are numbered from 0 in the order the shells list them; that number is how users select faces.
 //!
 //! Shells come from `MANIFOLD_SOLID_BREP` and `BREP_WITH_VOIDS` (closed), and
-//! `SHELL_BASED_SURFACE_MODEL` (open or closed); a file with none of these but loose
+//! `SHELL_BASED_SURFACE_MODEL` (open or closed), and the `CURVE_BOUNDED_SURFACE`s of a
+//! `GEOMETRIC_SET` (a face each, `bounded`); a file with none of these but loose
 //! `CLOSED_SHELL`/`OPEN_SHELL`s uses those. Lengths are converted to mm with the unit of the
 //! representation that holds the shell.
 //!
@@ -15,7 +16,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
-use flatcut_geom::{Aabb3, DVec3};
+use flatcut_geom::{Aabb3, DVec2, DVec3};
 use flatcut_surface::ParamCurve;
 use flatcut_surface::curve::nearest_from_samples;
 
@@ -26,6 +27,8 @@ use crate::file::{Instance, StepFile, Value};
 use crate::geom::{Curve, Surface};
 use crate::heal::{HealOptions, Repair};
 use crate::reader::{Reader, Space, Units};
+
+mod bounded;
 
 /// A curve whose length over an edge is below this (mm) makes a degenerate edge when the edge
 /// starts and ends at one vertex (an edge at a pole).
@@ -296,9 +299,10 @@ impl Model {
     }
 }
 
-/// Refuses a file whose shapes hold surfaces outside any shell (a `GEOMETRIC_SET` of bounded
-/// or trimmed surfaces beside the solids): only shells' faces are read, and the model would
-/// come in without them, with less area than the file has.
+/// Refuses a file whose shapes hold surfaces outside any shell that flatcut cannot read as
+/// faces (a `GEOMETRIC_SET` of trimmed or untrimmed surfaces beside the solids; its
+/// `CURVE_BOUNDED_SURFACE`s are read): the model would come in without them, with less area
+/// than the file has.
 fn loose_surfaces(file: &StepFile, r: &mut Reader) -> Result<(), StepError> {
     for set in file.ids_of_type("GEOMETRIC_SET") {
         let items = r.visit(set, set, |_, inst| {
@@ -310,12 +314,16 @@ fn loose_surfaces(file: &StepFile, r: &mut Reader) -> Result<(), StepError> {
                 continue;
             };
             let t = t.to_ascii_uppercase();
+            // Read as a face of its own (see `bounded`).
+            if t == "CURVE_BOUNDED_SURFACE" {
+                continue;
+            }
             if t.ends_with("_SURFACE") || t.ends_with("_FACE") {
                 return Err(StepError::entity(
                     set,
                     "GEOMETRIC_SET",
                     format!(
-                        "holds the surface #{item} ({t}) outside any shell: flatcut reads the faces of shells only, and the model would come in without it"
+                        "holds the surface #{item} ({t}) outside any shell: flatcut reads the faces of shells and curve-bounded surfaces only, and the model would come in without it"
                     ),
                 ));
             }
@@ -337,6 +345,15 @@ fn top_level_shells(
     ] {
         items.extend(file.ids_of_type(t));
     }
+    // A geometric set's curve-bounded surfaces: each a face of an open shell of its own.
+    for set in file.ids_of_type("GEOMETRIC_SET") {
+        let elements = r.visit(set, set, |_, inst| {
+            Attrs::of(inst, &inst.parts[0]).refs(1, "elements")
+        })?;
+        if elements.iter().any(|&e| is_bounded_surface(file, e)) {
+            items.push(set);
+        }
+    }
     items.sort_unstable();
     let mut out = Vec::new();
     for item in items {
@@ -345,6 +362,13 @@ fn top_level_shells(
             let kind = a.name.to_ascii_uppercase();
             let mut shells = Vec::new();
             match kind.as_str() {
+                "GEOMETRIC_SET" => {
+                    for e in a.refs(1, "elements")? {
+                        if is_bounded_surface(r.file, e) {
+                            shells.push((e, false));
+                        }
+                    }
+                }
                 "MANIFOLD_SOLID_BREP" => shells.push((a.reference(1, "outer")?, true)),
                 "BREP_WITH_VOIDS" => {
                     shells.push((a.reference(1, "outer")?, true));
@@ -375,6 +399,12 @@ fn top_level_shells(
         out.sort_by_key(|x| x.0);
     }
     Ok(out)
+}
+
+/// Whether instance `id` is a `CURVE_BOUNDED_SURFACE` (read as a face of its own).
+fn is_bounded_surface(file: &StepFile, id: u64) -> bool {
+    file.type_of(id)
+        .is_some_and(|t| t.eq_ignore_ascii_case("CURVE_BOUNDED_SURFACE"))
 }
 
 /// For each item of a shape representation, the representation's context.
@@ -529,6 +559,9 @@ impl<'f> Builder<'f> {
         index: usize,
         seen: &mut BTreeMap<(u64, usize), usize>,
     ) -> Result<Vec<usize>, StepError> {
+        if is_bounded_surface(self.r.file, sid) {
+            return Ok(self.bounded_surface(sid, from, index, seen));
+        }
         // An oriented shell (a solid's void, written reversed) is its element's faces, each
         // reversed when the orientation is false.
         let (element, reversed) = self.r.visit(sid, from, |_, inst| {

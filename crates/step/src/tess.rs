@@ -137,6 +137,7 @@ fn face_trim(
     g: &FaceGeometry,
     slot_of: &BTreeMap<usize, usize>,
     samples: &[Samples],
+    ruled: bool,
     rulings: Option<&[f64]>,
     chord: f64,
 ) -> Result<Trim, StepError> {
@@ -146,6 +147,7 @@ fn face_trim(
         face: g,
         slot_of,
         samples,
+        ruled,
         rulings,
         chord,
         heal: model.heal_mm,
@@ -265,16 +267,19 @@ fn face_repairs(model: &Model, index: usize, g: &FaceGeometry, t: &Trim) -> Vec<
     out
 }
 
-/// The u-step between rulings that keeps a developable face within `tol`, if it has one.
-fn chord_rulings(s: &Surface, loops: &[Vec<LoopPt>], tol: f64) -> Vec<f64> {
+/// The rulings a developable face needs for the chordal tolerance `tol`, besides those through
+/// its loop points (`have`, sorted): in every gap between those wider than the step the
+/// curvature allows, the points of a fixed grid of that step. The grid does not depend on where
+/// the face's loops start in u (on a cylinder or a cone it is whole fractions of a turn from
+/// u = 0), so the rulings one round of [`Tessellation::new`] puts on the edges are the ones the
+/// next round asks for again: the rounds settle instead of shifting every ruling a little.
+fn chord_rulings(s: &Surface, loops: &[Vec<LoopPt>], have: &[f64], tol: f64) -> Vec<f64> {
     let Surface::Analytic(a) = s else {
         return Vec::new();
     };
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for p in loops.iter().flatten() {
-        lo = lo.min(p.uv.x);
-        hi = hi.max(p.uv.x);
-    }
+    let (Some(&lo), Some(&hi)) = (have.first(), have.last()) else {
+        return Vec::new();
+    };
     let step_for = |radius: f64| {
         if radius > tol {
             2.0 * (1.0 - tol / radius).acos()
@@ -282,20 +287,32 @@ fn chord_rulings(s: &Surface, loops: &[Vec<LoopPt>], tol: f64) -> Vec<f64> {
             f64::INFINITY
         }
     };
-    let uniform = |step: f64| -> Vec<f64> {
+    let grid = |step: f64| -> Vec<f64> {
         if !(step.is_finite() && step > 0.0) {
             return Vec::new();
         }
-        let n = ((hi - lo) / step).ceil();
-        if !(n.is_finite() && n >= 2.0) {
+        // Whole fractions of a turn, at least as fine as `step`.
+        let n = (std::f64::consts::TAU / step).ceil();
+        if !(n.is_finite() && n >= 2.0) || (hi - lo) / step > 1e6 {
             return Vec::new();
         }
-        (1..n as usize)
-            .map(|i| lo + (hi - lo) * i as f64 / n)
-            .collect()
+        let step = std::f64::consts::TAU / n;
+        let mut out = Vec::new();
+        for w in have.windows(2) {
+            if w[1] - w[0] <= step {
+                continue;
+            }
+            let first = (w[0] / step).floor() as i64 + 1;
+            let mut k = first;
+            while (k as f64) * step < w[1] {
+                out.push(k as f64 * step);
+                k += 1;
+            }
+        }
+        out
     };
     match &a.kind {
-        AnalyticKind::Cylinder { radius } => uniform(step_for(*radius)),
+        AnalyticKind::Cylinder { radius } => grid(step_for(*radius)),
         AnalyticKind::Cone { .. } => {
             let rho = loops
                 .iter()
@@ -305,7 +322,7 @@ fn chord_rulings(s: &Surface, loops: &[Vec<LoopPt>], tol: f64) -> Vec<f64> {
                     q.x.hypot(q.y)
                 })
                 .fold(0.0, f64::max);
-            uniform(step_for(rho))
+            grid(step_for(rho))
         }
         AnalyticKind::Extrusion { curve, .. } => {
             flatten_with_breaks(curve.as_ref(), tol, &[lo, hi])
@@ -339,8 +356,9 @@ fn face_rulings(s: &Surface, loops: &[Vec<LoopPt>], tol: f64) -> (Vec<f64>, f64)
             (a.min(u), b.max(u))
         });
     let snap = RULING_SNAP_REL * (hi - lo).abs().max(f64::MIN_POSITIVE);
-    let mut all = us;
-    all.extend(chord_rulings(s, loops, tol));
+    let have = distinct(us, snap);
+    let mut all = chord_rulings(s, loops, &have, tol);
+    all.extend(have);
     (distinct(all, snap), snap)
 }
 
@@ -432,7 +450,7 @@ impl Tessellation {
                 if !active[k] {
                     continue;
                 }
-                let t = face_trim(model, *i, g, &slot_of, &samples, None, chord)?;
+                let t = face_trim(model, *i, g, &slot_of, &samples, ruled[k], None, chord)?;
                 if !t.wants.is_empty() {
                     changed |= insert_samples(model, &slots, &mut samples, &t.wants);
                     next[k] = true;
@@ -500,12 +518,21 @@ impl Tessellation {
         let mut face_meshes = Vec::with_capacity(geoms.len());
         for (k, (i, g)) in geoms.iter().enumerate() {
             let rulings = if ruled[k] {
-                let t = face_trim(model, *i, g, &slot_of, &samples, None, chord)?;
+                let t = face_trim(model, *i, g, &slot_of, &samples, true, None, chord)?;
                 Some(face_rulings(&g.surface, &t.loops, chord).0)
             } else {
                 None
             };
-            let t = face_trim(model, *i, g, &slot_of, &samples, rulings.as_deref(), chord)?;
+            let t = face_trim(
+                model,
+                *i,
+                g,
+                &slot_of,
+                &samples,
+                ruled[k],
+                rulings.as_deref(),
+                chord,
+            )?;
             let first_extra = positions.len() as u32;
             positions.extend(t.extra.iter().copied());
             let id_of = |o: Origin| -> u32 {
@@ -848,6 +875,6 @@ pub fn face_area(model: &Model, index: usize) -> Result<f64, StepError> {
         slot_of.insert(u.edge, samples.len());
         samples.push(sample_edge(model, eg, tol));
     }
-    let t = face_trim(model, index, g, &slot_of, &samples, None, tol)?;
+    let t = face_trim(model, index, g, &slot_of, &samples, false, None, tol)?;
     Ok(check::trim_area(&g.surface, &oriented_by_nesting(&t.loops)))
 }

@@ -103,7 +103,11 @@ pub(crate) struct TrimInput<'a> {
     pub face: &'a FaceGeometry,
     pub slot_of: &'a BTreeMap<usize, usize>,
     pub samples: &'a [Samples],
-    /// The rulings of a ruled face: pole runs put their points on them.
+    /// The face is meshed along its rulings (lines of constant u): a line cutting it open must
+    /// run along one, so the points of its two sides are the same.
+    pub ruled: bool,
+    /// The rulings of a ruled face, once its edges carry them: pole runs put their points on
+    /// them, and a band's cut line must be found on one.
     pub rulings: Option<&'a [f64]>,
     /// Chordal tolerance for the points of cut lines (mm).
     pub chord: f64,
@@ -1175,6 +1179,12 @@ fn dedup_closing(mut lp: Vec<LoopPt>) -> Vec<LoopPt> {
 
 /// A band: the loops `lower` (going `w` = ±1 times around u, the region on its upper side) and
 /// `upper` (the other way) joined by a cut line between a point of each.
+///
+/// On a ruled face the line runs along a ruling, between points of the two loops at one u: a
+/// line off the rulings would be split where it crosses each, at u on one side and at u + one
+/// period on the other, so its two sides would not share their points. Each ruling through a
+/// point of one loop crosses the other loop at an edge sample once the caller has put the
+/// face's rulings on its edges; until then (`inp.rulings` unset) any clear line will do.
 fn band(
     inp: &TrimInput,
     lower: &[LoopPt],
@@ -1190,48 +1200,75 @@ fn band(
     let mut order: Vec<usize> = (0..lower.len()).collect();
     order.sort_by(|&a, &b| lower[b].uv.y.total_cmp(&lower[a].uv.y));
     let refs = obstacles(&[(lower, w), (upper, -w)], holes, per);
-    for &ai in order.iter().take(CUT_CANDIDATES) {
-        let a = lower[ai].uv;
-        let mut near: Vec<(f64, usize, f64)> = upper
-            .iter()
-            .enumerate()
-            .map(|(k, q)| {
-                let sh = per * ((a.x - q.uv.x) / per).round();
-                let b = q.uv + DVec2::new(sh, 0.0);
-                (b.distance(a), k, sh)
-            })
-            .collect();
-        near.sort_by(|x, y| x.0.total_cmp(&y.0));
-        for &(_, bi, sh) in near.iter().take(CUT_CANDIDATES) {
-            let b = upper[bi].uv + DVec2::new(sh, 0.0);
-            if crosses(a, b, &refs) {
-                continue;
-            }
-            let line = cut_points(inp, a, b, trim);
-            let mut out = around_from(lower, ai, wp);
-            out.extend(line_points(trim, &line, DVec2::new(wp, 0.0), false));
-            // Around the upper loop once from its point (going the other way round).
-            let m = upper.len();
-            for k in 0..=m {
-                let mut p = upper[(bi + k) % m];
-                p.uv.x += sh + wp;
-                if bi + k >= m {
-                    p.uv.x -= wp;
+    let same_u = SAME_PARAM_REL * per;
+    let find = |along_ruling: bool, anchors: usize| -> Option<(usize, usize, f64)> {
+        for &ai in order.iter().take(anchors) {
+            let a = lower[ai].uv;
+            let mut near: Vec<(f64, usize, f64)> = upper
+                .iter()
+                .enumerate()
+                .map(|(k, q)| {
+                    let sh = per * ((a.x - q.uv.x) / per).round();
+                    (q.uv.x + sh - a.x, k, sh)
+                })
+                .filter(|&(du, _, _)| !along_ruling || du.abs() <= same_u)
+                .map(|(_, k, sh)| {
+                    let b = upper[k].uv + DVec2::new(sh, 0.0);
+                    (b.distance(a), k, sh)
+                })
+                .collect();
+            near.sort_by(|x, y| x.0.total_cmp(&y.0));
+            for &(_, bi, sh) in near.iter().take(CUT_CANDIDATES) {
+                let b = upper[bi].uv + DVec2::new(sh, 0.0);
+                if !crosses(a, b, &refs) {
+                    return Some((ai, bi, sh));
                 }
-                if k == m {
-                    p.along = None;
-                }
-                out.push(p);
             }
-            out.extend(line_points(trim, &line, DVec2::ZERO, true));
-            record_cut(trim, lower[ai].origin, &line, upper[bi].origin);
-            return Ok(dedup_closing(out));
         }
+        None
+    };
+    let found = if inp.ruled {
+        find(true, order.len()).or_else(|| {
+            inp.rulings
+                .is_none()
+                .then(|| find(false, CUT_CANDIDATES))
+                .flatten()
+        })
+    } else {
+        find(false, CUT_CANDIDATES)
+    };
+    let Some((ai, bi, sh)) = found else {
+        return Err(inp.err(format!(
+            "its two loops wind around the {} and no {} between them clears the face's other loops",
+            inp.surface().name(),
+            if inp.ruled { "ruling" } else { "line" }
+        )));
+    };
+    let (a, b) = (lower[ai].uv, upper[bi].uv + DVec2::new(sh, 0.0));
+    // A ruling is straight: its ends are all its points.
+    let line = if inp.ruled {
+        Vec::new()
+    } else {
+        cut_points(inp, a, b, trim)
+    };
+    let mut out = around_from(lower, ai, wp);
+    out.extend(line_points(trim, &line, DVec2::new(wp, 0.0), false));
+    // Around the upper loop once from its point (going the other way round).
+    let m = upper.len();
+    for k in 0..=m {
+        let mut p = upper[(bi + k) % m];
+        p.uv.x += sh + wp;
+        if bi + k >= m {
+            p.uv.x -= wp;
+        }
+        if k == m {
+            p.along = None;
+        }
+        out.push(p);
     }
-    Err(inp.err(format!(
-        "its two loops wind around the {} and no line between them clears the face's other loops",
-        inp.surface().name()
-    )))
+    out.extend(line_points(trim, &line, DVec2::ZERO, true));
+    record_cut(trim, lower[ai].origin, &line, upper[bi].origin);
+    Ok(dedup_closing(out))
 }
 
 /// Even–odd test of a point against a closed loop.

@@ -195,3 +195,54 @@ fn sheets_of_separate_shells_are_sewn_where_they_meet() {
         assert_eq!(sewn, 2, "face {}: {:?}", f.face, f.repairs);
     }
 }
+
+/// A tube cut square below and aslant above, whose side face has no seam edge (a band between
+/// a circle and an ellipse, as NIST's CTC-02 has one on a cone): the band is cut open along a
+/// ruling, whose two sides are the same two points, so the solid welds closed and the face stays
+/// exactly developable. Before, the cut went to the nearest point of the ellipse in (u, v), off
+/// the rulings, and each side of it was split where it crossed them, at u on one side and one
+/// turn further on the other: the shell was refused as open. The file (hand-written: the circle
+/// starts at 0 rad, the ellipse at 2 rad) is valid for OCCT (BRepCheck), its area within 6e-7
+/// of the exact one.
+#[test]
+fn a_band_without_a_seam_edge_is_cut_along_a_ruling_and_welds_closed() {
+    let r = 30.0f64;
+    // Side 2π r · 60 (the slant averages out), the disk below, the ellipse above (r/cos θ by
+    // r, tan θ = 1/2).
+    let exact = std::f64::consts::PI * r * (2.0 * 60.0 + r + r * 1.25f64.sqrt());
+    for chord in [0.2, 0.05] {
+        let (model, t) = tessellate("slanted_tube_no_seam", chord);
+        assert!(model.shells[0].closed);
+        let m = t.welded(None);
+        let topo = Topology::build(&m).unwrap();
+        assert!(topo.boundary_loops.is_empty(), "at {chord} mm: open");
+        assert_eq!(topo.component_count, 1);
+        let area: f64 = (0..model.faces.len())
+            .map(|f| flatcut_step::face_area(&model, f).unwrap())
+            .sum();
+        assert!(
+            (area - exact).abs() < 1e-4 * exact,
+            "area {area}, exact {exact}"
+        );
+        let side = t
+            .faces
+            .iter()
+            .find(|f| model.face(f.face).unwrap().surface.name() == "cylinder")
+            .unwrap();
+        assert!(side.ruled);
+        // The cut runs along one ruling: its two ends, nothing between, one above the other.
+        assert_eq!(side.cuts.len(), 1);
+        let ends: Vec<_> = side.cuts[0]
+            .iter()
+            .map(|&v| t.positions[v as usize])
+            .collect();
+        assert_eq!(ends.len(), 2);
+        assert!(
+            ends[0].truncate().distance(ends[1].truncate()) < 1e-9,
+            "{ends:?}"
+        );
+        let piece = t.piece_mesh(&model, &[side.face]);
+        let d = worst_angle_defect(&piece);
+        assert!(d < 1e-11, "at {chord} mm: angle defect {d}");
+    }
+}
