@@ -16,7 +16,8 @@ use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
 use crate::ops::{QuadraticBuilder, corner_cotans, used_mask, uv_area};
-use crate::{FlattenError, FlattenInfo, Flattening, Method, Pin};
+use crate::{FlattenError, FlattenInfo, Flattening, Method, Pin, Timings};
+use std::time::Instant;
 
 /// Solves LSCM on the disk `mesh` (topology from `check_disk`) with the (validated) `pins`.
 pub fn lscm(mesh: &TriMesh, topo: &Topology, pins: &[Pin]) -> Result<Flattening, FlattenError> {
@@ -28,7 +29,7 @@ pub fn lscm(mesh: &TriMesh, topo: &Topology, pins: &[Pin]) -> Result<Flattening,
         let d = (mesh.positions[b as usize] - mesh.positions[a as usize]).length();
         vec![(a, DVec2::ZERO), (b, DVec2::new(d, 0.0))]
     };
-    let mut uv = solve_pinned(mesh, topo, &hard)?;
+    let (mut uv, timings) = solve_pinned_timed(mesh, topo, &hard)?;
     if pins.len() < 2 {
         let a2 = uv_area(&mesh.triangles, &uv);
         if a2.is_nan() || a2 <= 0.0 || a2.is_infinite() {
@@ -58,6 +59,7 @@ pub fn lscm(mesh: &TriMesh, topo: &Topology, pins: &[Pin]) -> Result<Flattening,
             iterations: 1,
             final_energy: energy,
             warnings,
+            timings,
             ..Default::default()
         },
     })
@@ -73,6 +75,18 @@ pub fn solve_pinned(
     topo: &Topology,
     hard: &[(u32, DVec2)],
 ) -> Result<Vec<DVec2>, FlattenError> {
+    solve_pinned_timed(mesh, topo, hard).map(|(uv, _)| uv)
+}
+
+/// [`solve_pinned`], with where its time went: the assembly of the matrix (cotangents, the
+/// Dirichlet and boundary-area terms, their compression), the ordering and symbolic analysis,
+/// the numeric factorisation and the solve, for `flatten --timings`.
+fn solve_pinned_timed(
+    mesh: &TriMesh,
+    topo: &Topology,
+    hard: &[(u32, DVec2)],
+) -> Result<(Vec<DVec2>, Timings), FlattenError> {
+    let started = Instant::now();
     let n = mesh.positions.len();
     let mut fixed = vec![false; 2 * n];
     for (v, used) in used_mask(mesh).into_iter().enumerate() {
@@ -106,6 +120,7 @@ pub fn solve_pinned(
         }
     }
     let sys = q.build("lscm")?;
+    let built = started.elapsed();
     // The map's vector after the factorisation, the memory peak of a large map.
     let mut x = vec![0.0; 2 * n];
     for &(v, p) in hard {
@@ -115,7 +130,16 @@ pub fn solve_pinned(
     let mut fields = vec![x];
     sys.solve(&mut fields, None)?;
     let x = &fields[0];
-    Ok((0..n).map(|v| DVec2::new(x[2 * v], x[2 * v + 1])).collect())
+    let solver = sys.timings();
+    // The builder's own time: what the solver did not account for while building.
+    let timings = Timings {
+        assembly: built.saturating_sub(solver.ordering + solver.factorisation),
+        ..solver
+    };
+    Ok((
+        (0..n).map(|v| DVec2::new(x[2 * v], x[2 * v + 1])).collect(),
+        timings,
+    ))
 }
 
 /// `Σ_T A_T (½‖J‖² − det J) = Σ_T ½ A_T (σ1 − σ2)²` of the map `uv`.

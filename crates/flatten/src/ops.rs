@@ -229,6 +229,12 @@ impl QuadraticBuilder {
 }
 
 impl Reduced {
+    /// Where the solver's time went: the ordering and symbolic analysis, the numeric
+    /// factorisation and the solves so far.
+    pub fn timings(&self) -> crate::Timings {
+        self.solver.timings()
+    }
+
     /// Minimizes for several fields at once: `values[c]` holds the values of field `c` at the
     /// fixed dofs (free entries are overwritten with the solution); `source[c]`, when given, is
     /// the linear term `b` (read at free dofs).

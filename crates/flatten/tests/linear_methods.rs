@@ -80,6 +80,19 @@ fn lscm_reproduces_a_plane_at_scale() {
 }
 
 #[test]
+fn lscm_says_where_its_time_went() {
+    // One ordering, one numeric factorisation, one solve: the parts `flatten --timings` prints.
+    let mesh = testmesh::spherical_cap(30.0, 1.0, 24);
+    let t = run(&mesh, Method::Lscm).info.timings;
+    assert_eq!(t.factorisations, 1, "{t}");
+    assert!(t.ordering > std::time::Duration::ZERO, "{t}");
+    assert!(t.factorisation > std::time::Duration::ZERO, "{t}");
+    assert!(t.solve > std::time::Duration::ZERO, "{t}");
+    assert!(t.assembly > std::time::Duration::ZERO, "{t}");
+    assert_eq!(t.line_search, std::time::Duration::ZERO, "{t}");
+}
+
+#[test]
 fn lscm_on_a_cap_matches_the_stereographic_floor() {
     // Sphere radius 100 mm, geodesic radius 1.0 rad.
     let r = 100.0;

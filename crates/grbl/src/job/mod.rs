@@ -8,7 +8,8 @@
 //!
 //! One idea per module: `modal` (the interpreter's state), `parse` (stripping, words, the
 //! interpreter), `arc` (GRBL's arcs), `time` (the estimate), `resume` (preambles), `limits`
-//! (the controller's settings the sender uses), `feeds` (the feeds those settings clamp).
+//! (the controller's settings the sender uses), `feeds` (the feeds those settings clamp), `sync`
+//! (the lines GRBL answers only once the motion before them has finished).
 
 mod arc;
 mod feeds;
@@ -16,6 +17,7 @@ mod limits;
 mod modal;
 mod parse;
 mod resume;
+mod sync;
 mod time;
 
 pub use feeds::FeedClamp;
