@@ -45,7 +45,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "mesh".into());
+        // Ctrl-C stops the flattening at its cancel flag; nothing is written then.
+        let stop = crate::stop::Stoppable::register();
         let (params, bar) = common::with_progress_bar(a.flatten.params()?);
+        let params = params.clone().with_hooks(stop.hooks(params.hooks));
         let material = a.flatten.material()?;
         // Checked before the solve: darts without limits are refused at once, not after it.
         let settings = a.flatten.darts()?;
@@ -58,19 +61,17 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             }
         );
         let t0 = std::time::Instant::now();
-        let (f, grain) = match &material {
-            Some(m) => {
-                let (f, g) = flatcut::material::flatten(&name, &mesh, &params, m, None)
-                    .map_err(|e| anyhow::Error::new(e).context(a.file.display().to_string()))?;
-                (f, Some(g))
-            }
-            None => (
-                flatcut::flatten::flatten(&mesh, &params)
-                    .map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?,
-                None,
-            ),
+        let solved = match &material {
+            Some(m) => flatcut::material::flatten(&name, &mesh, &params, m, None)
+                .map(|(f, g)| (f, Some(g)))
+                .map_err(|e| anyhow::Error::new(e).context(a.file.display().to_string())),
+            None => flatcut::flatten::flatten(&mesh, &params)
+                .map(|f| (f, None))
+                .map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display())),
         };
         bar.finish_and_clear();
+        stop.check(|| format!("the flattening of {}", a.file.display()))?;
+        let (f, grain) = solved?;
         let dart_limits = match (&material, &grain) {
             (Some(m), Some(g)) => flatcut::material::dart_limits(&params, m, g, None, &mesh),
             _ => flatcut::darting::DartLimits::of(&params),
