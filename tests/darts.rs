@@ -74,7 +74,7 @@ fn bench_mesh(name: &str) -> Option<PathBuf> {
 /// A mesh as read from an OBJ: 3D positions, per-vertex UV when given, triangles.
 pub(crate) struct Obj {
     pub(crate) v: Vec<DVec3>,
-    vt: Vec<DVec2>,
+    pub(crate) vt: Vec<DVec2>,
     /// Per face: (vertex, uv) indices of its corners.
     pub(crate) f: Vec<[(usize, usize); 3]>,
 }

@@ -248,3 +248,271 @@ fn limits_no_split_can_meet_exit_3_with_the_excess_reached() {
     );
     assert!(!flat.exists());
 }
+
+/// Environment variable naming the working directory of [`interrupted_split_child`].
+const SPLIT_CHILD_ENV: &str = "FLATCUT_SPLIT_CHILD_DIR";
+
+/// The splitting half of [`ctrl_c_during_a_split_stops_it_with_nothing_written`], run in a child
+/// process (a signal to this test binary would reach every test running in it): the command
+/// line of `DIR/argv` (one argument a line) with the binary's signal handler, its exit code
+/// printed. Without the variable set it does nothing.
+#[test]
+fn interrupted_split_child() {
+    let Some(dir) = std::env::var_os(SPLIT_CHILD_ENV) else {
+        return;
+    };
+    flatcut_cli::install_signal_handler().unwrap();
+    let argv = std::fs::read_to_string(Path::new(&dir).join("argv")).unwrap();
+    let cli = flatcut_cli::Cli::try_parse_from(argv.lines()).unwrap();
+    let code = flatcut_cli::exit_code(flatcut_cli::run(cli));
+    eprintln!("CHILD-EXIT: {code:?}");
+}
+
+/// Runs `argv` in [`interrupted_split_child`] in `dir`, sends SIGINT once the split has begun,
+/// and returns what the child printed on stderr; the child must end within 60 s of it.
+fn interrupt_a_split(dir: &Path, argv: &[&str]) -> String {
+    use std::io::Read;
+    use std::process::Stdio;
+    use std::time::{Duration, Instant};
+    std::fs::write(dir.join("argv"), argv.join("\n")).unwrap();
+    let mut child =
+        crate::stream::child_test("genus::interrupted_split_child", SPLIT_CHILD_ENV, dir)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+    let mut stderr = child.stderr.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel::<Vec<u8>>();
+    let reader = std::thread::spawn(move || {
+        let mut buf = [0u8; 4096];
+        while let Ok(n) = stderr.read(&mut buf) {
+            if n == 0 || tx.send(buf[..n].to_vec()).is_err() {
+                break;
+            }
+        }
+    });
+    let mut said = String::new();
+    let t0 = Instant::now();
+    while !said.contains("splitting where the limits demand")
+        && t0.elapsed() < Duration::from_secs(120)
+    {
+        if let Ok(b) = rx.recv_timeout(Duration::from_millis(50)) {
+            said.push_str(&String::from_utf8_lossy(&b));
+        }
+    }
+    assert!(
+        said.contains("splitting where"),
+        "the split never began: {said}"
+    );
+    let pid = nix::unistd::Pid::from_raw(child.id() as i32);
+    nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGINT).unwrap();
+    let t0 = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if t0.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("the split goes on after Ctrl-C: {said}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    reader.join().unwrap();
+    said.extend(
+        rx.try_iter()
+            .map(|b| String::from_utf8_lossy(&b).into_owned()),
+    );
+    assert!(status.success(), "child failed: {said}");
+    said
+}
+
+/// Ctrl-C during `flatten --split auto` and during `run` with `split = "auto"`: the split stops
+/// at its cancel flag, the command says so and ends with 130 (the shell's code for SIGINT),
+/// and no output is written (all or none). Without the stop the handler would end the process
+/// at once, printing neither line.
+#[test]
+fn ctrl_c_during_a_split_stops_it_with_nothing_written() {
+    let interrupted = format!(
+        "CHILD-EXIT: {:?}",
+        std::process::ExitCode::from(flatcut_cli::stop::EXIT_INTERRUPTED)
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let ball = dir.path().join("ball.obj");
+    std::fs::write(&ball, crate::darts::ball_obj(40.0, 16, 32)).unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let (flat, report) = (out.join("flat.obj"), out.join("flat.json"));
+    let said = interrupt_a_split(
+        dir.path(),
+        &[
+            "flatcut",
+            "flatten",
+            ball.to_str().unwrap(),
+            "-o",
+            flat.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+            "--max-stretch",
+            "1",
+            "--max-compress",
+            "1",
+            "--split",
+            "auto",
+            "--max-pieces",
+            "64",
+        ],
+    );
+    assert!(
+        said.contains(&format!(
+            "error: interrupted (Ctrl-C) during the split of {}: stopped, nothing written",
+            ball.display()
+        )) && said.contains(&interrupted),
+        "{said}"
+    );
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 0, "{said}");
+
+    // The same through `flatcut run`, the project's split = "auto".
+    std::fs::write(
+        dir.path().join("project.toml"),
+        "name = \"ball\"\ndesign = \"ball.obj\"\nsplit = \"auto\"\n\
+         [material]\nname = \"felt\"\nmax_stretch_pct = 1.0\nmax_compress_pct = 1.0\n\
+         [sheet]\nwidth_mm = 600.0\nheight_mm = 400.0\n[machine]\nprofile = \"pen\"\n",
+    )
+    .unwrap();
+    let project = dir.path().join("project.toml");
+    let said = interrupt_a_split(
+        dir.path(),
+        &[
+            "flatcut",
+            "run",
+            project.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--no-send",
+        ],
+    );
+    assert!(
+        said.contains(&format!(
+            "error: interrupted (Ctrl-C) during the run of {}: stopped, nothing written",
+            project.display()
+        )) && said.contains(&interrupted),
+        "{said}"
+    );
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 0, "{said}");
+}
+
+/// A strip of the helicoid (x, y, z) = (r cos θ, r sin θ, c θ), r in [r0, r0 + w], θ in
+/// [0, 2π·turns], as OBJ text: `n` quads along each turn, 4 across.
+fn helicoid_strip_obj(r0: f64, w: f64, c: f64, turns: f64, n: usize) -> String {
+    let (along, across) = ((turns * n as f64).round() as usize, 4);
+    let mut s = String::new();
+    for i in 0..=along {
+        let t = std::f64::consts::TAU * turns * i as f64 / along as f64;
+        for j in 0..=across {
+            let r = r0 + w * j as f64 / across as f64;
+            s.push_str(&format!("v {} {} {}\n", r * t.cos(), r * t.sin(), c * t));
+        }
+    }
+    let id = |i: usize, j: usize| i * (across + 1) + j + 1;
+    for i in 0..along {
+        for j in 0..across {
+            s.push_str(&format!(
+                "f {} {} {}\n",
+                id(i, j),
+                id(i + 1, j),
+                id(i + 1, j + 1)
+            ));
+            s.push_str(&format!(
+                "f {} {} {}\n",
+                id(i, j),
+                id(i + 1, j + 1),
+                id(i, j + 1)
+            ));
+        }
+    }
+    s
+}
+
+/// Whether two boundary edges of the flat outline of `o` that share no vertex cross (every
+/// pair tried: an independent check of the library's sweep).
+fn outline_crosses(o: &Obj) -> bool {
+    let mut uv = vec![None; o.v.len()];
+    for t in &o.f {
+        for &(v, k) in t {
+            uv[v] = Some(o.vt[k]);
+        }
+    }
+    let edges: Vec<(usize, usize)> = crate::darts::boundary_next(o).into_iter().collect();
+    let side = |a: flatcut::geom::DVec2, b: flatcut::geom::DVec2, p: flatcut::geom::DVec2| {
+        (b - a).perp_dot(p - a)
+    };
+    edges.iter().enumerate().any(|(i, &(a, b))| {
+        edges[i + 1..].iter().any(|&(c, d)| {
+            if a == c || a == d || b == c || b == d {
+                return false;
+            }
+            let [a, b, c, d] = [a, b, c, d].map(|v| uv[v].unwrap());
+            side(a, b, c) * side(a, b, d) < 0.0 && side(c, d, a) * side(c, d, b) < 0.0
+        })
+    })
+}
+
+/// A flat piece that overlaps itself is never written with exit 0. A narrow helicoid strip is
+/// nearly isometric to a plane annulus sector: its middle helix (radius r, pitch c per radian)
+/// has all its curvature r/(r² + c²) in the surface, so flat it is an arc turning
+/// r/√(r² + c²) rad per radian of θ: one turn (r = 55, c = 10: 0.984 of a full turn) lies flat,
+/// two turns (1.97) overlap. Unsplit, the two turns are refused (exit 3, nothing written);
+/// with `--split auto` they come as parts that lie flat, each outline simple.
+#[test]
+fn a_flat_piece_that_overlaps_itself_is_refused_unless_split() {
+    let dir = tempfile::tempdir().unwrap();
+    let one = dir.path().join("one.obj");
+    std::fs::write(&one, helicoid_strip_obj(50.0, 10.0, 10.0, 1.0, 96)).unwrap();
+    let code = flatten(&one, dir.path(), &[]).unwrap();
+    assert_eq!(code, format!("{:?}", std::process::ExitCode::SUCCESS));
+    assert!(!outline_crosses(&read_obj(&dir.path().join("flat.obj"))));
+    std::fs::remove_file(dir.path().join("flat.obj")).unwrap();
+    std::fs::remove_file(dir.path().join("flat.json")).unwrap();
+
+    let two = dir.path().join("two.obj");
+    std::fs::write(&two, helicoid_strip_obj(50.0, 10.0, 10.0, 2.0, 96)).unwrap();
+    let argv = |extra: &[&str]| {
+        let mut v: Vec<String> = ["flatcut", "flatten", two.to_str().unwrap(), "-o"]
+            .map(String::from)
+            .to_vec();
+        v.push(dir.path().join("flat.obj").to_str().unwrap().into());
+        v.extend(extra.iter().map(|s| s.to_string()));
+        flatcut_cli::Cli::try_parse_from(v).unwrap()
+    };
+    let result = flatcut_cli::run(argv(&[]));
+    let text = format!("{:#}", result.as_ref().unwrap_err());
+    assert!(
+        text.contains("overlaps itself near (") && text.contains("--split auto"),
+        "{text}"
+    );
+    assert_eq!(
+        format!("{:?}", flatcut_cli::exit_code(result)),
+        format!(
+            "{:?}",
+            std::process::ExitCode::from(flatcut_cli::EXIT_LIMIT)
+        )
+    );
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        2,
+        "nothing written"
+    );
+
+    let code = flatcut_cli::run(argv(SPLIT_WITHIN_5_PCT)).unwrap();
+    assert_eq!(code, std::process::ExitCode::SUCCESS);
+    let parts = split_parts(dir.path(), "flat-two");
+    assert!(parts.len() >= 2);
+    for (i, p) in parts.iter().enumerate() {
+        assert!(!outline_crosses(p), "part {i} overlaps itself");
+        let (s, c) = measured_limits(p);
+        assert!(
+            s <= 5.0 + 1e-6 && c <= 5.0 + 1e-6,
+            "part {i}: {s} % / {c} %"
+        );
+    }
+}

@@ -803,3 +803,133 @@ fn serve_streams_jobs_to_the_simulator_and_stops_them_with_the_tool_off() {
     assert!(near(end.to, at), "{end:?} against {at:?}");
     assert_eq!(stop.machine, end.to);
 }
+
+/// "Resume from line N" in the device panel (`POST /api/jobs` with `resume_from`, a line of the
+/// sheet's file): refused with 400 when nothing is sent from that line on; after a stop, the job
+/// continues from that line whatever the journal says (the operator looked at the work), as
+/// `flatcut send --resume-from` does: after the same question on the work origin (the panel's
+/// simulator counts as restarted), the lines before it count as run, the simulator runs the
+/// G-code's motions from that line on, each once, and the journal ends complete.
+#[test]
+fn serve_resumes_a_job_from_the_line_the_operator_names() {
+    struct Motion {
+        text: String,
+        to: [f64; 3],
+    }
+    let dir = lampshade();
+    let srv = serve(&dir.path().join("project.toml"));
+    let a = srv.addr();
+    let c = send(
+        a,
+        "POST",
+        "/api/devices/connect",
+        &json!({"device": "simulator", "speed": 200, "baud": 1_000_000}),
+    );
+    assert_eq!(c.status, 200, "{}", String::from_utf8_lossy(&c.body));
+    let gcode = get(a, "/api/job.gcode").body;
+    let text = std::str::from_utf8(&gcode).unwrap();
+    let job = flatcut_grbl::Job::parse(text).unwrap();
+    let last = text.lines().count();
+    let r = send(
+        a,
+        "POST",
+        "/api/jobs",
+        &json!({"sheet": 1, "resume_from": last + 1}),
+    );
+    assert_eq!(r.status, 400, "{}", String::from_utf8_lossy(&r.body));
+    assert!(
+        String::from_utf8_lossy(&r.body)
+            .contains(&format!("nothing to send from line {}", last + 1)),
+        "{}",
+        String::from_utf8_lossy(&r.body)
+    );
+    // A job stopped in its outlines.
+    assert_eq!(
+        send(a, "POST", "/api/jobs", &json!({"sheet": 1})).status,
+        201
+    );
+    job_until(a, 1, "reached the outlines", |j| lines_done(j) > CUT_LAYER);
+    assert_eq!(send(a, "POST", "/api/jobs/1/stop", &json!({})).status, 200);
+    job_until(a, 1, "stopped", |j| j["state"] == "stopped");
+    let before = get(a, "/api/devices/sim").json()["motions"]
+        .as_array()
+        .unwrap()
+        .len();
+    // The operator continues from a line near the end of the file: a comment line names the
+    // next line sent.
+    let from = job.len() - 40;
+    let line = job.lines[from].source_line;
+    let comment = (1..line)
+        .rev()
+        .find(|&l| text.lines().nth(l - 1).is_some_and(|t| t.starts_with('(')))
+        .filter(|&l| job.first_line_from(l) == Some(from));
+    let named = comment.unwrap_or(line);
+    let r = send(
+        a,
+        "POST",
+        "/api/jobs",
+        &json!({"sheet": 1, "resume_from": named}),
+    );
+    assert_eq!(r.status, 201, "{}", String::from_utf8_lossy(&r.body));
+    assert_eq!(r.json()["resume_from"], named);
+    assert_eq!(r.json()["resume"], true);
+    // The same question as any resume on a controller whose position may be lost.
+    let asked = job_until(a, 2, "asked", |j| !j["question"].is_null());
+    let q = &asked["question"];
+    assert!(
+        q["text"].as_str().unwrap().contains(&format!(
+            "continues with line {}",
+            job.lines[from].source_line
+        )),
+        "{q}"
+    );
+    let r = send(
+        a,
+        "POST",
+        "/api/jobs/2/answer",
+        &json!({"question": q["id"], "yes": true}),
+    );
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let done = job_until(a, 2, "ended", |j| {
+        ["done", "failed", "stopped"].contains(&j["state"].as_str().unwrap())
+    });
+    assert_eq!(done["state"], "done", "{done}");
+    assert_eq!(done["report"]["previously_done"], from);
+    assert!(done["in_doubt"].is_null(), "{done}");
+    let sim = get(a, "/api/devices/sim").json();
+    let motions = sim["motions"].as_array().unwrap();
+    // What ran: the travel to the line's start, then the job's motions from it, each once.
+    let xyz = |v: &Value| -> [f64; 3] { std::array::from_fn(|i| v[i].as_f64().unwrap()) };
+    let mut ran: Vec<(String, [f64; 3], [f64; 3])> = Vec::new();
+    for m in &motions[before..] {
+        let (t, a, b) = (m["text"].as_str().unwrap(), xyz(&m["from"]), xyz(&m["to"]));
+        if near(a, b) {
+            continue;
+        }
+        // A line stopped part-way and completed later is one motion.
+        match ran.last_mut() {
+            Some(l) if l.0 == t && near(l.2, a) => l.2 = b,
+            _ => ran.push((t.to_string(), a, b)),
+        }
+    }
+    let ran: Vec<Motion> = ran
+        .into_iter()
+        .map(|(text, _, to)| Motion { text, to })
+        .collect();
+    let want: Vec<(String, [f64; 3])> = motions_before(&job, job.len())
+        .into_iter()
+        .skip(motions_before(&job, from).len())
+        .collect();
+    let tail = &ran[ran.len() - want.len()..];
+    for (k, (t, to)) in want.iter().enumerate() {
+        assert_eq!(&tail[k].text, t, "motion {k} from line {line}");
+        assert!(
+            near(tail[k].to, *to),
+            "motion {k}: {:?} vs {to:?}",
+            tail[k].to
+        );
+    }
+    let journal = flatcut_grbl::Journal::read(dir.path().join("job-1.gcode.journal")).unwrap();
+    assert!(journal.finished);
+    srv.stop().unwrap();
+}

@@ -333,6 +333,40 @@ fn separate_sheet_bodies_meet_at_mating_seams() {
 }
 
 #[test]
+fn inspect_says_which_edge_each_sewn_edge_was_sewn_into() {
+    // The two-sheet tube: each meeting line was an edge of each sheet. The edge sewing dropped
+    // bounds no face of its own; inspect names the edge it became (it used to list it with no
+    // faces, as if it bounded nothing).
+    let r =
+        flatcut::inspect::inspect_file(&corpus("occt_cylinder_panels.step"), &Tolerances::DEFAULT)
+            .unwrap();
+    let j = serde_json::to_value(&r).unwrap();
+    let edges = j["edges"].as_array().unwrap();
+    let sewn: Vec<&serde_json::Value> = edges.iter().filter(|e| e["sewn_into"].is_u64()).collect();
+    assert_eq!(sewn.len(), 2, "{edges:?}");
+    for e in &sewn {
+        assert!(e["faces"].as_array().unwrap().is_empty(), "{e}");
+        let into = &edges[e["sewn_into"].as_u64().unwrap() as usize];
+        assert_eq!(into["faces"].as_array().unwrap().len(), 2, "{into}");
+        assert!(into["sewn_into"].is_null());
+        assert!(
+            (into["length_mm"].as_f64().unwrap() - 80.0).abs() < 1e-9,
+            "{into}"
+        );
+        let line = format!("sewn into {} (#{})", into["index"], into["entity"]);
+        assert!(r.to_string().contains(&line), "{line} not in\n{r}");
+    }
+    // Edges sewing did not touch say nothing of it.
+    assert_eq!(
+        edges
+            .iter()
+            .filter(|e| e.get("sewn_into").is_some())
+            .count(),
+        2
+    );
+}
+
+#[test]
 fn an_assembly_places_its_instances_and_counts_them() {
     // One 40 × 30 × 20 box placed three times by an OCCT (XCAF) assembly, the third turned 30°
     // about z: three shells where OCCT puts them (the corpus test compares the centre of area

@@ -524,7 +524,7 @@ fn stream_arguments_defaults_hidden_faults_and_bad_port() {
 /// A command running the test `name` of this binary alone (its output shown), with the
 /// environment variable `env` naming `dir`: the half of a test that must run in a process of
 /// its own (a signal, another stdin).
-fn child_test(name: &str, env: &str, dir: &Path) -> std::process::Command {
+pub(crate) fn child_test(name: &str, env: &str, dir: &Path) -> std::process::Command {
     let mut c = std::process::Command::new(std::env::current_exe().unwrap());
     c.args([name, "--exact", "--nocapture", "--test-threads=1"])
         .env(env, dir);

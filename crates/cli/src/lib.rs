@@ -12,6 +12,7 @@ use clap::{Parser, Subcommand};
 pub mod cmd;
 pub mod output;
 pub mod stdout;
+pub mod stop;
 pub mod values;
 
 /// flatcut — from 3D designs to flat cutting patterns, and on to the cutter.
@@ -94,6 +95,11 @@ pub fn exit_code(result: anyhow::Result<ExitCode>) -> ExitCode {
         Err(e) if stdout::is_closed(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprint!("{}", error_report(&e));
+            if e.chain()
+                .any(|c| c.downcast_ref::<stop::Interrupted>().is_some())
+            {
+                return ExitCode::from(stop::EXIT_INTERRUPTED);
+            }
             // Limits that no dart could meet are a limit exceeded, not a failure to run.
             let out_of_limits = e.chain().any(|c| {
                 c.downcast_ref::<flatcut::pipeline::PipelineError>()

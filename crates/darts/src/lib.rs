@@ -276,6 +276,13 @@ pub enum DartError {
         at.x, at.y, at.z
     )]
     SplitOverlap { parts: usize, at: DVec3 },
+    /// A flat piece (not split) whose outline crosses itself: it overlaps itself flat, however
+    /// well each face keeps its limits.
+    #[error(
+        "the flat piece overlaps itself near ({:.2}, {:.2}, {:.2}): its outline crosses itself, so no pattern can be cut from it (splitting it, --split auto, cuts it into parts that lie flat)",
+        at.x, at.y, at.z
+    )]
+    OutlineCrossing { at: DVec3 },
     #[error("internal error (please report): {0}")]
     Internal(String),
 }

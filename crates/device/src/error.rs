@@ -48,6 +48,14 @@ pub enum DeviceError {
     /// The controller refused or failed what it was asked (a command outside a job).
     #[error(transparent)]
     Controller(#[from] SendError),
+    /// "Resume from line N" names a line of the file after which nothing is sent.
+    #[error("the job {job} has nothing to send from line {line} on")]
+    NothingFrom {
+        /// The job's name.
+        job: String,
+        /// The 1-based line of the file given.
+        line: usize,
+    },
     /// The device was closed (its link failed or it was shut).
     #[error("the device {device} is closed")]
     Closed {

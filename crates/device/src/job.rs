@@ -1,6 +1,7 @@
 //! A job for a device: what to stream and how ([`JobRequest`]), the handle that steers it and
 //! waits for its end ([`JobHandle`]), and what a completed job did ([`JobOutcome`]).
 
+use crate::error::DeviceError;
 use flatcut_grbl::{CancelToken, Job, JobError, SendError, SendOptions, SendReport};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::Duration;
@@ -50,6 +51,24 @@ impl JobRequest {
     pub fn with_control(mut self, c: CancelToken) -> Self {
         self.control = c;
         self
+    }
+
+    /// Resumes the job from line `line` of its file (1-based; a blank or comment line means the
+    /// next line sent), whatever its journal says ran: the operator's answer when a resume
+    /// cannot tell which lines ran (`flatcut send --resume-from`). The sender settles the
+    /// journal from there, and asks or checks as for any resume (the work origin when the
+    /// position is lost, an edited job). Keep the other options set first:
+    /// [`JobRequest::with_options`] replaces them.
+    pub fn resume_from_line(mut self, line: usize) -> Result<JobRequest, DeviceError> {
+        let index = self
+            .job
+            .first_line_from(line)
+            .ok_or_else(|| DeviceError::NothingFrom {
+                job: self.name.clone(),
+                line,
+            })?;
+        self.options = self.options.with_resume_from(Some(index));
+        Ok(self)
     }
 
     /// Sets [`JobRequest::ask`].

@@ -1,6 +1,7 @@
 //! Exact resume over a real pseudo-terminal, on a controller that keeps its position across
 //! reconnects (firmware-sim with DTR auto-reset off): a hang-up while moving, a feed hold followed
-//! by a soft reset, and a reset in motion (ALARM:3). In each case the simulator's trace over all
+//! by a soft reset, a reset in motion (ALARM:3), a stop while answers are still on the wire, and a
+//! pause then a stop where the path passes twice. In each case the simulator's trace over all
 //! runs, with a line that was stopped part-way joined to its completion, is the job's motion
 //! exactly once, in order.
 
@@ -210,4 +211,154 @@ fn reset_in_motion_requires_an_explicit_resume_point() {
         .expect("line k ran again");
     joinedtrace.extend_from_slice(&run2[from_k..]);
     assert_job_exactly_once(&b.job, &joinedtrace);
+}
+
+/// How many times each job motion drawn with the tool on (pen down) ran over the trace, a line
+/// stopped part-way and completed later counted once; the lines cut twice, and the drawing lines
+/// never cut.
+fn cut_counts(job: &Job, trace: &[TraceSegment]) -> (Vec<(String, usize)>, Vec<String>) {
+    let joined = flatcut_testkit::trace::joined(trace);
+    let mut twice = Vec::new();
+    let mut uncut = Vec::new();
+    for (text, from, to) in job.motions() {
+        if close(from, to) || !text.starts_with("G1 X") && !text.starts_with("G1X") {
+            continue;
+        }
+        let n = joined
+            .iter()
+            .filter(|s| s.tool_on && s.text == text && close(s.to, to))
+            .count();
+        match n {
+            0 => uncut.push(text),
+            1 => {}
+            _ => twice.push((text, n)),
+        }
+    }
+    (twice, uncut)
+}
+
+/// A fast machine that brakes gently (3000 mm/min, 20 mm/s²) at 16× real time: short chords at
+/// F2400 run many a line while the sender does not read, and stopping takes several of them.
+fn braking_sim() -> PtySim {
+    let mut cfg = SimConfig::default().with_time_scale(16.0);
+    for axis in 0..2 {
+        cfg = cfg
+            .with_setting(110 + axis, 3000.0)
+            .with_setting(120 + axis, 20.0);
+    }
+    PtySim::spawn_with_dtr_reset(cfg, false).expect("spawn firmware-sim")
+}
+
+/// A stop while running, with answers on their way: every line the controller ran before it
+/// stood still is journaled as executed (its `ok` read or not), so the resume continues where the
+/// machine stands. Over both runs, firmware-sim's trace cuts every drawing line exactly once.
+#[test]
+fn stop_with_answers_in_flight_resumes_without_cutting_twice() {
+    let dir = tempfile::tempdir().unwrap();
+    let journal = dir.path().join("job.journal");
+    let job = Job::parse(&jobs::pattern_job(3)).unwrap();
+    let sim = braking_sim();
+    // The sender stops reading for a while (a loaded host), the controller runs on and answers
+    // into the link; then the operator stops the job, before those answers are read.
+    let cancel = CancelToken::new();
+    let c = cancel.clone();
+    let e = send_with(sim.path(), &job, &opts(&journal), &cancel, &mut |p| {
+        if p.lines_acked >= 90 && !c.is_aborted() {
+            std::thread::sleep(Duration::from_millis(400));
+            c.abort();
+        }
+    })
+    .unwrap_err();
+    assert!(matches!(e, SendError::Aborted { .. }), "{e}");
+    let st = Journal::read(&journal).unwrap();
+    let (k, _) = st
+        .partial
+        .expect("the stop is journaled where the machine stands");
+    let open: Vec<usize> = (0..k).filter(|&i| !st.done[i]).collect();
+    let rep = send(
+        sim.path(),
+        &job,
+        &opts(&journal).with_resume(true),
+        &CancelToken::new(),
+        None,
+    )
+    .unwrap_or_else(|e| panic!("resume failed: {e}"));
+    let trace = sim.stop().trace;
+    let (twice, uncut) = cut_counts(&job, &trace);
+    assert!(twice.is_empty(), "cut twice: {twice:?}");
+    assert!(uncut.is_empty(), "never cut: {uncut:?}");
+    assert_job_exactly_once(&job, &trace);
+    assert!(
+        open.is_empty(),
+        "lines before the stop at {k} not journaled as run: {open:?}"
+    );
+    assert_eq!(rep.previously_done, k);
+}
+
+/// A pen plotter's three strokes, the pen a servo (`M3 S1000` down, `M3 S0` up, a dwell while it
+/// moves), the third starting on the first, as letters do: where the machine waits for the pen
+/// over the third stroke's start, the job's path passes twice.
+const CROSSING: &str = "G21 G90 G17\nM3 S0\nG4 P0.15\nG0 X10 Y10\nM3 S1000\nG4 P0.150\n\
+G1 X10 Y20 F2000\nM3 S0.0\nG4 P0.1500\nG0 X30 Y30\nM3 S1000.00\nG4 P0.15000\nG1 X40 Y30\n\
+M3 S0.000\nG4 P0.150000\nG0 X10 Y15\nM3 S1000.0\nG4 P4.0\nG1 X20 Y15\nM3 S0.00\n\
+G4 P0.1500000\nG0 X0 Y0\n";
+
+/// The operator pauses while the machine waits for the pen at the third stroke's start (a point
+/// the first stroke passed), then stops. The controller answered the pen's `M3` only once the
+/// motion before it had finished, so the journal knows where the machine stands: the stop is
+/// recorded there (`P`), and the resume continues without a question; over both runs,
+/// firmware-sim's trace cuts each stroke once.
+#[test]
+fn pause_then_stop_where_the_path_passes_twice_is_journaled_and_resumed() {
+    let dir = tempfile::tempdir().unwrap();
+    let journal = dir.path().join("job.journal");
+    let job = Job::parse(CROSSING).unwrap();
+    // A plotter's rates (as the lampshade's profile), at 4× real time.
+    let mut cfg = SimConfig::default().with_time_scale(4.0);
+    for axis in 0..2 {
+        cfg = cfg
+            .with_setting(110 + axis, 6000.0)
+            .with_setting(120 + axis, 500.0);
+    }
+    let sim = PtySim::spawn_with_dtr_reset(cfg, false).expect("spawn firmware-sim");
+    let pen_down = job
+        .lines
+        .iter()
+        .position(|l| l.text == "M3S1000.0")
+        .unwrap();
+    let cancel = CancelToken::new();
+    let c = cancel.clone();
+    let mut held: Option<Instant> = None;
+    let e = send_with(sim.path(), &job, &opts(&journal), &cancel, &mut |p| {
+        if held.is_none() && p.lines_acked > pen_down {
+            c.hold();
+            held = Some(Instant::now());
+        }
+        if held.is_some_and(|t| t.elapsed() > Duration::from_millis(300)) {
+            c.abort();
+        }
+    })
+    .unwrap_err();
+    assert!(matches!(e, SendError::Aborted { .. }), "{e}");
+    let st = Journal::read(&journal).unwrap();
+    assert_eq!(st.uncertain, None, "{:?}", st.notes);
+    let (k, at) = st
+        .partial
+        .expect("the stop is journaled where the machine stands");
+    assert!(close(at, [10.0, 15.0, 0.0]), "{at:?}");
+    assert!((0..k).all(|i| st.done[i]), "{:?}", st.done);
+    let rep = send(
+        sim.path(),
+        &job,
+        &opts(&journal).with_resume(true),
+        &CancelToken::new(),
+        None,
+    )
+    .unwrap_or_else(|e| panic!("resume failed: {e}"));
+    assert_eq!(rep.previously_done, k);
+    let trace = sim.stop().trace;
+    let (twice, uncut) = cut_counts(&job, &trace);
+    assert!(twice.is_empty(), "cut twice: {twice:?}");
+    assert!(uncut.is_empty(), "never cut: {uncut:?}");
+    assert_job_exactly_once(&job, &trace);
 }

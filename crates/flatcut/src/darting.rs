@@ -219,6 +219,7 @@ pub fn finish(
                 "{name}: drawn tight, a dart would close past its mouth (its legs cross or part), so the darts keep the least-strained map"
             ));
         }
+        no_crossing(name, &d.mesh)?;
         return Ok(Finished {
             mesh: d.mesh,
             info,
@@ -227,12 +228,32 @@ pub fn finish(
         });
     }
     mesh.flat = Some(uv);
+    no_crossing(name, &mesh)?;
     Ok(Finished {
         mesh,
         info,
         darts: Vec::new(),
         grain_kept: true,
     })
+}
+
+/// Refuses a flat piece (`mesh` with its map) whose outline crosses itself: within its limits
+/// face by face, it still overlaps itself flat, and no pattern can be cut from it (as a split's
+/// parts are checked, [`flatcut_darts::crossing`]).
+pub fn no_crossing(name: &str, mesh: &TriMesh) -> Result<(), PipelineError> {
+    let Some(uv) = mesh.flat.as_deref() else {
+        return Ok(());
+    };
+    let darts = |source| PipelineError::Darts {
+        piece: name.to_string(),
+        source,
+    };
+    match flatcut_darts::crossing::outline_crossing(mesh, uv).map_err(darts)? {
+        Some(v) => Err(darts(DartError::OutlineCrossing {
+            at: mesh.positions[v as usize],
+        })),
+        None => Ok(()),
+    }
 }
 
 /// The report's view of a piece's darts.
@@ -259,7 +280,8 @@ pub fn is_out_of_limits(e: &PipelineError) -> bool {
             source: DartError::Infeasible { .. }
                 | DartError::Overlap { .. }
                 | DartError::LegsApart { .. }
-                | DartError::SplitOverlap { .. },
+                | DartError::SplitOverlap { .. }
+                | DartError::OutlineCrossing { .. },
             ..
         }
     )

@@ -80,6 +80,9 @@ pub struct StepEdge {
     pub length_mm: Option<f64>,
     /// The faces whose loops use the edge (a face twice for its seam).
     pub faces: Vec<usize>,
+    /// The edge (index) this one was sewn into: its faces use that edge instead.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sewn_into: Option<usize>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
 }
@@ -249,6 +252,7 @@ pub fn summarise_model(model: &Model, tol: &Tolerances) -> StepSummary {
                 curve,
                 length_mm,
                 faces: e.faces.clone(),
+                sewn_into: e.sewn_into,
                 error,
             }
         })
@@ -404,15 +408,18 @@ impl std::fmt::Display for StepSummary {
         writeln!(f, "  edges")?;
         for e in &self.edges {
             let faces: Vec<String> = e.faces.iter().map(|x| x.to_string()).collect();
+            let uses = match e.sewn_into {
+                Some(k) => match self.edges.iter().find(|x| x.index == k) {
+                    Some(into) => format!("sewn into {k} (#{})", into.entity),
+                    None => format!("sewn into {k}"),
+                },
+                None => format!("faces {}", faces.join(", ")),
+            };
             match (&e.error, e.curve, e.length_mm) {
                 (None, Some(c), Some(l)) => writeln!(
                     f,
-                    "    {:>4} #{:<7} {:<9} {:>10.3} mm  faces {}",
-                    e.index,
-                    e.entity,
-                    c,
-                    l,
-                    faces.join(", ")
+                    "    {:>4} #{:<7} {:<9} {:>10.3} mm  {uses}",
+                    e.index, e.entity, c, l
                 )?,
                 (err, ..) => writeln!(
                     f,

@@ -69,7 +69,13 @@ pub fn split_piece(
     let Some(uv) = piece.mesh.flat.clone() else {
         return Ok(whole(piece));
     };
-    if !limited || !piece.darts.is_empty() || darting::within(&piece.mesh, &uv, params, None) {
+    // A piece that overlaps itself flat is split like one beyond its limits, or refused.
+    let crossing = darting::no_crossing(&piece.def.name, &piece.mesh);
+    if !limited || !piece.darts.is_empty() {
+        crossing?;
+        return Ok(whole(piece));
+    }
+    if crossing.is_ok() && darting::within(&piece.mesh, &uv, params, None) {
         return Ok(whole(piece));
     }
     let opts = options(&piece, &piece.mesh, params, settings)?;

@@ -576,3 +576,32 @@ fn a_stop_at_a_sharp_vertex_finishes_the_later_line_and_g91_is_refused() {
     let e = resolve_resume(&rel, &st, None, Some([2.0, 0.0, 0.0]), 128, 0.003, false).unwrap_err();
     assert!(e.to_string().contains("relative (G91)"), "{e}");
 }
+
+#[test]
+fn a_stop_inside_a_line_with_unrecorded_lines_before_it_is_not_guessed() {
+    // A journal that records line 1 as run and the stop inside line 4, but nothing of lines 2
+    // and 3 in between (their answers were on the wire when the run stopped): they ran, but the
+    // journal cannot say so, and a resume from line 2 would cut them again.
+    let job = Job::parse("G0X0Y0\nG1X10F600\nY10\nX0\nY0\nX10\n").unwrap();
+    let mut st = state_with_unconfirmed(&job, vec![2]);
+    st.unconfirmed.clear();
+    st.partial = Some((4, [0.0, 5.0, 0.0]));
+    let e = resolve_resume(&job, &st, None, Some([0.0, 5.0, 0.0]), 128, 0.003, false).unwrap_err();
+    let SendError::ResumeUncertain { from, to, .. } = &e else {
+        panic!("{e}");
+    };
+    assert_eq!((from.index, to.index), (2, 4), "{e}");
+    assert!(e.to_string().contains("answers still on the wire"), "{e}");
+    // The operator's line to continue from settles it.
+    let r = resolve_resume(&job, &st, Some(4), None, 128, 0.003, false)
+        .unwrap()
+        .unwrap();
+    assert_eq!((r.from, r.cut), (0, 4));
+    // Lines all recorded: nothing to settle.
+    st.done[2] = true;
+    st.done[3] = true;
+    assert_eq!(
+        resolve_resume(&job, &st, None, None, 128, 0.003, false).unwrap(),
+        None
+    );
+}

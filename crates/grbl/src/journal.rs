@@ -14,7 +14,9 @@
 //!                         work position (x, y, z) (mm); the first one counts
 //! O <x> <y> <z>           machine coordinates of the job's work origin (work zero) when it
 //!                         started; the first one counts
-//! A <index>               line <index> (0-based job line) was answered `ok`
+//! A <index>               line <index> (0-based job line) was answered `ok` (at a stop, also a
+//!                         line whose answer was still on the wire when the machine was found
+//!                         standing past it: GRBL answers a line before running it)
 //! E <index> <code>        line <index> was answered `error:<code>` (it did not run)
 //! X <index>               every line acknowledged in this run with index <= <index> has executed
 //! U <index>               lines of this run with index >= <index> are not known executed after

@@ -36,7 +36,8 @@ impl From<PanelError> for ApiError {
                 | DeviceError::Controller(_) => StatusCode::CONFLICT,
                 DeviceError::PortMissing { .. }
                 | DeviceError::Open { .. }
-                | DeviceError::SimConfig(_) => StatusCode::BAD_REQUEST,
+                | DeviceError::SimConfig(_)
+                | DeviceError::NothingFrom { .. } => StatusCode::BAD_REQUEST,
                 _ => StatusCode::INTERNAL_SERVER_ERROR,
             },
         };
@@ -220,6 +221,9 @@ struct SheetBody {
     /// Clear an alarm lock (`$X`) first: only when the machine position is known to be right.
     #[serde(default)]
     unlock: bool,
+    /// Continue the sheet's job from this line of its file (1-based), whatever its journal
+    /// says ran: the operator's answer when a resume cannot tell (`flatcut send --resume-from`).
+    resume_from: Option<usize>,
 }
 
 /// Default frame feed, mm/min.
@@ -264,9 +268,10 @@ async fn frame(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Valu
     command(app, move |d| d.frame([lo[0], lo[1]], [hi[0], hi[1]], feed)).await
 }
 
-/// `POST /api/jobs` `{sheet, resume, unlock}`: streams the sheet's `job-N.gcode` to the device
-/// open (by default the project's device, the embedded simulator as its machine); 201 with the
-/// job, 409 while another job runs.
+/// `POST /api/jobs` `{sheet, resume, unlock, resume_from}`: streams the sheet's `job-N.gcode` to
+/// the device open (by default the project's device, the embedded simulator as its machine),
+/// from its journal with `resume`, from line `resume_from` of the file with it; 201 with the
+/// job, 409 while another job runs, 400 for a `resume_from` after which nothing is sent.
 async fn start_job(State(app): AppState, raw: axum::body::Bytes) -> Result<Response, ApiError> {
     let b: SheetBody = body(&raw)?;
     let n = b.sheet.unwrap_or(1);
@@ -293,6 +298,7 @@ async fn start_job(State(app): AppState, raw: axum::body::Bytes) -> Result<Respo
         journal,
         resume: b.resume,
         unlock: b.unlock,
+        resume_from: b.resume_from,
     };
     let a = app.clone();
     let view = blocking(move || Ok(a.devices.start(job, &project_device, &profile)?)).await?;

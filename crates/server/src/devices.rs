@@ -13,7 +13,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 use flatcut::gcode::Profile;
-use flatcut_device::grbl::{CancelToken, PausePolicy, SendOptions};
+use flatcut_device::grbl::{CancelToken, PausePolicy, SendError, SendOptions};
 use flatcut_device::sim::SimReport;
 use flatcut_device::{
     Asked, Device, DeviceError, DeviceEvent, JobHandle, JobRequest, SimMachine, SimSetup, Target,
@@ -89,12 +89,17 @@ pub struct JobRecord {
     pub device: String,
     pub journal: PathBuf,
     pub resume: bool,
+    /// The line of the file the operator resumed from (1-based).
+    pub resume_from: Option<usize>,
     pub state: JobState,
     pub progress: Option<Json>,
     pub notices: Vec<String>,
     pub question: Option<Asked>,
     pub message: String,
     pub report: Option<Json>,
+    /// The lines a refused resume could not tell ran or not (see [`doubt_view`]): the page
+    /// asks for the line to continue from.
+    pub in_doubt: Option<Json>,
     /// Wall-clock seconds per second of machine time (for the ETA), `None`: instant motion.
     wall_per_machine_s: Option<f64>,
     control: CancelToken,
@@ -112,12 +117,14 @@ impl JobRecord {
             "device": self.device,
             "journal": self.journal.display().to_string(),
             "resume": self.resume,
+            "resume_from": self.resume_from,
             "state": self.state.name(),
             "progress": self.progress,
             "notices": self.notices,
             "question": self.question.as_ref().map(question_view),
             "message": self.message,
             "report": self.report,
+            "in_doubt": self.in_doubt,
         })
     }
 }
@@ -398,10 +405,13 @@ impl Devices {
             // The operator decides at the page: a job's own pause waits for resume or stop.
             .with_on_pause(PausePolicy::Wait);
         let control = CancelToken::new();
-        let req = parsed
+        let mut req = parsed
             .with_options(opts)
             .with_control(control.clone())
             .with_questions(true);
+        if let Some(line) = job.resume_from {
+            req = req.resume_from_line(line)?;
+        }
         let wall = device.target().wall_per_machine_second();
         let describe = device.target().describe();
         let mut inner = self.shared.lock();
@@ -424,13 +434,15 @@ impl Devices {
                 revision: job.revision,
                 device: describe,
                 journal: job.journal,
-                resume: job.resume,
+                resume: job.resume || job.resume_from.is_some(),
+                resume_from: job.resume_from,
                 state: JobState::Running,
                 progress: None,
                 notices: Vec::new(),
                 question: None,
                 message: String::new(),
                 report: None,
+                in_doubt: None,
                 wall_per_machine_s: wall,
                 control,
                 stop_asked: false,
@@ -525,6 +537,8 @@ pub struct StartJob {
     pub journal: PathBuf,
     pub resume: bool,
     pub unlock: bool,
+    /// Resume from this line of the file (1-based), whatever the journal says.
+    pub resume_from: Option<usize>,
 }
 
 /// What the page asks of a running job.
@@ -717,10 +731,63 @@ fn wait_for_end(shared: &Shared, id: u64, handle: JobHandle) {
                 } else {
                     JobState::Failed
                 };
+                j.in_doubt = doubt_view(&e);
                 j.message = e.to_string();
             }
         }
     }
     shared.publish_job(&inner, id);
     shared.publish_device(&inner, "idle");
+}
+
+/// The lines a stopped or refused job leaves to the operator's word, as the page shows them:
+/// `{from, to, reason}` (1-based lines of the file) when the sender cannot tell which of them ran
+/// (a resume whose journal and machine cannot settle it, a line damaged on the link). The page
+/// then asks for the line to continue from (`resume_from`).
+fn doubt_view(e: &SendError) -> Option<Json> {
+    match e {
+        SendError::ResumeUncertain { from, to, reason } => Some(json!({
+            "from": from.source_line,
+            "to": to.source_line,
+            "reason": reason,
+        })),
+        SendError::OffPath(off) => Some(json!({
+            "from": off.from.source_line,
+            "to": off.to.source_line,
+            "reason": "the machine left the job's path: a line was probably damaged on the link",
+        })),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flatcut_device::grbl::driver::LineRef;
+
+    fn line(index: usize, source_line: usize) -> LineRef {
+        LineRef {
+            index,
+            source_line,
+            text: String::new(),
+        }
+    }
+
+    #[test]
+    fn a_refused_resume_names_the_lines_in_doubt_by_the_files_numbers() {
+        let e = SendError::ResumeUncertain {
+            from: line(921, 1004),
+            to: line(930, 1016),
+            reason: "the path passes the machine's position 2 times".into(),
+        };
+        let d = doubt_view(&e).expect("lines in doubt");
+        assert_eq!(
+            (d["from"].as_u64(), d["to"].as_u64()),
+            (Some(1004), Some(1016))
+        );
+        assert!(d["reason"].as_str().unwrap().contains("2 times"));
+        // A stop whose lines all are known needs no line from the operator.
+        let stop = SendError::Aborted { last_done: None };
+        assert!(doubt_view(&stop).is_none());
+    }
 }

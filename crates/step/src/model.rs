@@ -157,6 +157,8 @@ pub struct Edge {
     pub faces: Vec<usize>,
     /// What healing changed in the edge.
     pub repairs: Vec<Repair>,
+    /// The edge this one was sewn into (it then bounds no face of its own; see `sew.rs`).
+    pub sewn_into: Option<usize>,
 }
 
 /// A STEP model: shells, faces, edges and vertices in mm.
@@ -748,6 +750,7 @@ impl<'f> Builder<'f> {
             geometry,
             faces: Vec::new(),
             repairs: Vec::new(),
+            sewn_into: None,
         });
         self.edge_of.insert((eid, self.instance), k);
         Ok(k)

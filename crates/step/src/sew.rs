@@ -191,5 +191,6 @@ impl Model {
             ));
         }
         self.edges[keep].faces.extend(faces);
+        self.edges[drop].sewn_into = Some(keep);
     }
 }

@@ -103,13 +103,26 @@ fn sample_edge(model: &Model, g: &EdgeGeometry, tol: f64) -> Samples {
         };
     }
     let (lo, hi) = (g.t0.min(g.t1), g.t0.max(g.t1));
+    let mut inner = g.curve.breakpoints();
+    if g.curve.is_periodic() {
+        // Eighths of a turn of the conic's own angle: bisecting from them puts the samples at
+        // dyadic fractions of a turn, whatever the edge's ends, so circles about one axis are
+        // sampled at common angles and the rulings through one circle's points find points
+        // on the next circle instead of adding their own (see `split_at_rulings`).
+        // Grid points a round-off from an end are the end.
+        let step = std::f64::consts::TAU / 8.0;
+        let margin = 1e-9 * step;
+        let mut k = (lo / step).floor() + 1.0;
+        while k * step < hi - margin {
+            if k * step > lo + margin {
+                inner.push(k * step);
+            }
+            k += 1.0;
+        }
+    }
+    inner.sort_by(f64::total_cmp);
     let mut breaks = vec![lo];
-    breaks.extend(
-        g.curve
-            .breakpoints()
-            .into_iter()
-            .filter(|&b| b > lo && b < hi),
-    );
+    breaks.extend(inner.into_iter().filter(|&b| b > lo && b < hi));
     breaks.push(hi);
     let mut s: Vec<(f64, DVec3)> = flatten_with_breaks(g.curve.as_ref(), tol, &breaks);
     if g.t1 < g.t0 {

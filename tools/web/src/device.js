@@ -1,7 +1,8 @@
 // The device panel: the devices (serial ports and the embedded simulator, the project's own
 // first), connect, unlock, home, jog and frame; a sheet's job started, paused, resumed and
 // stopped, with its progress, ETA and the live position drawn over the sheet's layout; the
-// sender's questions (a resume whose machine position is unknown, an edited job) asked here.
+// sender's questions (a resume whose machine position is unknown, an edited job) asked here, and
+// the line to continue from when a resume cannot tell which lines ran.
 // Every page follows the same device and job through the `device` and `job` events.
 
 const esc = (s) => String(s).replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' }[c]));
@@ -33,6 +34,7 @@ export async function devicePanel(el, api, hooks) {
       <button id="job-resume">Resume</button><button id="job-stop" title="Feed hold, soft reset, tool off">Stop</button></div>
     <div class="row"><progress id="job-progress" max="1" value="0"></progress><span id="job-text" class="muted">no job</span></div>
     <div id="job-question" hidden></div>
+    <div id="job-doubt" hidden></div>
     <div id="job-notices"></div>
     <div id="job-view" class="drawing job-view"></div>`;
   const $ = (id) => el.querySelector(`#${id}`);
@@ -140,9 +142,40 @@ export async function devicePanel(el, api, hooks) {
       q.hidden = true;
       q.innerHTML = '';
     }
+    drawDoubt(j);
     $('job-notices').innerHTML = j.notices.map((n) => `<p class="muted">${esc(n)}</p>`).join('');
     if (p && p.position) mark(p.position);
     drawDevice();
+  }
+
+  // A resume that cannot tell which lines ran names them: the operator looks at the work and
+  // says where to continue (as `flatcut send --resume-from LINE`).
+  function drawDoubt(j) {
+    const box = $('job-doubt');
+    const d = j.in_doubt;
+    if (!d || busy()) {
+      box.hidden = true;
+      box.innerHTML = '';
+      delete box.dataset.job;
+      return;
+    }
+    if (box.dataset.job === String(j.id)) return;
+    box.dataset.job = String(j.id);
+    box.hidden = false;
+    box.innerHTML = `<p class="question">Lines ${d.from} to ${d.to} of ${esc(j.name)} may or may not have run: ${esc(d.reason)}.</p>
+      <div class="row">Look at the work, then continue from line
+        <input id="job-from" type="number" min="1" step="1" value="${d.from}" style="width:6em" aria-label="line to continue from">
+        <button id="job-resume-from">Resume from this line</button></div>`;
+    box.querySelector('#job-resume-from').addEventListener('click', async () => {
+      const line = Number(box.querySelector('#job-from').value);
+      if (!Number.isInteger(line) || line < 1) {
+        $('job-text').innerHTML = '<span class="over">the line to continue from is a line number of the file (1 or more)</span>';
+        return;
+      }
+      $('job-text').textContent = `resuming from line ${line}…`;
+      const r = await act('POST', '/api/jobs', { sheet: j.sheet, resume_from: line });
+      if (r && (!job || r.id >= job.id)) { job = r; drawJob(); }
+    });
   }
 
   async function act(method, path, body) {

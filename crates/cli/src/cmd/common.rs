@@ -118,7 +118,15 @@ pub fn progress_hooks(hooks: FlattenHooks, len: usize) -> (FlattenHooks, indicat
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let shown = bar.clone();
+    let splitting = std::sync::atomic::AtomicBool::new(false);
     let hooks = hooks.with_progress(std::sync::Arc::new(move |p: &FlattenProgress| {
+        if p.stage == "split" && !splitting.swap(true, std::sync::atomic::Ordering::Relaxed) {
+            shown.suspend(|| {
+                eprintln!(
+                    "splitting where the limits demand (Ctrl-C stops it; nothing is written then)"
+                )
+            });
+        }
         shown.set_prefix(p.stage);
         shown.set_length(p.max_iterations as u64);
         shown.set_position(p.iteration as u64);
@@ -332,7 +340,10 @@ fn load_with(
         &mut dyn FnMut(&str, usize, usize),
     ) -> Result<Vec<Flat>, flatcut::pipeline::PipelineError>,
 ) -> anyhow::Result<Vec<Flat>> {
+    // Ctrl-C stops the flattening (and a split) at its cancel flag; nothing is written then.
+    let stop = crate::stop::Stoppable::register();
     let (params, bar) = with_progress_bar(fa.params()?);
+    let params = params.clone().with_hooks(stop.hooks(params.hooks));
     let tol = fa.tolerances()?;
     let limits = Limits {
         stretch_pct: limits.0,
@@ -341,6 +352,7 @@ fn load_with(
         split: fa.split()?,
         material: fa.material()?,
     };
+    let limits_split = limits.split.is_some();
     let t0 = std::time::Instant::now();
     let method = match &limits.material {
         Some(m) => format!("{} for {}", Method::Orthotropic, m.name),
@@ -352,6 +364,10 @@ fn load_with(
         }
     });
     bar.finish_and_clear();
+    stop.check(|| {
+        let what = if limits_split { "split" } else { "flattening" };
+        format!("the {what} of {}", path.display())
+    })?;
     let flats = flats.with_context(|| format!("cannot flatten {}", path.display()))?;
     for f in &flats {
         let Some(info) = &f.info else { continue };

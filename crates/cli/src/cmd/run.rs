@@ -63,6 +63,10 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let mut opts = RunOptions::default()
         .with_nest_iters(a.nest_iters)
         .with_seam_tolerance_mm(a.seam_tolerance);
+    // Ctrl-C stops the flattening and a split at their cancel flag; nothing is written then.
+    let stop = crate::stop::Stoppable::register();
+    let hooks = stop.hooks(opts.flatten_hooks.clone());
+    opts = opts.with_flatten_hooks(hooks);
     let flatten_bar = (!a.stream.quiet).then(|| {
         let (hooks, bar) = common::progress_hooks(opts.flatten_hooks.clone(), 1);
         opts = opts.clone().with_flatten_hooks(hooks);
@@ -72,6 +76,8 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     log.bar = flatten_bar;
     let outputs = flatcut::run::run_project(&proj, &opts, &mut log);
     log.finish_bar();
+    stop.check(|| format!("the run of {}", a.project.display()))?;
+    drop(stop);
     let outputs = outputs?;
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     // All of the run's files land together or not at all (the simulator's traces come later).

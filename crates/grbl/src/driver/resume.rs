@@ -10,7 +10,7 @@ use super::geometry::dist;
 use super::handshake::Link;
 use super::places::{places_on_path, position_tolerance};
 use super::session::Session;
-use super::stops::{OFF_PATH_NOTE, refused_with_tool_off};
+use super::stops::{OFF_PATH_NOTE, RESET_NOTE, refused_with_tool_off};
 use super::tracker::AMBIGUOUS_STOP_NOTE;
 use crate::job::Job;
 use crate::journal::{Journal, JournalState};
@@ -141,7 +141,7 @@ fn position_lost(
     }
     st.notes
         .iter()
-        .find(|n| n.starts_with("ALARM:") || n.starts_with("unexpected reset"))
+        .find(|n| n.starts_with("ALARM:") || n.starts_with(RESET_NOTE))
         .map(|n| format!("the interrupted run stopped on \"{n}\""))
 }
 
@@ -262,6 +262,18 @@ pub(super) fn resolve_resume(
         };
         return Err(doubt(a, b, reason));
     }
+    if let Some((k, _)) = st.partial
+        && let Some(a) = unrecorded_before_stop(st, k)
+    {
+        return Err(doubt(
+            a,
+            k,
+            format!(
+                "the journal records the stop part-way through line {} but not whether the lines before it from line {} ran (a stop that did not count the answers still on the wire): they may have",
+                job.lines[k].source_line, job.lines[a].source_line
+            ),
+        ));
+    }
     let (Some(&first), Some(&last_acked)) = (st.unconfirmed.first(), st.unconfirmed.last()) else {
         return Ok(None);
     };
@@ -316,6 +328,19 @@ pub(super) fn resolve_resume(
             ),
         )),
     }
+}
+
+/// The first line before the stop part-way through line `k` that the journal neither records
+/// as run nor explains: not rejected, not an acknowledgement waiting to be settled, not a line an
+/// unexpected reset made the run send again. A stop inside line `k` means every line sent before
+/// it ran, which a journal written by a stop that lost the answers still on the wire did not
+/// record; resuming from the first open line would cut those lines again.
+fn unrecorded_before_stop(st: &JournalState, k: usize) -> Option<usize> {
+    if st.notes.iter().any(|n| n.starts_with(RESET_NOTE)) {
+        return None;
+    }
+    (0..k.min(st.lines))
+        .find(|&i| !st.done[i] && st.rejected[i].is_none() && !st.unconfirmed.contains(&i))
 }
 
 /// The last line that may have reached the controller after `last_acked`: lines sent after the

@@ -315,12 +315,24 @@ impl<'a, T: Transport + ?Sized> Session<'a, T> {
         &mut self,
         timeout: Duration,
     ) -> Result<Option<StatusReport>, TransportError> {
+        self.query_status_seeing(timeout, &mut |_| {})
+    }
+
+    /// [`Session::query_status`], handing everything else the controller says meanwhile (the
+    /// answers to lines still in flight) to `seen`, in order.
+    pub(super) fn query_status_seeing(
+        &mut self,
+        timeout: Duration,
+        seen: &mut dyn FnMut(Event),
+    ) -> Result<Option<StatusReport>, TransportError> {
         let seq = self.status_seq;
         self.s.realtime(b'?');
         let until = Instant::now() + timeout;
         let mut resend = Instant::now() + Duration::from_millis(250);
         while Instant::now() < until {
-            self.pump(READ_SLICE)?;
+            for e in self.pump(READ_SLICE)? {
+                seen(e);
+            }
             if self.status_seq != seq {
                 return Ok(self.status.clone());
             }

@@ -77,20 +77,7 @@ pub(super) fn on_alarm<T: Transport + ?Sized>(
             },
         };
         for e in evs {
-            match e {
-                Event::Ack(Tag::Job(i)) => {
-                    if let Some(j) = journal.as_mut() {
-                        j.ack(i);
-                    }
-                    tracker.ack(job, i, journal);
-                }
-                Event::Rejected(Tag::Job(i), c) => {
-                    if let Some(j) = journal.as_mut() {
-                        j.reject(i, c);
-                    }
-                }
-                _ => {}
-            }
+            book_answer(e, job, tracker, journal);
         }
     }
     if let Some(Tag::Job(i)) = sess.s.last_sent() {
@@ -124,6 +111,27 @@ pub(super) fn on_alarm<T: Transport + ?Sized>(
     })
 }
 
+/// Books an answer to a job line that came in while a run stops (the controller answers what it
+/// parses until its buffers are flushed): an `ok` is journaled and counted as for a running job,
+/// an `error:N` journaled as a line that did not run. Anything else is left alone.
+fn book_answer(e: Event, job: &Job, tracker: &mut Tracker, journal: &mut Option<Journal>) {
+    match e {
+        Event::Ack(Tag::Job(i)) => {
+            if let Some(j) = journal.as_mut() {
+                j.ack(i);
+            }
+            tracker.ack(job, i, journal);
+        }
+        Event::Rejected(Tag::Job(i), c) => {
+            if let Some(j) = journal.as_mut() {
+                j.reject(i, c);
+            }
+            tracker.reject(i);
+        }
+        _ => {}
+    }
+}
+
 /// Whether line `i` does the same thing right after a soft reset (GRBL's parser back at G0 G54
 /// G17 G21 G90 G94 M5 M9, no G92) as it would in the job: then a line that GRBL took in after
 /// resetting really ran as the job meant it.
@@ -148,6 +156,10 @@ pub(super) fn same_after_reset(job: &Job, i: usize) -> bool {
 /// How many of the lines answered after an unexpected reset may not have cut their programmed
 /// segment (see [`on_reset`]).
 const RESET_DOUBT_LINES: usize = 2;
+
+/// How the journal's note of an unexpected reset begins (a resume names it as the reason the
+/// position is lost, and knows from it that lines it lost are sent again).
+pub(super) const RESET_NOTE: &str = "unexpected reset";
 
 /// Stops on an unexpected banner. GRBL cleared its RX buffer at the reset, but bytes still on
 /// the wire landed in the fresh buffer and ran: their answers arrive after the banner and belong
@@ -198,9 +210,19 @@ pub(super) fn on_reset<T: Transport + ?Sized>(
             }
         }
     }
+    // The lost lines not counted above did not run as the job meant (the reset discarded them,
+    // or they ran from the wrong place or in the wrong state): whatever the position says, they
+    // are sent again.
+    for t in &lost {
+        if let Tag::Job(i) = t
+            && !tracker.acked[*i]
+        {
+            tracker.keep_for_resend(*i);
+        }
+    }
     if let Some(j) = journal.as_mut() {
         j.note(&format!(
-            "unexpected reset; {} line(s) in flight, {ran_after_reset} of them ran after the reset; lines {resent:?} ran from where the reset left the tool and are re-sent",
+            "{RESET_NOTE}; {} line(s) in flight, {ran_after_reset} of them ran after the reset; lines {resent:?} ran from where the reset left the tool and are re-sent",
             lost.len()
         ));
     }
@@ -234,7 +256,7 @@ pub(super) fn stop_with_reset<T: Transport + ?Sized>(
     tracker: &mut Tracker,
     journal: &mut Option<Journal>,
 ) -> Result<(), SendError> {
-    hold_still(sess, job, tracker)?;
+    hold_still(sess, job, tracker, journal)?;
     if let (Some(p), Some(upto)) = (sess.work_position(), tracker.last_sent) {
         tracker.confirm_by_position(job, p, upto, journal);
     }
@@ -267,18 +289,22 @@ pub(super) fn stop_at_pause<T: Transport + ?Sized>(
 }
 
 /// Feed hold (so that a reset does not lose the position: a reset in motion is `ALARM:3`),
-/// then waits until the machine stands.
+/// then waits until the machine stands, booking the answers that come in meanwhile.
 fn hold_still<T: Transport + ?Sized>(
     sess: &mut Session<'_, T>,
     job: &Job,
     tracker: &mut Tracker,
+    journal: &mut Option<Journal>,
 ) -> Result<(), SendError> {
     sess.s.set_feeding(false);
     sess.s.clear_queue();
     sess.s.realtime(b'!');
     let until = Instant::now() + Duration::from_secs(10);
     while Instant::now() < until {
-        match sess.query_status(Duration::from_millis(500)) {
+        // Answers still on the wire (the run may stop before it read them) count: lines they
+        // answer may have run before the machine stood still.
+        let mut book = |e: Event| book_answer(e, job, tracker, journal);
+        match sess.query_status_seeing(Duration::from_millis(500), &mut book) {
             Ok(Some(st))
                 if matches!(
                     st.state,
@@ -326,7 +352,7 @@ pub(super) fn stop_off_path<T: Transport + ?Sized>(
     off: Deviation,
     tolerance: f64,
 ) -> Result<SendError, SendError> {
-    hold_still(sess, job, tracker)?;
+    hold_still(sess, job, tracker, journal)?;
     let to = tracker.last_sent.unwrap_or(off.to).max(off.to);
     if let Some(j) = journal.as_mut() {
         j.note(&format!(

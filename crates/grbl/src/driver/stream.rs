@@ -423,6 +423,7 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
     fn rejected(&mut self, tag: Tag, code: u8) {
         let failure = match tag {
             Tag::Job(i) => {
+                self.tracker.reject(i);
                 if let Some(j) = self.journal.as_mut() {
                     j.reject(i, code);
                     let line = self.job.lines[i].source_line;

@@ -43,6 +43,14 @@ pub(super) struct Tracker {
     /// steps without using a planner block, so shorter lines must not count towards the
     /// planner's capacity.
     min_motion: f64,
+    /// The controller is in laser mode (`$32=1`): which lines sync (see
+    /// [`Job::answer_waits_for_motion`]).
+    laser: bool,
+    /// Per job line: answered `error:N` in this run (it did not run).
+    rejected: Vec<bool>,
+    /// Per job line: to be sent again whatever the machine's position says (it ran from where an
+    /// unexpected reset left the tool, not from its programmed start).
+    resend: Vec<bool>,
 }
 
 impl Tracker {
@@ -72,6 +80,9 @@ impl Tracker {
             previously_done: 0,
             open_from: 0,
             min_motion: min_motion(&sess.settings),
+            laser: sess.settings.get(&32).is_some_and(|v| *v != 0.0),
+            rejected: vec![false; n],
+            resend: vec![false; n],
         };
         for i in (0..n).filter(|&i| t.prior_done[i]) {
             t.done[i] = true;
@@ -130,6 +141,11 @@ impl Tracker {
         }
         self.unconfirmed.push_back(i);
         self.motion_after.push_back(0);
+        if job.answer_waits_for_motion(i, self.laser) {
+            // GRBL answered it only after every motion before it had finished, and it ran.
+            self.confirm_all(job, journal);
+            return;
+        }
         // Lines with more motion lines acknowledged after them than GRBL can hold are done.
         let n = self
             .motion_after
@@ -147,9 +163,22 @@ impl Tracker {
         self.confirm(job, c, journal);
     }
 
-    /// Confirms by the reported position `pos`: the first line sent in this run (up to index
-    /// `upto`, acknowledged or not) whose path contains `pos` is where the machine stopped;
-    /// every acknowledged line before it is done, and it too if `pos` is its end point. A stop
+    /// Line `i` was answered `error:N`: it did not run.
+    pub(super) fn reject(&mut self, i: usize) {
+        self.rejected[i] = true;
+    }
+
+    /// Line `i` ran from where an unexpected reset left the tool: it is sent again whatever the
+    /// machine's position says.
+    pub(super) fn keep_for_resend(&mut self, i: usize) {
+        self.resend[i] = true;
+    }
+
+    /// Confirms by the reported position `pos` of a machine standing still: the first line sent
+    /// in this run and not known executed (up to index `upto`, answered or not) whose path
+    /// contains `pos` is where the machine stopped. Every line sent before it ran — GRBL runs
+    /// lines in order, and the machine got past them — whether or not its `ok` was read (a stop
+    /// may come while answers are still on the wire); it too if `pos` is its end point. A stop
     /// inside a line is journaled (`P`) so that a resume completes that line from there.
     pub(super) fn confirm_by_position(
         &mut self,
@@ -158,18 +187,27 @@ impl Tracker {
         upto: usize,
         journal: &mut Option<Journal>,
     ) {
-        let Some(&first) = self.unconfirmed.front() else {
-            return;
+        let upto = upto.min(job.len().saturating_sub(1));
+        let open = |t: &Tracker, i: usize| !t.done[i] && !t.rejected[i] && !t.resend[i];
+        let first_open = (self.first_open()..=upto).find(|&i| open(self, i));
+        let first = match (first_open, self.unconfirmed.front()) {
+            (Some(a), Some(&b)) => a.min(b),
+            (Some(a), None) => a,
+            (None, Some(&b)) => b,
+            (None, None) => return,
         };
-        let upto = upto.min(job.len().saturating_sub(1)).max(first);
-        let prior = &self.prior_done;
-        let places = places_on_path(job, pos, first..=upto, self.pos_tol, |i| prior[i]);
+        let upto = upto.max(first);
+        let (prior, rejected) = (&self.prior_done, &self.rejected);
+        let places = places_on_path(job, pos, first..=upto, self.pos_tol, |i| {
+            prior[i] || rejected[i]
+        });
         // Ambiguous (the path passes here twice): the earliest place confirms least, and the
         // lines from there to the last place may have run: a resume must not pass over them
         // without the operator's `--resume-from`.
         let (Some(&(cut, partial)), Some(&(last, _))) = (places.first(), places.last()) else {
             return;
         };
+        self.ran_unanswered(first..cut, journal);
         self.confirm_below(job, cut, journal);
         if last > cut
             && let Some(j) = journal.as_mut()
@@ -190,6 +228,34 @@ impl Tracker {
             // The lines from `cut` on did not run (the stop flushed GRBL's planner): the resume
             // continues line `cut` from where the machine stands.
             j.partial(cut, partial.unwrap_or(pos));
+        }
+    }
+
+    /// The lines of `range` sent in this run whose answer was not read (still on the wire when
+    /// the run stopped) but which ran, the machine standing past them: acknowledged (GRBL
+    /// answered each before running it) and, with the acknowledged ones, confirmed by the caller.
+    fn ran_unanswered(&mut self, range: std::ops::Range<usize>, journal: &mut Option<Journal>) {
+        let unanswered: Vec<usize> = range
+            .filter(|&i| !self.acked[i] && !self.rejected[i] && !self.resend[i])
+            .collect();
+        if unanswered.is_empty() {
+            return;
+        }
+        // Answers in order: the earlier of these come first in the confirmation queue.
+        let mut rest: Vec<usize> = self.unconfirmed.drain(..).collect();
+        self.motion_after.clear();
+        rest.extend(&unanswered);
+        rest.sort_unstable();
+        for i in rest {
+            if unanswered.contains(&i) {
+                self.acked[i] = true;
+                self.acked_count += 1;
+                if let Some(j) = journal.as_mut() {
+                    j.ack(i);
+                }
+            }
+            self.unconfirmed.push_back(i);
+            self.motion_after.push_back(0);
         }
     }
 

@@ -8,7 +8,8 @@
 //!
 //! One idea per module: `modal` (the interpreter's state), `parse` (stripping, words, the
 //! interpreter), `arc` (GRBL's arcs), `time` (the estimate), `resume` (preambles), `limits`
-//! (the controller's settings the sender uses), `feeds` (the feeds those settings clamp).
+//! (the controller's settings the sender uses), `feeds` (the feeds those settings clamp), `sync`
+//! (the lines GRBL answers only once the motion before them has finished).
 
 mod arc;
 mod feeds;
@@ -16,6 +17,7 @@ mod limits;
 mod modal;
 mod parse;
 mod resume;
+mod sync;
 mod time;
 
 pub use feeds::FeedClamp;
@@ -249,6 +251,13 @@ impl Job {
             .filter(|&i| self.lines[i].moves && self.lines[i].length > ZERO_LENGTH_MM)
             .map(|i| (self.lines[i].text.clone(), self.start_of(i), self.end_of(i)))
             .collect()
+    }
+
+    /// The first line to send from line `source_line` of the file on (1-based; a blank or
+    /// comment line names the next line that is sent): where an operator's "resume from line N"
+    /// continues. `None` when nothing is sent from there on.
+    pub fn first_line_from(&self, source_line: usize) -> Option<usize> {
+        self.lines.iter().position(|l| l.source_line >= source_line)
     }
 
     /// Whether line `index` pauses the program (`M0`): GRBL holds the feed there and keeps

@@ -156,6 +156,7 @@ impl Builder<'_> {
                 geometry,
                 faces: Vec::new(),
                 repairs: Vec::new(),
+                sewn_into: None,
             });
             uses.push(EdgeUse {
                 edge: self.edges.len() - 1,

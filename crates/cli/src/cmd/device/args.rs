@@ -337,10 +337,7 @@ impl StreamArgs {
     ) -> anyhow::Result<Option<usize>> {
         self.resume_from
             .map(|line| {
-                job.lines
-                    .iter()
-                    .position(|l| l.source_line >= line)
-                    .with_context(|| {
+                job.first_line_from(line).with_context(|| {
                         format!(
                             "--resume-from {line}: the job {name} has nothing to send from line {line} on"
                         )

@@ -34,8 +34,9 @@ static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new
 static HANDLER: OnceLock<Result<(), String>> = OnceLock::new();
 
 /// Installs the process's handler of SIGINT, SIGTERM and SIGHUP (once; later calls say how the
-/// first went). Without a send or a simulator registered, a signal removes the command's
-/// temporary outputs and ends the process (130). An embedding program that owns its signals
+/// first went). Without a send or a simulator registered, a signal stops a running flattening
+/// or split at its cancel flag ([`crate::stop`]; a second one ends the process), or else
+/// removes the command's temporary outputs and ends the process (130). An embedding program that owns its signals
 /// does not call it.
 pub fn install_handler() -> Result<(), String> {
     HANDLER
@@ -47,6 +48,8 @@ pub fn install_handler() -> Result<(), String> {
                     // A send whose prompt thread is gone still stops safely: the streaming
                     // thread aborts (feed hold, soft reset, tool off) and returns.
                     Some((_, _, Some(cancel))) => cancel.abort(),
+                    // A flattening or split stops at its cancel flag and writes nothing.
+                    _ if crate::stop::interrupt() => {}
                     _ => {
                         // No stream to stop: the command ends here, leaving no temporary file.
                         crate::output::remove_staged();
