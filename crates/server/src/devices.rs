@@ -97,7 +97,7 @@ pub struct JobRecord {
     pub question: Option<Asked>,
     pub message: String,
     pub report: Option<Json>,
-    /// The lines a refused resume could not tell ran or not (see [`doubt_view`]): the page
+    /// The lines a refused resume could not tell ran or not: the page
     /// asks for the line to continue from.
     pub in_doubt: Option<Json>,
     /// Wall-clock seconds per second of machine time (for the ETA), `None`: instant motion.
