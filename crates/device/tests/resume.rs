@@ -303,6 +303,67 @@ G1 X10 Y20 F2000\nM3 S0.0\nG4 P0.1500\nG0 X30 Y30\nM3 S1000.00\nG4 P0.15000\nG1 
 M3 S0.000\nG4 P0.150000\nG0 X10 Y15\nM3 S1000.0\nG4 P4.0\nG1 X20 Y15\nM3 S0.00\n\
 G4 P0.1500000\nG0 X0 Y0\n";
 
+/// A closed square whose pen waits (`G4 P4`) at its first corner, which is also its last.
+const CLOSED_SQUARE: &str = "G21 G90 G17\nM3 S0\nG4 P0.15\nG0 X10 Y10\nM3 S1000\nG4 P4.0\n\
+G1 X20 Y10 F2000\nG1 X20 Y20\nG1 X10 Y20\nG1 X10 Y10\nM3 S0.0\nG4 P0.15\nG0 X0 Y0\n";
+
+/// The operator stops while the pen waits at the start of a closed square, every line of the
+/// square already sent: the machine stands where the square also ends, but GRBL parses nothing
+/// after the unanswered dwell, so the journal records the stop at the dwell (`P`), not a place
+/// in doubt, and the resume cuts the square once.
+#[test]
+fn a_stop_during_a_dwell_at_a_closed_strokes_start_is_not_in_doubt() {
+    let dir = tempfile::tempdir().unwrap();
+    let journal = dir.path().join("job.journal");
+    let job = Job::parse(CLOSED_SQUARE).unwrap();
+    let mut cfg = SimConfig::default().with_time_scale(4.0);
+    for axis in 0..2 {
+        cfg = cfg
+            .with_setting(110 + axis, 6000.0)
+            .with_setting(120 + axis, 500.0);
+    }
+    let sim = PtySim::spawn_with_dtr_reset(cfg, false).expect("spawn firmware-sim");
+    let pen_down = job.lines.iter().position(|l| l.text == "M3S1000").unwrap();
+    let cancel = CancelToken::new();
+    let c = cancel.clone();
+    let mut seen: Option<Instant> = None;
+    let e = send_with(sim.path(), &job, &opts(&journal), &cancel, &mut |p| {
+        if seen.is_none() && p.lines_acked > pen_down {
+            seen = Some(Instant::now());
+        }
+        if seen.is_some_and(|t| t.elapsed() > Duration::from_millis(300)) {
+            c.abort();
+        }
+    })
+    .unwrap_err();
+    assert!(matches!(e, SendError::Aborted { .. }), "{e}");
+    let st = Journal::read(&journal).unwrap();
+    assert_eq!(st.uncertain, None, "{:?}", st.notes);
+    let (k, at) = st
+        .partial
+        .expect("the stop is journaled where the machine stands");
+    assert!(close(at, [10.0, 10.0, 0.0]), "{at:?}");
+    assert!(
+        k <= pen_down + 1,
+        "stopped at line {k}, the dwell is {}",
+        pen_down + 1
+    );
+    let rep = send(
+        sim.path(),
+        &job,
+        &opts(&journal).with_resume(true),
+        &CancelToken::new(),
+        None,
+    )
+    .unwrap_or_else(|e| panic!("resume failed: {e}"));
+    assert_eq!(rep.previously_done, k);
+    let trace = sim.stop().trace;
+    let (twice, uncut) = cut_counts(&job, &trace);
+    assert!(twice.is_empty(), "cut twice: {twice:?}");
+    assert!(uncut.is_empty(), "never cut: {uncut:?}");
+    assert_job_exactly_once(&job, &trace);
+}
+
 /// The operator pauses while the machine waits for the pen at the third stroke's start (a point
 /// the first stroke passed), then stops. The controller answered the pen's `M3` only once the
 /// motion before it had finished, so the journal knows where the machine stands: the stop is

@@ -197,6 +197,15 @@ impl Tracker {
             (None, None) => return,
         };
         let upto = upto.max(first);
+        // GRBL parses no line after a dwell, a pause or a spindle or coolant change before that
+        // line has finished and been answered, and its answer precedes the status report that
+        // gave `pos` on the wire: the machine cannot stand on a line after an unanswered one.
+        // (A pen that waits at the start of a closed stroke stands where the stroke ends too.)
+        let upto = (first..=upto)
+            .find(|&i| {
+                !self.acked[i] && !self.rejected[i] && job.answer_waits_for_motion(i, self.laser)
+            })
+            .unwrap_or(upto);
         let (prior, rejected) = (&self.prior_done, &self.rejected);
         let places = places_on_path(job, pos, first..=upto, self.pos_tol, |i| {
             prior[i] || rejected[i]
