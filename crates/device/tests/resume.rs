@@ -316,29 +316,9 @@ fn a_stop_during_a_dwell_at_a_closed_strokes_start_is_not_in_doubt() {
     let dir = tempfile::tempdir().unwrap();
     let journal = dir.path().join("job.journal");
     let job = Job::parse(CLOSED_SQUARE).unwrap();
-    let mut cfg = SimConfig::default().with_time_scale(4.0);
-    for axis in 0..2 {
-        cfg = cfg
-            .with_setting(110 + axis, 6000.0)
-            .with_setting(120 + axis, 500.0);
-    }
-    let sim = PtySim::spawn_with_dtr_reset(cfg, false).expect("spawn firmware-sim");
-    let pen_down = job.lines.iter().position(|l| l.text == "M3S1000").unwrap();
-    let cancel = CancelToken::new();
-    let c = cancel.clone();
-    let mut seen: Option<Instant> = None;
-    let e = send_with(sim.path(), &job, &opts(&journal), &cancel, &mut |p| {
-        if seen.is_none() && p.lines_acked > pen_down {
-            seen = Some(Instant::now());
-        }
-        if seen.is_some_and(|t| t.elapsed() > Duration::from_millis(300)) {
-            c.abort();
-        }
-    })
-    .unwrap_err();
-    assert!(matches!(e, SendError::Aborted { .. }), "{e}");
-    let st = Journal::read(&journal).unwrap();
-    assert_eq!(st.uncertain, None, "{:?}", st.notes);
+    let sim = plotter_sim();
+    let pen_down = line_index(&job, "M3S1000");
+    let st = stop_after_pen_down(&sim, &job, &journal, pen_down, false);
     let (k, at) = st
         .partial
         .expect("the stop is journaled where the machine stands");
@@ -348,20 +328,7 @@ fn a_stop_during_a_dwell_at_a_closed_strokes_start_is_not_in_doubt() {
         "stopped at line {k}, the dwell is {}",
         pen_down + 1
     );
-    let rep = send(
-        sim.path(),
-        &job,
-        &opts(&journal).with_resume(true),
-        &CancelToken::new(),
-        None,
-    )
-    .unwrap_or_else(|e| panic!("resume failed: {e}"));
-    assert_eq!(rep.previously_done, k);
-    let trace = sim.stop().trace;
-    let (twice, uncut) = cut_counts(&job, &trace);
-    assert!(twice.is_empty(), "cut twice: {twice:?}");
-    assert!(uncut.is_empty(), "never cut: {uncut:?}");
-    assert_job_exactly_once(&job, &trace);
+    resume_cutting_each_stroke_once(sim, &job, &journal, k);
 }
 
 /// The operator pauses while the machine waits for the pen at the third stroke's start (a point
@@ -374,7 +341,19 @@ fn pause_then_stop_where_the_path_passes_twice_is_journaled_and_resumed() {
     let dir = tempfile::tempdir().unwrap();
     let journal = dir.path().join("job.journal");
     let job = Job::parse(CROSSING).unwrap();
-    // A plotter's rates (as the lampshade's profile), at 4× real time.
+    let sim = plotter_sim();
+    let pen_down = line_index(&job, "M3S1000.0");
+    let st = stop_after_pen_down(&sim, &job, &journal, pen_down, true);
+    let (k, at) = st
+        .partial
+        .expect("the stop is journaled where the machine stands");
+    assert!(close(at, [10.0, 15.0, 0.0]), "{at:?}");
+    assert!((0..k).all(|i| st.done[i]), "{:?}", st.done);
+    resume_cutting_each_stroke_once(sim, &job, &journal, k);
+}
+
+/// firmware-sim with a plotter's rates (as the lampshade's profile), at 4× real time.
+fn plotter_sim() -> PtySim {
     let mut cfg = SimConfig::default().with_time_scale(4.0);
     for axis in 0..2 {
         cfg = cfg
@@ -382,44 +361,59 @@ fn pause_then_stop_where_the_path_passes_twice_is_journaled_and_resumed() {
             .with_setting(120 + axis, 500.0);
     }
     let sim = PtySim::spawn_with_dtr_reset(cfg, false).expect("spawn firmware-sim");
-    let pen_down = job
-        .lines
-        .iter()
-        .position(|l| l.text == "M3S1000.0")
-        .unwrap();
+    sim
+}
+
+/// The index of the job line whose text is `text`.
+fn line_index(job: &Job, text: &str) -> usize {
+    job.lines.iter().position(|l| l.text == text).unwrap()
+}
+
+/// Streams `job` and, 300 ms after the pen-down line `pen_down` was answered, stops it (after a
+/// feed hold when `hold`); the stop must leave no place in doubt. Returns the journal.
+fn stop_after_pen_down(
+    sim: &PtySim,
+    job: &Job,
+    journal: &Path,
+    pen_down: usize,
+    hold: bool,
+) -> flatcut_grbl::JournalState {
     let cancel = CancelToken::new();
     let c = cancel.clone();
-    let mut held: Option<Instant> = None;
-    let e = send_with(sim.path(), &job, &opts(&journal), &cancel, &mut |p| {
-        if held.is_none() && p.lines_acked > pen_down {
-            c.hold();
-            held = Some(Instant::now());
+    let mut seen: Option<Instant> = None;
+    let e = send_with(sim.path(), job, &opts(journal), &cancel, &mut |p| {
+        if seen.is_none() && p.lines_acked > pen_down {
+            if hold {
+                c.hold();
+            }
+            seen = Some(Instant::now());
         }
-        if held.is_some_and(|t| t.elapsed() > Duration::from_millis(300)) {
+        if seen.is_some_and(|t| t.elapsed() > Duration::from_millis(300)) {
             c.abort();
         }
     })
     .unwrap_err();
     assert!(matches!(e, SendError::Aborted { .. }), "{e}");
-    let st = Journal::read(&journal).unwrap();
+    let st = Journal::read(journal).unwrap();
     assert_eq!(st.uncertain, None, "{:?}", st.notes);
-    let (k, at) = st
-        .partial
-        .expect("the stop is journaled where the machine stands");
-    assert!(close(at, [10.0, 15.0, 0.0]), "{at:?}");
-    assert!((0..k).all(|i| st.done[i]), "{:?}", st.done);
+    st
+}
+
+/// Resumes `job` from its journal, which says `k` lines ran; over both runs firmware-sim's trace
+/// cuts every stroke once and runs the job's motions exactly once.
+fn resume_cutting_each_stroke_once(sim: PtySim, job: &Job, journal: &Path, k: usize) {
     let rep = send(
         sim.path(),
-        &job,
-        &opts(&journal).with_resume(true),
+        job,
+        &opts(journal).with_resume(true),
         &CancelToken::new(),
         None,
     )
     .unwrap_or_else(|e| panic!("resume failed: {e}"));
     assert_eq!(rep.previously_done, k);
     let trace = sim.stop().trace;
-    let (twice, uncut) = cut_counts(&job, &trace);
+    let (twice, uncut) = cut_counts(job, &trace);
     assert!(twice.is_empty(), "cut twice: {twice:?}");
     assert!(uncut.is_empty(), "never cut: {uncut:?}");
-    assert_job_exactly_once(&job, &trace);
+    assert_job_exactly_once(job, &trace);
 }
