@@ -360,8 +360,7 @@ fn plotter_sim() -> PtySim {
             .with_setting(110 + axis, 6000.0)
             .with_setting(120 + axis, 500.0);
     }
-    let sim = PtySim::spawn_with_dtr_reset(cfg, false).expect("spawn firmware-sim");
-    sim
+    PtySim::spawn_with_dtr_reset(cfg, false).expect("spawn firmware-sim")
 }
 
 /// The index of the job line whose text is `text`.
