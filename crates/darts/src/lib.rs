@@ -26,6 +26,7 @@ pub mod limits;
 pub mod open;
 pub mod place;
 pub mod relaxed;
+pub mod resew;
 pub mod seam_cost;
 pub mod solve;
 pub mod split;

@@ -31,6 +31,13 @@
 //! results taken in the order of the candidates, so the choice does not depend on the threads),
 //! each half by [`CANDIDATE_ITERS`] Newton steps at most: enough to rank them.
 //!
+//! Parts are sewn back where a cut is no longer needed ([`crate::resew`]): a side of a cut that
+//! holds the end of the sphere's opening slit has that slit sewn shut (a slit ending inside a
+//! part is a V no seam allowance fits in), and once every part is within the limits,
+//! neighbours whose union still lies within them are merged, the pairs sharing the longest
+//! seams first (the fewest pieces for the limits: a ball within ±10 % comes as the two halves
+//! of a tennis ball). The merged pieces are kept only when their joint solve holds the limits.
+//!
 //! A part within the limits can still overlap itself flat (a long limb or a ring laid out past
 //! a full turn): its outline crossing itself ([`crate::crossing`]) makes it a piece to cut like
 //! one beyond the limits, by chords through the face at the crossing and by its necks (the
@@ -65,6 +72,7 @@ use rayon::prelude::*;
 
 use crate::crossing::outline_crossing;
 use crate::limits::{Band, Limits, face_excess};
+use crate::resew::{close_slits, merge};
 use crate::seam_cost::{SeamCost, Visibility};
 use crate::{DartError, KeepOut};
 
@@ -198,6 +206,8 @@ fn split_on(
     let guard = Guard::new(mesh, opts.keep_out.as_ref(), &opts.visibility);
     let started = std::time::Instant::now();
     let mut timed_out = false;
+    // Whether neighbours were tried for merging, and whether any cut was sewn back.
+    let (mut merged, mut resewn) = (false, false);
     // New parts are judged flattened on their own with the limits held; the parts are flattened
     // together (seams equal) only when that says they are done, and split further if the seams
     // then push one beyond the limits.
@@ -239,7 +249,7 @@ fn split_on(
         if params.hooks.cancelled() {
             return Err(cancelled());
         }
-        let Some((k, (a, b, cut))) = next else {
+        let Some((k, halves)) = next else {
             if !together {
                 flatten_together(&mut pieces, &held)?;
                 together = true;
@@ -252,7 +262,21 @@ fn split_on(
                     at: pieces[k].positions[v as usize],
                 });
             }
+            // The fewest pieces: neighbours whose union lies within the limits are sewn back.
+            if excess <= 0.0 && !merged {
+                merged = true;
+                if let Some(fewer) = merge_within(&pieces, &held, opts.band, params)? {
+                    pieces = fewer;
+                    resewn = true;
+                    continue;
+                }
+            }
             let seams = seams_of(&pieces);
+            if resewn {
+                // The seams that remain are the cuts.
+                let refs: Vec<&TriMesh> = pieces.iter().collect();
+                cuts = seams.iter().map(|s| s.points_3d(0, &refs)).collect();
+            }
             return Ok(Split {
                 worst_3d: centroid(&pieces[w], face),
                 pieces,
@@ -263,7 +287,9 @@ fn split_on(
                 timed_out: timed_out && excess > 0.0,
             });
         };
-        let mut parts = [a, b];
+        resewn |= halves.closed_slit;
+        let cut = halves.path;
+        let mut parts = halves.sides;
         for p in &mut parts {
             let f = flatcut_flatten::flatten(p, &held).map_err(DartError::Flatten)?;
             p.flat = Some(f.uv);
@@ -274,6 +300,114 @@ fn split_on(
         cuts.push(cut);
         together = false;
     }
+}
+
+/// The pieces with neighbours sewn back together wherever their union, flattened alone with the
+/// limits held (`held`), lies within `band` and does not overlap itself ([`merge`]): in rounds,
+/// the pairs that share the longest seams first, each part in one merge a round. The result is
+/// flattened together and kept only when every piece is then within the limits without
+/// overlap; `None` when no pair merges or the joint solve undoes them.
+fn merge_within(
+    pieces: &[TriMesh],
+    held: &FlattenParams,
+    band: Band,
+    params: &FlattenParams,
+) -> Result<Option<Vec<TriMesh>>, DartError> {
+    let alone = held
+        .clone()
+        .with_hooks(flatcut_flatten::FlattenHooks::default());
+    let mut cur = pieces.to_vec();
+    let mut any = false;
+    loop {
+        if params.hooks.cancelled() {
+            return Err(cancelled());
+        }
+        let refs: Vec<&TriMesh> = cur.iter().collect();
+        let mut shared: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
+        for s in seams_of(&cur) {
+            let (i, j) = (s.sides[0].piece, s.sides[1].piece);
+            if i != j {
+                *shared.entry((i.min(j), i.max(j))).or_default() +=
+                    polyline_length(&s.points_3d(0, &refs));
+            }
+        }
+        let mut pairs: Vec<((usize, usize), f64)> = shared.into_iter().collect();
+        pairs.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        // Judged side by side; taken in the pairs' order.
+        let judged: Vec<Option<TriMesh>> = pairs
+            .par_iter()
+            .map(|&((i, j), _)| {
+                if params.hooks.cancelled() {
+                    return None;
+                }
+                let mut m = merge(&cur[i], &cur[j])?;
+                m.flat = Some(flatcut_flatten::flatten(&m, &alone).ok()?.uv);
+                let (_, e, _) = worst(std::slice::from_ref(&m), band).ok()?;
+                let x = m.flat.as_deref()?;
+                let wide = narrowest_neck(&m, x)? >= MERGED_NECK * m.area().sqrt();
+                (e <= 0.0 && wide && matches!(outline_crossing(&m, x), Ok(None))).then_some(m)
+            })
+            .collect();
+        let mut used = vec![false; cur.len()];
+        let mut gone = vec![false; cur.len()];
+        let mut next = cur.clone();
+        for (&((i, j), _), m) in pairs.iter().zip(judged) {
+            let Some(m) = m else { continue };
+            if used[i] || used[j] {
+                continue;
+            }
+            (used[i], used[j], gone[j]) = (true, true, true);
+            next[i] = m;
+        }
+        if !gone.iter().any(|&g| g) {
+            break;
+        }
+        any = true;
+        cur = next
+            .into_iter()
+            .zip(gone)
+            .filter_map(|(p, g)| (!g).then_some(p))
+            .collect();
+    }
+    if !any || flatten_together(&mut cur, held).is_err() {
+        return Ok(None);
+    }
+    let (_, e, _) = worst(&cur, band)?;
+    if e > 0.0 || first_crossing(&cur)?.is_some() {
+        return Ok(None);
+    }
+    Ok(Some(cur))
+}
+
+/// The narrowest neck a merged part may have, as a share of the square root of its area: two
+/// parts that meet at a corner or along a short seam make a piece of two lobes on a thin waist
+/// (or a long peel), within the limits but no piece to sew.
+pub const MERGED_NECK: f64 = 0.15;
+
+/// The narrowest neck of the flat outline of `mesh` (map `x`): the least distance between two
+/// outline vertices at least three times as far apart round the outline, and a tenth of it
+/// (the sides of a corner are not a neck). `None` for a mesh with no outline.
+fn narrowest_neck(mesh: &TriMesh, x: &[DVec2]) -> Option<f64> {
+    let topo = Topology::build(mesh).ok()?;
+    let rim = topo.boundary_loops.iter().max_by_key(|l| l.len())?;
+    let p: Vec<DVec2> = rim.iter().map(|&v| x[v as usize]).collect();
+    let n = p.len();
+    let mut along = vec![0.0; n + 1];
+    for i in 0..n {
+        along[i + 1] = along[i] + p[i].distance(p[(i + 1) % n]);
+    }
+    let round = along[n];
+    let mut neck = f64::INFINITY;
+    for i in 0..n {
+        for j in i + 1..n {
+            let a = (along[j] - along[i]).min(round - (along[j] - along[i]));
+            let d = p[i].distance(p[j]);
+            if a >= 3.0 * d && a >= 0.1 * round {
+                neck = neck.min(d);
+            }
+        }
+    }
+    Some(neck)
 }
 
 /// The error of a split stopped by the flattening hooks' cancel flag.
@@ -367,8 +501,8 @@ fn flatten_together(pieces: &mut [TriMesh], params: &FlattenParams) -> Result<()
     Ok(())
 }
 
-/// The best cut of `piece` (see the module documentation): its two sides (unflattened maps are
-/// replaced by each side's own) and the cut's 3D path. `None` when no chord splits the piece.
+/// The best cut of `piece` (see the module documentation): its two sides (each with its own
+/// map, flattened alone) and the cut's 3D path. `None` when no chord splits the piece.
 /// With `necks`, the shortest ways across the piece from points round its outline are judged
 /// too ([`necks`]).
 fn best_cut(
@@ -378,7 +512,7 @@ fn best_cut(
     band: Band,
     params: &FlattenParams,
     guard: &Guard,
-) -> Result<Option<(TriMesh, TriMesh, Vec<DVec3>)>, DartError> {
+) -> Result<Option<Halves>, DartError> {
     let x = piece
         .flat
         .as_deref()
@@ -426,11 +560,14 @@ fn best_cut(
                 Line::Chord(c, d) => chord_on_surface(piece, x, &outline, &rim3, *c, *d)?,
                 Line::Path(p) => p.clone(),
             };
-            let (a, b, path) = cut_in_two(&bare, points, area)?;
+            let Halves {
+                mut sides,
+                path,
+                closed_slit,
+            } = cut_in_two(&bare, points, area)?;
             if guard.blocks(&path) {
                 return None;
             }
-            let mut sides = [a, b];
             let sa = alone_excess(&mut sides[0], &free, band)?;
             let sb = alone_excess(&mut sides[1], &free, band)?;
             let score = sa.max(sb);
@@ -446,8 +583,11 @@ fn best_cut(
                 crossed,
                 score,
                 cost: guard.cost(&path).total(),
-                sides,
-                path,
+                halves: Halves {
+                    sides,
+                    path,
+                    closed_slit,
+                },
             })
         })
         .collect();
@@ -457,10 +597,7 @@ fn best_cut(
             best = Some(c);
         }
     }
-    Ok(best.map(|c| {
-        let [a, b] = c.sides;
-        (a, b, c.path)
-    }))
+    Ok(best.map(|c| c.halves))
 }
 
 /// A line a piece may be cut along: a chord of its flat outline (through a centre, along a
@@ -510,13 +647,12 @@ fn necks(piece: &TriMesh, rim: &[u32]) -> Vec<Vec<DVec3>> {
 }
 
 /// A chord judged: how many of its two halves overlap themselves flattened alone, the larger
-/// excess of the two, its seam cost, the halves and the cut's 3D path.
+/// excess of the two, its seam cost, and the piece cut along it.
 struct Candidate {
     crossed: usize,
     score: f64,
     cost: f64,
-    sides: [TriMesh; 2],
-    path: Vec<DVec3>,
+    halves: Halves,
 }
 
 impl Candidate {
@@ -613,11 +749,7 @@ fn chord_on_surface(
 
 /// The piece cut along the surface line through `points` into exactly two disks, neither under
 /// [`MIN_AREA_SHARE`] of `area`, and the cut's 3D path.
-fn cut_in_two(
-    bare: &TriMesh,
-    points: Vec<DVec3>,
-    area: f64,
-) -> Option<(TriMesh, TriMesh, Vec<DVec3>)> {
+fn cut_in_two(bare: &TriMesh, points: Vec<DVec3>, area: f64) -> Option<Halves> {
     let spec = LineSpec {
         points,
         notches: Vec::new(),
@@ -635,7 +767,24 @@ fn cut_in_two(
         .iter()
         .map(|&v| e.mesh.positions[v as usize])
         .collect();
-    Some((a.mesh, b.mesh, path))
+    // A slit the cut leaves ending inside a side is sewn shut there.
+    let [(a, ca), (b, cb)] = [a.mesh, b.mesh].map(|m| match close_slits(&m) {
+        Some(c) => (c, true),
+        None => (m, false),
+    });
+    Some(Halves {
+        sides: [a, b],
+        path,
+        closed_slit: ca || cb,
+    })
+}
+
+/// A piece cut in two: its sides, the cut's 3D path, and whether a slit was sewn shut in a side
+/// ([`close_slits`]).
+struct Halves {
+    sides: [TriMesh; 2],
+    path: Vec<DVec3>,
+    closed_slit: bool,
 }
 
 /// The surface point whose flat image is `p`, found in the flat triangle containing it.

@@ -2,11 +2,12 @@
 //! Where the cuts go is [`flatcut_darts::split`]'s; here each part becomes a piece of the
 //! pattern: named `<piece>-1`, `<piece>-2`, … (numbered as the cuts made them), with its share of
 //! the piece's marks and notches, the piece's grain, and two balance notches on every new seam at
-//! a third and two thirds of its length, so the sewer matches the parts point to point. A
-//! surface that is not a disk (closed, of any genus, or with several boundary loops) is opened
-//! first ([`flatcut_darts::open`]); the design's `seam_hidden` direction, `seam_hidden_regions`
-//! and `no_cut` regions say where its seams go ([`flatcut_darts::seam_cost`]), and every seam's
-//! length and visibility-weighted length are kept for the report.
+//! a third and two thirds of its length (one on a seam too short for two well apart), so the
+//! sewer matches the parts point to point. A surface that is not a disk (closed, of any genus, or
+//! with several boundary loops) is opened first ([`flatcut_darts::open`]); the design's
+//! `seam_hidden` direction, `seam_hidden_regions` and `no_cut` regions say where its seams go
+//! ([`flatcut_darts::seam_cost`]), and every seam's length and visibility-weighted length are
+//! kept for the report.
 
 use flatcut_darts::DartError;
 use flatcut_darts::seam_cost::{SeamCost, Visibility};
@@ -227,16 +228,7 @@ fn into_parts(
         seam.name = format!("{name} {}", seam.name);
         let pts = seam.points_3d(0, &s.pieces.iter().collect::<Vec<_>>());
         let cum = arc_lengths(&pts, |a, b| a.distance(*b));
-        let total = cum.last().copied().unwrap_or(0.0);
-        for (j, f) in BALANCE_NOTCHES.iter().enumerate() {
-            let index = cum
-                .iter()
-                .enumerate()
-                .min_by(|a, b| (a.1 - f * total).abs().total_cmp(&(b.1 - f * total).abs()))
-                .map_or(0, |(i, _)| i);
-            if index == 0 || index + 1 >= cum.len() {
-                continue;
-            }
+        for (j, index) in balance_indices(&cum).into_iter().enumerate() {
             let notch = format!("{} {}", seam.name, j + 1);
             for side in &seam.sides {
                 parts[side.piece].notches.push(FlatNotch {
@@ -255,6 +247,33 @@ fn into_parts(
         seams,
         cut_mm,
     })
+}
+
+/// The seam vertices (indices into `cum`, the arc length from the seam's start to each) that
+/// carry its balance notches: the inner vertex nearest each of [`BALANCE_NOTCHES`], dropped
+/// where it is a seam end or within a sixth of the seam's length of a notch already kept (a
+/// short seam of few vertices gets one notch rather than two at one place).
+fn balance_indices(cum: &[f64]) -> Vec<usize> {
+    let total = cum.last().copied().unwrap_or(0.0);
+    let mut out: Vec<usize> = Vec::new();
+    for f in BALANCE_NOTCHES {
+        let Some((index, _)) = cum
+            .iter()
+            .enumerate()
+            .min_by(|a, b| (a.1 - f * total).abs().total_cmp(&(b.1 - f * total).abs()))
+        else {
+            continue;
+        };
+        let inner = index > 0 && index + 1 < cum.len();
+        if inner
+            && out
+                .iter()
+                .all(|&k| (cum[k] - cum[index]).abs() >= total / 6.0)
+        {
+            out.push(index);
+        }
+    }
+    out
 }
 
 /// What each seam costs as a seam (length, visibility-weighted length, turning): the pieces
@@ -395,4 +414,24 @@ fn nearest(mesh: &TriMesh, p: DVec3) -> f64 {
         .iter()
         .map(|q| q.distance_squared(p))
         .fold(f64::INFINITY, f64::min)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn balance_notches_sit_at_thirds_on_distinct_spaced_vertices() {
+        // Evenly sampled: the vertices at a third and two thirds.
+        let even: Vec<f64> = (0..=9).map(|i| 3.0 * i as f64).collect();
+        assert_eq!(balance_indices(&even), vec![3, 6]);
+        // A 28.7 mm seam of three vertices: a third (9.6) and two thirds (19.1) are both
+        // nearest the middle vertex; one notch, not two at one place.
+        assert_eq!(balance_indices(&[0.0, 10.0, 28.7]), vec![1]);
+        // Two inner vertices 0.6 mm apart near the middle: one notch.
+        assert_eq!(balance_indices(&[0.0, 14.0, 14.6, 28.7]), vec![1]);
+        // A seam of one edge has no inner vertex.
+        assert!(balance_indices(&[0.0, 28.7]).is_empty());
+        assert!(balance_indices(&[]).is_empty());
+    }
 }

@@ -183,8 +183,9 @@ fn check_crossing(sew: &[DVec2], widths: &[f64], tol: f64) -> Result<(), SeamFai
         let m = (a + b) * 0.5;
         // start just off the own edge so it is not hit at distance 0
         let start = m + nrm * (tol * 1e-3);
-        if let Some(s) = poly::ray_hit(sew, start, nrm).filter(|s| *s < w - tol) {
-            let q = start + nrm * s;
+        let hit = flatcut_geom::polygon::ray_hit(sew, start, nrm).filter(|h| h.t < w - tol);
+        if let Some(h) = hit.filter(|h| !wedge(sew, i, h.edge, start + nrm * h.t, w, tol)) {
+            let (s, q) = (h.t, start + nrm * h.t);
             return Err(SeamFailure::TooLarge(format!(
                 "the {w:.1} mm allowance of the seam near ({:.1}, {:.1}) mm runs across the piece, meeting the sew line again {s:.1} mm away at ({:.1}, {:.1}) mm; {ADVICE}",
                 m.x, m.y, q.x, q.y
@@ -192,6 +193,64 @@ fn check_crossing(sew: &[DVec2], widths: &[f64], tol: f64) -> Result<(), SeamFai
         }
     }
     Ok(())
+}
+
+/// Steps a wedge's leg may take along the sew line, and how much longer than straight it may be.
+const WEDGE_STEPS: usize = 64;
+const WEDGE_STRAIGHT: f64 = 0.02;
+
+/// Whether the allowance of edge `i` meeting the sew line again on edge `j` is the overlap of a
+/// concave corner (a wedge) rather than of a slot or of another part of the piece: a vertex `c`
+/// between them along the sew line from which it runs straight (within [`WEDGE_STRAIGHT`]) to
+/// edge `i`'s midpoint and to the point `q` where the allowance met edge `j`, both within the depth
+/// `w / tan(φ/2)` where the allowances of a wedge of opening φ meet. Such a corner is filled by
+/// the union like every concave corner, however short its edges (seams meeting at a narrow
+/// angle on a split piece); a slot has two corners at its bottom and is no wedge.
+fn wedge(sew: &[DVec2], i: usize, j: usize, q: DVec2, w: f64, tol: f64) -> bool {
+    let n = sew.len();
+    let m = 0.5 * (sew[i] + sew[(i + 1) % n]);
+    let legs = |c: DVec2, along_m: f64, along_q: f64| {
+        let (dm, dq) = (m - c, q - c);
+        let straight = |along: f64, d: DVec2| along <= d.length() * (1.0 + WEDGE_STRAIGHT) + tol;
+        let phi = dm.angle_to(dq).abs();
+        let depth = w / (0.5 * phi).tan();
+        straight(along_m, dm)
+            && straight(along_q, dq)
+            && dm.length() <= depth + tol
+            && dq.length() <= depth + tol
+    };
+    // Each way round from the midpoint to `q`: forward through vertices i+1, i+2, …, j;
+    // backward through i, i-1, …, j+1.
+    for forward in [true, false] {
+        let mut path = vec![m];
+        let mut k = if forward { (i + 1) % n } else { i };
+        for _ in 0..WEDGE_STEPS.min(n) {
+            path.push(sew[k]);
+            let on_hit = if forward {
+                k == j
+            } else {
+                (k + n - 1) % n == j
+            };
+            if on_hit {
+                path.push(q);
+                let mut cum = vec![0.0; path.len()];
+                for c in 1..path.len() {
+                    cum[c] = cum[c - 1] + path[c].distance(path[c - 1]);
+                }
+                let total = cum[path.len() - 1];
+                if (1..path.len() - 1).any(|c| legs(path[c], cum[c], total - cum[c])) {
+                    return true;
+                }
+                break;
+            }
+            k = if forward {
+                (k + 1) % n
+            } else {
+                (k + n - 1) % n
+            };
+        }
+    }
+    false
 }
 
 /// Drops every vertex that lies between its two neighbours on the line through them (within
@@ -508,6 +567,46 @@ mod tests {
             )
             .is_ok()
         );
+    }
+
+    #[test]
+    fn a_narrow_wedge_of_short_edges_is_a_concave_corner_not_a_slot() {
+        // A square with a V notch of 47° opening down from its top edge, 80 mm deep, its legs
+        // of 5 mm edges (seams meeting at a narrow angle on a split piece). Near the apex the
+        // allowance of a leg's edge meets the other leg within 6 mm: the corner the union
+        // fills, as at every concave corner, not an allowance across the piece.
+        let half = (47.0f64 / 2.0).to_radians().tan() * 80.0;
+        let mut sew = vec![v(0., 0.), v(200., 0.), v(200., 200.)];
+        let steps = 16;
+        for k in 0..steps {
+            sew.push(v(100.0 + half, 200.0).lerp(v(100., 120.), k as f64 / steps as f64));
+        }
+        for k in 0..steps {
+            sew.push(v(100., 120.).lerp(v(100.0 - half, 200.0), k as f64 / steps as f64));
+        }
+        sew.push(v(100.0 - half, 200.0));
+        sew.push(v(0., 200.));
+        let n = sew.len();
+        let r = allowance(
+            &sew,
+            &vec![6.0; n],
+            &all(CornerStyle::Mitred, n),
+            DEFAULT_MITRE_LIMIT,
+            1e-6,
+        )
+        .unwrap();
+        let (dmin, _) = dist_range(&sew, &r.cut);
+        assert!(dmin >= 6.0 - 1e-6, "{dmin}");
+        // The cut line's notch ends where the two legs' allowances meet: 6 / sin(23.5°) mm
+        // above the apex on the notch's axis.
+        let apex = 6.0 / (47.0f64 / 2.0).to_radians().sin();
+        let lowest = r
+            .cut
+            .iter()
+            .filter(|p| (p.x - 100.0).abs() < 1.0 && p.y > 100.0)
+            .map(|p| p.y)
+            .fold(f64::INFINITY, f64::min);
+        assert!((lowest - (120.0 + apex)).abs() < 1e-3, "{lowest}");
     }
 
     fn star(k: usize, r_in: f64, r_out: f64, phase: f64) -> Vec<DVec2> {

@@ -33,7 +33,8 @@ pub(super) struct SewLine {
 
 impl SewLine {
     /// Fits the outline between its corners (the marks on it and the ends of its named
-    /// stretches are corners) and flattens the fit, refusing a sew line that crosses itself.
+    /// stretches are corners) and flattens the fit; where the fit would cross itself, the
+    /// outline's own points joined by lines.
     pub fn fit(
         name: &str,
         outline: &Outline,
@@ -41,7 +42,27 @@ impl SewLine {
         opts: &PieceOptions,
     ) -> Result<SewLine, PatternError> {
         let corners = fit::find_corners(&outline.points, edges.forced_corners(), opts.corner_deg);
-        let spans = fit::fit_closed_spans(&outline.points, &corners, opts.fit_tol);
+        let fitted = Self::fit_at(&outline.points, &corners, edges, opts);
+        if outline::check_simple(name, &fitted.polyline).is_ok() {
+            return Ok(fitted);
+        }
+        // Curves fitted within the tolerance across a slot narrower than it (where seams meet
+        // on a split piece) can cross the other side; the outline itself is simple (checked
+        // when cleaned), so its own points joined by lines are the sew line.
+        let every: Vec<usize> = (0..outline.points.len()).collect();
+        let lines = Self::fit_at(&outline.points, &every, edges, opts);
+        outline::check_simple(name, &lines.polyline)?;
+        Ok(lines)
+    }
+
+    /// The outline's points fitted between `corners` and flattened (see [`SewLine::fit`]).
+    fn fit_at(
+        points: &[DVec2],
+        corners: &[usize],
+        edges: &OutlineEdges,
+        opts: &PieceOptions,
+    ) -> SewLine {
+        let spans = fit::fit_closed_spans(points, corners, opts.fit_tol);
         let mut polyline: Vec<DVec2> = Vec::new();
         let mut finish: Vec<EdgeFinish> = Vec::new();
         let mut corner: Vec<bool> = Vec::new();
@@ -65,13 +86,12 @@ impl SewLine {
             segs.extend(span.iter().copied());
         }
         let (polyline, finish, corner) = dedup(polyline, finish, corner);
-        outline::check_simple(name, &polyline)?;
-        Ok(SewLine {
+        SewLine {
             segs,
             polyline,
             finish,
             corner,
-        })
+        }
     }
 
     /// The allowance of each polyline edge (mm).

@@ -288,3 +288,85 @@ fn clockwise_input_is_accepted_and_mirror_keeps_ccw() {
     let cut = d.strokes.iter().find(|s| s.is_outer()).unwrap();
     assert!((poly::signed_area(&cut.points) - p.cut_area()).abs() < 1e-6);
 }
+
+/// The flat outline of a part of a split ball (±5 %), to 0.1 µm: simple, but at the tip of its
+/// lens three seams meet in a zigzag of 0.7 mm edges, and the curves fitted within the 0.1 mm
+/// tolerance there crossed each other ("outline is self-intersecting", edges 54 and 56).
+const SPLIT_BALL_PART: [[f64; 2]; 54] = [
+    [50.7780, 32.0290],
+    [40.2338, 33.4453],
+    [32.0604, 34.3815],
+    [23.5694, 35.2819],
+    [1.4537, 36.1234],
+    [-3.0024, 37.3953],
+    [-21.3339, 35.4402],
+    [-29.2753, 34.9303],
+    [-41.9532, 33.8093],
+    [-56.7515, 31.6660],
+    [-62.4725, 31.1200],
+    [-83.1528, 26.0341],
+    [-87.9785, 24.8343],
+    [-101.6260, 21.2523],
+    [-107.4177, 19.5403],
+    [-120.8070, 14.2912],
+    [-132.3205, 10.5038],
+    [-139.3950, 8.4898],
+    [-151.2199, 3.7552],
+    [-157.3790, 1.4441],
+    [-155.0518, 0.4679],
+    [-145.0193, -3.8876],
+    [-127.3855, -10.8625],
+    [-117.7627, -13.9095],
+    [-98.4751, -21.0210],
+    [-78.7140, -26.3056],
+    [-67.8714, -27.9570],
+    [-38.1388, -34.1792],
+    [-37.6357, -35.3496],
+    [-31.4682, -36.0093],
+    [-7.6424, -37.9285],
+    [-1.5221, -38.2789],
+    [5.3441, -38.2079],
+    [19.5719, -37.6945],
+    [37.4462, -36.3325],
+    [48.0700, -34.7502],
+    [76.5466, -29.4061],
+    [90.1398, -24.8251],
+    [103.6229, -20.0169],
+    [115.1803, -15.7883],
+    [129.8912, -9.4774],
+    [150.6026, 0.1158],
+    [153.8149, 1.7588],
+    [151.5136, 2.7933],
+    [151.7351, 3.4410],
+    [137.6123, 9.1713],
+    [126.5282, 12.7869],
+    [119.0101, 15.2414],
+    [110.2712, 17.8409],
+    [99.7811, 20.5115],
+    [84.7439, 24.7684],
+    [80.3478, 26.0330],
+    [72.1207, 28.0175],
+    [60.7056, 30.2655],
+];
+
+#[test]
+fn a_simple_outline_gets_a_simple_sew_line_where_fitted_curves_would_cross() {
+    let outline: Vec<DVec2> = SPLIT_BALL_PART
+        .iter()
+        .map(|p| DVec2::from_array(*p))
+        .collect();
+    assert!(poly::first_self_intersection(&outline).is_none());
+    let opts = PieceOptions {
+        default_seam: 0.0,
+        ..PieceOptions::default()
+    };
+    let p = Piece::build(&PieceInput::new("ball-5", outline.clone()), &opts).unwrap();
+    assert!(poly::first_self_intersection(&p.sew_polyline).is_none());
+    // The sew line passes through every point of the outline.
+    for q in &outline {
+        assert!(
+            poly::dist_to_closed(&p.sew_polyline, *q) < 1e-6,
+            "{q} is off the sew line"
+        );
+    }
+}
