@@ -965,20 +965,17 @@ impl Drop for Killed {
     }
 }
 
-/// A server killed during a job (a crash, a power cut: nothing stopped, nothing closed, the
-/// simulator gone with it) leaves a journal whose last acknowledged lines may or may not have
-/// run. On the next server, the resume refuses to guess: the job fails naming those lines in
+/// A server killed during a job (a power cut: nothing stopped, nothing closed, the simulator
+/// gone with it; here while the job is held with lines queued) leaves a journal whose last
+/// acknowledged lines may or may not have run. On the next server, the resume refuses to guess: the job fails naming those lines in
 /// its `in_doubt` (from the journal's first unconfirmed line, as the page shows them), and
 /// continues from the line the operator names after the origin question, running the G-code's
 /// motions from that line on, each once, to the journal's end.
 #[test]
 fn serve_names_the_lines_in_doubt_after_a_crash_and_resumes_from_the_operators_line() {
     let dir = lampshade();
-    let mut child = crate::stream::child_test(
-        "serve::serve_child_process",
-        SERVE_CHILD_ENV,
-        dir.path(),
-    );
+    let mut child =
+        crate::stream::child_test("serve::serve_child_process", SERVE_CHILD_ENV, dir.path());
     let mut child = Killed(
         child
             .stdout(std::process::Stdio::null())
@@ -990,7 +987,10 @@ fn serve_names_the_lines_in_doubt_after_a_crash_and_resumes_from_the_operators_l
     let a: SocketAddr = stderr
         .lines()
         .map_while(Result::ok)
-        .find_map(|l| l.strip_prefix("serving at ").map(|s| s.trim().parse().unwrap()))
+        .find_map(|l| {
+            l.strip_prefix("serving at ")
+                .map(|s| s.trim().parse().unwrap())
+        })
         .expect("the server says where it listens");
     let c = send(
         a,
@@ -1006,6 +1006,26 @@ fn serve_names_the_lines_in_doubt_after_a_crash_and_resumes_from_the_operators_l
         201
     );
     job_until(a, 1, "reached the outlines", |j| lines_done(j) > CUT_LAYER);
+    // The power fails while the job is held with lines queued (acknowledged, not run); a hold
+    // where the planner had drained (a dwell) is let go and tried again further on.
+    let mut queued = false;
+    for _ in 0..20 {
+        assert_eq!(send(a, "POST", "/api/jobs/1/hold", &json!({})).status, 200);
+        let held = job_until(a, 1, "held", |j| {
+            j["state"] == "held" && j["progress"]["machine_state"] == "Hold:0"
+        });
+        if held["progress"]["lines_acked"].as_u64() > held["progress"]["lines_done"].as_u64() {
+            queued = true;
+            break;
+        }
+        assert_eq!(
+            send(a, "POST", "/api/jobs/1/resume", &json!({})).status,
+            200
+        );
+        let on = lines_done(&held) + 30;
+        job_until(a, 1, "went on", |j| lines_done(j) > on);
+    }
+    assert!(queued, "every hold found the planner drained");
     drop(child);
     let journal_path = dir.path().join("job-1.gcode.journal");
     let journal = flatcut_grbl::Journal::read(&journal_path).unwrap();

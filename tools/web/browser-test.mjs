@@ -2,16 +2,27 @@
 // playwright-core against `flatcut serve` on the bundled shoe.
 //
 //   node tools/web/browser-test.mjs --flatcut target/debug/flatcut [--screenshots docs]
+//   node tools/web/browser-test.mjs --flatcut target/release/flatcut --measure 9
 //
 // Steps: load the shoe; add a style line by clicking on the rendered surface at known screen
 // points (the projections of surface points from the server's own mesh); see the piece count
-// go from 4 to 5 (in the shoe's base size; every size in the pattern) and the heat map's colours on the new piece, in
-// 3D and flat; download the pattern and compare it with `flatcut run`'s bytes for the saved design; stream sheet 1's job
-// from the device panel to the embedded simulator, pause and resume it once, watch its progress
-// events to the end, and check the simulator's executed motions against the G-code's moves
-// (each once, in order, the same end point); then Ctrl-C the server during a job and check
-// the job stopped with the tool off and its journal says so. Prints one line per step and "N passed, N failed". Without Chromium it fails when FLATCUT_BROWSER_TEST=required (as CI
+// go from 4 to 5 (in the shoe's base size; every size in the pattern) and the heat map's colours
+// on the new piece, in 3D and flat; download the pattern and compare it with `flatcut run`'s bytes
+// for the saved design; stream sheet 1's job from the device panel to the embedded simulator,
+// pause and resume it once, watch its progress events to the end, and check the simulator's
+// executed motions against the G-code's moves (each once, in order, the same end point); then
+// Ctrl-C the server during a job and check the job stopped with the tool off and its journal
+// says so; then kill a server outright during sheet 3's job (a crash), resume from the journal
+// on a new server, see the panel refuse and name the lines in doubt (drawn over the layout
+// where the G-code moves), type a line among them, answer the origin question, and check the
+// simulator ran the G-code's moves from that line on, each once. Prints one line per step and
+// "N passed, N failed". Without Chromium it fails when FLATCUT_BROWSER_TEST=required (as CI
 // sets it), and otherwise says it skipped.
+//
+// `--measure N` instead draws the closing line N times (undoing it between runs) and prints the
+// time from the click that closes the region to the new pieces' heat map on the shoe, each run
+// and the median, split into the request adding the line, the flattening (the server's own time
+// within it), the response's transfer and the drawing.
 
 import { spawn, execFileSync } from 'node:child_process';
 import fs from 'node:fs';
@@ -422,7 +433,8 @@ try {
   `exit ${ended ? ended.c ?? ended.sig : 'none within 30 s'}; journal ends: ${journal.slice(-3).join(' | ')}`);
 
   // 7. A crash during a job (the server killed outright: nothing stopped, the simulator gone
-  // with it) leaves lines the journal cannot tell ran or not. On the next server the panel's
+  // with it; here while the job is paused with lines queued) leaves lines the journal cannot
+  // tell ran or not. On the next server the panel's
   // resume from the journal is refused and names them; the operator types the line to continue
   // from, answers the origin question in the page, and the simulator runs the G-code's moves
   // from that line on, each once.
@@ -437,6 +449,17 @@ try {
   await openDevice(crashed.url);
   await page.click('#job-start');
   await page.waitForFunction(() => { const j = window.__flatcut.lastJob; return j && j.sheet === 3 && j.progress && j.progress.lines_done > 300; }, null, { timeout: 120000 });
+  // The power fails while the job is paused with lines queued (acknowledged, not yet run); a
+  // pause that found the planner drained (at a dwell) is resumed and tried again further on.
+  for (let tries = 0; ; tries++) {
+    await page.click('#job-hold');
+    await page.waitForFunction(() => { const j = window.__flatcut.lastJob; return j.state === 'held' && j.progress.machine_state === 'Hold:0'; }, null, { timeout: 30000 });
+    const p = (await jobState()).progress;
+    if (p.lines_acked > p.lines_done) break;
+    if (tries === 20) throw new Error('every pause found the planner drained');
+    await page.click('#job-resume');
+    await page.waitForFunction((n) => window.__flatcut.lastJob.progress.lines_done > n, p.lines_done + 30, { timeout: 30000 });
+  }
   const gone = new Promise((r) => crashed.proc.on('exit', r));
   crashed.proc.kill('SIGKILL');
   await gone;
@@ -448,23 +471,43 @@ try {
   const refused = await jobState();
   const doubt = refused.in_doubt;
   const said = (await page.textContent('#job-doubt p')).trim();
-  await shot('device-doubt');
   step('after a crash, the resume is refused and the panel names the lines in doubt', refused.state === 'failed' && !!doubt
-    && doubt.from <= doubt.to && said.startsWith(`Lines ${doubt.from} to ${doubt.to} of job-3.gcode may or may not have run`), said);
+    && doubt.from <= doubt.to && said.startsWith(`Lines ${doubt.from} to ${doubt.to} of job-3.gcode may or may not have run`)
+    && (await page.textContent('#job-state')) === 'resume refused: lines in doubt', said);
   // The operator looks at the work: the cut ended about half-way through those lines.
   const typed = Math.round((doubt.from + doubt.to) / 2);
   await page.fill('#job-from', String(typed));
+  // The lines in doubt over the layout, each where the G-code moves (read here from the file):
+  // grey before the line typed, orange from it on, and a mark where the tool continues.
+  const drawn = await page.evaluate(() => {
+    const svg = document.getElementById('job-svg');
+    const h = svg.viewBox.baseVal.height;
+    return {
+      lines: [...svg.querySelectorAll('#job-doubt-path polyline')].map((p) => ({
+        line: Number(p.dataset.line), colour: p.getAttribute('stroke'),
+        end: (() => { const q = p.points[p.points.length - 1]; return [q.x, h - q.y]; })(),
+      })),
+      mark: !!svg.querySelector('#job-from-mark'),
+      text: document.getElementById('job-from-text').textContent,
+    };
+  });
+  const gcode3 = await page.evaluate(async () => (await fetch('/api/job.gcode?sheet=3')).text());
+  const job3 = gcodeMoves(gcode3);
+  const inDoubt = job3.moves.filter((m) => m.line >= doubt.from && m.line <= doubt.to);
+  const placed = inDoubt.every((m) => drawn.lines.some((l) => l.line === m.line && Math.hypot(l.end[0] - m.to[0], l.end[1] - m.to[1]) < 0.01
+    && l.colour === (m.line >= typed ? '#e8590c' : '#868e96')));
+  const firstSent = gcode3.split('\n').findIndex((t, i) => i + 1 >= typed && t.trim() && !t.trim().startsWith('(')) + 1;
+  await shot('device-doubt');
+  step('the lines in doubt are drawn over the layout where the G-code moves, the line typed named', placed && drawn.lines.length === inDoubt.length
+    && drawn.mark && drawn.text.startsWith(`line ${firstSent}: `),
+  `${drawn.lines.length} lines drawn of the ${inDoubt.length} moves in lines ${doubt.from} to ${doubt.to}; ${drawn.text}`);
   await page.click('#job-resume-from');
   await page.waitForSelector('#answer-yes', { timeout: 60000 });
   const asked = (await page.textContent('#job-question p')).trim();
   await page.click('#answer-yes');
   await page.waitForFunction(() => { const j = window.__flatcut.lastJob; return j.resume_from != null && ['done', 'failed', 'stopped'].includes(j.state); }, null, { timeout: 600000 });
   const resumed = await jobState();
-  const [gcode3, sim3] = await page.evaluate(async () => [
-    await (await fetch('/api/job.gcode?sheet=3')).text(),
-    await (await fetch('/api/devices/sim')).json(),
-  ]);
-  const job3 = gcodeMoves(gcode3);
+  const sim3 = await page.evaluate(async () => (await fetch('/api/devices/sim')).json());
   const rest = job3.moves.filter((m) => m.line >= typed);
   const ran3 = ranMotions(sim3);
   // First the travel to the line's start (at most a lift, a traverse and a plunge).
