@@ -15,7 +15,7 @@
 //! Vertices keep their coordinates exactly, so the seams are found again by their coincident
 //! vertices ([`flatcut_mesh::mating::coincident_seams`]). A part changed here loses its map.
 
-use std::collections::HashMap;
+use std::collections::BTreeMap;
 
 use flatcut_geom::DVec3;
 use flatcut_mesh::{Topology, TriMesh, check_disk};
@@ -25,7 +25,7 @@ use flatcut_mesh::{Topology, TriMesh, check_disk};
 pub fn close_slits(part: &TriMesh) -> Option<TriMesh> {
     let topo = Topology::build(part).ok()?;
     let p = &part.positions;
-    let mut into: HashMap<u32, u32> = HashMap::new();
+    let mut into: BTreeMap<u32, u32> = BTreeMap::new();
     for l in &topo.boundary_loops {
         let n = l.len();
         if n < 4 {
@@ -68,7 +68,7 @@ pub fn close_slits(part: &TriMesh) -> Option<TriMesh> {
 /// `b` would join (which of them is ambiguous) or the union is not one disk.
 pub fn merge(a: &TriMesh, b: &TriMesh) -> Option<TriMesh> {
     let key = |q: DVec3| [q.x.to_bits(), q.y.to_bits(), q.z.to_bits()];
-    let mut of_a: HashMap<[u64; 3], u32> = HashMap::new();
+    let mut of_a: BTreeMap<[u64; 3], u32> = BTreeMap::new();
     let mut twice: Vec<[u64; 3]> = Vec::new();
     for (i, &q) in a.positions.iter().enumerate() {
         if of_a.insert(key(q), i as u32).is_some() {
