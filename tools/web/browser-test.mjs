@@ -470,7 +470,7 @@ try {
   await page.waitForSelector('#job-doubt:not([hidden])', { timeout: 120000 });
   const refused = await jobState();
   const doubt = refused.in_doubt;
-  const said = (await page.textContent('#job-doubt p')).trim();
+  const said = (await page.textContent('#job-doubt p')).replace(/\s+/g, ' ').trim();
   step('after a crash, the resume is refused and the panel names the lines in doubt', refused.state === 'failed' && !!doubt
     && doubt.from <= doubt.to && said.startsWith(`Lines ${doubt.from} to ${doubt.to} of job-3.gcode may or may not have run`)
     && (await page.textContent('#job-state')) === 'resume refused: lines in doubt', said);
