@@ -146,3 +146,82 @@ fn nest_on_a_hide_keeps_off_its_defect_and_worse_zone() {
         }
     }
 }
+
+/// `--mirrored-pairs` names each copy by its side, `#<n>L` as drawn and `#<n>R` mirrored, and
+/// the R copies are the mirror images: a scalene wedge's edges run the other way round.
+#[test]
+fn mirrored_pairs_name_their_copies_left_and_right() {
+    let out = tempfile::tempdir().unwrap();
+    let wedge = out.path().join("wedge.svg");
+    std::fs::write(
+        &wedge,
+        r##"<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="100mm" viewBox="0 0 200 100"><path id="wedge" d="M 10 90 L 130 90 L 10 40 Z" stroke="#ff0000" fill="none"/></svg>"##,
+    )
+    .unwrap();
+    let svg = out.path().join("layout.svg");
+    let code = run_cli(&[
+        "nest",
+        wedge.to_str().unwrap(),
+        "--sheet",
+        "600x400",
+        "--mirrored-pairs",
+        "--quantity",
+        "2",
+        "--iters",
+        "3",
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        format!("{code:?}"),
+        format!("{:?}", std::process::ExitCode::SUCCESS)
+    );
+    let text = std::fs::read_to_string(&svg).unwrap();
+    let d = flatcut::pattern::svg::read_svg(
+        &text,
+        "layout",
+        0.01,
+        &flatcut::pattern::ColourTable::default(),
+    )
+    .unwrap()
+    .drawing;
+    let mut ids: Vec<&str> = d.strokes.iter().map(|s| s.id.as_str()).collect();
+    ids.sort_unstable();
+    assert_eq!(ids, ["wedge#1L", "wedge#1R", "wedge#2L", "wedge#2R"]);
+    // The edge lengths (120, 130, 50 mm) counter-clockwise from the longest: one order for the
+    // copies as drawn, the other for their mirror images.
+    let turn = |pts: &[DVec2]| -> Vec<i64> {
+        let mut p = pts.to_vec();
+        if p.first()
+            .zip(p.last())
+            .is_some_and(|(a, b)| a.distance(*b) < 1e-6)
+        {
+            p.pop();
+        }
+        let area: f64 = (0..p.len())
+            .map(|i| p[i].perp_dot(p[(i + 1) % p.len()]))
+            .sum();
+        if area < 0.0 {
+            p.reverse();
+        }
+        let mut e: Vec<i64> = (0..p.len())
+            .map(|i| p[i].distance(p[(i + 1) % p.len()]).round() as i64)
+            .collect();
+        let k = (0..e.len()).max_by_key(|&i| e[i]).unwrap();
+        e.rotate_left(k);
+        e
+    };
+    let side = |suffix: &str| -> Vec<Vec<i64>> {
+        d.strokes
+            .iter()
+            .filter(|s| s.id.ends_with(suffix))
+            .map(|s| turn(&s.points))
+            .collect()
+    };
+    let (l, r) = (side("L"), side("R"));
+    assert_eq!(l.len(), 2);
+    assert_eq!(l[0], l[1]);
+    let mirrored = vec![l[0][0], l[0][2], l[0][1]];
+    assert_eq!(r, [mirrored.clone(), mirrored]);
+    assert_ne!(l[0], r[0]);
+}

@@ -397,3 +397,59 @@ fn bad_edges_laps_and_sizes_are_refused_by_name_with_nothing_written() {
         assert!(!out.exists(), "{what}: nothing is written");
     }
 }
+
+/// `report` on the run's piece OBJs names a seam by its pieces (the OBJ's object name) and finds
+/// its notches where the design run put them: the same offsets along the seam, on both sides.
+#[test]
+fn report_on_piece_objs_names_seams_by_piece_and_carries_their_notches() {
+    let out = shoe();
+    let dir = tempfile::tempdir().unwrap();
+    let report = dir.path().join("report.json");
+    let obj = |f: &str| out.join(f).to_str().unwrap().to_string();
+    let (cap, vamp) = (obj("toe_cap_42.obj"), obj("vamp_42.obj"));
+    let code = run_cli(&["report", &cap, &vamp, "--json", report.to_str().unwrap()]);
+    assert_eq!(
+        format!("{code:?}"),
+        format!("{:?}", std::process::ExitCode::SUCCESS)
+    );
+    let pieces = json(&report);
+    assert_eq!(pieces[0]["name"], "toe cap 42");
+    assert_eq!(pieces[1]["name"], "vamp 42");
+    let seam = &pieces[0]["mating_seams"][0];
+    assert_eq!(seam["name"], "toe cap 42/vamp 42");
+    assert_eq!(seam["pieces"], serde_json::json!(["toe cap 42", "vamp 42"]));
+    // The design run's own measure of the same seam (`toe-cap 42`), notch for notch.
+    let summary = json(&out.join("summary.json"));
+    let run_seam = summary["mating_seams"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["name"] == "toe-cap 42")
+        .unwrap();
+    let offsets = |s: &serde_json::Value| -> Vec<(String, f64, f64)> {
+        let mut v: Vec<(String, f64, f64)> = s["notches"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| {
+                let o = &n["offset_mm"];
+                let (a, b) = (o[0].as_f64().unwrap(), o[1].as_f64().unwrap());
+                (n["name"].as_str().unwrap().to_string(), a.min(b), a.max(b))
+            })
+            .collect();
+        v.sort_by(|x, y| x.0.cmp(&y.0));
+        v
+    };
+    let (got, want) = (offsets(seam), offsets(run_seam));
+    assert_eq!(got.len(), 3, "{got:?}");
+    let length = seam["length_2d_mm"][0].as_f64().unwrap();
+    for ((gn, ga, gb), (wn, wa, wb)) in got.iter().zip(&want) {
+        assert_eq!(gn, wn);
+        // Measured from either end of the seam: the run's sides may run the other way.
+        let same = |g: f64, w: f64| (g - w).abs() < 1e-4 || (g - (length - w)).abs() < 1e-4;
+        assert!(
+            same(*ga, *wa) && same(*gb, *wb),
+            "{gn}: {ga}/{gb} vs {wa}/{wb}"
+        );
+    }
+}

@@ -45,6 +45,13 @@ pub enum PipelineError {
         path: std::path::PathBuf,
         reason: String,
     },
+    /// A flat OBJ's notch points ([`crate::notch_points`]) are not notches on its outline.
+    #[error("piece '{piece}': {}: {reason}", path.display())]
+    NotchPoints {
+        piece: String,
+        path: std::path::PathBuf,
+        reason: String,
+    },
     /// Pieces joined by seams cannot be flattened together.
     #[error("{file}: {source}")]
     Assembly {

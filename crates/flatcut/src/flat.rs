@@ -55,11 +55,15 @@ pub struct PieceTimes {
 }
 
 impl Flat {
-    /// The piece's flat OBJ, as `flatten` and `run` write it: the 3D vertices (`v`), one UV
-    /// per vertex in mm (`vt`), the faces, then each dart's sew line
-    /// ([`crate::dart_lines`]) for a later `pattern`, `report` or `run` to read back.
+    /// The piece's flat OBJ, as `flatten` and `run` write it: its name (`o`), the 3D vertices
+    /// (`v`), one UV per vertex in mm (`vt`), the faces, then each dart's sew line
+    /// ([`crate::dart_lines`]) and each notch ([`crate::notch_points`]) for a later `pattern`,
+    /// `report` or `run` to read back.
     pub fn obj(&self) -> String {
-        flatcut_mesh::io::obj_string(&self.mesh) + &crate::dart_lines::write(&self.darts)
+        crate::notch_points::write_name(&self.name)
+            + &flatcut_mesh::io::obj_string(&self.mesh)
+            + &crate::dart_lines::write(&self.darts)
+            + &crate::notch_points::write(&self.notches)
     }
 }
 
@@ -91,27 +95,40 @@ pub struct Limits {
 }
 
 /// Reads a mesh file; when it already carries a flat map (`vt`), returns it as one reported piece
-/// named after the file. `Ok(None)`: the file is a 3D mesh that still needs flattening.
+/// named by the OBJ's object statement (`o`, which `flatten` and `run` write) or else after the
+/// file, with the darts and notches the OBJ carries. `Ok(None)`: the file is a 3D mesh that
+/// still needs flattening.
 pub fn read_flat_mesh(path: &Path, limits: &Limits) -> Result<Option<Flat>, PipelineError> {
     let reading = Instant::now();
     let mesh = flatcut_mesh::read_mesh(path)?;
     let Some(x) = &mesh.flat else {
         return Ok(None);
     };
-    let name = path
+    let stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "piece".into());
-    // The darts `flatten --darts auto` wrote with the map (only an OBJ carries them).
+    // The name, darts and notches `flatten` wrote with the map (only an OBJ carries them).
     let is_obj = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-    let darts = if is_obj {
-        let text = std::fs::read_to_string(path).map_err(|source| PipelineError::Read {
-            piece: name.clone(),
+    let text = if is_obj {
+        std::fs::read_to_string(path).map_err(|source| PipelineError::Read {
+            piece: stem.clone(),
             path: path.to_path_buf(),
             source,
+        })?
+    } else {
+        String::new()
+    };
+    let name = crate::notch_points::read_name(&text).unwrap_or(stem);
+    let notches =
+        crate::notch_points::read(&text, &mesh).map_err(|reason| PipelineError::NotchPoints {
+            piece: name.clone(),
+            path: path.to_path_buf(),
+            reason,
         })?;
+    let darts = if is_obj {
         let drill = limits
             .darts
             .as_ref()
@@ -130,8 +147,14 @@ pub fn read_flat_mesh(path: &Path, limits: &Limits) -> Result<Option<Flat>, Pipe
     };
     let read = reading.elapsed();
     let reporting = Instant::now();
-    let report =
-        pipeline::report_piece(&name, &mesh, &[], limits.stretch_pct, limits.compress_pct)?;
+    let marks: Vec<u32> = notches.iter().map(|n| n.vertex).collect();
+    let report = pipeline::report_piece(
+        &name,
+        &mesh,
+        &marks,
+        limits.stretch_pct,
+        limits.compress_pct,
+    )?;
     let times = PieceTimes {
         read,
         report: reporting.elapsed(),
@@ -143,7 +166,7 @@ pub fn read_flat_mesh(path: &Path, limits: &Limits) -> Result<Option<Flat>, Pipe
         report,
         quantity: 1,
         mirrored: 0,
-        notches: Vec::new(),
+        notches,
         info: None,
         darts,
         grain: None,
@@ -281,19 +304,66 @@ fn attach_seams_among(flats: &mut [Flat], idx: &[usize], seams: &[MatingSeam]) {
     }
 }
 
+/// Gives pieces of the same name from different inputs (`sources[k]` is where `flats[k]` came
+/// from) names apart by adding their input's path: `"vamp (a/vamp.obj)"`. A name no other piece
+/// has is kept as it is, so seams read from files are named by their pieces.
+pub fn tell_apart(flats: &mut [Flat], sources: &[&Path]) {
+    let clash: Vec<bool> = (0..flats.len())
+        .map(|k| {
+            (0..flats.len())
+                .any(|j| j != k && flats[j].name == flats[k].name && sources[j] != sources[k])
+        })
+        .collect();
+    for ((f, source), clash) in flats.iter_mut().zip(sources).zip(clash) {
+        if clash {
+            f.name = format!("{} ({})", f.name, source.display());
+        }
+    }
+}
+
 /// Pairs flattened meshes read from files (no design) by their coincident boundary vertices (the
 /// `OUT-<piece>.obj` files of one split surface carry a seam's vertices at identical
-/// coordinates on both sides) and lists each such seam in both pieces' reports.
+/// coordinates on both sides) and lists each such seam in both pieces' reports, with the notches
+/// the files carry on its vertices.
 pub fn pair_coincident(flats: &mut [Flat]) {
     let idx: Vec<usize> = (0..flats.len())
         .filter(|&k| flats[k].def.is_none())
         .collect();
-    let seams = {
+    let mut seams = {
         let meshes: Vec<&TriMesh> = idx.iter().map(|&k| &flats[k].mesh).collect();
         let names: Vec<&str> = idx.iter().map(|&k| flats[k].name.as_str()).collect();
         flatcut_mesh::mating::coincident_seams(&meshes, &names)
     };
+    for s in &mut seams {
+        s.notches = seam_notches(s, |k| &flats[idx[k]].notches);
+    }
     attach_seams_among(flats, &idx, &seams);
+}
+
+/// The notches on a seam found between files: each seam vertex where either side's piece has a
+/// notch (the first side's name when both do), in order along the seam.
+fn seam_notches<'a>(
+    seam: &MatingSeam,
+    notches_of: impl Fn(usize) -> &'a [FlatNotch],
+) -> Vec<flatcut_mesh::mating::SeamNotch> {
+    let n = seam.sides[0]
+        .vertices
+        .len()
+        .min(seam.sides[1].vertices.len());
+    (0..n)
+        .filter_map(|index| {
+            seam.sides.iter().find_map(|side| {
+                let v = side.vertices[index];
+                notches_of(side.piece)
+                    .iter()
+                    .find(|m| m.vertex == v)
+                    .map(|m| flatcut_mesh::mating::SeamNotch {
+                        name: m.name.clone(),
+                        index,
+                    })
+            })
+        })
+        .collect()
 }
 
 /// The mating seams of the pieces (each once, in the order of the pieces that list them).

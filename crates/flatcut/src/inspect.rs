@@ -1,5 +1,6 @@
 //! `inspect`: what a design or mesh file contains — per piece its area, bounding box, curvature
-//! ranges, developability, patch, vertex and triangle counts.
+//! ranges (the extremes and the 1st–99th percentiles, which a pole or a spike does not set),
+//! developability, patch, vertex and triangle counts.
 //!
 //! For parametric pieces area and mean Gaussian curvature are integrated on the exact surface
 //! (Gauss–Legendre on a grid of cells), and curvature ranges are sampled at the tessellation's
@@ -16,7 +17,8 @@ use flatcut_surface::{DomainKind, ParamSurface};
 use serde::Serialize;
 
 pub use crate::inspect_figures::{
-    DEVELOPABLE_ANGLE_DEFECT, DEVELOPABLE_SCALED_K, PieceSummary, Range2, Range3, forms_at,
+    DEVELOPABLE_ANGLE_DEFECT, DEVELOPABLE_SCALED_K, PieceSummary, Range2, Range3, forms_at, p1_p99,
+    percentiles_text,
 };
 
 /// Grid of sample cells per patch side for curvature extremes and the developability test.
@@ -92,6 +94,9 @@ pub fn summarise(name: &str, quantity: u32, geom: &PieceGeometry, mesh: &TriMesh
             let worst_defect = max_interior_angle_defect(mesh);
             let (kmin, kmax) = stats.gaussian_range.unwrap_or((0.0, 0.0));
             let (hmin, hmax) = stats.mean_range.unwrap_or((0.0, 0.0));
+            let interior = |v: Vec<Option<f64>>| v.into_iter().flatten().collect::<Vec<f64>>();
+            let ks = interior(flatcut_mesh::stats::gaussian_curvature(mesh));
+            let hs = interior(flatcut_mesh::stats::mean_curvature(mesh));
             let kmean = if stats.area > 0.0 {
                 stats.total_angle_defect / stats.area
             } else {
@@ -107,10 +112,12 @@ pub fn summarise(name: &str, quantity: u32, geom: &PieceGeometry, mesh: &TriMesh
                     min: kmin,
                     max: kmax,
                     mean: kmean,
+                    p1_p99: p1_p99(&ks),
                 },
                 mean_curvature: Range2 {
                     min: hmin,
                     max: hmax,
+                    p1_p99: p1_p99(&hs),
                 },
                 developable: worst_defect < DEVELOPABLE_ANGLE_DEFECT,
                 developability_measure: worst_defect,
@@ -131,6 +138,7 @@ pub fn summarise(name: &str, quantity: u32, geom: &PieceGeometry, mesh: &TriMesh
             );
             let mut worst_scaled: f64 = 0.0;
             let mut bbox = Aabb3::EMPTY;
+            let (mut ks, mut hs) = (Vec::new(), Vec::new());
             for p in patches {
                 let (a, k) = integrate_area_and_curvature(p.as_ref());
                 area += a;
@@ -145,6 +153,8 @@ pub fn summarise(name: &str, quantity: u32, geom: &PieceGeometry, mesh: &TriMesh
                         kmax = kmax.max(k);
                         hmin = hmin.min(h);
                         hmax = hmax.max(h);
+                        ks.push(k);
+                        hs.push(h);
                     }
                 });
             }
@@ -161,10 +171,12 @@ pub fn summarise(name: &str, quantity: u32, geom: &PieceGeometry, mesh: &TriMesh
                     min: fin(kmin),
                     max: fin(kmax),
                     mean: if area > 0.0 { total_k / area } else { 0.0 },
+                    p1_p99: p1_p99(&ks),
                 },
                 mean_curvature: Range2 {
                     min: fin(hmin),
                     max: fin(hmax),
+                    p1_p99: p1_p99(&hs),
                 },
                 developable: worst_scaled < DEVELOPABLE_SCALED_K,
                 developability_measure: worst_scaled,
@@ -285,13 +297,18 @@ impl std::fmt::Display for InspectReport {
             )?;
             writeln!(
                 f,
-                "  Gaussian K        {:.4e} .. {:.4e} 1/mm² (area mean {:.4e})",
-                p.gaussian_curvature.min, p.gaussian_curvature.max, p.gaussian_curvature.mean
+                "  Gaussian K        {:.4e} .. {:.4e} 1/mm²{} (area mean {:.4e})",
+                p.gaussian_curvature.min,
+                p.gaussian_curvature.max,
+                percentiles_text(p.gaussian_curvature.p1_p99),
+                p.gaussian_curvature.mean
             )?;
             writeln!(
                 f,
-                "  mean H            {:.4e} .. {:.4e} 1/mm",
-                p.mean_curvature.min, p.mean_curvature.max
+                "  mean H            {:.4e} .. {:.4e} 1/mm{}",
+                p.mean_curvature.min,
+                p.mean_curvature.max,
+                percentiles_text(p.mean_curvature.p1_p99)
             )?;
             writeln!(
                 f,
@@ -373,6 +390,44 @@ mod tests {
             .unwrap()
             .gaussian();
         assert!(((near - k) / k).abs() < 1e-2, "{near} vs {k}");
+    }
+
+    #[test]
+    fn one_spike_sets_the_extremes_but_not_the_percentiles_of_a_plane() {
+        // A 40 × 40 grid of the plane z = 0 with one vertex lifted by 5 mm: the spike and its
+        // six neighbours are curved, the other 1,514 interior vertices are flat (K = H = 0).
+        let n = 40;
+        let mut positions = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let z = if (i, j) == (20, 20) { 5.0 } else { 0.0 };
+                positions.push(DVec3::new(i as f64, j as f64, z));
+            }
+        }
+        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        let mut triangles = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let mesh = TriMesh::new(positions, triangles);
+        let sum = summarise("spike", 1, &PieceGeometry::Mesh(mesh.clone()), &mesh);
+        let (k, h) = (&sum.gaussian_curvature, &sum.mean_curvature);
+        assert!(k.max > 0.1 && k.min < -0.01, "{k:?}");
+        assert!(h.max.abs().max(h.min.abs()) > 0.1, "{h:?}");
+        // Flat up to the rounding of the angle sums (2π − Σ angles ~ 1e-15).
+        for [lo, hi] in [k.p1_p99.unwrap(), h.p1_p99.unwrap()] {
+            assert!(lo.abs() < 1e-12 && hi.abs() < 1e-12, "{lo} {hi}");
+        }
+        let text = InspectReport {
+            source: "spike".into(),
+            pieces: vec![sum],
+            step: None,
+        }
+        .to_string();
+        assert!(text.contains("1/mm² (1st–99th percentile "), "{text}");
     }
 
     #[test]

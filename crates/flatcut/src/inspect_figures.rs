@@ -28,6 +28,11 @@ pub struct Range3 {
     pub min: f64,
     pub max: f64,
     pub mean: f64,
+    /// The 1st and 99th percentiles of the samples ([`p1_p99`]): the range a few outlying
+    /// samples (a pole, a spike in a scanned mesh) do not set. Absent where the samples are not
+    /// kept (a STEP model's faces).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub p1_p99: Option<[f64; 2]>,
 }
 
 /// A range.
@@ -35,6 +40,32 @@ pub struct Range3 {
 pub struct Range2 {
     pub min: f64,
     pub max: f64,
+    /// The 1st and 99th percentiles of the samples, as in [`Range3::p1_p99`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub p1_p99: Option<[f64; 2]>,
+}
+
+/// The 1st and 99th percentiles of `samples` (non-finite ones left out), interpolated linearly
+/// between the order statistics at rank p·(n − 1) (numpy's default `percentile`); `None`
+/// without a finite sample.
+pub fn p1_p99(samples: &[f64]) -> Option<[f64; 2]> {
+    let mut v: Vec<f64> = samples.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let at = |p: f64| {
+        let r = p * (v.len() - 1) as f64;
+        let (lo, hi) = (r.floor() as usize, r.ceil() as usize);
+        v[lo] + (r - lo as f64) * (v[hi] - v[lo])
+    };
+    Some([at(0.01), at(0.99)])
+}
+
+/// ` (1st–99th percentile a .. b)` for the text report, empty without percentiles.
+pub fn percentiles_text(p: Option<[f64; 2]>) -> String {
+    p.map(|[a, b]| format!(" (1st–99th percentile {a:.4e} .. {b:.4e})"))
+        .unwrap_or_default()
 }
 
 /// One piece as `inspect --json` reports it (keys are a stable contract).
@@ -86,5 +117,29 @@ pub fn forms_at(s: &dyn ParamSurface, u: f64, v: f64) -> Option<FundamentalForms
         None
     } else {
         FundamentalForms::from_derivs(&dd)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percentiles_interpolate_between_order_statistics_as_numpy_does() {
+        // numpy.percentile(range(101), [1, 99]) == [1, 99]; of range(11): [0.1, 9.9].
+        let hundred: Vec<f64> = (0..=100).rev().map(f64::from).collect();
+        assert_eq!(p1_p99(&hundred), Some([1.0, 99.0]));
+        let ten: Vec<f64> = (0..=10).map(f64::from).collect();
+        let [a, b] = p1_p99(&ten).unwrap();
+        assert!(
+            (a - 0.1).abs() < 1e-12 && (b - 9.9).abs() < 1e-12,
+            "{a} {b}"
+        );
+        // One wild sample among 1000 moves the maximum, not the 99th percentile.
+        let mut spiky = vec![1.0; 999];
+        spiky.push(1e9);
+        assert_eq!(p1_p99(&spiky), Some([1.0, 1.0]));
+        assert_eq!(p1_p99(&[f64::NAN]), None);
+        assert_eq!(p1_p99(&[2.0, f64::INFINITY]), Some([2.0, 2.0]));
     }
 }

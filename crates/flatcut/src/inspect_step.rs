@@ -14,7 +14,9 @@ use flatcut_step::{Model, Tessellation, face_area};
 use flatcut_surface::ParamSurface;
 use serde::Serialize;
 
-use crate::inspect_figures::{DEVELOPABLE_SCALED_K, PieceSummary, Range2, Range3, forms_at};
+use crate::inspect_figures::{
+    DEVELOPABLE_SCALED_K, PieceSummary, Range2, Range3, forms_at, p1_p99,
+};
 
 /// The length unit a STEP file states.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -136,6 +138,9 @@ struct Sampled {
     k_integral: f64,
     area: f64,
     worst_scaled_k: f64,
+    /// Every sample's Gaussian and mean curvature, for the robust ranges.
+    ks: Vec<f64>,
+    hs: Vec<f64>,
 }
 
 impl Sampled {
@@ -147,6 +152,8 @@ impl Sampled {
             k_integral: 0.0,
             area: 0.0,
             worst_scaled_k: 0.0,
+            ks: Vec::new(),
+            hs: Vec::new(),
         }
     }
 }
@@ -170,6 +177,8 @@ fn sample(model: &Model, t: &Tessellation) -> Sampled {
         for (k, h) in ks.iter().flatten() {
             s.k = (s.k.0.min(*k), s.k.1.max(*k));
             s.h = (s.h.0.min(*h), s.h.1.max(*h));
+            s.ks.push(*k);
+            s.hs.push(*h);
             if !g.surface.is_ruled_developable() {
                 s.worst_scaled_k = s.worst_scaled_k.max(k.abs() * diag * diag);
             }
@@ -223,6 +232,7 @@ pub fn summarise_model(model: &Model, tol: &Tolerances) -> StepSummary {
             out.gaussian_curvature = Some(Range2 {
                 min: s.k.0,
                 max: s.k.1,
+                p1_p99: p1_p99(&s.ks),
             });
             out.developable = Some(s.worst_scaled_k < DEVELOPABLE_SCALED_K);
             Ok(())
@@ -321,10 +331,12 @@ pub fn summarise_piece(
             } else {
                 0.0
             },
+            p1_p99: p1_p99(&s.ks),
         },
         mean_curvature: Range2 {
             min: s.h.0,
             max: s.h.1,
+            p1_p99: p1_p99(&s.hs),
         },
         developable: s.worst_scaled_k < DEVELOPABLE_SCALED_K,
         developability_measure: s.worst_scaled_k,

@@ -53,6 +53,7 @@ pub mod inspect_figures;
 pub mod inspect_step;
 pub mod material;
 pub mod nesting;
+pub mod notch_points;
 pub mod outline_edges;
 pub mod piece_build;
 pub mod pieces;

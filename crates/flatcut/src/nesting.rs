@@ -1,5 +1,7 @@
 //! Nesting drawings: pattern pieces as rigid groups placed on sheets, a roll or hides, each
-//! placed copy a drawing of its own.
+//! placed copy a drawing of its own. A copy's strokes are named `<id>#<n>` (the n-th placed);
+//! the two sides of a mirrored pair `<id>#<n>L` (as drawn) and `<id>#<n>R` (its mirror image),
+//! n counting each side's copies, and the piece's name says its side.
 
 use flatcut_geom::DVec2;
 use flatcut_nest::{
@@ -140,7 +142,20 @@ fn place_groups(groups: &[NestGroup], result: NestResult, stock: Option<Stock>) 
     for p in &result.placed {
         counters[p.item] += 1;
         let g = &groups[p.item];
-        let d = place(&g.drawing, &p.placement, counters[p.item], p.item as u32);
+        let copy = match g.mirrored_pair {
+            true => CopyName::Side {
+                n: p.copy + 1,
+                side: PairSide::of(p.placement.mirror),
+            },
+            false => CopyName::Plain,
+        };
+        let d = place(
+            &g.drawing,
+            &p.placement,
+            counters[p.item],
+            p.item as u32,
+            copy,
+        );
         if let Some(sheet) = sheets.get_mut(p.sheet) {
             sheet.strokes.extend(d.strokes);
             sheet.pieces.extend(d.pieces);
@@ -175,20 +190,57 @@ pub fn nest_groups_on_hides(
     Ok(place_groups(groups, result, None))
 }
 
-fn place(d: &Drawing, pl: &Placement, instance: u32, item: u32) -> Drawing {
+/// The side of a mirrored pair a placed copy is: as drawn (left) or its mirror image (right).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PairSide {
+    L,
+    R,
+}
+
+impl PairSide {
+    /// The side of a copy placed mirrored (`true`) or as drawn.
+    pub fn of(mirrored: bool) -> Self {
+        if mirrored { PairSide::R } else { PairSide::L }
+    }
+
+    /// `"L"` or `"R"`.
+    pub fn letter(self) -> &'static str {
+        match self {
+            PairSide::L => "L",
+            PairSide::R => "R",
+        }
+    }
+}
+
+/// How a placed copy is named: by its place in the order of placement, or as the n-th copy of
+/// its side of a mirrored pair.
+#[derive(Clone, Copy, Debug)]
+enum CopyName {
+    Plain,
+    Side { n: usize, side: PairSide },
+}
+
+fn place(d: &Drawing, pl: &Placement, instance: u32, item: u32, copy: CopyName) -> Drawing {
     let mut out = d.clone();
     out.apply_placement(pl);
+    let suffix = match copy {
+        CopyName::Plain => instance.to_string(),
+        CopyName::Side { n, side } => format!("{n}{}", side.letter()),
+    };
     for s in &mut out.strokes {
         // Unique piece numbers per placed instance so the G-code writer keeps holes before their
         // outer contour per instance.
         s.piece = Some(item * 10_000 + instance);
-        s.id = format!("{}#{}", s.id, instance);
+        s.id = format!("{}#{suffix}", s.id);
     }
     out.pieces.truncate(1);
     for info in &mut out.pieces {
         info.piece = item * 10_000 + instance;
         // each placed copy is one piece cut (its drawn label still says how many a set takes)
         info.label.quantity = 1;
+        if let CopyName::Side { side, .. } = copy {
+            info.label.name = format!("{} {}", info.label.name, side.letter());
+        }
     }
     out
 }

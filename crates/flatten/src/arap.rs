@@ -13,6 +13,7 @@
 //! relative energy decrease and the iteration cap); each iteration emits a `tracing` debug event
 //! (target `flatcut_flatten`, fields `method`, `iteration`, `energy`) for progress display.
 
+use crate::internal::InternalError;
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{
     Error, Executor, IterState, KV, Problem, Solver, State, TerminationReason, TerminationStatus,
@@ -50,9 +51,9 @@ impl ArapProblem {
         let mut rest_inv = Vec::with_capacity(mesh.triangles.len());
         for t in 0..mesh.triangles.len() {
             let p = mesh.corners(t);
-            let (loc, _, _) = local_frame(p[0], p[1], p[2]).ok_or_else(|| {
-                FlattenError::Internal(format!("triangle {t} is degenerate after the disk check"))
-            })?;
+            let (loc, _, _) = local_frame(p[0], p[1], p[2]).ok_or(FlattenError::Internal(
+                InternalError::DegenerateTriangle { triangle: t },
+            ))?;
             rest.push(loc);
             rest_inv.push(DMat2::from_cols(loc[1] - loc[0], loc[2] - loc[0]).inverse());
         }
@@ -152,7 +153,7 @@ impl Solver<ArapProblem, ArapState> for ArapSolver {
         let x = state
             .param
             .as_deref()
-            .ok_or_else(|| FlattenError::Internal("arap: no start map".into()))?;
+            .ok_or(FlattenError::Internal(InternalError::ArapNoStartMap))?;
         let e = p.energy(x);
         Ok((state.cost(e), None))
     }
@@ -165,7 +166,7 @@ impl Solver<ArapProblem, ArapState> for ArapSolver {
         let p = problem_ref(problem)?;
         let uv = state
             .take_param()
-            .ok_or_else(|| FlattenError::Internal("arap: no current map".into()))?;
+            .ok_or(FlattenError::Internal(InternalError::ArapNoCurrentMap))?;
         let n = uv.len() / 2;
         let rots = p.rotations(&uv);
         let [bx, by] = p.rhs(n, &rots);
@@ -222,7 +223,7 @@ fn problem_ref(problem: &Problem<ArapProblem>) -> Result<&ArapProblem, FlattenEr
     problem
         .problem
         .as_ref()
-        .ok_or_else(|| FlattenError::Internal("arap: the problem was moved out".into()))
+        .ok_or(FlattenError::Internal(InternalError::ArapProblemMoved))
 }
 
 /// Emits one `tracing` debug event per iteration (progress for the command line).
@@ -330,12 +331,10 @@ pub fn arap(
     let energy = state.get_best_cost();
     let x = state
         .take_best_param()
-        .ok_or_else(|| FlattenError::Internal("arap: no result".into()))?;
+        .ok_or(FlattenError::Internal(InternalError::ArapNoResult))?;
     let uv: Vec<DVec2> = (0..n).map(|v| DVec2::new(x[2 * v], x[2 * v + 1])).collect();
     if count_flips(&mesh.triangles, &uv) > 0 {
-        return Err(FlattenError::Internal(
-            "arap: a flipped triangle survived the flip-free line search".into(),
-        ));
+        return Err(FlattenError::Internal(InternalError::ArapFlipSurvived));
     }
     if res.solver.shortened_steps > 0 {
         warnings.push(format!(

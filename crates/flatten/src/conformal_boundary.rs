@@ -17,6 +17,7 @@
 //! boundary may self-overlap on strongly curved pieces (Duncan's caveat); flips are reported as
 //! warnings, not hidden.
 
+use crate::internal::InternalError;
 use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
@@ -78,10 +79,9 @@ pub fn conformal_map(
     closing: Closing,
 ) -> Result<Vec<DVec2>, FlattenError> {
     let n = mesh.positions.len();
-    let lp = topo
-        .boundary_loops
-        .first()
-        .ok_or_else(|| FlattenError::Internal("conformal-boundary: no boundary loop".into()))?;
+    let lp = topo.boundary_loops.first().ok_or(FlattenError::Internal(
+        InternalError::ConformalBoundaryNoLoop,
+    ))?;
     let sums = angle_sums(mesh, &corner_angles(mesh));
     let w = half_cotans(mesh);
     // (L u) at every vertex.

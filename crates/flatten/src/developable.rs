@@ -6,6 +6,7 @@
 //! is path-independent and isometric: every edge keeps its length up to round-off that grows
 //! with the breadth-first depth (measured ≤ 1e-12 relative on the test cylinders and cones).
 
+use crate::internal::InternalError;
 use std::collections::VecDeque;
 use std::f64::consts::TAU;
 
@@ -123,11 +124,9 @@ fn unfold(mesh: &TriMesh, topo: &Topology) -> Result<Vec<DVec2>, FlattenError> {
     let mut uv = vec![DVec2::ZERO; mesh.positions.len()];
     let tri = mesh.triangles[start];
     let p = mesh.corners(start);
-    let (loc, _, _) = local_frame(p[0], p[1], p[2]).ok_or_else(|| {
-        FlattenError::Internal(format!(
-            "triangle {start} is degenerate after the disk check"
-        ))
-    })?;
+    let (loc, _, _) = local_frame(p[0], p[1], p[2]).ok_or(FlattenError::Internal(
+        InternalError::DegenerateTriangle { triangle: start },
+    ))?;
     for k in 0..3 {
         uv[tri[k] as usize] = loc[k];
         placed[tri[k] as usize] = true;
@@ -159,9 +158,9 @@ fn place(
     let tri = mesh.triangles[t];
     let Some(k) = (0..3).find(|&k| placed[tri[k] as usize] && placed[tri[(k + 1) % 3] as usize])
     else {
-        return Err(FlattenError::Internal(format!(
-            "developable: triangle {t} reached without a placed edge"
-        )));
+        return Err(FlattenError::Internal(InternalError::UnfoldWithoutEdge {
+            triangle: t,
+        }));
     };
     let (a, b, c) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
     if placed[c as usize] {
@@ -169,14 +168,15 @@ fn place(
     }
     let pa = mesh.positions[a as usize];
     let (loc, _, _) = local_frame(pa, mesh.positions[b as usize], mesh.positions[c as usize])
-        .ok_or_else(|| {
-            FlattenError::Internal(format!("triangle {t} is degenerate after the disk check"))
-        })?;
+        .ok_or(FlattenError::Internal(InternalError::DegenerateTriangle {
+            triangle: t,
+        }))?;
     let e = (uv[b as usize] - uv[a as usize]).normalize_or_zero();
     if e == DVec2::ZERO {
-        return Err(FlattenError::Internal(format!(
-            "developable: edge {a}-{b} collapsed while unfolding"
-        )));
+        return Err(FlattenError::Internal(InternalError::UnfoldEdgeCollapsed {
+            a,
+            b,
+        }));
     }
     uv[c as usize] = uv[a as usize] + e * loc[2].x + e.perp() * loc[2].y;
     placed[c as usize] = true;

@@ -21,6 +21,7 @@ pub mod assembly;
 pub mod budget;
 pub mod conformal_boundary;
 pub mod developable;
+pub mod internal;
 pub mod limits;
 pub mod lscm;
 pub mod marks;
@@ -40,6 +41,7 @@ pub mod timings;
 pub mod tutte;
 
 pub use budget::{Budget, StageCount};
+pub use internal::InternalError;
 pub use method::Method;
 pub use params::{
     FlattenError, FlattenHooks, FlattenInfo, FlattenParams, FlattenProgress, Flattening, Pin,

@@ -16,6 +16,7 @@
 //!    ([`BARRIER_WEIGHTS`]). The barrier is infinite on the limits, so the flip-free line search
 //!    never steps across one: every iterate, and the result, is within them.
 
+use crate::internal::InternalError;
 use flatcut_geom::DVec2;
 use flatcut_mesh::{TriMesh, face_distortion};
 
@@ -60,9 +61,9 @@ impl Limits {
             .map_or(f64::INFINITY, |p| 1.0 + p / 100.0);
         let lo = params.max_compress_pct.map_or(0.0, |p| 1.0 - p / 100.0);
         if !(hi >= 1.0 && (0.0..=1.0).contains(&lo)) {
-            return Err(FlattenError::Internal(format!(
-                "material limits must allow the identity (σ ≤ {hi}, σ ≥ {lo})"
-            )));
+            return Err(FlattenError::Internal(
+                InternalError::LimitsExcludeIdentity { hi, lo },
+            ));
         }
         Ok(Some(Limits { hi, lo }))
     }

@@ -12,6 +12,7 @@
 //! planar input exactly at scale). With one user pin the same map is translated onto the pin;
 //! with two or more user pins the pins are hard constraints and fix the scale themselves.
 
+use crate::internal::InternalError;
 use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
@@ -160,7 +161,7 @@ pub fn farthest_boundary_pair(mesh: &TriMesh, topo: &Topology) -> Result<(u32, u
     let lp = topo
         .boundary_loops
         .first()
-        .ok_or_else(|| FlattenError::Internal("lscm: the mesh has no boundary".into()))?;
+        .ok_or(FlattenError::Internal(InternalError::LscmNoBoundary))?;
     let far = |from: u32| {
         let p = mesh.positions[from as usize];
         let mut best = (from, -1.0);
@@ -175,9 +176,7 @@ pub fn farthest_boundary_pair(mesh: &TriMesh, topo: &Topology) -> Result<(u32, u
     let a = far(lp[0]);
     let b = far(a);
     if a == b {
-        return Err(FlattenError::Internal(
-            "lscm: the boundary has a single vertex".into(),
-        ));
+        return Err(FlattenError::Internal(InternalError::LscmSingleVertex));
     }
     Ok((a.min(b), a.max(b)))
 }

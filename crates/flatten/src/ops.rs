@@ -2,6 +2,7 @@
 //! angle defects, and Laplace problems with Dirichlet data (the building block of Tutte,
 //! harmonic extension, the Yamabe solve and the ARAP global step).
 
+use crate::internal::InternalError;
 use flatcut_geom::{DVec2, DVec3};
 use flatcut_mesh::{Topology, TriMesh};
 
@@ -206,9 +207,9 @@ impl QuadraticBuilder {
             self.triplets.add(i, i, d);
         }
         if self.free.is_empty() {
-            return Err(FlattenError::Internal(format!(
-                "{stage}: every unknown is fixed"
-            )));
+            return Err(FlattenError::Internal(InternalError::EveryUnknownFixed {
+                stage,
+            }));
         }
         let k = self.dofs_per_vertex;
         let n_vertices = (self.free_index.len() as u32).div_ceil(k) as usize;

@@ -310,5 +310,5 @@ pub enum FlattenError {
     Anisotropy(String),
     /// A bug in flatcut: please report it.
     #[error("internal error (please report): {0}")]
-    Internal(String),
+    Internal(#[from] crate::internal::InternalError),
 }

@@ -23,6 +23,7 @@
 //! (a Newton direction far less than a map). A matrix that single precision cannot factor, and a
 //! solve whose refinement stalls, fall back to a double-precision factor.
 
+use crate::internal::InternalError;
 use faer::Index;
 use faer::Par;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
@@ -218,11 +219,11 @@ impl SymPattern {
     /// correctness.
     pub fn with_nodes(mut self, node_of: Vec<u32>, n_nodes: usize) -> Result<Self, FlattenError> {
         if node_of.len() != self.n || node_of.iter().any(|&v| v as usize >= n_nodes) {
-            return Err(FlattenError::Internal(format!(
-                "{} node labels (< {n_nodes}) for {} unknowns",
-                node_of.len(),
-                self.n
-            )));
+            return Err(FlattenError::Internal(InternalError::NodeLabels {
+                labels: node_of.len(),
+                nodes: n_nodes,
+                unknowns: self.n,
+            }));
         }
         self.nodes = Some((node_of, n_nodes));
         Ok(self)
@@ -306,16 +307,16 @@ impl SymPattern {
         stage: &'static str,
     ) -> Result<SparseColMat<usize, f64>, FlattenError> {
         if values.len() != self.n_values {
-            return Err(FlattenError::Internal(format!(
-                "{stage}: {} values for a pattern of {} triplets",
-                values.len(),
-                self.n_values
-            )));
+            return Err(FlattenError::Internal(InternalError::TripletCount {
+                stage,
+                got: values.len(),
+                want: self.n_values,
+            }));
         }
         let Some(argsort) = &self.argsort else {
-            return Err(FlattenError::Internal(format!(
-                "{stage}: a compressed-column pattern has no triplet order"
-            )));
+            return Err(FlattenError::Internal(InternalError::NoTripletOrder {
+                stage,
+            }));
         };
         SparseColMat::new_from_argsort(self.symbolic.clone(), argsort, values).map_err(|e| {
             FlattenError::Solver {
@@ -683,15 +684,13 @@ impl SpdSolver {
     /// reads.
     pub fn gather(&self, pattern: &SymPattern, values: &[f64]) -> Result<Vec<f64>, FlattenError> {
         if pattern.argsort.is_some() || values.len() != self.n_values() || pattern.n != self.n {
-            return Err(FlattenError::Internal(format!(
-                "{}: {} values of a {}×{} pattern for a solver of {} values and size {}",
-                self.stage,
-                values.len(),
-                pattern.n,
-                pattern.n,
-                self.n_values(),
-                self.n
-            )));
+            return Err(FlattenError::Internal(InternalError::GatherMismatch {
+                stage: self.stage,
+                values: values.len(),
+                size: pattern.n,
+                solver_values: self.n_values(),
+                solver_size: self.n,
+            }));
         }
         Ok(self.gather_matrix(SparseColMatRef::new(pattern.symbolic.as_ref(), values)))
     }
@@ -728,12 +727,11 @@ impl SpdSolver {
     pub fn factor(&mut self, values: Vec<f64>) -> Result<(), FlattenError> {
         self.factored = false;
         if values.len() != self.n_values() {
-            return Err(FlattenError::Internal(format!(
-                "{}: {} values for a pattern of {} entries",
-                self.stage,
-                values.len(),
-                self.n_values()
-            )));
+            return Err(FlattenError::Internal(InternalError::ValueCount {
+                stage: self.stage,
+                got: values.len(),
+                want: self.n_values(),
+            }));
         }
         self.values = values;
         self.refactor()
@@ -828,10 +826,9 @@ impl SpdSolver {
             });
         }
         let Some(Scratch { mem, .. }) = self.scratch.as_mut() else {
-            return Err(FlattenError::Internal(format!(
-                "{}: no factorisation scratch",
-                self.stage
-            )));
+            return Err(FlattenError::Internal(InternalError::NoScratch {
+                stage: self.stage,
+            }));
         };
         let a = SparseColMatRef::new(self.lower.as_ref(), values);
         llt(&self.symbolic, a, l, self.par, mem).map_err(|reason| FlattenError::Solver {
@@ -858,17 +855,17 @@ impl SpdSolver {
     pub fn solve_many_in_place(&self, rhs: &mut [f64], k: usize) -> Result<(), FlattenError> {
         let n = self.dim();
         if rhs.len() != n * k {
-            return Err(FlattenError::Internal(format!(
-                "{}: right-hand side of length {} for {k} columns of size {n}",
-                self.stage,
-                rhs.len()
-            )));
+            return Err(FlattenError::Internal(InternalError::RhsLength {
+                stage: self.stage,
+                len: rhs.len(),
+                columns: k,
+                size: n,
+            }));
         }
         if !self.factored {
-            return Err(FlattenError::Internal(format!(
-                "{}: solve before a successful factorization",
-                self.stage
-            )));
+            return Err(FlattenError::Internal(InternalError::SolveBeforeFactor {
+                stage: self.stage,
+            }));
         }
         let started = Instant::now();
         let done = self.solve_many_timed(rhs, k);
@@ -892,10 +889,9 @@ impl SpdSolver {
                 self.solve_refined(l, rhs, tol, REFINE_MAX)?
             }
             Factor::None => {
-                return Err(FlattenError::Internal(format!(
-                    "{}: no factor to solve with",
-                    self.stage
-                )));
+                return Err(FlattenError::Internal(InternalError::NoFactor {
+                    stage: self.stage,
+                }));
             }
         }
         for (j, col) in rhs.chunks_exact_mut(n).enumerate() {

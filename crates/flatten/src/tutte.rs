@@ -9,6 +9,7 @@
 //! than L). Uniform weights are used because cotangent weights can be negative and then lose
 //! the guarantee. The map is the flip-free start of the nonlinear methods and ARAP's fallback.
 
+use crate::internal::InternalError;
 use std::f64::consts::TAU;
 
 use flatcut_geom::DVec2;
@@ -26,10 +27,9 @@ pub fn tutte(mesh: &TriMesh, topo: &Topology) -> Result<Vec<DVec2>, FlattenError
     let lp = match topo.boundary_loops.as_slice() {
         [lp] => lp,
         other => {
-            return Err(FlattenError::Internal(format!(
-                "tutte: a disk has one boundary loop, this mesh has {}",
-                other.len()
-            )));
+            return Err(FlattenError::Internal(InternalError::TutteLoops {
+                loops: other.len(),
+            }));
         }
     };
     let boundary = convex_boundary(mesh, lp);

@@ -611,11 +611,11 @@ pub fn html_report(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
         if worst.is_empty() {
             h.push_str("<p>No measurable distortion anywhere.</p>\n");
         } else {
-            h.push_str("<table><tr><th>kind</th><th>worst %</th><th>area mm²</th><th>at 3D (mm)</th><th>at 2D (mm)</th></tr>\n");
+            h.push_str("<table><tr><th>kind</th><th>worst %</th><th>area mm²</th><th>worst at 3D (mm)</th><th>worst at 2D (mm)</th></tr>\n");
             for r in worst {
                 h.push_str(&format!(
                     "<tr><td>{}</td><td>{:.2}</td><td>{:.1}</td><td>({:.1}, {:.1}, {:.1})</td><td>({:.1}, {:.1})</td></tr>\n",
-                    r.kind, r.worst_pct, r.area_mm2, r.centroid_3d[0], r.centroid_3d[1], r.centroid_3d[2], r.centroid_2d[0], r.centroid_2d[1]
+                    r.kind, r.worst_pct, r.area_mm2, r.worst_at_3d[0], r.worst_at_3d[1], r.worst_at_3d[2], r.worst_at_2d[0], r.worst_at_2d[1]
                 ));
             }
             h.push_str("</table>\n");

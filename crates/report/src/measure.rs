@@ -152,8 +152,13 @@ pub struct Region {
     pub area_mm2: f64,
     /// The worst value in the region, percent.
     pub worst_pct: f64,
+    /// The region's area-weighted centroid: off a curved surface (inside a dome, say).
     pub centroid_3d: [f64; 3],
     pub centroid_2d: [f64; 2],
+    /// Where the worst value is: the centroid of the region's worst face, a point on the
+    /// surface (and in the flat map), where a limit's message points to.
+    pub worst_at_3d: [f64; 3],
+    pub worst_at_2d: [f64; 2],
 }
 
 /// What to compute besides the per-face measures.
@@ -570,13 +575,16 @@ fn over_limit(
         let id = regions.len();
         let mut stack = vec![seed];
         label[seed] = id;
-        let (mut count, mut area, mut worst) = (0usize, 0.0, 0.0f64);
+        let (mut count, mut area, mut worst, mut worst_face) = (0usize, 0.0, 0.0f64, seed);
         let (mut c3, mut c2) = (DVec3::ZERO, DVec2::ZERO);
         while let Some(t) = stack.pop() {
             count += 1;
             let a = faces[t].area_3d;
             area += a;
-            worst = worst.max(over(&faces[t]).unwrap_or(0.0));
+            let v = over(&faces[t]).unwrap_or(0.0);
+            if v > worst || (v == worst && t < worst_face) {
+                (worst, worst_face) = (v, t);
+            }
             let [p, q, r] = mesh.corners(t);
             c3 += (p + q + r) / 3.0 * a;
             let tri = mesh.triangles[t];
@@ -598,6 +606,13 @@ fn over_limit(
             worst_pct: worst,
             centroid_3d: (c3 / area).to_array(),
             centroid_2d: (c2 / area).to_array(),
+            worst_at_3d: (mesh.corners(worst_face).iter().sum::<DVec3>() / 3.0).to_array(),
+            worst_at_2d: (mesh.triangles[worst_face]
+                .iter()
+                .map(|&v| flat[v as usize])
+                .sum::<DVec2>()
+                / 3.0)
+                .to_array(),
         });
     }
     regions.sort_by(|a, b| b.worst_pct.total_cmp(&a.worst_pct));

@@ -202,6 +202,56 @@ fn limits_list_the_regions_beyond_them_with_location() {
 }
 
 #[test]
+fn a_region_on_a_curved_piece_is_located_on_its_surface() {
+    // A half-cylinder of radius 50 (the grid's x bent round the y axis), unrolled with a stretch
+    // that grows along the arc: s' = s + k s². Nearly every face is over 1 %; the region's
+    // centroid sits inside the cylinder, far off its surface, while the worst face is the last
+    // column at the far end of the arc (θ = π, x = −R).
+    let (r, n, k) = (50.0, 20, 0.001);
+    let theta = |x: f64| std::f64::consts::PI * x / 100.0;
+    let mut m = grid(n, 100.0);
+    let arc: Vec<f64> = m.positions.iter().map(|p| r * theta(p.x)).collect();
+    let ys: Vec<f64> = m.positions.iter().map(|p| p.y).collect();
+    m.flat = Some(
+        arc.iter()
+            .zip(&ys)
+            .map(|(&s, &y)| DVec2::new(s + k * s * s, y))
+            .collect(),
+    );
+    for p in &mut m.positions {
+        let t = theta(p.x);
+        *p = DVec3::new(r * t.cos(), p.y, r * t.sin());
+    }
+    let opts = ReportOptions::default().with_limit_stretch_pct(Some(1.0));
+    let rep = Report::compute("arc", &m, &opts).unwrap();
+    let reg = &rep.regions[0];
+    let from_axis = |p: [f64; 3]| p[0].hypot(p[2]);
+    assert!(
+        from_axis(reg.centroid_3d) < 0.8 * r,
+        "{:?}",
+        reg.centroid_3d
+    );
+    // The worst face's centroid is on a chord of the circle: between R cos(Δθ/2) and R.
+    let half_step = std::f64::consts::PI / n as f64 / 2.0;
+    let d = from_axis(reg.worst_at_3d);
+    assert!(d > r * half_step.cos() * 0.999 && d <= r, "{d}");
+    assert!(
+        reg.worst_at_3d[0] < -r * (2.0 * half_step).cos(),
+        "{:?}",
+        reg.worst_at_3d
+    );
+    // In the flat map too: the last column, s from 47.5π to 50π mm before the stretch.
+    let s_end = 50.0 * std::f64::consts::PI;
+    let last = s_end * (1.0 - 1.0 / n as f64);
+    assert!(
+        reg.worst_at_2d[0] > last + k * last * last,
+        "{:?}",
+        reg.worst_at_2d
+    );
+    assert!(reg.worst_at_2d[0] < s_end + k * s_end * s_end);
+}
+
+#[test]
 fn hot_spots_show_where_the_distortion_concentrates_without_limits() {
     // x' = x + k x²: the stretch grows to the right; on each column of cells the secant slope
     // is 1 + k (x_i + x_{i+1}), so the last column (x 95..100) is the 1 % worst at 19.5 %.

@@ -425,16 +425,17 @@ pub fn report_limits(flats: &[Flat], seam_tolerance: f64, flips: bool) -> bool {
         for r in &f.report.regions {
             over = true;
             eprintln!(
-                "{}: {} {:.2}% over {:.1} mm² at 3D ({:.1}, {:.1}, {:.1}) / 2D ({:.1}, {:.1})",
+                "{}: {} {:.2}% over {:.1} mm², worst at 3D ({:.1}, {:.1}, {:.1}) / 2D ({:.1}, {:.1}) \
+                 on the surface",
                 f.name,
                 r.kind,
                 r.worst_pct,
                 r.area_mm2,
-                r.centroid_3d[0],
-                r.centroid_3d[1],
-                r.centroid_3d[2],
-                r.centroid_2d[0],
-                r.centroid_2d[1]
+                r.worst_at_3d[0],
+                r.worst_at_3d[1],
+                r.worst_at_3d[2],
+                r.worst_at_2d[0],
+                r.worst_at_2d[1]
             );
         }
     }

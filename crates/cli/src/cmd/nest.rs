@@ -45,7 +45,8 @@ pub struct Args {
     /// `data-flatcut-quantity`, or a DXF's `Quantity:`).
     #[arg(long, default_value_t = 1, value_parser = values::quantity)]
     pub quantity: usize,
-    /// Also nest the mirror image of each piece (left and right shoe).
+    /// Also nest the mirror image of each piece (left and right shoe): the copies as drawn are
+    /// named `<id>#<n>L` and their mirror images `<id>#<n>R`, and their pieces `<name> L` / `R`.
     #[arg(long)]
     pub mirrored_pairs: bool,
     /// The material's grain rule for pieces with a grain line: `fixed` (one way), `0,180`
@@ -297,11 +298,23 @@ fn hide_strokes(h: &Hide) -> Vec<Stroke> {
     out
 }
 
-fn print_json(r: &NestResult, time_s: f64, seed: u64) -> anyhow::Result<()> {
+/// The side of a mirrored pair (`L` as drawn, `R` mirrored) an unplaced copy is, when the
+/// pieces are nested in pairs.
+fn side(pairs: bool, mirrored: bool) -> Option<&'static str> {
+    pairs.then(|| flatcut::nesting::PairSide::of(mirrored).letter())
+}
+
+fn print_json(r: &NestResult, time_s: f64, seed: u64, pairs: bool) -> anyhow::Result<()> {
     let unplaced: Vec<_> = r
         .unplaced
         .iter()
-        .map(|u| serde_json::json!({"name": u.name, "copy": u.copy + 1, "mirrored": u.mirrored, "reason": u.reason}))
+        .map(|u| {
+            let mut j = serde_json::json!({"name": u.name, "copy": u.copy + 1, "mirrored": u.mirrored, "reason": u.reason});
+            if let Some(side) = side(pairs, u.mirrored) {
+                j["side"] = side.into();
+            }
+            j
+        })
         .collect();
     let sheets: Vec<_> = r
         .sheet_use
@@ -432,7 +445,7 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     set.commit()?;
     let r = &layout.result;
     if a.json {
-        print_json(r, time_s, a.seed)?;
+        print_json(r, time_s, a.seed, a.mirrored_pairs)?;
     } else {
         crate::outln!(
             "placed {} of {} pieces",
@@ -466,11 +479,15 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         );
     }
     for u in &r.unplaced {
+        let side = match side(a.mirrored_pairs, u.mirrored) {
+            Some(s) => format!(" {s}"),
+            None if u.mirrored => " (mirrored)".to_string(),
+            None => String::new(),
+        };
         eprintln!(
-            "unplaced: {} copy {}{}: {}",
+            "unplaced: {}{side} copy {}: {}",
             u.name,
             u.copy + 1,
-            if u.mirrored { " (mirrored)" } else { "" },
             u.reason
         );
     }

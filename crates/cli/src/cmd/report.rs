@@ -74,16 +74,14 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
         }
     }
     let mut flats = Vec::new();
+    let mut sources = Vec::new();
     for f in &a.files {
-        for mut flat in
-            common::load_flat(f, &a.flatten, (a.limit_stretch, a.limit_compress), false)?
-        {
-            if a.files.len() > 1 {
-                flat.name = format!("{} ({})", flat.name, f.display());
-            }
+        for flat in common::load_flat(f, &a.flatten, (a.limit_stretch, a.limit_compress), false)? {
             flats.push(flat);
+            sources.push(f.as_path());
         }
     }
+    flatcut::flat::tell_apart(&mut flats, &sources);
     // Flattened meshes of one split surface pair up by their seams' shared coordinates.
     flatcut::flat::pair_coincident(&mut flats);
     if a.measure == Measure::Material

@@ -381,8 +381,8 @@ fn report_stage(
 
 fn region_line(piece: &str, r: &Region) -> String {
     format!(
-        "{piece}: {} {:.2}% over {:.0} mm² near ({:.0}, {:.0}, {:.0})",
-        r.kind, r.worst_pct, r.area_mm2, r.centroid_3d[0], r.centroid_3d[1], r.centroid_3d[2]
+        "{piece}: {} {:.2}% over {:.0} mm², worst at ({:.0}, {:.0}, {:.0}) on the surface",
+        r.kind, r.worst_pct, r.area_mm2, r.worst_at_3d[0], r.worst_at_3d[1], r.worst_at_3d[2]
     )
 }
 

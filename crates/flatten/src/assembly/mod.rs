@@ -17,6 +17,7 @@
 
 pub mod joint;
 
+use crate::internal::InternalError;
 use flatcut_geom::DVec2;
 use flatcut_mesh::TriMesh;
 use flatcut_mesh::mating::{MatingError, MatingSeam};
@@ -218,9 +219,7 @@ fn flatten_group(
         own.push(f.info);
         let r = rest_frames(meshes[p]).map_err(|t| AssemblyError::Piece {
             piece: p,
-            source: FlattenError::Internal(format!(
-                "triangle {t} is degenerate after the disk check"
-            )),
+            source: FlattenError::Internal(InternalError::DegenerateTriangle { triangle: t }),
         })?;
         offset[p] = x.len();
         rest.extend(r.into_iter().map(|mut t| {

@@ -16,6 +16,7 @@ pub mod newton;
 pub mod orthotropic;
 pub mod spd;
 
+use crate::internal::InternalError;
 use std::time::Instant;
 
 use flatcut_geom::DVec2;
@@ -58,9 +59,9 @@ pub fn solve(
                 Method::Minmax => minmax::minmax(mesh, topo, &rest, x0, params, &budget)?,
                 Method::Orthotropic => grain::orthotropic(mesh, &rest, x0, params, &budget)?,
                 m => {
-                    return Err(FlattenError::Internal(format!(
-                        "method {m} is not a nonlinear method"
-                    )));
+                    return Err(FlattenError::Internal(InternalError::NotNonlinear {
+                        method: m,
+                    }));
                 }
             };
             out.info.timings.start += start;
@@ -74,9 +75,8 @@ pub fn solve(
 
 /// The rest frames of a mesh that passed the disk check.
 pub(crate) fn rest_frames(mesh: &TriMesh) -> Result<Vec<RestTri>, FlattenError> {
-    kernel::rest_frames(mesh).map_err(|t| {
-        FlattenError::Internal(format!("triangle {t} is degenerate after the disk check"))
-    })
+    kernel::rest_frames(mesh)
+        .map_err(|t| FlattenError::Internal(InternalError::DegenerateTriangle { triangle: t }))
 }
 
 /// Runs projected Newton on `energy` from `x0` (flat, [`newton::to_flat`]). A cancelled run is
