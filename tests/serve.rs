@@ -633,6 +633,45 @@ fn motions_before(job: &flatcut_grbl::Job, end: usize) -> Vec<(String, [f64; 3])
         .collect()
 }
 
+/// Checks that the simulator's `motions` (the JSON of `GET /api/devices/sim`) since a resume from
+/// job line `from` are the travel to that line's start (at most a lift, a traverse and a plunge),
+/// then the job's motions from that line on, each once, in order.
+fn assert_runs_from(motions: &[Value], job: &flatcut_grbl::Job, from: usize) {
+    let xyz = |v: &Value| -> [f64; 3] { std::array::from_fn(|i| v[i].as_f64().unwrap()) };
+    let mut ran: Vec<(String, [f64; 3], [f64; 3])> = Vec::new();
+    for m in motions {
+        let (t, a, b) = (m["text"].as_str().unwrap(), xyz(&m["from"]), xyz(&m["to"]));
+        if near(a, b) {
+            continue;
+        }
+        // A line stopped part-way and completed later is one motion.
+        match ran.last_mut() {
+            Some(l) if l.0 == t && near(l.2, a) => l.2 = b,
+            _ => ran.push((t.to_string(), a, b)),
+        }
+    }
+    let want: Vec<(String, [f64; 3])> = motions_before(job, job.len())
+        .into_iter()
+        .skip(motions_before(job, from).len())
+        .collect();
+    let line = job.lines[from].source_line;
+    assert!(
+        ran.len() >= want.len() && ran.len() <= want.len() + 3,
+        "{} motions ran from line {line}; the job has {} from it (and a travel of at most 3)",
+        ran.len(),
+        want.len()
+    );
+    let tail = &ran[ran.len() - want.len()..];
+    for (k, (t, to)) in want.iter().enumerate() {
+        assert_eq!(&tail[k].0, t, "motion {k} from line {line}");
+        assert!(
+            near(tail[k].2, *to),
+            "motion {k}: {:?} vs {to:?}",
+            tail[k].2
+        );
+    }
+}
+
 /// The device panel over HTTP on the lampshade: the project's device is the embedded
 /// simulator; a job streams from the run's G-code, a second is refused while it runs; a stop
 /// leaves the tool off. After the simulator was closed (its position lost) a resume asks
@@ -812,10 +851,6 @@ fn serve_streams_jobs_to_the_simulator_and_stops_them_with_the_tool_off() {
 /// G-code's motions from that line on, each once, and the journal ends complete.
 #[test]
 fn serve_resumes_a_job_from_the_line_the_operator_names() {
-    struct Motion {
-        text: String,
-        to: [f64; 3],
-    }
     let dir = lampshade();
     let srv = serve(&dir.path().join("project.toml"));
     let a = srv.addr();
@@ -897,39 +932,173 @@ fn serve_resumes_a_job_from_the_line_the_operator_names() {
     assert_eq!(done["report"]["previously_done"], from);
     assert!(done["in_doubt"].is_null(), "{done}");
     let sim = get(a, "/api/devices/sim").json();
-    let motions = sim["motions"].as_array().unwrap();
-    // What ran: the travel to the line's start, then the job's motions from it, each once.
-    let xyz = |v: &Value| -> [f64; 3] { std::array::from_fn(|i| v[i].as_f64().unwrap()) };
-    let mut ran: Vec<(String, [f64; 3], [f64; 3])> = Vec::new();
-    for m in &motions[before..] {
-        let (t, a, b) = (m["text"].as_str().unwrap(), xyz(&m["from"]), xyz(&m["to"]));
-        if near(a, b) {
-            continue;
-        }
-        // A line stopped part-way and completed later is one motion.
-        match ran.last_mut() {
-            Some(l) if l.0 == t && near(l.2, a) => l.2 = b,
-            _ => ran.push((t.to_string(), a, b)),
-        }
-    }
-    let ran: Vec<Motion> = ran
-        .into_iter()
-        .map(|(text, _, to)| Motion { text, to })
-        .collect();
-    let want: Vec<(String, [f64; 3])> = motions_before(&job, job.len())
-        .into_iter()
-        .skip(motions_before(&job, from).len())
-        .collect();
-    let tail = &ran[ran.len() - want.len()..];
-    for (k, (t, to)) in want.iter().enumerate() {
-        assert_eq!(&tail[k].text, t, "motion {k} from line {line}");
-        assert!(
-            near(tail[k].to, *to),
-            "motion {k}: {:?} vs {to:?}",
-            tail[k].to
-        );
-    }
+    assert_runs_from(&sim["motions"].as_array().unwrap()[before..], &job, from);
     let journal = flatcut_grbl::Journal::read(dir.path().join("job-1.gcode.journal")).unwrap();
     assert!(journal.finished);
+    srv.stop().unwrap();
+}
+
+/// Environment variable naming the project directory of [`serve_child_process`].
+const SERVE_CHILD_ENV: &str = "FLATCUT_SERVE_CHILD_DIR";
+
+/// The workbench's server in a process of its own for
+/// [`serve_names_the_lines_in_doubt_after_a_crash_and_resumes_from_the_operators_line`], which
+/// kills it. It says where it listens on stderr and ends by itself after two minutes. Without
+/// the variable set it is the parent's run and does nothing.
+#[test]
+fn serve_child_process() {
+    let Some(dir) = std::env::var_os(SERVE_CHILD_ENV) else {
+        return;
+    };
+    let srv = serve(&Path::new(&dir).join("project.toml"));
+    eprintln!("serving at {}", srv.addr());
+    std::thread::sleep(Duration::from_secs(120));
+}
+
+/// Kills the child process when dropped (a test that fails leaves no server behind).
+struct Killed(std::process::Child);
+
+impl Drop for Killed {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// A server killed during a job (a power cut: nothing stopped, nothing closed, the simulator
+/// gone with it; here while the job is held with lines queued) leaves a journal whose last
+/// acknowledged lines may or may not have run. On the next server, the resume refuses to guess: the job fails naming those lines in
+/// its `in_doubt` (from the journal's first unconfirmed line, as the page shows them), and
+/// continues from the line the operator names after the origin question, running the G-code's
+/// motions from that line on, each once, to the journal's end.
+#[test]
+fn serve_names_the_lines_in_doubt_after_a_crash_and_resumes_from_the_operators_line() {
+    let dir = lampshade();
+    let mut child =
+        crate::stream::child_test("serve::serve_child_process", SERVE_CHILD_ENV, dir.path());
+    let mut child = Killed(
+        child
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap(),
+    );
+    let stderr = BufReader::new(child.0.stderr.take().unwrap());
+    let a: SocketAddr = stderr
+        .lines()
+        .map_while(Result::ok)
+        .find_map(|l| {
+            l.strip_prefix("serving at ")
+                .map(|s| s.trim().parse().unwrap())
+        })
+        .expect("the server says where it listens");
+    let c = send(
+        a,
+        "POST",
+        "/api/devices/connect",
+        &json!({"device": "simulator", "speed": 200, "baud": 1_000_000}),
+    );
+    assert_eq!(c.status, 200, "{}", String::from_utf8_lossy(&c.body));
+    let gcode = get(a, "/api/job.gcode").body;
+    let job = flatcut_grbl::Job::parse(std::str::from_utf8(&gcode).unwrap()).unwrap();
+    assert_eq!(
+        send(a, "POST", "/api/jobs", &json!({"sheet": 1})).status,
+        201
+    );
+    job_until(a, 1, "reached the outlines", |j| lines_done(j) > CUT_LAYER);
+    // The power fails while the job is held with lines queued (acknowledged, not run); a hold
+    // where the planner had drained (a dwell) is let go and tried again further on.
+    let mut queued = false;
+    for _ in 0..20 {
+        assert_eq!(send(a, "POST", "/api/jobs/1/hold", &json!({})).status, 200);
+        let held = job_until(a, 1, "held", |j| {
+            j["state"] == "held" && j["progress"]["machine_state"] == "Hold:0"
+        });
+        if held["progress"]["lines_acked"].as_u64() > held["progress"]["lines_done"].as_u64() {
+            queued = true;
+            break;
+        }
+        assert_eq!(
+            send(a, "POST", "/api/jobs/1/resume", &json!({})).status,
+            200
+        );
+        let on = lines_done(&held) + 30;
+        job_until(a, 1, "went on", |j| lines_done(j) > on);
+    }
+    assert!(queued, "every hold found the planner drained");
+    drop(child);
+    let journal_path = dir.path().join("job-1.gcode.journal");
+    let journal = flatcut_grbl::Journal::read(&journal_path).unwrap();
+    assert!(!journal.finished && journal.stop.is_none());
+    let first = *journal
+        .unconfirmed
+        .first()
+        .expect("lines acknowledged and not known to have run");
+    let srv = serve(&dir.path().join("project.toml"));
+    let a = srv.addr();
+    let c = send(
+        a,
+        "POST",
+        "/api/devices/connect",
+        &json!({"device": "simulator", "speed": 200, "baud": 1_000_000}),
+    );
+    assert_eq!(c.status, 200, "{}", String::from_utf8_lossy(&c.body));
+    let r = send(a, "POST", "/api/jobs", &json!({"sheet": 1, "resume": true}));
+    assert_eq!(r.status, 201, "{}", String::from_utf8_lossy(&r.body));
+    let refused = job_until(a, 1, "ended", |j| {
+        ["done", "failed", "stopped"].contains(&j["state"].as_str().unwrap())
+    });
+    assert_eq!(refused["state"], "failed", "{refused}");
+    assert!(
+        refused["message"]
+            .as_str()
+            .unwrap()
+            .contains("cannot tell where to resume"),
+        "{refused}"
+    );
+    let doubt = &refused["in_doubt"];
+    let (from, to) = (
+        doubt["from"].as_u64().unwrap() as usize,
+        doubt["to"].as_u64().unwrap() as usize,
+    );
+    assert_eq!(from, job.lines[first].source_line, "{doubt}");
+    let last = *journal.unconfirmed.last().unwrap();
+    assert!(to >= job.lines[last].source_line, "{doubt}");
+    assert!(
+        doubt["reason"].as_str().unwrap().contains("restarted"),
+        "{doubt}"
+    );
+    // Nothing ran: the refusal moved nothing.
+    let before = get(a, "/api/devices/sim").json()["motions"]
+        .as_array()
+        .unwrap()
+        .len();
+    assert_eq!(before, 0);
+    // The operator looks at the work and continues from the first line in doubt (what may
+    // have been cut is cut again; nothing is skipped).
+    let r = send(
+        a,
+        "POST",
+        "/api/jobs",
+        &json!({"sheet": 1, "resume_from": from}),
+    );
+    assert_eq!(r.status, 201, "{}", String::from_utf8_lossy(&r.body));
+    let asked = job_until(a, 2, "asked", |j| !j["question"].is_null());
+    let r = send(
+        a,
+        "POST",
+        "/api/jobs/2/answer",
+        &json!({"question": asked["question"]["id"], "yes": true}),
+    );
+    assert_eq!(r.status, 200, "{}", String::from_utf8_lossy(&r.body));
+    let done = job_until(a, 2, "ended", |j| {
+        ["done", "failed", "stopped"].contains(&j["state"].as_str().unwrap())
+    });
+    assert_eq!(done["state"], "done", "{done}");
+    assert_eq!(done["report"]["previously_done"], first);
+    assert!(done["in_doubt"].is_null(), "{done}");
+    let sim = get(a, "/api/devices/sim").json();
+    assert_runs_from(sim["motions"].as_array().unwrap(), &job, first);
+    assert!(flatcut_grbl::Journal::read(&journal_path).unwrap().finished);
     srv.stop().unwrap();
 }

@@ -3,8 +3,10 @@
 (cadquery-ocp: STEPControl_Reader + BRepMesh_IncrementalMesh, single-threaded) in one run, and
 measure both meshes with the same instrument.
 
-    python3 tools/step/bench.py [--chord 0.1] [--runs 5] MODEL.step…
+    python3 tools/step/bench.py [--chord 0.1] [--angle 0.5] [--runs 5] MODEL.step…
     (default models: the lofted hull of the tests and a 198-face plate written on the fly)
+    python3 tools/step/bench.py --corpus [--out FILE] [--chord 0.1] [--angle 0.5] [--runs 5]
+    (every file of crates/step/tests/corpus, one table, written to FILE too)
 
 Accuracy, per mesh, against OCCT's exact faces:
 - mesh → surface: the largest distance from the centroid and edge midpoints of every triangle to
@@ -12,6 +14,10 @@ Accuracy, per mesh, against OCCT's exact faces:
   GeomAPI_ProjectPointOnSurf can stop at a local one on the lofted hull);
 - surface → mesh: the largest distance from points sampled on every face (inside its trims) to
   that face's triangles.
+With `--corpus` the accuracy measures are skipped (they take minutes on the larger files); the
+table has, per file: the system that wrote it (manifest.json), faces, flatcut's area (its faces'
+trimmed domains) against OCCT's (BRepGProp), repairs, open edges of the welded closed shells,
+both times and their ratio, and both triangle counts.
 Each model is also run by flatcut at a chordal tolerance equal to the worst deviation OCCT's mesh
 showed (`flatcut @ OCCT accuracy`): the time at equal accuracy. Prints one table; needs the
 flatcut example built (`cargo build --release -p flatcut-step
@@ -36,6 +42,7 @@ from OCP.BRepMesh import BRepMesh_IncrementalMesh
 from OCP.BRepTools import BRepTools
 from OCP.GProp import GProp_GProps
 from OCP.IFSelect import IFSelect_RetDone
+from OCP.Interface import Interface_Static
 from OCP.STEPControl import STEPControl_Reader
 from OCP.ShapeAnalysis import ShapeAnalysis_Surface
 from OCP.TopAbs import TopAbs_IN
@@ -44,6 +51,7 @@ from OCP.gp import gp_Pnt, gp_Pnt2d
 
 HERE = pathlib.Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
+CORPUS = ROOT / "crates/step/tests/corpus"
 sys.path.insert(0, str(HERE))
 import make_models  # noqa: E402
 
@@ -52,19 +60,20 @@ SAMPLES = 12
 
 def occt_read(path):
     r = STEPControl_Reader()
+    Interface_Static.SetCVal_s("xstep.cascade.unit", "MM")
     if r.ReadFile(str(path)) != IFSelect_RetDone:
         raise SystemExit(f"OCCT cannot read {path}")
     r.TransferRoots()
     return r.OneShape()
 
 
-def occt_time(path, chord, runs):
+def occt_time(path, chord, runs, angle):
     times = []
     shape = None
     for _ in range(runs):
         t0 = time.perf_counter()
         shape = occt_read(path)
-        BRepMesh_IncrementalMesh(shape, chord, False, 0.5, False)
+        BRepMesh_IncrementalMesh(shape, chord, False, angle, False)
         times.append(time.perf_counter() - t0)
     return statistics.median(times), shape
 
@@ -187,30 +196,100 @@ def accuracy(shape_faces, meshes):
     return worst_ms, worst_sm
 
 
+def occt_area(faces):
+    """The area of the distinct faces (a file listing one shell in several representations
+    transfers it more than once), as make_corpus.py's reference."""
+    total = 0.0
+    for f in faces:
+        props = GProp_GProps()
+        BRepGProp.SurfaceProperties_s(f, props)
+        total += props.Mass()
+    return total
+
+
+def build_example():
+    subprocess.run(["cargo", "build", "--release", "-q", "-p", "flatcut-step", "--example", "step_bench"],
+                   cwd=ROOT, check=True)
+    return ROOT / "target/release/examples/step_bench"
+
+
+def corpus(args):
+    """One run over every corpus file: the table of the issue's closing note."""
+    manifest = json.loads((CORPUS / "manifest.json").read_text())["files"]
+    exe = build_example()
+    rows = []
+    for e in manifest:
+        path = CORPUS / e["file"]
+        occt_s, shape = occt_time(path, args.chord, args.runs, args.angle)
+        faces = make_models.faces_of(shape)
+        n_occt = sum(len(t) for _, t in (occt_mesh(f) for f in faces))
+        area = occt_area(faces)
+        out = subprocess.run([str(exe), "--chord", str(args.chord), "--angle", str(args.angle),
+                              "--runs", str(args.runs), str(path)],
+                             check=True, capture_output=True, text=True).stdout.splitlines()[-1]
+        run = json.loads(out)
+        rows.append((e, len(faces), area, n_occt, occt_s, run))
+        print(f"{e['file']}: {run.get('seconds', run.get('error'))} s, OCCT {occt_s:.4f} s",
+              file=sys.stderr, flush=True)
+    lines = [f"Read + tessellate at deflection {args.chord} mm and {args.angle} rad, median of {args.runs} runs, one thread, "
+             "flatcut (step_bench) against OCCT (STEPControl_Reader + BRepMesh_IncrementalMesh), "
+             "one run of tools/step/bench.py --corpus.",
+             "",
+             "| file | system | faces | area error | repairs | open edges | flatcut s | OCCT s "
+             "| time ratio | triangles | OCCT triangles |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    ratios = []
+    for e, nf, area, n_occt, occt_s, run in rows:
+        if "error" in run:
+            lines.append(f"| {e['file']} | {e['system']} | {nf} | refused: {run['error']} | | | | "
+                         f"{occt_s:.4f} | | | {n_occt} |")
+            continue
+        err = (run["area_mm2"] - area) / area if area else float("nan")
+        ratio = run["seconds"] / occt_s
+        ratios.append(ratio)
+        lines.append(f"| {e['file']} | {e['system']} | {run['faces']} | {err:+.2e} | {run['repairs']} "
+                     f"| {run['open_edges']} | {run['seconds']:.4f} | {occt_s:.4f} | {ratio:.2f} "
+                     f"| {run['triangles']} | {n_occt} |")
+    if ratios:
+        lines += ["", f"{len(ratios)} files read; time ratio (flatcut / OCCT): median "
+                  f"{statistics.median(ratios):.2f}, worst {max(ratios):.2f}, "
+                  f"{sum(r > 1 for r in ratios)} files slower than OCCT."]
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if args.out:
+        pathlib.Path(args.out).write_text(text)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--chord", type=float, default=0.1)
     ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--angle", type=float, default=0.5,
+                    help="angular deflection (rad) of both meshers: BRepMesh's, and flatcut's "
+                         "largest normal turn across a triangle")
+    ap.add_argument("--corpus", action="store_true")
+    ap.add_argument("--out")
     ap.add_argument("models", nargs="*")
     args = ap.parse_args()
+    if args.corpus:
+        return corpus(args)
     tmp = pathlib.Path(tempfile.mkdtemp(prefix="flatcut-step-bench-"))
     models = [pathlib.Path(m) for m in args.models]
     if not models:
         plate = tmp / "plate198.step"
         make_models.write_step(make_models.many_faces(8), plate)
         models = [ROOT / "crates/step/tests/data/hull.step", plate]
-    subprocess.run(["cargo", "build", "--release", "-q", "-p", "flatcut-step", "--example", "step_bench"],
-                   cwd=ROOT, check=True)
-    exe = ROOT / "target/release/examples/step_bench"
+    exe = build_example()
     def ours(model, chord):
         out = subprocess.run(
-            [str(exe), "--chord", str(chord), "--runs", str(args.runs), "--obj", str(tmp), str(model)],
+            [str(exe), "--chord", str(chord), "--angle", str(args.angle), "--runs", str(args.runs),
+             "--obj", str(tmp), str(model)],
             check=True, capture_output=True, text=True).stdout.splitlines()[-1]
         return json.loads(out), read_obj(tmp / f"{model.stem}.obj")
 
     rows = []
     for m in models:
-        occt_s, shape = occt_time(m, args.chord, args.runs)
+        occt_s, shape = occt_time(m, args.chord, args.runs, args.angle)
         faces = make_models.faces_of(shape)
         occt_meshes = [occt_mesh(f) for f in faces]
         acc_occt = accuracy(faces, occt_meshes)
@@ -220,7 +299,7 @@ def main():
             run, meshes = ours(m, chord)
             rows.append((m.name, "flatcut", chord, len(faces), run["seconds"], occt_s,
                          run["triangles"], accuracy(faces, meshes)))
-    print(f"\ndeflection {args.chord} mm for OCCT; median of {args.runs} runs, one thread")
+    print(f"\ndeflection {args.chord} mm for OCCT, angle {args.angle} rad for both; median of {args.runs} runs, one thread")
     print("| model | mesher | chord mm | faces | seconds | ratio to OCCT | triangles "
           "| mesh→surface mm | surface→mesh mm |")
     print("|---|---|---|---|---|---|---|---|---|")

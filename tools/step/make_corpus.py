@@ -4,6 +4,7 @@ STEP file there, the figures OpenCASCADE gives for it: the oracle of crates/step
 
     python3 tools/step/make_corpus.py models [DIR]     writes occt_*.step (the issue's cases)
     python3 tools/step/make_corpus.py reference [DIR]  writes DIR/reference.json
+    python3 tools/step/make_corpus.py reference DIR FILE…  adds those files' entries to it
 
 The models are the kinds every CAD system writes and flatcut once got wrong: spheres cut every
 way (the trim loop runs along the seam to the pole and back, no pole edge), a blind and a through
@@ -149,6 +150,16 @@ def cylinder_sphere():
     return BRepAlgoAPI_Fuse(BRepAlgoAPI_Fuse(c, a).Shape(), b).Shape()
 
 
+def pipe_tee():
+    """Pipes on three axes: a main pipe (R 20 along z) with a branch along x (R 12) and one at
+    45 degrees in the y-z plane (R 8). Each junction is a cylinder meeting a cylinder on another
+    axis: the rulings of each cross the other's edges."""
+    main = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, -60), gp_Dir(0, 0, 1)), 20.0, 120.0).Shape()
+    tee = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(1, 0, 0)), 12.0, 60.0).Shape()
+    skew = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, 20), gp_Dir(0, 1, 1)), 8.0, 60.0).Shape()
+    return BRepAlgoAPI_Fuse(BRepAlgoAPI_Fuse(main, tee).Shape(), skew).Shape()
+
+
 def assembly(path):
     """One box placed three times by an assembly (XCAF: NEXT_ASSEMBLY_USAGE_OCCURRENCE and
     CONTEXT_DEPENDENT_SHAPE_REPRESENTATION with ITEM_DEFINED_TRANSFORMATIONs), the third turned
@@ -189,6 +200,7 @@ MODELS = {
     "occt_cylinder_panels": (cylinder_panels, "MM", "AP214IS"),
     "occt_torus_inner": (lambda: torus_halves(False), "MM", "AP242DIS"),
     "occt_capsule": (cylinder_sphere, "MM", "AP242DIS"),
+    "occt_pipe_tee": (pipe_tee, "MM", "AP214IS"),
 }
 
 
@@ -246,7 +258,19 @@ def reference(path):
         "shells": count(shape, TopAbs_SHELL),
         "closed_shells": closed,
         "occt_seconds": round(t_read + t_mesh, 4),
+        "occt_triangles": triangles(faces),
     }
+
+
+def triangles(faces):
+    """The triangles of OCCT's mesh of the distinct faces (BRepMesh at the test's deflection)."""
+    from OCP.BRep import BRep_Tool
+    from OCP.TopLoc import TopLoc_Location
+    n = 0
+    for i in range(1, faces.Extent() + 1):
+        tri = BRep_Tool.Triangulation_s(TopoDS.Face(faces.FindKey(i)), TopLoc_Location())
+        n += 0 if tri is None else tri.NbTriangles()
+    return n
 
 
 def BRep_Tool_closed(shell):
@@ -265,9 +289,10 @@ def main():
             print(f"{name}: {count(shape, TopAbs_FACE)} faces, valid {BRepCheck_Analyzer(shape).IsValid()}")
         assembly(out / "occt_assembly.step")
         return
-    refs = {}
+    only = sys.argv[3:]
+    refs = json.loads((out / "reference.json").read_text()) if only else {}
     for p in sorted(out.iterdir()):
-        if p.suffix.lower() in (".step", ".stp"):
+        if p.suffix.lower() in (".step", ".stp") and (not only or p.name in only):
             refs[p.name] = reference(p)
             print(p.name, refs[p.name])
     (out / "reference.json").write_text(json.dumps(refs, indent=1, sort_keys=True) + "\n")

@@ -2,16 +2,27 @@
 // playwright-core against `flatcut serve` on the bundled shoe.
 //
 //   node tools/web/browser-test.mjs --flatcut target/debug/flatcut [--screenshots docs]
+//   node tools/web/browser-test.mjs --flatcut target/release/flatcut --measure 9
 //
 // Steps: load the shoe; add a style line by clicking on the rendered surface at known screen
 // points (the projections of surface points from the server's own mesh); see the piece count
-// go from 4 to 5 (in the shoe's base size; every size in the pattern) and the heat map's colours on the new piece, in
-// 3D and flat; download the pattern and compare it with `flatcut run`'s bytes for the saved design; stream sheet 1's job
-// from the device panel to the embedded simulator, pause and resume it once, watch its progress
-// events to the end, and check the simulator's executed motions against the G-code's moves
-// (each once, in order, the same end point); then Ctrl-C the server during a job and check
-// the job stopped with the tool off and its journal says so. Prints one line per step and "N passed, N failed". Without Chromium it fails when FLATCUT_BROWSER_TEST=required (as CI
+// go from 4 to 5 (in the shoe's base size; every size in the pattern) and the heat map's colours
+// on the new piece, in 3D and flat; download the pattern and compare it with `flatcut run`'s bytes
+// for the saved design; stream sheet 1's job from the device panel to the embedded simulator,
+// pause and resume it once, watch its progress events to the end, and check the simulator's
+// executed motions against the G-code's moves (each once, in order, the same end point); then
+// Ctrl-C the server during a job and check the job stopped with the tool off and its journal
+// says so; then kill a server outright during sheet 3's job (a crash), resume from the journal
+// on a new server, see the panel refuse and name the lines in doubt (drawn over the layout
+// where the G-code moves), type a line among them, answer the origin question, and check the
+// simulator ran the G-code's moves from that line on, each once. Prints one line per step and
+// "N passed, N failed". Without Chromium it fails when FLATCUT_BROWSER_TEST=required (as CI
 // sets it), and otherwise says it skipped.
+//
+// `--measure N` instead draws the closing line N times (undoing it between runs) and prints the
+// time from the click that closes the region to the new pieces' heat map on the shoe, each run
+// and the median, split into the request adding the line, the flattening (the server's own time
+// within it), the response's transfer and the drawing.
 
 import { spawn, execFileSync } from 'node:child_process';
 import fs from 'node:fs';
@@ -28,6 +39,7 @@ const opt = (name, dflt) => {
 };
 const flatcut = path.resolve(opt('--flatcut', path.join(repo, 'target/debug/flatcut')));
 const shots = opt('--screenshots', null);
+const measure = Number(opt('--measure', 0));
 const chromium = process.env.CHROMIUM || '/usr/bin/chromium';
 const required = process.env.FLATCUT_BROWSER_TEST === 'required';
 
@@ -63,18 +75,25 @@ const { chromium: pw } = await import('playwright-core');
 const work = fs.mkdtempSync(path.join(os.tmpdir(), 'flatcut-browser-'));
 for (const f of ['project.toml', 'design.toml']) fs.copyFileSync(path.join(repo, 'patterns/shoe', f), path.join(work, f));
 
-const server = spawn(flatcut, ['serve', path.join(work, 'project.toml'), '--port', '0'], { stdio: ['ignore', 'pipe', 'pipe'] });
-let serverOut = '';
-server.stderr.on('data', (d) => { serverOut += d; });
-const url = await new Promise((resolve, reject) => {
-  const t = setTimeout(() => reject(new Error(`flatcut serve printed no address: ${serverOut}`)), 60000);
-  server.stdout.on('data', (d) => {
-    serverOut += d;
-    const m = /workbench: (http:\/\/\S+)/.exec(serverOut);
-    if (m) { clearTimeout(t); resolve(m[1]); }
+/** `flatcut serve` on the project in `dir`, on a free port: its process and address. */
+async function startServer(dir) {
+  const proc = spawn(flatcut, ['serve', path.join(dir, 'project.toml'), '--port', '0'], { stdio: ['ignore', 'pipe', 'pipe'] });
+  let out = '';
+  proc.stderr.on('data', (d) => { out += d; });
+  const url = await new Promise((resolve, reject) => {
+    const t = setTimeout(() => reject(new Error(`flatcut serve printed no address: ${out}`)), 60000);
+    proc.stdout.on('data', (d) => {
+      out += d;
+      const m = /workbench: (http:\/\/\S+)/.exec(out);
+      if (m) { clearTimeout(t); resolve(m[1]); }
+    });
+    proc.on('exit', (c) => reject(new Error(`flatcut serve exited (${c}): ${out}`)));
   });
-  server.on('exit', (c) => reject(new Error(`flatcut serve exited (${c}): ${serverOut}`)));
-});
+  servers.push(proc);
+  return { proc, url };
+}
+const servers = [];
+const { proc: server, url } = await startServer(work);
 
 const browser = await pw.launch({
   executablePath: chromium,
@@ -106,6 +125,107 @@ async function pixel(canvasId, x, y) {
     gl.readPixels(sx, sy, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
     return [px[0], px[1], px[2]];
   }, [canvasId, x, y]);
+}
+
+/** The G-code's moves (absolute coordinates): each with its file line (1-based), its text as the
+ * simulator records it (comments and spaces gone, upper case), its end and its length; and where
+ * the job ends. */
+function gcodeMoves(gcode) {
+  const moves = [];
+  let pos = [0, 0, 0];
+  let mode = null;
+  for (const [n, raw] of gcode.split('\n').entries()) {
+    const line = raw.replace(/\(.*?\)/g, '').replace(/;.*/, '').replace(/\s+/g, '').toUpperCase();
+    if (!line) continue;
+    if (/G91(?!\d)/.test(line)) throw new Error('the job uses relative moves; this check reads absolute ones');
+    const g = /G0*([0-3])(?![\d.])/.exec(line);
+    if (g) mode = Number(g[1]);
+    const to = [...pos];
+    let moved = false;
+    for (const [k, ax] of ['X', 'Y', 'Z'].entries()) {
+      const m = new RegExp(`${ax}(-?[\\d.]+)`).exec(line);
+      if (m) { to[k] = Number(m[1]); moved = true; }
+    }
+    if (moved && mode != null && to.some((v, k) => Math.abs(v - pos[k]) > 1e-9)) {
+      moves.push({ line: n + 1, text: line, to, length: Math.hypot(...to.map((v, k) => v - pos[k])) });
+      pos = to;
+    }
+  }
+  return { moves, end: pos };
+}
+
+/** What the simulator executed (`GET /api/devices/sim`), the motions that moved; a line a hold
+ * stopped part-way is one motion resumed, so its two pieces are joined. */
+function ranMotions(sim) {
+  const ran = [];
+  for (const m of sim.motions.filter((m) => m.from.some((v, k) => Math.abs(v - m.to[k]) > 1e-9))) {
+    const last = ran[ran.length - 1];
+    if (last && last.line === m.line && last.to.every((v, k) => Math.abs(v - m.from[k]) < 1e-6)) last.to = m.to; else ran.push({ ...m });
+  }
+  return ran;
+}
+
+const near = (a, b) => a.every((v, k) => Math.abs(v - b[k]) <= 0.01);
+
+/** Walks the G-code's `moves` and the executed motions `ran` (from `ran[head]`) in order: each
+ * executed motion is the G-code's next move, at its end point within 0.01 mm (the machine's
+ * step); a move the simulator did not make must be shorter than a step of the machine (its target
+ * rounds to where the machine stands). `k`: motions matched; `bad`: the first difference. */
+function walk(moves, ran, head = 0) {
+  let i = 0, k = head, tiny = 0, bad = null;
+  while (i < moves.length && !bad) {
+    if (ran[k] && ran[k].text === moves[i].text && near(ran[k].to, moves[i].to)) { i++; k++; }
+    else if (moves[i].length < 0.01) { tiny++; i++; }
+    else bad = { at: i, ran: ran[k], want: moves[i] };
+  }
+  if (!bad && k < ran.length) bad = { at: i, ran: ran[k], want: 'nothing more' };
+  return { k: k - head, tiny, bad };
+}
+
+/** Thrown to end the run after `--measure`: its figures are printed, no step follows. */
+class Measured extends Error {}
+
+const median = (xs) => {
+  const v = [...xs].sort((a, b) => a - b);
+  return v.length % 2 ? v[(v.length - 1) / 2] : (v[v.length / 2 - 1] + v[v.length / 2]) / 2;
+};
+
+/** `--measure N`: the time from the click that closes the vamp's region to the new pieces' heat
+ * map on the shoe, N times (each line undone before the next), and where it goes: the request
+ * adding the line, the flattening's request (the server's own flattening time within it, then
+ * the response's transfer), and the page drawing it (parse, meshes, the frame on screen). */
+async function measureClose(screen) {
+  await page.click('[data-tool=line]');
+  const runs = [];
+  for (let r = 0; r < measure; r++) {
+    const n = await page.evaluate(() => { performance.clearResourceTimings(); return window.__flatcut.timings.length; });
+    for (const s of screen) await page.mouse.click(s.x, s.y);
+    await page.waitForFunction((n) => window.__flatcut.timings.length > n, n, { timeout: 120000 });
+    const t = await page.evaluate((n) => {
+      const t = window.__flatcut.timings[n];
+      const req = (p) => performance.getEntriesByType('resource')
+        .find((e) => new URL(e.name).pathname === p && e.startTime >= t.t0);
+      const line = req('/api/lines');
+      const flat = performance.getEntriesByType('resource')
+        .filter((e) => new URL(e.name).pathname === '/api/flatten' && e.startTime >= line.responseEnd)[0];
+      return {
+        total: t.closeToHeatMs,
+        line: line.responseEnd - t.t0,
+        flattenWait: flat.responseStart - line.responseEnd,
+        server: t.serverFlattenMs,
+        transfer: flat.responseEnd - flat.responseStart,
+        bytes: flat.encodedBodySize,
+        draw: t.closeToHeatMs - (flat.responseEnd - t.t0),
+      };
+    }, n);
+    runs.push(t);
+    console.log(`run ${r + 1}: ${t.total.toFixed(0)} ms (line ${t.line.toFixed(0)}, flatten wait ${t.flattenWait.toFixed(0)} of which the server flattened ${t.server.toFixed(0)}, transfer ${t.transfer.toFixed(0)} ms of ${(t.bytes / 1e6).toFixed(2)} MB, draw ${t.draw.toFixed(0)})`);
+    await page.click('#undo');
+    await page.waitForFunction(() => /^4 pieces/.test(document.querySelector('#piece-count')?.textContent || ''), null, { timeout: 120000 });
+    await page.waitForTimeout(300);
+  }
+  const m = (k) => median(runs.map((x) => x[k])).toFixed(0);
+  console.log(`click to heat map, median of ${runs.length}: ${m('total')} ms (line ${m('line')}, flatten wait ${m('flattenWait')} with the server's flattening ${m('server')}, transfer ${m('transfer')}, draw ${m('draw')} ms)`);
 }
 
 let code = 0;
@@ -149,6 +269,10 @@ try {
     const off = hit ? Math.hypot(hit.point[0] - p[0], hit.point[1] - p[1], hit.point[2] - p[2]) : Infinity;
     step(`surface point (${p.map((x) => x.toFixed(1)).join(', ')}) is under screen point (${s.x.toFixed(0)}, ${s.y.toFixed(0)})`, off < 1.5, `${off.toFixed(2)} mm off`);
     screen.push(s);
+  }
+  if (measure) {
+    await measureClose(screen);
+    throw new Measured();
   }
   await page.click('[data-tool=line]');
   for (const s of screen) await page.mouse.click(s.x, s.y);
@@ -286,43 +410,9 @@ try {
     await (await fetch('/api/job.gcode?sheet=1')).text(),
     await (await fetch('/api/devices/sim')).json(),
   ]);
-  const moves = [];
-  let pos = [0, 0, 0];
-  let mode = null;
-  for (const raw of gcode.split('\n')) {
-    const line = raw.replace(/\(.*?\)/g, '').replace(/;.*/, '').replace(/\s+/g, '').toUpperCase();
-    if (!line) continue;
-    if (/G91(?!\d)/.test(line)) throw new Error('the job uses relative moves; this check reads absolute ones');
-    const g = /G0*([0-3])(?![\d.])/.exec(line);
-    if (g) mode = Number(g[1]);
-    const to = [...pos];
-    let moved = false;
-    for (const [k, ax] of ['X', 'Y', 'Z'].entries()) {
-      const m = new RegExp(`${ax}(-?[\\d.]+)`).exec(line);
-      if (m) { to[k] = Number(m[1]); moved = true; }
-    }
-    if (moved && mode != null && to.some((v, k) => Math.abs(v - pos[k]) > 1e-9)) {
-      moves.push({ text: line, to, length: Math.hypot(...to.map((v, k) => v - pos[k])) });
-      pos = to;
-    }
-  }
-  // A line the hold stopped part-way is one motion resumed: its two pieces are joined.
-  const ran = [];
-  for (const m of sim.motions.filter((m) => m.from.some((v, k) => Math.abs(v - m.to[k]) > 1e-9))) {
-    const last = ran[ran.length - 1];
-    if (last && last.line === m.line && last.to.every((v, k) => Math.abs(v - m.from[k]) < 1e-6)) last.to = m.to; else ran.push({ ...m });
-  }
-  const near = (a, b) => a.every((v, k) => Math.abs(v - b[k]) <= 0.01);
-  // Walk both in order: each executed motion is the G-code's next move, at its end point within
-  // 0.01 mm (the machine's step); a move the simulator did not make must be shorter than a
-  // step of the machine (its target rounds to where the machine stands).
-  let i = 0, k = 0, tiny = 0, bad = null;
-  while (i < moves.length && !bad) {
-    if (ran[k] && ran[k].text === moves[i].text && near(ran[k].to, moves[i].to)) { i++; k++; }
-    else if (moves[i].length < 0.01) { tiny++; i++; }
-    else bad = { at: i, ran: ran[k], want: moves[i] };
-  }
-  if (!bad && k < ran.length) bad = { at: i, ran: ran[k], want: 'nothing more' };
+  const { moves, end: pos } = gcodeMoves(gcode);
+  const ran = ranMotions(sim);
+  const { k, tiny, bad } = walk(moves, ran);
   const end = ran[ran.length - 1]?.to || [NaN, NaN, NaN];
   step('the simulator executed the G-code\'s moves, each once, in order', !bad && near(end, pos),
     `${k} motions executed of the G-code's ${moves.length} moves (${tiny} shorter than 0.01 mm, below a step)${bad ? `; first difference at move ${bad.at}: ran ${JSON.stringify(bad.ran)}, the G-code ${JSON.stringify(bad.want)}` : ''}; ended at ${end.map((v) => v.toFixed(3)).join(', ')} mm (the G-code: ${pos.map((v) => v.toFixed(3)).join(', ')})`);
@@ -341,17 +431,108 @@ try {
   step('Ctrl-C stops the running job with the tool off and ends the server', !!ended && ended.c === 0 && !done
     && / M5( |$)/.test(stopRecord) && journal.some((l) => l.startsWith('N tool off')),
   `exit ${ended ? ended.c ?? ended.sig : 'none within 30 s'}; journal ends: ${journal.slice(-3).join(' | ')}`);
-} catch (e) {
-  if (!results.length || results[results.length - 1].ok) {
-    failed++;
-    console.log(`FAIL ${e.message.split('\n')[0]}`);
+
+  // 7. A crash during a job (the server killed outright: nothing stopped, the simulator gone
+  // with it; here while the job is paused with lines queued) leaves lines the journal cannot
+  // tell ran or not. On the next server the panel's
+  // resume from the journal is refused and names them; the operator types the line to continue
+  // from, answers the origin question in the page, and the simulator runs the G-code's moves
+  // from that line on, each once.
+  const openDevice = async (at) => {
+    await page.goto(at);
+    await page.waitForFunction(() => window.__flatcut && window.__flatcut.state.flat, null, { timeout: 120000 });
+    await page.click('#tabs [data-tab=device]');
+    await page.waitForSelector('#job-start:not([disabled])', { timeout: 60000 });
+    await page.selectOption('#job-sheet', '3');
+  };
+  const crashed = await startServer(work);
+  await openDevice(crashed.url);
+  await page.click('#job-start');
+  await page.waitForFunction(() => { const j = window.__flatcut.lastJob; return j && j.sheet === 3 && j.progress && j.progress.lines_done > 300; }, null, { timeout: 120000 });
+  // The power fails while the job is paused with lines queued (acknowledged, not yet run); a
+  // pause that found the planner drained (at a dwell) is resumed and tried again further on.
+  for (let tries = 0; ; tries++) {
+    await page.click('#job-hold');
+    await page.waitForFunction(() => { const j = window.__flatcut.lastJob; return j.state === 'held' && j.progress.machine_state === 'Hold:0'; }, null, { timeout: 30000 });
+    const p = (await jobState()).progress;
+    if (p.lines_acked > p.lines_done) break;
+    if (tries === 20) throw new Error('every pause found the planner drained');
+    await page.click('#job-resume');
+    await page.waitForFunction((n) => window.__flatcut.lastJob.progress.lines_done > n, p.lines_done + 30, { timeout: 30000 });
   }
-  code = 1;
+  const gone = new Promise((r) => crashed.proc.on('exit', r));
+  crashed.proc.kill('SIGKILL');
+  await gone;
+  const next = await startServer(work);
+  await openDevice(next.url);
+  await page.check('#job-resume-journal');
+  await page.click('#job-start');
+  await page.waitForSelector('#job-doubt:not([hidden])', { timeout: 120000 });
+  const refused = await jobState();
+  const doubt = refused.in_doubt;
+  const said = (await page.textContent('#job-doubt p')).trim();
+  step('after a crash, the resume is refused and the panel names the lines in doubt', refused.state === 'failed' && !!doubt
+    && doubt.from <= doubt.to && said.startsWith(`Lines ${doubt.from} to ${doubt.to} of job-3.gcode may or may not have run`)
+    && (await page.textContent('#job-state')) === 'resume refused: lines in doubt', said);
+  // The operator looks at the work: the cut ended about half-way through those lines.
+  const typed = Math.round((doubt.from + doubt.to) / 2);
+  await page.fill('#job-from', String(typed));
+  // The lines in doubt over the layout, each where the G-code moves (read here from the file):
+  // grey before the line typed, orange from it on, and a mark where the tool continues.
+  const drawn = await page.evaluate(() => {
+    const svg = document.getElementById('job-svg');
+    const h = svg.viewBox.baseVal.height;
+    return {
+      lines: [...svg.querySelectorAll('#job-doubt-path polyline')].map((p) => ({
+        line: Number(p.dataset.line), colour: p.getAttribute('stroke'),
+        end: (() => { const q = p.points[p.points.length - 1]; return [q.x, h - q.y]; })(),
+      })),
+      mark: !!svg.querySelector('#job-from-mark'),
+      text: document.getElementById('job-from-text').textContent,
+    };
+  });
+  const gcode3 = await page.evaluate(async () => (await fetch('/api/job.gcode?sheet=3')).text());
+  const job3 = gcodeMoves(gcode3);
+  const inDoubt = job3.moves.filter((m) => m.line >= doubt.from && m.line <= doubt.to);
+  const placed = inDoubt.every((m) => drawn.lines.some((l) => l.line === m.line && Math.hypot(l.end[0] - m.to[0], l.end[1] - m.to[1]) < 0.01
+    && l.colour === (m.line >= typed ? '#e8590c' : '#868e96')));
+  const firstSent = gcode3.split('\n').findIndex((t, i) => i + 1 >= typed && t.trim() && !t.trim().startsWith('(')) + 1;
+  await shot('device-doubt');
+  step('the lines in doubt are drawn over the layout where the G-code moves, the line typed named', placed && drawn.lines.length === inDoubt.length
+    && drawn.mark && drawn.text.startsWith(`line ${firstSent}: `),
+  `${drawn.lines.length} lines drawn of the ${inDoubt.length} moves in lines ${doubt.from} to ${doubt.to}; ${drawn.text}`);
+  await page.click('#job-resume-from');
+  await page.waitForSelector('#answer-yes', { timeout: 60000 });
+  const asked = (await page.textContent('#job-question p')).trim();
+  await page.click('#answer-yes');
+  await page.waitForFunction(() => { const j = window.__flatcut.lastJob; return j.resume_from != null && ['done', 'failed', 'stopped'].includes(j.state); }, null, { timeout: 600000 });
+  const resumed = await jobState();
+  const sim3 = await page.evaluate(async () => (await fetch('/api/devices/sim')).json());
+  const rest = job3.moves.filter((m) => m.line >= typed);
+  const ran3 = ranMotions(sim3);
+  // First the travel to the line's start (at most a lift, a traverse and a plunge).
+  let w = walk(rest, ran3, 0);
+  for (let h = 1; h <= 3 && w.bad; h++) w = walk(rest, ran3, h);
+  const end3 = ran3[ran3.length - 1]?.to || [NaN, NaN, NaN];
+  step(`resumed from line ${typed} typed in the panel: the simulator ran the G-code's moves from it, each once`,
+    resumed.state === 'done' && resumed.resume_from === typed && /continues with line/.test(asked) && !w.bad && near(end3, job3.end),
+    `${resumed.state}: ${resumed.message}; asked "${asked.split('\n')[0].slice(0, 80)}…"; ${w.k} motions of the ${rest.length} moves from line ${typed} after ${ran3.length - w.k} of travel${w.bad ? `; first difference at move ${w.bad.at}: ran ${JSON.stringify(w.bad.ran)}, the G-code ${JSON.stringify(w.bad.want)}` : ''}`);
+  step('no script error on the page after the crash', pageErrors.length === 0, pageErrors.join('; '));
+} catch (e) {
+  if (!(e instanceof Measured)) {
+    if (!results.length || results[results.length - 1].ok) {
+      failed++;
+      console.log(`FAIL ${e.message.split('\n')[0]}`);
+    }
+    code = 1;
+  }
 } finally {
   await browser.close().catch(() => {});
-  if (server.exitCode === null && server.signalCode === null) {
-    server.kill('SIGTERM');
-    await new Promise((r) => { server.on('exit', r); setTimeout(r, 5000); });
+  for (const p of servers) {
+    if (p.exitCode === null && p.signalCode === null) {
+      p.kill('SIGTERM');
+      await new Promise((r) => { p.on('exit', r); setTimeout(r, 5000); });
+    }
   }
   fs.rmSync(work, { recursive: true, force: true });
 }

@@ -17,19 +17,22 @@
 //!   circumcentre (Delaunay refinement, which keeps triangles well shaped) or, where that falls
 //!   outside the face or on a boundary, at its centroid.
 //! - **Ruled** (true; the developable surfaces, whose lines `u = const` are straight and along
-//!   which the surface is flat): every triangle has its corners on two neighbouring rulings, so
-//!   each strip between rulings is planar and the mesh is exactly developable (it unfolds with
-//!   zero distortion). The rulings are the distinct `u` of the loop points: the caller puts a loop
-//!   point wherever a ruling crosses the boundary and adds rulings where the surface needs them
-//!   for the chordal tolerance. Between two rulings, the loop segments crossing the strip pair
-//!   up (even–odd) into trapezoids, triangulated by zipping the points on their two sides; points
-//!   are added along the rulings so triangles are not needles.
+//!   which the surface is flat): each ruling's stretches inside the face are constraints of the
+//!   triangulation (with points along them so triangles are not needles), so every triangle
+//!   lies between two neighbouring rulings; one with its corners on those two rulings lies in
+//!   the strip's plane, and a mesh whose rulings all end at loop points is exactly developable
+//!   (it unfolds with zero distortion). The rulings are given by the caller (by default the
+//!   distinct `u` of the loop points): it puts a loop point wherever one of its rulings crosses
+//!   the boundary, and adds rulings where the surface needs them for the chordal tolerance. A
+//!   loop point off the rulings (a neighbour's, on a shared edge) is a corner of the triangles
+//!   of its strip; a ruling that crosses a segment with no loop point there ends at its last
+//!   point inside, and the triangulation closes the gap.
 //!
 //! Consecutive loop points with the same vertex id (a pole: a side of the parameter domain that
 //! collapses to one point, as at a cone's apex) become one vertex; triangles with two corners
 //! there are dropped.
 
-use std::collections::VecDeque;
+use std::collections::{BTreeSet, VecDeque};
 
 use flatcut_geom::{DVec2, DVec3, Tolerances};
 use flatcut_surface::ParamSurface;
@@ -54,8 +57,9 @@ const SPEED_SAMPLES: usize = 9;
 /// Largest ratio of wanted triangle lengths along u and along v (see [`plane_scale`]): long
 /// thin triangles follow a fillet, but never needles.
 const MAX_ANISOTROPY: f64 = 6.0;
-/// Points along a ruling are at most this many strip widths apart (ruled method).
-const RULING_ASPECT: f64 = 2.0;
+/// Points along a ruling are at most this many widths of the face's widest strip apart (ruled
+/// method).
+const RULING_ASPECT: f64 = 6.0;
 /// Two rulings closer than this fraction of the u range are one ruling (ruled method).
 const RULING_SNAP_REL: f64 = 1e-9;
 /// A point of a trim loop.
@@ -76,6 +80,9 @@ pub struct TrimmedFace<'a> {
     pub loops: &'a [Vec<TrimPoint>],
     /// The surface is developable with straight, flat lines `u = const`: mesh along them.
     pub ruled: bool,
+    /// The u of the rulings to mesh along (ruled faces); empty: the distinct u of the loop
+    /// points.
+    pub rulings: &'a [f64],
 }
 
 /// The mesh of one face: positions, triangles counter-clockwise in (u, v), `params` the (u, v)
@@ -358,13 +365,23 @@ fn loops_cdt(
 /// Inside flags of the CDT's inner faces: even–odd parity of constraint edges crossed from the
 /// outer face (breadth first, in face-index order, so deterministic).
 fn inside_faces(cdt: &Cdt) -> Vec<bool> {
+    inside_faces_except(cdt, &BTreeSet::new())
+}
+
+/// [`inside_faces`] counting only the constraint edges that are not `inner` (pairs of CDT
+/// vertex indices, smaller first): constraints inside the face, not on its boundary.
+fn inside_faces_except(cdt: &Cdt, inner: &BTreeSet<(usize, usize)>) -> Vec<bool> {
+    let boundary = |e: spade::handles::UndirectedEdgeHandle<'_, Vx, (), spade::CdtEdge<()>, ()>| {
+        let [a, b] = e.vertices().map(|v| v.fix().index());
+        cdt.is_constraint_edge(e.fix()) && !inner.contains(&(a.min(b), a.max(b)))
+    };
     let n = cdt.num_inner_faces() + 1;
     let mut parity: Vec<Option<bool>> = vec![None; n];
     let mut queue: VecDeque<FixedFaceHandle<InnerTag>> = VecDeque::new();
     for e in cdt.convex_hull() {
         // The hull edge has the outer face on its left; its reverse has an inner face.
         if let Some(f) = e.rev().face().as_inner() {
-            let inside = cdt.is_constraint_edge(e.as_undirected().fix());
+            let inside = boundary(e.as_undirected());
             let idx = f.fix().index();
             if parity[idx].is_none() {
                 parity[idx] = Some(inside);
@@ -378,7 +395,7 @@ fn inside_faces(cdt: &Cdt) -> Vec<bool> {
             if let Some(g) = e.rev().face().as_inner() {
                 let idx = g.fix().index();
                 if parity[idx].is_none() {
-                    let crosses = cdt.is_constraint_edge(e.as_undirected().fix());
+                    let crosses = boundary(e.as_undirected());
                     parity[idx] = Some(here ^ crosses);
                     queue.push_back(g.fix());
                 }
@@ -459,7 +476,15 @@ pub fn tessellate_trimmed(
     let loops = loop_vertices(face.loops, &mut verts)?;
     let mut cover = 0.0;
     let triangles = if face.ruled {
-        ruled_mesh(face.surface, &loops, &mut verts, tol, opts, &mut cover)?
+        ruled_mesh(
+            face.surface,
+            &loops,
+            face.rulings,
+            &mut verts,
+            tol,
+            opts,
+            &mut cover,
+        )?
     } else {
         cdt_mesh(face.surface, &loops, &mut verts, tol, opts, &mut cover)?
     };
@@ -487,10 +512,18 @@ fn cdt_mesh(
     let mut normals: Vec<Option<DVec3>> = verts.uv.iter().map(|&uv| unit_normal(s, uv)).collect();
     let min_edge = (MIN_EDGE_OVER_CHORD * tol.chord_mm).max(4.0 * tol.weld_mm);
     let max_turn_cos = opts.max_normal_turn.cos();
+    // A triangle's test depends on its corners alone, and every triangle an insertion makes has
+    // the new vertex as a corner: a round tests the triangles with a corner inserted by the
+    // round before, and those found bad then (by their triangulation vertices, sorted) whose
+    // point could not go in; the others were found fine already.
+    let mut new_from = 0usize;
+    let mut bad: BTreeSet<[usize; 3]> = BTreeSet::new();
     for _ in 0..MAX_ROUNDS {
         let inside = inside_faces(&cdt);
-        // (preferred point, fallback: the bad triangle's centroid), scaled plane.
-        let mut todo: Vec<(DVec2, DVec2)> = Vec::new();
+        let was_bad = std::mem::take(&mut bad);
+        // (preferred point, fallback: the bad triangle's centroid, a vertex of the bad triangle
+        // to start locating from), scaled plane.
+        let mut todo: Vec<(DVec2, DVec2, FixedVertexHandle)> = Vec::new();
         for f in cdt.inner_faces() {
             if !inside[f.fix().index()] {
                 continue;
@@ -498,6 +531,11 @@ fn cdt_mesh(
             let vs = f.vertices();
             let tri = vs.map(|v| v.data().local);
             if tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0] {
+                continue;
+            }
+            let mut key = vs.map(|v| v.fix().index());
+            key.sort_unstable();
+            if key[2] < new_from && !was_bad.contains(&key) {
                 continue;
             }
             let edges = f.adjacent_edges();
@@ -517,18 +555,28 @@ fn cdt_mesh(
             ) {
                 continue;
             }
+            bad.insert(key);
             let [a, b, c] = f.positions().map(|p| DVec2::new(p.x, p.y));
-            todo.push((refinement_point(&cdt, &inside, f.fix()), (a + b + c) / 3.0));
+            let hint = vs[0].fix();
+            todo.push((
+                refinement_point(&cdt, &inside, f.fix()),
+                (a + b + c) / 3.0,
+                hint,
+            ));
         }
         if todo.is_empty() {
             break;
         }
         let before = verts.uv.len();
-        for (first, fallback) in todo {
+        new_from = cdt.num_vertices();
+        for (first, fallback, hint) in todo {
             // Points of one round can crowd each other (neighbouring triangles on one circle
             // share their circumcentre): each goes in only with clearance in the triangulation
             // as it stands, else its triangle's centroid, else not at all this round.
-            let Some(w) = [first, fallback].into_iter().find(|&w| clear(&cdt, w)) else {
+            let Some(w) = [first, fallback]
+                .into_iter()
+                .find(|&w| clear(&cdt, w, hint))
+            else {
                 continue;
             };
             let uv = w / scale;
@@ -544,7 +592,7 @@ fn cdt_mesh(
             }
             let local = verts.uv.len() as u32;
             let pos = Point2::new(tiny0(w.x), tiny0(w.y));
-            cdt.insert(Vx { pos, local })
+            cdt.insert_with_hint(Vx { pos, local }, hint)
                 .map_err(|_| TrimError::SurfaceNonFinite { u: uv.x, v: uv.y })?;
             verts.push(uv, p, None);
             normals.push(unit_normal(s, uv));
@@ -569,12 +617,12 @@ fn cdt_mesh(
 }
 
 /// True when `w` lies strictly inside a face of the triangulation, at least [`MIN_INSET`] of
-/// that face's shortest side away from its sides.
-fn clear(cdt: &Cdt, w: DVec2) -> bool {
+/// that face's shortest side away from its sides (located walking from `hint`).
+fn clear(cdt: &Cdt, w: DVec2, hint: FixedVertexHandle) -> bool {
     if !flatcut_geom::finite2(w) {
         return false;
     }
-    match cdt.locate(Point2::new(tiny0(w.x), tiny0(w.y))) {
+    match cdt.locate_with_hint(Point2::new(tiny0(w.x), tiny0(w.y)), hint) {
         PositionInTriangulation::OnFace(g) => {
             let [p, q, r] = cdt.face(g).positions().map(|p| DVec2::new(p.x, p.y));
             let shortest = (q - p).length().min((r - q).length()).min((p - r).length());
@@ -599,7 +647,7 @@ fn refinement_point(cdt: &Cdt, inside: &[bool], f: FixedFaceHandle<InnerTag>) ->
     if !flatcut_geom::finite2(ccv) {
         return centroid;
     }
-    match cdt.locate(cc) {
+    match cdt.locate_with_hint(cc, face.vertices()[0].fix()) {
         PositionInTriangulation::OnFace(g) if inside[g.index()] => {
             let [p, q, r] = cdt.face(g).positions().map(|p| DVec2::new(p.x, p.y));
             let shortest = (q - p).length().min((r - q).length()).min((p - r).length());
@@ -656,18 +704,11 @@ fn inside_loops(loops: &[Vec<(u32, DVec2)>], q: DVec2) -> bool {
     inside
 }
 
-/// A loop segment crossing one strip between rulings: its ends on the left and right ruling
-/// (local vertex, v).
-#[derive(Clone, Copy, Debug)]
-struct Crossing {
-    left: (u32, f64),
-    right: (u32, f64),
-}
-
 /// The ruled method (see the module documentation).
 fn ruled_mesh(
     s: &dyn ParamSurface,
     loops: &[Vec<(u32, DVec2)>],
+    given: &[f64],
     verts: &mut Verts,
     tol: &Tolerances,
     opts: &TessOptions,
@@ -675,109 +716,102 @@ fn ruled_mesh(
 ) -> Result<Vec<[u32; 3]>, TrimError> {
     let (lo, hi) = bounds(loops);
     let snap = RULING_SNAP_REL * (hi.x - lo.x).abs().max(f64::MIN_POSITIVE);
-    // Rulings: the distinct u of the loop points.
-    let mut us: Vec<f64> = loops.iter().flatten().map(|p| p.1.x).collect();
-    us.sort_by(f64::total_cmp);
-    let mut rulings: Vec<f64> = Vec::new();
-    for u in us {
-        if rulings.last().is_none_or(|&r| u - r > snap) {
-            rulings.push(u);
-        }
-    }
-    let ruling_of = |u: f64| -> usize {
+    let rulings: Vec<f64> = ruling_values(loops, given, snap)
+        .into_iter()
+        .filter(|&r| r >= lo.x - snap && r <= hi.x + snap)
+        .collect();
+    let scale = plane_scale(s, lo, hi, tol.chord_mm, opts.max_normal_turn);
+    let (mut cdt, _) = loops_cdt(loops, scale, verts.uv.len())?;
+    // Loop points on each ruling, and the loop segments running along one.
+    let ruling_of = |u: f64| -> Option<usize> {
         let k = rulings.partition_point(|&r| r < u - snap);
-        k.min(rulings.len() - 1)
+        (k < rulings.len() && (rulings[k] - u).abs() <= snap).then_some(k)
     };
-    // Loops with every segment split where it crosses a ruling (interpolated in (u, v); the
-    // caller normally puts loop points there already, so this is the exception).
-    let mut split: Vec<Vec<(u32, DVec2, usize)>> = Vec::with_capacity(loops.len());
+    let nr = rulings.len();
+    // (v, the loop point's local vertex and exact (u, v), if a loop point is there).
+    type OnRuling = (f64, Option<(u32, DVec2)>);
+    let mut on_ruling: Vec<Vec<OnRuling>> = vec![Vec::new(); nr];
+    let mut along: BTreeSet<(u32, u32)> = BTreeSet::new();
     for lp in loops {
-        let mut out = Vec::with_capacity(lp.len());
         for k in 0..lp.len() {
             let (la, a) = lp[k];
-            let (_, b) = lp[(k + 1) % lp.len()];
+            let (lb, b) = lp[(k + 1) % lp.len()];
             let (ra, rb) = (ruling_of(a.x), ruling_of(b.x));
-            out.push((la, a, ra));
-            let (step, n) = if rb > ra {
-                (1isize, rb - ra)
-            } else {
-                (-1isize, ra - rb)
-            };
-            for m in 1..n {
-                let r = (ra as isize + step * m as isize) as usize;
+            if let Some(r) = ra {
+                on_ruling[r].push((a.y, Some((la, a))));
+            }
+            if ra.is_some() && ra == rb {
+                along.insert((la.min(lb), la.max(lb)));
+            }
+            // Where the segment crosses rulings between its ends (no loop point there: the
+            // ruling ends short of the boundary, the triangulation closes the gap).
+            let (u0, u1) = (a.x.min(b.x), a.x.max(b.x));
+            let first = rulings.partition_point(|&r| r <= u0 + snap);
+            for r in first..nr {
+                if rulings[r] >= u1 - snap {
+                    break;
+                }
                 let t = (rulings[r] - a.x) / (b.x - a.x);
-                let uv = DVec2::new(rulings[r], a.y + t * (b.y - a.y));
-                let p = s.eval(uv.x, uv.y);
-                if !flatcut_geom::finite3(p) {
-                    return Err(TrimError::SurfaceNonFinite { u: uv.x, v: uv.y });
-                }
-                out.push((verts.push(uv, p, None), uv, r));
-            }
-        }
-        split.push(out);
-    }
-    // Points on each ruling: (v, local vertex), and which consecutive pairs are boundary segments.
-    let nr = rulings.len();
-    let mut on_ruling: Vec<Vec<(f64, u32)>> = vec![Vec::new(); nr];
-    let mut vertical: Vec<Vec<(u32, u32)>> = vec![Vec::new(); nr];
-    let mut crossings: Vec<Vec<Crossing>> = vec![Vec::new(); nr.saturating_sub(1)];
-    for lp in &split {
-        for k in 0..lp.len() {
-            let (la, a, ra) = lp[k];
-            let (lb, b, rb) = lp[(k + 1) % lp.len()];
-            on_ruling[ra].push((a.y, la));
-            if ra == rb {
-                if la != lb {
-                    vertical[ra].push((la.min(lb), la.max(lb)));
-                }
-            } else {
-                let (l, r) = if ra < rb {
-                    ((la, a.y), (lb, b.y))
-                } else {
-                    ((lb, b.y), (la, a.y))
-                };
-                crossings[ra.min(rb)].push(Crossing { left: l, right: r });
+                on_ruling[r].push((a.y + t * (b.y - a.y), None));
             }
         }
     }
-    for pts in &mut on_ruling {
-        pts.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-        pts.dedup_by(|x, y| x.1 == y.1);
-    }
-    // Strip widths (3D, at mid height) and the spacing of points along rulings.
+    // Along each ruling, its stretches inside the face: points at the spacing that keeps the
+    // widest strips' triangles from being needles (the points add no accuracy: a strip is
+    // flat), each stretch a constraint from end to end, so every triangle away from the
+    // boundary has its corners on two neighbouring rulings.
     let vmid = 0.5 * (lo.y + hi.y);
-    let mut widths: Vec<f64> = (0..nr.saturating_sub(1))
-        .map(|i| {
-            s.eval(rulings[i], vmid)
-                .distance(s.eval(rulings[i + 1], vmid))
-        })
-        .filter(|w| w.is_finite() && *w > 0.0)
-        .collect();
-    widths.sort_by(f64::total_cmp);
-    let typical = widths.get(widths.len() / 2).copied().unwrap_or(0.0);
-    let spacing = (RULING_ASPECT * typical).max(tol.chord_mm);
-    // Fill points on the inside intervals of every ruling.
+    let widest = rulings
+        .windows(2)
+        .map(|w| s.eval(w[0], vmid).distance(s.eval(w[1], vmid)))
+        .filter(|w| w.is_finite())
+        .fold(0.0, f64::max);
+    let spacing = (RULING_ASPECT * widest).max(tol.chord_mm);
+    let mut inner: BTreeSet<(usize, usize)> = BTreeSet::new();
+    let mut hint: Option<FixedVertexHandle> = None;
     for (r, pts) in on_ruling.iter_mut().enumerate() {
         let u = rulings[r];
-        let mut added: Vec<(f64, u32)> = Vec::new();
+        pts.sort_by(|x, y| {
+            x.0.total_cmp(&y.0)
+                .then(x.1.map(|p| p.0).cmp(&y.1.map(|p| p.0)))
+        });
+        pts.dedup_by(|x, y| x.0 == y.0 && x.1.map(|p| p.0) == y.1.map(|p| p.0));
         for w in pts.windows(2) {
             let ((v0, l0), (v1, l1)) = (w[0], w[1]);
-            if l0 == l1 || vertical[r].contains(&(l0.min(l1), l0.max(l1))) {
+            if v1 - v0 <= 0.0 {
+                continue;
+            }
+            if let (Some((a, _)), Some((b, _))) = (l0, l1)
+                && (a == b || along.contains(&(a.min(b), a.max(b))))
+            {
                 continue;
             }
             if !inside_loops(loops, DVec2::new(u, 0.5 * (v0 + v1))) {
                 continue;
             }
             let len = s.eval(u, v0).distance(s.eval(u, v1));
-            let n = (len / spacing).ceil();
-            if !(n.is_finite() && n >= 2.0) {
-                continue;
-            }
-            if verts.uv.len() + n as usize >= opts.max_vertices {
+            let n = (len / spacing).ceil().max(1.0);
+            if !n.is_finite() || verts.uv.len() + n as usize >= opts.max_vertices {
                 return Err(TrimError::TooManyVertices {
                     limit: opts.max_vertices,
                     chord_mm: tol.chord_mm,
                 });
+            }
+            // The stretch's vertices: its ends where they are loop points, and the points
+            // between.
+            let mut chain: Vec<FixedVertexHandle> = Vec::new();
+            let locate = |cdt: &Cdt, uv: DVec2, hint: Option<FixedVertexHandle>| {
+                let w = uv * scale;
+                let p = Point2::new(tiny0(w.x), tiny0(w.y));
+                match hint {
+                    Some(h) => cdt.locate_with_hint(p, h),
+                    None => cdt.locate(p),
+                }
+            };
+            if let Some((_, uv)) = l0
+                && let PositionInTriangulation::OnVertex(h) = locate(&cdt, uv, hint)
+            {
+                chain.push(h);
             }
             for m in 1..n as usize {
                 let v = v0 + (v1 - v0) * m as f64 / n;
@@ -785,87 +819,79 @@ fn ruled_mesh(
                 if !flatcut_geom::finite3(p) {
                     return Err(TrimError::SurfaceNonFinite { u, v });
                 }
-                added.push((v, verts.push(DVec2::new(u, v), p, None)));
+                // Only inside a triangle or on an edge inside the face: never on the boundary.
+                match locate(&cdt, DVec2::new(u, v), hint) {
+                    PositionInTriangulation::OnFace(_) => {}
+                    PositionInTriangulation::OnEdge(e)
+                        if !cdt.is_constraint_edge(e.as_undirected()) => {}
+                    _ => continue,
+                }
+                let w = DVec2::new(u, v) * scale;
+                let local = verts.push(DVec2::new(u, v), p, None);
+                let vx = Vx {
+                    pos: Point2::new(tiny0(w.x), tiny0(w.y)),
+                    local,
+                };
+                let h = match hint {
+                    Some(h) => cdt.insert_with_hint(vx, h),
+                    None => cdt.insert(vx),
+                }
+                .map_err(|_| TrimError::SurfaceNonFinite { u, v })?;
+                chain.push(h);
+                hint = Some(h);
+            }
+            if let Some((_, uv)) = l1
+                && let PositionInTriangulation::OnVertex(h) = locate(&cdt, uv, hint)
+            {
+                chain.push(h);
+            }
+            for c in chain.windows(2) {
+                if c[0] == c[1] || cdt.exists_constraint(c[0], c[1]) {
+                    continue;
+                }
+                // A stretch that would cross the boundary (round-off at a tangency) is left
+                // to the triangulation.
+                if cdt.can_add_constraint(c[0], c[1]) {
+                    cdt.add_constraint(c[0], c[1]);
+                    inner.insert((
+                        c[0].index().min(c[1].index()),
+                        c[0].index().max(c[1].index()),
+                    ));
+                }
             }
         }
-        pts.extend(added);
-        pts.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
     }
-    // Zip each trapezoid of each strip.
-    let mut tris: Vec<[u32; 3]> = Vec::new();
-    for (i, cs) in crossings.iter_mut().enumerate() {
-        cs.sort_by(|x, y| {
-            (x.left.1 + x.right.1)
-                .total_cmp(&(y.left.1 + y.right.1))
-                .then(x.left.1.total_cmp(&y.left.1))
-        });
-        for pair in cs.chunks_exact(2) {
-            let (bot, top) = (pair[0], pair[1]);
-            let chain = |pts: &[(f64, u32)], from: (u32, f64), to: (u32, f64)| -> Vec<u32> {
-                let (v0, v1) = (from.1.min(to.1), from.1.max(to.1));
-                let mut c: Vec<u32> = vec![from.0];
-                c.extend(
-                    pts.iter()
-                        .filter(|p| p.0 > v0 && p.0 < v1 && p.1 != from.0 && p.1 != to.0)
-                        .map(|p| p.1),
-                );
-                if to.0 != from.0 {
-                    c.push(to.0);
-                }
-                c
-            };
-            let left = chain(&on_ruling[i], bot.left, top.left);
-            let right = chain(&on_ruling[i + 1], bot.right, top.right);
-            let corner = |l: u32, u: f64| DVec2::new(u, verts.uv[l as usize].y);
-            zip(
-                &left,
-                &right,
-                &verts.uv,
-                &mut tris,
-                &mut |t: [(u32, bool); 3]| {
-                    let c = t.map(|(l, on_left)| corner(l, rulings[i + usize::from(!on_left)]));
-                    *cover += uv_area(c);
-                },
-            );
+    let inside = inside_faces_except(&cdt, &inner);
+    let mut tris = Vec::new();
+    for f in cdt.inner_faces() {
+        if !inside[f.fix().index()] {
+            continue;
+        }
+        *cover += uv_area(f.positions().map(|p| DVec2::new(p.x, p.y) / scale));
+        let t = f.vertices().map(|v| v.data().local);
+        if t[0] != t[1] && t[1] != t[2] && t[2] != t[0] {
+            tris.push(t);
         }
     }
     Ok(tris)
 }
 
-/// Triangulates the strip between the left chain and the right chain (both bottom to top),
-/// counter-clockwise in (u, v), skipping triangles with a repeated vertex; `each` sees every
-/// triangle, skipped ones too, with each corner's side (true: left).
-fn zip(
-    left: &[u32],
-    right: &[u32],
-    uv: &[DVec2],
-    out: &mut Vec<[u32; 3]>,
-    each: &mut dyn FnMut([(u32, bool); 3]),
-) {
-    let (mut i, mut j) = (0usize, 0usize);
-    let mut push = |t: [(u32, bool); 3]| {
-        each(t);
-        let t = t.map(|x| x.0);
-        if t[0] != t[1] && t[1] != t[2] && t[2] != t[0] {
-            out.push(t);
-        }
+/// The rulings of a ruled face: those given, or (none given) the distinct u of its loop
+/// points, merged within `snap`.
+fn ruling_values(loops: &[Vec<(u32, DVec2)>], given: &[f64], snap: f64) -> Vec<f64> {
+    let mut us: Vec<f64> = if given.is_empty() {
+        loops.iter().flatten().map(|p| p.1.x).collect()
+    } else {
+        given.to_vec()
     };
-    while i + 1 < left.len() || j + 1 < right.len() {
-        let advance_left = if i + 1 == left.len() {
-            false
-        } else if j + 1 == right.len() {
-            true
-        } else {
-            uv[left[i + 1] as usize].y <= uv[right[j + 1] as usize].y
-        };
-        if advance_left {
-            push([(left[i], true), (right[j], false), (left[i + 1], true)]);
-            i += 1;
-        } else {
-            push([(left[i], true), (right[j], false), (right[j + 1], false)]);
-            j += 1;
+    us.sort_by(f64::total_cmp);
+    let mut rulings: Vec<f64> = Vec::new();
+    for u in us {
+        if rulings.last().is_none_or(|&r| u - r > snap) {
+            rulings.push(u);
         }
     }
+    rulings
 }
 
 /// The signed area of a (u, v) triangle.
@@ -965,6 +991,7 @@ mod tests {
                 surface: &s,
                 loops: &loops,
                 ruled: false,
+                rulings: &[],
             },
             &tol,
             &TessOptions::DEFAULT,
@@ -1005,6 +1032,7 @@ mod tests {
                 surface: &s,
                 loops: &[lp],
                 ruled: false,
+                rulings: &[],
             },
             &Tolerances::DEFAULT.with_chord_mm(0.01),
             &TessOptions::DEFAULT,
@@ -1065,6 +1093,7 @@ mod tests {
                 surface: &s,
                 loops: &[lp],
                 ruled: true,
+                rulings: &[],
             },
             &Tolerances::DEFAULT,
             &TessOptions::DEFAULT,
@@ -1136,6 +1165,7 @@ mod tests {
                 surface: s,
                 loops,
                 ruled: false,
+                rulings: &[],
             },
             &Tolerances::DEFAULT,
             &TessOptions::DEFAULT,

@@ -7,10 +7,13 @@
 //! 2. Each face's region is built in its surface's (u, v) by [`crate::trim`]: independent of
 //!    where its loops start, through poles and along seams, with the points it adds (cut lines,
 //!    poles) its own.
-//! 3. Developable faces (plane aside: cylinder, cone, extrusion) are meshed along rulings (see
-//!    [`flatcut_mesh::trimmed`]); each ruling that crosses an edge puts a point on that edge (for
-//!    both faces), and an edge that runs through a pole gets a point there, repeated until no
-//!    face needs another point (at most [`MAX_RULING_ROUNDS`]).
+//! 3. An edge that runs through a pole gets a point there. Developable faces (plane aside:
+//!    cylinder, cone, extrusion) are meshed along rulings (see [`flatcut_mesh::trimmed`]): a
+//!    face's rulings are the u of its own edge samples and a chordal grid, taken for all faces
+//!    before any crossing is put on an edge; then every ruling's crossings with its face's edges
+//!    become points of those edges (for both faces), in one pass. A neighbour's crossing is a
+//!    point of the face but not one of its rulings, so no point passes back and forth between
+//!    faces, whatever their axes: two passes over the faces, whatever the model.
 //! 4. Each face is triangulated by [`flatcut_mesh::tessellate_trimmed`] and oriented by its
 //!    normal (the surface normal, reversed when the face's `same_sense` is false).
 //! 5. Before anything is returned, [`crate::check`] compares every face's area on its trimmed
@@ -34,12 +37,14 @@ use crate::heal::Repair;
 use crate::model::{EdgeGeometry, FaceGeometry, Model};
 use crate::trim::{self, LoopPt, Origin, Samples, Seg, Trim, TrimInput};
 
-/// Rounds of putting ruling crossings and pole points on edges (each round only adds points).
-pub const MAX_RULING_ROUNDS: usize = 8;
+/// Rounds of putting pole points on edges (each round only adds points; one is the rule).
+pub const MAX_POLE_ROUNDS: usize = 4;
 /// Bisection steps when locating a ruling's crossing on an edge curve.
 const CROSSING_STEPS: usize = 80;
 /// Relative size (of the parameter range) below which two rulings are one.
 const RULING_SNAP_REL: f64 = 1e-9;
+/// Relative size (of an edge's parameter range) below which two samples are one.
+const SAME_SAMPLE_REL: f64 = 1e-9;
 /// The area of [`face_area`] is integrated over loops sampled this finely (fraction of the
 /// model's size): the sliver between a chord and its curve is then ~1e-6 of the area.
 const AREA_CHORD_REL: f64 = 1e-5;
@@ -108,7 +113,7 @@ fn sample_edge(model: &Model, g: &EdgeGeometry, tol: f64) -> Samples {
         // Eighths of a turn of the conic's own angle: bisecting from them puts the samples at
         // dyadic fractions of a turn, whatever the edge's ends, so circles about one axis are
         // sampled at common angles and the rulings through one circle's points find points
-        // on the next circle instead of adding their own (see `split_at_rulings`).
+        // on the next circle instead of adding their own (see `ruling_crossings`).
         // Grid points a round-off from an end are the end.
         let step = std::f64::consts::TAU / 8.0;
         let margin = 1e-9 * step;
@@ -280,13 +285,19 @@ fn face_repairs(model: &Model, index: usize, g: &FaceGeometry, t: &Trim) -> Vec<
     out
 }
 
-/// The rulings a developable face needs for the chordal tolerance `tol`, besides those through
-/// its loop points (`have`, sorted): in every gap between those wider than the step the
-/// curvature allows, the points of a fixed grid of that step. The grid does not depend on where
-/// the face's loops start in u (on a cylinder or a cone it is whole fractions of a turn from
-/// u = 0), so the rulings one round of [`Tessellation::new`] puts on the edges are the ones the
-/// next round asks for again: the rounds settle instead of shifting every ruling a little.
-fn chord_rulings(s: &Surface, loops: &[Vec<LoopPt>], have: &[f64], tol: f64) -> Vec<f64> {
+/// The rulings a developable face needs for the chordal tolerance `tol` and the normal's
+/// largest turn `turn` (radians) across a strip, besides those through its loop points
+/// (`have`, sorted): in every gap between those wider than the step the curvature allows, the
+/// points of a fixed grid of that step or finer. The grid does not depend on where the face's
+/// loops start in u (on a cylinder or a cone it is fractions of a turn from u = 0), so faces
+/// about one axis share it.
+fn chord_rulings(
+    s: &Surface,
+    loops: &[Vec<LoopPt>],
+    have: &[f64],
+    tol: f64,
+    turn: f64,
+) -> Vec<f64> {
     let Surface::Analytic(a) = s else {
         return Vec::new();
     };
@@ -295,7 +306,7 @@ fn chord_rulings(s: &Surface, loops: &[Vec<LoopPt>], have: &[f64], tol: f64) -> 
     };
     let step_for = |radius: f64| {
         if radius > tol {
-            2.0 * (1.0 - tol / radius).acos()
+            (2.0 * (1.0 - tol / radius).acos()).min(turn)
         } else {
             f64::INFINITY
         }
@@ -304,15 +315,19 @@ fn chord_rulings(s: &Surface, loops: &[Vec<LoopPt>], have: &[f64], tol: f64) -> 
         if !(step.is_finite() && step > 0.0) {
             return Vec::new();
         }
-        // Whole fractions of a turn, at least as fine as `step`.
-        let n = (std::f64::consts::TAU / step).ceil();
+        // A power of two of fractions of a turn, at least as fine as `step`: the grids of
+        // faces about one axis, and the circles' samples (dyadic fractions of a turn, see
+        // `sample_edge`), are then each other's subsets, so a stack of coaxial faces shares
+        // its rulings instead of each adding its own between the others'.
+        let n = (std::f64::consts::TAU / step).log2().ceil().exp2().max(8.0);
         if !(n.is_finite() && n >= 2.0) || (hi - lo) / step > 1e6 {
             return Vec::new();
         }
+        let need = step;
         let step = std::f64::consts::TAU / n;
         let mut out = Vec::new();
         for w in have.windows(2) {
-            if w[1] - w[0] <= step {
+            if w[1] - w[0] <= need {
                 continue;
             }
             let first = (w[0] / step).floor() as i64 + 1;
@@ -360,9 +375,24 @@ fn distinct(mut v: Vec<f64>, snap: f64) -> Vec<f64> {
     out
 }
 
-/// The rulings of a developable face: the u of its loop points and those the tolerance needs.
-fn face_rulings(s: &Surface, loops: &[Vec<LoopPt>], tol: f64) -> (Vec<f64>, f64) {
-    let us: Vec<f64> = loops.iter().flatten().map(|p| p.uv.x).collect();
+/// The rulings of a developable face: the u of its edge samples and those the tolerance needs.
+/// Points the face added itself (cut lines, the runs along a pole, where every u is the same
+/// point) are not rulings.
+fn face_rulings(s: &Surface, loops: &[Vec<LoopPt>], tol: f64, turn: f64) -> (Vec<f64>, f64) {
+    let mut us: Vec<f64> = Vec::new();
+    for lp in loops {
+        let n = lp.len();
+        for (k, p) in lp.iter().enumerate() {
+            let pole = n > 1
+                && (lp[(k + 1) % n].origin == p.origin || lp[(k + n - 1) % n].origin == p.origin);
+            if !pole && !matches!(p.origin, Origin::Extra(_)) {
+                us.push(p.uv.x);
+            }
+        }
+    }
+    if us.is_empty() {
+        us = loops.iter().flatten().map(|p| p.uv.x).collect();
+    }
     let (lo, hi) = us
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &u| {
@@ -370,7 +400,7 @@ fn face_rulings(s: &Surface, loops: &[Vec<LoopPt>], tol: f64) -> (Vec<f64>, f64)
         });
     let snap = RULING_SNAP_REL * (hi - lo).abs().max(f64::MIN_POSITIVE);
     let have = distinct(us, snap);
-    let mut all = chord_rulings(s, loops, &have, tol);
+    let mut all = chord_rulings(s, loops, &have, tol, turn);
     all.extend(have);
     (distinct(all, snap), snap)
 }
@@ -450,169 +480,69 @@ impl Tessellation {
                 .map_err(|err| face_err(model, users[&e], err.to_string()))?;
             samples.push(sample_edge(model, g, chord));
         }
-        // Rulings of the developable faces and pole crossings put points on their edges.
+        // Edges running through a pole get a point there (each round only adds such points;
+        // a segment with its pole point asks for no other).
         let ruled: Vec<bool> = geoms
             .iter()
             .map(|(_, g)| g.surface.is_ruled_developable() && g.surface.name() != "plane")
             .collect();
-        let mut active: Vec<bool> = vec![true; geoms.len()];
-        for _ in 0..MAX_RULING_ROUNDS {
+        for _ in 0..MAX_POLE_ROUNDS {
             let mut changed = false;
-            let mut next = vec![false; geoms.len()];
             for (k, (i, g)) in geoms.iter().enumerate() {
-                if !active[k] {
-                    continue;
-                }
                 let t = face_trim(model, *i, g, &slot_of, &samples, ruled[k], None, chord)?;
-                if !t.wants.is_empty() {
-                    changed |= insert_samples(model, &slots, &mut samples, &t.wants);
-                    next[k] = true;
-                }
-                if ruled[k] {
-                    let (rulings, snap) = face_rulings(&g.surface, &t.loops, chord);
-                    let added =
-                        split_at_rulings(model, g, &t.segs, &rulings, snap, &slots, &mut samples);
-                    changed |= added;
-                    next[k] |= added;
-                }
+                changed |= insert_samples(model, &slots, &mut samples, &t.wants);
             }
             if !changed {
                 break;
             }
-            // Faces sharing an edge with a face that changed its edges look again.
-            active = next;
-            for (k, (_, g)) in geoms.iter().enumerate() {
-                if ruled[k] {
-                    active[k] = true;
-                }
-                let _ = g;
-            }
         }
-        for (sl, &e) in slots.iter().enumerate() {
-            if let Ok(g) = &model.edges[e].geometry
-                && !g.degenerate
-            {
-                check::edge_length(g.curve.as_ref(), &samples[sl].ts, &samples[sl].pts, chord)
-                    .map_err(|m| {
-                        face_err(
-                            model,
-                            users[&e],
-                            format!("edge #{}: {m}", model.edges[e].entity),
-                        )
-                    })?;
+        // The rulings of every developable face, from its own edge samples and the chordal
+        // grid, all taken before any is put on an edge; then each ruling's crossings with its
+        // face's edges are put on those edges, in one pass. A point a face gets from a
+        // neighbour's ruling is not a ruling of its own (its strip's triangles take it as a
+        // corner), so nothing passes back and forth between faces. A face too narrow for
+        // such a point (its triangles, off the strip's plane, fail the face's check) takes the
+        // points it got as rulings too, once, and all faces are meshed again: each face does
+        // so at most once, so there are at most as many passes as developable faces, plus one.
+        let mut rulings: Vec<Option<Vec<f64>>> = vec![None; geoms.len()];
+        let mut takes_all = vec![false; geoms.len()];
+        let mut pending: Vec<usize> = (0..geoms.len()).filter(|&k| ruled[k]).collect();
+        let (positions, face_meshes, edges_out) = loop {
+            let mut crossings: Vec<(usize, f64)> = Vec::new();
+            for &k in &pending {
+                let (i, g) = geoms[k];
+                let t = face_trim(model, i, g, &slot_of, &samples, true, None, chord)?;
+                let (own, snap) = face_rulings(&g.surface, &t.loops, chord, opts.max_normal_turn);
+                crossings.extend(ruling_crossings(
+                    model, g, &t.segs, &own, snap, &slots, &samples,
+                ));
+                rulings[k] = Some(own);
             }
-        }
-        // Shell vertex ids: model vertices, then edge samples in edge order.
-        let mut positions: Vec<DVec3> = model.vertices.iter().map(|v| v.point).collect();
-        let mut edges_out = Vec::new();
-        let mut order: Vec<usize> = (0..slots.len()).collect();
-        order.sort_by_key(|&s| slots[s]);
-        let mut sample_id: Vec<Vec<u32>> = vec![Vec::new(); slots.len()];
-        for &sl in &order {
-            let g = model.edges[slots[sl]]
-                .geometry
-                .as_ref()
-                .map_err(|e| face_err(model, users[&slots[sl]], e.to_string()))?;
-            let n = samples[sl].pts.len();
-            let mut ids = Vec::with_capacity(n);
-            ids.push(g.start as u32);
-            for k in 1..n - 1 {
-                positions.push(samples[sl].pts[k]);
-                ids.push((positions.len() - 1) as u32);
-            }
-            ids.push(g.end as u32);
-            edges_out.push(EdgeMesh {
-                edge: slots[sl],
-                vertices: ids.clone(),
-            });
-            sample_id[sl] = ids;
-        }
-        // Faces.
-        let mut face_meshes = Vec::with_capacity(geoms.len());
-        for (k, (i, g)) in geoms.iter().enumerate() {
-            let rulings = if ruled[k] {
-                let t = face_trim(model, *i, g, &slot_of, &samples, true, None, chord)?;
-                Some(face_rulings(&g.surface, &t.loops, chord).0)
-            } else {
-                None
-            };
-            let t = face_trim(
+            crossings.sort_by(|x, y| x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)));
+            crossings.dedup_by(|x, y| x.0 == y.0 && x.1 == y.1);
+            insert_samples(model, &slots, &mut samples, &crossings);
+            match mesh_faces(&Pass {
                 model,
-                *i,
-                g,
-                &slot_of,
-                &samples,
-                ruled[k],
-                rulings.as_deref(),
-                chord,
-            )?;
-            let first_extra = positions.len() as u32;
-            positions.extend(t.extra.iter().copied());
-            let id_of = |o: Origin| -> u32 {
-                match o {
-                    Origin::Sample { slot, index } => sample_id[slot][index],
-                    Origin::Vertex(v) => v as u32,
-                    Origin::Extra(e) => first_extra + e as u32,
-                }
-            };
-            let trim_pts: Vec<Vec<TrimPoint>> = t
-                .loops
-                .iter()
-                .map(|lp| {
-                    lp.iter()
-                        .map(|p| TrimPoint {
-                            uv: p.uv,
-                            pos: p.pos,
-                            vertex: id_of(p.origin),
-                        })
-                        .collect()
-                })
-                .collect();
-            let tm = tessellate_trimmed(
-                &TrimmedFace {
-                    surface: g.surface.as_ref(),
-                    loops: &trim_pts,
-                    ruled: ruled[k],
-                },
+                geoms: &geoms,
+                ruled: &ruled,
+                rulings: &rulings,
+                slots: &slots,
+                slot_of: &slot_of,
+                users: &users,
+                samples: &samples,
                 tol,
                 opts,
-            )
-            .map_err(|e| face_err(model, *i, e.to_string()))?;
-            let oriented = oriented_by_nesting(&t.loops);
-            let trim_area = check::trim_area(&g.surface, &oriented);
-            check_face(model, *i, &g.surface, &oriented, trim_area, &tm, chord)?;
-            let mut mesh = tm.mesh;
-            if g.same_sense == t.flip {
-                for tri in &mut mesh.triangles {
-                    tri.swap(1, 2);
+            })? {
+                Meshed::Done(p, f, e) => break (p, f, e),
+                Meshed::Failed(k, err) => {
+                    if takes_all[k] || !ruled[k] {
+                        return Err(err);
+                    }
+                    takes_all[k] = true;
+                    pending = vec![k];
                 }
             }
-            let global: Vec<u32> = tm
-                .vertex
-                .iter()
-                .zip(&mesh.positions)
-                .map(|(id, p)| match id {
-                    Some(v) => *v,
-                    None => {
-                        positions.push(*p);
-                        (positions.len() - 1) as u32
-                    }
-                })
-                .collect();
-            face_meshes.push(FaceMesh {
-                face: *i,
-                mesh,
-                global,
-                ruled: ruled[k],
-                trim_area_mm2: trim_area,
-                cuts: t
-                    .cuts
-                    .iter()
-                    .map(|c| c.iter().map(|&o| id_of(o)).collect())
-                    .collect(),
-                repairs: face_repairs(model, *i, g, &t),
-            });
-        }
+        };
         let out = Tessellation {
             positions,
             faces: face_meshes,
@@ -630,6 +560,30 @@ impl Tessellation {
     /// the vertices those faces use (in shell order).
     pub fn welded(&self, faces: Option<&[usize]>) -> TriMesh {
         self.welded_with_ids(faces).0
+    }
+
+    /// Open mesh edges of the welded closed shells whose faces are all tessellated here and
+    /// whose topology closes them too (every model edge used twice; a file may flag an open
+    /// shell closed): 0 for a crack-free tessellation.
+    pub fn open_edges(&self, model: &Model) -> usize {
+        let closed = |faces: &[usize]| {
+            model.edges.iter().all(|e| {
+                let uses = e.faces.iter().filter(|f| faces.contains(f)).count();
+                uses == 0 || uses == 2
+            })
+        };
+        model
+            .shells
+            .iter()
+            .filter(|s| s.closed && s.faces.iter().all(|f| self.face(*f).is_some()))
+            .filter(|s| closed(&s.faces))
+            .map(|s| {
+                let m = self.welded(Some(&s.faces));
+                flatcut_mesh::Topology::build(&m).map_or(usize::MAX, |topo| {
+                    topo.edges.values().filter(|e| e.is_boundary()).count()
+                })
+            })
+            .sum()
     }
 
     /// [`Self::welded`] and the index in it of every shell vertex (`u32::MAX` if unused).
@@ -806,7 +760,175 @@ impl Tessellation {
     }
 }
 
-/// Adds samples at the curve parameters asked for (slot, t); true if any was added.
+/// What meshing the faces from the edges' samples as they stand needs.
+struct Pass<'a> {
+    model: &'a Model,
+    geoms: &'a [(usize, &'a FaceGeometry)],
+    ruled: &'a [bool],
+    rulings: &'a [Option<Vec<f64>>],
+    slots: &'a [usize],
+    slot_of: &'a BTreeMap<usize, usize>,
+    users: &'a BTreeMap<usize, usize>,
+    samples: &'a [Samples],
+    tol: &'a Tolerances,
+    opts: &'a TessOptions,
+}
+
+/// The meshes of a pass: shell positions, face meshes and edges, or the first face (index
+/// into the pass's faces) that failed its check, with the error.
+enum Meshed {
+    Done(Vec<DVec3>, Vec<FaceMesh>, Vec<EdgeMesh>),
+    Failed(usize, StepError),
+}
+
+/// Meshes every face of the pass from the edges' samples (see [`Tessellation::new`]).
+fn mesh_faces(p: &Pass) -> Result<Meshed, StepError> {
+    let Pass {
+        model,
+        ruled,
+        rulings,
+        slots,
+        slot_of,
+        users,
+        samples,
+        tol,
+        opts,
+        ..
+    } = *p;
+    let chord = tol.chord_mm;
+    for (sl, &e) in slots.iter().enumerate() {
+        if let Ok(g) = &model.edges[e].geometry
+            && !g.degenerate
+        {
+            check::edge_length(g.curve.as_ref(), &samples[sl].ts, &samples[sl].pts, chord)
+                .map_err(|m| {
+                    face_err(
+                        model,
+                        users[&e],
+                        format!("edge #{}: {m}", model.edges[e].entity),
+                    )
+                })?;
+        }
+    }
+    // Shell vertex ids: model vertices, then edge samples in edge order.
+    let mut positions: Vec<DVec3> = model.vertices.iter().map(|v| v.point).collect();
+    let mut edges_out = Vec::new();
+    let mut order: Vec<usize> = (0..slots.len()).collect();
+    order.sort_by_key(|&s| slots[s]);
+    let mut sample_id: Vec<Vec<u32>> = vec![Vec::new(); slots.len()];
+    for &sl in &order {
+        let g = model.edges[slots[sl]]
+            .geometry
+            .as_ref()
+            .map_err(|e| face_err(model, users[&slots[sl]], e.to_string()))?;
+        let n = samples[sl].pts.len();
+        let mut ids = Vec::with_capacity(n);
+        ids.push(g.start as u32);
+        for k in 1..n - 1 {
+            positions.push(samples[sl].pts[k]);
+            ids.push((positions.len() - 1) as u32);
+        }
+        ids.push(g.end as u32);
+        edges_out.push(EdgeMesh {
+            edge: slots[sl],
+            vertices: ids.clone(),
+        });
+        sample_id[sl] = ids;
+    }
+    // Faces.
+    let mut face_meshes = Vec::with_capacity(p.geoms.len());
+    for (k, (i, g)) in p.geoms.iter().enumerate() {
+        // Own rulings a whole number of periods along too: the region's (u, v) may sit a
+        // period from where the rulings were taken.
+        let rulings = rulings[k]
+            .as_deref()
+            .map(|own| periodic_copies(&g.surface, own));
+        let t = face_trim(
+            model,
+            *i,
+            g,
+            slot_of,
+            samples,
+            ruled[k],
+            rulings.as_deref(),
+            chord,
+        )?;
+        let first_extra = positions.len() as u32;
+        positions.extend(t.extra.iter().copied());
+        let id_of = |o: Origin| -> u32 {
+            match o {
+                Origin::Sample { slot, index } => sample_id[slot][index],
+                Origin::Vertex(v) => v as u32,
+                Origin::Extra(e) => first_extra + e as u32,
+            }
+        };
+        let trim_pts: Vec<Vec<TrimPoint>> = t
+            .loops
+            .iter()
+            .map(|lp| {
+                lp.iter()
+                    .map(|p| TrimPoint {
+                        uv: p.uv,
+                        pos: p.pos,
+                        vertex: id_of(p.origin),
+                    })
+                    .collect()
+            })
+            .collect();
+        let tm = tessellate_trimmed(
+            &TrimmedFace {
+                surface: g.surface.as_ref(),
+                loops: &trim_pts,
+                ruled: ruled[k],
+                rulings: rulings.as_deref().unwrap_or(&[]),
+            },
+            tol,
+            opts,
+        )
+        .map_err(|e| face_err(model, *i, e.to_string()))?;
+        let oriented = oriented_by_nesting(&t.loops);
+        let trim_area = check::trim_area(&g.surface, &oriented);
+        if let Err(e) = check_face(model, *i, &g.surface, &oriented, trim_area, &tm, chord) {
+            return Ok(Meshed::Failed(k, e));
+        }
+        let mut mesh = tm.mesh;
+        if g.same_sense == t.flip {
+            for tri in &mut mesh.triangles {
+                tri.swap(1, 2);
+            }
+        }
+        let global: Vec<u32> = tm
+            .vertex
+            .iter()
+            .zip(&mesh.positions)
+            .map(|(id, p)| match id {
+                Some(v) => *v,
+                None => {
+                    positions.push(*p);
+                    (positions.len() - 1) as u32
+                }
+            })
+            .collect();
+        face_meshes.push(FaceMesh {
+            face: *i,
+            mesh,
+            global,
+            ruled: ruled[k],
+            trim_area_mm2: trim_area,
+            cuts: t
+                .cuts
+                .iter()
+                .map(|c| c.iter().map(|&o| id_of(o)).collect())
+                .collect(),
+            repairs: face_repairs(model, *i, g, &t),
+        });
+    }
+    Ok(Meshed::Done(positions, face_meshes, edges_out))
+}
+
+/// Adds samples at the curve parameters asked for (slot, t); true if any was added. A
+/// parameter within [`SAME_SAMPLE_REL`] of the edge's range from a sample it has is that
+/// sample (two faces about one axis find one ruling's crossing a rounding apart).
 fn insert_samples(
     model: &Model,
     slots: &[usize],
@@ -823,7 +945,12 @@ fn insert_samples(
         let pos = sm
             .ts
             .partition_point(|&x| if increasing { x < t } else { x > t });
-        if pos == 0 || pos >= sm.ts.len() || sm.ts[pos] == t || sm.ts[pos - 1] == t {
+        let same = SAME_SAMPLE_REL * (sm.ts[sm.ts.len() - 1] - sm.ts[0]).abs();
+        if pos == 0
+            || pos >= sm.ts.len()
+            || (sm.ts[pos] - t).abs() <= same
+            || (sm.ts[pos - 1] - t).abs() <= same
+        {
             continue;
         }
         sm.ts.insert(pos, t);
@@ -833,38 +960,44 @@ fn insert_samples(
     added
 }
 
-/// Puts a point on every edge segment of the face that a ruling crosses; true if any was added.
-fn split_at_rulings(
+/// The points (slot, t) where the face's rulings cross its edge segments.
+fn ruling_crossings(
     model: &Model,
     g: &FaceGeometry,
     segs: &[Seg],
     rulings: &[f64],
     snap: f64,
     slots: &[usize],
-    samples: &mut [Samples],
-) -> bool {
+    samples: &[Samples],
+) -> Vec<(usize, f64)> {
     let s = g.surface.as_ref();
-    let mut inserts: Vec<(usize, f64)> = Vec::new();
+    let mut out: Vec<(usize, f64)> = Vec::new();
     for sg in segs {
         let (ulo, uhi) = (sg.ua.min(sg.ub), sg.ua.max(sg.ub));
         let Ok(eg) = &model.edges[slots[sg.slot]].geometry else {
             continue;
         };
-        for &r in rulings {
-            if r > ulo + snap && r < uhi - snap {
-                let ta = samples[sg.slot].ts[sg.i];
-                let tb = samples[sg.slot].ts[sg.j];
-                let t = crossing(&eg.curve, s, (ta, sg.ua), (tb, sg.ub), r);
-                inserts.push((sg.slot, t));
-            }
+        let first = rulings.partition_point(|&r| r <= ulo + snap);
+        for &r in rulings[first..].iter().take_while(|&&r| r < uhi - snap) {
+            let ta = samples[sg.slot].ts[sg.i];
+            let tb = samples[sg.slot].ts[sg.j];
+            out.push((sg.slot, crossing(&eg.curve, s, (ta, sg.ua), (tb, sg.ub), r)));
         }
     }
-    if inserts.is_empty() {
-        return false;
-    }
-    inserts.sort_by(|x, y| x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)));
-    inserts.dedup_by(|x, y| x.0 == y.0 && x.1 == y.1);
-    insert_samples(model, slots, samples, &inserts)
+    out
+}
+
+/// The rulings and their copies a whole period either way (a periodic u), sorted.
+fn periodic_copies(s: &Surface, rulings: &[f64]) -> Vec<f64> {
+    let Some(per) = s.periods()[0] else {
+        return rulings.to_vec();
+    };
+    let mut out: Vec<f64> = (-2..=2)
+        .flat_map(|k| rulings.iter().map(move |&r| r + k as f64 * per))
+        .collect();
+    out.sort_by(f64::total_cmp);
+    out.dedup();
+    out
 }
 
 /// The area of face `index` (mm²): the integral of |S_u × S_v| over the region its loops bound

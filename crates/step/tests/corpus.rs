@@ -13,7 +13,6 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use flatcut_geom::{DVec3, Tolerances};
-use flatcut_mesh::Topology;
 use flatcut_mesh::tessellate::TessOptions;
 use flatcut_step::{Model, StepError, Tessellation, face_area};
 use serde::Deserialize;
@@ -54,28 +53,6 @@ struct Manifest {
 
 fn corpus_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/corpus")
-}
-
-/// Open edges of the welded closed shells of a tessellation of all the faces (the shells
-/// closed by their topology too: every edge used twice; a file may flag an open shell closed).
-fn open_edges(model: &Model, t: &Tessellation) -> usize {
-    let closed = |faces: &[usize]| {
-        model.edges.iter().all(|e| {
-            let uses = e.faces.iter().filter(|f| faces.contains(f)).count();
-            uses == 0 || uses == 2
-        })
-    };
-    model
-        .shells
-        .iter()
-        .filter(|s| s.closed && closed(&s.faces))
-        .map(|s| {
-            let m = t.welded(Some(&s.faces));
-            Topology::build(&m).map_or(usize::MAX, |topo| {
-                topo.edges.values().filter(|e| e.is_boundary()).count()
-            })
-        })
-        .sum()
 }
 
 /// What flatcut makes of a file.
@@ -121,7 +98,7 @@ fn import(path: &Path) -> Result<Imported, StepError> {
         faces: model.faces.len(),
         area,
         repairs: t.faces.iter().map(|f| f.repairs.len()).sum(),
-        open: open_edges(&model, &t),
+        open: t.open_edges(&model),
         centroid,
         size,
     })

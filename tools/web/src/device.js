@@ -2,7 +2,8 @@
 // first), connect, unlock, home, jog and frame; a sheet's job started, paused, resumed and
 // stopped, with its progress, ETA and the live position drawn over the sheet's layout; the
 // sender's questions (a resume whose machine position is unknown, an edited job) asked here, and
-// the line to continue from when a resume cannot tell which lines ran.
+// the line to continue from when a resume cannot tell which lines ran (those lines drawn over the
+// layout).
 // Every page follows the same device and job through the `device` and `job` events.
 
 const esc = (s) => String(s).replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' }[c]));
@@ -59,7 +60,7 @@ export async function devicePanel(el, api, hooks) {
   try { sheets = Math.max(1, (await api('GET', '/api/summary.json')).sheets); } catch { /* the run's error shows on start */ }
   $('job-sheet').innerHTML = Array.from({ length: sheets }, (_, i) => `<option>${i + 1}</option>`).join('');
 
-  const view = { sheet: null, height: 0, dot: null };
+  const view = { sheet: null, height: 0, dot: null, doubt: null, from: null };
   async function showSheet(n) {
     if (view.sheet === n) return;
     view.sheet = n;
@@ -78,9 +79,12 @@ export async function devicePanel(el, api, hooks) {
       g.setAttribute('id', 'job-overlay');
       g.setAttribute('visibility', 'hidden');
       g.innerHTML = '<circle r="6" fill="none" stroke="#3b82c4" stroke-width="1.5"/><path d="M-10 0H10M0-10V10" stroke="#3b82c4" stroke-width="1"/><circle r="2" fill="#3b82c4"/>';
-      svg.append(g);
+      const doubt = document.createElementNS(SVG, 'g');
+      doubt.setAttribute('id', 'job-doubt-path');
+      svg.append(doubt, g);
       box.replaceChildren(document.importNode(svg, true));
       view.dot = box.querySelector('#job-overlay');
+      drawDoubtPath();
     } catch (e) {
       box.textContent = e.message;
     }
@@ -89,6 +93,15 @@ export async function devicePanel(el, api, hooks) {
     if (!p || !view.dot) return;
     view.dot.setAttribute('transform', `translate(${p[0]} ${view.height - p[1]})`);
     view.dot.setAttribute('visibility', 'visible');
+    inView(view.dot);
+  }
+
+  /** Scrolls the layout so that `node` (drawn over it) is in view, when it is not. */
+  function inView(node) {
+    const box = $('job-view');
+    const [r, b] = [node.getBoundingClientRect(), box.getBoundingClientRect()];
+    if (r.height && (r.top < b.top || r.bottom > b.bottom)) box.scrollTop += (r.top + r.bottom) / 2 - (b.top + b.bottom) / 2;
+    if (r.width && (r.left < b.left || r.right > b.right)) box.scrollLeft += (r.left + r.right) / 2 - (b.left + b.right) / 2;
   }
 
   let job = info.job;
@@ -122,13 +135,15 @@ export async function devicePanel(el, api, hooks) {
     const p = j.progress;
     const frac = p ? p.fraction : 0;
     $('job-progress').value = frac;
-    const what = {
+    // A resume refused before anything was sent: the box below says why and asks.
+    const refused = j.in_doubt && j.state === 'failed' && !(p && p.lines_done);
+    const what = refused ? 'resume refused: lines in doubt' : {
       running: 'running', held: 'paused (feed hold)', paused: 'paused by the job', asking: 'waiting for your answer',
       done: 'done', failed: 'failed', stopped: 'stopped (tool off)',
     }[j.state] || j.state;
     $('job-text').innerHTML = `<strong id="job-state">${esc(what)}</strong> · ${esc(j.name)}
-      ${p ? ` · line ${p.lines_done} of ${p.lines_total} · ${(100 * frac).toFixed(1)} % of the path · ETA ${secs(p.eta_s)} · <span class="dev-pos">${mm(p.position)}</span>` : ''}
-      ${j.message && j.state !== 'done' ? `<br><span class="${j.state === 'failed' ? 'over' : 'muted'}">${esc(j.message)}</span>` : ''}`;
+      ${p && !refused ? ` · line ${p.lines_done} of ${p.lines_total} · ${(100 * frac).toFixed(1)} % of the path · ETA ${secs(p.eta_s)} · <span class="dev-pos">${mm(p.position)}</span>` : ''}
+      ${j.message && j.state !== 'done' && !refused ? `<br><span class="${j.state === 'failed' ? 'over' : 'muted'}">${esc(j.message)}</span>` : ''}`;
     const q = $('job-question');
     if (j.question) {
       q.hidden = false;
@@ -148,8 +163,9 @@ export async function devicePanel(el, api, hooks) {
     drawDevice();
   }
 
-  // A resume that cannot tell which lines ran names them: the operator looks at the work and
-  // says where to continue (as `flatcut send --resume-from LINE`).
+  // A resume that cannot tell which lines ran names them, and shows them over the layout: the
+  // operator looks at the work and says where to continue (as `flatcut send --resume-from
+  // LINE`). The lines before the one typed count as run (grey); from it on they run (orange).
   function drawDoubt(j) {
     const box = $('job-doubt');
     const d = j.in_doubt;
@@ -157,17 +173,25 @@ export async function devicePanel(el, api, hooks) {
       box.hidden = true;
       box.innerHTML = '';
       delete box.dataset.job;
+      if (view.doubt) { view.doubt = null; drawDoubtPath(); }
       return;
     }
     if (box.dataset.job === String(j.id)) return;
     box.dataset.job = String(j.id);
     box.hidden = false;
-    box.innerHTML = `<p class="question">Lines ${d.from} to ${d.to} of ${esc(j.name)} may or may not have run: ${esc(d.reason)}.</p>
+    view.doubt = d;
+    view.from = d.from;
+    box.innerHTML = `<p class="question">Lines ${d.from} to ${d.to} of ${esc(j.name)} may or may not have run: ${esc(d.reason)}.
+      They are drawn over the sheet below, orange from the line to continue from on.</p>
       <div class="row">Look at the work, then continue from line
         <input id="job-from" type="number" min="1" step="1" value="${d.from}" style="width:6em" aria-label="line to continue from">
-        <button id="job-resume-from">Resume from this line</button></div>`;
+        <button id="job-resume-from">Resume from this line</button></div>
+      <p id="job-from-text" class="dev-pos muted"></p>`;
+    const input = box.querySelector('#job-from');
+    input.addEventListener('input', () => { view.from = Number(input.value); drawDoubtPath(); });
+    drawDoubtPath();
     box.querySelector('#job-resume-from').addEventListener('click', async () => {
-      const line = Number(box.querySelector('#job-from').value);
+      const line = Number(input.value);
       if (!Number.isInteger(line) || line < 1) {
         $('job-text').innerHTML = '<span class="over">the line to continue from is a line number of the file (1 or more)</span>';
         return;
@@ -176,6 +200,50 @@ export async function devicePanel(el, api, hooks) {
       const r = await act('POST', '/api/jobs', { sheet: j.sheet, resume_from: line });
       if (r && (!job || r.id >= job.id)) { job = r; drawJob(); }
     });
+  }
+
+  /** The lines in doubt over the layout, and what the line typed is. */
+  function drawDoubtPath() {
+    const g = $('job-view').querySelector('#job-doubt-path');
+    const d = view.doubt;
+    const said = $('job-doubt').querySelector('#job-from-text');
+    if (g) g.replaceChildren();
+    if (!d) return;
+    const from = view.from;
+    // Where a resume from `from` continues: the first line sent from there on (a comment or a
+    // blank line names the next), as the sender counts it.
+    const first = d.lines.find((l) => l.line >= from);
+    if (said) {
+      said.textContent = first && Number.isInteger(from) && from >= d.from
+        ? `line ${first.line}: ${first.text}`
+        : (Number.isInteger(from) && from > 0 ? `line ${from} is outside the lines in doubt` : '');
+    }
+    if (!g) return;
+    const xy = (p) => `${p[0]},${view.height - p[1]}`;
+    for (const l of d.lines) {
+      if (l.path.length < 2) continue;
+      const runs = Number.isInteger(from) && l.line >= from;
+      const pl = document.createElementNS(SVG, 'polyline');
+      pl.setAttribute('points', l.path.map(xy).join(' '));
+      pl.setAttribute('fill', 'none');
+      pl.setAttribute('stroke', runs ? '#e8590c' : '#868e96');
+      pl.setAttribute('stroke-width', l.cuts ? '3' : '1.5');
+      if (!l.cuts) pl.setAttribute('stroke-dasharray', '4 3');
+      pl.setAttribute('vector-effect', 'non-scaling-stroke');
+      pl.dataset.line = String(l.line);
+      g.append(pl);
+    }
+    const start = first && d.lines.slice(d.lines.indexOf(first)).find((l) => l.path.length);
+    if (start && from >= d.from) {
+      const c = document.createElementNS(SVG, 'circle');
+      c.setAttribute('cx', start.path[0][0]);
+      c.setAttribute('cy', view.height - start.path[0][1]);
+      c.setAttribute('r', '5');
+      c.setAttribute('fill', '#e8590c');
+      c.setAttribute('id', 'job-from-mark');
+      g.append(c);
+    }
+    inView(g);
   }
 
   async function act(method, path, body) {

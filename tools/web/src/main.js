@@ -122,10 +122,13 @@ async function flatten() {
     const base = view.sizes.length > 1 && !all ? view.pieces[0]?.size : null;
     status(`${view.pieces.length} pieces${base ? ` in size ${base} of ${view.sizes.join(', ')}` : ''} · ${view.elapsed_s.toFixed(2)} s`);
     if (state.pendingClose && view.revision >= state.pendingClose.revision) {
-      // The heat map of the new pieces is on the surface once this frame is drawn.
+      // The heat map of the new pieces is drawn in the next frame (the render loop's turn comes
+      // first); it is on the screen when the frame after it begins.
       const t0 = state.pendingClose.t0;
       state.pendingClose = null;
-      requestAnimationFrame(() => hooks.timings.push({ closeToHeatMs: performance.now() - t0, revision: view.revision }));
+      requestAnimationFrame(() => requestAnimationFrame(() => hooks.timings.push({
+        closeToHeatMs: performance.now() - t0, t0, revision: view.revision, serverFlattenMs: 1000 * view.elapsed_s,
+      })));
     }
     $('legend').innerHTML = legend();
     panels();
@@ -260,23 +263,23 @@ async function lineClick(ev) {
   const tol = part.end_tolerance_mm;
   if (d.length >= 3 && dist(hit.point, d[0]) <= tol) {
     d.push([...d[0]]);
-    return commitLine(true);
+    return commitLine(ev.timeStamp);
   }
   const end = closingPoint(part, hit.point);
   d.push(end || hit.point);
   if (d.length === 1) state.draftEnds[0] = !!end;
   state.draftEnds[1] = d.length > 1 && !!end;
   v3.setDraft(d, state.draftEnds);
-  if (d.length >= 2 && state.draftEnds[0] && state.draftEnds[1]) return commitLine(false);
+  if (d.length >= 2 && state.draftEnds[0] && state.draftEnds[1]) return commitLine(ev.timeStamp);
   $('hint').textContent = state.draftEnds[0]
     ? 'Go on clicking; the line closes when you click on the boundary or another line (Enter ends it here).'
     : 'This line does not start on the boundary or a line: it must close on itself (click its first point).';
 }
 
-async function commitLine() {
+/** Sends the drawn line; `t0`: when the click (or key) that ended it happened. */
+async function commitLine(t0 = performance.now()) {
   const part = state.regions.parts[state.draftPart];
   const points = state.draft;
-  const t0 = performance.now();
   dropDraft();
   try {
     const r = await api('POST', '/api/lines', { part: part.name, points });
@@ -424,7 +427,7 @@ window.addEventListener('keydown', (ev) => {
   if (ev.ctrlKey || ev.metaKey || ev.altKey) return;
   if (k === 'escape') dropDraft();
   else if (k === 'backspace' && state.draft.length) { state.draft.pop(); v3.setDraft(state.draft, state.draftEnds); }
-  else if (k === 'enter' && state.draft.length >= 2) commitLine();
+  else if (k === 'enter' && state.draft.length >= 2) commitLine(ev.timeStamp);
   else if ((k === 'delete' || k === 'backspace') && state.tool === 'edit') deleteSelected();
   else if ({ o: 1, l: 1, e: 1, n: 1, r: 1 }[k]) setTool({ o: 'orbit', l: 'line', e: 'edit', n: 'notch', r: 'name' }[k]);
 });
