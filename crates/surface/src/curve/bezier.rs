@@ -278,7 +278,7 @@ impl Bezier {
         let lu = a.lu();
         let sol = lu
             .solve(&rhs)
-            .ok_or_else(|| SurfaceError::BezierInterpolationSingular)?;
+            .ok_or(SurfaceError::BezierInterpolationSingular)?;
         let out: Vec<DVec3> = (0..m)
             .map(|r| DVec3::new(sol[(r, 0)], sol[(r, 1)], sol[(r, 2)]))
             .collect();

@@ -46,7 +46,7 @@ impl Frame {
         }
         let z = axis
             .try_normalize()
-            .ok_or_else(|| SurfaceError::ZeroLength { what: "frame axis" })?;
+            .ok_or(SurfaceError::ZeroLength { what: "frame axis" })?;
         let r = match reference {
             Some(r) if flatcut_geom::finite3(r) => r,
             Some(_) => {

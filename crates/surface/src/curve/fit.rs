@@ -231,7 +231,7 @@ fn solve_lsq(
         }
     }
     let x = banded_cholesky_solve(&mut a, ni, bw, rhs)
-        .ok_or_else(|| SurfaceError::FitSingular { control_points: n })?;
+        .ok_or(SurfaceError::FitSingular { control_points: n })?;
     let mut pts = Vec::with_capacity(n);
     pts.push(q0);
     pts.extend(x);

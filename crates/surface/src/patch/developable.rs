@@ -147,7 +147,7 @@ impl DevelopableSurface {
         };
         let r = s
             .correct(r_start, t0)
-            .ok_or_else(|| SurfaceError::DevelopableNoRuling { r: r_start, t: t0 })?;
+            .ok_or(SurfaceError::DevelopableNoRuling { r: r_start, t: t0 })?;
         s.integrate(r, t0, t1, ra, rb)?;
         s.validate()?;
         Ok(s)

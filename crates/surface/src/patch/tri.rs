@@ -105,7 +105,7 @@ impl TriBezierPatch {
         let sol = a
             .lu()
             .solve(&rhs)
-            .ok_or_else(|| SurfaceError::TriangularInterpolationSingular)?;
+            .ok_or(SurfaceError::TriangularInterpolationSingular)?;
         let pts = (0..m)
             .map(|k| DVec3::new(sol[(k, 0)], sol[(k, 1)], sol[(k, 2)]))
             .collect();
