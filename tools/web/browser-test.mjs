@@ -219,13 +219,13 @@ async function measureClose(screen) {
       };
     }, n);
     runs.push(t);
-    console.log(`run ${r + 1}: ${t.total.toFixed(0)} ms (line ${t.line.toFixed(0)}, flatten wait ${t.flattenWait.toFixed(0)} of which the server flattened ${t.server.toFixed(0)}, transfer ${t.transfer.toFixed(0)} ms of ${(t.bytes / 1e6).toFixed(2)} MB, draw ${t.draw.toFixed(0)})`);
+    console.log(`run ${r + 1}: ${t.total.toFixed(0)} ms (line ${t.line.toFixed(0)}, flatten wait ${t.flattenWait.toFixed(0)} (the server's flattening, begun with the line: ${t.server.toFixed(0)}), transfer ${t.transfer.toFixed(0)} ms of ${(t.bytes / 1e6).toFixed(2)} MB, draw ${t.draw.toFixed(0)})`);
     await page.click('#undo');
     await page.waitForFunction(() => /^4 pieces/.test(document.querySelector('#piece-count')?.textContent || ''), null, { timeout: 120000 });
     await page.waitForTimeout(300);
   }
   const m = (k) => median(runs.map((x) => x[k])).toFixed(0);
-  console.log(`click to heat map, median of ${runs.length}: ${m('total')} ms (line ${m('line')}, flatten wait ${m('flattenWait')} with the server's flattening ${m('server')}, transfer ${m('transfer')}, draw ${m('draw')} ms)`);
+  console.log(`click to heat map, median of ${runs.length}: ${m('total')} ms (line ${m('line')}, flatten wait ${m('flattenWait')} (the server's flattening ${m('server')}), transfer ${m('transfer')}, draw ${m('draw')} ms)`);
 }
 
 let code = 0;
@@ -470,7 +470,7 @@ try {
   await page.waitForSelector('#job-doubt:not([hidden])', { timeout: 120000 });
   const refused = await jobState();
   const doubt = refused.in_doubt;
-  const said = (await page.textContent('#job-doubt p')).trim();
+  const said = (await page.textContent('#job-doubt p')).replace(/\s+/g, ' ').trim();
   step('after a crash, the resume is refused and the panel names the lines in doubt', refused.state === 'failed' && !!doubt
     && doubt.from <= doubt.to && said.startsWith(`Lines ${doubt.from} to ${doubt.to} of job-3.gcode may or may not have run`)
     && (await page.textContent('#job-state')) === 'resume refused: lines in doubt', said);
