@@ -4,7 +4,8 @@
 //! trimmed domains, their repairs and the open edges of the welded closed shells); with
 //! `--obj DIR` the meshes are written as OBJ with one group per face (`g face<N>`) for the
 //! accuracy check, with `DIR/<name>.faces.json` beside: per face its index, `#id`, surface,
-//! area on its trimmed domain and repairs (tools/step/check_faces.py).
+//! area on its trimmed domain (`area_mm2`, [`face_area`]), the area the mesh's chord loops
+//! bound (`chord_loops_area_mm2`) and repairs (tools/step/check_faces.py).
 //!
 //! `cargo run --release -p flatcut-step --example step_bench -- [--chord 0.1] [--angle RAD] [--runs 5] [--obj DIR] FILE…`
 //! (`--angle`: the largest turn of the normal across a triangle, default flatcut's 20°)
@@ -111,7 +112,8 @@ fn main() {
                         "face": fm.face,
                         "entity": model.faces[fm.face].entity,
                         "surface": model.face(fm.face).map(|g| g.surface.name()).unwrap_or(""),
-                        "area_mm2": fm.trim_area_mm2,
+                        "area_mm2": face_area(&model, fm.face).expect("area of a tessellated face"),
+                        "chord_loops_area_mm2": fm.trim_area_mm2,
                         "repairs": fm.repairs,
                     })
                 })

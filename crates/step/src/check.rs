@@ -98,48 +98,86 @@ fn inner(s: &Surface, u0: f64, u: f64, v: f64) -> f64 {
 }
 
 /// The area (mm²) of the region the loops bound in the surface's (u, v), by Green's theorem
-/// (see the module documentation): positive for counter-clockwise outer loops.
+/// (see the module documentation): positive for counter-clockwise outer loops. Consecutive
+/// points are joined by straight lines in (u, v).
 pub fn trim_area(s: &Surface, loops: &[Vec<DVec2>]) -> f64 {
-    let u0 = loops
+    let nodes: Vec<Vec<(DVec2, bool)>> = loops
         .iter()
-        .flatten()
-        .map(|p| p.x)
-        .fold(f64::INFINITY, f64::min);
+        .map(|lp| lp.iter().map(|&p| (p, false)).collect())
+        .collect();
+    trim_area_curved(s, &nodes)
+}
+
+/// [`trim_area`] on loops whose points are `(uv, mid)`: a point marked `mid` is the (u, v) of
+/// the curve halfway between its two neighbours, and the loop runs from one neighbour to the
+/// other along the parabola through the three. An edge's curve is then followed to the fourth
+/// order in its samples' spacing instead of the second (a chord's sliver is `4 s / 3 r` of a
+/// disk of radius r sampled to sag s: 1e-3 for a 10 mm fillet sampled to 7 µm).
+pub fn trim_area_curved(s: &Surface, loops: &[Vec<(DVec2, bool)>]) -> f64 {
+    let all = || loops.iter().flatten().map(|n| n.0);
+    let u0 = all().map(|p| p.x).fold(f64::INFINITY, f64::min);
     if !u0.is_finite() {
         return 0.0;
     }
-    let (vlo, vhi) = loops
-        .iter()
-        .flatten()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-            (a.min(p.y), b.max(p.y))
-        });
+    let (vlo, vhi) = all().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+        (a.min(p.y), b.max(p.y))
+    });
     let vspan = (vhi - vlo).max(f64::MIN_POSITIVE);
     let mut total = 0.0;
     for lp in loops {
         let n = lp.len();
-        for k in 0..n {
-            let (a, b) = (lp[k], lp[(k + 1) % n]);
-            let dv = b.y - a.y;
-            if dv == 0.0 {
-                continue;
-            }
-            // Long segments (pole runs, coarse loops) in pieces of at most 1/OUTER_PIECES of
-            // the v extent.
-            let m = ((dv.abs() / vspan) * OUTER_PIECES as f64)
-                .ceil()
-                .clamp(1.0, 1e4) as usize;
-            let mut seg = 0.0;
-            for piece in 0..m {
-                for (t, w) in GL3 {
-                    let q = a + (b - a) * ((piece as f64 + t) / m as f64);
-                    seg += w * inner(s, u0, q.x, q.y);
-                }
-            }
-            total += seg * dv / m as f64;
+        for k in (0..n).filter(|&k| !lp[k].1) {
+            let next = lp[(k + 1) % n];
+            let (mid, b) = if next.1 && n > 2 {
+                (Some(next.0), lp[(k + 2) % n].0)
+            } else {
+                (None, next.0)
+            };
+            total += segment_integral(s, u0, vspan, lp[k].0, mid, b);
         }
     }
     total
+}
+
+/// `∫ F dv` from `a` to `b`: along the straight line, or along the parabola through `mid`.
+fn segment_integral(
+    s: &Surface,
+    u0: f64,
+    vspan: f64,
+    a: DVec2,
+    mid: Option<DVec2>,
+    b: DVec2,
+) -> f64 {
+    // The path q(σ) and its derivative on σ ∈ [0, 1].
+    let q = |x: f64| match mid {
+        None => (a + (b - a) * x, b - a),
+        Some(m) => (
+            a * ((1.0 - x) * (1.0 - 2.0 * x))
+                + m * (4.0 * x * (1.0 - x))
+                + b * (x * (2.0 * x - 1.0)),
+            a * (4.0 * x - 3.0) + m * (4.0 - 8.0 * x) + b * (4.0 * x - 1.0),
+        ),
+    };
+    let reach = match mid {
+        None => (b.y - a.y).abs(),
+        Some(m) => (m.y - a.y).abs() + (b.y - m.y).abs(),
+    };
+    if reach == 0.0 {
+        return 0.0;
+    }
+    // Long segments (pole runs, coarse loops) in pieces of at most 1/OUTER_PIECES of the v
+    // extent.
+    let pieces = ((reach / vspan) * OUTER_PIECES as f64)
+        .ceil()
+        .clamp(1.0, 1e4) as usize;
+    let mut sum = 0.0;
+    for piece in 0..pieces {
+        for (t, w) in GL3 {
+            let (p, dp) = q((piece as f64 + t) / pieces as f64);
+            sum += w * inner(s, u0, p.x, p.y) * dp.y;
+        }
+    }
+    sum / pieces as f64
 }
 
 /// The allowance for the chordal deficit of a face's flat triangles: `2 δ κ` (δ the chordal

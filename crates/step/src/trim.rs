@@ -1383,45 +1383,65 @@ fn fill_poles(lp: Vec<LoopPt>, rulings: Option<&[f64]>) -> Vec<LoopPt> {
     out
 }
 
+/// The sample indices point origin `o` may be on edge slot `slot` (a closed edge's vertex is
+/// both ends).
+fn index_on(
+    model: &Model,
+    slot_of: &BTreeMap<usize, usize>,
+    samples: &[Samples],
+    o: Origin,
+    slot: usize,
+) -> Vec<usize> {
+    match o {
+        Origin::Sample { slot: s, index } if s == slot => vec![index],
+        Origin::Vertex(v) => {
+            let Some((e, _)) = slot_of.iter().find(|(_, s)| **s == slot) else {
+                return Vec::new();
+            };
+            let Ok(g) = model.edges[*e].geometry.as_ref() else {
+                return Vec::new();
+            };
+            let n = samples[slot].pts.len();
+            let mut out = Vec::new();
+            if v == g.start {
+                out.push(0);
+            }
+            if v == g.end {
+                out.push(n - 1);
+            }
+            out
+        }
+        _ => Vec::new(),
+    }
+}
+
+/// The edge samples a loop runs between from point `a` to the next point `b`: (slot, i, j)
+/// when they are consecutive samples of the edge `a` runs along.
+pub(crate) fn along_edge(
+    model: &Model,
+    slot_of: &BTreeMap<usize, usize>,
+    samples: &[Samples],
+    a: &LoopPt,
+    b: &LoopPt,
+) -> Option<(usize, usize, usize)> {
+    let slot = a.along?;
+    let ia = index_on(model, slot_of, samples, a.origin, slot);
+    let ib = index_on(model, slot_of, samples, b.origin, slot);
+    ia.iter()
+        .flat_map(|&i| ib.iter().map(move |&j| (i, j)))
+        .find(|(i, j)| i.abs_diff(*j) == 1)
+        .map(|(i, j)| (slot, i, j))
+}
+
 /// The segments of the loops along edges: consecutive points that are consecutive samples of
 /// one edge (its ends being its vertices).
 fn segments(inp: &TrimInput, loops: &[Vec<LoopPt>]) -> Vec<Seg> {
-    // The sample indices a point may be on an edge slot (a closed edge's vertex is both ends).
-    let index_on = |o: Origin, slot: usize| -> Vec<usize> {
-        match o {
-            Origin::Sample { slot: s, index } if s == slot => vec![index],
-            Origin::Vertex(v) => {
-                let Some((e, _)) = inp.slot_of.iter().find(|(_, s)| **s == slot) else {
-                    return Vec::new();
-                };
-                let Ok(g) = inp.model.edges[*e].geometry.as_ref() else {
-                    return Vec::new();
-                };
-                let n = inp.samples[slot].pts.len();
-                let mut out = Vec::new();
-                if v == g.start {
-                    out.push(0);
-                }
-                if v == g.end {
-                    out.push(n - 1);
-                }
-                out
-            }
-            _ => Vec::new(),
-        }
-    };
     let mut out = Vec::new();
     for lp in loops {
         let n = lp.len();
         for k in 0..n {
             let (a, b) = (lp[k], lp[(k + 1) % n]);
-            let Some(slot) = a.along else { continue };
-            let (ia, ib) = (index_on(a.origin, slot), index_on(b.origin, slot));
-            if let Some((i, j)) = ia
-                .iter()
-                .flat_map(|&i| ib.iter().map(move |&j| (i, j)))
-                .find(|(i, j)| i.abs_diff(*j) == 1)
-            {
+            if let Some((slot, i, j)) = along_edge(inp.model, inp.slot_of, inp.samples, &a, &b) {
                 out.push(Seg {
                     slot,
                     i,
