@@ -931,3 +931,39 @@ fn every_file_architecture_names_exists() {
         "ARCHITECTURE.md names files that do not exist: {missing:?}"
     );
 }
+
+/// Words that only make sense inside the workplace a change was made in, not to a reader of a
+/// clone: schedule talk, and paths to folders beside the repository that a clone does not have.
+const PLACE_BOUND_PHRASES: &[&str] = &["this round", "main before this", "../shared", "/work/"];
+
+#[test]
+fn docs_speak_to_a_reader_of_a_clone() {
+    let mut docs = vec![root().join("README.md"), root().join("ARCHITECTURE.md")];
+    for d in ["docs", "docs/guide", "patterns"] {
+        if let Ok(entries) = std::fs::read_dir(root().join(d)) {
+            docs.extend(
+                entries
+                    .map(|e| e.unwrap().path())
+                    .filter(|p| p.extension().is_some_and(|x| x == "md")),
+            );
+        }
+    }
+    let mut help = Vec::new();
+    rust_files(&root().join("crates/cli/src"), &mut help);
+    let mut found = Vec::new();
+    for f in docs.iter().chain(&help) {
+        let text = std::fs::read_to_string(f).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            let lower = line.to_lowercase();
+            for p in PLACE_BOUND_PHRASES {
+                if lower.contains(p) {
+                    found.push(format!("{}:{}: {p}", f.display(), n + 1));
+                }
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "text a clone's reader cannot follow: {found:#?}"
+    );
+}
