@@ -828,3 +828,142 @@ fn every_crates_modules_import_without_circles() {
         "circles listed as known that are gone: {gone:#?}"
     );
 }
+
+/// ARCHITECTURE.md's code map: one `### <dir> — `<package>`` section per section heading.
+fn architecture_sections() -> Vec<(String, Vec<String>)> {
+    let text = std::fs::read_to_string(root().join("ARCHITECTURE.md")).unwrap();
+    let mut out: Vec<(String, Vec<String>)> = Vec::new();
+    for line in text.lines() {
+        if let Some(h) = line.strip_prefix("### ") {
+            out.push((h.to_string(), Vec::new()));
+        } else if line.starts_with("## ") {
+            out.push((String::new(), Vec::new()));
+        } else if let Some((_, body)) = out.last_mut() {
+            body.push(line.to_string());
+        }
+    }
+    out
+}
+
+/// Every package directory of the workspace with its package name.
+fn packages() -> Vec<(String, String)> {
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(root().join("crates"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.join("Cargo.toml").exists())
+        .collect();
+    dirs.push(root().join("firmware-sim"));
+    dirs.sort();
+    dirs.iter()
+        .map(|d| {
+            let v: toml::Value =
+                toml::from_str(&std::fs::read_to_string(d.join("Cargo.toml")).unwrap()).unwrap();
+            let dir = d.strip_prefix(root()).unwrap().display().to_string();
+            (dir, v["package"]["name"].as_str().unwrap().to_string())
+        })
+        .collect()
+}
+
+#[test]
+fn architecture_maps_every_crate_and_only_crates_that_exist() {
+    let sections = architecture_sections();
+    let packages = packages();
+    for (dir, name) in &packages {
+        let head = format!("{dir} — `{name}`");
+        assert!(
+            sections.iter().any(|(h, _)| h.starts_with(&head)),
+            "ARCHITECTURE.md has no code-map section `### {head}`"
+        );
+    }
+    for (h, _) in &sections {
+        if let Some(dir) = h.split(" — ").next().filter(|d| d.starts_with("crates/")) {
+            assert!(
+                packages.iter().any(|(d, _)| d == dir),
+                "ARCHITECTURE.md maps {dir}, which is not a workspace crate"
+            );
+        }
+    }
+}
+
+/// A crate's section is a map, not an essay: the detail lives in the crate's module docs.
+const MAX_SECTION_LINES: usize = 40;
+
+#[test]
+fn architecture_sections_are_maps_not_essays() {
+    for (h, body) in architecture_sections() {
+        let lines = body.iter().filter(|l| !l.trim().is_empty()).count();
+        assert!(
+            h.is_empty() || lines <= MAX_SECTION_LINES,
+            "ARCHITECTURE.md section `{h}` has {lines} lines (at most {MAX_SECTION_LINES}): \
+             move the detail into the module docs of the code it describes"
+        );
+    }
+}
+
+#[test]
+fn every_file_architecture_names_exists() {
+    let text = std::fs::read_to_string(root().join("ARCHITECTURE.md")).unwrap();
+    let mut files = Vec::new();
+    for d in ["crates", "firmware-sim", "tests"] {
+        rust_files(&root().join(d), &mut files);
+    }
+    let files: Vec<String> = files
+        .iter()
+        .map(|f| f.strip_prefix(root()).unwrap().display().to_string())
+        .collect();
+    let named: Vec<&str> = text
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .filter(|s| s.ends_with(".rs") && !s.contains(' '))
+        .collect();
+    assert!(named.len() > 20, "too few file names found: {named:?}");
+    let missing: Vec<_> = named
+        .iter()
+        .filter(|n| {
+            !files
+                .iter()
+                .any(|f| f == *n || f.ends_with(&format!("/{n}")))
+        })
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "ARCHITECTURE.md names files that do not exist: {missing:?}"
+    );
+}
+
+/// Words that only make sense inside the workplace a change was made in, not to a reader of a
+/// clone: schedule talk, and paths to folders beside the repository that a clone does not have.
+const PLACE_BOUND_PHRASES: &[&str] = &["this round", "main before this", "../shared", "/work/"];
+
+#[test]
+fn docs_speak_to_a_reader_of_a_clone() {
+    let mut docs = vec![root().join("README.md"), root().join("ARCHITECTURE.md")];
+    for d in ["docs", "docs/guide", "patterns"] {
+        if let Ok(entries) = std::fs::read_dir(root().join(d)) {
+            docs.extend(
+                entries
+                    .map(|e| e.unwrap().path())
+                    .filter(|p| p.extension().is_some_and(|x| x == "md")),
+            );
+        }
+    }
+    let mut help = Vec::new();
+    rust_files(&root().join("crates/cli/src"), &mut help);
+    let mut found = Vec::new();
+    for f in docs.iter().chain(&help) {
+        let text = std::fs::read_to_string(f).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            let lower = line.to_lowercase();
+            for p in PLACE_BOUND_PHRASES {
+                if lower.contains(p) {
+                    found.push(format!("{}:{}: {p}", f.display(), n + 1));
+                }
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "text a clone's reader cannot follow: {found:#?}"
+    );
+}

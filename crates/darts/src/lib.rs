@@ -15,6 +15,63 @@
 //!
 //! **Architecture invariant:** the flattening itself is the flattener's (its kernel and its
 //! Newton solver); this crate decides where to cut and proves the limits with that solver.
+//!
+//! ## How it works
+//!
+//! (The crate's map is in ARCHITECTURE.md; this is the detail behind it.)
+//!
+//! `place(mesh, uv, DartOptions) -> Darted`: the fewest darts that let every face of a piece
+//! flatten within its limits, and the cut piece flattened with the limits held. The limits
+//! (`Limits`) are a stretch/compression band on the principal stretches, or per thread of a
+//! material (`threads`: warp, weft and both biases along a pattern grain fixed in the plane, ℓ = ln
+//! det F − ½ ln|adj(F)d|², the report's measure); demand and reach are estimated with a band either
+//! way (the tightest thread's), the count with the band or the loosest thread's, and the search
+//! goes down from that count while fewer darts hold, or up until one does. Demand and reach come
+//! from the piece flattened as if it could yield everywhere (`relaxed`); a dart is the geodesic
+//! leaving the outline at right angles (`trace`), made part of the mesh (its edge crossings become
+//! vertices, `embed`) and cut open (`cut`); `keepout` masks the vertices of `no_cut` regions, marks
+//! and seams. The limits are held as hard constraints (`limits`: p-norm continuation, the method of
+//! centres, then an interior-point δ2 solve) with each dart's legs kept at equal 2D length edge by
+//! edge (`solve`: penalty terms on renewed targets, then multipliers while a dart's legs differ by
+//! more than half of `LEG_MATCH_MM`, 0.1 mm; on the flattener's projected Newton, one analysed
+//! problem per cut piece for all its solves). The method of centres ends where the best recent gain
+//! per stage, kept for every stage left, cannot reach the band: such a cut fails whatever follows.
+//! `place` starts from the count the dart-point angles ask for and searches down while the limits
+//! hold (up when they do not), computing the attempt it will most likely ask for next on the other
+//! core (`Lookahead`; the search asks for the same attempts in the same order, so the darts are the
+//! same bits with any number of threads); when none holds it says by how much and where
+//! (`DartError::Infeasible`). Of the counts that held, the shortest whose final map keeps every
+//! dart's legs within `LEG_MATCH_MM` and whose flat outline is simple is the answer; a dart the
+//! limits hardly need can close past its mouth, and a dart whose flanks the limits press along
+//! different threads can part its legs; when every count that held does, the search goes on to up
+//! to three more darts, then refuses the piece (`DartError::Overlap`, `DartError::LegsApart`)
+//! rather than write it. The final map is the least-strained one within the limits, or with
+//! `DartFit::Tight` (`fit`) each dart drawn shut by a pull between its mouth's corners, guard
+//! triangles (point and two leg copies, no energy, only kept from turning over by the line search)
+//! keeping its legs from crossing. Where a guard next to a dart's point is on its boundary the dart
+//! is shut there (`fit::shut_points`): it ends there, the piece is cut again with the map's shut
+//! copies merged (`CutMesh::merge_from`), brought within the limits and drawn tight again, so a
+//! tight fit's darts are never longer; a dart that cannot end there without breaking the limits is
+//! let go (`fit::jammed`, its pull dropped). A tight map whose legs still part or cross is tried at
+//! weaker pulls (`CLOSE_WEIGHTS`), then gives way to the least-strained one. `split` is the other
+//! cut, for where no dart can help (a saddle's flat piece is too short, not too long): chords of
+//! the flat piece through the worst face and the middle, traced on the surface as style lines
+//! (`flatcut_mesh::lines`), the one whose two halves flatten with the least excess cut, then all
+//! parts flattened together with their seams' edges equal and the limits held
+//! (`flatcut_flatten::assembly`), the worst part split again until every face is within the limits
+//! or `max_pieces` is reached (the chords judged side by side, a tie broken by the seam's cost,
+//! `seam_cost`: length weighted by visibility from curvature, a hidden side or region, and turning;
+//! a time limit returns the best split so far). A part whose flat outline crosses itself
+//! (`crossing`) is cut again, by chords and by its necks, and a split that cannot undo the overlap
+//! is an error, never a result; an unsplit piece whose outline crosses itself is refused the same
+//! way (`flatcut::darting::no_crossing`). A surface that is not a disk (`split_surface`) is first
+//! opened (`open`): refused if it passes through itself or is not manifold, each component cut
+//! along its cut graph (`flatcut_mesh::cut_graph`: the greedy system of loops from the most hidden
+//! vertex, tree–cotree, joined to the boundary, each path tightened toward a geodesic), a sphere
+//! slit from its most hidden vertex to the farthest.
+//! Cuts no longer needed are sewn back (`resew`): a slit ending inside a part is closed, and parts
+//! whose union lies within the limits are merged (the fewest pieces), kept only if their joint solve
+//! holds.
 
 pub mod band;
 pub mod crossing;

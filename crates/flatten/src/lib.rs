@@ -14,6 +14,49 @@
 //! never returns a flipped triangle from a method documented flip-free; never rescales the
 //! result. Long solves report progress, honour a time limit and can be cancelled
 //! ([`FlattenParams::time_limit`], [`FlattenHooks`]).
+//!
+//! ## How it works
+//!
+//! (The crate's map is in ARCHITECTURE.md; this is the detail behind it.)
+//!
+//! `flatten(mesh, params) -> Flattening`. Linear methods (LSCM, ARAP, conformal with isometric
+//! boundary, developable unfolding) on faer's sparse Cholesky with a reused symbolic factorisation
+//! (AMD ordering; from 150k vertices our nested dissection of the vertex graph, `ordering.rs`, with
+//! LSCM's u and v ordered field by field, as they are coupled only along the outline; 32-bit
+//! indices); nonlinear flip-free methods (isometric δ2, conformal δ1, min-max δ0,
+//! boundary-isometric f1, orthotropic) as argmin solvers whose heavy steps are our own sparse
+//! Newton/local-global iterations. The projected Newton (`nonlinear/newton.rs`) evaluates triangles
+//! in parallel (rayon, fixed blocks scattered in triangle order), mirrors indefinite Hessian modes
+//! while steps run into inversions, extends full steps while the energy falls, uses the unprojected
+//! Hessian near convergence when it is positive definite, and in the tail takes chord steps (the
+//! last factorisation reused for the new gradient), ending on one when it shows the next step would
+//! gain less than the tolerance. Edge lengths held as constraints (f1's boundary) take their
+//! multipliers along with every step (the SQP step of the augmented Lagrangian), and the solve does
+//! not stop while they still close in; vertices can be held in place (`MapProblem::with_fixed`:
+//! f1's interior inside a kept outline where a free one would crimp), pulled together (`Pull`, zero
+//! rest length) and kept from turning over in triangles of their own (`MapProblem::with_guards`):
+//! the darts' tight fit. The sparse Cholesky is always supernodal and runs in parallel from 8M
+//! factor values; from 40M (about 300k faces) the factor is single precision and each solve is
+//! refined to double precision by conjugate gradients (`refine.rs`). Long solves report progress
+//! and honour a time limit and a cancel flag (`FlattenParams::time_limit`, `FlattenHooks`). Every
+//! stage of a flattening (a method's own solve, the limits, the joint solve's seams, the darts, the
+//! split) draws on one `budget::Budget`: `max_iters` and `time_limit` cap the stage over all its
+//! solves, work computed ahead on the other core is taken only where the cap would not have cut it
+//! short (so the counts and the bits are those of the sequential run), and each stage's count is in
+//! `FlattenInfo::stages`; `timings` says where a solve's time went (start map, ordering, assembly,
+//! factorisation, solves, line search). `assembly` flattens the pieces joined by mating seams as
+//! one problem (δ2 plus an augmented Lagrangian that keeps each pair of sewn edges equally long);
+//! `limits` makes material limits constraints of the solve (a feasibility penalty, then a
+//! logarithmic barrier) or reports where they cannot be met. `nonlinear/orthotropic` is the one
+//! energy that is not a function of the singular values (the Green strain in each triangle's grain
+//! frame weighted by the material's stiffness; its 4×4 Hessian projected by a symmetric
+//! eigen-decomposition), so the Newton solver takes any per-triangle energy (`kernel::TriEnergy`,
+//! every isotropic energy one); `nonlinear/grain` takes the warp as a straight line of the pattern
+//! pulled back through the isometric map, and searches the grain's angle for `grain = "auto"` (its
+//! samples solved side by side, compared in order); `anisotropy` holds the material numbers it
+//! takes. `testmesh` (generated surfaces) is test support behind the `test-support` feature;
+//! `examples/flatten_bench.rs` is the benchmark driver (`tools/flatten/bench.py` runs it against
+//! libigl's SLIM).
 
 pub mod anisotropy;
 pub mod arap;

@@ -34,8 +34,9 @@ pub struct Args {
     /// direction lines), used in the order given; repeat for more hides.
     #[arg(long, value_name = "HIDE")]
     pub hide: Vec<PathBuf>,
-    /// A strip-packing benchmark instance (jagua-rs JSON, as in ../shared/bench/nesting): nested
-    /// on its strip by its own rules (its allowed rotations, no spacing).
+    /// A strip-packing benchmark instance in jagua-rs's JSON format (the published instances of
+    /// the strip-packing literature, such as those shipped with jagua-rs and sparrow): nested on
+    /// its strip by its own rules (its allowed rotations, no spacing).
     #[arg(long, value_name = "FILE.json", conflicts_with_all = ["pieces", "sheet", "roll", "hide"])]
     pub instance: Option<PathBuf>,
     /// Gap between pieces (kerf), mm.
