@@ -90,103 +90,116 @@ pub fn summarise(name: &str, quantity: u32, geom: &PieceGeometry, mesh: &TriMesh
         PieceGeometry::Step(sp) => {
             crate::inspect_step::summarise_piece(name, quantity, sp, mesh, &Tolerances::DEFAULT)
         }
-        PieceGeometry::Mesh(_) => {
-            let worst_defect = max_interior_angle_defect(mesh);
-            let (kmin, kmax) = stats.gaussian_range.unwrap_or((0.0, 0.0));
-            let (hmin, hmax) = stats.mean_range.unwrap_or((0.0, 0.0));
-            let interior = |v: Vec<Option<f64>>| v.into_iter().flatten().collect::<Vec<f64>>();
-            let ks = interior(flatcut_mesh::stats::gaussian_curvature(mesh));
-            let hs = interior(flatcut_mesh::stats::mean_curvature(mesh));
-            let kmean = if stats.area > 0.0 {
-                stats.total_angle_defect / stats.area
-            } else {
-                0.0
-            };
-            PieceSummary {
-                name: name.to_string(),
-                kind: "mesh",
-                quantity,
-                area_mm2: stats.area,
-                bbox_mm: bbox_arr(&stats.bbox),
-                gaussian_curvature: Range3 {
-                    min: kmin,
-                    max: kmax,
-                    mean: kmean,
-                    p1_p99: p1_p99(&ks),
-                },
-                mean_curvature: Range2 {
-                    min: hmin,
-                    max: hmax,
-                    p1_p99: p1_p99(&hs),
-                },
-                developable: worst_defect < DEVELOPABLE_ANGLE_DEFECT,
-                developability_measure: worst_defect,
-                patches: 0,
-                vertices: stats.vertices,
-                triangles: stats.triangles,
-                boundary_loops: stats.boundary_loops,
-                boundary_length_mm: stats.boundary_length,
+        PieceGeometry::Mesh(_) => summarise_mesh(name, quantity, mesh, &stats),
+        PieceGeometry::Patches(patches) => summarise_patches(name, quantity, patches, mesh, &stats),
+    }
+}
+
+/// The summary of a mesh piece: discrete curvature estimates at its interior vertices.
+fn summarise_mesh(name: &str, quantity: u32, mesh: &TriMesh, stats: &MeshStats) -> PieceSummary {
+    let worst_defect = max_interior_angle_defect(mesh);
+    let (kmin, kmax) = stats.gaussian_range.unwrap_or((0.0, 0.0));
+    let (hmin, hmax) = stats.mean_range.unwrap_or((0.0, 0.0));
+    let interior = |v: Vec<Option<f64>>| v.into_iter().flatten().collect::<Vec<f64>>();
+    let ks = interior(flatcut_mesh::stats::gaussian_curvature(mesh));
+    let hs = interior(flatcut_mesh::stats::mean_curvature(mesh));
+    let kmean = if stats.area > 0.0 {
+        stats.total_angle_defect / stats.area
+    } else {
+        0.0
+    };
+    PieceSummary {
+        name: name.to_string(),
+        kind: "mesh",
+        quantity,
+        area_mm2: stats.area,
+        bbox_mm: bbox_arr(&stats.bbox),
+        gaussian_curvature: Range3 {
+            min: kmin,
+            max: kmax,
+            mean: kmean,
+            p1_p99: p1_p99(&ks),
+        },
+        mean_curvature: Range2 {
+            min: hmin,
+            max: hmax,
+            p1_p99: p1_p99(&hs),
+        },
+        developable: worst_defect < DEVELOPABLE_ANGLE_DEFECT,
+        developability_measure: worst_defect,
+        patches: 0,
+        vertices: stats.vertices,
+        triangles: stats.triangles,
+        boundary_loops: stats.boundary_loops,
+        boundary_length_mm: stats.boundary_length,
+    }
+}
+
+/// The summary of a parametric piece: area and mean curvature integrated on the exact surface,
+/// curvature ranges sampled on a grid of each patch.
+fn summarise_patches(
+    name: &str,
+    quantity: u32,
+    patches: &[std::sync::Arc<dyn ParamSurface>],
+    mesh: &TriMesh,
+    stats: &MeshStats,
+) -> PieceSummary {
+    let (mut area, mut total_k) = (0.0, 0.0);
+    let (mut kmin, mut kmax, mut hmin, mut hmax) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    let mut worst_scaled: f64 = 0.0;
+    let mut bbox = Aabb3::EMPTY;
+    let (mut ks, mut hs) = (Vec::new(), Vec::new());
+    for p in patches {
+        let (a, k) = integrate_area_and_curvature(p.as_ref());
+        area += a;
+        total_k += k;
+        worst_scaled =
+            worst_scaled.max(diffgeom::developability(p.as_ref(), SAMPLES_PER_SIDE).max_scaled_k);
+        for_each_sample(p.as_ref(), SAMPLES_PER_SIDE, |pt, ff| {
+            bbox.add(pt);
+            if let Some(ff) = ff {
+                let (k, h) = (ff.gaussian(), ff.mean());
+                kmin = kmin.min(k);
+                kmax = kmax.max(k);
+                hmin = hmin.min(h);
+                hmax = hmax.max(h);
+                ks.push(k);
+                hs.push(h);
             }
-        }
-        PieceGeometry::Patches(patches) => {
-            let (mut area, mut total_k) = (0.0, 0.0);
-            let (mut kmin, mut kmax, mut hmin, mut hmax) = (
-                f64::INFINITY,
-                f64::NEG_INFINITY,
-                f64::INFINITY,
-                f64::NEG_INFINITY,
-            );
-            let mut worst_scaled: f64 = 0.0;
-            let mut bbox = Aabb3::EMPTY;
-            let (mut ks, mut hs) = (Vec::new(), Vec::new());
-            for p in patches {
-                let (a, k) = integrate_area_and_curvature(p.as_ref());
-                area += a;
-                total_k += k;
-                worst_scaled = worst_scaled
-                    .max(diffgeom::developability(p.as_ref(), SAMPLES_PER_SIDE).max_scaled_k);
-                for_each_sample(p.as_ref(), SAMPLES_PER_SIDE, |pt, ff| {
-                    bbox.add(pt);
-                    if let Some(ff) = ff {
-                        let (k, h) = (ff.gaussian(), ff.mean());
-                        kmin = kmin.min(k);
-                        kmax = kmax.max(k);
-                        hmin = hmin.min(h);
-                        hmax = hmax.max(h);
-                        ks.push(k);
-                        hs.push(h);
-                    }
-                });
-            }
-            // The tessellation's vertices lie on the surface: they complete the bounding box.
-            bbox = bbox.union(&mesh.bbox());
-            let fin = |v: f64| if v.is_finite() { v } else { 0.0 };
-            PieceSummary {
-                name: name.to_string(),
-                kind: "patches",
-                quantity,
-                area_mm2: area,
-                bbox_mm: bbox_arr(&bbox),
-                gaussian_curvature: Range3 {
-                    min: fin(kmin),
-                    max: fin(kmax),
-                    mean: if area > 0.0 { total_k / area } else { 0.0 },
-                    p1_p99: p1_p99(&ks),
-                },
-                mean_curvature: Range2 {
-                    min: fin(hmin),
-                    max: fin(hmax),
-                    p1_p99: p1_p99(&hs),
-                },
-                developable: worst_scaled < DEVELOPABLE_SCALED_K,
-                developability_measure: worst_scaled,
-                patches: patches.len(),
-                vertices: stats.vertices,
-                triangles: stats.triangles,
-                boundary_loops: stats.boundary_loops,
-                boundary_length_mm: stats.boundary_length,
-            }
-        }
+        });
+    }
+    // The tessellation's vertices lie on the surface: they complete the bounding box.
+    bbox = bbox.union(&mesh.bbox());
+    let fin = |v: f64| if v.is_finite() { v } else { 0.0 };
+    PieceSummary {
+        name: name.to_string(),
+        kind: "patches",
+        quantity,
+        area_mm2: area,
+        bbox_mm: bbox_arr(&bbox),
+        gaussian_curvature: Range3 {
+            min: fin(kmin),
+            max: fin(kmax),
+            mean: if area > 0.0 { total_k / area } else { 0.0 },
+            p1_p99: p1_p99(&ks),
+        },
+        mean_curvature: Range2 {
+            min: fin(hmin),
+            max: fin(hmax),
+            p1_p99: p1_p99(&hs),
+        },
+        developable: worst_scaled < DEVELOPABLE_SCALED_K,
+        developability_measure: worst_scaled,
+        patches: patches.len(),
+        vertices: stats.vertices,
+        triangles: stats.triangles,
+        boundary_loops: stats.boundary_loops,
+        boundary_length_mm: stats.boundary_length,
     }
 }
 
@@ -396,23 +409,10 @@ mod tests {
     fn one_spike_sets_the_extremes_but_not_the_percentiles_of_a_plane() {
         // A 40 × 40 grid of the plane z = 0 with one vertex lifted by 5 mm: the spike and its
         // six neighbours are curved, the other 1,514 interior vertices are flat (K = H = 0).
-        let n = 40;
-        let mut positions = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                let z = if (i, j) == (20, 20) { 5.0 } else { 0.0 };
-                positions.push(DVec3::new(i as f64, j as f64, z));
-            }
-        }
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        let mut triangles = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        let mesh = TriMesh::new(positions, triangles);
+        let mesh = flatcut_mesh::test_grid::grid_mesh(40, 40, |i, j| {
+            let z = if (i, j) == (20, 20) { 5.0 } else { 0.0 };
+            DVec3::new(i as f64, j as f64, z)
+        });
         let sum = summarise("spike", 1, &PieceGeometry::Mesh(mesh.clone()), &mesh);
         let (k, h) = (&sum.gaussian_curvature, &sum.mean_curvature);
         assert!(k.max > 0.1 && k.min < -0.01, "{k:?}");

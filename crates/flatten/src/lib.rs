@@ -56,6 +56,29 @@ use flatcut_mesh::{TriMesh, check_disk};
 const PIN_COINCIDENT_REL: f64 = 1e-9;
 
 /// Flattens a disk-topology mesh with the method and constraints in `params`.
+///
+/// Two 10 mm squares at a right angle (a sheet folded along x = 10) unfold to a 20 × 10 mm
+/// rectangle, every edge its own length:
+///
+/// ```
+/// use flatcut_flatten::{FlattenParams, Method, flatten};
+/// use flatcut_geom::DVec3;
+/// use flatcut_mesh::TriMesh;
+///
+/// let p = [(0., 0., 0.), (10., 0., 0.), (10., 10., 0.), (0., 10., 0.), (10., 0., 10.), (10., 10., 10.)]
+///     .map(|(x, y, z)| DVec3::new(x, y, z))
+///     .to_vec();
+/// let mesh = TriMesh::new(p, vec![[0, 1, 2], [0, 2, 3], [2, 1, 4], [2, 4, 5]]);
+/// let flat = flatten(&mesh, &FlattenParams::new(Method::Isometric))?;
+/// for t in &mesh.triangles {
+///     for k in 0..3 {
+///         let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+///         let (l3, l2) = (mesh.positions[a].distance(mesh.positions[b]), flat.uv[a].distance(flat.uv[b]));
+///         assert!((l3 - l2).abs() < 1e-6, "{l3} vs {l2}");
+///     }
+/// }
+/// # Ok::<(), flatcut_flatten::FlattenError>(())
+/// ```
 pub fn flatten(mesh: &TriMesh, params: &FlattenParams) -> Result<Flattening, FlattenError> {
     let topo = check_disk(mesh)?;
     validate_pins(mesh, &params.pins)?;

@@ -8,6 +8,8 @@
 
 use std::f64::consts::TAU;
 
+use flatcut_mesh::test_grid::Diagonal;
+
 use flatcut_geom::{DVec2, DVec3};
 use flatcut_mesh::TriMesh;
 
@@ -152,33 +154,16 @@ pub fn jittered_plane(size: f64, n: usize) -> (TriMesh, Vec<DVec2>) {
 
 fn grid_surface(nu: usize, nv: usize, f: impl Fn(f64, f64) -> DVec3) -> TriMesh {
     let (nu, nv) = (nu.max(1), nv.max(1));
-    let mut pos = Vec::with_capacity((nu + 1) * (nv + 1));
-    for j in 0..=nv {
-        for i in 0..=nu {
-            pos.push(f(i as f64 / nu as f64, j as f64 / nv as f64));
-        }
-    }
+    let pos = flatcut_mesh::test_grid::grid_points(nu, nv, |i, j| {
+        f(i as f64 / nu as f64, j as f64 / nv as f64)
+    });
     TriMesh::new(pos, grid_triangles(nu, nv))
 }
 
 /// Triangles of an `nu × nv` vertex grid (row-major, `nu + 1` vertices per row), counter-
-/// clockwise in the parameter plane, with alternating diagonals.
+/// clockwise in the parameter plane, with alternating diagonals (the geometry testkit's).
 fn grid_triangles(nu: usize, nv: usize) -> Vec<[u32; 3]> {
-    let id = |i: usize, j: usize| (j * (nu + 1) + i) as u32;
-    let mut t = Vec::with_capacity(2 * nu * nv);
-    for j in 0..nv {
-        for i in 0..nu {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            if (i + j) % 2 == 0 {
-                t.push([a, b, c]);
-                t.push([a, c, d]);
-            } else {
-                t.push([a, b, d]);
-                t.push([b, c, d]);
-            }
-        }
-    }
-    t
+    flatcut_mesh::test_grid::grid_triangles(nu, nv, Diagonal::Alternating, |_, _| true)
 }
 
 /// `mesh` with slivers: every `every`-th interior edge (in the order of first appearance, one

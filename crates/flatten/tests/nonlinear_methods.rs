@@ -5,31 +5,13 @@
 
 use flatcut_flatten::{FlattenParams, Method, flatten};
 use flatcut_geom::{DVec2, DVec3};
-use flatcut_mesh::{TriMesh, face_distortion};
+use flatcut_mesh::{TriMesh, face_distortion, test_grid};
 
 /// Grid over [0,1]² with `nu`×`nv` cells, mapped by `f`, alternate diagonals.
 fn grid(nu: usize, nv: usize, f: impl Fn(f64, f64) -> DVec3) -> TriMesh {
-    let mut pos = Vec::new();
-    for j in 0..=nv {
-        for i in 0..=nu {
-            pos.push(f(i as f64 / nu as f64, j as f64 / nv as f64));
-        }
-    }
-    let id = |i: usize, j: usize| (j * (nu + 1) + i) as u32;
-    let mut tris = Vec::new();
-    for j in 0..nv {
-        for i in 0..nu {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            if (i + j) % 2 == 0 {
-                tris.push([a, b, c]);
-                tris.push([a, c, d]);
-            } else {
-                tris.push([a, b, d]);
-                tris.push([b, c, d]);
-            }
-        }
-    }
-    TriMesh::new(pos, tris)
+    test_grid::grid_mesh_split(nu, nv, test_grid::Diagonal::Alternating, |i, j| {
+        f(i as f64 / nu as f64, j as f64 / nv as f64)
+    })
 }
 
 /// Cylinder patch, radius 30 mm, 200° of arc, height 50 mm.

@@ -123,6 +123,28 @@ const DEDUP_MM: f64 = 1e-4;
 
 /// Plans the drawing for the profile: layer order (engrave, draw, inner cuts, outer cuts), travel
 /// ordering, knife compensation, arc fitting, work-area check.
+///
+/// A 50 mm square cut with a pen profile: 200 mm of cut, in millimetres (`G21`).
+///
+/// ```
+/// use flatcut_gcode::{GcodeOptions, Profile, plan};
+/// use flatcut_geom::DVec2;
+/// use flatcut_pattern::{Drawing, Layer, Stroke, StrokeKind};
+///
+/// let square = [(10., 10.), (60., 10.), (60., 60.), (10., 60.)].map(|(x, y)| DVec2::new(x, y)).to_vec();
+/// let stroke = Stroke {
+///     layer: Layer::Cut,
+///     points: square,
+///     closed: true,
+///     piece: Some(1),
+///     kind: StrokeKind::Boundary,
+///     id: "square-cut".into(),
+/// };
+/// let job = plan(&Drawing::from_strokes(vec![stroke]), &Profile::pen(), &GcodeOptions::default())?;
+/// assert!((job.summary().cut_length_mm - 200.0).abs() < 1e-6);
+/// assert!(job.to_gcode().contains("G21"));
+/// # Ok::<(), flatcut_gcode::GcodeError>(())
+/// ```
 pub fn plan(drawing: &Drawing, profile: &Profile, opts: &GcodeOptions) -> Result<Plan, GcodeError> {
     // Strokes in machine coordinates, cleaned.
     struct S {

@@ -23,8 +23,10 @@ pub mod regions;
 pub mod seams;
 pub mod stats;
 pub mod tessellate;
-#[cfg(test)]
-mod test_grid;
+/// The geometry testkit: grid meshes for tests (feature `testkit`), not part of the public API.
+#[cfg(any(test, feature = "testkit"))]
+#[doc(hidden)]
+pub mod test_grid;
 pub mod topology;
 pub mod trimesh;
 pub mod trimmed;

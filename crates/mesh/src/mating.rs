@@ -274,21 +274,8 @@ mod tests {
     #[test]
     fn the_pieces_of_a_split_grid_pair_up_by_their_coordinates() {
         // A 4 × 4 grid split along x = 2: two meshes sharing the line's five vertices.
-        let mut p = Vec::new();
-        for j in 0..=4 {
-            for i in 0..=4 {
-                p.push(DVec3::new(i as f64, j as f64, 0.0));
-            }
-        }
+        let m = crate::test_grid::grid_mesh(4, 4, |i, j| DVec3::new(i as f64, j as f64, 0.0));
         let id = |i: u32, j: u32| j * 5 + i;
-        let mut t = Vec::new();
-        for j in 0..4 {
-            for i in 0..4 {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        let m = TriMesh::new(p, t);
         let line: Vec<u32> = (0..=4).map(|j| id(2, j)).collect();
         let s = split_along_lines(&m, &[line]).unwrap();
         let meshes: Vec<&TriMesh> = s.regions.iter().map(|r| &r.mesh).collect();

@@ -76,6 +76,23 @@ pub fn polygon_area(p: &[DVec2]) -> f64 {
 
 /// Places items on a roll or on sheets. Calls `progress` after the construction and whenever a
 /// better layout is found (on the calling thread).
+///
+/// Four 100 × 50 mm rectangles on a roll 110 mm wide, 2 mm apart: every one placed, on no less
+/// roll than their area needs and no more than a single file of them.
+///
+/// ```
+/// use flatcut_geom::DVec2;
+/// use flatcut_nest::{NestItem, NestOptions, Stock, nest};
+///
+/// let rect = [(0., 0.), (100., 0.), (100., 50.), (0., 50.)].map(|(x, y)| DVec2::new(x, y)).to_vec();
+/// let items = [NestItem::new("panel", rect, 4)];
+/// let stock = Stock::Roll { width: 110.0, max_length: None };
+/// let opts = NestOptions::DEFAULT.with_max_iters(50);
+/// let r = nest(&items, stock, &opts, &mut |_| {})?;
+/// assert_eq!((r.placed.len(), r.unplaced.len()), (4, 0));
+/// assert!(r.length >= 4.0 * 100.0 * 50.0 / 110.0 && r.length <= 4.0 * 102.0 + 2.0, "{}", r.length);
+/// # Ok::<(), flatcut_nest::NestError>(())
+/// ```
 pub fn nest(
     items: &[NestItem],
     stock: Stock,

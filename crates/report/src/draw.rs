@@ -761,21 +761,8 @@ mod tests {
     fn a_piece_of_more_faces_than_elements_is_drawn_one_path_per_colour_and_renders() {
         // 240 × 240 quads: 115,200 faces, stretched along x by 0 % at the bottom to 10 % at the top.
         let k = 240;
-        let mut p = Vec::new();
-        for j in 0..=k {
-            for i in 0..=k {
-                p.push(DVec3::new(i as f64, j as f64, 0.0));
-            }
-        }
-        let id = |i: usize, j: usize| (j * (k + 1) + i) as u32;
-        let mut t = Vec::new();
-        for j in 0..k {
-            for i in 0..k {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        let mut m = TriMesh::new(p, t);
+        let mut m =
+            flatcut_mesh::test_grid::grid_mesh(k, k, |i, j| DVec3::new(i as f64, j as f64, 0.0));
         m.flat = Some(
             m.positions
                 .iter()

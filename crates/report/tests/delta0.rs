@@ -4,7 +4,7 @@
 //! distances on the surface and inside the flat piece.
 
 use flatcut_geom::{DVec2, DVec3};
-use flatcut_mesh::TriMesh;
+use flatcut_mesh::{TriMesh, test_grid};
 use flatcut_report::{Report, ReportOptions};
 
 /// A deterministic offset in [−0.5, 0.5) for vertex (i, j), so the triangles are irregular.
@@ -15,22 +15,7 @@ fn jitter(i: usize, j: usize) -> f64 {
 /// Quads between consecutive rulings `i` and `i + 1` at heights `j`, `j + 1`, for the cells that
 /// `keep` keeps; diagonals alternate so the triangles are not all alike.
 fn quads(nu: usize, nv: usize, keep: impl Fn(usize, usize) -> bool) -> Vec<[u32; 3]> {
-    let id = |i: usize, j: usize| (j * (nu + 1) + i) as u32;
-    let mut t = Vec::new();
-    for j in 0..nv {
-        for i in 0..nu {
-            if !keep(i, j) {
-                continue;
-            }
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            if (i + j) % 2 == 0 {
-                t.extend([[a, b, c], [a, c, d]]);
-            } else {
-                t.extend([[a, b, d], [b, c, d]]);
-            }
-        }
-    }
-    t
+    test_grid::grid_triangles(nu, nv, test_grid::Diagonal::Alternating, keep)
 }
 
 /// Drops the vertices no triangle uses (the L's missing corner), renumbering the rest.

@@ -9,25 +9,9 @@ use flatcut_report::{
 };
 
 fn grid(n: usize, size: f64) -> TriMesh {
-    let mut p = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            p.push(DVec3::new(
-                i as f64 * size / n as f64,
-                j as f64 * size / n as f64,
-                0.0,
-            ));
-        }
-    }
-    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    let mut t = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    TriMesh::new(p, t)
+    flatcut_mesh::test_grid::grid_mesh(n, n, |i, j| {
+        DVec3::new(i as f64 * size / n as f64, j as f64 * size / n as f64, 0.0)
+    })
 }
 
 fn with_map(mut m: TriMesh, f: impl Fn(DVec3) -> DVec2) -> TriMesh {

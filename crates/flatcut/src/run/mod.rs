@@ -2,15 +2,22 @@
 //! tell an [`Observer`] what they do and return every output as a value. The caller writes the
 //! files (as one set) and streams the jobs to its device.
 //!
-//! ```no_run
+//! The bundled lampshade (a cone, which unrolls exactly) run through every stage:
+//!
+//! ```
 //! use flatcut::project::Project;
 //! use flatcut::run::{run_project, RunOptions, Silent};
 //!
-//! let project = Project::load("patterns/shoe/project.toml".as_ref())?;
-//! let out = run_project(&project, &RunOptions::default(), &mut Silent)?;
-//! for f in &out.files {
-//!     println!("{} ({} bytes)", f.name, f.bytes.len());
-//! }
+//! let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+//!     .join("../../patterns/lampshade/project.toml");
+//! let project = Project::load(&path)?;
+//! let out = run_project(&project, &RunOptions::default().with_nest_iters(5), &mut Silent)?;
+//! // Every output comes back as a value: the caller writes them (as one set).
+//! let names: Vec<&str> = out.files.iter().map(|f| f.name.as_str()).collect();
+//! assert!(names.contains(&"pattern.svg") && names.contains(&"job-1.gcode"), "{names:?}");
+//! // A developable piece flattens without distortion, and everything is placed.
+//! assert!(out.flats.iter().all(|f| f.report.delta2_max < 1e-6));
+//! assert_eq!(out.summary.unplaced, 0);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 

@@ -281,18 +281,21 @@ pub fn check_knots(n: usize, p: usize, knots: &[f64]) -> Result<(), crate::Surfa
             1
         };
         if mult > p + 1 {
-            return Err(SurfaceError::Invalid(format!(
-                "knot {i} ({}) has multiplicity {mult}, more than degree + 1 = {}",
-                knots[i],
-                p + 1
-            )));
+            return Err(SurfaceError::KnotMultiplicity {
+                index: i,
+                knot: knots[i],
+                multiplicity: mult,
+                max: p + 1,
+            });
         }
     }
     if knots[p] >= knots[n] {
-        return Err(SurfaceError::Invalid(format!(
-            "empty parameter domain: knot {p} ({}) is not below knot {n} ({})",
-            knots[p], knots[n]
-        )));
+        return Err(SurfaceError::EmptyKnotDomain {
+            first: p,
+            first_knot: knots[p],
+            last: n,
+            last_knot: knots[n],
+        });
     }
     Ok(())
 }

@@ -177,12 +177,10 @@ impl Bezier {
     /// the diagonal; `f(0^{n−k}, 1^k) = b_k` (digest A6). `args` must hold exactly `n` values.
     pub fn blossom(&self, args: &[f64]) -> Result<DVec3, SurfaceError> {
         if args.len() != self.degree() {
-            return Err(SurfaceError::Invalid(format!(
-                "blossom of a degree-{} Bézier curve takes {} arguments, got {}",
-                self.degree(),
-                self.degree(),
-                args.len()
-            )));
+            return Err(SurfaceError::BlossomArity {
+                degree: self.degree(),
+                got: args.len(),
+            });
         }
         if let Some(i) = args.iter().position(|a| !a.is_finite()) {
             return Err(SurfaceError::NonFinite {
@@ -258,11 +256,10 @@ impl Bezier {
             });
         }
         if params.len() != points.len() {
-            return Err(SurfaceError::Invalid(format!(
-                "Bézier interpolation needs one parameter per point: {} points, {} parameters",
-                points.len(),
-                params.len()
-            )));
+            return Err(SurfaceError::BezierParamCount {
+                points: points.len(),
+                params: params.len(),
+            });
         }
         check_finite(points, "interpolated point")?;
         if let Some(i) = params.iter().position(|a| !a.is_finite()) {
@@ -279,11 +276,9 @@ impl Bezier {
         });
         let rhs = nalgebra::DMatrix::from_fn(m, 3, |r, c| points[r][c]);
         let lu = a.lu();
-        let sol = lu.solve(&rhs).ok_or_else(|| {
-            SurfaceError::Invalid(
-                "Bézier interpolation parameters are not distinct (singular system)".into(),
-            )
-        })?;
+        let sol = lu
+            .solve(&rhs)
+            .ok_or(SurfaceError::BezierInterpolationSingular)?;
         let out: Vec<DVec3> = (0..m)
             .map(|r| DVec3::new(sol[(r, 0)], sol[(r, 1)], sol[(r, 2)]))
             .collect();

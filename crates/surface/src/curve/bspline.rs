@@ -175,17 +175,21 @@ fn insert<V: Lin>(
 ) -> Result<(Vec<f64>, Vec<V>), SurfaceError> {
     let n = pts.len();
     if !(t > knots[p] && t < knots[n]) {
-        return Err(SurfaceError::Invalid(format!(
-            "knot {t} to insert lies outside the open domain ({}, {})",
-            knots[p], knots[n]
-        )));
+        return Err(SurfaceError::InsertOutside {
+            knot: t,
+            lo: knots[p],
+            hi: knots[n],
+        });
     }
     let k = find_span(n, p, t, knots);
     let s = knots.iter().filter(|&&u| u == t).count();
     if r + s > p {
-        return Err(SurfaceError::Invalid(format!(
-            "inserting knot {t} {r} times would raise its multiplicity {s} above the degree {p}"
-        )));
+        return Err(SurfaceError::InsertTooOften {
+            knot: t,
+            times: r,
+            multiplicity: s,
+            degree: p,
+        });
     }
     if r == 0 {
         return Ok((knots.to_vec(), pts.to_vec()));
@@ -295,29 +299,29 @@ impl BSpline {
             });
         }
         if breaks.len() != pieces.len() + 1 {
-            return Err(SurfaceError::Invalid(format!(
-                "{} Bézier pieces need {} breakpoints, got {}",
-                pieces.len(),
-                pieces.len() + 1,
-                breaks.len()
-            )));
+            return Err(SurfaceError::BreakpointCount {
+                pieces: pieces.len(),
+                want: pieces.len() + 1,
+                got: breaks.len(),
+            });
         }
         let mut points = first.points().to_vec();
         let mut knots = vec![breaks[0]; p + 1];
         for (i, pc) in pieces.iter().enumerate().skip(1) {
             if pc.degree() != p {
-                return Err(SurfaceError::Invalid(format!(
-                    "Bézier piece {i} has degree {}, piece 0 has degree {p}",
-                    pc.degree()
-                )));
+                return Err(SurfaceError::PieceDegree {
+                    piece: i,
+                    degree: pc.degree(),
+                    first: p,
+                });
             }
             let (end, start) = (points[points.len() - 1], pc.points()[0]);
             if end.distance(start) > join_tol {
-                return Err(SurfaceError::Invalid(format!(
-                    "Bézier piece {i} starts {} mm away from the end of piece {}",
-                    end.distance(start),
-                    i - 1
-                )));
+                return Err(SurfaceError::PieceGap {
+                    piece: i,
+                    gap: end.distance(start),
+                    previous: i - 1,
+                });
             }
             let last = points.len() - 1;
             points[last] = 0.5 * (end + start);
@@ -457,11 +461,11 @@ impl Nurbs {
         check_knots(points.len(), degree, &knots)?;
         check_finite(&points, "control point")?;
         if weights.len() != points.len() {
-            return Err(SurfaceError::Invalid(format!(
-                "NURBS needs one weight per control point: {} points, {} weights",
-                points.len(),
-                weights.len()
-            )));
+            return Err(SurfaceError::WeightCount {
+                what: "NURBS",
+                points: points.len(),
+                weights: weights.len(),
+            });
         }
         let wmax = weights.iter().fold(0.0f64, |a, &w| a.max(w));
         if let Some(index) = weights
@@ -517,17 +521,13 @@ impl Nurbs {
         /// Slack on the 2π limit for angles computed by callers (e.g. `a0 + TAU`).
         const FULL_TURN_SLACK: f64 = 1e-12;
         if !(radius.is_finite() && radius > 0.0) {
-            return Err(SurfaceError::Invalid(format!(
-                "circle arc radius {radius} must be finite and > 0"
-            )));
+            return Err(SurfaceError::ArcRadius { radius });
         }
         if !(a0.is_finite() && a1.is_finite())
             || a1 <= a0
             || a1 - a0 > std::f64::consts::TAU * (1.0 + FULL_TURN_SLACK)
         {
-            return Err(SurfaceError::Invalid(format!(
-                "circle arc angles {a0}..{a1} must satisfy 0 < a1 − a0 ≤ 2π"
-            )));
+            return Err(SurfaceError::ArcAngles { a0, a1 });
         }
         if !flatcut_geom::finite3(center) {
             return Err(SurfaceError::NonFinite {
@@ -545,9 +545,7 @@ impl Nurbs {
             || !flatcut_geom::finite3(x + y)
             || y_perp.length() <= MIN_AXIS_SINE * y_axis.length()
         {
-            return Err(SurfaceError::Invalid(
-                "circle arc axes must be finite, non-zero and not parallel".into(),
-            ));
+            return Err(SurfaceError::ArcAxes);
         }
         let theta = (a1 - a0).min(std::f64::consts::TAU);
         let narcs = (theta / std::f64::consts::FRAC_PI_2 - 1e-12)

@@ -40,28 +40,26 @@ impl Frame {
     /// reference direction an arbitrary one orthogonal to the axis is chosen (STEP's default).
     pub fn new(origin: DVec3, axis: DVec3, reference: Option<DVec3>) -> Result<Self, SurfaceError> {
         if !(flatcut_geom::finite3(origin) && flatcut_geom::finite3(axis)) {
-            return Err(SurfaceError::Invalid(
-                "frame origin or axis is not finite".into(),
-            ));
+            return Err(SurfaceError::FrameNotFinite {
+                what: "frame origin or axis",
+            });
         }
         let z = axis
             .try_normalize()
-            .ok_or_else(|| SurfaceError::Invalid("frame axis has zero length".into()))?;
+            .ok_or(SurfaceError::ZeroLength { what: "frame axis" })?;
         let r = match reference {
             Some(r) if flatcut_geom::finite3(r) => r,
             Some(_) => {
-                return Err(SurfaceError::Invalid(
-                    "frame reference direction is not finite".into(),
-                ));
+                return Err(SurfaceError::FrameNotFinite {
+                    what: "frame reference direction",
+                });
             }
             None => z.any_orthonormal_vector(),
         };
         let rl = r.length();
         let rp = r - z * r.dot(z);
         if rp.length() <= FRAME_PARALLEL_REL * rl || rl == 0.0 {
-            return Err(SurfaceError::Invalid(
-                "frame reference direction is parallel to its axis".into(),
-            ));
+            return Err(SurfaceError::ReferenceAlongAxis);
         }
         let x = rp.normalize();
         Ok(Self {
@@ -91,9 +89,7 @@ fn check_domain(t0: f64, t1: f64) -> Result<(f64, f64), SurfaceError> {
     if t0.is_finite() && t1.is_finite() && t0 < t1 {
         Ok((t0, t1))
     } else {
-        Err(SurfaceError::Invalid(format!(
-            "curve interval [{t0}, {t1}] is empty or not finite"
-        )))
+        Err(SurfaceError::EmptyInterval { t0, t1 })
     }
 }
 
@@ -115,7 +111,9 @@ impl Line {
             });
         }
         if vector.length_squared() == 0.0 {
-            return Err(SurfaceError::Invalid("line vector has zero length".into()));
+            return Err(SurfaceError::ZeroLength {
+                what: "line vector",
+            });
         }
         Ok(Self {
             point,
@@ -166,9 +164,10 @@ impl Ellipse {
     pub fn new(frame: Frame, a: f64, b: f64) -> Result<Self, SurfaceError> {
         for (what, x) in [("semi-axis 1", a), ("semi-axis 2", b)] {
             if !(x.is_finite() && x > 0.0) {
-                return Err(SurfaceError::Invalid(format!(
-                    "ellipse {what} must be finite and > 0, got {x}"
-                )));
+                return Err(SurfaceError::NotPositive {
+                    what: format!("ellipse {what}"),
+                    value: x,
+                });
             }
         }
         Ok(Self {

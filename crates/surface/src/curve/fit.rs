@@ -54,9 +54,10 @@ pub fn fit_bspline(points: &[DVec3], degree: usize, tol: f64) -> Result<Fit, Sur
         });
     }
     if !tol.is_finite() || tol <= 0.0 {
-        return Err(SurfaceError::Invalid(format!(
-            "fit tolerance {tol} must be finite and > 0"
-        )));
+        return Err(SurfaceError::BadTolerance {
+            what: "fit tolerance",
+            value: tol,
+        });
     }
     let m = points.len();
     if m < 2 {
@@ -71,10 +72,10 @@ pub fn fit_bspline(points: &[DVec3], degree: usize, tol: f64) -> Result<Fit, Sur
     for (i, w) in points.windows(2).enumerate() {
         let d = w[0].distance(w[1]);
         if d == 0.0 {
-            return Err(SurfaceError::Invalid(format!(
-                "fit points {i} and {} coincide",
-                i + 1
-            )));
+            return Err(SurfaceError::FitPointsCoincide {
+                first: i,
+                second: i + 1,
+            });
         }
         u.push(u[i] + d);
     }
@@ -114,7 +115,7 @@ pub fn fit_bspline(points: &[DVec3], degree: usize, tol: f64) -> Result<Fit, Sur
             lo = mid;
         }
     }
-    best.ok_or_else(|| SurfaceError::Invalid("no B-spline fit found".into()))
+    best.ok_or(SurfaceError::NoFit)
 }
 
 /// Least-squares fit with `n` control points and parameter correction.
@@ -229,11 +230,8 @@ fn solve_lsq(
             }
         }
     }
-    let x = banded_cholesky_solve(&mut a, ni, bw, rhs).ok_or_else(|| {
-        SurfaceError::Invalid(format!(
-            "least-squares system for {n} control points is singular (too few points per span)"
-        ))
-    })?;
+    let x = banded_cholesky_solve(&mut a, ni, bw, rhs)
+        .ok_or(SurfaceError::FitSingular { control_points: n })?;
     let mut pts = Vec::with_capacity(n);
     pts.push(q0);
     pts.extend(x);

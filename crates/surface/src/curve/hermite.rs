@@ -108,12 +108,10 @@ impl ParamCurve for Hermite {
 }
 
 /// Normalises an end tangent, naming it in the error.
-fn unit_tangent(t: DVec3, which: &str) -> Result<DVec3, SurfaceError> {
+fn unit_tangent(t: DVec3, which: &'static str) -> Result<DVec3, SurfaceError> {
     let u = t.normalize_or_zero();
     if !flatcut_geom::finite3(t) || u == DVec3::ZERO {
-        return Err(SurfaceError::Invalid(format!(
-            "end tangent {which} must be finite and non-zero, got {t}"
-        )));
+        return Err(SurfaceError::EndTangent { which, tangent: t });
     }
     Ok(u)
 }
@@ -131,9 +129,7 @@ fn end_data(
     let d = r1 - r0;
     let w = d.length();
     if w == 0.0 || !w.is_finite() {
-        return Err(SurfaceError::Invalid(format!(
-            "end points r0 = {r0} and r1 = {r1} coincide: no cubic segment between them"
-        )));
+        return Err(SurfaceError::EndsCoincide { r0, r1 });
     }
     Ok((u0, u1, d, w))
 }
@@ -159,10 +155,7 @@ pub fn min_energy_speeds(
     let b = 3.0 * (4.0 * g1 + c * g0) / det;
     for (speed, which) in [(a, "start"), (b, "end")] {
         if speed.is_nan() || speed <= 0.0 {
-            return Err(SurfaceError::Invalid(format!(
-                "minimum-energy cubic has {which} speed {speed} ≤ 0: the tangent would be reversed \
-                 (tangents point away from the chord)"
-            )));
+            return Err(SurfaceError::ReversedSpeed { which, speed });
         }
     }
     Ok((a, b))
@@ -200,10 +193,10 @@ pub fn manning_speeds(
     for (i, (u, which)) in [(u0, "t0"), (u1, "t1")].into_iter().enumerate() {
         let one_plus_cos = 1.0 + (d.dot(u) / w).clamp(-1.0, 1.0);
         if one_plus_cos < MANNING_MIN_ONE_PLUS_COS {
-            return Err(SurfaceError::Invalid(format!(
-                "tangent {which} points back along the chord (1 + cos α = {one_plus_cos:.3}): \
-                 no circular-arc cubic"
-            )));
+            return Err(SurfaceError::TangentBackwards {
+                which,
+                one_plus_cos,
+            });
         }
         out[i] = 2.0 * w / one_plus_cos;
     }
@@ -251,11 +244,10 @@ impl HermiteSpline {
             });
         }
         if tangents.len() != points.len() {
-            return Err(SurfaceError::Invalid(format!(
-                "Hermite spline needs one tangent per point: {} points, {} tangents",
-                points.len(),
-                tangents.len()
-            )));
+            return Err(SurfaceError::TangentCount {
+                points: points.len(),
+                tangents: tangents.len(),
+            });
         }
         let mut segments = Vec::with_capacity(points.len() - 1);
         for i in 0..points.len() - 1 {
@@ -264,8 +256,10 @@ impl HermiteSpline {
                 SpeedRule::MinimumEnergy => min_energy_cubic(r0, t0, r1, t1),
                 SpeedRule::Manning => manning_cubic(r0, t0, r1, t1),
             }
-            .map_err(|e| {
-                SurfaceError::Invalid(format!("segment {i} (points {i}–{}): {e}", i + 1))
+            .map_err(|e| SurfaceError::Segment {
+                index: i,
+                next: i + 1,
+                source: Box::new(e),
             })?;
             segments.push(seg);
         }

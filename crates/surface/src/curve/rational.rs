@@ -58,11 +58,11 @@ impl RationalBezier {
     /// interior weight removes that point's influence.
     pub fn new(points: &[DVec3], weights: &[f64]) -> Result<Self, SurfaceError> {
         if points.len() != weights.len() {
-            return Err(SurfaceError::Invalid(format!(
-                "rational Bézier needs one weight per control point: {} points, {} weights",
-                points.len(),
-                weights.len()
-            )));
+            return Err(SurfaceError::WeightCount {
+                what: "rational Bézier",
+                points: points.len(),
+                weights: weights.len(),
+            });
         }
         super::bezier::check_finite(points, "control point")?;
         Self::from_homogeneous(

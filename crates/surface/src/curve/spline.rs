@@ -74,10 +74,10 @@ impl CubicSpline {
                 SplineParam::Centripetal => d.sqrt(),
             };
             if h.is_nan() || h <= 0.0 {
-                return Err(SurfaceError::Invalid(format!(
-                    "spline points {i} and {} coincide: no chord-length parameter interval",
-                    i + 1
-                )));
+                return Err(SurfaceError::SplinePointsCoincide {
+                    first: i,
+                    second: i + 1,
+                });
             }
             params.push(params[i] + h);
         }
@@ -86,11 +86,12 @@ impl CubicSpline {
             .windows(2)
             .position(|w| w[1] - w[0] <= SAME_POINT_REL * total)
         {
-            return Err(SurfaceError::Invalid(format!(
-                "spline points {i} and {} (almost) coincide: parameter interval {} of total {total}",
-                i + 1,
-                params[i + 1] - params[i]
-            )));
+            return Err(SurfaceError::SplinePointsNear {
+                first: i,
+                second: i + 1,
+                interval: params[i + 1] - params[i],
+                total,
+            });
         }
         Self::solve(pts, params, ends)
     }
@@ -106,17 +107,16 @@ impl CubicSpline {
         check_finite(points, "spline point")?;
         let pts = loop_points(points, ends)?;
         if params.len() != pts.len() {
-            return Err(SurfaceError::Invalid(format!(
-                "spline needs {} parameters for {} points ({}), got {}",
-                pts.len(),
-                points.len(),
-                if matches!(ends, SplineEnds::Closed) {
+            return Err(SurfaceError::SplineParamCount {
+                want: pts.len(),
+                points: points.len(),
+                ends: if matches!(ends, SplineEnds::Closed) {
                     "closed: one more for the return to the start"
                 } else {
                     "open"
                 },
-                params.len()
-            )));
+                got: params.len(),
+            });
         }
         for i in 0..params.len() {
             if !params[i].is_finite() {
@@ -126,12 +126,12 @@ impl CubicSpline {
                 });
             }
             if i > 0 && params[i] <= params[i - 1] {
-                return Err(SurfaceError::Invalid(format!(
-                    "spline parameters must increase strictly: parameter {i} ({}) ≤ parameter {} ({})",
-                    params[i],
-                    i - 1,
-                    params[i - 1]
-                )));
+                return Err(SurfaceError::SplineParamOrder {
+                    index: i,
+                    value: params[i],
+                    previous: i - 1,
+                    previous_value: params[i - 1],
+                });
             }
         }
         Self::solve(pts, params.to_vec(), ends)

@@ -75,9 +75,10 @@ fn positive(what: &str, x: f64) -> Result<(), SurfaceError> {
     if x.is_finite() && x > 0.0 {
         Ok(())
     } else {
-        Err(SurfaceError::Invalid(format!(
-            "{what} must be finite and > 0, got {x}"
-        )))
+        Err(SurfaceError::NotPositive {
+            what: what.to_string(),
+            value: x,
+        })
     }
 }
 
@@ -116,14 +117,13 @@ impl Analytic {
     /// The cone about `frame.z` with `radius` ≥ 0 at v = 0 and semi-angle in (0, π/2).
     pub fn cone(frame: Frame, radius: f64, semi_angle: f64) -> Result<Self, SurfaceError> {
         if !(radius.is_finite() && radius >= 0.0) {
-            return Err(SurfaceError::Invalid(format!(
-                "cone radius must be finite and >= 0, got {radius}"
-            )));
+            return Err(SurfaceError::Negative {
+                what: "cone radius",
+                value: radius,
+            });
         }
         if !(semi_angle.is_finite() && semi_angle > 0.0 && semi_angle < 0.5 * PI) {
-            return Err(SurfaceError::Invalid(format!(
-                "cone semi-angle must lie in (0, π/2) radians, got {semi_angle}"
-            )));
+            return Err(SurfaceError::ConeAngle { semi_angle });
         }
         Ok(Self::with_kind(
             frame,
@@ -165,9 +165,9 @@ impl Analytic {
     /// The surface swept by `curve` moving along `vector`.
     pub fn extrusion(curve: Arc<dyn ParamCurve>, vector: DVec3) -> Result<Self, SurfaceError> {
         if !flatcut_geom::finite3(vector) || vector.length_squared() == 0.0 {
-            return Err(SurfaceError::Invalid(
-                "extrusion vector must be finite and nonzero".into(),
-            ));
+            return Err(SurfaceError::ZeroVector {
+                what: "extrusion vector",
+            });
         }
         let (t0, t1) = curve.domain();
         Ok(Self::with_kind(
@@ -203,9 +203,7 @@ impl Analytic {
     pub fn with_domain(mut self, d: Domain2) -> Result<Self, SurfaceError> {
         let ok = |(a, b): (f64, f64)| a.is_finite() && b.is_finite() && a < b;
         if !(ok(d.u) && ok(d.v)) {
-            return Err(SurfaceError::Invalid(format!(
-                "parameter domain {d:?} is empty or not finite"
-            )));
+            return Err(SurfaceError::EmptyDomain { domain: d });
         }
         self.domain = d;
         Ok(self)

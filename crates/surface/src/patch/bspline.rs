@@ -394,10 +394,13 @@ fn check_knots(
         }
         let mult = j - i + 1;
         if mult > degree {
-            return Err(SurfaceError::Invalid(format!(
-                "{dir} knot {} = {} has multiplicity {mult} > degree {degree}",
-                i, knots[i]
-            )));
+            return Err(SurfaceError::InteriorKnotMultiplicity {
+                dir,
+                index: i,
+                knot: knots[i],
+                multiplicity: mult,
+                degree,
+            });
         }
         i = j + 1;
     }
@@ -439,11 +442,10 @@ impl BSplinePatch {
         let mut hpoints = Vec::new();
         if let Some(w) = &weights {
             if w.len() != points.len() {
-                return Err(SurfaceError::Invalid(format!(
-                    "{} weights given for {} poles",
-                    w.len(),
-                    points.len()
-                )));
+                return Err(SurfaceError::PoleWeightCount {
+                    weights: w.len(),
+                    poles: points.len(),
+                });
             }
             if let Some(index) = w.iter().position(|x| !(x.is_finite() && *x > 0.0)) {
                 return Err(SurfaceError::BadWeight {
@@ -682,11 +684,10 @@ impl BSplinePatch {
         knots_v: Vec<f64>,
     ) -> Result<Self, SurfaceError> {
         if profile.len() != profile_weights.len() {
-            return Err(SurfaceError::Invalid(format!(
-                "profile has {} points but {} weights",
-                profile.len(),
-                profile_weights.len()
-            )));
+            return Err(SurfaceError::ProfileWeightCount {
+                points: profile.len(),
+                weights: profile_weights.len(),
+            });
         }
         let mut pts = Vec::with_capacity(profile.len() * circle.len());
         let mut w = Vec::with_capacity(pts.capacity());
@@ -712,9 +713,10 @@ impl BSplinePatch {
         if x.is_finite() && x > 0.0 {
             Ok(())
         } else {
-            Err(SurfaceError::Invalid(format!(
-                "{what} must be finite and > 0, got {x}"
-            )))
+            Err(SurfaceError::NotPositive {
+                what: what.to_string(),
+                value: x,
+            })
         }
     }
 
@@ -777,9 +779,10 @@ impl BSplinePatch {
         Self::check_positive("cone base radius", base_radius)?;
         Self::check_positive("cone height", height)?;
         if !(top_radius.is_finite() && top_radius >= 0.0) {
-            return Err(SurfaceError::Invalid(format!(
-                "cone top radius must be finite and >= 0, got {top_radius}"
-            )));
+            return Err(SurfaceError::Negative {
+                what: "cone top radius",
+                value: top_radius,
+            });
         }
         Self::revolve(
             base,
@@ -797,9 +800,7 @@ impl BSplinePatch {
         Self::check_positive("torus major radius", major)?;
         Self::check_positive("torus minor radius", minor)?;
         if minor >= major {
-            return Err(SurfaceError::Invalid(format!(
-                "torus minor radius {minor} must be below the major radius {major}"
-            )));
+            return Err(SurfaceError::TorusRadii { major, minor });
         }
         let s = QUARTER_WEIGHT;
         let c: [(f64, f64); 9] = [

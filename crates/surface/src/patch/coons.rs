@@ -28,9 +28,11 @@ impl UnitCurve {
     fn new(c: Arc<dyn ParamCurve>, name: &str) -> Result<Self, SurfaceError> {
         let (t0, t1) = c.domain();
         if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
-            return Err(SurfaceError::Invalid(format!(
-                "{name}: curve domain ({t0}, {t1}) is empty or not finite"
-            )));
+            return Err(SurfaceError::EmptyCurveDomain {
+                name: name.to_string(),
+                t0,
+                t1,
+            });
         }
         Ok(Self {
             c,
@@ -146,10 +148,7 @@ impl CoonsPatch {
         for ((i, j), a, b) in pairs {
             let gap = a.distance(b);
             if gap > tol {
-                return Err(SurfaceError::Invalid(format!(
-                    "Coons corner ({i},{j}): the boundary curves miss each other by {gap:.3e} mm \
-                     (tolerance {tol:.1e} mm)"
-                )));
+                return Err(SurfaceError::CoonsCorner { i, j, gap, tol });
             }
             corners[i][j] = (a + b) * 0.5;
         }
@@ -253,25 +252,18 @@ pub struct GordonSurface {
     grid: Vec<DVec3>,
 }
 
-fn check_params(p: &[f64], what: &str) -> Result<(), SurfaceError> {
+fn check_params(p: &[f64], what: &'static str) -> Result<(), SurfaceError> {
     if p.len() < 2 {
-        return Err(SurfaceError::Invalid(format!(
-            "Gordon: need at least two {what}"
-        )));
+        return Err(SurfaceError::GordonTooFew { what });
     }
     for (i, w) in p.windows(2).enumerate() {
         // `partial_cmp` rejects NaN too (it is not `Less`).
         if w[0].partial_cmp(&w[1]) != Some(std::cmp::Ordering::Less) {
-            return Err(SurfaceError::Invalid(format!(
-                "Gordon: {what} must increase strictly (index {})",
-                i + 1
-            )));
+            return Err(SurfaceError::GordonOrder { what, index: i + 1 });
         }
     }
     if !(p[0] >= 0.0 && p[p.len() - 1] <= 1.0) {
-        return Err(SurfaceError::Invalid(format!(
-            "Gordon: {what} must lie in [0, 1]"
-        )));
+        return Err(SurfaceError::GordonRange { what });
     }
     Ok(())
 }
@@ -288,13 +280,12 @@ impl GordonSurface {
         check_params(&u_params, "u parameters")?;
         check_params(&v_params, "v parameters")?;
         if u_curves.len() != u_params.len() || v_curves.len() != v_params.len() {
-            return Err(SurfaceError::Invalid(format!(
-                "Gordon: {} u-curves for {} u parameters, {} v-curves for {} v parameters",
-                u_curves.len(),
-                u_params.len(),
-                v_curves.len(),
-                v_params.len()
-            )));
+            return Err(SurfaceError::GordonCount {
+                u_curves: u_curves.len(),
+                u_params: u_params.len(),
+                v_curves: v_curves.len(),
+                v_params: v_params.len(),
+            });
         }
         let u_curves = u_curves
             .into_iter()
@@ -327,11 +318,11 @@ impl GordonSurface {
         for (k, (p, q)) in a.iter().zip(&b).enumerate() {
             let gap = p.distance(*q);
             if gap > tol {
-                return Err(SurfaceError::Invalid(format!(
-                    "Gordon: u-curve {} and v-curve {} miss each other by {gap:.3e} mm",
-                    k / nv,
-                    k % nv
-                )));
+                return Err(SurfaceError::GordonMiss {
+                    u: k / nv,
+                    v: k % nv,
+                    gap,
+                });
             }
             grid.push((*p + *q) * 0.5);
         }

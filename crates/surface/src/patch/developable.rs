@@ -137,9 +137,7 @@ impl DevelopableSurface {
         let (t0, t1) = rail1.domain();
         let (ra, rb) = rail0.domain();
         if !(t1 > t0 && rb > ra) || opts.steps == 0 {
-            return Err(SurfaceError::Invalid(
-                "developable: empty rail domain or zero steps".into(),
-            ));
+            return Err(SurfaceError::DevelopableEmpty);
         }
         let mut s = Self {
             rail0,
@@ -147,12 +145,9 @@ impl DevelopableSurface {
             samples: Vec::new(),
             opts,
         };
-        let r = s.correct(r_start, t0).ok_or_else(|| {
-            SurfaceError::Invalid(format!(
-                "developable: no ruling from rail 0 near r={r_start} meets rail 1 at t={t0} \
-                 with a common tangent plane"
-            ))
-        })?;
+        let r = s
+            .correct(r_start, t0)
+            .ok_or(SurfaceError::DevelopableNoRuling { r: r_start, t: t0 })?;
         s.integrate(r, t0, t1, ra, rb)?;
         s.validate()?;
         Ok(s)
@@ -222,12 +217,7 @@ impl DevelopableSurface {
     ) -> Result<(), SurfaceError> {
         const MAX_HALVINGS: u32 = 20;
         let h0 = (t1 - t0) / self.opts.steps as f64;
-        let degenerate = |t: f64| {
-            SurfaceError::Invalid(format!(
-                "developable: the rails admit no developable at rail-1 parameter t={t:.6}: \
-                 [λ−μ, λ'', μ'] vanishes (ruling tangent to a rail or through a cone vertex)"
-            ))
-        };
+        let degenerate = |t: f64| SurfaceError::DevelopableDegenerate { t };
         let (mut t, mut r) = (t0, r_init);
         let k = self.slope(r, t).ok_or_else(|| degenerate(t))?;
         self.samples.push((t, r, k));
@@ -260,9 +250,7 @@ impl DevelopableSurface {
             }
         }
         if self.samples.len() < 2 {
-            return Err(SurfaceError::Invalid(format!(
-                "developable: rail 0 ends immediately (no ruling beyond t={t0})"
-            )));
+            return Err(SurfaceError::DevelopableRailEnds { t: t0 });
         }
         Ok(())
     }
@@ -279,10 +267,10 @@ impl DevelopableSurface {
     fn validate(&self) -> Result<(), SurfaceError> {
         let worst = self.max_ruling_twist();
         if worst.0 > self.opts.max_ruling_twist {
-            return Err(SurfaceError::Invalid(format!(
-                "developable: normals along the ruling at t={:.6} differ by sin θ = {:.2e}",
-                worst.1, worst.0
-            )));
+            return Err(SurfaceError::DevelopableNormals {
+                t: worst.1,
+                sin: worst.0,
+            });
         }
         Ok(())
     }
@@ -345,11 +333,7 @@ impl DevelopableSurface {
             .collect();
         let len0 = pts[0][0].distance(pts[0][1]);
         let mut out = vec![[DVec2::ZERO, DVec2::new(len0, 0.0)]];
-        let fail = |i: usize| {
-            SurfaceError::Invalid(format!(
-                "developable: ruling {i} has zero length; cannot unfold"
-            ))
-        };
+        let fail = |i: usize| SurfaceError::ZeroRuling { index: i };
         // Side of the previous apex relative to the edge we unfold across: the new vertex goes
         // to the other side so the strip never folds back.
         let side = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a) >= 0.0;

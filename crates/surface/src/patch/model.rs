@@ -114,36 +114,49 @@ fn nearest_dist(patch: &dyn ParamSurface, side: Side, q: DVec3) -> f64 {
     best.0.min(m.fx).sqrt()
 }
 
+/// Every side of every patch sampled, its box, and whether it collapses to a point within
+/// `weld_mm`; a side that evaluates to a non-finite point is an error naming it.
+fn sample_sides(
+    patches: &[Arc<dyn ParamSurface>],
+    weld_mm: f64,
+) -> Result<Vec<SideInfo>, SurfaceError> {
+    let mut sides = Vec::new();
+    for (pi, p) in patches.iter().enumerate() {
+        for &side in Side::all(p.domain_kind()) {
+            let samples: Vec<DVec3> = (0..SIDE_SAMPLES)
+                .map(|k| side.eval(p.as_ref(), k as f64 / (SIDE_SAMPLES - 1) as f64))
+                .collect();
+            if let Some(k) = samples.iter().position(|q| !flatcut_geom::finite3(*q)) {
+                return Err(SurfaceError::NonFiniteSide {
+                    patch: pi,
+                    side: format!("{side:?}"),
+                    sample: k,
+                });
+            }
+            let bbox = Aabb3::from_points(samples.iter().copied());
+            let degenerate = samples.iter().all(|q| q.distance(samples[0]) <= weld_mm);
+            sides.push(SideInfo {
+                patch: pi,
+                side,
+                samples,
+                bbox,
+                degenerate,
+            });
+        }
+    }
+    Ok(sides)
+}
+
 impl Model {
     /// Builds the model and detects shared sides within `weld_mm` (finite, > 0).
     pub fn new(patches: Vec<Arc<dyn ParamSurface>>, weld_mm: f64) -> Result<Self, SurfaceError> {
         if !(weld_mm.is_finite() && weld_mm > 0.0) {
-            return Err(SurfaceError::Invalid(format!(
-                "model weld tolerance must be finite and > 0, got {weld_mm}"
-            )));
+            return Err(SurfaceError::NotPositive {
+                what: "model weld tolerance".into(),
+                value: weld_mm,
+            });
         }
-        let mut sides = Vec::new();
-        for (pi, p) in patches.iter().enumerate() {
-            for &side in Side::all(p.domain_kind()) {
-                let samples: Vec<DVec3> = (0..SIDE_SAMPLES)
-                    .map(|k| side.eval(p.as_ref(), k as f64 / (SIDE_SAMPLES - 1) as f64))
-                    .collect();
-                if let Some(k) = samples.iter().position(|q| !flatcut_geom::finite3(*q)) {
-                    return Err(SurfaceError::Invalid(format!(
-                        "model: patch {pi} side {side:?} evaluates to a non-finite point at sample {k}"
-                    )));
-                }
-                let bbox = Aabb3::from_points(samples.iter().copied());
-                let degenerate = samples.iter().all(|q| q.distance(samples[0]) <= weld_mm);
-                sides.push(SideInfo {
-                    patch: pi,
-                    side,
-                    samples,
-                    bbox,
-                    degenerate,
-                });
-            }
-        }
+        let sides = sample_sides(&patches, weld_mm)?;
         let mut edges = Vec::new();
         for i in 0..sides.len() {
             for j in i + 1..sides.len() {

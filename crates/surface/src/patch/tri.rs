@@ -102,9 +102,10 @@ impl TriBezierPatch {
                 rhs[(row, 2)] = p.z;
             }
         }
-        let sol = a.lu().solve(&rhs).ok_or_else(|| {
-            SurfaceError::Invalid("triangular interpolation system is singular".into())
-        })?;
+        let sol = a
+            .lu()
+            .solve(&rhs)
+            .ok_or(SurfaceError::TriangularInterpolationSingular)?;
         let pts = (0..m)
             .map(|k| DVec3::new(sol[(k, 0)], sol[(k, 1)], sol[(k, 2)]))
             .collect();
