@@ -416,3 +416,166 @@ fn resume_cutting_each_stroke_once(sim: PtySim, job: &Job, journal: &Path, k: us
     assert!(uncut.is_empty(), "never cut: {uncut:?}");
     assert_job_exactly_once(job, &trace);
 }
+
+/// A board that keeps running after the host dies, accelerating briskly (200 mm/s²) at 16×
+/// real time: a stroke of the zigzag takes about 15 ms, so the job runs in seconds.
+fn crash_sim() -> PtySim {
+    let mut cfg = SimConfig::default().with_time_scale(32.0);
+    for axis in 0..2 {
+        cfg = cfg.with_setting(120 + axis, 200.0);
+    }
+    PtySim::spawn_with_dtr_reset(cfg, false).expect("spawn firmware-sim")
+}
+
+/// How many times each job motion ran over the trace (each has its own text here): the lines run
+/// more than once, and those never run.
+fn run_counts(job: &Job, trace: &[TraceSegment]) -> (Vec<(String, usize)>, Vec<String>) {
+    let (mut twice, mut never) = (Vec::new(), Vec::new());
+    for (text, _, to) in job.motions() {
+        let n = trace
+            .iter()
+            .filter(|s| s.text == text && close(s.to, to))
+            .count();
+        match n {
+            0 => never.push(text),
+            1 => {}
+            _ => twice.push((text, n)),
+        }
+    }
+    (twice, never)
+}
+
+/// Environment of the sender process [`crash_sender`] runs as: the simulator's device path,
+/// the job file and the journal.
+const CRASH_ENV: [&str; 3] = [
+    "FLATCUT_CRASH_PORT",
+    "FLATCUT_CRASH_JOB",
+    "FLATCUT_CRASH_JOURNAL",
+];
+
+/// The sender that [`a_sender_killed_mid_stream_never_resumes_from_a_place_it_does_not_know`]
+/// kills: this test binary run again with [`CRASH_ENV`] set. It streams the job and never
+/// returns on its own before the job is done.
+#[test]
+#[ignore = "the sender process of the crash test, run by it"]
+fn crash_sender() {
+    let [port, job, journal] = CRASH_ENV.map(|k| std::env::var(k).expect(k));
+    let job = Job::parse(&std::fs::read_to_string(job).unwrap()).unwrap();
+    let _ = send(
+        Path::new(&port),
+        &job,
+        &opts(Path::new(&journal)),
+        &CancelToken::new(),
+        None,
+    );
+}
+
+/// The host dies mid-stream (SIGKILL, as a crash or a power cut would) while a real GRBL keeps
+/// running what its RX buffer and planner hold: firmware-sim on a pseudo-terminal, the sender
+/// a separate process killed after `kill_after` lines reached the controller, with journal
+/// records still in its buffer. The simulator finishes on its own; then `--resume` either
+/// completes the job with every motion run exactly once, or refuses naming the lines in doubt,
+/// and a resume from the line the operator names (the first one the workpiece shows undone)
+/// completes it. Returns the number of drawing motions cut twice and never cut.
+fn crash_and_resume(kill_after: u32) -> (usize, usize) {
+    let text = jobs::zigzag(160, 0.1, 1.0, 1200.0);
+    let dir = tempfile::tempdir().unwrap();
+    let b = Bench {
+        journal: dir.path().join("job.journal"),
+        job: Job::parse(&text).unwrap(),
+        _dir: dir,
+    };
+    let job_path = b.journal.with_extension("gcode");
+    std::fs::write(&job_path, text).unwrap();
+    let sim = crash_sim();
+    let mut child = std::process::Command::new(std::env::current_exe().unwrap())
+        .args(["--exact", "crash_sender", "--ignored", "--nocapture"])
+        .env(CRASH_ENV[0], sim.path())
+        .env(CRASH_ENV[1], &job_path)
+        .env(CRASH_ENV[2], &b.journal)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("start the sender");
+    let t0 = Instant::now();
+    while sim.lines_received() < kill_after {
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "the sender never got going"
+        );
+        std::thread::sleep(Duration::from_micros(200));
+    }
+    child.kill().expect("SIGKILL the sender");
+    child.wait().unwrap();
+    // The controller runs on: wait until it has run everything it was given.
+    let mut seen = (sim.trace().len(), Instant::now());
+    while seen.1.elapsed() < Duration::from_millis(400) {
+        std::thread::sleep(Duration::from_millis(50));
+        let n = sim.trace().len();
+        if n != seen.0 {
+            seen = (n, Instant::now());
+        }
+    }
+    let ran_before = sim.trace();
+    let resumed = send(
+        sim.path(),
+        &b.job,
+        &opts(&b.journal).with_resume(true),
+        &CancelToken::new(),
+        None,
+    );
+    let trace = match resumed {
+        Ok(_) => sim.stop().trace,
+        Err(SendError::ResumeUncertain { from, to, reason }) => {
+            assert!(from.index <= to.index, "{reason}");
+            // The operator looks at the work and names the first stroke not drawn.
+            let done = flatcut_testkit::trace::joined(&ran_before).len();
+            let named = b
+                .job
+                .lines
+                .iter()
+                .enumerate()
+                .filter(|(_, l)| l.moves)
+                .nth(done)
+                .map(|(i, _)| i)
+                .expect("a line still to run");
+            assert!(
+                (from.index..=to.index + 1).contains(&named),
+                "the lines in doubt {}..={} do not hold the line the machine stands at ({named}): {reason}",
+                from.index,
+                to.index
+            );
+            send(
+                sim.path(),
+                &b.job,
+                &opts(&b.journal)
+                    .with_resume(true)
+                    .with_resume_from(Some(named)),
+                &CancelToken::new(),
+                None,
+            )
+            .unwrap_or_else(|e| panic!("resume from line {named} failed: {e}"));
+            sim.stop().trace
+        }
+        Err(e) => panic!("the resume after a crash failed otherwise: {e}"),
+    };
+    let (twice, uncut) = run_counts(&b.job, &trace);
+    eprintln!("killed after {kill_after} lines: cut twice {twice:?}, never cut {uncut:?}");
+    if twice.is_empty() && uncut.is_empty() {
+        assert_job_exactly_once(&b.job, &trace);
+    }
+    (twice.len(), uncut.len())
+}
+
+#[test]
+fn a_sender_killed_mid_stream_never_resumes_from_a_place_it_does_not_know() {
+    // Lines the controller received (a dozen are the handshake's) when the sender dies.
+    let found: Vec<(u32, (usize, usize))> = [30, 61, 97, 140]
+        .into_iter()
+        .map(|k| (k, crash_and_resume(k)))
+        .collect();
+    assert!(
+        found.iter().all(|(_, (twice, uncut))| twice + uncut == 0),
+        "(lines received when killed, (motions cut twice, never cut)): {found:?}"
+    );
+}

@@ -514,6 +514,7 @@ fn state_with_unconfirmed(job: &Job, unconfirmed: Vec<usize>) -> JournalState {
         origin: None,
         texts: Vec::new(),
         stop: None,
+        sent: None,
     }
 }
 

@@ -17,6 +17,12 @@
 //! A <index>               line <index> (0-based job line) was answered `ok` (at a stop, also a
 //!                         line whose answer was still on the wire when the machine was found
 //!                         standing past it: GRBL answers a line before running it)
+//! W <index>               job lines of this run up to <index> may have been written to the port:
+//!                         recorded (and handed to the OS) before their bytes are written. If the
+//!                         run ends without a record settling its stop (`P`, `Q`, `S`, `D`), or a
+//!                         later run's `K`, the lines it wrote that are not known executed are in
+//!                         doubt ([`JournalState::sent`]): the sender died, but a controller keeps
+//!                         running its RX buffer and planner. Journals without `W` read as before
 //! E <index> <code>        line <index> was answered `error:<code>` (it did not run)
 //! X <index>               every line acknowledged in this run with index <= <index> has executed
 //! U <index>               lines of this run with index >= <index> are not known executed after
@@ -133,6 +139,9 @@ pub struct JournalState {
     pub texts: Vec<(usize, String)>,
     /// What the controller said when the last run stopped, unless a later run moved it since.
     pub stop: Option<StopRecord>,
+    /// The highest line a run wrote to the port (`W`) with no record settling what became of the
+    /// lines it wrote: those not known executed may have run (see [`JournalState::in_doubt`]).
+    pub sent: Option<usize>,
 }
 
 /// What the controller said when a run stopped and the machine stood still (the `S` record):
@@ -172,6 +181,17 @@ impl JournalState {
     /// Number of lines known executed.
     pub fn done_count(&self) -> usize {
         self.done.iter().filter(|d| **d).count()
+    }
+
+    /// Lines written to the port by a run that ended unsettled and not known executed (nor
+    /// rejected): the controller may have run them after the sender died.
+    pub fn in_doubt(&self) -> Vec<usize> {
+        let Some(w) = self.sent else {
+            return Vec::new();
+        };
+        (0..=w.min(self.lines.saturating_sub(1)))
+            .filter(|&i| !self.done[i] && self.rejected[i].is_none())
+            .collect()
     }
 
     /// Highest index `k` such that every line `0..=k` is done (the "last completed line").
@@ -300,6 +320,9 @@ impl Journal {
         {
             t.push_str(&format!("Q {a} {b}\n"));
         }
+        if let Some(w) = st.in_doubt().into_iter().filter_map(m).max() {
+            t.push_str(&format!("W {w}\n"));
+        }
         if let Some(r) = &st.stop {
             t.push_str(&format!("S {}\n", r.to_record()));
         }
@@ -395,6 +418,7 @@ impl Journal {
             origin: None,
             texts: Vec::new(),
             stop: None,
+            sent: None,
         };
         // Acks of the current run not yet confirmed, kept sorted by arrival (= index order
         // within a run except across resume gaps).
@@ -402,6 +426,10 @@ impl Journal {
         let mut confirmed: Vec<usize> = Vec::new();
         // Unconfirmed acknowledgements of earlier runs, waiting for a `K`.
         let mut carried: Vec<usize> = Vec::new();
+        // The current run's `W` high-water mark, and the highest of earlier unsettled runs.
+        let mut written: Option<usize> = None;
+        let mut carried_written: Option<usize> = None;
+        let max = |a: Option<usize>, b: Option<usize>| a.max(b);
         let coord = |n: usize, s: Option<&str>| -> Result<f64, JournalError> {
             s.and_then(|s| s.parse::<f64>().ok())
                 .filter(|v| v.is_finite())
@@ -430,6 +458,7 @@ impl Journal {
                     st.runs += 1;
                     carried.append(&mut pending);
                     confirmed.clear();
+                    carried_written = max(carried_written, written.take());
                 }
                 "A" => {
                     let i = index(n, rest)?;
@@ -437,6 +466,10 @@ impl Journal {
                     st.last_acked = Some(st.last_acked.map_or(i, |l| l.max(i)));
                     pending.push(i);
                     st.stop = None;
+                }
+                "W" => {
+                    let i = index(n, rest)?;
+                    written = max(written, Some(i));
                 }
                 "E" => {
                     let mut w = rest.unwrap_or("").split_whitespace();
@@ -480,6 +513,7 @@ impl Journal {
                     ];
                     pending.retain(|&i| i < k);
                     st.partial = Some((k, p));
+                    written = None;
                 }
                 "Q" | "K" => {
                     let mut w = rest.unwrap_or("").split_whitespace();
@@ -489,10 +523,12 @@ impl Journal {
                         .and_then(|s| s.parse().ok())
                         .filter(|&b| b <= lines)
                         .ok_or_else(|| bad(n, "missing or bad range end"))?;
+                    written = None;
                     if kind == "Q" {
                         pending.clear();
                         st.uncertain = Some((a, b));
                     } else {
+                        carried_written = None;
                         for (i, d) in st.done.iter_mut().enumerate() {
                             if i >= b {
                                 *d = false;
@@ -559,6 +595,7 @@ impl Journal {
                     for x in &mut g {
                         *x = coord(n, w.next())?;
                     }
+                    written = None;
                     st.stop = Some(StopRecord {
                         machine: v,
                         wcs,
@@ -568,7 +605,10 @@ impl Journal {
                     });
                 }
                 "N" => st.notes.push(rest.unwrap_or("").to_string()),
-                "D" => st.finished = true,
+                "D" => {
+                    st.finished = true;
+                    written = None;
+                }
                 _ => return Err(bad(n, &format!("unknown record '{kind}'"))),
             }
         }
@@ -577,6 +617,7 @@ impl Journal {
         carried.sort_unstable();
         carried.dedup();
         st.unconfirmed = carried;
+        st.sent = max(carried_written, written);
         if st.partial.is_some_and(|(k, _)| st.done[k]) {
             st.partial = None;
         }
@@ -591,6 +632,13 @@ impl Journal {
     /// Records that line `index` was acknowledged (buffered until [`Journal::sync`]).
     pub fn ack(&mut self, index: usize) {
         self.buf.push_str(&format!("A {index}\n"));
+    }
+
+    /// Records that job lines up to `index` may be written to the port, and hands the record to
+    /// the OS at once (with what is buffered before it): called before the bytes are written.
+    pub fn sending(&mut self, index: usize) -> Result<(), JournalError> {
+        self.buf.push_str(&format!("W {index}\n"));
+        self.flush()
     }
 
     /// Records that line `index` was rejected with `error:code`.
@@ -824,6 +872,60 @@ mod tests {
             Journal::read(&p),
             Err(JournalError::Malformed { .. })
         ));
+    }
+
+    #[test]
+    fn lines_written_by_a_run_that_died_unsettled_are_in_doubt_until_resolved() {
+        let job = Job::parse("G1X1F100\nG1X2\nG1X3\nG1X4\nG1X5\nG1X6\n").unwrap();
+        let p = tmp("written.journal");
+        {
+            // Everything answered was confirmed; lines 2..=4 were written, then the sender died.
+            let mut j = Journal::create(&p, &job).unwrap();
+            j.sending(1).unwrap();
+            j.ack(0);
+            j.ack(1);
+            j.executed_through(1);
+            j.sending(4).unwrap();
+            std::mem::forget(j);
+        }
+        let st = Journal::read(&p).unwrap();
+        assert!(st.unconfirmed.is_empty());
+        assert_eq!((st.sent, st.in_doubt()), (Some(4), vec![2, 3, 4]));
+        // A resume that settles nothing keeps the doubt.
+        drop(Journal::resume(&p, &job).unwrap());
+        assert_eq!(Journal::read(&p).unwrap().in_doubt(), vec![2, 3, 4]);
+        {
+            let (mut j, _) = Journal::resume(&p, &job).unwrap();
+            j.resolved(2, 4);
+            j.sending(5).unwrap();
+            j.ack(4);
+            j.ack(5);
+            j.executed_through(5);
+            j.finish();
+            j.sync().unwrap();
+        }
+        let st = Journal::read(&p).unwrap();
+        assert_eq!((st.sent, st.in_doubt()), (None, vec![]));
+        assert_eq!(st.remaining(), Vec::<usize>::new());
+        // A stop that settled what it wrote (`P`) leaves nothing in doubt; a journal without
+        // `W` (an older one) reads as before.
+        let mut j = Journal::create(&p, &job).unwrap();
+        j.sending(3).unwrap();
+        j.ack(0);
+        j.executed_through(0);
+        j.partial(1, [1.5, 0.0, 0.0]);
+        j.sync().unwrap();
+        drop(j);
+        assert_eq!(Journal::read(&p).unwrap().sent, None);
+        let old: String = std::fs::read_to_string(&p)
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with("W "))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        std::fs::write(&p, old).unwrap();
+        let st = Journal::read(&p).unwrap();
+        assert_eq!((st.sent, st.partial), (None, Some((1, [1.5, 0.0, 0.0]))));
     }
 
     #[test]

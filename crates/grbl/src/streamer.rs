@@ -212,6 +212,38 @@ impl Streamer {
         self.queue.is_empty() && self.in_flight.is_empty() && self.realtime.is_empty()
     }
 
+    /// The highest job line the next [`Streamer::poll_transmit`] would hand out, if any: what a
+    /// write-ahead journal records before the bytes go to the port.
+    pub fn next_job_line(&self) -> Option<usize> {
+        if !self.feeding {
+            return None;
+        }
+        let mut bytes = self.in_flight_bytes;
+        let mut sr = self
+            .in_flight
+            .iter()
+            .any(|f| f.mode == SendMode::SendResponse);
+        let mut empty = self.in_flight.is_empty();
+        let mut last = None;
+        for p in &self.queue {
+            let need = p.text.len() + 1;
+            let fits = match p.mode {
+                SendMode::CharCount => !sr && bytes + need <= self.rx_size,
+                SendMode::SendResponse => empty,
+            };
+            if !fits {
+                break;
+            }
+            bytes += need;
+            sr |= p.mode == SendMode::SendResponse;
+            empty = false;
+            if let Tag::Job(i) = p.tag {
+                last = Some(last.map_or(i, |l: usize| l.max(i)));
+            }
+        }
+        last
+    }
+
     /// The next bytes to write, if any may be written now: pending realtime bytes first, then as
     /// many queued lines as the flow control allows, each terminated by a single `\n` (never
     /// `\r\n`, which GRBL answers with two `ok`s).

@@ -218,7 +218,8 @@ pub(super) struct Resolution {
 /// Settles a resume (see [`Resolution`]): the operator's `--resume-from`; or the machine's
 /// position `here` (only when it is trustworthy) matched against the job's own geometry over the
 /// window of lines that may have run after the journal lost track (acknowledged but not
-/// confirmed, plus what fitted in the `rx`-byte RX buffer behind them). `None`: the journal
+/// confirmed, and written but unanswered: those the journal records as written, `W`, or for a
+/// journal without that record what fitted in the `rx`-byte RX buffer behind them). `None`: the journal
 /// already says exactly what ran.
 pub(super) fn resolve_resume(
     job: &Job,
@@ -274,10 +275,19 @@ pub(super) fn resolve_resume(
             ),
         ));
     }
-    let (Some(&first), Some(&last_acked)) = (st.unconfirmed.first(), st.unconfirmed.last()) else {
-        return Ok(None);
+    // Lines written by a run that died unsettled (`W`) are in doubt as acknowledged ones are:
+    // the controller runs what it received, and no line after them was written.
+    let sent = st.in_doubt();
+    let first = match (st.unconfirmed.first(), sent.first()) {
+        (Some(&a), Some(&b)) => a.min(b),
+        (Some(&a), None) | (None, Some(&a)) => a,
+        (None, None) => return Ok(None),
     };
-    let upper = window_end(job, last_acked, rx);
+    let upper = match (st.unconfirmed.last(), st.sent) {
+        (Some(&last_acked), None) => window_end(job, last_acked, rx),
+        (last_acked, Some(w)) => last_acked.map_or(w, |&l| l.max(w)),
+        (None, None) => return Ok(None),
+    };
     let Some(p) = here else {
         let why = if restarted {
             "the controller restarted when the port was opened (or lost power), so its planner and position are gone"

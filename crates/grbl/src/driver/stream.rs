@@ -128,6 +128,8 @@ pub(super) struct Stream<'s, 'a, T: Transport + ?Sized> {
     watch_tol: Option<f64>,
     /// The path length shown so far, mm: progress never goes back.
     shown_length: f64,
+    /// The highest job line journaled as written (`W`).
+    written: Option<usize>,
 }
 
 /// Tag of the `G4 P0.01` the sender appends to find out that the planner is empty: GRBL answers
@@ -175,6 +177,7 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
             paused: None,
             watch_tol,
             shown_length: 0.0,
+            written: None,
         }
     }
 
@@ -189,6 +192,7 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
         progress.phase = Phase::Streaming;
         loop {
             self.control(cancel)?;
+            self.write_ahead()?;
             let evs = match self.sess.pump(READ_SLICE) {
                 Ok(e) => e,
                 Err(e) => return self.link_failed(e),
@@ -199,6 +203,7 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
             let acked = self.handle(evs, progress)?;
             // Refill GRBL's RX buffer at once: the answers just read made room, and the link
             // idles until the next line is written.
+            self.write_ahead()?;
             if let Err(e) = self.sess.write() {
                 return self.link_failed(e);
             }
@@ -258,6 +263,23 @@ impl<'s, 'a, T: Transport + ?Sized> Stream<'s, 'a, T> {
             self.sess.s.realtime(b'?');
             self.last_poll = Instant::now();
         }
+        Ok(())
+    }
+
+    /// Journals the highest job line the next write hands to the port before it is written
+    /// (`W`): a sender that dies after the write leaves those lines in doubt, not forgotten,
+    /// since the controller runs what it received. One record per write that goes further.
+    fn write_ahead(&mut self) -> Result<(), SendError> {
+        let Some(i) = self.sess.s.next_job_line() else {
+            return Ok(());
+        };
+        if self.written.is_some_and(|w| w >= i) {
+            return Ok(());
+        }
+        if let Some(j) = self.journal.as_mut() {
+            j.sending(i)?;
+        }
+        self.written = Some(i);
         Ok(())
     }
 
