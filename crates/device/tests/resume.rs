@@ -1,7 +1,9 @@
 //! Exact resume over a real pseudo-terminal, on a controller that keeps its position across
 //! reconnects (firmware-sim with DTR auto-reset off): a hang-up while moving, a feed hold followed
 //! by a soft reset, a reset in motion (ALARM:3), a stop while answers are still on the wire, and a
-//! pause then a stop where the path passes twice. In each case the simulator's trace over all
+//! pause then a stop where the path passes twice, and a sender that dies mid-stream while the
+//! controller runs on (killed for real, and the journals such a death leaves, built from a real
+//! run so that the outcome does not depend on timing). In each case the simulator's trace over all
 //! runs, with a line that was stopped part-way joined to its completion, is the job's motion
 //! exactly once, in order.
 
@@ -569,8 +571,11 @@ fn crash_and_resume(kill_after: u32) -> (usize, usize) {
 
 #[test]
 fn a_sender_killed_mid_stream_never_resumes_from_a_place_it_does_not_know() {
-    // Lines the controller received (a dozen are the handshake's) when the sender dies.
-    let found: Vec<(u32, (usize, usize))> = [30, 61, 97, 140]
+    // Lines the controller received (a dozen are the handshake's) when the sender dies: once
+    // with the planner and RX buffer full mid-job, once near the end. Where the journal ends is
+    // up to the scheduler here; the journals a death can leave are each taken in turn, without
+    // timing, by `a_killed_senders_unflushed_answers_are_settled_from_the_position_not_resent`.
+    let found: Vec<(u32, (usize, usize))> = [61, 140]
         .into_iter()
         .map(|k| (k, crash_and_resume(k)))
         .collect();
@@ -578,4 +583,144 @@ fn a_sender_killed_mid_stream_never_resumes_from_a_place_it_does_not_know() {
         found.iter().all(|(_, (twice, uncut))| twice + uncut == 0),
         "(lines received when killed, (motions cut twice, never cut)): {found:?}"
     );
+}
+
+/// The journal a sender killed mid-stream leaves, built from `full`, the journal of a run that
+/// streamed the first lines of `job` to completion: `job`'s header (the run's own job was that
+/// prefix), then the run's records up to its first `X` confirming line `from` or later, then of
+/// the rest only the `W` marks, which reach the OS before their lines' bytes do; the answers and
+/// confirmations behind that `X` were still in the dead process's buffer. With
+/// `answers_lost_too`, the answers before the `X` that it does not cover are dropped as well
+/// (they were in the buffer too), so the journal confirms every answer it holds. Returns the
+/// line the kept `X` confirms.
+fn journal_of_a_killed_sender(
+    full: &str,
+    job: &Job,
+    journal: &Path,
+    from: usize,
+    answers_lost_too: bool,
+) -> usize {
+    drop(Journal::create(journal, job).unwrap());
+    let head: Vec<String> = std::fs::read_to_string(journal)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with("R "))
+        .map(String::from)
+        .collect();
+    let body: Vec<&str> = full
+        .lines()
+        .filter(|l| !l.starts_with("flatcut-journal") && !l.starts_with("T "))
+        .collect();
+    let index = |rec: &str, kind: &str| -> Option<usize> {
+        rec.strip_prefix(kind).map(|i| i.trim().parse().unwrap())
+    };
+    let (at, x) = body
+        .iter()
+        .enumerate()
+        .find_map(|(n, r)| index(r, "X ").filter(|&x| x >= from).map(|x| (n, x)))
+        .expect("the run confirmed lines as it went");
+    let kept = body.iter().enumerate().filter(|&(n, r)| {
+        if n > at {
+            r.starts_with("W ")
+        } else {
+            !answers_lost_too || index(r, "A ").is_none_or(|i| i <= x)
+        }
+    });
+    let text: String = head
+        .iter()
+        .map(String::as_str)
+        .chain(kept.map(|(_, r)| *r))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(journal, text).unwrap();
+    x
+}
+
+/// firmware-sim runs the first `m` lines of a zigzag (the lines a sender wrote before it was
+/// killed) to the end; the journal the sender left ([`journal_of_a_killed_sender`]) confirms
+/// lines only up to `x`, well before `m`. The resume must not send lines `x + 1..m` again: it
+/// settles them from the machine's position, or refuses naming a range that holds them (then the
+/// operator resumes from line `m`). Over both runs the simulator's trace must run every motion
+/// exactly once. Returns how the resume went.
+fn resume_after_a_killed_sender(answers_lost_too: bool) -> String {
+    let text = jobs::zigzag(120, 0.1, 1.0, 1200.0);
+    let dir = tempfile::tempdir().unwrap();
+    let journal = dir.path().join("job.journal");
+    let job = Job::parse(&text).unwrap();
+    let m = 100;
+    let written: String = text.lines().take(m).map(|l| format!("{l}\n")).collect();
+    let prefix = Job::parse(&written).unwrap();
+    assert_eq!(prefix.len(), m);
+    let sim = crash_sim();
+    let run = dir.path().join("run.journal");
+    send(sim.path(), &prefix, &opts(&run), &CancelToken::new(), None)
+        .unwrap_or_else(|e| panic!("streaming the lines written failed: {e}"));
+    let ran_before = sim.trace();
+    let full = std::fs::read_to_string(&run).unwrap();
+    let x = journal_of_a_killed_sender(&full, &job, &journal, 30, answers_lost_too);
+    assert!(
+        x + 20 < m,
+        "the kept confirmation {x} is not well before line {m}"
+    );
+    let resumed = send(
+        sim.path(),
+        &job,
+        &opts(&journal).with_resume(true),
+        &CancelToken::new(),
+        None,
+    );
+    let (how, trace) = match resumed {
+        Ok(rep) => {
+            let how = format!("resumed from line {}", rep.previously_done);
+            (how, sim.stop().trace)
+        }
+        Err(SendError::ResumeUncertain { from, to, reason }) => {
+            assert!(
+                from.index <= x + 1 && to.index + 1 >= m,
+                "confirmed through line {x}, ran through line {}: the lines in doubt {}..={} do not hold them all: {reason}",
+                m - 1,
+                from.index,
+                to.index,
+            );
+            assert_eq!(sim.trace().len(), ran_before.len(), "nothing moved");
+            send(
+                sim.path(),
+                &job,
+                &opts(&journal).with_resume(true).with_resume_from(Some(m)),
+                &CancelToken::new(),
+                None,
+            )
+            .unwrap_or_else(|e| panic!("resume from line {m} failed: {e}"));
+            let how = format!("refused naming lines {}..={}", from.index, to.index);
+            (how, sim.stop().trace)
+        }
+        Err(e) => panic!("the resume failed otherwise: {e}"),
+    };
+    let (twice, never) = run_counts(&job, &trace);
+    let span = |v: Vec<String>| match (v.first(), v.last()) {
+        (Some(a), Some(b)) => format!("{} motions, {a} to {b}", v.len()),
+        _ => "none".to_string(),
+    };
+    assert!(
+        twice.is_empty() && never.is_empty(),
+        "confirmed through line {x}, ran through line {}, {how}: run twice {}, never run {}",
+        m - 1,
+        span(twice.into_iter().map(|(t, _)| t).collect()),
+        span(never),
+    );
+    assert_job_exactly_once(&job, &trace);
+    format!("confirmed through line {x}: {how}")
+}
+
+/// The host dies with answers read but their records unflushed while the controller runs on
+/// through what it was written, in both shapes of journal that leaves: every answer journaled is
+/// confirmed (a resume that trusted it would send the lines run since again), or some are not
+/// (one that looked only one RX buffer past them would not find the machine). Deterministic: the
+/// simulator runs the lines written to their end, no process is killed, nothing is timed.
+#[test]
+fn a_killed_senders_unflushed_answers_are_settled_from_the_position_not_resent() {
+    for answers_lost_too in [true, false] {
+        let how = resume_after_a_killed_sender(answers_lost_too);
+        eprintln!("answers before the confirmation lost too: {answers_lost_too}: {how}");
+    }
 }
