@@ -12,6 +12,8 @@ use flatcut_darts::{Dart, Legs};
 use flatcut_geom::DVec2;
 use flatcut_mesh::TriMesh;
 
+use crate::obj_vertex::obj_vertex;
+
 /// Prefix of a dart's group name.
 const GROUP: &str = "dart-";
 
@@ -48,20 +50,7 @@ pub fn read(text: &str, mesh: &TriMesh, x: &[DVec2], drill_mm: f64) -> Result<Ve
         let at = |what: String| format!("line {}: {what}", i + 1);
         let ids = rest
             .split_whitespace()
-            .map(|t| {
-                let v: usize = t
-                    .split('/')
-                    .next()
-                    .and_then(|s| s.parse().ok())
-                    .ok_or_else(|| at(format!("'{t}' is not a vertex index")))?;
-                if v == 0 || v > mesh.positions.len() {
-                    return Err(at(format!(
-                        "vertex index {v} is out of range (the file has {} vertices)",
-                        mesh.positions.len()
-                    )));
-                }
-                Ok(v as u32 - 1)
-            })
+            .map(|t| obj_vertex(t, mesh.positions.len()).map_err(at))
             .collect::<Result<Vec<u32>, String>>()?;
         if ids.len() < 3 || ids.len() % 2 == 0 {
             return Err(at(format!(

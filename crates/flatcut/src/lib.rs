@@ -54,6 +54,7 @@ pub mod inspect_step;
 pub mod material;
 pub mod nesting;
 pub mod notch_points;
+mod obj_vertex;
 pub mod outline_edges;
 pub mod piece_build;
 pub mod pieces;

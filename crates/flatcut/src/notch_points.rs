@@ -10,6 +10,8 @@ use std::fmt::Write as _;
 
 use flatcut_mesh::TriMesh;
 
+use crate::obj_vertex::obj_vertex;
+
 use crate::flat_piece::FlatNotch;
 
 /// The group a notch's point is in: `g notch <name>`.
@@ -74,21 +76,11 @@ pub fn read(text: &str, mesh: &TriMesh) -> Result<Vec<FlatNotch>, String> {
                 ids.len()
             )));
         };
-        let v: usize = t
-            .split('/')
-            .next()
-            .and_then(|s| s.parse().ok())
-            .ok_or_else(|| at(format!("'{t}' is not a vertex index")))?;
-        if v == 0 || v > mesh.positions.len() {
-            return Err(at(format!(
-                "vertex index {v} is out of range (the file has {} vertices)",
-                mesh.positions.len()
-            )));
-        }
-        let vertex = v as u32 - 1;
+        let vertex = obj_vertex(t, mesh.positions.len()).map_err(at)?;
         if !boundary.contains(&vertex) {
             return Err(at(format!(
-                "vertex {v} is not on the piece's boundary; a notch sits on its outline"
+                "vertex {} is not on the piece's boundary; a notch sits on its outline",
+                vertex + 1
             )));
         }
         notches.push(FlatNotch {

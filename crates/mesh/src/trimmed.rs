@@ -602,18 +602,7 @@ fn cdt_mesh(
         }
     }
     let inside = inside_faces(&cdt);
-    let mut tris = Vec::new();
-    for f in cdt.inner_faces() {
-        if !inside[f.fix().index()] {
-            continue;
-        }
-        *cover += uv_area(f.positions().map(|p| DVec2::new(p.x, p.y) / scale));
-        let t = f.vertices().map(|v| v.data().local);
-        if t[0] != t[1] && t[1] != t[2] && t[2] != t[0] {
-            tris.push(t);
-        }
-    }
-    Ok(tris)
+    Ok(inside_triangles(&cdt, &inside, scale, cover))
 }
 
 /// True when `w` lies strictly inside a face of the triangulation, at least [`MIN_INSET`] of
@@ -862,18 +851,7 @@ fn ruled_mesh(
         }
     }
     let inside = inside_faces_except(&cdt, &inner);
-    let mut tris = Vec::new();
-    for f in cdt.inner_faces() {
-        if !inside[f.fix().index()] {
-            continue;
-        }
-        *cover += uv_area(f.positions().map(|p| DVec2::new(p.x, p.y) / scale));
-        let t = f.vertices().map(|v| v.data().local);
-        if t[0] != t[1] && t[1] != t[2] && t[2] != t[0] {
-            tris.push(t);
-        }
-    }
-    Ok(tris)
+    Ok(inside_triangles(&cdt, &inside, scale, cover))
 }
 
 /// The rulings of a ruled face: those given, or (none given) the distinct u of its loop
@@ -892,6 +870,23 @@ fn ruling_values(loops: &[Vec<(u32, DVec2)>], given: &[f64], snap: f64) -> Vec<f
         }
     }
     rulings
+}
+
+/// The triangles of `cdt` inside the face (`inside`, per face) as local vertex indices, those
+/// collapsed onto one vertex left out; adds their (u, v) area, unscaled by `scale`, to `cover`.
+fn inside_triangles(cdt: &Cdt, inside: &[bool], scale: DVec2, cover: &mut f64) -> Vec<[u32; 3]> {
+    let mut tris = Vec::new();
+    for f in cdt.inner_faces() {
+        if !inside[f.fix().index()] {
+            continue;
+        }
+        *cover += uv_area(f.positions().map(|p| DVec2::new(p.x, p.y) / scale));
+        let t = f.vertices().map(|v| v.data().local);
+        if t[0] != t[1] && t[1] != t[2] && t[2] != t[0] {
+            tris.push(t);
+        }
+    }
+    tris
 }
 
 /// The signed area of a (u, v) triangle.
