@@ -13,65 +13,111 @@ use crate::PieceDef;
 #[non_exhaustive]
 pub enum DesignError {
     #[error("{}: {source}", path.display())]
+    /// The design file (or a file it refers to) could not be read.
     Io {
+        /// The file that could not be read.
         path: PathBuf,
+        /// The operating system's reason.
         source: std::io::Error,
     },
     #[error("{file}:{line}:{col}: {msg}")]
+    /// The file is not valid TOML or JSON, or does not fit the schema.
     Syntax {
+        /// The design file's path as given.
         file: String,
+        /// 1-based line of the problem.
         line: usize,
+        /// 1-based column of the problem.
         col: usize,
+        /// The parser's description of the problem.
         msg: String,
     },
     #[error("{file}: the design has no [[piece]] and no [[part]]")]
-    NoPieces { file: String },
-    #[error("{file}: part {index} '{part}': {msg}")]
-    Part {
+    /// The design defines nothing to cut.
+    NoPieces {
+        /// The design file's path as given.
         file: String,
+    },
+    #[error("{file}: part {index} '{part}': {msg}")]
+    /// A `[[part]]` that cannot be built: its style lines, pieces or edges are wrong.
+    Part {
+        /// The design file's path as given.
+        file: String,
+        /// The part's 0-based position among the file's parts.
         index: usize,
+        /// The part's name.
         part: String,
+        /// What is wrong with the part.
         msg: String,
     },
     #[error("{file}: [grading]{}: {msg}", size.as_ref().map(|s| format!(" size '{s}'")).unwrap_or_default())]
+    /// The `[grading]` table, or one of its sizes, is wrong.
     Grading {
+        /// The design file's path as given.
         file: String,
+        /// The size at fault; `None` when the problem is in the table itself.
         size: Option<String>,
+        /// What is wrong.
         msg: String,
     },
     #[error("{file}: join {index} '{join}': {msg}")]
+    /// A `[[join]]` whose edges cannot be found or do not match.
     Join {
+        /// The design file's path as given.
         file: String,
+        /// The join's 0-based position among the file's joins.
         index: usize,
+        /// The join's name.
         join: String,
+        /// What is wrong with the join.
         msg: String,
     },
     #[error("{file}: piece {index} '{piece}': {msg}")]
+    /// A piece whose keys are wrong or inconsistent.
     Piece {
+        /// The design file's path as given.
         file: String,
+        /// The piece's 0-based position among the file's pieces.
         index: usize,
+        /// The piece's name.
         piece: String,
+        /// What is wrong with the piece.
         msg: String,
     },
     #[error("{file}: piece {index} '{piece}': {source}")]
+    /// A piece's surface could not be built from its definition.
     Surface {
+        /// The design file's path as given.
         file: String,
+        /// The piece's 0-based position among the file's pieces.
         index: usize,
+        /// The piece's name.
         piece: String,
+        /// Why the surface could not be built.
         source: SurfaceError,
     },
     #[error("{file}: piece {index} '{piece}': {source}")]
+    /// A piece's mesh file could not be read.
     Mesh {
+        /// The design file's path as given.
         file: String,
+        /// The piece's 0-based position among the file's pieces.
         index: usize,
+        /// The piece's name.
         piece: String,
+        /// Why the mesh file could not be read (it names the mesh file).
         source: Box<MeshIoError>,
     },
     #[error("{file}: piece {index} '{piece}': {source}")]
+    /// A piece's surface could not be tessellated into a mesh.
     Tessellation {
+        /// The design file's path as given.
         file: String,
+        /// The piece's 0-based position among the file's pieces.
         index: usize,
+        /// The piece's name.
         piece: String,
+        /// Why the tessellation failed.
         source: TessError,
     },
 }

@@ -40,6 +40,8 @@ use crate::{DesignError, PieceDef, SurfaceDef};
 pub enum StepFaces {
     /// Only `"all"` is accepted.
     Keyword(String),
+    /// Face numbers as `flatcut inspect` lists them (0-based), each less than the model's face
+    /// count.
     List(Vec<usize>),
 }
 
@@ -133,7 +135,9 @@ impl PartialEq for StepModel {
 /// from it.
 #[derive(Clone, Debug)]
 pub struct StepPiece {
+    /// The STEP file the faces come from, read once and shared with the design's other STEP pieces.
     pub source: Arc<StepSource>,
+    /// The piece's faces: 0-based face numbers, sorted and distinct.
     pub faces: Vec<usize>,
 }
 

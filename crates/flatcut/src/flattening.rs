@@ -46,8 +46,11 @@ pub fn check_unique_names(design: &Design) -> Result<(), PipelineError> {
 /// seams between them (sides index `pieces`).
 #[derive(Clone, Debug)]
 pub struct FlatDesign {
+    /// The design, lengths in mm.
     pub design: Design,
+    /// The flattened pieces, in the design's piece order.
     pub pieces: Vec<FlatPiece>,
+    /// The mating seams between pieces; their sides index `pieces`.
     pub seams: Vec<MatingSeam>,
     /// Time spent reading the surfaces and building the pieces and seams (every size's), before
     /// any flattening.

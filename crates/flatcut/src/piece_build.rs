@@ -55,14 +55,18 @@ pub fn flat_boundary(name: &str, mesh: &TriMesh) -> Result<(Vec<DVec2>, Vec<u32>
 /// What a pattern piece is built with beyond the flattened mesh.
 #[derive(Clone, Debug, Default)]
 pub struct PieceContext<'a> {
+    /// The piece as the design defines it (marks, grain, allowances); `None` for a mesh file.
     pub def: Option<&'a PieceDef>,
+    /// The piece's distortion report, summarised on its label.
     pub report: Option<&'a Report>,
     /// The piece's darts: their mouths get notches, their points drill marks and a fold arrow
     /// says which way each is pressed.
     pub darts: &'a [flatcut_darts::Dart],
     /// Seam allowance (mm) when the design gives none.
     pub seam_mm: Option<f64>,
+    /// The size the piece is cut in, for its label (empty when ungraded).
     pub size: String,
+    /// How the allowance turns at corners.
     pub corner: flatcut_pattern::CornerStyle,
     /// The piece's notches as boundary vertices (exact positions; named on mating seams).
     pub notches: &'a [FlatNotch],

@@ -9,9 +9,11 @@ use crate::pipeline::{self, PieceContext, PipelineError};
 /// How pattern pieces are built beyond what the design says.
 #[derive(Clone, Copy, Debug)]
 pub struct PieceSettings {
+    /// The options every piece is built with (tolerances, notch style, label height).
     pub options: PieceOptions,
     /// Seam allowance (mm) where the design gives none.
     pub seam_mm: Option<f64>,
+    /// How the allowance turns at corners.
     pub corner: CornerStyle,
 }
 

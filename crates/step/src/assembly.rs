@@ -30,11 +30,14 @@ const MAX_DEPTH: usize = 64;
 /// A rigid placement: `p ↦ rot · p + origin`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Placement {
+    /// The rotation (orthonormal, determinant 1).
     pub rot: DMat3,
+    /// The translation (mm), applied after the rotation.
     pub origin: DVec3,
 }
 
 impl Placement {
+    /// The placement that moves nothing.
     pub const IDENTITY: Self = Self {
         rot: DMat3::IDENTITY,
         origin: DVec3::ZERO,
@@ -48,10 +51,12 @@ impl Placement {
         }
     }
 
+    /// A point placed: `rot · p + origin`.
     pub fn point(&self, p: DVec3) -> DVec3 {
         self.rot * p + self.origin
     }
 
+    /// A direction placed: `rot · v` (no translation).
     pub fn vector(&self, v: DVec3) -> DVec3 {
         self.rot * v
     }

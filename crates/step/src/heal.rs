@@ -67,15 +67,18 @@ pub enum RepairKind {
 /// One repair, on the entity it concerns.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Repair {
+    /// What was repaired.
     pub kind: RepairKind,
     /// The instance repaired (`#id`).
     pub entity: u64,
     /// The size of the defect (mm).
     pub mm: f64,
+    /// The repair in words, for the report.
     pub message: String,
 }
 
 impl Repair {
+    /// A repair of `kind` on instance `entity`, of a defect `mm` long.
     pub fn new(kind: RepairKind, entity: u64, mm: f64, message: impl Into<String>) -> Self {
         Self {
             kind,

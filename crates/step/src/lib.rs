@@ -14,6 +14,7 @@
 //!
 //! Errors name the instance (`#1234 = OFFSET_SURFACE: not supported`) or the line; a face that
 //! cannot be used keeps its number and error while the others load.
+#![warn(missing_docs)]
 
 pub mod adjacency;
 pub mod assembly;

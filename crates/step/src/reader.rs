@@ -29,7 +29,9 @@ pub const MAX_REF_DEPTH: usize = 64;
 /// space (2D, unscaled).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Space {
+    /// 3D model space, lengths in the file's unit.
     Model,
+    /// A surface's (u, v) parameter space.
     Param,
 }
 
@@ -60,6 +62,7 @@ impl Units {
 
 /// Reads geometry from a file, with caches and the cycle guard.
 pub struct Reader<'f> {
+    /// The file the geometry is read from.
     pub file: &'f StepFile,
     /// Millimetres per length unit of the representation being read.
     pub mm: f64,
@@ -104,6 +107,8 @@ enum UnitKind {
 }
 
 impl<'f> Reader<'f> {
+    /// A reader of `file` with empty caches, in mm and radians until a representation sets its
+    /// units.
     pub fn new(file: &'f StepFile) -> Self {
         Self {
             file,
