@@ -799,18 +799,6 @@ const KNOWN_CIRCLES: &[(&str, &[&str], &str)] = &[
          the app mounts them (the device routes ask the solve routes for the finished pattern); \
          the state and error belong in a module below the routes",
     ),
-    (
-        "crates/step/src",
-        &["assembly", "reader"],
-        "the reader resolves placements (assembly::Placement) and the assembly reads entities \
-         through the reader; Placement belongs below both",
-    ),
-    (
-        "crates/step/src",
-        &["heal", "model"],
-        "healing works on the model's edge uses (model::EdgeUse) and the model heals while it \
-         builds; EdgeUse belongs below both",
-    ),
 ];
 
 #[test]

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use flatcut_mesh::TessError;
 use flatcut_mesh::io::MeshIoError;
+use flatcut_step::StepError;
 use flatcut_surface::SurfaceError;
 
 use crate::PieceDef;
@@ -120,6 +121,21 @@ pub enum DesignError {
         /// Why the tessellation failed.
         source: TessError,
     },
+    /// A piece's STEP model could not be read. When the STEP file is the design itself (a
+    /// `.step` loaded as a design), the message names it once, without the piece it stands for.
+    #[error("{}", step_read_message(file, *index, piece, path, source))]
+    StepRead {
+        /// The design file's path as given (the STEP file's, for a `.step` loaded as a design).
+        file: String,
+        /// The piece's 0-based position among the file's pieces.
+        index: usize,
+        /// The piece's name.
+        piece: String,
+        /// The STEP file as read (joined to the design's folder).
+        path: PathBuf,
+        /// Why it could not be read (the line or the entity); boxed, so the error stays small.
+        source: Box<StepError>,
+    },
 }
 
 /// Error context: file, piece index and name.
@@ -127,6 +143,28 @@ pub(crate) struct Ctx {
     pub(crate) file: String,
     pub(crate) index: usize,
     pub(crate) piece: String,
+}
+
+/// The text of [`DesignError::StepRead`]: each file named once.
+fn step_read_message(
+    file: &str,
+    index: usize,
+    piece: &str,
+    path: &std::path::Path,
+    source: &StepError,
+) -> String {
+    // A read error names the STEP file itself; any other is about its content.
+    let names_path = matches!(source, StepError::Io { .. });
+    let step = if names_path {
+        source.to_string()
+    } else {
+        format!("{}: {source}", path.display())
+    };
+    if std::path::Path::new(file) == path {
+        step
+    } else {
+        format!("{file}: piece {index} '{piece}': {step}")
+    }
 }
 
 impl Ctx {
@@ -143,6 +181,15 @@ impl Ctx {
             index: self.index,
             piece: self.piece.clone(),
             msg,
+        }
+    }
+    pub(crate) fn step_read(&self, path: &std::path::Path, source: StepError) -> DesignError {
+        DesignError::StepRead {
+            file: self.file.clone(),
+            index: self.index,
+            piece: self.piece.clone(),
+            path: path.to_path_buf(),
+            source: Box::new(source),
         }
     }
     pub(crate) fn surf(&self, what: &str, e: SurfaceError) -> DesignError {

@@ -162,8 +162,8 @@ pub(crate) fn check_faces(ctx: &Ctx, faces: &StepFaces) -> Result<(), DesignErro
 }
 
 fn read_file(ctx: &Ctx, path: &Path) -> Result<(StepFile, Model), DesignError> {
-    let file = StepFile::read(path).map_err(|e| ctx.err(format!("{}: {e}", path.display())))?;
-    let model = Model::from_file(&file).map_err(|e| ctx.err(format!("{}: {e}", path.display())))?;
+    let file = StepFile::read(path).map_err(|e| ctx.step_read(path, e))?;
+    let model = Model::from_file(&file).map_err(|e| ctx.step_read(path, e))?;
     Ok((file, model))
 }
 

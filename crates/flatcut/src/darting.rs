@@ -6,6 +6,9 @@
 //! What the design says about the piece keeps darts away: its `no_cut` regions, its marks
 //! (notches, drill and reference points, stitch and placement lines); its seams are already part
 //! of the outline.
+//!
+//! Pieces joined to others by mating seams are not darted (a dart would move their seams): the
+//! flattening warns and leaves them whole.
 
 pub use flatcut_darts::DartFit;
 use flatcut_darts::{Dart, DartError, DartOptions, Darted, KeepOut, Threads};

@@ -1,5 +1,8 @@
 //! Flattening a design: load it (or a mesh or STEP model), build its pieces and seams, and
 //! flatten them with their material, darts and splits, measured by the report.
+//!
+//! Every size of a graded design is flattened, its pieces named `<piece> <size>`, into
+//! [`crate::flat_piece::FlatPiece`]s.
 
 use std::path::Path;
 use std::time::{Duration, Instant};

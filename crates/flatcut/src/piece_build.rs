@@ -1,5 +1,9 @@
 //! A flattened mesh to a 2D pattern piece: boundary → sew line, the design's 3D marks, darts
 //! and grain → 2D.
+//!
+//! It is the glue from a flattened mesh boundary to a 2D piece, so `pattern` never learns about
+//! meshes: notches come as boundary vertices named after their seam, a pair's mirrored side is
+//! the mirror image of the flat map.
 
 use flatcut_design::{MarkKind as DesignMark, PieceDef};
 use flatcut_geom::{DVec2, DVec3};

@@ -1,4 +1,7 @@
 //! Pattern pieces from flattened pieces, and the plain row in which a pattern sheet shows them.
+//!
+//! Short label codes are unique in a set; a graded design's pieces make one row per size, and
+//! the graded sets.
 
 use flatcut_geom::DVec2;
 use flatcut_pattern::{CornerStyle, Piece, PieceOptions, PlacedPiece, Placement};

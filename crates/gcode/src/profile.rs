@@ -299,6 +299,11 @@ pub struct Profile {
     pub svg_colours: BTreeMap<String, flatcut_pattern::ColourJob>,
 }
 
+/// Finite and strictly positive.
+fn positive(v: f64) -> bool {
+    v.is_finite() && v > 0.0
+}
+
 /// A profile that cannot be used.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -428,14 +433,21 @@ impl Profile {
     /// Checks ranges and that the tool section matches the kind.
     pub fn validate(&self) -> Result<(), ProfileError> {
         self.colour_table()?;
-        let pos = |v: f64| v.is_finite() && v > 0.0;
-        if !pos(self.feed_mm_min) {
+        self.validate_motion()?;
+        self.validate_hpgl()?;
+        self.validate_tool()?;
+        self.validate_layers()
+    }
+
+    /// Feeds, acceleration, work area, number format, axes, kerf and leads.
+    fn validate_motion(&self) -> Result<(), ProfileError> {
+        if !positive(self.feed_mm_min) {
             return Err(self.invalid("feed_mm_min", self.feed_mm_min, "must be > 0"));
         }
-        if !pos(self.travel_mm_min) {
+        if !positive(self.travel_mm_min) {
             return Err(self.invalid("travel_mm_min", self.travel_mm_min, "must be > 0"));
         }
-        if !pos(self.accel_mm_s2) {
+        if !positive(self.accel_mm_s2) {
             return Err(self.invalid("accel_mm_s2", self.accel_mm_s2, "must be > 0"));
         }
         if !(self.junction_deviation_mm.is_finite() && self.junction_deviation_mm >= 0.0) {
@@ -446,7 +458,7 @@ impl Profile {
             ));
         }
         for v in self.work_area_mm {
-            if !pos(v) {
+            if !positive(v) {
                 return Err(self.invalid("work_area_mm", v, "must be > 0"));
             }
         }
@@ -477,29 +489,40 @@ impl Profile {
         {
             return Err(self.invalid("lead.length_mm", l.length_mm, "must be in (0, 50]"));
         }
-        if let Some(h) = &self.hpgl {
-            for (key, v) in [
-                ("hpgl.velocity_cm_s", h.velocity_cm_s),
-                ("hpgl.force", h.force),
-            ] {
-                if let Some(v) = v
-                    && !(v.is_finite() && v > 0.0 && v < 10_000.0)
-                {
-                    return Err(self.invalid(key, v, "must be in (0, 10000)"));
-                }
-            }
-            if let Some(w) = h.weed_border_mm
-                && !(w.is_finite() && w > 0.0)
+        Ok(())
+    }
+
+    /// The `[hpgl]` section, when there is one.
+    fn validate_hpgl(&self) -> Result<(), ProfileError> {
+        let Some(h) = &self.hpgl else {
+            return Ok(());
+        };
+        for (key, v) in [
+            ("hpgl.velocity_cm_s", h.velocity_cm_s),
+            ("hpgl.force", h.force),
+        ] {
+            if let Some(v) = v
+                && !(v.is_finite() && v > 0.0 && v < 10_000.0)
             {
-                return Err(self.invalid("hpgl.weed_border_mm", w, "must be > 0"));
-            }
-            if h.pen > 8 {
-                return Err(self.invalid("hpgl.pen", h.pen as f64, "must be 0..=8"));
-            }
-            if h.baud == 0 {
-                return Err(self.invalid("hpgl.baud", 0.0, "must be > 0"));
+                return Err(self.invalid(key, v, "must be in (0, 10000)"));
             }
         }
+        if let Some(w) = h.weed_border_mm
+            && !(w.is_finite() && w > 0.0)
+        {
+            return Err(self.invalid("hpgl.weed_border_mm", w, "must be > 0"));
+        }
+        if h.pen > 8 {
+            return Err(self.invalid("hpgl.pen", h.pen as f64, "must be 0..=8"));
+        }
+        if h.baud == 0 {
+            return Err(self.invalid("hpgl.baud", 0.0, "must be > 0"));
+        }
+        Ok(())
+    }
+
+    /// The tool section the kind needs (`[pen]`, `[knife]` or `[laser]`) and its ranges.
+    fn validate_tool(&self) -> Result<(), ProfileError> {
         match self.kind {
             ToolKind::Pen if self.pen.is_none() && self.hpgl.is_none() => {
                 return Err(ProfileError::Invalid {
@@ -544,7 +567,7 @@ impl Profile {
                         reason: "a laser profile needs a [laser] section",
                     });
                 };
-                if !pos(l.s_max) {
+                if !positive(l.s_max) {
                     return Err(self.invalid(
                         "laser.s_max",
                         l.s_max,
@@ -554,6 +577,11 @@ impl Profile {
             }
             _ => {}
         }
+        Ok(())
+    }
+
+    /// The per-layer settings: known layer names, feeds, power, tabs and passes.
+    fn validate_layers(&self) -> Result<(), ProfileError> {
         for (name, l) in &self.layers {
             if !["engrave", "draw", "cut"].contains(&name.as_str()) {
                 return Err(ProfileError::Invalid {
@@ -564,7 +592,7 @@ impl Profile {
                 });
             }
             if let Some(f) = l.feed_mm_min
-                && !pos(f)
+                && !positive(f)
             {
                 return Err(self.invalid("layers.*.feed_mm_min", f, "must be > 0"));
             }
@@ -588,7 +616,6 @@ impl Profile {
         }
         Ok(())
     }
-
     /// The settings of a layer (defaults when the profile does not mention it).
     pub fn layer(&self, layer: Layer) -> LayerConfig {
         self.layers.get(layer.name()).cloned().unwrap_or_default()

@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use crate::model::EdgeUse;
+use crate::edge_use::EdgeUse;
 
 /// The default healing limit as a fraction of the model's size (the diagonal of its vertices'
 /// bounding box): 0.2 % — a 0.4 mm gap on a 200 mm part is a sloppy file, a 4 mm one is a

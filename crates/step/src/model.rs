@@ -21,11 +21,12 @@ use flatcut_surface::ParamCurve;
 use flatcut_surface::curve::nearest_from_samples;
 
 use crate::StepError;
-use crate::assembly::Placement;
 use crate::attrs::Attrs;
+use crate::edge_use::EdgeUse;
 use crate::file::{Instance, StepFile, Value};
 use crate::geom::{Curve, Surface};
 use crate::heal::{HealOptions, Repair};
+use crate::placement::Placement;
 use crate::reader::{Reader, Space, Units};
 
 mod bounded;
@@ -74,16 +75,6 @@ pub struct Vertex {
     pub entity: u64,
     /// Its position in the world (mm).
     pub point: DVec3,
-}
-
-/// One use of an edge in a loop: forward when the loop runs from the edge's start vertex to its
-/// end vertex.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct EdgeUse {
-    /// The edge (index into [`Model::edges`]).
-    pub edge: usize,
-    /// True when the loop runs the edge from its start vertex to its end vertex.
-    pub forward: bool,
 }
 
 /// A loop bounding a face (already oriented by the bound's orientation flag).

@@ -16,10 +16,10 @@ use flatcut_surface::patch::bspline::MAX_DEGREE;
 use flatcut_surface::patch::{Analytic, BSplinePatch};
 
 use crate::StepError;
-use crate::assembly::Placement;
 use crate::attrs::{Attrs, describe, number};
 use crate::file::{Instance, StepFile, Value};
 use crate::geom::{Curve, Spline, Surface};
+use crate::placement::Placement;
 
 /// Longest chain of references followed from one instance (a B-rep is about 12 deep: shell,
 /// face, bound, loop, oriented edge, edge, curve, placement, direction).
