@@ -786,18 +786,6 @@ fn only_the_binary_installs_the_signal_handler() {
 /// a listed one that is gone (take it off the list).
 const KNOWN_CIRCLES: &[(&str, &[&str], &str)] = &[
     (
-        "crates/flatten/src",
-        &["limits", "nonlinear"],
-        "the limits' barrier solves with the Newton solver, and the solver's per-piece energy \
-         takes the limits (limits::Limits, OnePiece); the limits' types belong below both",
-    ),
-    (
-        "crates/report/src",
-        &["delta0", "measure"],
-        "δ0 reads the per-face measures (measure::FaceMeasure) and the report's aggregation calls \
-         δ0; FaceMeasure belongs in a module below both",
-    ),
-    (
         "crates/server/src",
         &["app", "device_routes", "solve_routes", "task"],
         "the routes and the task slots use the app's state and error (app::App, ApiError), and \

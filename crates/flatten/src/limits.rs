@@ -21,7 +21,6 @@ use flatcut_geom::DVec2;
 use flatcut_mesh::{TriMesh, face_distortion};
 
 use crate::nonlinear::kernel::{IsoEnergy, RestTri, SymDirichlet, WithLimits, singular_values};
-use crate::nonlinear::newton::{Budget, EarlyStop};
 use crate::{FlattenError, FlattenParams};
 
 /// Stiffness stages of the feasibility penalty (relative to the δ2 density).
@@ -186,42 +185,6 @@ pub(crate) trait EnergySolve {
     /// spent: no further stage runs.
     fn stopped(&self) -> bool {
         false
-    }
-}
-
-/// The Newton solve of one piece ([`crate::nonlinear::newton_solve`]) within the limits stage's
-/// budget; `early` records a solve the time limit stopped.
-pub(crate) struct OnePiece<'a> {
-    pub rest: &'a [RestTri],
-    pub n: usize,
-    pub params: &'a FlattenParams,
-    pub budget: &'a Budget,
-    pub early: Option<EarlyStop>,
-    /// Where the solves' time went.
-    pub timings: crate::Timings,
-}
-
-impl EnergySolve for OnePiece<'_> {
-    fn solve<E: IsoEnergy + Copy>(
-        &mut self,
-        energy: E,
-        x: &[DVec2],
-    ) -> Result<(Vec<DVec2>, usize), FlattenError> {
-        let r = crate::nonlinear::newton_solve(
-            self.rest,
-            self.n,
-            energy,
-            crate::nonlinear::newton::to_flat(x),
-            self.params,
-            crate::Method::Isometric,
-            self.budget,
-        )?;
-        self.early = self.early.or(r.early);
-        self.timings.add(&r.timings);
-        Ok((r.x, r.iterations))
-    }
-    fn stopped(&self) -> bool {
-        self.early.is_some() || self.budget.spent()
     }
 }
 

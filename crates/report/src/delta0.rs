@@ -30,7 +30,7 @@
 //! check of the theorem (geodesic distances on the surface and in the flat piece, pair by pair)
 //! is in the tests.
 
-use crate::measure::FaceMeasure;
+use crate::face::FaceMeasure;
 
 /// How δ0 was obtained (the JSON's `delta0_method`): exactly, from the faces' extreme stretches.
 pub const METHOD_EXACT: &str = "exact";

@@ -14,6 +14,7 @@
 pub mod darts;
 pub mod delta0;
 pub mod draw;
+pub mod face;
 pub mod grain;
 pub mod measure;
 pub mod per_face;
@@ -21,9 +22,8 @@ pub mod seams;
 
 pub use darts::DartReport;
 pub use draw::{Column, DIVERGING_STOPS, heatmap_svg, histogram_svg, html_report, render_png};
+pub use face::FaceMeasure;
 pub use grain::GrainReport;
-pub use measure::{
-    BoundarySegment, FaceMeasure, Measure, Region, Report, ReportError, ReportOptions, Stats,
-};
+pub use measure::{BoundarySegment, Measure, Region, Report, ReportError, ReportOptions, Stats};
 pub use per_face::{FaceRow, ReportWithFaces, per_face_rows, with_faces};
 pub use seams::{DEFAULT_SEAM_TOLERANCE_MM, MatingSeamReport, NotchOffset, measure_seam};

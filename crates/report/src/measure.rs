@@ -6,6 +6,8 @@ use flatcut_geom::{DVec2, DVec3};
 use flatcut_mesh::{TriMesh, face_distortion};
 use serde::Serialize;
 
+use crate::face::FaceMeasure;
+
 /// Which quantity a picture shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -95,30 +97,6 @@ impl Measure {
             Self::Material => f.material_excess_pct.unwrap_or(f64::NAN),
         }
     }
-}
-
-/// One face's distortion, at true scale.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct FaceMeasure {
-    pub mu1: f64,
-    pub mu2: f64,
-    pub delta1: f64,
-    pub delta2: f64,
-    /// σ1σ2 with its sign: negative for a flipped face.
-    pub area_ratio: f64,
-    /// (σ1 − 1)·100, at least 0.
-    pub stretch_pct: f64,
-    /// (1 − σ2)·100, at least 0.
-    pub compress_pct: f64,
-    pub flipped: bool,
-    /// Direction of largest stretch in the plane.
-    pub dir_max_2d: DVec2,
-    /// 3D area of the face, mm².
-    pub area_3d: f64,
-    /// With a material: the face's largest excess over the material's limits along, across or
-    /// on the bias (percentage points; negative: the margin) — [`crate::GrainReport`].
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub material_excess_pct: Option<f64>,
 }
 
 /// Area-weighted statistics of one quantity.

@@ -22,7 +22,7 @@ use std::time::Instant;
 use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
-use crate::limits::{Limits, OnePiece};
+use crate::limits::{EnergySolve, Limits};
 use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method};
 use kernel::{IsoEnergy, Mips, RestTri, SymDirichlet, TriEnergy};
 use newton::{Budget, EarlyStop};
@@ -117,6 +117,42 @@ pub(crate) fn time_limit_warning(method: Method, iterations: usize) -> String {
     format!(
         "{method} stopped at the time limit after {iterations} iterations: the map is flip-free but not fully converged"
     )
+}
+
+/// The Newton solve of one piece ([`newton_solve`]) within the limits stage's
+/// budget; `early` records a solve the time limit stopped.
+pub(crate) struct OnePiece<'a> {
+    pub rest: &'a [RestTri],
+    pub n: usize,
+    pub params: &'a FlattenParams,
+    pub budget: &'a Budget,
+    pub early: Option<EarlyStop>,
+    /// Where the solves' time went.
+    pub timings: crate::Timings,
+}
+
+impl EnergySolve for OnePiece<'_> {
+    fn solve<E: IsoEnergy + Copy>(
+        &mut self,
+        energy: E,
+        x: &[DVec2],
+    ) -> Result<(Vec<DVec2>, usize), FlattenError> {
+        let r = newton_solve(
+            self.rest,
+            self.n,
+            energy,
+            newton::to_flat(x),
+            self.params,
+            crate::Method::Isometric,
+            self.budget,
+        )?;
+        self.early = self.early.or(r.early);
+        self.timings.add(&r.timings);
+        Ok((r.x, r.iterations))
+    }
+    fn stopped(&self) -> bool {
+        self.early.is_some() || self.budget.spent()
+    }
 }
 
 /// Duncan's isometric distortion δ2 (symmetric Dirichlet) from the flip-free map `x0`, with
