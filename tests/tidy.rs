@@ -771,13 +771,6 @@ const KNOWN_CIRCLES: &[(&str, &[&str], &str)] = &[
          δ0; FaceMeasure belongs in a module below both",
     ),
     (
-        "crates/server/src",
-        &["app", "device_routes", "solve_routes", "task"],
-        "the routes and the task slots use the app's state and error (app::App, ApiError), and \
-         the app mounts them (the device routes ask the solve routes for the finished pattern); \
-         the state and error belong in a module below the routes",
-    ),
-    (
         "crates/step/src",
         &["assembly", "reader"],
         "the reader resolves placements (assembly::Placement) and the assembly reads entities \

@@ -17,8 +17,9 @@ use flatcut_device::grbl::{Job, Jog};
 use serde::Deserialize;
 use serde_json::{Value, json};
 
-use crate::app::{ApiError, App};
+use crate::app::App;
 use crate::devices::{OpenRequest, PanelError, SIMULATOR, StartJob, Steer};
+use crate::error::ApiError;
 
 type AppState = State<Arc<App>>;
 
