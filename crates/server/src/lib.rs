@@ -19,6 +19,7 @@
 //! `guard` (host, token), `assets` (the page), `error` (errors as responses), `app` (the shared
 //! state), `routes` (the router), `design_routes`, `solve_routes`, `device_routes` (the
 //! handlers), `devices` (the device panel's state: the devices open, their jobs, their events),
+//! `device_watch` (each device's events and each job's end turned into that state),
 //! `device_views` (their JSON).
 
 pub mod app;
@@ -27,6 +28,7 @@ pub mod bench;
 pub mod design_routes;
 pub mod device_routes;
 pub mod device_views;
+pub mod device_watch;
 pub mod devices;
 pub mod document;
 pub mod edit;
@@ -187,7 +189,7 @@ impl Server {
             // A running job stops with the tool off and its journal written before the
             // server ends.
             let closing = app.clone();
-            let _ = tokio::task::spawn_blocking(move || closing.devices.close()).await;
+            let _ = tokio::task::spawn_blocking(move || closing.devices.close_all()).await;
             let _ = stop_tx.send(true);
         });
         let mut servers = Vec::new();
