@@ -19,7 +19,8 @@ use serde::Deserialize;
 use serde_json::{Value, json};
 
 use crate::app::App;
-use crate::devices::{OpenRequest, PanelError, StartJob, Steer, project_id};
+use crate::device_state::PanelError;
+use crate::devices::{OpenRequest, StartJob, Steer, project_id};
 use crate::error::ApiError;
 
 type AppState = State<Arc<App>>;

@@ -5,8 +5,8 @@
 use flatcut_device::{DeviceEvent, JobHandle, Subscription};
 use serde_json::json;
 
+use crate::device_state::{JobState, Shared, closed_view};
 use crate::device_views::{controller_view, doubt_view, progress_view, report_view, status_view};
-use crate::devices::{JobState, Shared, closed_view};
 
 /// Turns device `id`'s events (of its opening `generation`) into the panel's state and the pages'
 /// events, until it closes.

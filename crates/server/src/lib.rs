@@ -18,8 +18,9 @@
 //! JSON the page draws), `task` (per-revision computations), `events` (server-sent events),
 //! `guard` (host, token), `assets` (the page), `error` (errors as responses), `app` (the shared
 //! state), `routes` (the router), `design_routes`, `solve_routes`, `device_routes` (the
-//! handlers), `devices` (the device panel's state: the devices open, their jobs, their events),
-//! `device_watch` (each device's events and each job's end turned into that state),
+//! handlers), `device_state` (the device panel's state: the devices open, their jobs),
+//! `devices` (what the pages ask of them), `device_watch` (each device's events and each job's
+//! end turned into that state and the pages' events),
 //! `device_views` (their JSON).
 
 pub mod app;
@@ -27,6 +28,7 @@ pub mod assets;
 pub mod bench;
 pub mod design_routes;
 pub mod device_routes;
+pub mod device_state;
 pub mod device_views;
 pub mod device_watch;
 pub mod devices;
