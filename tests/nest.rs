@@ -40,7 +40,7 @@ fn cut_outlines(svg: &Path) -> Vec<Vec<DVec2>> {
 fn nest_instance_writes_every_piece_and_the_json_line() {
     let out = tempfile::tempdir().unwrap();
     let svg = out.path().join("dagli.svg");
-    let inst = root().join("../shared/bench/nesting/instances/dagli.json");
+    let inst = root().join("crates/nest/tests/data/instances/dagli.json");
     let code = run_cli(&[
         "nest",
         "--instance",

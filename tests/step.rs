@@ -59,6 +59,23 @@ fn inspect_of_a_step_file_lists_faces_edges_and_its_unit() {
     );
 }
 
+#[test]
+fn inspect_of_a_truncated_step_file_names_the_file_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(data("bracket_inch.step")).unwrap();
+    let path = dir.path().join("half.step");
+    std::fs::write(&path, &text[..text.len() / 2]).unwrap();
+    let name = path.to_str().unwrap();
+    let cli = flatcut_cli::Cli::try_parse_from(["flatcut", "inspect", name]).unwrap();
+    let report = flatcut_cli::error_report(&flatcut_cli::run(cli).expect_err("refused"));
+    assert_eq!(report.matches(name).count(), 1, "{report}");
+    assert!(
+        report.starts_with(&format!("error: {name}: line ")),
+        "{report}"
+    );
+    assert!(report.contains("(is it truncated?)"), "{report}");
+}
+
 /// Flattens every piece of a design (or a STEP file) and returns (name, δ2 max) per piece.
 fn delta2(path: &Path) -> Vec<(String, f64)> {
     let flat = flatcut::pipeline::flatten_design(

@@ -348,8 +348,34 @@ fn run(
         } else {
             std::thread::sleep(Duration::from_millis(u64::from(POLL_MS)));
         }
+        let now = Instant::now();
+        let dt = now.duration_since(last).as_secs_f64().min(MAX_TICK_S);
+        last = now;
+        rx_pace.add(dt);
+        tx_pace.add(dt);
+        // Receive, paced. The bytes are read before the watch's events and fed to the core after them: a client's
+        // open is queued on the watch before its first byte can be read, so bytes are never answered into a
+        // connection the loop has not seen yet (the answer would be dropped as said to nobody).
+        let mut received = 0;
+        if let Some(m) = &master {
+            let mut n = rx_pace.available().min(buf.len());
+            if config.rx_overflow == RxOverflow::Block {
+                n = n.min(core.rx_free());
+            }
+            if n > 0 {
+                match nix::unistd::read(m, &mut buf[..n]) {
+                    Ok(k) => {
+                        rx_pace.take(k);
+                        received = k;
+                    }
+                    Err(Errno::EAGAIN) | Err(Errno::EIO) | Err(Errno::EINTR) => {}
+                    Err(_) => {}
+                }
+            }
+        }
         // A client opened the device: reset like the DTR pulse of an Uno, with the stale bytes flushed. The last
-        // client closed it: what is still on its way to it is lost.
+        // client closed it: what is still on its way to it is lost (the bytes it sent before closing were on the
+        // wire and are not).
         if let (Some(ino), Some(s)) = (&opens, &slave)
             && let Ok(events) = ino.read_events()
         {
@@ -358,6 +384,8 @@ fn run(
                     if dtr_reset {
                         let _ = tcflush(s, FlushArg::TCIOFLUSH);
                         txq.clear();
+                        // Bytes read just now went to the board being reset: the bootloader drops them.
+                        received = 0;
                         hard_reset(&mut core, boot, &mut booting);
                         if boot.is_zero() {
                             booting = None;
@@ -369,35 +397,14 @@ fn run(
                 } else {
                     clients = (clients - 1).max(0);
                     if clients == 0 {
-                        let _ = tcflush(s, FlushArg::TCIOFLUSH);
+                        // TCIFLUSH on the slave drops what the controller wrote and no client read.
+                        let _ = tcflush(s, FlushArg::TCIFLUSH);
                         txq.clear();
                     }
                 }
             }
         }
-        let connected = clients > 0;
-        let now = Instant::now();
-        let dt = now.duration_since(last).as_secs_f64().min(MAX_TICK_S);
-        last = now;
-        rx_pace.add(dt);
-        tx_pace.add(dt);
-        // Receive, paced.
-        if let Some(m) = &master {
-            let mut n = rx_pace.available().min(buf.len());
-            if config.rx_overflow == RxOverflow::Block {
-                n = n.min(core.rx_free());
-            }
-            if n > 0 {
-                match nix::unistd::read(m, &mut buf[..n]) {
-                    Ok(k) => {
-                        rx_pace.take(k);
-                        core.receive_all(&buf[..k]);
-                    }
-                    Err(Errno::EAGAIN) | Err(Errno::EIO) | Err(Errno::EINTR) => {}
-                    Err(_) => {}
-                }
-            }
-        }
+        core.receive_all(&buf[..received]);
         core.tick(dt * config.time_scale);
         for ev in core.take_events() {
             match ev {
@@ -411,6 +418,7 @@ fn run(
                 }
             }
         }
+        let connected = clients > 0;
         let out = core.take_output();
         // Until a client connects (and resets the board) nothing is listening: output is lost, as on the wire.
         if master.is_some() && connected {

@@ -422,3 +422,38 @@ fn a_power_cycle_with_no_client_loses_position_and_g92_and_its_banner() {
     drop(port);
     sim.stop();
 }
+
+/// A client that asks for the status the moment it opens the port is answered, however the simulator's loop is
+/// scheduled: the open is seen before the byte is answered, and the previous client's close does not throw the
+/// new client's byte away. Each round closes one client and opens the next at once (the race is between the
+/// watch's events and the byte), on a board with auto-reset disabled, so nothing may be lost.
+#[test]
+fn a_query_sent_the_instant_a_client_reconnects_is_answered() {
+    let sim = PtySim::spawn(
+        SimConfig::default()
+            .with_instant_motion(true)
+            .with_dtr_reset(false),
+    )
+    .unwrap();
+    let mut port = open(sim.path());
+    let mut acc = String::new();
+    assert!(read_until(
+        port.as_mut(),
+        &mut acc,
+        "for help]\r\n",
+        Duration::from_secs(3)
+    ));
+    for round in 0..600 {
+        drop(port);
+        port = open(sim.path());
+        port.write_all(b"?").unwrap();
+        let mut acc = String::new();
+        assert!(
+            read_until(port.as_mut(), &mut acc, ">\r\n", Duration::from_secs(2)),
+            "round {round}: no answer to a status query sent right after opening: {acc:?}"
+        );
+        assert!(acc.starts_with("<Idle|MPos:"), "round {round}: {acc:?}");
+    }
+    drop(port);
+    sim.stop();
+}

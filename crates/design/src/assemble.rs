@@ -24,9 +24,12 @@ use crate::{Design, DesignError, LineDef, PartDef, PieceDef};
 /// A piece to cut, with the mesh its flattening starts from.
 #[derive(Clone, Debug)]
 pub struct AssembledPiece {
+    /// The piece as the design defines it (name, quantity, marks, grain, material), lengths in mm.
     pub def: PieceDef,
     /// The part it was cut from (`None` for a `[[piece]]`).
     pub part: Option<String>,
+    /// The 3D mesh the piece is flattened from (mm): the piece's own surface tessellated, or its
+    /// region of the part's mesh.
     pub mesh: TriMesh,
     /// The piece's notch marks (`kind = "notch"`) as boundary vertices of `mesh`, inserted
     /// exactly where each mark's point falls on the boundary: (mark name, vertex).
@@ -36,7 +39,9 @@ pub struct AssembledPiece {
 /// Every piece of a design and the mating seams between them (sides index `pieces`).
 #[derive(Clone, Debug)]
 pub struct Assembly {
+    /// Every piece to cut, `[[piece]]`s first in file order, then the pieces of each part.
     pub pieces: Vec<AssembledPiece>,
+    /// The mating seams between pieces; their sides index `pieces`.
     pub seams: Vec<MatingSeam>,
 }
 

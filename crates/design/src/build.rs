@@ -170,88 +170,20 @@ fn build_surface(
                     .map_err(e("hermite"))?,
             )
         }
-        SurfaceDef::Bspline {
-            degree,
-            counts,
-            points,
-            knots_u,
-            knots_v,
-        }
-        | SurfaceDef::Nurbs {
-            degree,
-            counts,
-            points,
-            knots_u,
-            knots_v,
-            ..
-        } => {
-            let weights = match s {
-                SurfaceDef::Nurbs { weights, .. } => Some(weights.clone()),
-                _ => None,
-            };
-            let ku = knots_u
-                .clone()
-                .unwrap_or_else(|| clamped_knots(degree[0], counts[0]));
-            let kv = knots_v
-                .clone()
-                .unwrap_or_else(|| clamped_knots(degree[1], counts[1]));
-            Arc::new(
-                BSplinePatch::new(
-                    degree[0],
-                    degree[1],
-                    ku,
-                    kv,
-                    counts[0],
-                    counts[1],
-                    pts(points),
-                    weights,
-                )
-                .map_err(e("bspline/nurbs"))?,
-            )
-        }
+        SurfaceDef::Bspline { .. } | SurfaceDef::Nurbs { .. } => spline_patch(ctx, s)?,
         SurfaceDef::Coons {
             v0,
             v1,
             u0,
             u1,
             blend,
-        } => {
-            let c = [
-                build_curve(ctx, "coons curve v0", v0)?,
-                build_curve(ctx, "coons curve v1", v1)?,
-                build_curve(ctx, "coons curve u0", u0)?,
-                build_curve(ctx, "coons curve u1", u1)?,
-            ];
-            let [a, b, cc, d] = c;
-            Arc::new(
-                match blend {
-                    Blend::Linear => CoonsPatch::bilinear(a, b, cc, d),
-                    Blend::Cubic => CoonsPatch::bicubic(a, b, cc, d),
-                }
-                .map_err(e("coons"))?,
-            )
-        }
+        } => coons_patch(ctx, [v0, v1, u0, u1], *blend)?,
         SurfaceDef::Gordon {
             u_curves,
             v_curves,
             u_params,
             v_params,
-        } => {
-            let uc = u_curves
-                .iter()
-                .enumerate()
-                .map(|(i, c)| build_curve(ctx, &format!("gordon u-curve {i}"), c))
-                .collect::<Result<Vec<_>, _>>()?;
-            let vc = v_curves
-                .iter()
-                .enumerate()
-                .map(|(i, c)| build_curve(ctx, &format!("gordon v-curve {i}"), c))
-                .collect::<Result<Vec<_>, _>>()?;
-            Arc::new(
-                GordonSurface::new(uc, vc, u_params.clone(), v_params.clone())
-                    .map_err(e("gordon"))?,
-            )
-        }
+        } => gordon_surface(ctx, u_curves, v_curves, u_params, v_params)?,
         SurfaceDef::Ruled { curves } => Arc::new(
             RuledSurface::new(
                 build_curve(ctx, "ruled curve 0", &curves[0])?,
@@ -314,6 +246,99 @@ fn build_surface(
     };
     out.push(surf);
     Ok(())
+}
+
+/// A B-spline or NURBS patch of the design (`s` is one of the two), clamped uniform knots where
+/// the file gives none.
+fn spline_patch(ctx: &Ctx, s: &SurfaceDef) -> Result<Arc<dyn ParamSurface>, DesignError> {
+    let (SurfaceDef::Bspline {
+        degree,
+        counts,
+        points,
+        knots_u,
+        knots_v,
+    }
+    | SurfaceDef::Nurbs {
+        degree,
+        counts,
+        points,
+        knots_u,
+        knots_v,
+        ..
+    }) = s
+    else {
+        return Err(ctx.err("not a B-spline or NURBS patch".into()));
+    };
+    let weights = match s {
+        SurfaceDef::Nurbs { weights, .. } => Some(weights.clone()),
+        _ => None,
+    };
+    let ku = knots_u
+        .clone()
+        .unwrap_or_else(|| clamped_knots(degree[0], counts[0]));
+    let kv = knots_v
+        .clone()
+        .unwrap_or_else(|| clamped_knots(degree[1], counts[1]));
+    Ok(Arc::new(
+        BSplinePatch::new(
+            degree[0],
+            degree[1],
+            ku,
+            kv,
+            counts[0],
+            counts[1],
+            pts(points),
+            weights,
+        )
+        .map_err(|err| ctx.surf("bspline/nurbs", err))?,
+    ))
+}
+
+/// A Coons patch from its four boundary curves `[v0, v1, u0, u1]`.
+fn coons_patch(
+    ctx: &Ctx,
+    curves: [&CurveDef; 4],
+    blend: Blend,
+) -> Result<Arc<dyn ParamSurface>, DesignError> {
+    let [v0, v1, u0, u1] = curves;
+    let c = [
+        build_curve(ctx, "coons curve v0", v0)?,
+        build_curve(ctx, "coons curve v1", v1)?,
+        build_curve(ctx, "coons curve u0", u0)?,
+        build_curve(ctx, "coons curve u1", u1)?,
+    ];
+    let [a, b, cc, d] = c;
+    Ok(Arc::new(
+        match blend {
+            Blend::Linear => CoonsPatch::bilinear(a, b, cc, d),
+            Blend::Cubic => CoonsPatch::bicubic(a, b, cc, d),
+        }
+        .map_err(|err| ctx.surf("coons", err))?,
+    ))
+}
+
+/// A Gordon surface through its curve network.
+fn gordon_surface(
+    ctx: &Ctx,
+    u_curves: &[CurveDef],
+    v_curves: &[CurveDef],
+    u_params: &[f64],
+    v_params: &[f64],
+) -> Result<Arc<dyn ParamSurface>, DesignError> {
+    let uc = u_curves
+        .iter()
+        .enumerate()
+        .map(|(i, c)| build_curve(ctx, &format!("gordon u-curve {i}"), c))
+        .collect::<Result<Vec<_>, _>>()?;
+    let vc = v_curves
+        .iter()
+        .enumerate()
+        .map(|(i, c)| build_curve(ctx, &format!("gordon v-curve {i}"), c))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Arc::new(
+        GordonSurface::new(uc, vc, u_params.to_vec(), v_params.to_vec())
+            .map_err(|err| ctx.surf("gordon", err))?,
+    ))
 }
 
 impl PieceDef {

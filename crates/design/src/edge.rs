@@ -28,15 +28,21 @@ pub use flatcut_pattern::EdgeKind;
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EdgeDef {
+    /// The edge's name, used in messages and on the pattern's allowance labels.
     pub name: String,
+    /// Where the stretch starts: a point on (or within 1 % of the size of) the outline.
     pub from: P3,
+    /// Where the stretch ends; equal to `from`, the whole outline loop through that point.
     pub to: P3,
     #[serde(default)]
+    /// A point the stretch passes nearest, to choose between the two ways round from `from` to `to`
+    /// (default: the shorter).
     pub via: Option<P3>,
     /// Allowance in mm whatever the file's units; absent: the piece's `seam_allowance_mm`.
     #[serde(default)]
     pub allowance_mm: Option<f64>,
     #[serde(default)]
+    /// How the stretch is finished (seam, hem, fold, lasting or raw); default seam.
     pub kind: EdgeKind,
 }
 
@@ -94,9 +100,11 @@ pub(crate) fn check_allowance(what: &str, a: Option<f64>) -> Result<(), String> 
 pub struct OutlineEdge {
     /// The edge's (or style line's, or seam's) name.
     pub name: String,
+    /// How the stretch is finished (seam, hem, fold, lasting or raw).
     pub kind: EdgeKind,
     /// Allowance in mm; `None`: the piece's own.
     pub allowance_mm: Option<f64>,
+    /// The stretch's points on the piece's 3D outline (mm), in order along it.
     pub points: Vec<DVec3>,
     /// The stretch is a whole loop of the outline.
     pub closed: bool,

@@ -35,6 +35,8 @@ pub struct GradingDef {
     /// The point every scaled size keeps.
     pub origin: P3,
     #[serde(rename = "size")]
+    /// The sizes of the run besides the base, in the order the file lists them
+    /// (`[[grading.size]]`).
     pub sizes: Vec<SizeDef>,
 }
 
@@ -42,8 +44,11 @@ pub struct GradingDef {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SizeDef {
+    /// The size's name, as outputs and labels carry it.
     pub name: String,
     #[serde(default)]
+    /// The factor per axis (x, y, z) about the grading's origin; dimensionless, each finite and
+    /// positive.
     pub scale: Option<[f64; 3]>,
     /// A design file (relative to the graded design) for this size.
     #[serde(default)]
@@ -54,8 +59,11 @@ pub struct SizeDef {
 /// and the folder its files are relative to.
 #[derive(Clone, Debug)]
 pub struct SizedDesign {
+    /// The size's name; `None` for a design without grading.
     pub size: Option<String>,
+    /// The design of this size, every length in mm.
     pub design: Design,
+    /// The folder the design's files (meshes, STEP models, materials) are relative to.
     pub dir: PathBuf,
 }
 

@@ -25,6 +25,7 @@
 //!
 //! **Architecture invariant:** this crate only translates the file into surfaces and meshes; all
 //! geometry lives in flatcut-surface and flatcut-mesh.
+#![warn(missing_docs)]
 
 mod assemble;
 mod build;

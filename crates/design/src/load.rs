@@ -15,6 +15,7 @@ use crate::{DesignError, GradingDef, JoinDef, PartDef, PieceDef, SurfaceDef, Uni
 pub struct Design {
     /// Units the file was written in (lengths are already converted).
     pub units: Units,
+    /// The `[[piece]]` definitions in file order (their `index` is the position here).
     pub pieces: Vec<PieceDef>,
     /// Surfaces cut into pieces by style lines.
     pub parts: Vec<PartDef>,

@@ -30,8 +30,11 @@ const MAX_FILE_BYTES: u64 = 64 * 1024;
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Directions {
+    /// Along the grain (warp), in percent.
     pub along: f64,
+    /// Across the grain (weft), in percent.
     pub across: f64,
+    /// On the 45° bias, in percent.
     pub bias: f64,
 }
 
@@ -39,8 +42,11 @@ pub struct Directions {
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialStiffness {
+    /// Stiffness along the grain (warp), relative to an isotropic sheet's 1.
     pub along: f64,
+    /// Stiffness across the grain (weft), relative to an isotropic sheet's 1.
     pub across: f64,
+    /// Shear stiffness (on the bias), relative to an isotropic sheet's 1.
     pub shear: f64,
 }
 
@@ -48,12 +54,17 @@ pub struct MaterialStiffness {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
+    /// The material's name, as the report prints it.
     pub name: String,
     #[serde(default)]
+    /// A line describing the material, for people reading the file.
     pub description: Option<String>,
+    /// The largest stretch the material takes per direction, percent of the length (≥ 0).
     pub stretch_max_pct: Directions,
+    /// The largest compression the material takes per direction, percent of the length (≥ 0).
     pub compress_max_pct: Directions,
     #[serde(default)]
+    /// Relative stiffness per direction; absent: isotropic (1, 1, 1).
     pub stiffness: Option<MaterialStiffness>,
 }
 
@@ -65,21 +76,31 @@ pub enum MaterialError {
         "material '{name}': no bundled material of that name and no such file ({source}); bundled: {}",
         bundled_names()
     )]
+    /// The name is neither a bundled material nor a readable file.
     NotFound {
+        /// The material as the design names it.
         name: String,
+        /// Why the file of that name could not be read.
         source: std::io::Error,
     },
     /// `at` is `:line:column` where the parser knows it.
     #[error("{file}{at}: {msg}")]
     Syntax {
+        /// The material file's path as given.
         file: String,
+        /// Where in the file: `:line:column`, or empty when the parser does not say.
         at: String,
+        /// The parser's description of the problem.
         msg: String,
     },
     #[error("{file}: {key}: {msg}")]
+    /// A key whose value is out of range or inconsistent.
     Invalid {
+        /// The material file's path as given (or the bundled material's name).
         file: String,
+        /// The offending key, e.g. `stretch_max_pct.bias`.
         key: String,
+        /// What is wrong with its value.
         msg: String,
     },
 }

@@ -46,14 +46,19 @@ use crate::{DesignError, GrainDef, MarkDef, P3, PieceDef, SurfaceDef};
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PartDef {
+    /// The part's name, used in messages.
     pub name: String,
+    /// The one surface the part's pieces are cut from.
     pub surface: SurfaceDef,
     #[serde(default, rename = "line")]
+    /// The style lines that divide the surface into pieces (`[[part.line]]`).
     pub lines: Vec<LineDef>,
     /// Named stretches of the part's outline with their own allowance.
     #[serde(default, rename = "edge")]
     pub edges: Vec<EdgeDef>,
     #[serde(rename = "piece")]
+    /// The pieces of the part, one per region between the style lines and the outline
+    /// (`[[part.piece]]`).
     pub pieces: Vec<PartPieceDef>,
     /// Position among the parts (0-based), set at load time.
     #[serde(skip)]
@@ -70,6 +75,7 @@ pub struct PartDef {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LineDef {
+    /// The line's name: seams along it are named after it.
     pub name: String,
     /// Points on (or near) the surface, in order; joined along the surface.
     #[serde(default)]
@@ -102,24 +108,34 @@ impl LineDef {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PartPieceDef {
+    /// The piece's name, unique in the design.
     pub name: String,
     /// A point inside the region (on or near the surface).
     pub at: P3,
     #[serde(default = "crate::schema::one")]
+    /// How many to cut as drawn (default 1; set from `pairs` when given).
     pub quantity: u32,
     #[serde(default)]
+    /// `pairs = N`: N as drawn and N mirrored (left and right).
     pub pairs: Option<u32>,
     #[serde(default)]
+    /// What the labels of a pair say: as drawn, then mirrored (default "L", "R").
     pub pair_labels: Option<[String; 2]>,
     #[serde(default)]
+    /// Notches, stitch lines and points on the piece's region of the surface.
     pub marks: Vec<MarkDef>,
     #[serde(default)]
+    /// Grain direction: two points on (or near) the region, or `"auto"`.
     pub grain: Option<GrainDef>,
     #[serde(default)]
+    /// Seam allowance in mm whatever the file's units (default: the project's).
     pub seam_allowance_mm: Option<f64>,
     #[serde(default)]
+    /// The material's name as printed on the pattern piece (a label only).
     pub material: Option<String>,
     #[serde(default)]
+    /// A bundled material or a material file relative to the design: its limits and stiffness drive
+    /// the flattening.
     pub material_properties: Option<String>,
 }
 
@@ -127,8 +143,11 @@ pub struct PartPieceDef {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct JoinDef {
+    /// The seam's name, used in the report and on notches.
     pub name: String,
+    /// The first piece's edge.
     pub a: JoinEdgeDef,
+    /// The second piece's edge, sewn to `a`.
     pub b: JoinEdgeDef,
     /// Notches on the seam: each is placed on both edges at its nearest point.
     #[serde(default)]
@@ -143,10 +162,15 @@ pub struct JoinDef {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct JoinEdgeDef {
+    /// The name of the piece (a `[[piece]]` or a part's piece) whose boundary the edge lies on.
     pub piece: String,
+    /// Where the edge starts: a point on (or near) the piece's boundary.
     pub from: P3,
+    /// Where the edge ends: a point on (or near) the piece's boundary.
     pub to: P3,
     #[serde(default)]
+    /// A point the edge passes nearest, to choose between the two ways round (default: the
+    /// shorter).
     pub via: Option<P3>,
 }
 

@@ -9,9 +9,13 @@ use serde::Deserialize;
 #[serde(rename_all = "lowercase")]
 pub enum Units {
     #[default]
+    /// Millimetres (the default).
     Mm,
+    /// Centimetres: 10 mm.
     Cm,
+    /// Metres: 1000 mm.
     M,
+    /// Inches: 25.4 mm.
     In,
 }
 
@@ -35,43 +39,73 @@ pub type P3 = [f64; 3];
 #[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum CurveDef {
     /// Bézier curve of degree `points.len() − 1`.
-    Bezier { points: Vec<P3> },
+    Bezier {
+        /// Control points, at least two; the first and last are the curve's ends.
+        points: Vec<P3>,
+    },
     /// B-spline; clamped uniform knots when `knots` is omitted.
     Bspline {
+        /// Polynomial degree, at least 1 and below the number of points.
         degree: usize,
+        /// Control points (poles), at least `degree + 1`.
         points: Vec<P3>,
         #[serde(default)]
+        /// Non-decreasing knots, `points.len() + degree + 1` of them.
         knots: Option<Vec<f64>>,
     },
     /// NURBS; clamped uniform knots when `knots` is omitted.
     Nurbs {
+        /// Polynomial degree, at least 1 and below the number of points.
         degree: usize,
+        /// Control points (poles), at least `degree + 1`.
         points: Vec<P3>,
+        /// One weight per point, finite and > 0.
         weights: Vec<f64>,
         #[serde(default)]
+        /// Non-decreasing knots, `points.len() + degree + 1` of them.
         knots: Option<Vec<f64>>,
     },
     /// Straight segments through the points.
-    Polyline { points: Vec<P3> },
+    Polyline {
+        /// The vertices, at least two, in order.
+        points: Vec<P3>,
+    },
     /// Cubic Hermite segment: end points and end tangents.
-    Hermite { p0: P3, t0: P3, p1: P3, t1: P3 },
+    Hermite {
+        /// Start point.
+        p0: P3,
+        /// Tangent (derivative with respect to the parameter in [0, 1]) at the start point.
+        t0: P3,
+        /// End point.
+        p1: P3,
+        /// Tangent (derivative with respect to the parameter in [0, 1]) at the end point.
+        t1: P3,
+    },
     /// Exact circular arc around `center` in the plane of `x_axis`, `y_axis` (default xy plane),
     /// from `start_deg` to `end_deg`.
     Arc {
+        /// The circle's centre.
         center: P3,
+        /// The circle's radius, finite and > 0.
         radius: f64,
+        /// Start angle in degrees from `x_axis` towards `y_axis`.
         start_deg: f64,
+        /// End angle in degrees, above `start_deg` by at most 360.
         end_deg: f64,
         #[serde(default)]
+        /// Direction of angle 0 (default x); normalised.
         x_axis: Option<P3>,
         #[serde(default)]
+        /// Direction of angle 90° (default y); must not be parallel to `x_axis`.
         y_axis: Option<P3>,
     },
     /// Interpolating C² cubic spline through the points (chord-length, natural ends; a closed
     /// loop when `closed = true`).
     Spline {
+        /// The points the spline passes through, in order.
         points: Vec<P3>,
         #[serde(default)]
+        /// Whether the spline closes back to its first point, C² there too.
         closed: bool,
     },
 }
@@ -81,7 +115,10 @@ pub enum CurveDef {
 #[serde(rename_all = "lowercase")]
 pub enum Blend {
     #[default]
+    /// Linear blending `1 − t`, `t` (the bilinear Coons patch; the default).
     Linear,
+    /// Hermite cubic blending `1 − 3t² + 2t³`, `3t² − 2t³`: zero slope at the edges, so
+    /// cross-boundary derivatives depend only on the boundary curves.
     Cubic,
 }
 
@@ -90,83 +127,156 @@ pub enum Blend {
 #[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum SurfaceDef {
     /// Tensor-product Bézier patch: `(du+1)(dv+1)` points, v varying fastest.
-    Bezier { degree: [usize; 2], points: Vec<P3> },
+    Bezier {
+        /// Degrees `[du, dv]`, each at least 1.
+        degree: [usize; 2],
+        /// `(du+1)(dv+1)` control points, v varying fastest.
+        points: Vec<P3>,
+    },
     /// Bicubic Hermite patch from corner data `corners[i][j] = P(i, j)`.
     Hermite {
+        /// `corners[i][j]` is the point at `(u, v) = (i, j)`.
         corners: [[P3; 2]; 2],
+        /// `tangents_u[i][j]` is ∂P/∂u at corner `(i, j)`.
         tangents_u: [[P3; 2]; 2],
+        /// `tangents_v[i][j]` is ∂P/∂v at corner `(i, j)`.
         tangents_v: [[P3; 2]; 2],
         #[serde(default)]
+        /// `twists[i][j]` is ∂²P/∂u∂v at corner `(i, j)` (default zero: a Ferguson patch).
         twists: Option<[[P3; 2]; 2]>,
     },
     /// B-spline patch; `counts = [nu, nv]` poles (v fastest), clamped uniform knots by default.
     Bspline {
+        /// Degrees `[du, dv]`, each at least 1.
         degree: [usize; 2],
+        /// Number of poles `[nu, nv]`, each above its degree.
         counts: [usize; 2],
+        /// `nu · nv` poles, v varying fastest.
         points: Vec<P3>,
         #[serde(default)]
+        /// Knots in u, `nu + du + 1` of them (default clamped uniform).
         knots_u: Option<Vec<f64>>,
         #[serde(default)]
+        /// Knots in v, `nv + dv + 1` of them (default clamped uniform).
         knots_v: Option<Vec<f64>>,
     },
     /// NURBS patch: as `bspline` with one weight per pole.
     Nurbs {
+        /// Degrees `[du, dv]`, each at least 1.
         degree: [usize; 2],
+        /// Number of poles `[nu, nv]`, each above its degree.
         counts: [usize; 2],
+        /// `nu · nv` poles, v varying fastest.
         points: Vec<P3>,
+        /// One weight per pole, finite and > 0.
         weights: Vec<f64>,
         #[serde(default)]
+        /// Knots in u, `nu + du + 1` of them (default clamped uniform).
         knots_u: Option<Vec<f64>>,
         #[serde(default)]
+        /// Knots in v, `nv + dv + 1` of them (default clamped uniform).
         knots_v: Option<Vec<f64>>,
     },
     /// Coons patch: `P(u,0) = v0`, `P(u,1) = v1`, `P(0,v) = u0`, `P(1,v) = u1`.
     Coons {
+        /// The boundary `P(u, 0)`.
         v0: CurveDef,
+        /// The boundary `P(u, 1)`.
         v1: CurveDef,
+        /// The boundary `P(0, v)`.
         u0: CurveDef,
+        /// The boundary `P(1, v)`.
         u1: CurveDef,
         #[serde(default)]
+        /// How the boundaries are blended into the interior (default linear).
         blend: Blend,
     },
     /// Gordon surface through a curve network: `u_curves[i]` at `u = u_params[i]` (running in
     /// v), `v_curves[j]` at `v = v_params[j]`.
     Gordon {
+        /// Curves of constant u, running in v; at least two.
         u_curves: Vec<CurveDef>,
+        /// Curves of constant v, running in u; at least two.
         v_curves: Vec<CurveDef>,
+        /// The u value of each of `u_curves`, increasing.
         u_params: Vec<f64>,
+        /// The v value of each of `v_curves`, increasing.
         v_params: Vec<f64>,
     },
     /// Ruled surface between two curves.
-    Ruled { curves: [CurveDef; 2] },
+    Ruled {
+        /// The two curves; straight rulings join points of equal parameter.
+        curves: [CurveDef; 2],
+    },
     /// Developable surface between two rails.
-    Developable { rails: [CurveDef; 2] },
+    Developable {
+        /// The two rails; rulings join them so that the surface flattens without distortion.
+        rails: [CurveDef; 2],
+    },
     /// Exact sphere.
-    Sphere { center: P3, radius: f64 },
+    Sphere {
+        /// The sphere's centre.
+        center: P3,
+        /// The sphere's radius, finite and > 0.
+        radius: f64,
+    },
     /// Exact cylinder around the z axis through `base`.
-    Cylinder { base: P3, radius: f64, height: f64 },
+    Cylinder {
+        /// Centre of the bottom circle.
+        base: P3,
+        /// Radius, finite and > 0.
+        radius: f64,
+        /// Height along +z, finite and > 0.
+        height: f64,
+    },
     /// Exact cone frustum around the z axis through `base`.
     Cone {
+        /// Centre of the bottom circle.
         base: P3,
+        /// Radius of the bottom circle, ≥ 0.
         base_radius: f64,
+        /// Radius of the top circle, ≥ 0.
         top_radius: f64,
+        /// Height along +z, finite and > 0.
         height: f64,
     },
     /// Exact torus around the z axis.
-    Torus { center: P3, major: f64, minor: f64 },
+    Torus {
+        /// Centre of the centre circle.
+        center: P3,
+        /// Radius of the centre circle, above `minor`.
+        major: f64,
+        /// Radius of the tube, finite and > 0.
+        minor: f64,
+    },
     /// Triangular Bézier patch of the given degree, `(n+1)(n+2)/2` points.
-    TriangularBezier { degree: usize, points: Vec<P3> },
+    TriangularBezier {
+        /// Degree `n`, at least 1.
+        degree: usize,
+        /// `(n+1)(n+2)/2` control points, in the order `flatcut_surface`'s triangular patch
+        /// documents.
+        points: Vec<P3>,
+    },
     /// Several surfaces forming one piece (tessellated crack-free).
-    Patches { patches: Vec<SurfaceDef> },
+    Patches {
+        /// The surfaces, meeting edge to edge.
+        patches: Vec<SurfaceDef>,
+    },
     /// A mesh file (.obj, .stl, .ply), relative to the design file, in the design's units.
-    Mesh { file: String },
+    Mesh {
+        /// The mesh file's path, relative to the design file.
+        file: String,
+    },
     /// Faces of a STEP model (relative to the design file, in the model's own unit); expanded
     /// into one piece per face or per smooth group when the design is loaded (see `step`).
     Step {
+        /// The STEP file's path, relative to the design file.
         file: String,
         #[serde(default)]
+        /// Which faces to take (default all).
         faces: StepFaces,
         #[serde(default)]
+        /// How the chosen faces become pieces (default one piece per face).
         group: StepGroup,
         /// The model, once read (set when the design is loaded).
         #[serde(skip)]
@@ -179,8 +289,11 @@ pub enum SurfaceDef {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(untagged)]
 pub enum SeamDef {
+    /// 3D points `[x, y, z]` on (or near) the surface.
     Points(Vec<P3>),
+    /// Surface parameters `[u, v]` of a single-patch piece.
     Params(Vec<[f64; 2]>),
+    /// 0-based vertex indices of a mesh piece's file.
     Vertices(Vec<u32>),
 }
 
@@ -201,9 +314,12 @@ pub enum MarkKind {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MarkDef {
+    /// The mark's name, carried to the pattern and used in messages.
     pub name: String,
     #[serde(default)]
+    /// What the mark is for (default a line).
     pub kind: MarkKind,
+    /// Points on (or near) the surface: one for a notch or point, two or more for a line.
     pub points: Vec<P3>,
 }
 
@@ -216,7 +332,9 @@ pub(crate) fn one() -> u32 {
 /// least.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum GrainDef {
+    /// From the first point to the second, both on (or near) the surface.
     Line([P3; 2]),
+    /// Chosen by the flattening: the direction that exceeds the material's limits least.
     Auto,
 }
 
@@ -259,6 +377,7 @@ impl<'de> Deserialize<'de> for GrainDef {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PieceDef {
+    /// The piece's name, unique in the design.
     pub name: String,
     /// How many to cut as drawn (default 1; `pairs` when given).
     #[serde(default = "one")]
@@ -272,16 +391,20 @@ pub struct PieceDef {
     /// What the labels of a pair say: as drawn, then mirrored (default "L", "R").
     #[serde(default)]
     pub pair_labels: Option<[String; 2]>,
+    /// The piece's geometry.
     pub surface: SurfaceDef,
     #[serde(default)]
+    /// Seams on the piece's surface where it is cut open (a closed or too-curved surface).
     pub seams: Vec<SeamDef>,
     #[serde(default)]
+    /// Notches, stitch lines and points on the surface.
     pub marks: Vec<MarkDef>,
     /// Grain direction: from the first point to the second (on or near the surface), or
     /// `"auto"`.
     #[serde(default)]
     pub grain: Option<GrainDef>,
     #[serde(default)]
+    /// Seam allowance in mm whatever the file's units (default: the project's).
     pub seam_allowance_mm: Option<f64>,
     /// The material's name as printed on the pattern piece (a label only).
     #[serde(default)]

@@ -40,6 +40,8 @@ use crate::{DesignError, PieceDef, SurfaceDef};
 pub enum StepFaces {
     /// Only `"all"` is accepted.
     Keyword(String),
+    /// Face numbers as `flatcut inspect` lists them (0-based), each less than the model's face
+    /// count.
     List(Vec<usize>),
 }
 
@@ -133,7 +135,9 @@ impl PartialEq for StepModel {
 /// from it.
 #[derive(Clone, Debug)]
 pub struct StepPiece {
+    /// The STEP file the faces come from, read once and shared with the design's other STEP pieces.
     pub source: Arc<StepSource>,
+    /// The piece's faces: 0-based face numbers, sorted and distinct.
     pub faces: Vec<usize>,
 }
 
@@ -158,8 +162,8 @@ pub(crate) fn check_faces(ctx: &Ctx, faces: &StepFaces) -> Result<(), DesignErro
 }
 
 fn read_file(ctx: &Ctx, path: &Path) -> Result<(StepFile, Model), DesignError> {
-    let file = StepFile::read(path).map_err(|e| ctx.err(format!("{}: {e}", path.display())))?;
-    let model = Model::from_file(&file).map_err(|e| ctx.err(format!("{}: {e}", path.display())))?;
+    let file = StepFile::read(path).map_err(|e| ctx.step_read(path, e))?;
+    let model = Model::from_file(&file).map_err(|e| ctx.step_read(path, e))?;
     Ok((file, model))
 }
 

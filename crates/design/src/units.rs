@@ -14,11 +14,14 @@ use crate::{CurveDef, GrainDef, P3, PieceDef, SeamDef, SurfaceDef};
 /// The map `p ↦ a ⊙ p + b` (⊙ per axis): a scale per axis about some point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Axes {
+    /// Factor per axis (x, y, z); dimensionless.
     pub a: [f64; 3],
+    /// Offset per axis after scaling (mm once loaded).
     pub b: [f64; 3],
 }
 
 impl Axes {
+    /// The map that leaves every point where it is.
     pub const IDENTITY: Axes = Axes {
         a: [1.0; 3],
         b: [0.0; 3],
@@ -48,14 +51,17 @@ impl Axes {
         }
     }
 
+    /// Whether the map moves nothing (every factor 1, every offset 0).
     pub fn is_identity(&self) -> bool {
         *self == Axes::IDENTITY
     }
 
+    /// The image `a ⊙ p + b` of a point.
     pub fn point(&self, p: P3) -> P3 {
         [0, 1, 2].map(|k| self.a[k] * p[k] + self.b[k])
     }
 
+    /// The image `a ⊙ v` of a vector (a difference of points: no offset).
     pub fn vector(&self, v: P3) -> P3 {
         [0, 1, 2].map(|k| self.a[k] * v[k])
     }

@@ -111,3 +111,60 @@ fn bad_selections_are_named() {
         "{e}"
     );
 }
+
+/// The first half of a STEP file, cut inside its data section.
+fn truncated(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(data("fillet_box.step")).unwrap();
+    let path = dir.join("cut.step");
+    std::fs::write(&path, &text[..text.len() / 2]).unwrap();
+    path
+}
+
+#[test]
+fn a_truncated_step_file_loaded_as_a_design_is_named_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = truncated(dir.path());
+    let e = Design::load(&path).unwrap_err().to_string();
+    let name = path.display().to_string();
+    assert_eq!(e.matches(&name).count(), 1, "{e}");
+    assert!(e.starts_with(&format!("{name}: line ")), "{e}");
+    assert!(e.ends_with("(is it truncated?)"), "{e}");
+    assert!(!e.contains("piece 0"), "{e}");
+}
+
+#[test]
+fn a_truncated_step_file_of_a_design_names_the_design_the_piece_and_the_model_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let step = truncated(dir.path());
+    let path = dir.path().join("design.toml");
+    std::fs::write(
+        &path,
+        "[[piece]]\nname = \"x\"\n[piece.surface]\ntype = \"step\"\nfile = \"cut.step\"\n",
+    )
+    .unwrap();
+    let e = Design::load(&path).unwrap_err().to_string();
+    let (design, model) = (path.display().to_string(), step.display().to_string());
+    assert!(
+        e.starts_with(&format!("{design}: piece 0 'x': {model}: line ")),
+        "{e}"
+    );
+    assert_eq!(e.matches("cut.step").count(), 1, "{e}");
+    assert!(e.ends_with("(is it truncated?)"), "{e}");
+}
+
+#[test]
+fn a_missing_step_file_is_named_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("gone.step");
+    let e = Design::load(&path).unwrap_err().to_string();
+    assert_eq!(e.matches("gone.step").count(), 1, "{e}");
+    let design = dir.path().join("design.toml");
+    std::fs::write(
+        &design,
+        "[[piece]]\nname = \"x\"\n[piece.surface]\ntype = \"step\"\nfile = \"gone.step\"\n",
+    )
+    .unwrap();
+    let e = Design::load(&design).unwrap_err().to_string();
+    assert_eq!(e.matches("gone.step").count(), 1, "{e}");
+    assert!(e.contains("piece 0 'x'"), "{e}");
+}

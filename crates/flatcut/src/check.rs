@@ -9,7 +9,9 @@ use flatcut_pattern::Drawing;
 /// One straight or circular motion a device made, in machine mm.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CutSegment {
+    /// Where the motion starts (mm).
     pub from: DVec2,
+    /// Where it ends (mm).
     pub to: DVec2,
     /// Arc centre and direction (`true`: counter-clockwise) for a circular motion.
     pub arc: Option<(DVec2, bool)>,

@@ -36,7 +36,9 @@ const LEG_FIT_ROUNDS: usize = 4;
 /// A dart of the piece as the pattern draws it: its two legs (mouth to point, smooth) and the
 /// side its intake is pressed toward (0 or 1: the leg).
 pub struct DrawnDart {
+    /// The two legs, each from the mouth to the point (mm, the piece's flat frame).
     pub legs: [Vec<DVec2>; 2],
+    /// The leg the intake is pressed toward: 0 or 1.
     pub pressed: usize,
 }
 

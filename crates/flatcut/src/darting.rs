@@ -6,6 +6,9 @@
 //! What the design says about the piece keeps darts away: its `no_cut` regions, its marks
 //! (notches, drill and reference points, stitch and placement lines); its seams are already part
 //! of the outline.
+//!
+//! Pieces joined to others by mating seams are not darted (a dart would move their seams): the
+//! flattening warns and leaves them whole.
 
 pub use flatcut_darts::DartFit;
 use flatcut_darts::{Dart, DartError, DartOptions, Darted, KeepOut, Threads};
@@ -45,7 +48,9 @@ impl Default for DartSettings {
 /// stretches, or, when given, `threads`' per thread of the material.
 #[derive(Clone, Debug)]
 pub struct DartLimits {
+    /// The flattening's parameters: its stretch and compression limits on the principal stretches.
     pub params: FlattenParams,
+    /// The material's limits per thread; when given, they replace the principal-stretch limits.
     pub threads: Option<Threads>,
 }
 
@@ -183,6 +188,7 @@ pub struct Finished {
     /// The flattening's info (its limit warnings dropped when darts brought the piece within
     /// them).
     pub info: FlattenInfo,
+    /// The darts cut, in the order they were found.
     pub darts: Vec<Dart>,
     /// True when the map keeps the grain where it lay in the flattening's map: no darts, or
     /// darts that held the threads' limits along it. False: the grain is to be found again.

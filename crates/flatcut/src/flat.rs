@@ -21,9 +21,13 @@ use flatcut_design::material::MaterialSpec;
 /// flattening went.
 #[derive(Clone, Debug)]
 pub struct Flat {
+    /// The piece's name.
     pub name: String,
+    /// The piece as the design defines it; `None` for a piece read from a mesh file.
     pub def: Option<PieceDef>,
+    /// The 3D mesh with its flattening (`flat`, mm).
     pub mesh: TriMesh,
+    /// The piece's distortion report.
     pub report: Report,
     /// How many to cut as drawn.
     pub quantity: u32,
@@ -83,8 +87,11 @@ pub fn columns(flats: &[Flat]) -> Vec<flatcut_report::Column<'_>> {
 /// cut to meet the flattening's limits (`None`: only where the design's piece asks for them).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Limits {
+    /// The largest stretch allowed (percent); `None`: no limit.
     pub stretch_pct: Option<f64>,
+    /// The largest compression allowed (percent); `None`: no limit.
     pub compress_pct: Option<f64>,
+    /// How darts are cut; `None`: only where the design's piece asks for them.
     pub darts: Option<DartSettings>,
     /// Whether pieces that darts cannot bring within the limits are split into parts sewn
     /// together ([`crate::splitting`]).

@@ -10,7 +10,9 @@ use flatcut_mesh::TriMesh;
 /// (a mating seam's notch `line n`, or the design's notch mark).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct FlatNotch {
+    /// The notch's name.
     pub name: String,
+    /// Its boundary vertex in the piece's mesh.
     pub vertex: u32,
 }
 
@@ -18,8 +20,11 @@ pub struct FlatNotch {
 /// every vertex (mm, true scale).
 #[derive(Clone, Debug)]
 pub struct FlatPiece {
+    /// The piece as the design defines it.
     pub def: PieceDef,
+    /// The 3D mesh with its flattening (`flat`, mm).
     pub mesh: TriMesh,
+    /// How the flattening went: method, iterations, warnings.
     pub info: FlattenInfo,
     /// Its notches: the notches of its mating seams and its own notch marks.
     pub notches: Vec<FlatNotch>,

@@ -1,5 +1,8 @@
 //! Flattening a design: load it (or a mesh or STEP model), build its pieces and seams, and
 //! flatten them with their material, darts and splits, measured by the report.
+//!
+//! Every size of a graded design is flattened, its pieces named `<piece> <size>`, into
+//! [`crate::flat_piece::FlatPiece`]s.
 
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -46,8 +49,11 @@ pub fn check_unique_names(design: &Design) -> Result<(), PipelineError> {
 /// seams between them (sides index `pieces`).
 #[derive(Clone, Debug)]
 pub struct FlatDesign {
+    /// The design, lengths in mm.
     pub design: Design,
+    /// The flattened pieces, in the design's piece order.
     pub pieces: Vec<FlatPiece>,
+    /// The mating seams between pieces; their sides index `pieces`.
     pub seams: Vec<MatingSeam>,
     /// Time spent reading the surfaces and building the pieces and seams (every size's), before
     /// any flattening.

@@ -27,8 +27,11 @@ const SAMPLES_PER_SIDE: usize = 24;
 const QUAD_CELLS: usize = 6;
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
+/// What `inspect --json` reports for a design or mesh file (keys are a stable contract).
 pub struct InspectReport {
+    /// The file inspected.
     pub source: String,
+    /// One summary per piece, in the design's order.
     pub pieces: Vec<PieceSummary>,
     /// For a STEP file: its unit, shells, faces and edges (keys `unit`, `schemas`, `shells`,
     /// `faces`, `edges` beside `pieces`).

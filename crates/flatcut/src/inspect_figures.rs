@@ -25,8 +25,11 @@ const POLE_NUDGE: f64 = 1e-4;
 /// A range with its mean.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Range3 {
+    /// The smallest value.
     pub min: f64,
+    /// The largest value.
     pub max: f64,
+    /// The mean value.
     pub mean: f64,
     /// The 1st and 99th percentiles of the samples ([`p1_p99`]): the range a few outlying
     /// samples (a pole, a spike in a scanned mesh) do not set. Absent where the samples are not
@@ -38,7 +41,9 @@ pub struct Range3 {
 /// A range.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Range2 {
+    /// The smallest value.
     pub min: f64,
+    /// The largest value.
     pub max: f64,
     /// The 1st and 99th percentiles of the samples, as in [`Range3::p1_p99`].
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -71,22 +76,33 @@ pub fn percentiles_text(p: Option<[f64; 2]>) -> String {
 /// One piece as `inspect --json` reports it (keys are a stable contract).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PieceSummary {
+    /// The piece's name.
     pub name: String,
+    /// What the piece is made of: `patches`, `mesh` or `step`.
     pub kind: &'static str,
+    /// How many to cut.
     pub quantity: u32,
+    /// Surface area (mm²).
     pub area_mm2: f64,
+    /// Bounding box: lowest corner, then highest (mm).
     pub bbox_mm: [[f64; 3]; 2],
     /// Gaussian curvature in 1/mm² (mean: area-weighted).
     pub gaussian_curvature: Range3,
     /// Mean curvature in 1/mm (sign follows the normal r_u × r_v).
     pub mean_curvature: Range2,
+    /// True when the surface flattens without distortion within the developability threshold.
     pub developable: bool,
     /// `max |K| · diag²` (patches) or the largest interior angle defect in rad (meshes).
     pub developability_measure: f64,
+    /// Number of surface patches (0 for a mesh).
     pub patches: usize,
+    /// Vertices of the tessellation (or of the mesh).
     pub vertices: usize,
+    /// Triangles of the tessellation (or of the mesh).
     pub triangles: usize,
+    /// Boundary loops; `None` when the mesh's topology is invalid.
     pub boundary_loops: Option<usize>,
+    /// Total length of the boundary (mm).
     pub boundary_length_mm: f64,
 }
 

@@ -30,10 +30,15 @@ pub struct StepUnit {
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
+/// One shell of a STEP model (keys are a stable contract).
 pub struct StepShell {
+    /// 0-based index of the shell.
     pub index: usize,
+    /// The shell's instance number (`#id`).
     pub entity: u64,
+    /// True for a closed shell (it bounds a solid).
     pub closed: bool,
+    /// The shell's faces (0-based face indices).
     pub faces: Vec<usize>,
 }
 
@@ -41,8 +46,11 @@ pub struct StepShell {
 /// of one body are one part cut `quantity` times.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StepBody {
+    /// The body's instance number (`#id`).
     pub entity: u64,
+    /// The body's name in the file.
     pub name: String,
+    /// How many times the assembly places it.
     pub quantity: usize,
     /// The shells of its instances.
     pub shells: Vec<usize>,
@@ -51,19 +59,26 @@ pub struct StepBody {
 /// One face (keys are a stable contract). Without `error`, all figures are present.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StepFace {
+    /// 0-based index of the face, as designs name it.
     pub index: usize,
+    /// The face's instance number (`#id`).
     pub entity: u64,
+    /// The shell it belongs to (0-based).
     pub shell: usize,
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// The surface's kind, e.g. `plane`, `cylinder`, `bspline`.
     pub surface: Option<&'static str>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// Area of the face (mm²).
     pub area_mm2: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// Bounding box: lowest corner, then highest (mm).
     pub bbox_mm: Option<[[f64; 3]; 2]>,
     /// Gaussian curvature range (1/mm²).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gaussian_curvature: Option<Range2>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// True when the face flattens without distortion within the developability threshold.
     pub developable: Option<bool>,
     /// What healing repaired in the face, its loops and its edges (empty for a clean face).
     pub repairs: Vec<Repair>,
@@ -73,12 +88,17 @@ pub struct StepFace {
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
+/// One edge of a STEP model (keys are a stable contract).
 pub struct StepEdge {
+    /// 0-based index of the edge.
     pub index: usize,
+    /// The edge's instance number (`#id`).
     pub entity: u64,
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// The curve's kind, e.g. `line`, `circle`, `bspline`.
     pub curve: Option<&'static str>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// Length of the edge (mm).
     pub length_mm: Option<f64>,
     /// The faces whose loops use the edge (a face twice for its seam).
     pub faces: Vec<usize>,
@@ -86,20 +106,26 @@ pub struct StepEdge {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sewn_into: Option<usize>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// Why the edge cannot be used; the figures are absent then.
     pub error: Option<String>,
 }
 
 /// What `inspect` adds for a STEP file.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StepSummary {
+    /// The length unit the file states.
     pub unit: StepUnit,
+    /// The schemas the file names (AP203, AP214, AP242).
     pub schemas: Vec<String>,
     /// The largest defect healed (mm): `--heal-tolerance`, or a fraction of the model's size.
     pub heal_limit_mm: f64,
+    /// The shells, in model order.
     pub shells: Vec<StepShell>,
     /// The bodies and their quantities (an assembly places a body once per instance).
     pub bodies: Vec<StepBody>,
+    /// The faces, in model order.
     pub faces: Vec<StepFace>,
+    /// The edges, in model order.
     pub edges: Vec<StepEdge>,
 }
 

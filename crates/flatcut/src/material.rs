@@ -25,6 +25,7 @@ use crate::error::PipelineError;
 /// A piece's material and where its grain runs in the piece's flat map.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PieceGrain {
+    /// The material: its limits per direction and stiffness.
     pub material: MaterialSpec,
     /// True when the flattening chose the grain.
     pub auto: bool,

@@ -15,15 +15,21 @@ use flatcut_pattern::poly::signed_area;
 /// A rigid group of strokes nested as one item: a pattern piece's drawing in its own frame.
 #[derive(Clone, Debug)]
 pub struct NestGroup {
+    /// The group's name, as the layout names its copies.
     pub name: String,
+    /// The strokes in the group's own frame (mm).
     pub drawing: Drawing,
     /// The outline that must not overlap (the cut line), CCW.
     pub outline: Vec<DVec2>,
+    /// How many copies to place.
     pub quantity: usize,
+    /// True when `quantity` mirror images are placed besides (left and right pieces).
     pub mirrored_pair: bool,
+    /// The grain line's direction in the group's frame (radians from +x); `None`: no grain line.
     pub grain_angle: Option<f64>,
     /// The material's grain rule for a piece with a grain line, and its tolerance (degrees).
     pub grain_directions: GrainDirections,
+    /// How far a placed copy's grain may turn from the material's (degrees).
     pub grain_tolerance_deg: f64,
     /// The worst hide grade the piece accepts (`None` = any).
     pub quality: Option<u32>,
@@ -111,7 +117,9 @@ impl NestGroup {
 
 /// A nested layout: one drawing per sheet or hide (its coordinates, mm) and the nesting figures.
 pub struct Layout {
+    /// One drawing per sheet or hide, in sheet coordinates (mm).
     pub sheets: Vec<Drawing>,
+    /// The nesting's figures: placements, utilisation, copies left unplaced.
     pub result: NestResult,
     /// The roll or sheets (`None` on hides).
     pub stock: Option<Stock>,
@@ -193,7 +201,9 @@ pub fn nest_groups_on_hides(
 /// The side of a mirrored pair a placed copy is: as drawn (left) or its mirror image (right).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PairSide {
+    /// As drawn.
     L,
+    /// Mirrored.
     R,
 }
 

@@ -1,5 +1,9 @@
 //! A flattened mesh to a 2D pattern piece: boundary → sew line, the design's 3D marks, darts
 //! and grain → 2D.
+//!
+//! It is the glue from a flattened mesh boundary to a 2D piece, so `pattern` never learns about
+//! meshes: notches come as boundary vertices named after their seam, a pair's mirrored side is
+//! the mirror image of the flat map.
 
 use flatcut_design::{MarkKind as DesignMark, PieceDef};
 use flatcut_geom::{DVec2, DVec3};
@@ -55,14 +59,18 @@ pub fn flat_boundary(name: &str, mesh: &TriMesh) -> Result<(Vec<DVec2>, Vec<u32>
 /// What a pattern piece is built with beyond the flattened mesh.
 #[derive(Clone, Debug, Default)]
 pub struct PieceContext<'a> {
+    /// The piece as the design defines it (marks, grain, allowances); `None` for a mesh file.
     pub def: Option<&'a PieceDef>,
+    /// The piece's distortion report, summarised on its label.
     pub report: Option<&'a Report>,
     /// The piece's darts: their mouths get notches, their points drill marks and a fold arrow
     /// says which way each is pressed.
     pub darts: &'a [flatcut_darts::Dart],
     /// Seam allowance (mm) when the design gives none.
     pub seam_mm: Option<f64>,
+    /// The size the piece is cut in, for its label (empty when ungraded).
     pub size: String,
+    /// How the allowance turns at corners.
     pub corner: flatcut_pattern::CornerStyle,
     /// The piece's notches as boundary vertices (exact positions; named on mating seams).
     pub notches: &'a [FlatNotch],

@@ -1,4 +1,7 @@
 //! Pattern pieces from flattened pieces, and the plain row in which a pattern sheet shows them.
+//!
+//! Short label codes are unique in a set; a graded design's pieces make one row per size, and
+//! the graded sets.
 
 use flatcut_geom::DVec2;
 use flatcut_pattern::{CornerStyle, Piece, PieceOptions, PlacedPiece, Placement};
@@ -9,9 +12,11 @@ use crate::pipeline::{self, PieceContext, PipelineError};
 /// How pattern pieces are built beyond what the design says.
 #[derive(Clone, Copy, Debug)]
 pub struct PieceSettings {
+    /// The options every piece is built with (tolerances, notch style, label height).
     pub options: PieceOptions,
     /// Seam allowance (mm) where the design gives none.
     pub seam_mm: Option<f64>,
+    /// How the allowance turns at corners.
     pub corner: CornerStyle,
 }
 

@@ -13,17 +13,25 @@ pub const READ_CHORD_MM: f64 = 0.02;
 #[non_exhaustive]
 pub enum PlotError {
     #[error(transparent)]
+    /// The machine profile cannot be used.
     Profile(#[from] flatcut_gcode::ProfileError),
     #[error(transparent)]
+    /// The drawing could not be read or built.
     Pattern(#[from] flatcut_pattern::PatternError),
     #[error("cannot plan {name}: {source}")]
+    /// The drawing's job could not be planned.
     Plan {
+        /// The drawing's name.
         name: String,
+        /// Why the plan failed.
         source: flatcut_gcode::GcodeError,
     },
     #[error("{name}: {source}")]
+    /// The plan cannot be written as HP-GL.
     Hpgl {
+        /// The drawing's name.
         name: String,
+        /// Why HP-GL cannot be written.
         source: flatcut_gcode::hpgl::HpglError,
     },
 }

@@ -39,11 +39,15 @@ use flatcut_nest::GrainDirections;
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
+/// The project's `[material]`: its name and limits, and its grain rule.
 pub struct Material {
+    /// The material's name, printed on the pieces' labels.
     pub name: String,
     #[serde(default)]
+    /// The largest stretch allowed (percent); absent: no limit.
     pub max_stretch_pct: Option<f64>,
     #[serde(default)]
+    /// The largest compression allowed (percent); absent: no limit.
     pub max_compress_pct: Option<f64>,
     /// The material's grain rule for pieces with a grain line: `"fixed"` (along the grain one
     /// way), `"0,180"` (either way; the default) or `"any"` (no grain: pieces turn freely in
@@ -80,14 +84,19 @@ impl Material {
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
+/// The project's `[sheet]`: sheets of width × height, or a roll of a width.
 pub struct Sheet {
     #[serde(default)]
+    /// Sheet width (mm); with `height_mm`.
     pub width_mm: Option<f64>,
     #[serde(default)]
+    /// Sheet height (mm); with `width_mm`.
     pub height_mm: Option<f64>,
     #[serde(default)]
+    /// Roll width (mm), instead of sheets.
     pub roll_width_mm: Option<f64>,
     #[serde(default = "Sheet::default_spacing")]
+    /// Smallest gap between nested pieces (mm, default 2).
     pub spacing_mm: f64,
 }
 
@@ -99,7 +108,10 @@ impl Sheet {
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
+/// The project's `[machine]`.
 pub struct Machine {
+    /// A bundled profile's name (`pen`, `knife`, `laser`, …) or a profile file relative to the
+    /// project.
     pub profile: String,
 }
 
@@ -151,12 +163,15 @@ impl Device {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Project {
+    /// The project's name, used in the summary and messages.
     pub name: String,
     /// The design file, relative to the project file.
     pub design: PathBuf,
     #[serde(default)]
+    /// The flattening method (as `flatcut flatten --method`); absent: the default.
     pub method: Option<String>,
     #[serde(default)]
+    /// Seam allowance (mm) where the design gives none.
     pub seam_mm: Option<f64>,
     /// `"auto"`: cut darts into the pieces that cannot meet the material's limits otherwise.
     #[serde(default)]
@@ -165,8 +180,11 @@ pub struct Project {
     /// limits into parts sewn together.
     #[serde(default)]
     pub split: Option<flatcut_design::DartsDef>,
+    /// The material the pieces are cut from.
     pub material: Material,
+    /// What the pieces are nested on.
     pub sheet: Sheet,
+    /// The machine that cuts them.
     pub machine: Machine,
     /// Sets to cut per size of a graded design (`S = 2`, `M = 4`): the nesting places every
     /// piece of a size its quantity times this; sizes not named are not cut. Absent: one set
@@ -174,6 +192,7 @@ pub struct Project {
     #[serde(default)]
     pub order: Option<std::collections::BTreeMap<String, u32>>,
     #[serde(default)]
+    /// Where the jobs stream to (default: the embedded simulator).
     pub device: Device,
     /// The project file's directory (set at load time).
     #[serde(skip)]
@@ -185,22 +204,37 @@ pub struct Project {
 #[non_exhaustive]
 pub enum ProjectError {
     #[error("{path}: {source}")]
+    /// The project file could not be read.
     Io {
+        /// The project file's path.
         path: String,
+        /// The operating system's reason.
         source: std::io::Error,
     },
     #[error("{path}:{line}:{col}: {message}")]
+    /// The project file is not valid TOML or does not fit the schema.
     Syntax {
+        /// The project file's path.
         path: String,
+        /// 1-based line of the problem.
         line: usize,
+        /// 1-based column of the problem.
         col: usize,
+        /// The parser's description.
         message: String,
     },
     #[error("{path}: {message}")]
-    Invalid { path: String, message: String },
+    /// A value out of range, or keys that do not go together.
+    Invalid {
+        /// The project file's path.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
 }
 
 impl Project {
+    /// Reads and checks a project file; `dir` is set to its folder.
     pub fn load(path: &Path) -> Result<Self, ProjectError> {
         let p = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|source| ProjectError::Io {

@@ -16,6 +16,7 @@ pub const SANE_MAX: f64 = 10.0;
 /// A piece whose map leaves the sane range.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Insane {
+    /// The piece's name.
     pub piece: String,
     /// Faces outside the range.
     pub faces: usize,

@@ -29,18 +29,31 @@ pub enum HpglError {
     #[error(
         "profile {profile} has no [hpgl] section: it drives a GRBL controller (use `flatcut gcode`)"
     )]
-    NotHpgl { profile: String },
+    /// The profile drives a GRBL controller, not an HP-GL device.
+    NotHpgl {
+        /// The profile's name.
+        profile: String,
+    },
     #[error("profile {profile}: a laser is not an HP-GL device")]
-    Laser { profile: String },
+    /// The profile is a laser's, which HP-GL does not drive.
+    Laser {
+        /// The profile's name.
+        profile: String,
+    },
 }
 
 /// Figures of an HP-GL job.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct HpglSummary {
+    /// Bytes of the job.
     pub bytes: usize,
+    /// HP-GL commands in the job.
     pub commands: usize,
+    /// Tool-down length, every pass counted (mm).
     pub cut_length_mm: f64,
+    /// Tool-up length between paths (mm).
     pub travel_length_mm: f64,
+    /// Toolpaths in the job.
     pub paths: usize,
 }
 

@@ -8,6 +8,7 @@
 //!
 //! **Architecture invariant:** depends on neither the sender (`flatcut-grbl`) nor the simulator:
 //! the simulator is the independent check on what this crate writes.
+#![warn(missing_docs)]
 
 pub mod arcs;
 pub mod cutter;

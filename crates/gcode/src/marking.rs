@@ -11,9 +11,17 @@ use crate::profile::Profile;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Marking {
     /// The labels of this many pieces are written.
-    Labelled { pieces: usize, of: usize },
+    Labelled {
+        /// Pieces whose labels are written.
+        pieces: usize,
+        /// Pieces in the job.
+        of: usize,
+    },
     /// The profile writes no labels: the pieces come off the table unmarked.
-    Unmarked { pieces: usize },
+    Unmarked {
+        /// Pieces in the job.
+        pieces: usize,
+    },
 }
 
 impl Marking {

@@ -15,7 +15,9 @@ pub const MAX_TWO_OPT_PASSES: usize = 60;
 /// A path to order: its points, and whether it is closed (may start at any vertex).
 #[derive(Clone, Debug)]
 pub struct OrderItem<'a> {
+    /// The path's points (mm), in drawing order.
     pub points: &'a [DVec2],
+    /// True when the path closes, so it may start at any of its points.
     pub closed: bool,
 }
 

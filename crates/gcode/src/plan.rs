@@ -13,10 +13,13 @@ use crate::profile::{Profile, ToolKind};
 /// A continuous tool-down path.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Toolpath {
+    /// The drawing layer the path comes from; its settings (feed, power, passes) apply.
     pub layer: Layer,
     /// The stroke's id from the drawing.
     pub id: String,
+    /// Where the tool goes down (mm, machine frame).
     pub start: DVec2,
+    /// The tool-down moves from `start`, in order.
     pub moves: Vec<Move>,
     /// Feed while working, mm/min.
     pub feed: f64,
@@ -51,6 +54,7 @@ impl Toolpath {
         sum
     }
 
+    /// Where the tool lifts: the last move's end, or `start` for a path without moves.
     pub fn end(&self) -> DVec2 {
         self.moves.last().map_or(self.start, Move::end)
     }
@@ -83,38 +87,62 @@ impl Default for GcodeOptions {
 #[non_exhaustive]
 pub enum GcodeError {
     #[error("nothing to do: the drawing has no strokes on a layer the {profile} profile runs")]
-    Empty { profile: String },
+    /// No stroke of the drawing lies on a layer the profile runs.
+    Empty {
+        /// The profile's name.
+        profile: String,
+    },
     #[error(
         "stroke '{id}' leaves the work area of profile {profile} ({w} × {h} mm) by {excess:.3} mm at machine ({x:.3}, {y:.3}); move the drawing (offset_mm) or use a larger machine"
     )]
+    /// A stroke falls outside the machine's travel.
     OutsideWorkArea {
+        /// The stroke's id from the drawing.
         id: String,
+        /// The profile's name.
         profile: String,
+        /// The work area's width (mm).
         w: f64,
+        /// The work area's height (mm).
         h: f64,
+        /// How far the stroke leaves the work area (mm).
         excess: f64,
+        /// Machine x of the point furthest out (mm).
         x: f64,
+        /// Machine y of the point furthest out (mm).
         y: f64,
     },
     #[error("stroke '{id}' has a non-finite coordinate")]
-    NonFinite { id: String },
+    /// A stroke has a NaN or infinite coordinate.
+    NonFinite {
+        /// The stroke's id from the drawing.
+        id: String,
+    },
 }
 
 /// The planned job: toolpaths in execution order plus the profile that will run them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plan {
+    /// The machine profile that runs the job.
     pub profile: Profile,
+    /// The toolpaths in execution order, in machine coordinates (mm).
     pub paths: Vec<Toolpath>,
+    /// The job's title, written into the header comment.
     pub title: String,
 }
 
 /// Figures of a job.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Summary {
+    /// Lines of G-code written.
     pub lines: usize,
+    /// Tool-down length, every pass counted (mm).
     pub cut_length_mm: f64,
+    /// Tool-up length between paths (mm).
     pub travel_length_mm: f64,
+    /// Estimated run time (s) from the profile's feeds, acceleration and junction deviation.
     pub est_time_s: f64,
+    /// Toolpaths in the job.
     pub paths: usize,
 }
 

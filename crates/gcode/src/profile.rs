@@ -12,8 +12,11 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ToolKind {
+    /// A pen plotter: lines are drawn, the pen lifted by a servo or a Z axis.
     Pen,
+    /// A drag knife: the blade trails the tool axis, corners get swivel arcs.
     Knife,
+    /// A laser: power by `S`, per-layer passes, kerf and lead-ins.
     Laser,
 }
 
@@ -21,9 +24,13 @@ pub enum ToolKind {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Corner {
+    /// Origin at the sheet's lower left.
     LowerLeft,
+    /// Origin at the sheet's upper left.
     UpperLeft,
+    /// Origin at the sheet's lower right.
     LowerRight,
+    /// Origin at the sheet's upper right.
     UpperRight,
 }
 
@@ -31,9 +38,13 @@ pub enum Corner {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum AxisDir {
+    /// Towards the operator's right.
     Right,
+    /// Towards the operator's left.
     Left,
+    /// Away from the operator.
     Up,
+    /// Towards the operator.
     Down,
 }
 
@@ -49,19 +60,27 @@ pub enum PenMode {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
+/// How a pen plotter lifts and lowers its pen (`[pen]`).
 pub struct PenConfig {
+    /// Servo on the spindle PWM, or a Z axis.
     pub mode: PenMode,
     #[serde(default)]
+    /// Servo mode: the `S` value that lifts the pen (default 0).
     pub up_s: f64,
     #[serde(default = "PenConfig::default_down_s")]
+    /// Servo mode: the `S` value that lowers the pen (default 1000).
     pub down_s: f64,
     #[serde(default = "PenConfig::default_dwell_s")]
+    /// Servo mode: dwell after each move of the servo, in seconds (default 0.15).
     pub dwell_s: f64,
     #[serde(default = "PenConfig::default_z_up")]
+    /// Z mode: machine Z with the pen up, mm (default 3).
     pub z_up: f64,
     #[serde(default)]
+    /// Z mode: machine Z with the pen down, mm (default 0).
     pub z_down: f64,
     #[serde(default = "PenConfig::default_plunge")]
+    /// Z mode: feed of the pen going down, mm/min (default 1000).
     pub plunge_mm_min: f64,
 }
 
@@ -82,6 +101,7 @@ impl PenConfig {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
+/// How a drag knife cuts (`[knife]`).
 pub struct KnifeConfig {
     /// The blade tip trails the tool axis by this distance (mm).
     pub blade_offset_mm: f64,
@@ -89,13 +109,17 @@ pub struct KnifeConfig {
     pub swivel_angle_deg: f64,
     /// Closed loops are cut this far past their start so the piece comes free (mm).
     pub overcut_mm: f64,
+    /// Machine Z with the blade lifted (mm).
     pub z_up: f64,
+    /// Machine Z with the blade through the material (mm).
     pub z_down: f64,
+    /// Feed of the blade going down (mm/min).
     pub plunge_mm_min: f64,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
+/// How a laser fires (`[laser]`).
 pub struct LaserConfig {
     /// The controller's `$30` (spindle max): `S` for 100 % power.
     pub s_max: f64,
@@ -175,6 +199,7 @@ pub enum LeadKind {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LeadConfig {
+    /// A straight lead along the normal, or a quarter-circle arc.
     pub kind: LeadKind,
     /// Length of a line lead, radius of an arc lead (mm).
     pub length_mm: f64,
@@ -185,6 +210,7 @@ pub struct LeadConfig {
 #[serde(deny_unknown_fields)]
 pub struct LayerConfig {
     #[serde(default = "yes")]
+    /// Whether the layer is run at all (default true).
     pub enabled: bool,
     /// Feed for this layer; the profile's `feed_mm_min` when absent.
     pub feed_mm_min: Option<f64>,
@@ -220,9 +246,13 @@ impl Default for LayerConfig {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Profile {
+    /// The profile's name, as messages and headers carry it.
     pub name: String,
+    /// What the machine carries.
     pub kind: ToolKind,
+    /// Feed while working (mm/min), unless a layer sets its own.
     pub feed_mm_min: f64,
+    /// Feed of travel moves with the tool up (mm/min).
     pub travel_mm_min: f64,
     /// Acceleration used for the run-time estimate (GRBL `$120`/`$121`).
     pub accel_mm_s2: f64,
@@ -230,8 +260,11 @@ pub struct Profile {
     pub junction_deviation_mm: f64,
     /// Machine travel in X and Y (GRBL `$130`, `$131`).
     pub work_area_mm: [f64; 2],
+    /// Where machine (0, 0) sits on the sheet.
     pub origin: Corner,
+    /// Which way the machine's +X runs on the sheet.
     pub x_axis: AxisDir,
+    /// Which way the machine's +Y runs on the sheet.
     pub y_axis: AxisDir,
     /// Machine position of the drawing's origin.
     #[serde(default)]
@@ -242,8 +275,11 @@ pub struct Profile {
     /// Arc fitting tolerance (0 disables arcs).
     #[serde(default = "Profile::default_arc_tol")]
     pub arc_tolerance_mm: f64,
+    /// Pen settings; required when `kind` is pen.
     pub pen: Option<PenConfig>,
+    /// Knife settings; required when `kind` is knife.
     pub knife: Option<KnifeConfig>,
+    /// Laser settings; required when `kind` is laser.
     pub laser: Option<LaserConfig>,
     /// An HP-GL device instead of a GRBL controller (`flatcut hpgl`).
     pub hpgl: Option<HpglConfig>,
@@ -254,6 +290,8 @@ pub struct Profile {
     /// Lead-in and lead-out of closed cuts.
     pub lead: Option<LeadConfig>,
     #[serde(default)]
+    /// Per-layer settings, keyed by layer name (`cut`, `draw`, `engrave`); a layer not listed runs
+    /// with the defaults.
     pub layers: BTreeMap<String, LayerConfig>,
     /// SVG input: LightBurn palette layer (`"00"`…`"29"`, `"T1"`, `"T2"`) → `cut`, `draw`,
     /// `engrave` or `skip`, over the default table of `flatcut_pattern::colours`.
@@ -261,27 +299,47 @@ pub struct Profile {
     pub svg_colours: BTreeMap<String, flatcut_pattern::ColourJob>,
 }
 
+/// Finite and strictly positive.
+fn positive(v: f64) -> bool {
+    v.is_finite() && v > 0.0
+}
+
 /// A profile that cannot be used.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ProfileError {
     #[error("{path}: {source}")]
+    /// The profile file could not be read.
     Io {
+        /// The profile file's path.
         path: String,
+        /// The operating system's reason.
         source: std::io::Error,
     },
     #[error("{path}: {message}")]
-    Parse { path: String, message: String },
+    /// The profile file is not valid TOML or does not fit the schema.
+    Parse {
+        /// The profile file's path.
+        path: String,
+        /// The parser's description, with line and column.
+        message: String,
+    },
     #[error("profile {profile}: {key} = {value}: {reason}")]
+    /// A setting out of range or inconsistent with the others.
     Invalid {
+        /// The profile's name.
         profile: String,
+        /// The setting, e.g. `feed_mm_min`.
         key: &'static str,
+        /// Its value as given.
         value: String,
+        /// Why it cannot be used.
         reason: &'static str,
     },
     #[error(
         "unknown profile '{0}': use pen, knife, laser, vinyl, pen-hpgl or a path to a .toml file"
     )]
+    /// Neither a bundled profile's name nor a path ending in `.toml`: the name given.
     Unknown(String),
 }
 
@@ -334,6 +392,7 @@ impl Profile {
         }
     }
 
+    /// Reads and checks a profile file (TOML).
     pub fn load(path: &Path) -> Result<Self, ProfileError> {
         let text = std::fs::read_to_string(path).map_err(|source| ProfileError::Io {
             path: path.display().to_string(),
@@ -374,14 +433,21 @@ impl Profile {
     /// Checks ranges and that the tool section matches the kind.
     pub fn validate(&self) -> Result<(), ProfileError> {
         self.colour_table()?;
-        let pos = |v: f64| v.is_finite() && v > 0.0;
-        if !pos(self.feed_mm_min) {
+        self.validate_motion()?;
+        self.validate_hpgl()?;
+        self.validate_tool()?;
+        self.validate_layers()
+    }
+
+    /// Feeds, acceleration, work area, number format, axes, kerf and leads.
+    fn validate_motion(&self) -> Result<(), ProfileError> {
+        if !positive(self.feed_mm_min) {
             return Err(self.invalid("feed_mm_min", self.feed_mm_min, "must be > 0"));
         }
-        if !pos(self.travel_mm_min) {
+        if !positive(self.travel_mm_min) {
             return Err(self.invalid("travel_mm_min", self.travel_mm_min, "must be > 0"));
         }
-        if !pos(self.accel_mm_s2) {
+        if !positive(self.accel_mm_s2) {
             return Err(self.invalid("accel_mm_s2", self.accel_mm_s2, "must be > 0"));
         }
         if !(self.junction_deviation_mm.is_finite() && self.junction_deviation_mm >= 0.0) {
@@ -392,7 +458,7 @@ impl Profile {
             ));
         }
         for v in self.work_area_mm {
-            if !pos(v) {
+            if !positive(v) {
                 return Err(self.invalid("work_area_mm", v, "must be > 0"));
             }
         }
@@ -423,29 +489,40 @@ impl Profile {
         {
             return Err(self.invalid("lead.length_mm", l.length_mm, "must be in (0, 50]"));
         }
-        if let Some(h) = &self.hpgl {
-            for (key, v) in [
-                ("hpgl.velocity_cm_s", h.velocity_cm_s),
-                ("hpgl.force", h.force),
-            ] {
-                if let Some(v) = v
-                    && !(v.is_finite() && v > 0.0 && v < 10_000.0)
-                {
-                    return Err(self.invalid(key, v, "must be in (0, 10000)"));
-                }
-            }
-            if let Some(w) = h.weed_border_mm
-                && !(w.is_finite() && w > 0.0)
+        Ok(())
+    }
+
+    /// The `[hpgl]` section, when there is one.
+    fn validate_hpgl(&self) -> Result<(), ProfileError> {
+        let Some(h) = &self.hpgl else {
+            return Ok(());
+        };
+        for (key, v) in [
+            ("hpgl.velocity_cm_s", h.velocity_cm_s),
+            ("hpgl.force", h.force),
+        ] {
+            if let Some(v) = v
+                && !(v.is_finite() && v > 0.0 && v < 10_000.0)
             {
-                return Err(self.invalid("hpgl.weed_border_mm", w, "must be > 0"));
-            }
-            if h.pen > 8 {
-                return Err(self.invalid("hpgl.pen", h.pen as f64, "must be 0..=8"));
-            }
-            if h.baud == 0 {
-                return Err(self.invalid("hpgl.baud", 0.0, "must be > 0"));
+                return Err(self.invalid(key, v, "must be in (0, 10000)"));
             }
         }
+        if let Some(w) = h.weed_border_mm
+            && !(w.is_finite() && w > 0.0)
+        {
+            return Err(self.invalid("hpgl.weed_border_mm", w, "must be > 0"));
+        }
+        if h.pen > 8 {
+            return Err(self.invalid("hpgl.pen", h.pen as f64, "must be 0..=8"));
+        }
+        if h.baud == 0 {
+            return Err(self.invalid("hpgl.baud", 0.0, "must be > 0"));
+        }
+        Ok(())
+    }
+
+    /// The tool section the kind needs (`[pen]`, `[knife]` or `[laser]`) and its ranges.
+    fn validate_tool(&self) -> Result<(), ProfileError> {
         match self.kind {
             ToolKind::Pen if self.pen.is_none() && self.hpgl.is_none() => {
                 return Err(ProfileError::Invalid {
@@ -490,7 +567,7 @@ impl Profile {
                         reason: "a laser profile needs a [laser] section",
                     });
                 };
-                if !pos(l.s_max) {
+                if !positive(l.s_max) {
                     return Err(self.invalid(
                         "laser.s_max",
                         l.s_max,
@@ -500,6 +577,11 @@ impl Profile {
             }
             _ => {}
         }
+        Ok(())
+    }
+
+    /// The per-layer settings: known layer names, feeds, power, tabs and passes.
+    fn validate_layers(&self) -> Result<(), ProfileError> {
         for (name, l) in &self.layers {
             if !["engrave", "draw", "cut"].contains(&name.as_str()) {
                 return Err(ProfileError::Invalid {
@@ -510,7 +592,7 @@ impl Profile {
                 });
             }
             if let Some(f) = l.feed_mm_min
-                && !pos(f)
+                && !positive(f)
             {
                 return Err(self.invalid("layers.*.feed_mm_min", f, "must be > 0"));
             }
@@ -534,7 +616,6 @@ impl Profile {
         }
         Ok(())
     }
-
     /// The settings of a layer (defaults when the profile does not mention it).
     pub fn layer(&self, layer: Layer) -> LayerConfig {
         self.layers.get(layer.name()).cloned().unwrap_or_default()

@@ -11,8 +11,11 @@ use crate::profile::Profile;
 pub enum Motion {
     /// A straight move at `feed_mm_min` (`None`: a rapid, at the axes' max rate).
     Move {
+        /// Start point (x, y, z in mm).
         from: [f64; 3],
+        /// End point (x, y, z in mm).
         to: [f64; 3],
+        /// Feed (mm/min); `None` for a rapid.
         feed_mm_min: Option<f64>,
     },
     /// A `G4` dwell, s.

@@ -11,6 +11,7 @@
 //!   polling, feed hold/abort and journaling over a transport.
 //!
 //! **Architecture invariant:** never more bytes in flight than the device's RX buffer holds.
+#![warn(missing_docs)]
 
 pub mod codes;
 pub mod driver;

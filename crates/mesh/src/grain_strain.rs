@@ -20,8 +20,11 @@ use crate::distortion::local_frame;
 /// Limits in percent along the warp, across it (the weft) and on the 45° bias.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ByDirection {
+    /// Along the warp (percent).
     pub along: f64,
+    /// Across the warp, along the weft (percent).
     pub across: f64,
+    /// On the 45° bias (percent).
     pub bias: f64,
 }
 
@@ -35,7 +38,9 @@ impl ByDirection {
 /// A material's stretch and compression limits per direction (percent).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DirectionalLimits {
+    /// The largest stretch per direction (percent, ≥ 0).
     pub stretch_pct: ByDirection,
+    /// The largest compression per direction (percent, ≥ 0).
     pub compress_pct: ByDirection,
 }
 
@@ -52,7 +57,9 @@ pub struct GrainStrain {
     pub bias_min: f64,
     /// Green strain along the warp, across it, and the shear, in the warp's 3D frame.
     pub e_aa: f64,
+    /// Green strain across the warp.
     pub e_bb: f64,
+    /// Green shear strain between warp and weft.
     pub e_ab: f64,
 }
 

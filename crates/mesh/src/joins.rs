@@ -20,25 +20,37 @@ const SAME_FRACTION: f64 = 1e-9;
 #[non_exhaustive]
 pub enum JoinError {
     #[error(transparent)]
+    /// The mesh's topology does not allow the join.
     Topology(#[from] TopologyError),
     #[error(
         "{what} ({x:.2}, {y:.2}, {z:.2}) is {dist:.2} mm from the boundary (at most {tol:.2} mm)"
     )]
+    /// A point of the join lies too far from the mesh's boundary.
     OffBoundary {
+        /// Which point, as the caller names it, e.g. "`from`".
         what: String,
+        /// x of the point (mm).
         x: f64,
+        /// y of the point (mm).
         y: f64,
+        /// z of the point (mm).
         z: f64,
+        /// Its distance from the boundary (mm).
         dist: f64,
+        /// The largest distance accepted (mm).
         tol: f64,
     },
     #[error("the two end points lie on different boundary loops")]
+    /// The stretch's two ends lie on different boundary loops.
     DifferentLoops,
     #[error("the two end points are the same boundary vertex")]
+    /// The stretch's two ends are one vertex: the stretch is empty.
     Empty,
     #[error("the notches come in a different order along the two edges")]
+    /// The notches do not come in the same order along both edges.
     NotchOrder,
     #[error("the two edges of one piece overlap")]
+    /// Two edges of one piece share part of its boundary.
     Overlap,
 }
 

@@ -45,7 +45,9 @@ const SAME_POINT_REL: f64 = 1e-9;
 /// A line to embed: points near the surface, in order, and notch points on it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LineSpec {
+    /// The line's points (mm) on or near the surface, in order; joined along the surface.
     pub points: Vec<DVec3>,
+    /// Notch points (mm) on or near the line.
     pub notches: Vec<DVec3>,
 }
 
@@ -67,60 +69,101 @@ pub struct Embedded {
 #[non_exhaustive]
 pub enum LineError {
     #[error("line {line}: it needs at least two distinct points")]
-    TooShort { line: usize },
-    #[error("line {line}: point {point} ({x:.2}, {y:.2}, {z:.2}) is {dist:.2} mm from the surface")]
-    OffSurface {
+    /// The line has fewer than two distinct points.
+    TooShort {
+        /// 0-based index of the line.
         line: usize,
+    },
+    #[error("line {line}: point {point} ({x:.2}, {y:.2}, {z:.2}) is {dist:.2} mm from the surface")]
+    /// A point of the line lies too far from the surface.
+    OffSurface {
+        /// 0-based index of the line.
+        line: usize,
+        /// 0-based index of the point in the line.
         point: usize,
+        /// x of the point (mm).
         x: f64,
+        /// y of the point (mm).
         y: f64,
+        /// z of the point (mm).
         z: f64,
+        /// Its distance from the surface (mm).
         dist: f64,
     },
     #[error(
         "line {line}: notch {notch} ({x:.2}, {y:.2}, {z:.2}) is {dist:.2} mm from the line (at most {tol:.2} mm)"
     )]
+    /// A notch lies too far from its line.
     NotchOffLine {
+        /// 0-based index of the line.
         line: usize,
+        /// 0-based index of the notch in the line.
         notch: usize,
+        /// x of the notch (mm).
         x: f64,
+        /// y of the notch (mm).
         y: f64,
+        /// z of the notch (mm).
         z: f64,
+        /// Its distance from the line (mm).
         dist: f64,
+        /// The largest distance accepted (mm).
         tol: f64,
     },
     #[error(
         "line {line}: its {end} end ({x:.2}, {y:.2}, {z:.2}) is {dist:.2} mm from the surface boundary and from every other line (at most {tol:.2} mm): it does not close a region; end it on the boundary or on another line"
     )]
+    /// An end of the line meets neither the boundary nor another line, so it closes no region.
     LooseEnd {
+        /// 0-based index of the line.
         line: usize,
+        /// Which end, "first" or "last".
         end: &'static str,
+        /// x of the end (mm).
         x: f64,
+        /// y of the end (mm).
         y: f64,
+        /// z of the end (mm).
         z: f64,
+        /// Its distance from the boundary and the other lines (mm).
         dist: f64,
+        /// The largest distance accepted (mm).
         tol: f64,
     },
     #[error(
         "line {line} leaves the surface near ({x:.2}, {y:.2}, {z:.2}) on its way from point {from} to point {to}: give points along the surface there"
     )]
+    /// The way between two points of the line leaves the surface.
     LeavesSurface {
+        /// 0-based index of the line.
         line: usize,
+        /// 0-based index of the point the way starts at.
         from: usize,
+        /// 0-based index of the point it goes to.
         to: usize,
+        /// x of where it leaves (mm).
         x: f64,
+        /// y of where it leaves (mm).
         y: f64,
+        /// z of where it leaves (mm).
         z: f64,
     },
     #[error(
         "line {line}: no way along the surface found from point {from} to point {to} (stopped near ({x:.2}, {y:.2}, {z:.2})): give points closer together"
     )]
+    /// No way along the surface was found between two points of the line.
     Lost {
+        /// 0-based index of the line.
         line: usize,
+        /// 0-based index of the point the way starts at.
         from: usize,
+        /// 0-based index of the point it goes to.
         to: usize,
+        /// x of where the search stopped (mm).
         x: f64,
+        /// y of where the search stopped (mm).
         y: f64,
+        /// z of where the search stopped (mm).
         z: f64,
     },
 }

@@ -14,22 +14,29 @@ use crate::TriMesh;
 /// vertices along the seam.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SeamSide {
+    /// The piece (index into the meshes the seam belongs to).
     pub piece: usize,
+    /// The piece's boundary vertices along the seam, in sewing order; as many as the other side's.
     pub vertices: Vec<u32>,
 }
 
 /// A notch on a mating seam: its name and the index of its vertex along the seam.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SeamNotch {
+    /// The notch's name.
     pub name: String,
+    /// 0-based index of its vertex in each side's `vertices`.
     pub index: usize,
 }
 
 /// Two boundary stretches sewn together.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct MatingSeam {
+    /// The seam's name, used in the report and on notches.
     pub name: String,
+    /// The two sides; `vertices[i]` of one is sewn to `vertices[i]` of the other.
     pub sides: [SeamSide; 2],
+    /// The notches on the seam.
     pub notches: Vec<SeamNotch>,
 }
 
@@ -38,27 +45,53 @@ pub struct MatingSeam {
 #[non_exhaustive]
 pub enum MatingError {
     #[error("mating seam '{seam}': its sides have {a} and {b} vertices (they must match)")]
-    Count { seam: String, a: usize, b: usize },
-    #[error("mating seam '{seam}': a side needs at least two vertices")]
-    Short { seam: String },
-    #[error("mating seam '{seam}': side {side} names piece {piece}, but there are {count}")]
-    Piece {
+    /// The sides have different numbers of vertices.
+    Count {
+        /// The seam's name.
         seam: String,
+        /// Vertices of side 0.
+        a: usize,
+        /// Vertices of side 1.
+        b: usize,
+    },
+    #[error("mating seam '{seam}': a side needs at least two vertices")]
+    /// A side has fewer than two vertices.
+    Short {
+        /// The seam's name.
+        seam: String,
+    },
+    #[error("mating seam '{seam}': side {side} names piece {piece}, but there are {count}")]
+    /// A side names a piece that does not exist.
+    Piece {
+        /// The seam's name.
+        seam: String,
+        /// The side, 0 or 1.
         side: usize,
+        /// The piece it names.
         piece: usize,
+        /// Pieces there are.
         count: usize,
     },
     #[error("mating seam '{seam}': side {side} names vertex {vertex}, but its piece has {count}")]
+    /// A side names a vertex its piece does not have.
     Vertex {
+        /// The seam's name.
         seam: String,
+        /// The side, 0 or 1.
         side: usize,
+        /// The vertex it names.
         vertex: u32,
+        /// Vertices the piece has.
         count: usize,
     },
     #[error("mating seam '{seam}': notch '{notch}' is at index {index}, past the seam's end")]
+    /// A notch lies past the seam's end.
     Notch {
+        /// The seam's name.
         seam: String,
+        /// The notch's name.
         notch: String,
+        /// Its index along the seam.
         index: usize,
     },
 }

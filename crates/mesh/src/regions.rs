@@ -28,6 +28,7 @@ pub struct Region {
 /// A stretch of one line with the same region on each side, ordered like the line.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SeamRun {
+    /// The line (index into the lines the mesh was split along).
     pub line: usize,
     /// The index in the line's vertex path of each vertex of the seam.
     pub path_index: Vec<usize>,
@@ -40,7 +41,9 @@ pub struct SeamRun {
 /// A mesh split along lines.
 #[derive(Clone, Debug)]
 pub struct Split {
+    /// The regions the lines cut the mesh into.
     pub regions: Vec<Region>,
+    /// The stretches of lines between regions.
     pub seams: Vec<SeamRun>,
     /// The region of each input triangle.
     pub region_of_face: Vec<u32>,
@@ -51,13 +54,32 @@ pub struct Split {
 #[non_exhaustive]
 pub enum RegionError {
     #[error(transparent)]
+    /// The mesh's topology does not allow the split.
     Topology(#[from] TopologyError),
     #[error("line {line}: vertices {a} and {b} are consecutive but not joined by a mesh edge")]
-    NotAnEdge { line: usize, a: u32, b: u32 },
+    /// Two consecutive vertices of a line are not joined by a mesh edge.
+    NotAnEdge {
+        /// 0-based index of the line.
+        line: usize,
+        /// The first vertex.
+        a: u32,
+        /// The vertex after it.
+        b: u32,
+    },
     #[error(
         "line {line} runs along the surface boundary near ({x:.2}, {y:.2}, {z:.2}): it separates nothing there"
     )]
-    AlongBoundary { line: usize, x: f64, y: f64, z: f64 },
+    /// A line runs along the surface's boundary, so it separates nothing.
+    AlongBoundary {
+        /// 0-based index of the line.
+        line: usize,
+        /// x of a point where it does (mm).
+        x: f64,
+        /// y of a point where it does (mm).
+        y: f64,
+        /// z of a point where it does (mm).
+        z: f64,
+    },
 }
 
 /// Splits `mesh` along `lines` (vertex paths joined by mesh edges).

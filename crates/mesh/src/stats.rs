@@ -142,10 +142,13 @@ pub fn mean_curvature(mesh: &TriMesh) -> Vec<Option<f64>> {
 /// Summary of a mesh for `inspect`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshStats {
+    /// Number of vertices.
     pub vertices: usize,
+    /// Number of triangles.
     pub triangles: usize,
     /// Surface area in mm².
     pub area: f64,
+    /// Bounding box of the vertices (mm).
     pub bbox: Aabb3,
     /// Number of boundary loops (0 for a closed surface); `None` if the topology is invalid.
     pub boundary_loops: Option<usize>,
@@ -157,8 +160,11 @@ pub struct MeshStats {
     pub boundary_length: f64,
     /// Shortest, mean and longest edge in mm.
     pub edge_min: f64,
+    /// Mean edge length in mm.
     pub edge_mean: f64,
+    /// Longest edge in mm.
     pub edge_max: f64,
+    /// Most triangles around one vertex.
     pub valence_max: usize,
     /// Range of the interior vertices' Gaussian curvature (1/mm²), if any interior vertex.
     pub gaussian_range: Option<(f64, f64)>,

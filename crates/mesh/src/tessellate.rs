@@ -87,17 +87,37 @@ const PROJECT_T_TOL: f64 = 1e-13;
 #[non_exhaustive]
 pub enum TessError {
     #[error("chordal tolerance must be finite and > 0 mm, got {0}")]
+    /// The chordal tolerance given is not finite and positive.
     BadTolerance(f64),
     #[error("no surface to tessellate")]
+    /// There is no patch to tessellate.
     NoPatches,
     #[error("patch {patch} evaluates to a non-finite point at (u, v) = ({u}, {v})")]
-    NonFinite { patch: usize, u: f64, v: f64 },
+    /// A patch evaluates to a NaN or infinite point.
+    NonFinite {
+        /// 0-based index of the patch.
+        patch: usize,
+        /// Parameter u of the point.
+        u: f64,
+        /// Parameter v of the point.
+        v: f64,
+    },
     #[error("patch {patch} has an empty or non-finite parameter domain")]
-    BadDomain { patch: usize },
+    /// A patch's parameter domain is empty or not finite.
+    BadDomain {
+        /// 0-based index of the patch.
+        patch: usize,
+    },
     #[error(
         "tessellation needs more than {limit} vertices at chordal tolerance {chord_mm} mm; raise the tolerance"
     )]
-    TooManyVertices { limit: usize, chord_mm: f64 },
+    /// The tolerance calls for more vertices than the limit.
+    TooManyVertices {
+        /// The vertex limit ([`TessOptions::max_vertices`]).
+        limit: usize,
+        /// The chordal tolerance asked for (mm).
+        chord_mm: f64,
+    },
     /// A face of a trimmed (CAD) model could not be tessellated; the message names it.
     #[error("{0}")]
     Face(String),
@@ -113,16 +133,19 @@ pub struct TessOptions {
 }
 
 impl TessOptions {
+    /// The default limits: [`DEFAULT_MAX_VERTICES`] and [`MAX_NORMAL_TURN`].
     pub const DEFAULT: Self = Self {
         max_vertices: DEFAULT_MAX_VERTICES,
         max_normal_turn: MAX_NORMAL_TURN,
     };
 
+    /// These options with a vertex limit of `n`.
     pub const fn with_max_vertices(mut self, n: usize) -> Self {
         self.max_vertices = n;
         self
     }
 
+    /// These options with a largest normal turn of `a` radians.
     pub const fn with_max_normal_turn(mut self, a: f64) -> Self {
         self.max_normal_turn = a;
         self

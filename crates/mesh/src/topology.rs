@@ -10,65 +10,141 @@ use crate::TriMesh;
 #[non_exhaustive]
 pub enum TopologyError {
     #[error("the mesh has no triangles")]
+    /// The mesh has no triangles.
     Empty,
     #[error("triangle {triangle} refers to vertex {vertex}, but the mesh has {count} vertices")]
+    /// A triangle refers to a vertex the mesh does not have.
     BadIndex {
+        /// 0-based index of the triangle.
         triangle: usize,
+        /// The vertex it refers to.
         vertex: u32,
+        /// Vertices the mesh has.
         count: usize,
     },
     #[error("triangle {triangle} is degenerate (repeated vertex {vertex})")]
-    RepeatedVertex { triangle: usize, vertex: u32 },
-    #[error("triangle {triangle} has zero area (collinear corners {a}, {b}, {c})")]
-    ZeroArea {
+    /// A triangle uses one vertex twice.
+    RepeatedVertex {
+        /// 0-based index of the triangle.
         triangle: usize,
+        /// The repeated vertex.
+        vertex: u32,
+    },
+    #[error("triangle {triangle} has zero area (collinear corners {a}, {b}, {c})")]
+    /// A triangle's corners are collinear.
+    ZeroArea {
+        /// 0-based index of the triangle.
+        triangle: usize,
+        /// Its first corner.
         a: u32,
+        /// Its second corner.
         b: u32,
+        /// Its third corner.
         c: u32,
     },
     #[error("triangles {first} and {second} are duplicates (same three vertices)")]
-    DuplicateTriangle { first: usize, second: usize },
+    /// Two triangles have the same three vertices.
+    DuplicateTriangle {
+        /// 0-based index of the first triangle.
+        first: usize,
+        /// 0-based index of its duplicate.
+        second: usize,
+    },
     #[error("vertex {vertex} has a non-finite coordinate")]
-    NonFinite { vertex: usize },
+    /// A vertex has a NaN or infinite coordinate.
+    NonFinite {
+        /// 0-based index of the vertex.
+        vertex: usize,
+    },
     #[error(
         "edge {a}-{b} is shared by {count} triangles (non-manifold edge); split the mesh there"
     )]
-    NonManifoldEdge { a: u32, b: u32, count: usize },
+    /// An edge is shared by more than two triangles.
+    NonManifoldEdge {
+        /// One end of the edge.
+        a: u32,
+        /// The other end.
+        b: u32,
+        /// Triangles sharing it.
+        count: usize,
+    },
     #[error(
         "edge {a}-{b} is used twice in the same direction: triangles {t0} and {t1} have inconsistent orientation"
     )]
+    /// Two triangles run an edge in the same direction: their orientations disagree.
     InconsistentOrientation {
+        /// One end of the edge.
         a: u32,
+        /// The other end.
         b: u32,
+        /// 0-based index of the first triangle.
         t0: usize,
+        /// 0-based index of the second.
         t1: usize,
     },
     #[error("vertex {vertex} is non-manifold (its triangles form {fans} separate fans)")]
-    NonManifoldVertex { vertex: u32, fans: usize },
+    /// A vertex's triangles form more than one fan (two surfaces touch at a point).
+    NonManifoldVertex {
+        /// 0-based index of the vertex.
+        vertex: u32,
+        /// Separate fans around it.
+        fans: usize,
+    },
     #[error(
         "the mesh is closed (no boundary): add a seam (a path of mesh vertices) to cut it open"
     )]
+    /// The mesh is closed: it needs a seam to open it.
     NoBoundary,
     #[error(
         "the mesh has {count} boundary loops: it is not a disk; add seams joining the holes to the outer boundary (or flatten each region separately)"
     )]
-    SeveralBoundaries { count: usize },
+    /// The mesh has holes: more than one boundary loop.
+    SeveralBoundaries {
+        /// Boundary loops.
+        count: usize,
+    },
     #[error("the mesh has {count} connected components: flatten each one separately")]
-    SeveralComponents { count: usize },
+    /// The mesh falls apart into several pieces.
+    SeveralComponents {
+        /// Connected components.
+        count: usize,
+    },
     #[error("the mesh has Euler characteristic {chi}, a disk has 1: add seams to cut handles open")]
-    NotADisk { chi: i64 },
+    /// The mesh has handles: its Euler characteristic is not a disk's 1.
+    NotADisk {
+        /// The Euler characteristic V − E + F.
+        chi: i64,
+    },
     #[error("seam {seam}: vertex {vertex} does not exist (the mesh has {count} vertices)")]
+    /// A seam names a vertex the mesh does not have.
     SeamBadVertex {
+        /// 0-based index of the seam.
         seam: usize,
+        /// The vertex it names.
         vertex: u32,
+        /// Vertices the mesh has.
         count: usize,
     },
     #[error("seam {seam}: vertices {a} and {b} are consecutive but not joined by a mesh edge")]
-    SeamNotAnEdge { seam: usize, a: u32, b: u32 },
+    /// Two consecutive vertices of a seam are not joined by a mesh edge.
+    SeamNotAnEdge {
+        /// 0-based index of the seam.
+        seam: usize,
+        /// The first vertex.
+        a: u32,
+        /// The vertex after it.
+        b: u32,
+    },
     #[error(
         "seam {seam}: point {point} cannot be reached from the previous point along mesh edges"
     )]
-    SeamUnreachable { seam: usize, point: usize },
+    /// A seam point cannot be reached from the one before along mesh edges.
+    SeamUnreachable {
+        /// 0-based index of the seam.
+        seam: usize,
+        /// 0-based index of the point in the seam.
+        point: usize,
+    },
 }
 
 /// An undirected edge `(min, max)` with the triangles on each side.
@@ -81,6 +157,7 @@ pub struct EdgeInfo {
 }
 
 impl EdgeInfo {
+    /// True when the edge has a triangle on one side only.
     pub fn is_boundary(&self) -> bool {
         self.fwd.is_none() || self.rev.is_none()
     }
@@ -95,6 +172,7 @@ pub struct Topology {
     pub boundary_loops: Vec<Vec<u32>>,
     /// Connected component index of each triangle.
     pub component_of_triangle: Vec<u32>,
+    /// Number of connected components (the largest index in `component_of_triangle` plus one).
     pub component_count: usize,
 }
 

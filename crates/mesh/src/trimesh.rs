@@ -28,10 +28,12 @@ impl TriMesh {
         }
     }
 
+    /// Number of vertices.
     pub fn vertex_count(&self) -> usize {
         self.positions.len()
     }
 
+    /// Number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()
     }
@@ -80,10 +82,12 @@ impl TriMesh {
         )
     }
 
+    /// Bounding box of the 3D positions (mm).
     pub fn bbox(&self) -> Aabb3 {
         Aabb3::from_points(self.positions.iter().copied())
     }
 
+    /// Bounding box of the flattening (mm), if the mesh carries one.
     pub fn flat_bbox(&self) -> Option<Aabb2> {
         Some(Aabb2::from_points(self.flat.as_ref()?.iter().copied()))
     }

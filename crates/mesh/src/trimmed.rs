@@ -76,7 +76,9 @@ pub struct TrimPoint {
 /// A trimmed face: the surface and its closed trim loops (last point not repeated).
 #[derive(Clone, Copy, Debug)]
 pub struct TrimmedFace<'a> {
+    /// The face's surface.
     pub surface: &'a dyn ParamSurface,
+    /// The trim loops in (u, v), closed (last point not repeated): the outer loop and its holes.
     pub loops: &'a [Vec<TrimPoint>],
     /// The surface is developable with straight, flat lines `u = const`: mesh along them.
     pub ruled: bool,
@@ -89,7 +91,9 @@ pub struct TrimmedFace<'a> {
 /// of every vertex; `vertex[i]` is the caller's id of a boundary vertex, `None` inside.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TrimmedMesh {
+    /// The mesh: positions (mm), triangles counter-clockwise in (u, v), `params` the (u, v).
     pub mesh: TriMesh,
+    /// Per vertex of `mesh`, the caller's id for a boundary vertex, `None` inside.
     pub vertex: Vec<Option<u32>>,
     /// The area in (u, v) of the triangulation's triangles, each with its own corners' (u, v)
     /// (a pole is one vertex of the mesh but a run of points in (u, v)), triangles collapsed at
@@ -103,27 +107,68 @@ pub struct TrimmedMesh {
 #[non_exhaustive]
 pub enum TrimError {
     #[error("chordal tolerance must be finite and > 0 mm, got {0}")]
+    /// The chordal tolerance given is not finite and positive.
     BadTolerance(f64),
     #[error("trim loop {index} has fewer than 2 distinct points")]
-    ShortLoop { index: usize },
+    /// A trim loop has fewer than two distinct points.
+    ShortLoop {
+        /// 0-based index of the loop.
+        index: usize,
+    },
     #[error("trim loop {index} has a non-finite (u, v) or point")]
-    NonFinite { index: usize },
+    /// A trim loop has a NaN or infinite coordinate.
+    NonFinite {
+        /// 0-based index of the loop.
+        index: usize,
+    },
     #[error("trim loop {index} has (u, v) = ({u}, {v}), beyond the triangulator's range (±3.2e60)")]
-    OutOfRange { index: usize, u: f64, v: f64 },
+    /// A trim loop's (u, v) is beyond the triangulator's range.
+    OutOfRange {
+        /// 0-based index of the loop.
+        index: usize,
+        /// The u given.
+        u: f64,
+        /// The v given.
+        v: f64,
+    },
     #[error("the surface is not finite at (u, v) = ({u}, {v})")]
-    SurfaceNonFinite { u: f64, v: f64 },
+    /// The surface evaluates to a NaN or infinite point.
+    SurfaceNonFinite {
+        /// Parameter u of the point.
+        u: f64,
+        /// Parameter v of the point.
+        v: f64,
+    },
     #[error(
         "the trim loops cross each other in (u, v) near ({u:.6}, {v:.6}): the face's boundary is not a valid region"
     )]
-    LoopsCross { u: f64, v: f64 },
+    /// Trim loops cross each other.
+    LoopsCross {
+        /// Parameter u near the crossing.
+        u: f64,
+        /// Parameter v near the crossing.
+        v: f64,
+    },
     #[error(
         "the trim loops run twice along one segment near ({u:.6}, {v:.6}) in (u, v): the face's boundary is not a valid region"
     )]
-    LoopsOverlap { u: f64, v: f64 },
+    /// Trim loops run twice along one segment.
+    LoopsOverlap {
+        /// Parameter u near the overlap.
+        u: f64,
+        /// Parameter v near the overlap.
+        v: f64,
+    },
     #[error(
         "the face needs more than {limit} vertices at chordal tolerance {chord_mm} mm; raise the tolerance"
     )]
-    TooManyVertices { limit: usize, chord_mm: f64 },
+    /// The tolerance calls for more vertices than the limit.
+    TooManyVertices {
+        /// The vertex limit.
+        limit: usize,
+        /// The chordal tolerance asked for (mm).
+        chord_mm: f64,
+    },
 }
 
 /// Working-plane vertex of the triangulation: scaled (u, v) and the local vertex index.

@@ -18,6 +18,7 @@
 //!
 //! **Architecture invariant:** no dependency on any workspace crate and no IO: the sender, which
 //! must not depend on the G-code writer, and the writer both use it.
+#![warn(missing_docs)]
 
 mod arc;
 mod estimate;

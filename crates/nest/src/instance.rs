@@ -1,7 +1,7 @@
 //! Loaders for benchmark instances: the ESICUP strip-packing instances in the jagua-rs JSON
-//! format (`../shared/bench/nesting/instances`), and the leather instances of Baldacci et al.
-//! (2014) in their PascalCase schema (`Scarpa.json`: shoe parts and two hides with defects and
-//! quality zones).
+//! format (copies in `crates/nest/tests/data/instances`), and the leather instances of Baldacci
+//! et al. (2014) in their PascalCase schema (`Scarpa.json`: shoe parts and two hides with defects
+//! and quality zones).
 
 use crate::error::NestError;
 use crate::item::{NestItem, Rotations};

@@ -1,6 +1,7 @@
-//! Regression floors: on every ESICUP strip instance in ../shared/bench/nesting, a fixed
-//! iteration budget (deterministic, not a timing test) must reach at least the utilization
-//! recorded here, with every layout checked overlap-free by geo's boolean operations.
+//! Regression floors: on every ESICUP strip instance in tests/data/instances (source and
+//! licence in its manifest.json), a fixed iteration budget (deterministic, not a timing test)
+//! must reach at least the utilization recorded here, with every layout checked overlap-free by
+//! geo's boolean operations.
 //!
 //! The floors are the figures measured when they were recorded minus one percentage point (the
 //! search is deterministic per seed; the margin absorbs floating-point differences between
@@ -27,7 +28,7 @@ const FLOORS: [(&str, f64); 7] = [
 
 fn check(name: &str, floor: f64) {
     let path = format!(
-        "{}/../../../shared/bench/nesting/instances/{name}.json",
+        "{}/tests/data/instances/{name}.json",
         env!("CARGO_MANIFEST_DIR")
     );
     let text = std::fs::read_to_string(&path)

@@ -18,7 +18,7 @@ use geo::{Area, BooleanOps, BoundingRect, Intersects};
 fn scarpa_path() -> String {
     concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/bench/nesting/instances/Scarpa.json"
+        "/tests/data/instances/Scarpa.json"
     )
     .to_string()
 }

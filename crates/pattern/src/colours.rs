@@ -60,8 +60,11 @@ pub const LIGHTBURN_PALETTE: [(&str, [u8; 3]); 32] = [
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ColourJob {
+    /// Strokes of the layer are cut ([`Layer::Cut`]).
     Cut,
+    /// Strokes of the layer are drawn ([`Layer::Draw`]).
     Draw,
+    /// Strokes of the layer are engraved ([`Layer::Engrave`]).
     Engrave,
     /// Not read (dropped with a warning).
     Skip,

@@ -27,8 +27,10 @@ pub enum Layer {
 }
 
 impl Layer {
+    /// Every layer: engrave, draw, cut.
     pub const ALL: [Layer; 3] = [Layer::Engrave, Layer::Draw, Layer::Cut];
 
+    /// The layer's name as files carry it: `engrave`, `draw` or `cut`.
     pub fn name(self) -> &'static str {
         match self {
             Layer::Engrave => "engrave",
@@ -41,9 +43,11 @@ impl Layer {
 /// One polyline of the drawing.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Stroke {
+    /// What the tool does along the stroke.
     pub layer: Layer,
     /// Points in mm. A closed stroke does not repeat its first point at the end.
     pub points: Vec<DVec2>,
+    /// True when the stroke returns from its last point to its first.
     pub closed: bool,
     /// Which piece (instance) the stroke belongs to, if any: inner cuts of a piece are cut before
     /// the outer contour that holds them.
@@ -96,6 +100,7 @@ impl StrokeKind {
 pub struct PieceInfo {
     /// The value of [`Stroke::piece`] of the strokes this describes.
     pub piece: u32,
+    /// The piece's label fields: name, size, material, quantity.
     pub label: LabelInfo,
     /// Grain line end points in the drawing's frame (mm).
     pub grain: Option<(DVec2, DVec2)>,
@@ -104,6 +109,7 @@ pub struct PieceInfo {
 /// A set of strokes in mm.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Drawing {
+    /// The polylines, in drawing order.
     pub strokes: Vec<Stroke>,
     /// Label and grain of the pieces the strokes belong to, where known (by [`PieceInfo::piece`]).
     #[serde(default)]
@@ -124,6 +130,7 @@ impl Drawing {
         self.pieces.iter().find(|p| p.piece == piece)
     }
 
+    /// The bounding box of every stroke's points (mm); empty for a drawing without points.
     pub fn bbox(&self) -> Aabb2 {
         Aabb2::from_points(self.strokes.iter().flat_map(|s| s.points.iter().copied()))
     }

@@ -36,6 +36,7 @@ const MAX_SPLINE_DEGREE: usize = 11;
 /// A DXF read into a drawing, with what was skipped or assumed.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DxfImport {
+    /// The contours read, pieces told apart by their outer boundaries.
     pub drawing: Drawing,
     /// Entities skipped and assumptions made (unit, open contours), one line each.
     pub warnings: Vec<String>,
@@ -122,9 +123,11 @@ pub fn read_dxf(text: &str, chord_tol: f64) -> Result<DxfImport, PatternError> {
 /// A contour of a DXF with the name of its layer (lines and arcs chained into contours).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LayerPath {
+    /// The DXF layer the contour was drawn on.
     pub layer: String,
     /// Points in mm; a closed contour does not repeat its first point.
     pub points: Vec<DVec2>,
+    /// True when the contour closes on itself.
     pub closed: bool,
 }
 

@@ -17,14 +17,30 @@ use flatcut_geom::DVec2;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PathSeg {
     /// Straight segment.
-    Line { p0: DVec2, p1: DVec2 },
+    Line {
+        /// Start point (mm).
+        p0: DVec2,
+        /// End point (mm).
+        p1: DVec2,
+    },
     /// Circular arc from `p0` to `p1` with bulge `tan(sweep/4)` (|sweep| < 2π).
-    Arc { p0: DVec2, p1: DVec2, bulge: f64 },
+    Arc {
+        /// Start point (mm).
+        p0: DVec2,
+        /// End point (mm).
+        p1: DVec2,
+        /// `tan(sweep/4)`: 0 straight, 1 a half circle, negative clockwise.
+        bulge: f64,
+    },
     /// Cubic Bézier.
     Cubic {
+        /// Start point (mm).
         p0: DVec2,
+        /// First control point (mm): the start tangent points at it.
         c1: DVec2,
+        /// Second control point (mm): the end tangent comes from it.
         c2: DVec2,
+        /// End point (mm).
         p1: DVec2,
     },
 }

@@ -4,6 +4,7 @@
 //!
 //! **Architecture invariant:** this crate is 2D only. It cannot name a surface or a mesh type
 //! (the crate graph enforces it); the facade turns a flattened boundary into a piece.
+#![warn(missing_docs)]
 
 pub mod colours;
 pub mod corner;

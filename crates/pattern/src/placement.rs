@@ -6,12 +6,16 @@ use flatcut_geom::DVec2;
 /// translation.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Placement {
+    /// Rotation in radians, counter-clockwise, after the mirror.
     pub rotation: f64,
+    /// True when x is negated first (the piece turned over).
     pub mirror: bool,
+    /// Translation (mm), applied last.
     pub translation: DVec2,
 }
 
 impl Placement {
+    /// The placement that leaves the piece where it is.
     pub const IDENTITY: Self = Self {
         rotation: 0.0,
         mirror: false,

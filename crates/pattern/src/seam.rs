@@ -33,13 +33,16 @@ const HOLE_AREA_EPS: f64 = 1e-3;
 /// Result of the offset: the cut ring (CCW, no repeated end point).
 #[derive(Clone, Debug)]
 pub struct SeamResult {
+    /// The cut line: the sew line offset by its allowances, CCW, no repeated end point (mm).
     pub cut: Vec<DVec2>,
 }
 
 /// Reason an allowance could not be built (mapped to `PatternError` by the caller).
 #[derive(Clone, Debug)]
 pub enum SeamFailure {
+    /// The allowance closes over the piece: why.
     TooLarge(String),
+    /// The offset engine failed: what it reported.
     Engine(String),
 }
 

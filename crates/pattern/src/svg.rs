@@ -525,7 +525,9 @@ struct PieceMeta {
 /// [`Drawing::pieces`]) and what was dropped or assumed, one sentence each.
 #[derive(Clone, Debug, Default)]
 pub struct SvgImport {
+    /// The paths read, pieces told apart by their outer boundaries.
     pub drawing: Drawing,
+    /// What was dropped or assumed, one sentence each.
     pub warnings: Vec<String>,
 }
 

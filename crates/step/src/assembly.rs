@@ -14,74 +14,16 @@
 
 use std::collections::BTreeMap;
 
-use flatcut_geom::{DMat3, DVec3};
-use flatcut_surface::curve::Frame;
-
 use crate::StepError;
 use crate::attrs::Attrs;
 use crate::file::{StepFile, Value};
+use crate::placement::Placement;
 use crate::reader::Reader;
 
 /// Most instances of one body (a cycle guard and a bound on the work).
 pub const MAX_INSTANCES: usize = 100_000;
 /// Deepest nesting of assemblies followed.
 const MAX_DEPTH: usize = 64;
-
-/// A rigid placement: `p ↦ rot · p + origin`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Placement {
-    pub rot: DMat3,
-    pub origin: DVec3,
-}
-
-impl Placement {
-    pub const IDENTITY: Self = Self {
-        rot: DMat3::IDENTITY,
-        origin: DVec3::ZERO,
-    };
-
-    /// The placement of a frame: local coordinates to the frame's space.
-    pub fn of_frame(f: &Frame) -> Self {
-        Self {
-            rot: DMat3::from_cols(f.x, f.y, f.z),
-            origin: f.origin,
-        }
-    }
-
-    pub fn point(&self, p: DVec3) -> DVec3 {
-        self.rot * p + self.origin
-    }
-
-    pub fn vector(&self, v: DVec3) -> DVec3 {
-        self.rot * v
-    }
-
-    /// `self ∘ other`: `other` first.
-    pub fn then_outer(&self, other: &Placement) -> Placement {
-        Placement {
-            rot: self.rot * other.rot,
-            origin: self.rot * other.origin + self.origin,
-        }
-    }
-
-    /// The inverse (the rotation is orthonormal).
-    pub fn inverse(&self) -> Placement {
-        let rt = self.rot.transpose();
-        Placement {
-            rot: rt,
-            origin: -(rt * self.origin),
-        }
-    }
-
-    /// True for the identity within round-off.
-    pub fn is_identity(&self) -> bool {
-        (self.rot - DMat3::IDENTITY)
-            .to_cols_array()
-            .iter()
-            .all(|x| x.abs() < 1e-14)
-            && self.origin.length() < 1e-12
-    }
-}
 
 /// The representations a file's shape representations hold, with their items.
 const REPRESENTATIONS: [&str; 5] = [

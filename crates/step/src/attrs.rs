@@ -7,8 +7,11 @@ use crate::file::{Instance, Part, Value};
 /// The attributes of one part of an instance.
 #[derive(Clone, Copy, Debug)]
 pub struct Attrs<'i, 'a> {
+    /// The instance's number (`#id`), for messages.
     pub id: u64,
+    /// The part's entity type name, e.g. `CIRCLE`.
     pub name: &'a str,
+    /// The attribute values in file order.
     pub params: &'i [Value<'a>],
 }
 
@@ -70,6 +73,7 @@ impl<'i, 'a> Attrs<'i, 'a> {
         }
     }
 
+    /// Attribute `i` (0-based); `what` names it in the error when it is missing.
     pub fn get(&self, i: usize, what: &str) -> Result<&'i Value<'a>, StepError> {
         self.params
             .get(i)
@@ -86,6 +90,7 @@ impl<'i, 'a> Attrs<'i, 'a> {
         number(v).ok_or_else(|| self.expected(i, what, "a number", v))
     }
 
+    /// Attribute `i` as an integer.
     pub fn int(&self, i: usize, what: &str) -> Result<i64, StepError> {
         match self.get(i, what)? {
             Value::Int(k) => Ok(*k),
@@ -102,6 +107,7 @@ impl<'i, 'a> Attrs<'i, 'a> {
         }
     }
 
+    /// Attribute `i` as an enumeration's name, without the dots.
     pub fn enumeration(&self, i: usize, what: &str) -> Result<&'a str, StepError> {
         match self.get(i, what)? {
             Value::Enum(e) => Ok(e),
@@ -109,6 +115,7 @@ impl<'i, 'a> Attrs<'i, 'a> {
         }
     }
 
+    /// Attribute `i` as a reference `#id`.
     pub fn reference(&self, i: usize, what: &str) -> Result<u64, StepError> {
         match self.get(i, what)? {
             Value::Ref(r) => Ok(*r),
@@ -125,6 +132,7 @@ impl<'i, 'a> Attrs<'i, 'a> {
         }
     }
 
+    /// Attribute `i` as a list.
     pub fn list(&self, i: usize, what: &str) -> Result<&'i [Value<'a>], StepError> {
         match self.get(i, what)? {
             Value::List(l) => Ok(l),

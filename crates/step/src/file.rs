@@ -24,18 +24,25 @@ pub const MAX_FILE_BYTES: u64 = 4 << 30;
 /// An attribute value.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Value<'a> {
+    /// An integer, e.g. `3`.
     Int(i64),
+    /// A real, e.g. `2.5E-1`.
     Real(f64),
     /// The raw text between the quotes (escapes not decoded).
     Str(&'a str),
     /// The name between the dots of `.NAME.`.
     Enum(&'a str),
+    /// A reference to an instance, `#id`.
     Ref(u64),
+    /// A list `(…)` of values.
     List(Vec<Value<'a>>),
     /// A typed value `NAME(…)`, e.g. `LENGTH_MEASURE(25.4)`.
     Typed(&'a str, Vec<Value<'a>>),
+    /// `$`: an optional value left out.
     Omitted,
+    /// `*`: a value derived from a supertype.
     Derived,
+    /// A binary value `"0F3A"` (its bits are not kept).
     Binary,
 }
 
@@ -43,14 +50,18 @@ pub enum Value<'a> {
 /// of a complex one (`(A(…) B(…))`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Part<'a> {
+    /// The entity type name, e.g. `CARTESIAN_POINT`.
     pub name: &'a str,
+    /// The attribute values in file order.
     pub params: Vec<Value<'a>>,
 }
 
 /// A parsed instance.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Instance<'a> {
+    /// The instance's number (`#id`).
     pub id: u64,
+    /// One part for a simple instance, several for a complex one.
     pub parts: Vec<Part<'a>>,
 }
 

@@ -42,15 +42,21 @@ const SIDE_SAMPLES: usize = 12;
 /// A curve of the model (3D, mm) or of a parameter space (z = 0, unscaled).
 #[derive(Clone, Debug)]
 pub enum Curve {
+    /// A straight line.
     Line(Line),
     /// A circle or an ellipse.
     Conic(Ellipse),
+    /// A polynomial B-spline curve.
     BSpline(BSpline),
+    /// A rational B-spline (NURBS) curve.
     Nurbs(Nurbs),
+    /// Straight segments through points.
     Polyline(Polyline),
     /// A curve in the (u, v) space of a surface (its x, y), mapped onto the surface.
     OnSurface {
+        /// The curve in (u, v) (its x, y; z = 0).
         uv: Arc<Curve>,
+        /// The surface it lies on.
         surface: Arc<Surface>,
     },
 }
@@ -148,7 +154,9 @@ impl ParamCurve for Curve {
 /// A surface of the model.
 #[derive(Clone, Debug)]
 pub enum Surface {
+    /// A plane, cylinder, cone, sphere, torus, extrusion or revolution in its STEP parametrisation.
     Analytic(Analytic),
+    /// A B-spline or NURBS patch.
     Spline(Spline),
 }
 
@@ -156,6 +164,7 @@ pub enum Surface {
 /// ring): those are periodic with the domain's width as period, evaluated modulo the domain.
 #[derive(Clone, Debug)]
 pub struct Spline {
+    /// The patch in model space (mm).
     pub patch: BSplinePatch,
     /// The period of u and of v, when the patch closes on itself in that direction.
     pub period: [Option<f64>; 2],

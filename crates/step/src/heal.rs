@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use crate::model::EdgeUse;
+use crate::edge_use::EdgeUse;
 
 /// The default healing limit as a fraction of the model's size (the diagonal of its vertices'
 /// bounding box): 0.2 % — a 0.4 mm gap on a 200 mm part is a sloppy file, a 4 mm one is a
@@ -67,15 +67,18 @@ pub enum RepairKind {
 /// One repair, on the entity it concerns.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Repair {
+    /// What was repaired.
     pub kind: RepairKind,
     /// The instance repaired (`#id`).
     pub entity: u64,
     /// The size of the defect (mm).
     pub mm: f64,
+    /// The repair in words, for the report.
     pub message: String,
 }
 
 impl Repair {
+    /// A repair of `kind` on instance `entity`, of a defect `mm` long.
     pub fn new(kind: RepairKind, entity: u64, mm: f64, message: impl Into<String>) -> Self {
         Self {
             kind,

@@ -24,14 +24,19 @@ pub enum Tok {
     #[regex(r"@[0-9]+")]
     ValueRef,
     #[token("=")]
+    /// `=`.
     Eq,
     #[token("(")]
+    /// `(`.
     Open,
     #[token(")")]
+    /// `)`.
     Close,
     #[token(",")]
+    /// `,`.
     Comma,
     #[token(";")]
+    /// `;`: the end of an instance or header entry.
     Semi,
     /// `$`: an omitted optional value.
     #[token("$")]
@@ -49,11 +54,14 @@ pub enum Tok {
     #[regex(r"\.[A-Za-z_][A-Za-z0-9_]*\.")]
     Enum,
     #[regex(r"[+-]?[0-9]+")]
+    /// An integer, e.g. `-12`.
     Int,
     #[regex(r"[+-]?[0-9]+\.[0-9]*([eE][+-]?[0-9]+)?")]
     #[regex(r"[+-]?\.[0-9]+([eE][+-]?[0-9]+)?")]
+    /// A real: digits with a decimal point, an optional exponent.
     Real,
     #[regex(r"'([^']|'')*'")]
+    /// A string `'…'` (a quote inside doubled).
     Str,
     /// `"0F3A"`: a binary value.
     #[regex(r#""[0-9A-Fa-f]*""#)]

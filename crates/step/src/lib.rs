@@ -14,27 +14,31 @@
 //!
 //! Errors name the instance (`#1234 = OFFSET_SURFACE: not supported`) or the line; a face that
 //! cannot be used keeps its number and error while the others load.
+#![warn(missing_docs)]
 
 pub mod adjacency;
 pub mod assembly;
 pub mod attrs;
 pub mod check;
+pub mod edge_use;
 pub mod error;
 pub mod file;
 pub mod geom;
 pub mod heal;
 pub mod lexer;
 pub mod model;
+pub mod placement;
 pub mod reader;
 pub mod sew;
 pub mod tess;
 pub mod trim;
 
+pub use edge_use::EdgeUse;
 pub use error::StepError;
 pub use file::StepFile;
 pub use geom::{Curve, Surface};
 pub use model::{
-    BodyInstance, Bound, Edge, EdgeGeometry, EdgeUse, Face, FaceGeometry, Model, Shell, Vertex,
+    BodyInstance, Bound, Edge, EdgeGeometry, Face, FaceGeometry, Model, Shell, Vertex,
 };
 pub use reader::Units;
 pub use tess::{EdgeMesh, FaceMesh, Tessellation, face_area};

@@ -21,11 +21,12 @@ use flatcut_surface::ParamCurve;
 use flatcut_surface::curve::nearest_from_samples;
 
 use crate::StepError;
-use crate::assembly::Placement;
 use crate::attrs::Attrs;
+use crate::edge_use::EdgeUse;
 use crate::file::{Instance, StepFile, Value};
 use crate::geom::{Curve, Surface};
 use crate::heal::{HealOptions, Repair};
+use crate::placement::Placement;
 use crate::reader::{Reader, Space, Units};
 
 mod bounded;
@@ -43,8 +44,11 @@ const LOCATE_SAMPLES_PER_SPAN: usize = 8;
 /// A shell: a connected set of faces (closed: bounds a solid), in one instance of its body.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Shell {
+    /// The shell's instance number (`#id`).
     pub entity: u64,
+    /// True for a `CLOSED_SHELL` (it bounds a solid).
     pub closed: bool,
+    /// The shell's faces (indices into [`Model::faces`]).
     pub faces: Vec<usize>,
     /// The body instance (index into [`Model::instances`]).
     pub instance: usize,
@@ -60,30 +64,27 @@ pub struct BodyInstance {
     pub name: String,
     /// Which of the body's instances (0 for the first).
     pub copy: usize,
+    /// Where the body stands in the world.
     pub placement: Placement,
 }
 
 /// A vertex: its position in mm.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Vertex {
+    /// The vertex's instance number (`#id`).
     pub entity: u64,
+    /// Its position in the world (mm).
     pub point: DVec3,
-}
-
-/// One use of an edge in a loop: forward when the loop runs from the edge's start vertex to its
-/// end vertex.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct EdgeUse {
-    pub edge: usize,
-    pub forward: bool,
 }
 
 /// A loop bounding a face (already oriented by the bound's orientation flag).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bound {
+    /// The loop's instance number (`#id`).
     pub entity: u64,
     /// Declared as the outer bound (`FACE_OUTER_BOUND`).
     pub outer: bool,
+    /// The edges in loop order.
     pub uses: Vec<EdgeUse>,
     /// A `VERTEX_LOOP` (a degenerate bound at a single point, e.g. a cone's apex).
     pub vertex: Option<usize>,
@@ -94,9 +95,11 @@ pub struct Bound {
 pub struct FaceGeometry {
     /// The instance number of the surface.
     pub surface_entity: u64,
+    /// The surface (in mm), shared with the faces that use it.
     pub surface: Arc<Surface>,
     /// The face normal is the surface normal `S_u × S_v` (else its opposite).
     pub same_sense: bool,
+    /// The face's loops: the outer one and its holes.
     pub bounds: Vec<Bound>,
 }
 
@@ -118,7 +121,9 @@ impl FaceGeometry {
 /// A face of the model.
 #[derive(Clone, Debug)]
 pub struct Face {
+    /// The face's instance number (`#id`).
     pub entity: u64,
+    /// The shell it belongs to (index into [`Model::shells`]).
     pub shell: usize,
     /// The face's geometry, or why it cannot be used.
     pub geometry: Result<FaceGeometry, StepError>,
@@ -129,7 +134,9 @@ pub struct Face {
 /// A curve in a surface's parameter space that the file gives for an edge (a `PCURVE`).
 #[derive(Clone, Debug)]
 pub struct Pcurve {
+    /// The instance number of the surface the curve lies on.
     pub surface_entity: u64,
+    /// The curve in the surface's (u, v) (its x, y).
     pub curve: Arc<Curve>,
 }
 
@@ -137,11 +144,17 @@ pub struct Pcurve {
 /// `end`); `t1 < t0` when the edge runs against the curve.
 #[derive(Clone, Debug)]
 pub struct EdgeGeometry {
+    /// The 3D curve (mm).
     pub curve: Arc<Curve>,
+    /// The start vertex (index into [`Model::vertices`]).
     pub start: usize,
+    /// The end vertex (index into [`Model::vertices`]).
     pub end: usize,
+    /// The curve parameter at `start`.
     pub t0: f64,
+    /// The curve parameter at `end`.
     pub t1: f64,
+    /// The edge's curves in the parameter spaces of its faces' surfaces.
     pub pcurves: Vec<Pcurve>,
     /// The edge has no length: one vertex, a curve of zero extent (an edge at a pole).
     pub degenerate: bool,
@@ -152,8 +165,11 @@ pub struct EdgeGeometry {
 /// An edge of the model and the faces whose loops use it (a face twice for a seam).
 #[derive(Clone, Debug)]
 pub struct Edge {
+    /// The edge's instance number (`#id`).
     pub entity: u64,
+    /// The edge's geometry, or why it cannot be used.
     pub geometry: Result<EdgeGeometry, StepError>,
+    /// The faces whose loops use the edge (indices into [`Model::faces`]).
     pub faces: Vec<usize>,
     /// What healing changed in the edge.
     pub repairs: Vec<Repair>,
@@ -169,9 +185,13 @@ pub struct Model {
     pub schemas: Vec<String>,
     /// The length unit the file states (of the first shell's representation).
     pub units: Units,
+    /// The shells, in file order per body instance.
     pub shells: Vec<Shell>,
+    /// The faces of all shells.
     pub faces: Vec<Face>,
+    /// The edges the faces' loops use.
     pub edges: Vec<Edge>,
+    /// The vertices the edges end at.
     pub vertices: Vec<Vertex>,
     /// The placed bodies, in order (one per body for a file that is no assembly).
     pub instances: Vec<BodyInstance>,

@@ -16,10 +16,10 @@ use flatcut_surface::patch::bspline::MAX_DEGREE;
 use flatcut_surface::patch::{Analytic, BSplinePatch};
 
 use crate::StepError;
-use crate::assembly::Placement;
 use crate::attrs::{Attrs, describe, number};
 use crate::file::{Instance, StepFile, Value};
 use crate::geom::{Curve, Spline, Surface};
+use crate::placement::Placement;
 
 /// Longest chain of references followed from one instance (a B-rep is about 12 deep: shell,
 /// face, bound, loop, oriented edge, edge, curve, placement, direction).
@@ -29,7 +29,9 @@ pub const MAX_REF_DEPTH: usize = 64;
 /// space (2D, unscaled).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Space {
+    /// 3D model space, lengths in the file's unit.
     Model,
+    /// A surface's (u, v) parameter space.
     Param,
 }
 
@@ -60,6 +62,7 @@ impl Units {
 
 /// Reads geometry from a file, with caches and the cycle guard.
 pub struct Reader<'f> {
+    /// The file the geometry is read from.
     pub file: &'f StepFile,
     /// Millimetres per length unit of the representation being read.
     pub mm: f64,
@@ -104,6 +107,8 @@ enum UnitKind {
 }
 
 impl<'f> Reader<'f> {
+    /// A reader of `file` with empty caches, in mm and radians until a representation sets its
+    /// units.
     pub fn new(file: &'f StepFile) -> Self {
         Self {
             file,

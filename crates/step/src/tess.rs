@@ -56,6 +56,7 @@ const POLE_REL: f64 = 1e-7;
 /// The mesh of one face.
 #[derive(Clone, Debug)]
 pub struct FaceMesh {
+    /// The face (index into [`crate::Model::faces`]).
     pub face: usize,
     /// Positions, triangles counter-clockwise about the face normal, `params` the (u, v).
     pub mesh: TriMesh,
@@ -78,7 +79,9 @@ pub struct FaceMesh {
 /// An edge's points in the shell mesh, from its start vertex to its end vertex.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EdgeMesh {
+    /// The edge (index into [`crate::Model::edges`]).
     pub edge: usize,
+    /// Shell vertex ids along the edge, from its start vertex to its end vertex.
     pub vertices: Vec<u32>,
 }
 
@@ -88,6 +91,7 @@ pub struct Tessellation {
     /// Shell vertex positions (mm): model vertices first, then edge samples, then the points the
     /// faces added, then face interiors.
     pub positions: Vec<DVec3>,
+    /// One mesh per chosen face, in the order the faces were asked for.
     pub faces: Vec<FaceMesh>,
     /// The edges bounding the faces, in edge order.
     pub edges: Vec<EdgeMesh>,

@@ -27,9 +27,10 @@ use flatcut_geom::{DVec2, DVec3};
 use flatcut_surface::{ParamCurve, ParamSurface};
 
 use crate::StepError;
+use crate::edge_use::EdgeUse;
 use crate::geom::{Curve, Surface};
 use crate::heal::{Repair, RepairKind};
-use crate::model::{Bound, EdgeGeometry, EdgeUse, FaceGeometry, Model};
+use crate::model::{Bound, EdgeGeometry, FaceGeometry, Model};
 
 /// Angular step of the points of a pole run on a curved face (radians of the free parameter):
 /// 64 per turn.

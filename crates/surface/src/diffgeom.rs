@@ -28,12 +28,19 @@ fn unit_normal(su: DVec3, sv: DVec3) -> Option<DVec3> {
 /// First (E, F, G) and second (L, M, N) fundamental forms at one point, with the unit normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FundamentalForms {
+    /// `E = r_u · r_u`.
     pub e: f64,
+    /// `F = r_u · r_v`.
     pub f: f64,
+    /// `G = r_v · r_v`.
     pub g: f64,
+    /// `L = r_uu · N`.
     pub l: f64,
+    /// `M = r_uv · N`.
     pub m: f64,
+    /// `N = r_vv · N`.
     pub n: f64,
+    /// The unit normal `N = r_u × r_v / |r_u × r_v|`.
     pub normal: DVec3,
 }
 
@@ -80,13 +87,21 @@ pub fn fundamental_forms(s: &dyn ParamSurface, u: f64, v: f64) -> Option<Fundame
 /// directions (in the parameter plane and as unit 3D tangents).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Curvature {
+    /// Gaussian curvature `K = k1 k2` (1/mm²).
     pub gaussian: f64,
+    /// Mean curvature `H = (k1 + k2) / 2` (1/mm), signed by the normal.
     pub mean: f64,
+    /// The larger principal curvature (1/mm).
     pub k1: f64,
+    /// The smaller principal curvature (1/mm).
     pub k2: f64,
+    /// Direction of `k1` in the parameter plane.
     pub dir1_uv: DVec2,
+    /// Direction of `k2` in the parameter plane.
     pub dir2_uv: DVec2,
+    /// Direction of `k1` as a unit 3D tangent.
     pub dir1: DVec3,
+    /// Direction of `k2` as a unit 3D tangent.
     pub dir2: DVec3,
 }
 
@@ -138,6 +153,7 @@ pub fn curvature(s: &dyn ParamSurface, u: f64, v: f64) -> Option<Curvature> {
 /// Christoffel symbols of the second kind, `gamma[k][i][j] = Γ^k_ij` (indices 0 = u, 1 = v).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Christoffel {
+    /// `gamma[k][i][j] = Γ^k_ij`; symmetric in `i`, `j`.
     pub gamma: [[[f64; 2]; 2]; 2],
 }
 
@@ -179,10 +195,22 @@ pub enum GeodesicError {
     BadStart(String),
     /// The surface is singular (r_u × r_v = 0) at the given parameters on the path.
     #[error("geodesic reaches a singular point at (u, v) = ({u:.6}, {v:.6}) after length {s:.6}")]
-    Singular { u: f64, v: f64, s: f64 },
+    Singular {
+        /// Parameter u of the singular point.
+        u: f64,
+        /// Parameter v of the singular point.
+        v: f64,
+        /// Arc length traced before it (mm).
+        s: f64,
+    },
     /// The step size fell below the minimum without meeting the tolerance.
     #[error("geodesic step control failed at length {s:.6} (step {h:.3e})")]
-    StepUnderflow { s: f64, h: f64 },
+    StepUnderflow {
+        /// Arc length traced when the control failed (mm).
+        s: f64,
+        /// The last step size tried.
+        h: f64,
+    },
 }
 
 /// Options for [`geodesic`].
@@ -231,9 +259,13 @@ impl Default for GeodesicOptions {
 /// stopped at the domain boundary before the requested length.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Geodesic {
+    /// Parameter points along the path, the start first.
     pub uv: Vec<DVec2>,
+    /// The surface points at `uv` (mm).
     pub points: Vec<DVec3>,
+    /// Arc length from the start to each point (mm), increasing from 0.
     pub arclen: Vec<f64>,
+    /// True when the path left the domain before the requested length.
     pub hit_boundary: bool,
 }
 

@@ -17,6 +17,7 @@
 //! **Architecture invariant:** evaluators are pure and total on their domain; construction
 //! validates (knots non-decreasing, weights positive, counts consistent, coordinates finite) and
 //! returns [`SurfaceError`] rather than panicking later.
+#![warn(missing_docs)]
 
 pub mod curve;
 pub mod diffgeom;

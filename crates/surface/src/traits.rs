@@ -15,11 +15,14 @@ pub trait ParamCurve: Send + Sync + std::fmt::Debug {
 /// A rectangular parameter domain `[u0, u1] × [v0, v1]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Domain2 {
+    /// The u interval `(u0, u1)`, `u0 < u1`.
     pub u: (f64, f64),
+    /// The v interval `(v0, v1)`, `v0 < v1`.
     pub v: (f64, f64),
 }
 
 impl Domain2 {
+    /// The unit square `[0, 1] × [0, 1]`.
     pub const UNIT: Self = Self {
         u: (0.0, 1.0),
         v: (0.0, 1.0),
@@ -29,11 +32,17 @@ impl Domain2 {
 /// Position and partial derivatives up to second order at one (u, v).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct SurfaceDerivs {
+    /// The point `r(u, v)` (mm).
     pub p: DVec3,
+    /// `∂r/∂u`.
     pub su: DVec3,
+    /// `∂r/∂v`.
     pub sv: DVec3,
+    /// `∂²r/∂u²`.
     pub suu: DVec3,
+    /// `∂²r/∂u∂v`.
     pub suv: DVec3,
+    /// `∂²r/∂v²`.
     pub svv: DVec3,
 }
 

@@ -3,7 +3,6 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::Context as _;
 use flatcut::geom::Tolerances;
 
 #[derive(Debug, clap::Args)]
@@ -31,8 +30,8 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let tol = Tolerances::DEFAULT
         .with_chord_mm(a.chord)
         .with_heal_mm(a.heal_tolerance);
-    let report = flatcut::inspect::inspect_file(&a.file, &tol)
-        .with_context(|| format!("cannot inspect {}", a.file.display()))?;
+    // Every error of a design, mesh or STEP file names the file: no context to add.
+    let report = flatcut::inspect::inspect_file(&a.file, &tol)?;
     if a.json {
         crate::outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {

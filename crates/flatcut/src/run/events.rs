@@ -6,16 +6,22 @@ use std::time::Duration;
 /// The stages of a project run, in order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Stage {
+    /// Flattening the pieces.
     Flatten,
+    /// Measuring their distortion.
     Report,
+    /// Building the pattern pieces.
     Pattern,
+    /// Nesting them on sheets.
     Nest,
+    /// Planning one job per sheet.
     Gcode,
     /// Streaming to the device: run by the caller that owns the device, after the others.
     Send,
 }
 
 impl Stage {
+    /// Every stage, in run order.
     pub const ALL: [Stage; 6] = [
         Stage::Flatten,
         Stage::Report,
@@ -30,6 +36,7 @@ impl Stage {
         Stage::ALL.iter().position(|&s| s == self).unwrap_or(0) + 1
     }
 
+    /// The stage's name as progress lines print it.
     pub fn name(self) -> &'static str {
         match self {
             Stage::Flatten => "flatten",
@@ -46,22 +53,42 @@ impl Stage {
 #[derive(Clone, Copy, Debug)]
 pub enum Event<'a> {
     /// A stage begins; `detail` says on what (e.g. the design file and method).
-    Started { stage: Stage, detail: &'a str },
+    Started {
+        /// The stage.
+        stage: Stage,
+        /// What the stage works on.
+        detail: &'a str,
+    },
     /// Work inside a stage: `done` of `total` units, on `what` (a piece name, a phase).
     Progress {
+        /// The stage.
         stage: Stage,
+        /// Units done.
         done: usize,
+        /// Units in all.
         total: usize,
+        /// What is being worked on.
         what: &'a str,
     },
     /// Something the user should know that does not stop the run.
-    Warning { stage: Stage, message: &'a str },
+    Warning {
+        /// The stage.
+        stage: Stage,
+        /// The warning.
+        message: &'a str,
+    },
     /// A stage ended after `elapsed`.
-    Finished { stage: Stage, elapsed: Duration },
+    Finished {
+        /// The stage.
+        stage: Stage,
+        /// Its wall time.
+        elapsed: Duration,
+    },
 }
 
 /// Receives a run's events.
 pub trait Observer {
+    /// Called for every event, in the order they happen.
     fn event(&mut self, e: &Event<'_>);
 }
 

@@ -57,21 +57,25 @@ pub struct RunOptions {
 }
 
 impl RunOptions {
+    /// Nesting iterations by default.
     pub const DEFAULT_NEST_ITERS: usize = 60;
     /// A project tessellates more coarsely than a single `flatten`: the pieces of a whole part
     /// are cut together, and 0.4 mm is below a knife's or a pen's width.
     pub const DEFAULT_CHORD_MM: f64 = Tolerances::DEFAULT_CHORD_MM * 4.0;
 
+    /// These options with `n` nesting iterations.
     pub fn with_nest_iters(mut self, n: usize) -> Self {
         self.nest_iters = n;
         self
     }
 
+    /// These options with a seam tolerance of `mm`.
     pub fn with_seam_tolerance_mm(mut self, mm: f64) -> Self {
         self.seam_tolerance_mm = mm;
         self
     }
 
+    /// These options with the flattening's progress callback and cancel flag.
     pub fn with_flatten_hooks(mut self, hooks: FlattenHooks) -> Self {
         self.flatten_hooks = hooks;
         self
@@ -94,16 +98,28 @@ impl Default for RunOptions {
 #[non_exhaustive]
 pub enum RunError {
     #[error(transparent)]
+    /// A pipeline stage failed.
     Pipeline(#[from] PipelineError),
     #[error("project '{project}': {message}")]
-    Project { project: String, message: String },
+    /// The project's settings do not allow the run.
+    Project {
+        /// The project's name.
+        project: String,
+        /// What is wrong.
+        message: String,
+    },
     #[error("machine profile: {0}")]
+    /// The machine profile cannot be used.
     Profile(#[from] flatcut_gcode::ProfileError),
     #[error("heat map: {0}")]
+    /// The heat map could not be rendered.
     Render(#[from] flatcut_report::ReportError),
     #[error("sheet {sheet}: {source}")]
+    /// A sheet's job could not be planned.
     Gcode {
+        /// The sheet's 1-based number.
         sheet: usize,
+        /// Why the plan failed.
         source: flatcut_gcode::GcodeError,
     },
 }

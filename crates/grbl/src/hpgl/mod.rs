@@ -34,13 +34,17 @@ pub const STALL_LIMIT: Duration = Duration::from_secs(60);
 /// Flow control of the link.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub enum HpglFlow {
+    /// Software flow control: the device sends XOFF (0x13) when its buffer fills and XON (0x11)
+    /// when it has room.
     XonXoff,
+    /// Hardware flow control on the RTS/CTS lines, handled by the serial port.
     RtsCts,
 }
 
 /// How to stream.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HpglStreamOptions {
+    /// How the device holds the sender back.
     pub flow: HpglFlow,
     /// Ask the device for its free buffer space (`ESC.B`) and never exceed it.
     pub buffer_query: bool,
@@ -53,7 +57,10 @@ pub struct HpglStreamOptions {
 }
 
 impl HpglStreamOptions {
+    /// Largest write by default (bytes).
     pub const DEFAULT_CHUNK: usize = 16;
+    /// Options for a link with `flow`, asking for the free buffer when `buffer_query`, paced for
+    /// `baud`; default chunk and a 16-byte reserve.
     pub fn new(flow: HpglFlow, buffer_query: bool, baud: u32) -> Self {
         Self {
             flow,
@@ -68,7 +75,9 @@ impl HpglStreamOptions {
 /// Where a stream stands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct HpglProgress {
+    /// Bytes of the job written so far.
     pub sent: usize,
+    /// Bytes in the job.
     pub total: usize,
     /// Waiting for XON.
     pub held: bool,
@@ -77,15 +86,21 @@ pub struct HpglProgress {
 /// What a stream did.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct HpglReport {
+    /// Bytes of the job written to the device.
     pub bytes_sent: usize,
+    /// XOFF bytes the device sent.
     pub xoff_received: u64,
+    /// XON bytes the device sent.
     pub xon_received: u64,
+    /// Buffer queries (`ESC.B`) sent.
     pub queries: u64,
     /// The device's buffer size, when it answered `ESC.L`.
     pub device_buffer: Option<usize>,
     /// Fewest free bytes any `ESC.B` answer reported.
     pub min_free_reported: Option<usize>,
+    /// Wall time of the stream (s).
     pub elapsed_s: f64,
+    /// True when the stream was aborted (`ESC.K` sent) before the job's end.
     pub aborted: bool,
 }
 
@@ -94,14 +109,18 @@ pub struct HpglReport {
 #[non_exhaustive]
 pub enum HpglError {
     #[error(transparent)]
+    /// The link failed.
     Transport(#[from] TransportError),
     #[error("the device sent XOFF and no XON for {0:?} (byte {1} of {2} sent): it has stopped")]
+    /// XOFF held the stream longer than [`STALL_LIMIT`]: how long, bytes sent, bytes in the job.
     Stalled(Duration, usize, usize),
     #[error("the device did not answer the buffer query ESC.{0} within {1:?}")]
+    /// A query (`ESC.B` or `ESC.L`: its letter) went unanswered for the given time.
     NoAnswer(char, Duration),
     #[error(
         "aborted after {0} of {1} bytes: the device was told to drop its buffer (ESC.K) and lift the tool"
     )]
+    /// The stream was stopped: bytes sent, bytes in the job.
     Aborted(usize, usize),
 }
 

@@ -52,6 +52,7 @@ impl EdgeKind {
 pub struct EdgeAllowance {
     /// Names the edge in errors, annotations and reports (a design's edge or style line).
     pub name: String,
+    /// How the stretch is finished: seam, hem, fold, lasting or raw.
     pub kind: EdgeKind,
     /// Allowance in mm; `None`: the piece's default seam width. A raw edge has none (0).
     pub width: Option<f64>,

@@ -54,6 +54,7 @@ pub enum MarkKind {
 /// A mark on the piece.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Mark {
+    /// A notch, a drill hole or a drawn point.
     pub kind: MarkKind,
     /// Position in the piece's flat frame (mm).
     pub pos: DVec2,
@@ -69,6 +70,7 @@ pub struct PieceInput {
     pub name: String,
     /// Sew line, closed (first point not repeated), counter-clockwise, mm.
     pub outline: Vec<DVec2>,
+    /// Notches, drill holes and reference points.
     pub marks: Vec<Mark>,
     /// Drawn internal lines (stitch lines, placement lines), open polylines in the flat frame
     /// (mm), each of at least two points.
@@ -84,7 +86,9 @@ pub struct PieceInput {
     /// not overlap.
     #[serde(default)]
     pub edges: Vec<EdgeAllowance>,
+    /// How the allowance turns at the outline's corners.
     pub corner_style: CornerStyle,
+    /// What the piece's label says.
     pub label: LabelInfo,
     /// Names of the notch marks, by mark index (a mating seam's notch carries the seam's name
     /// into the notch's id); marks past its end, and empty names, are unnamed.
@@ -139,6 +143,7 @@ pub struct PieceOptions {
     pub default_seam: f64,
     /// Mitre limit in widths.
     pub mitre_limit: f64,
+    /// How notches are cut: a slit or a V.
     pub notch_style: NotchStyle,
     /// Notch depth (mm), clipped to 3/4 of the local allowance.
     pub notch_depth: f64,
@@ -165,6 +170,7 @@ impl PieceOptions {
     pub const DEFAULT_DRILL_DIAMETER: f64 = 3.0;
     /// 6 mm cap height reads well on fabric and leather.
     pub const DEFAULT_LABEL_HEIGHT: f64 = 6.0;
+    /// The defaults above.
     pub const DEFAULT: Self = Self {
         fit_tol: Self::DEFAULT_FIT_TOL,
         chord_tol: Self::DEFAULT_CHORD_TOL,
@@ -177,30 +183,37 @@ impl PieceOptions {
         drill_diameter: Self::DEFAULT_DRILL_DIAMETER,
         label_height: Self::DEFAULT_LABEL_HEIGHT,
     };
+    /// These options with fitting tolerance `v` (mm).
     pub fn with_fit_tol(mut self, v: f64) -> Self {
         self.fit_tol = v;
         self
     }
+    /// These options with chordal tolerance `v` (mm).
     pub fn with_chord_tol(mut self, v: f64) -> Self {
         self.chord_tol = v;
         self
     }
+    /// These options with default seam width `v` (mm).
     pub fn with_default_seam(mut self, v: f64) -> Self {
         self.default_seam = v;
         self
     }
+    /// These options with notch style `v`.
     pub fn with_notch_style(mut self, v: NotchStyle) -> Self {
         self.notch_style = v;
         self
     }
+    /// These options with notch depth `v` (mm).
     pub fn with_notch_depth(mut self, v: f64) -> Self {
         self.notch_depth = v;
         self
     }
+    /// These options with corner threshold `v` (degrees).
     pub fn with_corner_deg(mut self, v: f64) -> Self {
         self.corner_deg = v;
         self
     }
+    /// These options with maximum label cap height `v` (mm).
     pub fn with_label_height(mut self, v: f64) -> Self {
         self.label_height = v;
         self
@@ -216,6 +229,7 @@ impl Default for PieceOptions {
 /// A built piece, in its own flat frame (mm, y up).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Piece {
+    /// The piece's name, as ids and labels carry it.
     pub name: String,
     /// Fitted sew line: lines, arcs, cubics, closed.
     pub sew: Vec<PathSeg>,
@@ -237,6 +251,7 @@ pub struct Piece {
     pub sew_lines: Vec<Vec<DVec2>>,
     /// Grain line end points.
     pub grain: Option<(DVec2, DVec2)>,
+    /// What the label says (all of it, before shortening).
     pub label: LabelInfo,
     /// Label text strokes (open polylines).
     pub label_strokes: Vec<Vec<DVec2>>,
@@ -262,6 +277,7 @@ pub const MIN_LABEL_HEIGHT: f64 = 3.0;
 pub struct PieceEdge {
     /// The stretch's name (empty for the default seam).
     pub name: String,
+    /// How the run is finished: seam, hem, fold, lasting or raw.
     pub kind: EdgeKind,
     /// Allowance (mm): the distance from the sew line to the cut line along the run.
     pub width: f64,

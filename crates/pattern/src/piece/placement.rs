@@ -8,8 +8,11 @@ use crate::placement::Placement;
 /// A piece instance placed on a sheet.
 #[derive(Clone, Copy, Debug)]
 pub struct PlacedPiece<'a> {
+    /// The piece.
     pub piece: &'a Piece,
+    /// Which copy of the piece (0-based), carried into the strokes' piece ids.
     pub instance: u32,
+    /// Where the copy lies on the sheet.
     pub placement: Placement,
 }
 

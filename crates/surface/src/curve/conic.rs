@@ -15,9 +15,13 @@ use crate::{ParamCurve, SurfaceError};
 /// `AXIS2_PLACEMENT_3D`: `z` is the axis, `x` the reference direction).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
+    /// The frame's origin (mm): the centre of a circle, ellipse, sphere or torus.
     pub origin: DVec3,
+    /// Unit reference direction, where angle 0 lies.
     pub x: DVec3,
+    /// Unit `z × x`: angle π/2.
     pub y: DVec3,
+    /// The unit axis.
     pub z: DVec3,
 }
 
@@ -96,7 +100,9 @@ fn check_domain(t0: f64, t1: f64) -> Result<(f64, f64), SurfaceError> {
 /// The straight line `P + t·V` (STEP `LINE`: `V` is the direction times the vector's magnitude).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Line {
+    /// The point at `t = 0` (mm).
     pub point: DVec3,
+    /// The direction times the vector's magnitude: the motion per unit of `t` (mm).
     pub vector: DVec3,
     domain: (f64, f64),
 }
@@ -153,8 +159,11 @@ impl ParamCurve for Line {
 /// The ellipse `C + a cos t·x + b sin t·y` in `frame` (a circle when `a = b`), `t` in radians.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ellipse {
+    /// The placement: `frame.origin` is the centre, `x` the major axis.
     pub frame: Frame,
+    /// Semi-axis along `frame.x` (mm, > 0).
     pub a: f64,
+    /// Semi-axis along `frame.y` (mm, > 0).
     pub b: f64,
     domain: (f64, f64),
 }

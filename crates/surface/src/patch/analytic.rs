@@ -36,29 +36,42 @@ const CURVE_NEAREST_ACCURACY: f64 = 1e-10;
 /// Which elementary or swept surface, with its defining data.
 #[derive(Clone, Debug)]
 pub enum AnalyticKind {
+    /// `C + u x + v y`.
     Plane,
+    /// `C + R e(u) + v z`.
     Cylinder {
+        /// `R` (mm, > 0).
         radius: f64,
     },
     /// `radius` at v = 0 and the semi-angle α between the axis and the cone's lines.
     Cone {
+        /// `R` at v = 0 (mm, ≥ 0).
         radius: f64,
+        /// α in radians, in (0, π/2).
         semi_angle: f64,
     },
+    /// `C + R cos v e(u) + R sin v z`.
     Sphere {
+        /// `R` (mm, > 0).
         radius: f64,
     },
+    /// `C + (R + r cos v) e(u) + r sin v z`.
     Torus {
+        /// `R`, the centre circle's radius (mm, above `minor`).
         major: f64,
+        /// `r`, the tube's radius (mm, > 0).
         minor: f64,
     },
     /// The swept curve `c(u)` and the extrusion vector `V` (direction times length).
     Extrusion {
+        /// The swept curve `c(u)`.
         curve: Arc<dyn ParamCurve>,
+        /// `V`: the extrusion direction times its length (mm).
         vector: DVec3,
     },
     /// The swept curve `c(v)` turned about the axis through `frame.origin` along `frame.z`.
     Revolution {
+        /// The profile `c(v)`.
         curve: Arc<dyn ParamCurve>,
     },
 }
@@ -66,7 +79,9 @@ pub enum AnalyticKind {
 /// An elementary or swept surface (see the module documentation for the parametrisations).
 #[derive(Clone, Debug)]
 pub struct Analytic {
+    /// The placement: `C` is `frame.origin`, the axis `frame.z`, angle 0 along `frame.x`.
     pub frame: Frame,
+    /// Which surface, with its defining data.
     pub kind: AnalyticKind,
     domain: Domain2,
 }

@@ -71,11 +71,17 @@ impl Side {
 /// sides give the same point (within the weld tolerance), so matching samples need no search.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SharedEdge {
+    /// 0-based index of the first patch.
     pub a: usize,
+    /// The first patch's side.
     pub side_a: Side,
+    /// 0-based index of the second patch (`a <= b`).
     pub b: usize,
+    /// The second patch's side.
     pub side_b: Side,
+    /// True when the two sides run in opposite directions.
     pub reversed: bool,
+    /// True when equal fractions along the sides give the same point.
     pub same_parameterization: bool,
 }
 
