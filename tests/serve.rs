@@ -681,7 +681,6 @@ fn assert_runs_from(motions: &[Value], job: &flatcut_grbl::Job, from: usize) {
 /// one up to where the journal says. (Four jobs at 200× real time on a 1 Mbaud link.)
 #[test]
 fn serve_streams_jobs_to_the_simulator_and_stops_them_with_the_tool_off() {
-    use flatcut_testkit::trace::joined;
     let dir = lampshade();
     let srv = serve(&dir.path().join("project.toml"));
     let app = srv.app.clone();
@@ -803,44 +802,10 @@ fn serve_streams_jobs_to_the_simulator_and_stops_them_with_the_tool_off() {
     let fourth = app.devices.job(4).unwrap();
     assert_eq!(fourth["state"], "stopped", "{fourth}");
     let sim = app.devices.last_sim().unwrap().trace;
-    let ran = joined(&sim[before..after]);
-    let want = motions_before(&job, job.len());
-    assert_eq!(ran.len(), want.len(), "motions of a whole job");
-    for (k, (text, to)) in want.iter().enumerate() {
-        assert_eq!(&ran[k].text, text, "motion {k}");
-        assert!(
-            near(ran[k].to, *to),
-            "motion {k}: ran to {:?}, the job {to:?}",
-            ran[k].to
-        );
-    }
-    let journal = flatcut_grbl::Journal::read(dir.path().join("job-1.gcode.journal")).unwrap();
-    assert!(!journal.finished);
-    let stop = journal.stop.expect("a stop record");
-    assert!(stop.modal.contains("M5"), "{}", stop.modal);
+    assert_ran_whole_job(&sim[before..after], &job);
     // The journal and the simulator agree: the machine stopped part-way through the line the
     // journal names (`P`), where it says, having run every line before it and nothing after.
-    let (part, at) = journal.partial.expect("stopped part-way through a line");
-    assert!(!journal.done[part..].iter().any(|&d| d));
-    let want = motions_before(&job, part);
-    let ran = joined(&sim[after..]);
-    // The line stopped in may not have moved yet (or moves nothing: a dwell, a tool command).
-    let cut = ran.len() > want.len();
-    assert_eq!(ran.len(), want.len() + usize::from(cut), "motions executed");
-    for (k, (text, to)) in want.iter().enumerate() {
-        assert_eq!(&ran[k].text, text, "motion {k}");
-        assert!(
-            near(ran[k].to, *to),
-            "motion {k}: ran to {:?}, the job {to:?}",
-            ran[k].to
-        );
-    }
-    let end = ran.last().unwrap();
-    if cut {
-        assert_eq!(end.text, job.lines[part].text);
-    }
-    assert!(near(end.to, at), "{end:?} against {at:?}");
-    assert_eq!(stop.machine, end.to);
+    assert_stopped_as_journal_says(&sim[after..], &job, &dir.path().join("job-1.gcode.journal"));
 }
 
 /// "Resume from line N" in the device panel (`POST /api/jobs` with `resume_from`, a line of the
@@ -1100,5 +1065,211 @@ fn serve_names_the_lines_in_doubt_after_a_crash_and_resumes_from_the_operators_l
     let sim = get(a, "/api/devices/sim").json();
     assert_runs_from(sim["motions"].as_array().unwrap(), &job, first);
     assert!(flatcut_grbl::Journal::read(&journal_path).unwrap().finished);
+    srv.stop().unwrap();
+}
+
+/// Checks that a simulator's trace `sim` is the whole of `job`: its motions, each once, in order.
+fn assert_ran_whole_job(sim: &[flatcut_firmware_sim::TraceSegment], job: &flatcut_grbl::Job) {
+    let ran = flatcut_testkit::trace::joined(sim);
+    let want = motions_before(job, job.len());
+    assert_eq!(ran.len(), want.len(), "motions of a whole job");
+    for (k, (text, to)) in want.iter().enumerate() {
+        assert_eq!(&ran[k].text, text, "motion {k}");
+        assert!(
+            near(ran[k].to, *to),
+            "motion {k}: ran to {:?}, the job {to:?}",
+            ran[k].to
+        );
+    }
+}
+
+/// Checks that a simulator's trace `sim` is job `job` stopped where its journal says: every line
+/// before the one it stopped in (`P`), each once, that one up to where the journal says, and
+/// nothing after; the tool off in its stop record.
+fn assert_stopped_as_journal_says(
+    sim: &[flatcut_firmware_sim::TraceSegment],
+    job: &flatcut_grbl::Job,
+    journal: &Path,
+) {
+    use flatcut_testkit::trace::joined;
+    let journal = flatcut_grbl::Journal::read(journal).unwrap();
+    assert!(!journal.finished);
+    let stop = journal.stop.expect("a stop record");
+    assert!(stop.modal.contains("M5"), "{}", stop.modal);
+    let (part, at) = journal.partial.expect("stopped part-way through a line");
+    assert!(!journal.done[part..].iter().any(|&d| d));
+    let want = motions_before(job, part);
+    let ran = joined(sim);
+    // The line stopped in may not have moved yet (or moves nothing: a dwell, a tool command).
+    let cut = ran.len() > want.len();
+    assert_eq!(ran.len(), want.len() + usize::from(cut), "motions executed");
+    for (k, (text, to)) in want.iter().enumerate() {
+        assert_eq!(&ran[k].text, text, "motion {k}");
+        assert!(
+            near(ran[k].to, *to),
+            "motion {k}: ran to {:?}, the job {to:?}",
+            ran[k].to
+        );
+    }
+    let end = ran.last().unwrap();
+    if cut {
+        assert_eq!(end.text, job.lines[part].text);
+    }
+    assert!(near(end.to, at), "{end:?} against {at:?}");
+    assert_eq!(stop.machine, end.to);
+}
+
+/// Two devices open at once (the embedded simulator and a second one, `simulator:2`), each with
+/// its own job: both stream at the same time, the pages hear each job's events tagged with its
+/// device; a third job on a busy device is refused; a stop on the first leaves the second
+/// running to its end. Each simulator executed its own job: the second every motion once, in
+/// order; the first exactly the lines before the one its journal says it stopped in. Each device
+/// keeps its own journal of the same sheet. (Two jobs at 200× real time on 1 Mbaud links.)
+#[test]
+fn serve_runs_jobs_on_two_devices_at_once_and_a_stop_on_one_leaves_the_other() {
+    let dir = lampshade();
+    let srv = serve(&dir.path().join("project.toml"));
+    let app = srv.app.clone();
+    let a = srv.addr();
+    let gcode = get(a, "/api/job.gcode").body;
+    let job = flatcut_grbl::Job::parse(std::str::from_utf8(&gcode).unwrap()).unwrap();
+    for id in ["simulator", "simulator:2"] {
+        let c = send(
+            a,
+            "POST",
+            "/api/devices/connect",
+            &json!({"device": id, "speed": 200, "baud": 1_000_000}),
+        );
+        assert_eq!(c.status, 200, "{}", String::from_utf8_lossy(&c.body));
+        assert_eq!(c.json()["id"], id);
+    }
+    let bad = send(
+        a,
+        "POST",
+        "/api/devices/connect",
+        &json!({"device": "simulator:a b"}),
+    );
+    assert_eq!(bad.status, 400, "{}", String::from_utf8_lossy(&bad.body));
+    let d = get(a, "/api/devices").json();
+    let opened: Vec<&str> = d["opened"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| o["id"].as_str().unwrap())
+        .collect();
+    assert_eq!(opened, ["simulator", "simulator:2"], "{d}");
+    assert_eq!(d["default"], "simulator:2");
+    assert_eq!(d["open"]["id"], "simulator:2");
+    for id in ["simulator", "simulator:2"] {
+        let listed = d["devices"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|x| x["id"] == id);
+        assert_eq!(listed.map(|x| &x["open"]), Some(&json!(true)), "{d}");
+    }
+    // The pages' events, from before the jobs start.
+    let mut s = TcpStream::connect(a).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(120))).unwrap();
+    write!(
+        s,
+        "GET /api/events HTTP/1.1\r\nHost: localhost:{}\r\n\r\n",
+        a.port()
+    )
+    .unwrap();
+    let mut events = BufReader::new(s);
+    // One job named to the first device, one to the default device (the second).
+    let one = send(a, "POST", "/api/jobs", &json!({"device": "simulator"}));
+    assert_eq!(one.status, 201, "{}", String::from_utf8_lossy(&one.body));
+    let two = send(a, "POST", "/api/jobs", &json!({"sheet": 1}));
+    assert_eq!(two.status, 201, "{}", String::from_utf8_lossy(&two.body));
+    let (one, two) = (one.json(), two.json());
+    assert_eq!(
+        (one["device_id"].as_str(), two["device_id"].as_str()),
+        (Some("simulator"), Some("simulator:2"))
+    );
+    assert!(
+        one["journal"]
+            .as_str()
+            .unwrap()
+            .ends_with("/job-1.gcode.journal"),
+        "{one}"
+    );
+    assert!(
+        two["journal"]
+            .as_str()
+            .unwrap()
+            .ends_with("/job-1.gcode@simulator-2.journal"),
+        "{two}"
+    );
+    let third = send(a, "POST", "/api/jobs", &json!({"device": "simulator"}));
+    assert_eq!(
+        third.status,
+        409,
+        "{}",
+        String::from_utf8_lossy(&third.body)
+    );
+    // Both run at once.
+    job_until(a, 1, "ran 300 lines", |j| lines_done(j) > 300);
+    let both = job_until(a, 2, "ran 300 lines", |j| lines_done(j) > 300);
+    assert_eq!(both["state"], "running");
+    assert_eq!(get(a, "/api/jobs/1").json()["state"], "running");
+    let d = get(a, "/api/devices").json();
+    assert_eq!(d["running"].as_array().unwrap().len(), 2, "{d}");
+    assert!(
+        d["opened"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|o| o["busy"] == true),
+        "{d}"
+    );
+    // Each job's progress reached the pages tagged with its device.
+    let mut seen = String::new();
+    while !(seen.contains("\"device_id\":\"simulator\"")
+        && seen.contains("\"device_id\":\"simulator:2\""))
+    {
+        let mut l = String::new();
+        assert!(
+            events.read_line(&mut l).unwrap() > 0,
+            "the events ended: {seen}"
+        );
+        if l.starts_with("data:") && l.contains("\"lines_done\"") {
+            seen.push_str(&l);
+        }
+    }
+    // A stop on the first leaves the second running to its end.
+    job_until(a, 1, "reached the outlines", |j| lines_done(j) > CUT_LAYER);
+    assert_eq!(send(a, "POST", "/api/jobs/1/stop", &json!({})).status, 200);
+    let stopped = job_until(a, 1, "stopped", |j| j["state"] == "stopped");
+    assert!(
+        stopped["message"].as_str().unwrap().contains("tool off"),
+        "{stopped}"
+    );
+    let on = get(a, "/api/jobs/2").json();
+    assert!(
+        ["running", "done"].contains(&on["state"].as_str().unwrap()),
+        "the second job after the first stopped: {on}"
+    );
+    let done = job_until(a, 2, "ended", |j| {
+        ["done", "failed", "stopped"].contains(&j["state"].as_str().unwrap())
+    });
+    assert_eq!(done["state"], "done", "{done}");
+    assert_eq!(
+        done["progress"]["lines_done"],
+        done["progress"]["lines_total"]
+    );
+    // What each simulator executed.
+    for id in ["simulator:2", "simulator"] {
+        let c = send(a, "POST", "/api/devices/close", &json!({"device": id}));
+        assert_eq!(c.json()["closed"], id);
+    }
+    assert_eq!(get(a, "/api/devices").json()["opened"], json!([]));
+    assert_ran_whole_job(&app.devices.last_sim_of("simulator:2").unwrap().trace, &job);
+    let first = app.devices.last_sim_of("simulator").unwrap().trace;
+    assert_stopped_as_journal_says(&first, &job, &dir.path().join("job-1.gcode.journal"));
+    let journal2 =
+        flatcut_grbl::Journal::read(dir.path().join("job-1.gcode@simulator-2.journal")).unwrap();
+    assert!(journal2.finished);
     srv.stop().unwrap();
 }

@@ -781,19 +781,8 @@ fn only_the_binary_installs_the_signal_handler() {
     );
 }
 
-/// Import circles between the modules of a crate that stay for now, each with why: `(crate
-/// source folder, the circle's modules sorted)`. A circle not listed fails the test, and so does
-/// a listed one that is gone (take it off the list).
-const KNOWN_CIRCLES: &[(&str, &[&str], &str)] = &[
-    (
-        "crates/server/src",
-        &["app", "device_routes", "solve_routes", "task"],
-        "the routes and the task slots use the app's state and error (app::App, ApiError), and \
-         the app mounts them (the device routes ask the solve routes for the finished pattern); \
-         the state and error belong in a module below the routes",
-    ),
-];
-
+/// No crate's modules import one another in a circle: each module's imports form a DAG, so every
+/// module can be read knowing only the ones below it.
 #[test]
 fn every_crates_modules_import_without_circles() {
     let mut crates: Vec<PathBuf> = std::fs::read_dir(root().join("crates"))
@@ -810,26 +799,7 @@ fn every_crates_modules_import_without_circles() {
             found.push((krate.clone(), circle));
         }
     }
-    let known = |k: &str, c: &[String]| {
-        KNOWN_CIRCLES
-            .iter()
-            .any(|(kk, cc, _)| *kk == k && cc.iter().copied().eq(c.iter().map(String::as_str)))
-    };
-    let new: Vec<_> = found.iter().filter(|(k, c)| !known(k, c)).collect();
-    assert!(new.is_empty(), "import circles inside crates: {new:#?}");
-    let gone: Vec<_> = KNOWN_CIRCLES
-        .iter()
-        .filter(|(k, c, _)| {
-            !found
-                .iter()
-                .any(|(fk, fc)| fk == k && c.iter().copied().eq(fc.iter().map(String::as_str)))
-        })
-        .map(|(k, c, _)| (k, c))
-        .collect();
-    assert!(
-        gone.is_empty(),
-        "circles listed as known that are gone: {gone:#?}"
-    );
+    assert!(found.is_empty(), "import circles inside crates: {found:#?}");
 }
 
 /// ARCHITECTURE.md's code map: one `### <dir> — `<package>`` section per section heading.

@@ -10,8 +10,10 @@
 // on the new piece, in 3D and flat; download the pattern and compare it with `flatcut run`'s bytes
 // for the saved design; stream sheet 1's job from the device panel to the embedded simulator,
 // pause and resume it once, watch its progress events to the end, and check the simulator's
-// executed motions against the G-code's moves (each once, in order, the same end point); then
-// Ctrl-C the server during a job and check the job stopped with the tool off and its journal
+// executed motions against the G-code's moves (each once, in order, the same end point); open a
+// second device (another embedded simulator) on a tab of its own beside the first, run sheet 2
+// on it while sheet 1 runs again on the first, and check the second simulator executed sheet 2's
+// moves, each once; then Ctrl-C the server during a job and check the job stopped with the tool off and its journal
 // says so; then kill a server outright during sheet 3's job (a crash), resume from the journal
 // on a new server, see the panel refuse and name the lines in doubt (drawn over the layout
 // where the G-code moves), type a line among them, answer the origin question, and check the
@@ -416,11 +418,55 @@ try {
   const end = ran[ran.length - 1]?.to || [NaN, NaN, NaN];
   step('the simulator executed the G-code\'s moves, each once, in order', !bad && near(end, pos),
     `${k} motions executed of the G-code's ${moves.length} moves (${tiny} shorter than 0.01 mm, below a step)${bad ? `; first difference at move ${bad.at}: ran ${JSON.stringify(bad.ran)}, the G-code ${JSON.stringify(bad.want)}` : ''}; ended at ${end.map((v) => v.toFixed(3)).join(', ')} mm (the G-code: ${pos.map((v) => v.toFixed(3)).join(', ')})`);
+
+  // 5b. A second device beside the first: another embedded simulator on a tab of its own, sheet
+  // 2 streamed to it while sheet 1 runs again on the first; each tab shows its own job, and the
+  // second simulator executed sheet 2's moves, each once, in order.
+  await page.selectOption('#dev-select', 'simulator:new');
+  await page.click('#dev-connect');
+  await page.waitForSelector('#dev-tabs [data-device="simulator:2"].on', { timeout: 60000 });
+  await page.selectOption('#job-sheet', '2');
+  await page.click('#job-start');
+  await page.waitForFunction(() => { const j = window.__flatcut.lastJob; return j && j.device_id === 'simulator:2' && j.progress && j.progress.lines_done > 20; }, null, { timeout: 120000 });
+  // Held there while the first device starts, so that both run at once whatever their speed.
+  await page.click('#job-hold');
+  await page.waitForFunction(() => window.__flatcut.lastJob.state === 'held', null, { timeout: 30000 });
+  await page.click('#dev-tabs [data-device="simulator"]');
+  await page.selectOption('#job-sheet', '1');
+  await page.click('#job-start');
+  await page.waitForFunction(() => { const j = window.__flatcut.lastJob; return j && j.device_id === 'simulator' && j.state === 'running' && j.progress; }, null, { timeout: 120000 });
+  const tabs = await page.$$eval('#dev-tabs [data-device]', (bs) => bs.map((b) => ({ id: b.dataset.device, text: [...b.children].map((c) => c.textContent.trim()).join(': '), busy: b.classList.contains('busy') })));
+  await shot('device-two');
+  const twoRunning = await page.evaluate(async () => (await (await fetch('/api/devices')).json()).running.map((j) => `${j.device_id}: ${j.name} ${j.state}`));
+  await page.click('#dev-tabs [data-device="simulator:2"]');
+  await page.waitForFunction(() => window.__flatcut.lastJob?.device_id === 'simulator:2', null, { timeout: 30000 });
+  await page.click('#job-resume');
+  // Both jobs to their ends (each device's latest job, as the server lists them).
+  for (const t0 = Date.now(); ; await page.waitForTimeout(500)) {
+    const ended = await page.evaluate(async () => {
+      const r = await (await fetch('/api/jobs')).json();
+      const last = (d) => r.jobs.filter((j) => j.device_id === d).pop();
+      return ['simulator', 'simulator:2'].every((d) => ['done', 'failed', 'stopped'].includes(last(d)?.state));
+    });
+    if (ended) break;
+    if (Date.now() - t0 > 600000) throw new Error('the two jobs did not end within 10 min');
+  }
+  const [gcode2, sim2, jobs2] = await page.evaluate(async () => [
+    await (await fetch('/api/job.gcode?sheet=2')).text(),
+    await (await fetch('/api/devices/sim?device=simulator:2')).json(),
+    (await (await fetch('/api/jobs')).json()).jobs,
+  ]);
+  const second = jobs2.filter((j) => j.device_id === 'simulator:2').pop();
+  const again = jobs2.filter((j) => j.device_id === 'simulator').pop();
+  const w2 = walk(gcodeMoves(gcode2).moves, ranMotions(sim2));
+  step('a second device runs a job beside the first, each on its own tab', twoRunning.length === 2 && tabs.length === 2
+    && tabs.every((t) => t.busy) && second.state === 'done' && second.sheet === 2 && again.state === 'done' && again.sheet === 1 && !w2.bad,
+  `running at once: ${twoRunning.join(', ')}; tabs: ${tabs.map((t) => t.text).join(' | ')}; simulator 2 executed ${w2.k} motions of sheet 2's ${gcodeMoves(gcode2).moves.length} moves${w2.bad ? `; first difference at move ${w2.bad.at}` : ''}`);
   step('no script error on the page', pageErrors.length === 0, pageErrors.join('; '));
 
   // 6. Ctrl-C to the server while a job runs: the job stops with the tool off, its journal says
   // so, and the server ends cleanly.
-  await page.evaluate(() => fetch('/api/jobs', { method: 'POST', headers: { 'content-type': 'application/json' }, body: '{"sheet":2}' }));
+  await page.evaluate(() => fetch('/api/jobs', { method: 'POST', headers: { 'content-type': 'application/json' }, body: '{"sheet":2,"device":"simulator"}' }));
   await page.waitForFunction(() => { const j = window.__flatcut.lastJob; return j && j.sheet === 2 && j.progress && j.progress.lines_done > 50; }, null, { timeout: 120000 });
   const exited = new Promise((r) => server.on('exit', (c, sig) => r({ c, sig })));
   server.kill('SIGINT');
@@ -443,6 +489,8 @@ try {
     await page.waitForFunction(() => window.__flatcut && window.__flatcut.state.flat, null, { timeout: 120000 });
     await page.click('#tabs [data-tab=device]');
     await page.waitForSelector('#job-start:not([disabled])', { timeout: 60000 });
+    // The sheets are listed once the new server has nested the design.
+    await page.waitForFunction(() => document.querySelectorAll('#job-sheet option').length >= 3, null, { timeout: 300000 });
     await page.selectOption('#job-sheet', '3');
   };
   const crashed = await startServer(work);

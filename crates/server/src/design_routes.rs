@@ -14,8 +14,9 @@ use flatcut::geom::Tolerances;
 use serde::Deserialize;
 use serde_json::{Value, json};
 
-use crate::app::{ApiError, App, lock};
+use crate::app::{App, lock};
 use crate::edit;
+use crate::error::ApiError;
 
 type AppState = State<Arc<App>>;
 

@@ -1,13 +1,14 @@
 //! The device panel's routes: the devices (`GET /api/devices`; connect, close, status, unlock,
 //! home, jog, frame), the jobs (`POST /api/jobs`, `GET /api/jobs/{id}`; hold, resume, stop, the
-//! answer to a question) and what the embedded simulator executed. Each blocking call to the
-//! device runs on a blocking thread; the state lives in `devices`.
+//! answer to a question) and what the embedded simulator executed. Each names its device by id
+//! (`device` in the body, `?device=` in a `GET`'s query) or means the default one. Each blocking
+//! call to a device runs on a blocking thread; the state lives in `devices`.
 
 use std::sync::Arc;
 
 use axum::Json;
 use axum::Router;
-use axum::extract::{Path, State};
+use axum::extract::{Path, Query, State};
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
@@ -17,15 +18,19 @@ use flatcut_device::grbl::{Job, Jog};
 use serde::Deserialize;
 use serde_json::{Value, json};
 
-use crate::app::{ApiError, App};
-use crate::devices::{OpenRequest, PanelError, SIMULATOR, StartJob, Steer};
+use crate::app::App;
+use crate::device_state::PanelError;
+use crate::devices::{OpenRequest, StartJob, Steer, project_id};
+use crate::error::ApiError;
 
 type AppState = State<Arc<App>>;
 
 impl From<PanelError> for ApiError {
     fn from(e: PanelError) -> ApiError {
         let status = match &e {
-            PanelError::Busy(_) | PanelError::NotOpen => StatusCode::CONFLICT,
+            PanelError::Busy(_) | PanelError::NotOpen | PanelError::NotOpenId(_) => {
+                StatusCode::CONFLICT
+            }
             PanelError::Bad(_) => StatusCode::BAD_REQUEST,
             PanelError::NoJob(_) => StatusCode::NOT_FOUND,
             PanelError::Device(d) => match d {
@@ -96,7 +101,7 @@ async fn devices(State(app): AppState) -> Result<Json<Value>, ApiError> {
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct ConnectBody {
-    /// `simulator` or a serial port (default: the project's device).
+    /// `simulator`, `simulator:<name>` or a serial port (default: the project's device).
     device: Option<String>,
     baud: Option<u32>,
     speed: Option<f64>,
@@ -108,16 +113,7 @@ struct ConnectBody {
 async fn connect(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
     let b: ConnectBody = body(&raw)?;
     let project_device = app.bench().opened.project.device.clone();
-    let device = b.device.unwrap_or_else(|| {
-        if project_device.is_simulator() {
-            SIMULATOR.to_string()
-        } else {
-            project_device
-                .port
-                .clone()
-                .unwrap_or_else(|| SIMULATOR.into())
-        }
-    });
+    let device = b.device.unwrap_or_else(|| project_id(&project_device));
     let req = OpenRequest {
         device,
         baud: b.baud.or(project_device.baud),
@@ -129,18 +125,40 @@ async fn connect(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Va
     blocking(move || Ok(Json(a.devices.connect(&req, &profile)?))).await
 }
 
-/// `POST /api/devices/close`: closes the device (a running job stops, tool off); for the
-/// simulator, what it executed.
-async fn close(State(app): AppState, _b: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
-    let a = app.clone();
-    blocking(move || Ok(Json(a.devices.close().unwrap_or(json!({ "closed": null }))))).await
+/// A body that names a device, or none (the default device).
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct DeviceBody {
+    device: Option<String>,
 }
 
-/// `GET /api/devices/status`: the controller's state and position now.
-async fn status(State(app): AppState) -> Result<Json<Value>, ApiError> {
+/// `?device=ID` (none: the default device).
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct DeviceQuery {
+    device: Option<String>,
+}
+
+/// `POST /api/devices/close` `{device}`: closes the device (a running job stops, tool off); for
+/// a simulator, what it executed. With no device open (and none named), `{closed: null}`.
+async fn close(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
+    let b: DeviceBody = body(&raw)?;
+    let a = app.clone();
+    blocking(move || match a.devices.close(b.device.as_deref()) {
+        Err(PanelError::NotOpen) => Ok(Json(json!({ "closed": null }))),
+        r => Ok(Json(r?)),
+    })
+    .await
+}
+
+/// `GET /api/devices/status[?device=ID]`: the controller's state and position now.
+async fn status(
+    State(app): AppState,
+    Query(q): Query<DeviceQuery>,
+) -> Result<Json<Value>, ApiError> {
     let a = app.clone();
     blocking(move || {
-        let s = a.devices.with_device(|d| d.status())?;
+        let s = a.devices.with_device(q.device.as_deref(), |d| d.status())?;
         Ok(Json(json!({
             "state": s.map(|s| s.state.name()),
             "work": s.and_then(|s| s.work),
@@ -150,37 +168,42 @@ async fn status(State(app): AppState) -> Result<Json<Value>, ApiError> {
     .await
 }
 
-/// `GET /api/devices/sim`: what the open embedded simulator executed so far.
-async fn sim(State(app): AppState) -> Result<Json<Value>, ApiError> {
+/// `GET /api/devices/sim[?device=ID]`: what an open embedded simulator executed so far.
+async fn sim(State(app): AppState, Query(q): Query<DeviceQuery>) -> Result<Json<Value>, ApiError> {
     let a = app.clone();
-    blocking(move || Ok(Json(a.devices.sim()?))).await
+    blocking(move || Ok(Json(a.devices.sim(q.device.as_deref())?))).await
 }
 
-/// A command between jobs, answered `{ok: true}`.
+/// A command between jobs to device `device` (the default one when `None`), answered
+/// `{ok: true}`.
 async fn command(
     app: Arc<App>,
+    device: Option<String>,
     f: impl FnOnce(&flatcut_device::Device) -> Result<(), DeviceError> + Send + 'static,
 ) -> Result<Json<Value>, ApiError> {
     blocking(move || {
-        app.devices.with_device(f)?;
+        app.devices.with_device(device.as_deref(), f)?;
         Ok(Json(json!({ "ok": true })))
     })
     .await
 }
 
-/// `POST /api/devices/unlock` (`$X`).
-async fn unlock(State(app): AppState, _b: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
-    command(app, |d| d.unlock()).await
+/// `POST /api/devices/unlock` `{device}` (`$X`).
+async fn unlock(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
+    let b: DeviceBody = body(&raw)?;
+    command(app, b.device, |d| d.unlock()).await
 }
 
-/// `POST /api/devices/home` (`$H`).
-async fn home(State(app): AppState, _b: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
-    command(app, |d| d.home()).await
+/// `POST /api/devices/home` `{device}` (`$H`).
+async fn home(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
+    let b: DeviceBody = body(&raw)?;
+    command(app, b.device, |d| d.home()).await
 }
 
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct JogBody {
+    device: Option<String>,
     /// mm per axis.
     by: [f64; 3],
     /// mm/min.
@@ -195,7 +218,7 @@ async fn jog(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Value>
             "a jog needs finite distances `by` (mm) and a feed > 0 (mm/min)",
         ));
     }
-    command(app, move |d| {
+    command(app, b.device, move |d| {
         d.jog(Jog {
             by: b.by,
             feed: b.feed,
@@ -204,14 +227,17 @@ async fn jog(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Value>
     .await
 }
 
-/// `POST /api/devices/jog/cancel`.
-async fn jog_cancel(State(app): AppState, _b: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
-    command(app, |d| d.jog_cancel()).await
+/// `POST /api/devices/jog/cancel` `{device}`.
+async fn jog_cancel(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
+    let b: DeviceBody = body(&raw)?;
+    command(app, b.device, |d| d.jog_cancel()).await
 }
 
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct SheetBody {
+    /// The device's id (none: the default device, else the project's).
+    device: Option<String>,
     sheet: Option<usize>,
     /// Frame feed, mm/min.
     feed: Option<f64>,
@@ -250,7 +276,7 @@ async fn sheet_job(app: &Arc<App>, n: usize) -> Result<(String, String, u64), Ap
     Ok((name, text, f.revision))
 }
 
-/// `POST /api/devices/frame` `{sheet, feed}`: traces the rectangle the sheet's job cuts in,
+/// `POST /api/devices/frame` `{device, sheet, feed}`: traces the rectangle the sheet's job cuts in,
 /// tool off.
 async fn frame(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
     let b: SheetBody = body(&raw)?;
@@ -265,18 +291,22 @@ async fn frame(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Valu
     if !(feed.is_finite() && feed > 0.0) {
         return Err(ApiError::bad("the frame's feed must be > 0 mm/min"));
     }
-    command(app, move |d| d.frame([lo[0], lo[1]], [hi[0], hi[1]], feed)).await
+    command(app, b.device, move |d| {
+        d.frame([lo[0], lo[1]], [hi[0], hi[1]], feed)
+    })
+    .await
 }
 
-/// `POST /api/jobs` `{sheet, resume, unlock, resume_from}`: streams the sheet's `job-N.gcode` to
-/// the device open (by default the project's device, the embedded simulator as its machine),
+/// `POST /api/jobs` `{device, sheet, resume, unlock, resume_from}`: streams the sheet's
+/// `job-N.gcode` to the device named, or the default device open, or the project's device (the
+/// embedded simulator as its machine by default),
 /// from its journal with `resume`, from line `resume_from` of the file with it; 201 with the
 /// job, 409 while another job runs, 400 for a `resume_from` after which nothing is sent.
 async fn start_job(State(app): AppState, raw: axum::body::Bytes) -> Result<Response, ApiError> {
     let b: SheetBody = body(&raw)?;
     let n = b.sheet.unwrap_or(1);
     let (name, gcode, revision) = sheet_job(&app, n).await?;
-    let (project_device, journal) = {
+    let (project_device, dir) = {
         let bench = app.bench();
         let dir = bench
             .opened
@@ -284,10 +314,7 @@ async fn start_job(State(app): AppState, raw: axum::body::Bytes) -> Result<Respo
             .parent()
             .map(std::path::Path::to_path_buf)
             .unwrap_or_default();
-        (
-            bench.opened.project.device.clone(),
-            dir.join(format!("{name}.journal")),
-        )
+        (bench.opened.project.device.clone(), dir)
     };
     let profile = profile(&app)?;
     let job = StartJob {
@@ -295,10 +322,11 @@ async fn start_job(State(app): AppState, raw: axum::body::Bytes) -> Result<Respo
         sheet: n,
         revision,
         gcode,
-        journal,
+        dir,
         resume: b.resume,
         unlock: b.unlock,
         resume_from: b.resume_from,
+        device: b.device,
     };
     let a = app.clone();
     let view = blocking(move || Ok(a.devices.start(job, &project_device, &profile)?)).await?;

@@ -1,10 +1,12 @@
 //! The device panel's JSON: a job's progress (lines, path, wall-clock ETA, live work position),
 //! the sender's report, the controller, a status report, a question, and what the embedded
-//! simulator executed — the keys `API.md` documents for `/api/devices`, `/api/jobs` and the
+//! simulator executed, the lines a refused resume leaves in doubt — the keys `API.md` documents for `/api/devices`, `/api/jobs` and the
 //! `device` and `job` events.
 
 use flatcut_device::Asked;
-use flatcut_device::grbl::{ControllerInfo, MachineState, MachineStatus, Progress, SendReport};
+use flatcut_device::grbl::{
+    ControllerInfo, Job, MachineState, MachineStatus, Progress, SendError, SendReport,
+};
 use flatcut_device::sim::SimReport;
 use serde_json::{Value as Json, json};
 
@@ -88,4 +90,100 @@ pub fn sim_view(r: &SimReport) -> Json {
         "bytes_dropped_overflow": r.stats.bytes_dropped_overflow,
         "sim_time_s": r.sim_time,
     })
+}
+
+/// The lines a stopped or refused job leaves to the operator's word, as the page shows them:
+/// `{from, to, reason, lines}` (1-based lines of the file) when the sender cannot tell which of
+/// them ran (a resume whose journal and machine cannot settle it, a line damaged on the link).
+/// `lines` are those lines as sent, each with where it moves the tool (work mm: its start and
+/// end, an arc's chord points between) and whether the tool cuts, so the page can show them over
+/// the layout while the operator looks at the work; the page then asks for the line to continue
+/// from (`resume_from`).
+pub fn doubt_view(e: &SendError, job: &Job) -> Option<Json> {
+    let (from, to, reason) = match e {
+        SendError::ResumeUncertain { from, to, reason } => (from, to, reason.clone()),
+        SendError::OffPath(off) => (
+            &off.from,
+            &off.to,
+            "the machine left the job's path: a line was probably damaged on the link".into(),
+        ),
+        _ => return None,
+    };
+    let lines: Vec<Json> = (from.index..=to.index.min(from.index + MAX_DOUBT_LINES - 1))
+        .filter_map(|i| job.lines.get(i).map(|l| (i, l)))
+        .map(|(i, l)| {
+            let path: Vec<[f64; 3]> = match (l.moves && l.length > 0.0, l.arc.is_empty()) {
+                (false, _) => Vec::new(),
+                (true, true) => vec![job.start_of(i), job.end_of(i)],
+                (true, false) => l.arc.clone(),
+            };
+            json!({ "line": l.source_line, "text": l.text, "cuts": l.tool_on, "path": path })
+        })
+        .collect();
+    Some(json!({
+        "from": from.source_line,
+        "to": to.source_line,
+        "reason": reason,
+        "lines": lines,
+    }))
+}
+
+/// Most lines in doubt the view lists (a damaged line's doubt spans what the controller's buffer
+/// held: tens of lines).
+const MAX_DOUBT_LINES: usize = 1000;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flatcut_device::grbl::driver::LineRef;
+
+    fn line(job: &Job, index: usize) -> LineRef {
+        LineRef {
+            index,
+            source_line: job.lines[index].source_line,
+            text: job.lines[index].text.clone(),
+        }
+    }
+
+    #[test]
+    fn a_refused_resume_names_the_lines_in_doubt_by_the_files_numbers_and_where_they_move() {
+        let job = Job::parse(
+            "G21 G90\n(the square)\nG0 X10 Y0\nM3 S1000\nG1 X20 F600\nG2 X30 Y10 I0 J10\nM5\n",
+        )
+        .unwrap();
+        let e = SendError::ResumeUncertain {
+            from: line(&job, 1),
+            to: line(&job, 4),
+            reason: "the path passes the machine's position 2 times".into(),
+        };
+        let d = doubt_view(&e, &job).expect("lines in doubt");
+        assert_eq!((d["from"].as_u64(), d["to"].as_u64()), (Some(3), Some(6)));
+        assert!(d["reason"].as_str().unwrap().contains("2 times"));
+        let lines = d["lines"].as_array().unwrap();
+        let numbers: Vec<u64> = lines.iter().map(|l| l["line"].as_u64().unwrap()).collect();
+        assert_eq!(numbers, [3, 4, 5, 6]);
+        // The rapid to (10, 0) does not cut; the spindle line moves nothing; the feed cuts along
+        // X; the arc's chords run from (20, 0) to (30, 10) about its centre (20, 10).
+        assert_eq!(lines[0]["path"], json!([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0]]));
+        assert_eq!(lines[0]["cuts"], false);
+        assert_eq!(lines[1]["path"], json!([]));
+        assert_eq!(
+            lines[2]["path"],
+            json!([[10.0, 0.0, 0.0], [20.0, 0.0, 0.0]])
+        );
+        assert_eq!(lines[2]["cuts"], true);
+        let arc = lines[3]["path"].as_array().unwrap();
+        assert!(arc.len() > 2, "{arc:?}");
+        let xy = |p: &Json| (p[0].as_f64().unwrap(), p[1].as_f64().unwrap());
+        // GRBL splits arcs in single precision: the chords' ends are on the circle to 1e-3 mm.
+        for p in arc {
+            let (x, y) = xy(p);
+            assert!(((x - 20.0).hypot(y - 10.0) - 10.0).abs() < 1e-3, "{p}");
+        }
+        let ((x0, y0), (x1, y1)) = (xy(&arc[0]), xy(&arc[arc.len() - 1]));
+        assert!((x0 - 20.0).hypot(y0) < 1e-3 && (x1 - 30.0).hypot(y1 - 10.0) < 1e-3);
+        // A stop whose lines all are known needs no line from the operator.
+        let stop = SendError::Aborted { last_done: None };
+        assert!(doubt_view(&stop, &job).is_none());
+    }
 }

@@ -16,22 +16,29 @@
 //! Module map: `opened` (what was opened), `document` (the TOML edited in place), `bench` (the
 //! design state: undo, redo, save), `edit` (lines and regions as tree edits), `views` (the
 //! JSON the page draws), `task` (per-revision computations), `events` (server-sent events),
-//! `guard` (host, token), `assets` (the page), `app` (state and routes), `design_routes`,
-//! `solve_routes`, `device_routes` (the handlers), `devices` (the device panel's state: the
-//! device open, its jobs, its events), `device_views` (their JSON).
+//! `guard` (host, token), `assets` (the page), `error` (errors as responses), `app` (the shared
+//! state), `routes` (the router), `design_routes`, `solve_routes`, `device_routes` (the
+//! handlers), `device_state` (the device panel's state: the devices open, their jobs),
+//! `devices` (what the pages ask of them), `device_watch` (each device's events and each job's
+//! end turned into that state and the pages' events),
+//! `device_views` (their JSON).
 
 pub mod app;
 pub mod assets;
 pub mod bench;
 pub mod design_routes;
 pub mod device_routes;
+pub mod device_state;
 pub mod device_views;
+pub mod device_watch;
 pub mod devices;
 pub mod document;
 pub mod edit;
+pub mod error;
 pub mod events;
 pub mod guard;
 pub mod opened;
+pub mod routes;
 pub mod solve_routes;
 pub mod task;
 pub mod views;
@@ -158,7 +165,7 @@ impl Server {
             None => format!("http://{host}:{port}/"),
         };
         let app = Arc::new(App::new(bench));
-        let router = app::router(app.clone(), guard);
+        let router = routes::router(app.clone(), guard);
         Ok(Server {
             listeners,
             router,
@@ -184,7 +191,7 @@ impl Server {
             // A running job stops with the tool off and its journal written before the
             // server ends.
             let closing = app.clone();
-            let _ = tokio::task::spawn_blocking(move || closing.devices.close()).await;
+            let _ = tokio::task::spawn_blocking(move || closing.devices.close_all()).await;
             let _ = stop_tx.send(true);
         });
         let mut servers = Vec::new();

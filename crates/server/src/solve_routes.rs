@@ -20,7 +20,8 @@ use flatcut::run::{Event, RunError};
 use serde::Deserialize;
 use serde_json::json;
 
-use crate::app::{ApiError, App, Finished, Flattened, lock};
+use crate::app::{App, Finished, Flattened, lock};
+use crate::error::ApiError;
 use crate::events::Events;
 use crate::task;
 

@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use tokio::sync::watch;
 
-use crate::app::ApiError;
+use crate::error::ApiError;
 
 type Outcome<T> = Option<Result<Arc<T>, ApiError>>;
 

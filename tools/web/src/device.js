@@ -1,14 +1,19 @@
 // The device panel: the devices (serial ports and the embedded simulator, the project's own
-// first), connect, unlock, home, jog and frame; a sheet's job started, paused, resumed and
-// stopped, with its progress, ETA and the live position drawn over the sheet's layout; the
-// sender's questions (a resume whose machine position is unknown, an edited job) asked here, and
-// the line to continue from when a resume cannot tell which lines ran (those lines drawn over the
-// layout).
-// Every page follows the same device and job through the `device` and `job` events.
+// first, and more embedded simulators), several open at once, each on a tab of its own with its
+// state and its job's progress; connect, unlock, home, jog and frame the device of the tab shown;
+// a sheet's job started on it, paused, resumed and stopped, with its progress, ETA and the live
+// position drawn over the sheet's layout; the sender's questions (a resume whose machine position
+// is unknown, an edited job) asked here, and the line to continue from when a resume cannot tell
+// which lines ran (those lines drawn over the layout).
+// Every page follows the same devices and jobs through the `device` and `job` events (each names
+// its device).
 
 const esc = (s) => String(s).replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' }[c]));
 const mm = (p) => (p ? `X ${p[0].toFixed(2)}  Y ${p[1].toFixed(2)}  Z ${p[2].toFixed(2)}` : '–');
 const SVG = 'http://www.w3.org/2000/svg';
+const ENDED = ['done', 'failed', 'stopped'];
+/** How the panel names a device: the embedded simulator, another one, or the port's path. */
+const label = (id) => (id === 'simulator' ? 'embedded simulator' : id.startsWith('simulator:') ? `simulator ${id.slice(10)}` : id);
 
 function secs(s) {
   if (s == null) return '–';
@@ -16,10 +21,12 @@ function secs(s) {
   return m ? `${m} min ${Math.round(s - 60 * m)} s` : `${s.toFixed(1)} s`;
 }
 
-/** The panel in `el`; `hooks` (the page's script hooks) get `onDevice`, `onJob` and `lastJob`. */
+/** The panel in `el`; `hooks` (the page's script hooks) get `onDevice`, `onJob`, `lastJob` (the
+ * job of the device shown) and `shownDevice`. */
 export async function devicePanel(el, api, hooks) {
-  el.innerHTML = `<h3>Device</h3>
-    <div class="row"><select id="dev-select" aria-label="device"></select>
+  el.innerHTML = `<h3>Devices</h3>
+    <div id="dev-tabs" class="dev-tabs" role="tablist" aria-label="devices open"></div>
+    <div class="row"><select id="dev-select" aria-label="device to open"></select>
       <label title="Time scale of the embedded simulator (1: real time)">speed <input id="dev-speed" type="number" min="0.1" max="1000" step="any" value="50" style="width:5em"></label>
       <button id="dev-connect">Connect</button><button id="dev-close">Disconnect</button></div>
     <p id="dev-state" class="dev-pos">not connected</p>
@@ -39,9 +46,9 @@ export async function devicePanel(el, api, hooks) {
     <div id="job-notices"></div>
     <div id="job-view" class="drawing job-view"></div>`;
   const $ = (id) => el.querySelector(`#${id}`);
-  let info;
+  let info, all;
   try {
-    info = await api('GET', '/api/devices');
+    [info, all] = await Promise.all([api('GET', '/api/devices'), api('GET', '/api/jobs')]);
   } catch (e) {
     $('dev-state').textContent = e.message;
     return;
@@ -51,10 +58,9 @@ export async function devicePanel(el, api, hooks) {
   const order = [info.project_device, ...ids.filter((i) => i !== info.project_device)];
   sel.innerHTML = order.filter((id) => ids.includes(id)).map((id) => {
     const d = info.devices.find((x) => x.id === id);
-    const label = d.kind === 'simulator' ? 'embedded simulator (GRBL 1.1h)' : `${d.id} (${d.description})`;
-    return `<option value="${esc(d.id)}">${esc(label)}${id === info.project_device ? ' · the project\'s' : ''}</option>`;
-  }).join('');
-  if (info.open.open) sel.value = info.open.id;
+    const text = d.kind === 'simulator' ? `${label(d.id)} (GRBL 1.1h)` : `${d.id} (${d.description})`;
+    return `<option value="${esc(d.id)}">${esc(text)}${id === info.project_device ? ' · the project\'s' : ''}</option>`;
+  }).join('') + '<option value="simulator:new">another embedded simulator</option>';
 
   let sheets = 1;
   try { sheets = Math.max(1, (await api('GET', '/api/summary.json')).sheets); } catch { /* the run's error shows on start */ }
@@ -104,22 +110,66 @@ export async function devicePanel(el, api, hooks) {
     if (r.width && (r.left < b.left || r.right > b.right)) box.scrollLeft += (r.left + r.right) / 2 - (b.left + b.right) / 2;
   }
 
-  let job = info.job;
-  let device = info.open;
-  const busy = () => job && !['done', 'failed', 'stopped'].includes(job.state);
+  // Every device open (by id), the latest job of each device, and the device shown.
+  const devices = new Map(info.opened.map((d) => [d.id, d]));
+  const jobs = new Map();
+  for (const j of all.jobs) jobs.set(j.device_id, j);
+  let shown = info.default || (info.opened[0] && info.opened[0].id) || null;
+  let closedNote = '';
+  let job = shown ? jobs.get(shown) || null : null;
+  let device = shown ? devices.get(shown) : null;
+  const busy = () => job && !ENDED.includes(job.state);
+
+  /** One tab per device open: its name, and its job's state and progress. */
+  function drawTabs() {
+    const tabs = $('dev-tabs');
+    if (!devices.size) { tabs.innerHTML = '<span class="muted">no device open</span>'; return; }
+    tabs.innerHTML = [...devices.keys()].map((id) => {
+      const j = jobs.get(id);
+      const run = j && !ENDED.includes(j.state);
+      const what = j ? `${j.state}${run && j.progress ? ` ${(100 * j.progress.fraction).toFixed(0)} %` : ''} · ${esc(j.name)}` : 'idle';
+      return `<button role="tab" data-device="${esc(id)}" class="${id === shown ? 'on' : ''}${run ? ' busy' : ''}" aria-selected="${id === shown}">
+        <strong>${esc(label(id))}</strong><span class="muted">${what}</span></button>`;
+    }).join('');
+    for (const b of tabs.querySelectorAll('[data-device]')) b.addEventListener('click', () => show(b.dataset.device));
+  }
+
+  /** Shows device `id`'s tab: its state, its job, its position over its job's layout. */
+  async function show(id) {
+    shown = id;
+    hooks.shownDevice = id;
+    device = devices.get(id) || null;
+    job = jobs.get(id) || null;
+    drawTabs();
+    drawDevice();
+    if (job) { await showSheet(job.sheet); drawJob(); } else { hooks.lastJob = null; noJob(); }
+  }
+
+  function noJob() {
+    $('job-start').disabled = false;
+    $('job-hold').disabled = $('job-resume').disabled = $('job-stop').disabled = true;
+    $('job-progress').value = 0;
+    $('job-text').innerHTML = '<span class="muted">no job on this device</span>';
+    $('job-question').hidden = true;
+    $('job-notices').innerHTML = '';
+    drawDoubt({ id: null });
+    if (view.dot) view.dot.setAttribute('visibility', 'hidden');
+  }
 
   function drawDevice() {
     const d = device;
     const open = d && d.open;
-    const st = open && d.status;
+    // While a job runs its progress says where the machine is; between jobs, the status reports.
+    const p = busy() && job.progress;
+    const st = open && (p ? { state: p.machine_state, work: p.position } : d.status);
     $('dev-state').textContent = open
-      ? `${d.description}${d.controller ? `, GRBL ${d.controller.version}` : ''} · ${st ? `${st.state} · ${mm(st.work)}` : 'connected'}`
-      : (d && d.message) || 'not connected';
+      ? `${label(d.id)}: ${d.description}${d.controller ? `, GRBL ${d.controller.version}` : ''} · ${st && st.state ? `${st.state} · ${mm(st.work)}` : 'connected'}`
+      : closedNote || 'not connected';
     $('dev-close').disabled = !open;
     for (const id of ['dev-unlock', 'dev-home', 'dev-frame']) $(id).disabled = !open || busy();
     for (const b of el.querySelectorAll('[data-jog]')) b.disabled = !open || busy();
-    $('dev-speed').disabled = sel.value !== 'simulator';
-    if (st && !busy() && st.work) mark(st.work);
+    $('dev-speed').disabled = !sel.value.startsWith('simulator');
+    if (st && !p && st.work) mark(st.work);
   }
 
   function drawJob() {
@@ -169,7 +219,7 @@ export async function devicePanel(el, api, hooks) {
   function drawDoubt(j) {
     const box = $('job-doubt');
     const d = j.in_doubt;
-    if (!d || busy()) {
+    if (!d || busy() || !j.id) {
       box.hidden = true;
       box.innerHTML = '';
       delete box.dataset.job;
@@ -197,8 +247,8 @@ export async function devicePanel(el, api, hooks) {
         return;
       }
       $('job-text').textContent = `resuming from line ${line}…`;
-      const r = await act('POST', '/api/jobs', { sheet: j.sheet, resume_from: line });
-      if (r && (!job || r.id >= job.id)) { job = r; drawJob(); }
+      const r = await act('POST', '/api/jobs', { sheet: j.sheet, resume_from: line, device: j.device_id });
+      if (r) took(r);
     });
   }
 
@@ -255,50 +305,88 @@ export async function devicePanel(el, api, hooks) {
     }
   }
 
-  hooks.onDevice = (d) => {
-    if (d.event === 'restarted') { $('job-notices').insertAdjacentHTML('beforeend', `<p class="over">${esc(d.message)}</p>`); return; }
-    device = d;
-    drawDevice();
-  };
-  hooks.onJob = (j) => {
-    if (job && j.id < job.id) return;
+  /** A device's state: its tab, and the panel when it is the one shown. */
+  function tookDevice(d) {
+    if (d.open) {
+      const first = !devices.has(d.id);
+      devices.set(d.id, d);
+      if (first && (!shown || !devices.has(shown))) { show(d.id); return; }
+    } else if (d.id != null) {
+      devices.delete(d.id);
+      if (d.id === shown) {
+        closedNote = d.message ? `${label(d.id)} closed: ${d.message}` : `${label(d.id)} closed`;
+        device = null;
+        const next = [...devices.keys()].pop();
+        if (next) { show(next); return; }
+      }
+    }
+    drawTabs();
+    if (d.id === shown) { device = d.open ? d : null; drawDevice(); }
+  }
+
+  /** A job's state: the latest of its device's, drawn when its device is shown. */
+  function took(j) {
+    const had = jobs.get(j.device_id);
+    if (had && j.id < had.id) return;
+    jobs.set(j.device_id, j);
+    drawTabs();
+    if (j.device_id !== shown) return;
     if (!job || j.id !== job.id) showSheet(j.sheet);
     job = j;
     drawJob();
-  };
+  }
 
-  const connectBody = () => ({ device: sel.value, ...(sel.value === 'simulator' ? { speed: Number($('dev-speed').value) || 50 } : {}) });
+  hooks.onDevice = (d) => {
+    if (d.event === 'restarted') {
+      if (d.id === shown) $('job-notices').insertAdjacentHTML('beforeend', `<p class="over">${esc(d.message)}</p>`);
+      return;
+    }
+    tookDevice(d);
+  };
+  hooks.onJob = took;
+
+  /** What to open: the device chosen, or another embedded simulator under the next free name. */
+  function chosen() {
+    if (sel.value !== 'simulator:new') return sel.value;
+    let n = 2;
+    while (devices.has(`simulator:${n}`)) n++;
+    return `simulator:${n}`;
+  }
+  const connectBody = (id) => ({ device: id, ...(id.startsWith('simulator') ? { speed: Number($('dev-speed').value) || 50 } : {}) });
   $('dev-connect').addEventListener('click', async () => {
     $('dev-state').textContent = 'connecting…';
-    const d = await act('POST', '/api/devices/connect', connectBody());
-    if (d) { device = d; drawDevice(); }
+    const id = chosen();
+    const d = await act('POST', '/api/devices/connect', connectBody(id));
+    if (d) { devices.set(d.id, d); await show(d.id); }
   });
-  $('dev-close').addEventListener('click', () => act('POST', '/api/devices/close'));
-  $('dev-unlock').addEventListener('click', () => act('POST', '/api/devices/unlock'));
-  $('dev-home').addEventListener('click', () => act('POST', '/api/devices/home'));
-  $('dev-frame').addEventListener('click', () => act('POST', '/api/devices/frame', { sheet: Number($('job-sheet').value) }));
+  const on = (extra = {}) => ({ device: shown, ...extra });
+  $('dev-close').addEventListener('click', () => shown && act('POST', '/api/devices/close', on()));
+  $('dev-unlock').addEventListener('click', () => act('POST', '/api/devices/unlock', on()));
+  $('dev-home').addEventListener('click', () => act('POST', '/api/devices/home', on()));
+  $('dev-frame').addEventListener('click', () => act('POST', '/api/devices/frame', on({ sheet: Number($('job-sheet').value) })));
   for (const b of el.querySelectorAll('[data-jog]')) {
     b.addEventListener('click', () => {
       const step = Number($('jog-step').value);
       const by = [0, 0, 0];
       by['XYZ'.indexOf(b.dataset.jog[0])] = b.dataset.jog[1] === '+' ? step : -step;
-      act('POST', '/api/devices/jog', { by, feed: b.dataset.jog[0] === 'Z' ? 300 : 2000 });
+      act('POST', '/api/devices/jog', on({ by, feed: b.dataset.jog[0] === 'Z' ? 300 : 2000 }));
     });
   }
   $('job-sheet').addEventListener('change', () => showSheet(Number($('job-sheet').value)));
   $('job-start').addEventListener('click', async () => {
     const sheet = Number($('job-sheet').value);
     await showSheet(sheet);
-    // Opening the simulator at the speed asked for, unless a device is open.
+    // Opening the device chosen (the simulator at the speed asked for), unless one is shown.
     if (!(device && device.open)) {
       $('job-text').textContent = 'connecting…';
-      const d = await act('POST', '/api/devices/connect', connectBody());
+      const d = await act('POST', '/api/devices/connect', connectBody(chosen()));
       if (!d) return;
-      device = d;
+      devices.set(d.id, d);
+      await show(d.id);
     }
     $('job-text').textContent = 'preparing the job…';
-    const j = await act('POST', '/api/jobs', { sheet, resume: $('job-resume-journal').checked });
-    if (j && (!job || j.id >= job.id)) { job = j; drawJob(); }
+    const j = await act('POST', '/api/jobs', on({ sheet, resume: $('job-resume-journal').checked }));
+    if (j) took(j);
   });
   $('job-hold').addEventListener('click', () => job && act('POST', `/api/jobs/${job.id}/hold`));
   $('job-resume').addEventListener('click', () => job && act('POST', `/api/jobs/${job.id}/resume`));
@@ -306,6 +394,5 @@ export async function devicePanel(el, api, hooks) {
   sel.addEventListener('change', drawDevice);
 
   await showSheet(job ? job.sheet : 1);
-  drawDevice();
-  if (job) drawJob(); else { hooks.lastJob = null; $('job-hold').disabled = $('job-resume').disabled = $('job-stop').disabled = true; }
+  if (shown) await show(shown); else { drawTabs(); drawDevice(); hooks.lastJob = null; noJob(); }
 }

@@ -55,7 +55,7 @@ function detail(p) {
   const warn = p.warnings.length ? `<h3>Notes</h3>${p.warnings.map((w) => `<p class="muted">${esc(w)}</p>`).join('')}` : '';
   return `<h3>${esc(p.name)}</h3>
     <p>${p.faces} faces, area ${p.area_3d_mm2.toFixed(0)} mm² on the form, ${p.area_2d_mm2.toFixed(0)} mm² flat; δ2 mean ${p.delta2_mean.toFixed(4)}; cut ${p.quantity}${p.mirrored ? ` + ${p.mirrored} mirrored` : ''}.</p>
-    <label class="row"><input type="checkbox" id="darts-auto" ${p.darts_auto ? 'checked' : ''}> cut darts where it exceeds the limits (<code>darts = "auto"</code>; not for a piece sewn to others)</label>
+    <label class="check"><input type="checkbox" id="darts-auto" ${p.darts_auto ? 'checked' : ''}><span>cut darts where it exceeds the limits (<code>darts = "auto"</code>; not for a piece sewn to others)</span></label>
     ${grain}${regions}${darts}${warn}`;
 }
 

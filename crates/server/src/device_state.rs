@@ -1,0 +1,234 @@
+//! The device panel's shared state: the devices open (by id) with their link, controller, status
+//! and job slot, the jobs with their live state, the default device, what closed simulators
+//! executed; behind one lock, with the events every page hears. `devices` changes it on the
+//! pages' requests, `device_watch` on the devices' events.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use flatcut_device::grbl::{CancelToken, Job};
+use flatcut_device::sim::SimReport;
+use flatcut_device::{Asked, Device, DeviceError};
+use serde_json::{Value as Json, json};
+
+use crate::device_views::question_view;
+use crate::events::Events;
+
+/// What a job is doing, as the page shows it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JobState {
+    Running,
+    /// Feed hold asked for by the operator.
+    Held,
+    /// The job paused itself (`M0`) and waits.
+    Paused,
+    /// A question waits for the operator's answer.
+    Asking,
+    Done,
+    Failed,
+    /// Stopped by the operator (or the server stopping): tool off, journal written.
+    Stopped,
+}
+
+impl JobState {
+    pub fn name(self) -> &'static str {
+        match self {
+            JobState::Running => "running",
+            JobState::Held => "held",
+            JobState::Paused => "paused",
+            JobState::Asking => "asking",
+            JobState::Done => "done",
+            JobState::Failed => "failed",
+            JobState::Stopped => "stopped",
+        }
+    }
+
+    pub fn ended(self) -> bool {
+        matches!(self, JobState::Done | JobState::Failed | JobState::Stopped)
+    }
+}
+
+/// One job streamed from the workbench.
+pub struct JobRecord {
+    pub id: u64,
+    /// Its file name as `flatcut run` writes it (`job-1.gcode`).
+    pub name: String,
+    pub sheet: usize,
+    /// The design revision its G-code was made from.
+    pub revision: u64,
+    /// How messages name its device (`the embedded simulator (…)`, `/dev/ttyUSB0 at 115200 baud`).
+    pub device: String,
+    /// Its device's id (`simulator`, a port's path).
+    pub device_id: String,
+    pub journal: PathBuf,
+    pub resume: bool,
+    /// The line of the file the operator resumed from (1-based).
+    pub resume_from: Option<usize>,
+    pub state: JobState,
+    pub progress: Option<Json>,
+    pub notices: Vec<String>,
+    pub question: Option<Asked>,
+    pub message: String,
+    pub report: Option<Json>,
+    /// The lines a refused resume could not tell ran or not: the page
+    /// asks for the line to continue from.
+    pub in_doubt: Option<Json>,
+    /// The job as parsed (what the lines in doubt are, and where).
+    pub(crate) job: Arc<Job>,
+    /// Wall-clock seconds per second of machine time (for the ETA), `None`: instant motion.
+    pub(crate) wall_per_machine_s: Option<f64>,
+    pub(crate) control: CancelToken,
+    pub(crate) stop_asked: bool,
+}
+
+impl JobRecord {
+    /// The job as `GET /api/jobs/{id}` and the `job` event give it.
+    pub fn view(&self) -> Json {
+        json!({
+            "id": self.id,
+            "name": self.name,
+            "sheet": self.sheet,
+            "revision": self.revision,
+            "device": self.device,
+            "device_id": self.device_id,
+            "journal": self.journal.display().to_string(),
+            "resume": self.resume,
+            "resume_from": self.resume_from,
+            "state": self.state.name(),
+            "progress": self.progress,
+            "notices": self.notices,
+            "question": self.question.as_ref().map(question_view),
+            "message": self.message,
+            "report": self.report,
+            "in_doubt": self.in_doubt,
+        })
+    }
+}
+
+/// One device open.
+pub(crate) struct OpenDevice {
+    /// Its id: `simulator`, `simulator:<name>` or the port's path.
+    pub(crate) id: String,
+    /// Which opening this is (its watcher's events belong to it).
+    pub(crate) generation: u64,
+    pub(crate) device: Arc<Device>,
+    pub(crate) controller: Option<Json>,
+    pub(crate) status: Option<Json>,
+    /// The simulator's time scale (`None` on a port).
+    pub(crate) speed: Option<f64>,
+    /// The job running on it.
+    pub(crate) job: Option<u64>,
+}
+
+impl OpenDevice {
+    /// The device as `/api/devices` and the `device` event give it.
+    pub(crate) fn view(&self, what: &str) -> Json {
+        json!({
+            "event": what,
+            "open": true,
+            "id": self.id,
+            "description": self.device.target().describe(),
+            "link": self.device.link(),
+            "busy": self.job.is_some(),
+            "job": self.job,
+            "speed": self.speed,
+            "controller": self.controller,
+            "status": self.status,
+        })
+    }
+}
+
+#[derive(Default)]
+pub(crate) struct Inner {
+    /// The devices open, by id.
+    pub(crate) open: BTreeMap<String, OpenDevice>,
+    /// The default device: opened or connected last (and still open).
+    pub(crate) default: Option<String>,
+    pub(crate) jobs: BTreeMap<u64, JobRecord>,
+    /// What each embedded simulator closed had executed, by id, and which closed last.
+    pub(crate) last_sim: BTreeMap<String, SimReport>,
+    pub(crate) last_closed: Option<String>,
+    /// Openings so far.
+    pub(crate) generations: u64,
+}
+
+impl Inner {
+    /// A device that is gone from the list: the default moves to the device opened last.
+    pub(crate) fn forget(&mut self, id: &str) -> Option<OpenDevice> {
+        let o = self.open.remove(id);
+        if self.default.as_deref() == Some(id) {
+            self.default = self
+                .open
+                .values()
+                .max_by_key(|o| o.generation)
+                .map(|o| o.id.clone());
+        }
+        o
+    }
+
+    /// The open device a request names, or the default one.
+    pub(crate) fn resolve(&self, id: Option<&str>) -> Result<&OpenDevice, PanelError> {
+        match id {
+            Some(id) => self
+                .open
+                .get(id)
+                .ok_or_else(|| PanelError::NotOpenId(id.to_string())),
+            None => self
+                .default
+                .as_ref()
+                .and_then(|d| self.open.get(d))
+                .ok_or(PanelError::NotOpen),
+        }
+    }
+}
+
+/// The shared state: behind a lock, and the events every page hears.
+pub(crate) struct Shared {
+    pub(crate) inner: Mutex<Inner>,
+    pub(crate) events: Events,
+}
+
+impl Shared {
+    pub(crate) fn lock(&self) -> MutexGuard<'_, Inner> {
+        self.inner.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    pub(crate) fn publish_job(&self, inner: &Inner, id: u64) {
+        if let Some(j) = inner.jobs.get(&id) {
+            self.events.publish("job", j.view());
+        }
+    }
+
+    /// Tells every page of device `id`'s state (`what` happened).
+    pub(crate) fn publish_device(&self, inner: &Inner, id: &str, what: &str) {
+        let v = match inner.open.get(id) {
+            Some(o) => o.view(what),
+            None => closed_view(id, what, None),
+        };
+        self.events.publish("device", v);
+    }
+}
+
+/// A device that is not open, as the `device` event tells it.
+pub(crate) fn closed_view(id: &str, what: &str, message: Option<&str>) -> Json {
+    json!({ "event": what, "open": false, "id": id, "job": Json::Null, "message": message })
+}
+
+/// Why the device panel could not do what it was asked.
+#[derive(Debug, thiserror::Error)]
+pub enum PanelError {
+    #[error(transparent)]
+    Device(#[from] DeviceError),
+    /// A job is running: nothing else but hold, resume, stop and answers.
+    #[error("{0}")]
+    Busy(String),
+    #[error("{0}")]
+    Bad(String),
+    #[error("no device is open: connect one first")]
+    NotOpen,
+    #[error("the device {0} is not open: connect it first")]
+    NotOpenId(String),
+    #[error("no job {0}")]
+    NoJob(u64),
+}
