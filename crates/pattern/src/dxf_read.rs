@@ -173,13 +173,46 @@ fn read_entities(
     }
     let pairs = pairs(text)?;
     let mut warnings = Vec::new();
-    let mut insunits: Option<i64> = None;
-    let mut blocks: BTreeMap<String, BlockDef> = BTreeMap::new();
-    let mut entities: Vec<Entity> = Vec::new();
-    let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
+    let sections = read_sections(&pairs, chord_tol)?;
+    if !sections.seen_eof && pairs.last().is_some_and(|p| p.1 != "EOF") {
+        warnings.push("no EOF marker: the file may be truncated".into());
+    }
+    for (name, n) in &sections.skipped {
+        warnings.push(format!(
+            "{n} {name} entit{} skipped (not a cut or drawn line)",
+            if *n == 1 { "y" } else { "ies" }
+        ));
+    }
+    let (mut top, n_insert) = expand_inserts(sections.entities, &sections.blocks)?;
+    let scale = unit_scale(sections.insunits, &top, &mut warnings);
+    for (_, e) in &mut top {
+        scale_geo(&mut e.geo, scale);
+        check_range(e)?;
+    }
+    Ok((top, n_insert, warnings))
+}
+
+/// What the sections of a DXF hold, as read.
+#[derive(Default)]
+struct Sections {
+    /// `$INSUNITS` of the header, if given.
+    insunits: Option<i64>,
+    /// The block definitions, by name.
+    blocks: BTreeMap<String, BlockDef>,
+    /// The entities of the `ENTITIES` section, in order.
+    entities: Vec<Entity>,
+    /// Entities skipped, counted by kind.
+    skipped: BTreeMap<String, usize>,
+    /// Whether an `EOF` marker ended the file.
+    seen_eof: bool,
+}
+
+/// Reads the header's unit, the blocks and the entities of the group pairs, curves flattened
+/// within `chord_tol`.
+fn read_sections(pairs: &[Pair<'_>], chord_tol: f64) -> Result<Sections, PatternError> {
+    let mut s = Sections::default();
     let mut i = 0;
     let mut section = String::new();
-    let mut seen_eof = false;
     while i < pairs.len() {
         let (code, val, line) = pairs[i];
         match (code, val) {
@@ -196,61 +229,73 @@ fn read_entities(
                 i += 1;
             }
             (0, "EOF") => {
-                seen_eof = true;
+                s.seen_eof = true;
                 break;
             }
             (9, "$INSUNITS") if section == "HEADER" => {
                 if let Some(&(70, v, l)) = pairs.get(i + 1) {
-                    insunits = Some(number(v, l)? as i64);
+                    s.insunits = Some(number(v, l)? as i64);
                 }
                 i += 2;
             }
             (0, "BLOCK") if section == "BLOCKS" => {
-                i += 1;
-                let mut def = BlockDef::default();
-                let mut name = String::new();
-                while i < pairs.len() && pairs[i].0 != 0 {
-                    let (c, v, l) = pairs[i];
-                    match c {
-                        2 => name = v.to_string(),
-                        10 => def.base.x = number(v, l)?,
-                        20 => def.base.y = number(v, l)?,
-                        _ => {}
-                    }
-                    i += 1;
-                }
-                while i < pairs.len() && !(pairs[i].0 == 0 && pairs[i].1 == "ENDBLK") {
-                    if pairs[i].1 == "EOF" || pairs[i].1 == "ENDSEC" {
-                        return Err(err(pairs[i].2, format!("block `{name}` without ENDBLK")));
-                    }
-                    if let Some(e) = entity(&pairs, &mut i, chord_tol, &mut skipped)? {
-                        def.entities.push(e);
-                    }
-                }
-                i += 1;
-                blocks.insert(name, def);
+                let (name, def) = block(pairs, &mut i, chord_tol, &mut s.skipped)?;
+                s.blocks.insert(name, def);
             }
             (0, _) if section == "ENTITIES" => {
-                if let Some(e) = entity(&pairs, &mut i, chord_tol, &mut skipped)? {
-                    entities.push(e);
+                if let Some(e) = entity(pairs, &mut i, chord_tol, &mut s.skipped)? {
+                    s.entities.push(e);
                 }
-                if entities.len() > MAX_ENTITIES {
+                if s.entities.len() > MAX_ENTITIES {
                     return Err(err(line, format!("more than {MAX_ENTITIES} entities")));
                 }
             }
             _ => i += 1,
         }
     }
-    if !seen_eof && pairs.last().is_some_and(|p| p.1 != "EOF") {
-        warnings.push("no EOF marker: the file may be truncated".into());
+    Ok(s)
+}
+
+/// Reads the block definition starting at `pairs[*i]` (its `BLOCK` pair) up to its `ENDBLK`;
+/// advances past it.
+fn block(
+    pairs: &[Pair<'_>],
+    i: &mut usize,
+    chord_tol: f64,
+    skipped: &mut BTreeMap<String, usize>,
+) -> Result<(String, BlockDef), PatternError> {
+    *i += 1;
+    let mut def = BlockDef::default();
+    let mut name = String::new();
+    while *i < pairs.len() && pairs[*i].0 != 0 {
+        let (c, v, l) = pairs[*i];
+        match c {
+            2 => name = v.to_string(),
+            10 => def.base.x = number(v, l)?,
+            20 => def.base.y = number(v, l)?,
+            _ => {}
+        }
+        *i += 1;
     }
-    for (name, n) in &skipped {
-        warnings.push(format!(
-            "{n} {name} entit{} skipped (not a cut or drawn line)",
-            if *n == 1 { "y" } else { "ies" }
-        ));
+    while *i < pairs.len() && !(pairs[*i].0 == 0 && pairs[*i].1 == "ENDBLK") {
+        if pairs[*i].1 == "EOF" || pairs[*i].1 == "ENDSEC" {
+            return Err(err(pairs[*i].2, format!("block `{name}` without ENDBLK")));
+        }
+        if let Some(e) = entity(pairs, i, chord_tol, skipped)? {
+            def.entities.push(e);
+        }
     }
-    // Expand inserts: every top-level insert is a piece candidate.
+    *i += 1;
+    Ok((name, def))
+}
+
+/// The entities with every insert replaced by its block's entities: every top-level insert is
+/// a piece candidate, so each entity carries the index of the insert it came from. Also returns
+/// the number of inserts.
+fn expand_inserts(
+    entities: Vec<Entity>,
+    blocks: &BTreeMap<String, BlockDef>,
+) -> Result<(Vec<(Option<usize>, Entity)>, usize), PatternError> {
     let mut top: Vec<(Option<usize>, Entity)> = Vec::new();
     let mut n_insert = 0;
     let mut count = 0usize;
@@ -258,19 +303,28 @@ fn read_entities(
         match &e.geo {
             Geo::Insert(ins) => {
                 let mut out = Vec::new();
-                expand(ins, &blocks, 0, e.line, &mut out, &mut count)?;
+                expand(ins, blocks, 0, e.line, &mut out, &mut count)?;
                 top.extend(out.into_iter().map(|x| (Some(n_insert), x)));
                 n_insert += 1;
             }
             _ => top.push((None, e)),
         }
     }
-    // Units.
+    Ok((top, n_insert))
+}
+
+/// Millimetres per drawing unit: `$INSUNITS` where it names a length unit, else the AAMA
+/// `Units:` text, else 1 (with a warning).
+fn unit_scale(
+    insunits: Option<i64>,
+    top: &[(Option<usize>, Entity)],
+    warnings: &mut Vec<String>,
+) -> f64 {
     let aama_units = top.iter().find_map(|(_, e)| match &e.geo {
         Geo::Text { value, .. } => aama_field(value, "Units"),
         _ => None,
     });
-    let scale = match (insunits, aama_units.as_deref()) {
+    match (insunits, aama_units.as_deref()) {
         (Some(1), _) => 25.4,
         (Some(2), _) => 304.8,
         (Some(4), _) => 1.0,
@@ -289,12 +343,7 @@ fn read_entities(
                 .push("the file states no unit ($INSUNITS or AAMA `Units:`): read as mm".into());
             1.0
         }
-    };
-    for (_, e) in &mut top {
-        scale_geo(&mut e.geo, scale);
-        check_range(e)?;
     }
-    Ok((top, n_insert, warnings))
 }
 
 /// Reads one entity starting at `pairs[*i]` (a code-0 pair); advances past it.
