@@ -786,13 +786,6 @@ fn only_the_binary_installs_the_signal_handler() {
 /// a listed one that is gone (take it off the list).
 const KNOWN_CIRCLES: &[(&str, &[&str], &str)] = &[
     (
-        "crates/darts/src",
-        &["cut", "fit", "solve"],
-        "the cut's edge pairs (solve::EdgePairs), the fit's legs (cut::Legs) and the solve's \
-         closing (fit::Closing) are each declared by the stage that makes them; the three types \
-         belong in a module of their own below all three",
-    ),
-    (
         "crates/flatten/src",
         &["limits", "nonlinear"],
         "the limits' barrier solves with the Newton solver, and the solver's per-piece energy \

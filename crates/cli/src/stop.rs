@@ -55,6 +55,11 @@ impl Stoppable {
         Stoppable { id, flag }
     }
 
+    /// The flag itself, for computations that take a bare flag (the nesting).
+    pub fn flag(&self) -> Arc<AtomicBool> {
+        self.flag.clone()
+    }
+
     /// `hooks` that stop at this flag.
     pub fn hooks(&self, hooks: FlattenHooks) -> FlattenHooks {
         hooks.with_cancel(self.flag.clone())

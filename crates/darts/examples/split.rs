@@ -25,6 +25,7 @@ fn main() {
         keep_out: None,
         visibility: Default::default(),
         time_limit: None,
+        seam_allowance_mm: 0.0,
     };
     let result = if !disk {
         flatcut_darts::split::split_surface(&mesh, &params, &opts)

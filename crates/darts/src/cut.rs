@@ -9,7 +9,7 @@
 use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TopologyError, TriMesh, cut_along_seams};
 
-use crate::solve::EdgePairs;
+use crate::sewn::EdgePairs;
 
 /// A piece cut along a set of paths.
 #[derive(Clone, Debug)]

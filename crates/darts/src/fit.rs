@@ -31,6 +31,7 @@ use flatcut_flatten::nonlinear::newton::Pull;
 use flatcut_geom::DVec2;
 
 use crate::cut::Legs;
+use crate::sewn::Closing;
 
 /// How the final map of a darted piece uses the material's give.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -63,15 +64,6 @@ impl DartFit {
 /// order they are tried: the first whose map keeps every dart's legs paired and the outline
 /// simple is kept.
 pub const CLOSE_WEIGHTS: [f64; 3] = [10.0, 1.0, 0.1];
-
-/// What draws a piece's darts shut: pulls on the darts' mouths, and guards that keep their legs
-/// from crossing. Empty for the least-strained fit.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Closing {
-    pub pulls: Vec<Pull>,
-    /// Triangles (counter-clockwise in the map the closing is made for) that must not turn over.
-    pub guards: Vec<[usize; 3]>,
-}
 
 /// The closing of a tight map from the map `x`: one pull per dart between the two corners of its
 /// mouth (the first vertices of its legs), and for every other pair of copies along the legs a

@@ -85,6 +85,7 @@ pub mod place;
 pub mod relaxed;
 pub mod resew;
 pub mod seam_cost;
+pub mod sewn;
 pub mod solve;
 pub mod split;
 pub mod threads;

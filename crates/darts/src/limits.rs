@@ -28,8 +28,8 @@ use flatcut_flatten::nonlinear::kernel::{
 use flatcut_geom::{DMat2, DVec2};
 use flatcut_mesh::TriMesh;
 
-use crate::fit::Closing;
-use crate::solve::{self, EdgePairs};
+use crate::sewn::{Closing, EdgePairs};
+use crate::solve;
 use crate::threads::{ThreadBarrier, ThreadPower, Threads};
 
 pub use crate::band::Band;

@@ -33,11 +33,12 @@ use flatcut_mesh::{Topology, TriMesh, check_disk};
 
 use crate::cut::{CutMesh, Legs, all_pairs};
 use crate::embed::{Embedded, embed, transfer};
-use crate::fit::{CLOSE_WEIGHTS, Closing, DartFit, closing, jammed, shut_points};
+use crate::fit::{CLOSE_WEIGHTS, DartFit, closing, jammed, shut_points};
 use crate::keepout::KeepOut;
 use crate::limits::{self, Effort, Held, Limits};
 use crate::relaxed::{Yield, face_opening, rim_demand};
-use crate::solve::{self, EdgePairs, LEG_MATCH_MM};
+use crate::sewn::{Closing, EdgePairs};
+use crate::solve::{self, LEG_MATCH_MM};
 use crate::trace::{Adjacency, Geodesic, inward_direction, trace};
 use crate::{Attempt, Dart, DartError, DartOptions, Darted};
 

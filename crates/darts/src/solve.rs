@@ -14,38 +14,8 @@ use flatcut_flatten::nonlinear::newton::{
     self, Budget, DirectionTerm, EdgeTerms, MapProblem, Pull,
 };
 use flatcut_geom::DVec2;
-use std::ops::Range;
 
-/// Pairs of edges (vertex index pairs of the cut mesh) that must keep equal 2D lengths: the two
-/// copies of one cut edge, one on each leg of a dart.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct EdgePairs {
-    pub pairs: Vec<[(usize, usize); 2]>,
-    /// The pairs of each dart's legs: `pairs[legs[k]]` (a dart's legs are sewn as a whole).
-    pub legs: Vec<Range<usize>>,
-}
-
-impl EdgePairs {
-    /// The largest difference of a dart's two legs' 2D lengths (mm).
-    pub fn worst_leg_mismatch(&self, x: &[DVec2]) -> f64 {
-        self.worst_legs(x).map_or(0.0, |(_, d)| d)
-    }
-
-    /// The dart whose legs differ most in 2D length, and by how much (mm); `None` without darts.
-    pub fn worst_legs(&self, x: &[DVec2]) -> Option<(usize, f64)> {
-        self.legs
-            .iter()
-            .map(|r| {
-                self.pairs[r.clone()]
-                    .iter()
-                    .map(|[(a, b), (c, d)]| x[*a].distance(x[*b]) - x[*c].distance(x[*d]))
-                    .sum::<f64>()
-                    .abs()
-            })
-            .enumerate()
-            .max_by(|a, b| a.1.total_cmp(&b.1))
-    }
-}
+use crate::sewn::{Closing, EdgePairs};
 
 /// Result of a Newton run.
 pub struct Run {
@@ -102,8 +72,8 @@ impl<'a> Solves<'a> {
     }
 
     /// Solves that draw darts shut (before the first solve: the pulls' vertex pairs join the
-    /// Hessian's pattern then), [`crate::fit::Closing`].
-    pub fn with_closing(mut self, c: crate::fit::Closing) -> Self {
+    /// Hessian's pattern then), [`Closing`].
+    pub fn with_closing(mut self, c: Closing) -> Self {
         self.pulls = c.pulls;
         self.guards = c.guards;
         self

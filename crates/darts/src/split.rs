@@ -80,6 +80,16 @@ use crate::{DartError, KeepOut};
 /// flattener's limits land on their bound, and a map written to a file (to a micrometre) and
 /// checked independently must still be within it.
 const HELD_INSIDE: f64 = 1e-5;
+/// Newton steps of each solve of a flattening that holds the limits (the parts alone, and all
+/// of them together): the limits are brought in by a dozen solves of rising stiffness, and in
+/// the joint solve each of them runs the seams' augmented Lagrangian again. At the flattener's
+/// 200 steps a joint solve of the 7,680-face torus's parts took 3,200–3,700 Newton steps (70–96 s
+/// under load, several times per split); at 30 it takes 170–900, and the limits still hold (the
+/// check after every joint solve is what decides).
+pub const HELD_SOLVE_ITERS: usize = 30;
+/// Relative energy decrease below which those solves stop: the split needs a map within the
+/// limits with its seams equal, not the last digits of its energy.
+pub const HELD_REL_TOLERANCE: f64 = 1e-6;
 /// Directions of the chords tried through each centre, evenly over a half turn.
 pub const DIRECTIONS: usize = 8;
 /// Points of a chord lifted to the surface between its ends (the trace joins them along it).
@@ -105,6 +115,9 @@ pub struct SplitOptions {
     pub visibility: Visibility,
     /// Time after which the best split so far is returned (`timed_out`).
     pub time_limit: Option<std::time::Duration>,
+    /// The seam allowance the parts will be cut with (mm): no merged part gets a neck too
+    /// narrow to take it on both sides ([`merged_neck`]).
+    pub seam_allowance_mm: f64,
 }
 
 impl SplitOptions {
@@ -186,9 +199,12 @@ fn held_params(params: &FlattenParams, opts: &SplitOptions) -> FlattenParams {
         ln_s: (opts.band.ln_s - HELD_INSIDE).max(0.5 * opts.band.ln_s),
         ln_c: (opts.band.ln_c + HELD_INSIDE).min(0.5 * opts.band.ln_c),
     };
-    isometric(params)
+    let mut p = isometric(params)
         .with_max_stretch_pct(stretch_pct(inside))
-        .with_max_compress_pct(compress_pct(inside))
+        .with_max_compress_pct(compress_pct(inside));
+    p.max_iters = p.max_iters.min(HELD_SOLVE_ITERS);
+    p.rel_tolerance = p.rel_tolerance.max(HELD_REL_TOLERANCE);
+    p
 }
 
 /// The greedy loop of the module documentation from `pieces` (each flattened; `together` when
@@ -265,7 +281,9 @@ fn split_on(
             // The fewest pieces: neighbours whose union lies within the limits are sewn back.
             if excess <= 0.0 && !merged {
                 merged = true;
-                if let Some(fewer) = merge_within(&pieces, &held, opts.band, params)? {
+                if let Some(fewer) =
+                    merge_within(&pieces, &held, opts.band, opts.seam_allowance_mm, params)?
+                {
                     pieces = fewer;
                     resewn = true;
                     continue;
@@ -311,6 +329,7 @@ fn merge_within(
     pieces: &[TriMesh],
     held: &FlattenParams,
     band: Band,
+    allowance_mm: f64,
     params: &FlattenParams,
 ) -> Result<Option<Vec<TriMesh>>, DartError> {
     let alone = held
@@ -344,7 +363,7 @@ fn merge_within(
                 m.flat = Some(flatcut_flatten::flatten(&m, &alone).ok()?.uv);
                 let (_, e, _) = worst(std::slice::from_ref(&m), band).ok()?;
                 let x = m.flat.as_deref()?;
-                let wide = narrowest_neck(&m, x)? >= MERGED_NECK * m.area().sqrt();
+                let wide = narrowest_neck(&m, x)? >= merged_neck(m.area(), allowance_mm);
                 (e <= 0.0 && wide && matches!(outline_crossing(&m, x), Ok(None))).then_some(m)
             })
             .collect();
@@ -383,6 +402,14 @@ fn merge_within(
 /// parts that meet at a corner or along a short seam make a piece of two lobes on a thin waist
 /// (or a long peel), within the limits but no piece to sew.
 pub const MERGED_NECK: f64 = 0.15;
+
+/// The narrowest neck a merged part of `area` (mm²) cut with a seam allowance of
+/// `allowance_mm` may have: [`MERGED_NECK`] of the square root of its area, and never less than
+/// twice the allowance (the allowances of the neck's two sides would meet across it, and the
+/// cut line would run across the piece).
+pub fn merged_neck(area: f64, allowance_mm: f64) -> f64 {
+    (MERGED_NECK * area.sqrt()).max(2.0 * allowance_mm)
+}
 
 /// The narrowest neck of the flat outline of `mesh` (map `x`): the least distance between two
 /// outline vertices at least three times as far apart round the outline, and a tenth of it

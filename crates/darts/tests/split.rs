@@ -58,6 +58,7 @@ fn options(pct: f64, max_pieces: usize) -> SplitOptions {
         keep_out: None,
         visibility: Default::default(),
         time_limit: None,
+        seam_allowance_mm: 0.0,
     }
 }
 
@@ -188,6 +189,15 @@ fn parts_whose_union_holds_the_limits_are_merged_back() {
             "face {t}: {s1} {s2}"
         );
     }
+}
+
+#[test]
+fn a_merged_part_keeps_no_neck_narrower_than_twice_the_seam_allowance() {
+    use flatcut_darts::split::{MERGED_NECK, merged_neck};
+    // 0.15 √area, or twice the allowance where that is wider.
+    assert_eq!(merged_neck(40_000.0, 0.0), MERGED_NECK * 200.0);
+    assert_eq!(merged_neck(40_000.0, 10.0), MERGED_NECK * 200.0);
+    assert_eq!(merged_neck(40_000.0, 16.0), 32.0);
 }
 
 #[test]

@@ -30,6 +30,9 @@ pub struct SplitSettings {
     pub max_pieces: usize,
     /// Time after which a piece's best split so far is taken, with a warning.
     pub time_limit: Option<std::time::Duration>,
+    /// The seam allowance (mm) of pieces whose design gives none: merged parts keep no neck
+    /// narrower than twice the allowance.
+    pub seam_allowance_mm: f64,
 }
 
 impl Default for SplitSettings {
@@ -37,6 +40,7 @@ impl Default for SplitSettings {
         Self {
             max_pieces: SplitOptions::DEFAULT_MAX_PIECES,
             time_limit: None,
+            seam_allowance_mm: 0.0,
         }
     }
 }
@@ -166,6 +170,10 @@ fn options(
         keep_out: Some(darting::keep_out(Some(&piece.def), mesh)?),
         visibility: visibility(&piece.def, mesh)?,
         time_limit: settings.time_limit,
+        seam_allowance_mm: piece
+            .def
+            .seam_allowance_mm
+            .unwrap_or(settings.seam_allowance_mm),
     })
 }
 

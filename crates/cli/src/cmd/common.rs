@@ -233,6 +233,7 @@ impl FlattenArgs {
         Ok(Some(SplitSettings {
             max_pieces: self.max_pieces,
             time_limit: self.split_time,
+            ..SplitSettings::default()
         }))
     }
 

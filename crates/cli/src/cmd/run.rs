@@ -63,10 +63,11 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     let mut opts = RunOptions::default()
         .with_nest_iters(a.nest_iters)
         .with_seam_tolerance_mm(a.seam_tolerance);
-    // Ctrl-C stops the flattening and a split at their cancel flag; nothing is written then.
+    // Ctrl-C stops the flattening, a split and the nesting at their cancel flag; nothing is
+    // written then.
     let stop = crate::stop::Stoppable::register();
     let hooks = stop.hooks(opts.flatten_hooks.clone());
-    opts = opts.with_flatten_hooks(hooks);
+    opts = opts.with_flatten_hooks(hooks).with_cancel(stop.flag());
     let flatten_bar = (!a.stream.quiet).then(|| {
         let (hooks, bar) = common::progress_hooks(opts.flatten_hooks.clone(), 1);
         opts = opts.clone().with_flatten_hooks(hooks);

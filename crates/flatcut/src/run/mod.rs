@@ -54,6 +54,9 @@ pub struct RunOptions {
     pub seam_tolerance_mm: f64,
     /// Progress callback and cancel flag handed to every piece's flattening.
     pub flatten_hooks: FlattenHooks,
+    /// Set from another thread to stop the nesting (the best layout so far is returned; the
+    /// caller that set it writes nothing).
+    pub cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 impl RunOptions {
@@ -80,6 +83,12 @@ impl RunOptions {
         self.flatten_hooks = hooks;
         self
     }
+
+    /// The nesting stops once `flag` is set ([`RunOptions::cancel`]).
+    pub fn with_cancel(mut self, flag: std::sync::Arc<std::sync::atomic::AtomicBool>) -> Self {
+        self.cancel = Some(flag);
+        self
+    }
 }
 
 impl Default for RunOptions {
@@ -89,6 +98,7 @@ impl Default for RunOptions {
             chord_mm: Self::DEFAULT_CHORD_MM,
             seam_tolerance_mm: flatcut_report::DEFAULT_SEAM_TOLERANCE_MM,
             flatten_hooks: FlattenHooks::default(),
+            cancel: None,
         }
     }
 }
@@ -282,8 +292,12 @@ fn limits(project: &Project) -> Limits {
         compress_pct: project.material.max_compress_pct,
         darts: (project.darts == Some(flatcut_design::DartsDef::Auto))
             .then(crate::darting::DartSettings::default),
-        split: (project.split == Some(flatcut_design::DartsDef::Auto))
-            .then(crate::splitting::SplitSettings::default),
+        split: (project.split == Some(flatcut_design::DartsDef::Auto)).then(|| {
+            crate::splitting::SplitSettings {
+                seam_allowance_mm: project.seam_mm.unwrap_or(0.0),
+                ..Default::default()
+            }
+        }),
         material: project.material.spec.clone(),
     }
 }
@@ -515,9 +529,12 @@ fn nest_stage(
             })
         })
         .collect();
-    let nopts = NestOptions::DEFAULT
+    let mut nopts = NestOptions::DEFAULT
         .with_spacing(project.sheet.spacing_mm)
         .with_max_iters(opts.nest_iters);
+    if let Some(flag) = &opts.cancel {
+        nopts = nopts.with_cancel(flag.clone());
+    }
     let layout = pipeline::nest_groups(&groups, stock, &nopts, &mut |p| {
         obs.event(&Event::Progress {
             stage: Stage::Nest,
