@@ -1,14 +1,14 @@
 //! From a drawing to ordered, compensated, arc-fitted toolpaths in machine coordinates.
 
 use flatcut_geom::{Aabb2, DVec2};
-use flatcut_pattern::{Drawing, Layer};
+use flatcut_pattern::{Drawing, Layer, Stroke};
 
 use crate::arcs;
 use crate::cutter;
 use crate::knife;
 pub use crate::moves::Move;
 use crate::order::{self, OrderItem};
-use crate::profile::{Profile, ToolKind};
+use crate::profile::{LayerConfig, Profile, ToolKind};
 
 /// A continuous tool-down path.
 #[derive(Clone, Debug, PartialEq)]
@@ -174,140 +174,24 @@ const DEDUP_MM: f64 = 1e-4;
 /// # Ok::<(), flatcut_gcode::GcodeError>(())
 /// ```
 pub fn plan(drawing: &Drawing, profile: &Profile, opts: &GcodeOptions) -> Result<Plan, GcodeError> {
-    // Strokes in machine coordinates, cleaned.
-    struct S {
-        layer: Layer,
-        outer: bool,
-        closed: bool,
-        id: String,
-        pts: Vec<DVec2>,
-    }
-    let mut strokes = Vec::new();
-    for s in &drawing.strokes {
-        if !profile.layer(s.layer).enabled {
-            continue;
-        }
-        if s.points.iter().any(|p| !flatcut_geom::finite2(*p)) {
-            return Err(GcodeError::NonFinite { id: s.id.clone() });
-        }
-        let mut pts: Vec<DVec2> = Vec::with_capacity(s.points.len());
-        for &p in &s.points {
-            let q = profile.to_machine(p);
-            if pts.last().is_none_or(|l: &DVec2| l.distance(q) > DEDUP_MM) {
-                pts.push(q);
-            }
-        }
-        let mut closed = s.closed;
-        if closed && pts.len() > 2 && pts[0].distance(pts[pts.len() - 1]) <= DEDUP_MM {
-            pts.pop();
-        }
-        if pts.len() < 2 {
-            continue;
-        }
-        if pts.len() < 3 {
-            closed = false;
-        }
-        if closed && s.layer == Layer::Cut && profile.kerf_mm > 0.0 {
-            pts = cutter::kerf_offset(&pts, s.is_outer(), 0.5 * profile.kerf_mm);
-        }
-        strokes.push(S {
-            layer: s.layer,
-            outer: s.is_outer(),
-            closed,
-            id: s.id.clone(),
-            pts,
-        });
-    }
+    let strokes = machine_strokes(drawing, profile)?;
     if strokes.is_empty() {
         return Err(GcodeError::Empty {
             profile: profile.name.clone(),
         });
     }
-
-    let groups: [(Layer, Option<bool>); 4] = [
-        (Layer::Engrave, None),
-        (Layer::Draw, None),
-        (Layer::Cut, Some(false)),
-        (Layer::Cut, Some(true)),
-    ];
     let mut paths = Vec::new();
     let mut at = profile.to_machine(DVec2::ZERO);
     at = DVec2::new(at.x.max(0.0), at.y.max(0.0));
-    for (layer, outer) in groups {
-        let members: Vec<&S> = strokes
+    for (layer, outer) in LAYER_ORDER {
+        let members: Vec<&MachineStroke> = strokes
             .iter()
             .filter(|s| s.layer == layer && outer.is_none_or(|o| s.outer == o))
             .collect();
         if members.is_empty() {
             continue;
         }
-        let items: Vec<OrderItem<'_>> = members
-            .iter()
-            .map(|s| OrderItem {
-                points: &s.pts,
-                closed: s.closed,
-            })
-            .collect();
-        let tour = if opts.reorder {
-            order::order(&items, at)
-        } else {
-            (0..items.len())
-                .map(|i| order::Visit {
-                    item: i,
-                    reversed: false,
-                    start: 0,
-                })
-                .collect()
-        };
-        let cfg = profile.layer(layer);
-        let feed = profile.layer_feed(layer);
-        let power_s = match (&profile.laser, profile.kind) {
-            (Some(l), ToolKind::Laser) => l.s_max * cfg.power_pct.unwrap_or(100.0) / 100.0,
-            _ => 0.0,
-        };
-        for v in tour {
-            let s = members[v.item];
-            let pts = order::visit_points(&items[v.item], &v);
-            let passes = if profile.kind == ToolKind::Laser {
-                cfg.passes
-            } else {
-                1
-            };
-            let closed_cut = s.closed && layer == Layer::Cut;
-            // Tabs split a closed cut into open runs; otherwise overcut and leads extend it.
-            let runs: Vec<(Vec<DVec2>, bool)> = match cfg.tabs {
-                Some(t) if closed_cut => cutter::split_tabs(&pts, t.count, t.width_mm)
-                    .into_iter()
-                    .map(|r| (r, false))
-                    .collect(),
-                _ => vec![(pts, s.closed)],
-            };
-            for (run, closed) in runs {
-                let overcut = match (&profile.knife, profile.kind) {
-                    (Some(k), ToolKind::Knife) if closed => k.overcut_mm,
-                    _ => 0.0,
-                };
-                let run = match &profile.lead {
-                    Some(lead) if closed && closed_cut => {
-                        cutter::with_leads(&run, &s.pts, s.outer, lead, overcut)
-                    }
-                    // A piece of a closed cut that tabs split is entered and left in the scrap
-                    // as the whole cut would be.
-                    Some(lead) if closed_cut => {
-                        cutter::with_open_leads(&run, &s.pts, s.outer, lead)
-                    }
-                    _ if overcut > 0.0 => knife::with_overcut(&run, overcut),
-                    _ => run,
-                };
-                let tp = toolpath(run, layer, &s.id, feed, power_s, passes, opts, profile);
-                if tp.moves.is_empty() {
-                    continue;
-                }
-                check_work_area(&tp, profile)?;
-                at = tp.end();
-                paths.push(tp);
-            }
-        }
+        plan_group(&members, layer, profile, opts, &mut at, &mut paths)?;
     }
     if let (Some(w), ToolKind::Knife) = (
         profile.hpgl.as_ref().and_then(|h| h.weed_border_mm),
@@ -323,6 +207,168 @@ pub fn plan(drawing: &Drawing, profile: &Profile, opts: &GcodeOptions) -> Result
         paths,
         title: opts.title.clone(),
     })
+}
+
+/// The order in which strokes are cut, by layer and (for cuts) inner before outer: engrave,
+/// draw, inner cuts, outer cuts.
+const LAYER_ORDER: [(Layer, Option<bool>); 4] = [
+    (Layer::Engrave, None),
+    (Layer::Draw, None),
+    (Layer::Cut, Some(false)),
+    (Layer::Cut, Some(true)),
+];
+
+/// A stroke in machine coordinates, cleaned.
+struct MachineStroke {
+    layer: Layer,
+    outer: bool,
+    closed: bool,
+    id: String,
+    pts: Vec<DVec2>,
+}
+
+/// The drawing's strokes on enabled layers in machine coordinates, cleaned; an error for a
+/// stroke with a non-finite point.
+fn machine_strokes(drawing: &Drawing, profile: &Profile) -> Result<Vec<MachineStroke>, GcodeError> {
+    let mut strokes = Vec::new();
+    for s in &drawing.strokes {
+        if !profile.layer(s.layer).enabled {
+            continue;
+        }
+        if s.points.iter().any(|p| !flatcut_geom::finite2(*p)) {
+            return Err(GcodeError::NonFinite { id: s.id.clone() });
+        }
+        if let Some(m) = machine_stroke(s, profile) {
+            strokes.push(m);
+        }
+    }
+    Ok(strokes)
+}
+
+/// One stroke in machine coordinates: repeated points dropped, a closed stroke's repeated end
+/// dropped, closed cuts offset by half the kerf; `None` when fewer than two points remain.
+fn machine_stroke(s: &Stroke, profile: &Profile) -> Option<MachineStroke> {
+    let mut pts: Vec<DVec2> = Vec::with_capacity(s.points.len());
+    for &p in &s.points {
+        let q = profile.to_machine(p);
+        if pts.last().is_none_or(|l: &DVec2| l.distance(q) > DEDUP_MM) {
+            pts.push(q);
+        }
+    }
+    let mut closed = s.closed;
+    if closed && pts.len() > 2 && pts[0].distance(pts[pts.len() - 1]) <= DEDUP_MM {
+        pts.pop();
+    }
+    if pts.len() < 2 {
+        return None;
+    }
+    if pts.len() < 3 {
+        closed = false;
+    }
+    if closed && s.layer == Layer::Cut && profile.kerf_mm > 0.0 {
+        pts = cutter::kerf_offset(&pts, s.is_outer(), 0.5 * profile.kerf_mm);
+    }
+    Some(MachineStroke {
+        layer: s.layer,
+        outer: s.is_outer(),
+        closed,
+        id: s.id.clone(),
+        pts,
+    })
+}
+
+/// Plans one group of strokes of `layer`: in travel order from `at` (moved to where the last
+/// path ends), each stroke's toolpaths appended to `paths`.
+fn plan_group(
+    members: &[&MachineStroke],
+    layer: Layer,
+    profile: &Profile,
+    opts: &GcodeOptions,
+    at: &mut DVec2,
+    paths: &mut Vec<Toolpath>,
+) -> Result<(), GcodeError> {
+    let items: Vec<OrderItem<'_>> = members
+        .iter()
+        .map(|s| OrderItem {
+            points: &s.pts,
+            closed: s.closed,
+        })
+        .collect();
+    let tour = if opts.reorder {
+        order::order(&items, *at)
+    } else {
+        (0..items.len())
+            .map(|i| order::Visit {
+                item: i,
+                reversed: false,
+                start: 0,
+            })
+            .collect()
+    };
+    let cfg = profile.layer(layer);
+    let feed = profile.layer_feed(layer);
+    let power_s = match (&profile.laser, profile.kind) {
+        (Some(l), ToolKind::Laser) => l.s_max * cfg.power_pct.unwrap_or(100.0) / 100.0,
+        _ => 0.0,
+    };
+    let passes = if profile.kind == ToolKind::Laser {
+        cfg.passes
+    } else {
+        1
+    };
+    for v in tour {
+        let s = members[v.item];
+        let pts = order::visit_points(&items[v.item], &v);
+        for (run, closed) in stroke_runs(pts, s, &cfg) {
+            let run = lead_and_overcut(run, closed, s, profile);
+            let tp = toolpath(run, layer, &s.id, feed, power_s, passes, opts, profile);
+            if tp.moves.is_empty() {
+                continue;
+            }
+            check_work_area(&tp, profile)?;
+            *at = tp.end();
+            paths.push(tp);
+        }
+    }
+    Ok(())
+}
+
+/// The runs a stroke is cut in (points as visited, and whether the run is closed): tabs split a
+/// closed cut into open runs; anything else is one run.
+fn stroke_runs(pts: Vec<DVec2>, s: &MachineStroke, cfg: &LayerConfig) -> Vec<(Vec<DVec2>, bool)> {
+    let closed_cut = s.closed && s.layer == Layer::Cut;
+    match cfg.tabs {
+        Some(t) if closed_cut => cutter::split_tabs(&pts, t.count, t.width_mm)
+            .into_iter()
+            .map(|r| (r, false))
+            .collect(),
+        _ => vec![(pts, s.closed)],
+    }
+}
+
+/// A run of stroke `s` extended by the profile's lead-in and lead-out (closed cuts) or the
+/// knife's overcut (closed runs).
+fn lead_and_overcut(
+    run: Vec<DVec2>,
+    closed: bool,
+    s: &MachineStroke,
+    profile: &Profile,
+) -> Vec<DVec2> {
+    let closed_cut = s.closed && s.layer == Layer::Cut;
+    let overcut = match (&profile.knife, profile.kind) {
+        (Some(k), ToolKind::Knife) if closed => k.overcut_mm,
+        _ => 0.0,
+    };
+    match &profile.lead {
+        Some(lead) if closed && closed_cut => {
+            cutter::with_leads(&run, &s.pts, s.outer, lead, overcut)
+        }
+        // A piece of a closed cut that tabs split is entered and left in the scrap as the whole
+        // cut would be.
+        Some(lead) if closed_cut => cutter::with_open_leads(&run, &s.pts, s.outer, lead),
+        _ if overcut > 0.0 => knife::with_overcut(&run, overcut),
+        _ => run,
+    }
 }
 
 /// The weeding border: a rectangle `w` mm around everything cut, cut last so the waste lifts in

@@ -173,13 +173,46 @@ fn read_entities(
     }
     let pairs = pairs(text)?;
     let mut warnings = Vec::new();
-    let mut insunits: Option<i64> = None;
-    let mut blocks: BTreeMap<String, BlockDef> = BTreeMap::new();
-    let mut entities: Vec<Entity> = Vec::new();
-    let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
+    let sections = read_sections(&pairs, chord_tol)?;
+    if !sections.seen_eof && pairs.last().is_some_and(|p| p.1 != "EOF") {
+        warnings.push("no EOF marker: the file may be truncated".into());
+    }
+    for (name, n) in &sections.skipped {
+        warnings.push(format!(
+            "{n} {name} entit{} skipped (not a cut or drawn line)",
+            if *n == 1 { "y" } else { "ies" }
+        ));
+    }
+    let (mut top, n_insert) = expand_inserts(sections.entities, &sections.blocks)?;
+    let scale = unit_scale(sections.insunits, &top, &mut warnings);
+    for (_, e) in &mut top {
+        scale_geo(&mut e.geo, scale);
+        check_range(e)?;
+    }
+    Ok((top, n_insert, warnings))
+}
+
+/// What the sections of a DXF hold, as read.
+#[derive(Default)]
+struct Sections {
+    /// `$INSUNITS` of the header, if given.
+    insunits: Option<i64>,
+    /// The block definitions, by name.
+    blocks: BTreeMap<String, BlockDef>,
+    /// The entities of the `ENTITIES` section, in order.
+    entities: Vec<Entity>,
+    /// Entities skipped, counted by kind.
+    skipped: BTreeMap<String, usize>,
+    /// Whether an `EOF` marker ended the file.
+    seen_eof: bool,
+}
+
+/// Reads the header's unit, the blocks and the entities of the group pairs, curves flattened
+/// within `chord_tol`.
+fn read_sections(pairs: &[Pair<'_>], chord_tol: f64) -> Result<Sections, PatternError> {
+    let mut s = Sections::default();
     let mut i = 0;
     let mut section = String::new();
-    let mut seen_eof = false;
     while i < pairs.len() {
         let (code, val, line) = pairs[i];
         match (code, val) {
@@ -196,61 +229,73 @@ fn read_entities(
                 i += 1;
             }
             (0, "EOF") => {
-                seen_eof = true;
+                s.seen_eof = true;
                 break;
             }
             (9, "$INSUNITS") if section == "HEADER" => {
                 if let Some(&(70, v, l)) = pairs.get(i + 1) {
-                    insunits = Some(number(v, l)? as i64);
+                    s.insunits = Some(number(v, l)? as i64);
                 }
                 i += 2;
             }
             (0, "BLOCK") if section == "BLOCKS" => {
-                i += 1;
-                let mut def = BlockDef::default();
-                let mut name = String::new();
-                while i < pairs.len() && pairs[i].0 != 0 {
-                    let (c, v, l) = pairs[i];
-                    match c {
-                        2 => name = v.to_string(),
-                        10 => def.base.x = number(v, l)?,
-                        20 => def.base.y = number(v, l)?,
-                        _ => {}
-                    }
-                    i += 1;
-                }
-                while i < pairs.len() && !(pairs[i].0 == 0 && pairs[i].1 == "ENDBLK") {
-                    if pairs[i].1 == "EOF" || pairs[i].1 == "ENDSEC" {
-                        return Err(err(pairs[i].2, format!("block `{name}` without ENDBLK")));
-                    }
-                    if let Some(e) = entity(&pairs, &mut i, chord_tol, &mut skipped)? {
-                        def.entities.push(e);
-                    }
-                }
-                i += 1;
-                blocks.insert(name, def);
+                let (name, def) = block(pairs, &mut i, chord_tol, &mut s.skipped)?;
+                s.blocks.insert(name, def);
             }
             (0, _) if section == "ENTITIES" => {
-                if let Some(e) = entity(&pairs, &mut i, chord_tol, &mut skipped)? {
-                    entities.push(e);
+                if let Some(e) = entity(pairs, &mut i, chord_tol, &mut s.skipped)? {
+                    s.entities.push(e);
                 }
-                if entities.len() > MAX_ENTITIES {
+                if s.entities.len() > MAX_ENTITIES {
                     return Err(err(line, format!("more than {MAX_ENTITIES} entities")));
                 }
             }
             _ => i += 1,
         }
     }
-    if !seen_eof && pairs.last().is_some_and(|p| p.1 != "EOF") {
-        warnings.push("no EOF marker: the file may be truncated".into());
+    Ok(s)
+}
+
+/// Reads the block definition starting at `pairs[*i]` (its `BLOCK` pair) up to its `ENDBLK`;
+/// advances past it.
+fn block(
+    pairs: &[Pair<'_>],
+    i: &mut usize,
+    chord_tol: f64,
+    skipped: &mut BTreeMap<String, usize>,
+) -> Result<(String, BlockDef), PatternError> {
+    *i += 1;
+    let mut def = BlockDef::default();
+    let mut name = String::new();
+    while *i < pairs.len() && pairs[*i].0 != 0 {
+        let (c, v, l) = pairs[*i];
+        match c {
+            2 => name = v.to_string(),
+            10 => def.base.x = number(v, l)?,
+            20 => def.base.y = number(v, l)?,
+            _ => {}
+        }
+        *i += 1;
     }
-    for (name, n) in &skipped {
-        warnings.push(format!(
-            "{n} {name} entit{} skipped (not a cut or drawn line)",
-            if *n == 1 { "y" } else { "ies" }
-        ));
+    while *i < pairs.len() && !(pairs[*i].0 == 0 && pairs[*i].1 == "ENDBLK") {
+        if pairs[*i].1 == "EOF" || pairs[*i].1 == "ENDSEC" {
+            return Err(err(pairs[*i].2, format!("block `{name}` without ENDBLK")));
+        }
+        if let Some(e) = entity(pairs, i, chord_tol, skipped)? {
+            def.entities.push(e);
+        }
     }
-    // Expand inserts: every top-level insert is a piece candidate.
+    *i += 1;
+    Ok((name, def))
+}
+
+/// The entities with every insert replaced by its block's entities: every top-level insert is
+/// a piece candidate, so each entity carries the index of the insert it came from. Also returns
+/// the number of inserts.
+fn expand_inserts(
+    entities: Vec<Entity>,
+    blocks: &BTreeMap<String, BlockDef>,
+) -> Result<(Vec<(Option<usize>, Entity)>, usize), PatternError> {
     let mut top: Vec<(Option<usize>, Entity)> = Vec::new();
     let mut n_insert = 0;
     let mut count = 0usize;
@@ -258,19 +303,28 @@ fn read_entities(
         match &e.geo {
             Geo::Insert(ins) => {
                 let mut out = Vec::new();
-                expand(ins, &blocks, 0, e.line, &mut out, &mut count)?;
+                expand(ins, blocks, 0, e.line, &mut out, &mut count)?;
                 top.extend(out.into_iter().map(|x| (Some(n_insert), x)));
                 n_insert += 1;
             }
             _ => top.push((None, e)),
         }
     }
-    // Units.
+    Ok((top, n_insert))
+}
+
+/// Millimetres per drawing unit: `$INSUNITS` where it names a length unit, else the AAMA
+/// `Units:` text, else 1 (with a warning).
+fn unit_scale(
+    insunits: Option<i64>,
+    top: &[(Option<usize>, Entity)],
+    warnings: &mut Vec<String>,
+) -> f64 {
     let aama_units = top.iter().find_map(|(_, e)| match &e.geo {
         Geo::Text { value, .. } => aama_field(value, "Units"),
         _ => None,
     });
-    let scale = match (insunits, aama_units.as_deref()) {
+    match (insunits, aama_units.as_deref()) {
         (Some(1), _) => 25.4,
         (Some(2), _) => 304.8,
         (Some(4), _) => 1.0,
@@ -289,12 +343,7 @@ fn read_entities(
                 .push("the file states no unit ($INSUNITS or AAMA `Units:`): read as mm".into());
             1.0
         }
-    };
-    for (_, e) in &mut top {
-        scale_geo(&mut e.geo, scale);
-        check_range(e)?;
     }
-    Ok((top, n_insert, warnings))
 }
 
 /// Reads one entity starting at `pairs[*i]` (a code-0 pair); advances past it.
@@ -310,183 +359,278 @@ fn entity(
     while *i < pairs.len() && pairs[*i].0 != 0 {
         *i += 1;
     }
-    let body = &pairs[start..*i];
-    let layer = body
-        .iter()
-        .find(|p| p.0 == 8)
-        .map(|p| p.1.to_string())
-        .unwrap_or_else(|| "0".into());
-    let get = |c: i32| -> Result<f64, PatternError> {
-        match body.iter().find(|p| p.0 == c) {
-            Some(&(_, v, l)) => number(v, l),
-            None => Ok(0.0),
-        }
-    };
-    let get_or = |c: i32, d: f64| -> Result<f64, PatternError> {
-        match body.iter().find(|p| p.0 == c) {
-            Some(&(_, v, l)) => number(v, l),
-            None => Ok(d),
-        }
-    };
-    // OCS with extrusion (0, 0, -1): x is mirrored (arcs drawn from below).
-    let flip = get_or(230, 1.0)? < 0.0;
-    let ocs = |p: DVec2| if flip { DVec2::new(-p.x, p.y) } else { p };
+    let body = Body::new(kind, line, &pairs[start..*i])?;
     let geo = match kind {
-        "LINE" => Geo::Path {
-            pts: vec![
-                ocs(DVec2::new(get(10)?, get(20)?)),
-                ocs(DVec2::new(get(11)?, get(21)?)),
-            ],
-            closed: false,
-        },
-        "POINT" => Geo::Point(ocs(DVec2::new(get(10)?, get(20)?))),
-        "CIRCLE" | "ARC" => {
-            let c = DVec2::new(get(10)?, get(20)?);
-            let r = get(40)?;
-            if r.is_nan() || r <= 0.0 {
-                return Err(err(line, format!("{kind} with radius {r}")));
-            }
-            let (a0, a1, closed) = if kind == "CIRCLE" {
-                (0.0, 360.0, true)
-            } else {
-                let (a0, mut a1) = (get(50)?, get(51)?);
-                while a1 <= a0 {
-                    a1 += 360.0;
-                }
-                (a0, a1, false)
-            };
-            let mut pts = arc_points(c, r, a0.to_radians(), a1.to_radians(), tol);
-            if closed {
-                pts.pop();
-            }
-            Geo::Path {
-                pts: pts.into_iter().map(ocs).collect(),
-                closed,
-            }
-        }
-        "ELLIPSE" => {
-            let c = DVec2::new(get(10)?, get(20)?);
-            let major = DVec2::new(get(11)?, get(21)?);
-            let ratio = get_or(40, 1.0)?;
-            let (t0, mut t1) = (get_or(41, 0.0)?, get_or(42, std::f64::consts::TAU)?);
-            while t1 <= t0 {
-                t1 += std::f64::consts::TAU;
-            }
-            let minor = DVec2::new(-major.y, major.x) * ratio;
-            let a = major.length();
-            if !(a > 0.0 && ratio > 0.0) {
-                return Err(err(line, "ELLIPSE with a zero axis"));
-            }
-            let step = 2.0 * (1.0 - (tol / a).min(1.0)).acos().max(1e-4);
-            let n = (((t1 - t0) / step).ceil() as usize).clamp(4, MAX_CURVE_POINTS);
-            let closed = (t1 - t0 - std::f64::consts::TAU).abs() < 1e-9;
-            let m = if closed { n } else { n + 1 };
-            let pts = (0..m)
-                .map(|k| {
-                    let t = t0 + (t1 - t0) * k as f64 / n as f64;
-                    ocs(c + major * t.cos() + minor * t.sin())
-                })
-                .collect();
-            Geo::Path { pts, closed }
-        }
-        "LWPOLYLINE" => {
-            let closed = (get(70)? as i64) & 1 == 1;
-            let mut verts: Vec<(DVec2, f64)> = Vec::new();
-            for &(c, v, l) in body {
-                match c {
-                    10 => verts.push((DVec2::new(number(v, l)?, 0.0), 0.0)),
-                    20 => {
-                        if let Some(p) = verts.last_mut() {
-                            p.0.y = number(v, l)?;
-                        }
-                    }
-                    42 => {
-                        if let Some(p) = verts.last_mut() {
-                            p.1 = number(v, l)?;
-                        }
-                    }
-                    _ => {}
-                }
-            }
-            bulge_path(&verts, closed, tol, ocs)
-        }
-        "POLYLINE" => {
-            let flags = get(70)? as i64;
-            let closed = flags & 1 == 1;
-            let mut verts = Vec::new();
-            while *i < pairs.len() && pairs[*i].0 == 0 && pairs[*i].1 == "VERTEX" {
-                *i += 1;
-                let (mut p, mut b) = (DVec2::ZERO, 0.0);
-                while *i < pairs.len() && pairs[*i].0 != 0 {
-                    let (c, v, l) = pairs[*i];
-                    match c {
-                        10 => p.x = number(v, l)?,
-                        20 => p.y = number(v, l)?,
-                        42 => b = number(v, l)?,
-                        _ => {}
-                    }
-                    *i += 1;
-                }
-                verts.push((p, b));
-            }
-            if *i < pairs.len() && pairs[*i].1 == "SEQEND" {
-                *i += 1;
-                while *i < pairs.len() && pairs[*i].0 != 0 {
-                    *i += 1;
-                }
-            } else {
-                let ln = pairs.get(*i).map_or(line, |p| p.2);
-                return Err(err(ln, "POLYLINE without SEQEND"));
-            }
-            if flags & (16 | 64) != 0 {
+        "LINE" => line_geo(&body)?,
+        "POINT" => Geo::Point(body.point(10, 20)?),
+        "CIRCLE" | "ARC" => circle_or_arc(&body, tol)?,
+        "ELLIPSE" => ellipse(&body, tol)?,
+        "LWPOLYLINE" => lwpolyline(&body, tol)?,
+        "POLYLINE" => match polyline(&body, pairs, i, tol)? {
+            Some(geo) => geo,
+            None => {
                 *skipped.entry("POLYLINE mesh".into()).or_default() += 1;
                 return Ok(None);
             }
-            bulge_path(&verts, closed, tol, ocs)
-        }
-        "SPLINE" => spline(body, line, tol)?,
-        "TEXT" | "MTEXT" => {
-            let mut value = String::new();
-            for &(c, v, _) in body {
-                if c == 3 || c == 1 {
-                    value.push_str(v);
-                }
-            }
-            Geo::Text {
-                at: ocs(DVec2::new(get(10)?, get(20)?)),
-                value,
-            }
-        }
-        "INSERT" => {
-            let name = body
-                .iter()
-                .find(|p| p.0 == 2)
-                .map(|p| p.1.to_string())
-                .unwrap_or_default();
-            let cols = get_or(70, 1.0)?;
-            let rows = get_or(71, 1.0)?;
-            if cols > 1.0 || rows > 1.0 {
-                return Err(err(
-                    line,
-                    format!("INSERT of `{name}` as a {cols}×{rows} array is not supported"),
-                ));
-            }
-            Geo::Insert(Insert {
-                name,
-                at: ocs(DVec2::new(get(10)?, get(20)?)),
-                scale: DVec2::new(
-                    get_or(41, 1.0)? * if flip { -1.0 } else { 1.0 },
-                    get_or(42, 1.0)?,
-                ),
-                rotation_deg: get(50)? * if flip { -1.0 } else { 1.0 },
-            })
-        }
+        },
+        "SPLINE" => spline(body.pairs, line, tol)?,
+        "TEXT" | "MTEXT" => text(&body)?,
+        "INSERT" => insert(&body)?,
         other => {
             *skipped.entry(other.to_string()).or_default() += 1;
             return Ok(None);
         }
     };
-    Ok(Some(Entity { layer, geo, line }))
+    Ok(Some(Entity {
+        layer: body.layer(),
+        geo,
+        line,
+    }))
+}
+
+/// The groups of one entity after its code-0 pair, with the entity's name, line and
+/// orientation.
+struct Body<'p, 'a> {
+    kind: &'a str,
+    line: usize,
+    pairs: &'p [Pair<'a>],
+    /// OCS with extrusion (0, 0, -1): x is mirrored (arcs drawn from below).
+    flip: bool,
+}
+
+impl<'p, 'a> Body<'p, 'a> {
+    fn new(kind: &'a str, line: usize, pairs: &'p [Pair<'a>]) -> Result<Self, PatternError> {
+        let mut body = Body {
+            kind,
+            line,
+            pairs,
+            flip: false,
+        };
+        body.flip = body.get_or(230, 1.0)? < 0.0;
+        Ok(body)
+    }
+
+    /// The layer name (code 8), `0` when none is given.
+    fn layer(&self) -> String {
+        self.pairs
+            .iter()
+            .find(|p| p.0 == 8)
+            .map(|p| p.1.to_string())
+            .unwrap_or_else(|| "0".into())
+    }
+
+    /// The number of the first group with code `c`, `d` when there is none.
+    fn get_or(&self, c: i32, d: f64) -> Result<f64, PatternError> {
+        match self.pairs.iter().find(|p| p.0 == c) {
+            Some(&(_, v, l)) => number(v, l),
+            None => Ok(d),
+        }
+    }
+
+    /// The number of the first group with code `c`, 0 when there is none.
+    fn get(&self, c: i32) -> Result<f64, PatternError> {
+        self.get_or(c, 0.0)
+    }
+
+    /// The point of codes `cx`, `cy` as written, in the entity's own coordinates.
+    fn xy(&self, cx: i32, cy: i32) -> Result<DVec2, PatternError> {
+        Ok(DVec2::new(self.get(cx)?, self.get(cy)?))
+    }
+
+    /// A point of the entity's own coordinates in the drawing's.
+    fn ocs(&self, p: DVec2) -> DVec2 {
+        if self.flip { DVec2::new(-p.x, p.y) } else { p }
+    }
+
+    /// The point of codes `cx`, `cy` in the drawing's coordinates.
+    fn point(&self, cx: i32, cy: i32) -> Result<DVec2, PatternError> {
+        Ok(self.ocs(self.xy(cx, cy)?))
+    }
+
+    /// Bit 1 of the flags (code 70): a closed polyline.
+    fn closed_flag(&self) -> Result<bool, PatternError> {
+        Ok((self.get(70)? as i64) & 1 == 1)
+    }
+}
+
+/// A `LINE`: its two endpoints.
+fn line_geo(body: &Body<'_, '_>) -> Result<Geo, PatternError> {
+    Ok(Geo::Path {
+        pts: vec![body.point(10, 20)?, body.point(11, 21)?],
+        closed: false,
+    })
+}
+
+/// A `CIRCLE` or `ARC`, flattened within `tol`.
+fn circle_or_arc(body: &Body<'_, '_>, tol: f64) -> Result<Geo, PatternError> {
+    let c = body.xy(10, 20)?;
+    let r = body.get(40)?;
+    if r.is_nan() || r <= 0.0 {
+        return Err(err(body.line, format!("{} with radius {r}", body.kind)));
+    }
+    let (a0, a1, closed) = if body.kind == "CIRCLE" {
+        (0.0, 360.0, true)
+    } else {
+        let (a0, mut a1) = (body.get(50)?, body.get(51)?);
+        while a1 <= a0 {
+            a1 += 360.0;
+        }
+        (a0, a1, false)
+    };
+    let mut pts = arc_points(c, r, a0.to_radians(), a1.to_radians(), tol);
+    if closed {
+        pts.pop();
+    }
+    Ok(Geo::Path {
+        pts: pts.into_iter().map(|p| body.ocs(p)).collect(),
+        closed,
+    })
+}
+
+/// An `ELLIPSE` (or an arc of one), flattened within `tol`.
+fn ellipse(body: &Body<'_, '_>, tol: f64) -> Result<Geo, PatternError> {
+    let c = body.xy(10, 20)?;
+    let major = body.xy(11, 21)?;
+    let ratio = body.get_or(40, 1.0)?;
+    let (t0, mut t1) = (
+        body.get_or(41, 0.0)?,
+        body.get_or(42, std::f64::consts::TAU)?,
+    );
+    while t1 <= t0 {
+        t1 += std::f64::consts::TAU;
+    }
+    let minor = DVec2::new(-major.y, major.x) * ratio;
+    let a = major.length();
+    if !(a > 0.0 && ratio > 0.0) {
+        return Err(err(body.line, "ELLIPSE with a zero axis"));
+    }
+    let step = 2.0 * (1.0 - (tol / a).min(1.0)).acos().max(1e-4);
+    let n = (((t1 - t0) / step).ceil() as usize).clamp(4, MAX_CURVE_POINTS);
+    let closed = (t1 - t0 - std::f64::consts::TAU).abs() < 1e-9;
+    let m = if closed { n } else { n + 1 };
+    let pts = (0..m)
+        .map(|k| {
+            let t = t0 + (t1 - t0) * k as f64 / n as f64;
+            body.ocs(c + major * t.cos() + minor * t.sin())
+        })
+        .collect();
+    Ok(Geo::Path { pts, closed })
+}
+
+/// An `LWPOLYLINE`: its vertices (codes 10, 20) and bulges (42), arcs flattened within `tol`.
+fn lwpolyline(body: &Body<'_, '_>, tol: f64) -> Result<Geo, PatternError> {
+    let closed = body.closed_flag()?;
+    let mut verts: Vec<(DVec2, f64)> = Vec::new();
+    for &(c, v, l) in body.pairs {
+        match c {
+            10 => verts.push((DVec2::new(number(v, l)?, 0.0), 0.0)),
+            20 => {
+                if let Some(p) = verts.last_mut() {
+                    p.0.y = number(v, l)?;
+                }
+            }
+            42 => {
+                if let Some(p) = verts.last_mut() {
+                    p.1 = number(v, l)?;
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(bulge_path(&verts, closed, tol, |p| body.ocs(p)))
+}
+
+/// A `POLYLINE` with the `VERTEX` entities and the `SEQEND` after it (`*i` is advanced past
+/// them), arcs flattened within `tol`; `None` for a polygon or polyface mesh.
+fn polyline(
+    body: &Body<'_, '_>,
+    pairs: &[Pair<'_>],
+    i: &mut usize,
+    tol: f64,
+) -> Result<Option<Geo>, PatternError> {
+    let flags = body.get(70)? as i64;
+    let closed = flags & 1 == 1;
+    let verts = polyline_vertices(pairs, i)?;
+    skip_seqend(pairs, i, body.line)?;
+    if flags & (16 | 64) != 0 {
+        return Ok(None);
+    }
+    Ok(Some(bulge_path(&verts, closed, tol, |p| body.ocs(p))))
+}
+
+/// The `VERTEX` entities from `pairs[*i]` on: each one's point and bulge; advances past them.
+fn polyline_vertices(pairs: &[Pair<'_>], i: &mut usize) -> Result<Vec<(DVec2, f64)>, PatternError> {
+    let mut verts = Vec::new();
+    while *i < pairs.len() && pairs[*i].0 == 0 && pairs[*i].1 == "VERTEX" {
+        *i += 1;
+        let (mut p, mut b) = (DVec2::ZERO, 0.0);
+        while *i < pairs.len() && pairs[*i].0 != 0 {
+            let (c, v, l) = pairs[*i];
+            match c {
+                10 => p.x = number(v, l)?,
+                20 => p.y = number(v, l)?,
+                42 => b = number(v, l)?,
+                _ => {}
+            }
+            *i += 1;
+        }
+        verts.push((p, b));
+    }
+    Ok(verts)
+}
+
+/// Advances past the `SEQEND` at `pairs[*i]` that ends the `POLYLINE` of line `line`; an error
+/// when there is none.
+fn skip_seqend(pairs: &[Pair<'_>], i: &mut usize, line: usize) -> Result<(), PatternError> {
+    if *i < pairs.len() && pairs[*i].1 == "SEQEND" {
+        *i += 1;
+        while *i < pairs.len() && pairs[*i].0 != 0 {
+            *i += 1;
+        }
+        Ok(())
+    } else {
+        let ln = pairs.get(*i).map_or(line, |p| p.2);
+        Err(err(ln, "POLYLINE without SEQEND"))
+    }
+}
+
+/// A `TEXT` or `MTEXT`: its insertion point and its text (codes 3 and 1, in order).
+fn text(body: &Body<'_, '_>) -> Result<Geo, PatternError> {
+    let mut value = String::new();
+    for &(c, v, _) in body.pairs {
+        if c == 3 || c == 1 {
+            value.push_str(v);
+        }
+    }
+    Ok(Geo::Text {
+        at: body.point(10, 20)?,
+        value,
+    })
+}
+
+/// An `INSERT` of a block; arrays of inserts are refused.
+fn insert(body: &Body<'_, '_>) -> Result<Geo, PatternError> {
+    let name = body
+        .pairs
+        .iter()
+        .find(|p| p.0 == 2)
+        .map(|p| p.1.to_string())
+        .unwrap_or_default();
+    let cols = body.get_or(70, 1.0)?;
+    let rows = body.get_or(71, 1.0)?;
+    if cols > 1.0 || rows > 1.0 {
+        return Err(err(
+            body.line,
+            format!("INSERT of `{name}` as a {cols}×{rows} array is not supported"),
+        ));
+    }
+    let mirror = if body.flip { -1.0 } else { 1.0 };
+    Ok(Geo::Insert(Insert {
+        name,
+        at: body.point(10, 20)?,
+        scale: DVec2::new(body.get_or(41, 1.0)? * mirror, body.get_or(42, 1.0)?),
+        rotation_deg: body.get(50)? * mirror,
+    }))
 }
 
 /// Points of an arc from angle `a0` to `a1` (radians, counter-clockwise), within `tol`.
@@ -761,13 +905,45 @@ fn classify(
     let aama_blocks = top
         .iter()
         .any(|(b, e)| b.is_some() && e.layer == "1" && matches!(e.geo, Geo::Path { .. }));
-    let drill_r = 0.5 * PieceOptions::DEFAULT_DRILL_DIAMETER;
-    let mut strokes: Vec<Stroke> = Vec::new();
-    let mut pieces: Vec<PieceInfo> = Vec::new();
-    // Groups: (insert index or None, layer name) → paths to chain.
-    let mut groups: BTreeMap<(Option<usize>, String), Vec<(Vec<DVec2>, bool)>> = BTreeMap::new();
-    let mut labels: BTreeMap<usize, LabelInfo> = BTreeMap::new();
-    let mut grains: BTreeMap<usize, (DVec2, DVec2)> = BTreeMap::new();
+    let gathered = gather(top, aama_blocks, &mut warnings);
+    let _ = n_insert;
+    let mut strokes = group_strokes(gathered.groups, &mut warnings);
+    let pieces = if aama_blocks {
+        block_pieces(
+            &mut strokes,
+            gathered.labels,
+            &gathered.grains,
+            &mut warnings,
+        )
+    } else {
+        contour_pieces(&mut strokes)
+    };
+    assign_ids(&mut strokes, &pieces);
+    DxfImport {
+        drawing: Drawing { strokes, pieces },
+        warnings,
+    }
+}
+
+/// What the top-level entities say, sorted by what classification does with it.
+#[derive(Default)]
+struct Gathered {
+    /// (insert index or None, layer name) → paths to chain.
+    groups: BTreeMap<(Option<usize>, String), Vec<(Vec<DVec2>, bool)>>,
+    /// Per AAMA block: its piece label (layer 1 text).
+    labels: BTreeMap<usize, LabelInfo>,
+    /// Per AAMA block: its grain line (the first two-point line on layer 7).
+    grains: BTreeMap<usize, (DVec2, DVec2)>,
+}
+
+/// Sorts the entities into paths per block and layer, labels and grain lines; blocks count only
+/// in an AAMA file (`aama_blocks`).
+fn gather(
+    top: Vec<(Option<usize>, Entity)>,
+    aama_blocks: bool,
+    warnings: &mut Vec<String>,
+) -> Gathered {
+    let mut g = Gathered::default();
     for (b, e) in top {
         let block = if aama_blocks { b } else { None };
         match e.geo {
@@ -775,54 +951,77 @@ fn classify(
                 if let (Some(k), "7") = (block, e.layer.as_str())
                     && pts.len() == 2
                 {
-                    grains.entry(k).or_insert((pts[0], pts[1]));
+                    g.grains.entry(k).or_insert((pts[0], pts[1]));
                 }
-                groups
+                g.groups
                     .entry((block, e.layer.clone()))
                     .or_default()
                     .push((pts, closed));
             }
             Geo::Path { .. } => {}
             Geo::Point(p) if e.layer == "13" => {
-                let n = 24;
-                let pts = (0..n)
-                    .map(|k| {
-                        p + drill_r * DVec2::from_angle(k as f64 * std::f64::consts::TAU / n as f64)
-                    })
-                    .collect();
-                groups
+                g.groups
                     .entry((block, e.layer.clone()))
                     .or_default()
-                    .push((pts, true));
+                    .push((drill_hole(p), true));
             }
             Geo::Point(_) => {}
             Geo::Text { value, .. } => {
                 if let (Some(k), "1") = (block, e.layer.as_str()) {
-                    let l = labels.entry(k).or_insert_with(|| LabelInfo {
-                        quantity: 1,
-                        ..LabelInfo::default()
-                    });
-                    if let Some(v) = aama_field(&value, "Piece Name") {
-                        l.name = v;
-                    } else if let Some(v) = aama_field(&value, "Size") {
-                        l.size = v;
-                    } else if let Some(v) = aama_field(&value, "Material") {
-                        l.material = v;
-                    } else if let Some(v) = aama_field(&value, "Quantity") {
-                        match v.parse::<u32>() {
-                            Ok(q) if q > 0 => l.quantity = q,
-                            _ => warnings.push(format!(
-                                "piece {}: `Quantity: {v}` is not a positive count; 1 used",
-                                k + 1
-                            )),
-                        }
-                    }
+                    let label = g.labels.entry(k).or_insert_with(unlabelled);
+                    read_label_text(label, &value, k, warnings);
                 }
             }
             Geo::Insert(_) => {}
         }
     }
-    let _ = n_insert;
+    g
+}
+
+/// A drill hole at `p` (AAMA layer 13) as a closed 24-gon of the default drill diameter.
+fn drill_hole(p: DVec2) -> Vec<DVec2> {
+    let drill_r = 0.5 * PieceOptions::DEFAULT_DRILL_DIAMETER;
+    let n = 24;
+    (0..n)
+        .map(|k| p + drill_r * DVec2::from_angle(k as f64 * std::f64::consts::TAU / n as f64))
+        .collect()
+}
+
+/// The label of a piece nothing names: quantity 1, no name, size or material.
+fn unlabelled() -> LabelInfo {
+    LabelInfo {
+        quantity: 1,
+        ..LabelInfo::default()
+    }
+}
+
+/// Reads one AAMA piece text of block `k` (`Piece Name:`, `Size:`, `Material:` or `Quantity:`)
+/// into its label.
+fn read_label_text(label: &mut LabelInfo, value: &str, k: usize, warnings: &mut Vec<String>) {
+    if let Some(v) = aama_field(value, "Piece Name") {
+        label.name = v;
+    } else if let Some(v) = aama_field(value, "Size") {
+        label.size = v;
+    } else if let Some(v) = aama_field(value, "Material") {
+        label.material = v;
+    } else if let Some(v) = aama_field(value, "Quantity") {
+        match v.parse::<u32>() {
+            Ok(q) if q > 0 => label.quantity = q,
+            _ => warnings.push(format!(
+                "piece {}: `Quantity: {v}` is not a positive count; 1 used",
+                k + 1
+            )),
+        }
+    }
+}
+
+/// The strokes of the grouped paths: each layer's kind, cuts and seams chained into contours,
+/// open cut contours kept as lines (with a warning).
+fn group_strokes(
+    groups: BTreeMap<(Option<usize>, String), Vec<(Vec<DVec2>, bool)>>,
+    warnings: &mut Vec<String>,
+) -> Vec<Stroke> {
+    let mut strokes: Vec<Stroke> = Vec::new();
     for ((block, layer), paths) in groups {
         let (tool, kind) = aama_layer_kind(&layer)
             .or_else(|| named_layer_kind(&layer))
@@ -835,12 +1034,7 @@ fn classify(
         for (pts, closed) in paths {
             let kind = match kind {
                 StrokeKind::Boundary | StrokeKind::InnerCut if !closed => {
-                    warnings.push(format!(
-                        "an open contour on layer `{layer}` ({} points from ({:.3}, {:.3})) is kept as a line, not a piece",
-                        pts.len(),
-                        pts[0].x,
-                        pts[0].y
-                    ));
+                    warnings.push(open_contour_warning(&layer, &pts));
                     StrokeKind::Internal
                 }
                 k => k,
@@ -855,69 +1049,98 @@ fn classify(
             });
         }
     }
-    if aama_blocks {
-        // Per block: the largest closed boundary is the piece; other closed boundaries are cut-outs.
-        let blocks: Vec<u32> = {
-            let mut v: Vec<u32> = strokes.iter().filter_map(|s| s.piece).collect();
-            v.sort_unstable();
-            v.dedup();
-            v
-        };
-        for b in blocks {
-            let best = strokes
-                .iter()
-                .enumerate()
-                .filter(|(_, s)| s.piece == Some(b) && s.kind == StrokeKind::Boundary)
-                .max_by(|x, y| area(&x.1.points).total_cmp(&area(&y.1.points)))
-                .map(|(i, _)| i);
-            for (i, s) in strokes.iter_mut().enumerate() {
-                if s.piece == Some(b) && s.kind == StrokeKind::Boundary && Some(i) != best {
-                    s.kind = StrokeKind::InnerCut;
-                }
-            }
-            if best.is_none() {
-                warnings.push(format!(
-                    "block {} has no closed boundary on layer 1: not a piece",
-                    b + 1
-                ));
-            }
-            let label = labels.remove(&(b as usize)).unwrap_or_else(|| LabelInfo {
-                quantity: 1,
-                ..LabelInfo::default()
-            });
-            pieces.push(PieceInfo {
-                piece: b,
-                label,
-                grain: grains.get(&(b as usize)).copied(),
-            });
+    strokes
+}
+
+/// The warning for an open contour on a cut layer.
+fn open_contour_warning(layer: &str, pts: &[DVec2]) -> String {
+    format!(
+        "an open contour on layer `{layer}` ({} points from ({:.3}, {:.3})) is kept as a line, not a piece",
+        pts.len(),
+        pts[0].x,
+        pts[0].y
+    )
+}
+
+/// The pieces of an AAMA file, one per block, with the labels and grain lines read; loose
+/// strokes join the piece that holds them.
+fn block_pieces(
+    strokes: &mut [Stroke],
+    mut labels: BTreeMap<usize, LabelInfo>,
+    grains: &BTreeMap<usize, (DVec2, DVec2)>,
+    warnings: &mut Vec<String>,
+) -> Vec<PieceInfo> {
+    let mut pieces = Vec::new();
+    let blocks: Vec<u32> = {
+        let mut v: Vec<u32> = strokes.iter().filter_map(|s| s.piece).collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
+    for b in blocks {
+        if keep_largest_boundary(strokes, b).is_none() {
+            warnings.push(format!(
+                "block {} has no closed boundary on layer 1: not a piece",
+                b + 1
+            ));
         }
-        // Loose strokes outside the blocks join the piece that holds them.
-        crate::plain_pieces::assign_by_containment(&mut strokes);
-    } else {
-        crate::plain_pieces::find_pieces(&mut strokes);
-        let n = strokes
-            .iter()
-            .filter_map(|s| s.piece)
-            .max()
-            .map_or(0, |m| m + 1);
-        for k in 0..n {
+        let label = labels.remove(&(b as usize)).unwrap_or_else(unlabelled);
+        pieces.push(PieceInfo {
+            piece: b,
+            label,
+            grain: grains.get(&(b as usize)).copied(),
+        });
+    }
+    // Loose strokes outside the blocks join the piece that holds them.
+    crate::plain_pieces::assign_by_containment(strokes);
+    pieces
+}
+
+/// In block `b`, the largest closed boundary is the piece and other closed boundaries become
+/// cut-outs; returns the piece's stroke index, if the block has a boundary.
+fn keep_largest_boundary(strokes: &mut [Stroke], b: u32) -> Option<usize> {
+    let best = strokes
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.piece == Some(b) && s.kind == StrokeKind::Boundary)
+        .max_by(|x, y| area(&x.1.points).total_cmp(&area(&y.1.points)))
+        .map(|(i, _)| i);
+    for (i, s) in strokes.iter_mut().enumerate() {
+        if s.piece == Some(b) && s.kind == StrokeKind::Boundary && Some(i) != best {
+            s.kind = StrokeKind::InnerCut;
+        }
+    }
+    best
+}
+
+/// The pieces of a file without AAMA blocks: every outer closed cut contour, with the strokes
+/// inside it and its grain line.
+fn contour_pieces(strokes: &mut [Stroke]) -> Vec<PieceInfo> {
+    crate::plain_pieces::find_pieces(strokes);
+    let n = strokes
+        .iter()
+        .filter_map(|s| s.piece)
+        .max()
+        .map_or(0, |m| m + 1);
+    (0..n)
+        .map(|k| {
             let grain = strokes
                 .iter()
                 .find(|s| s.piece == Some(k) && s.kind == StrokeKind::Grain && s.points.len() == 2)
                 .map(|s| (s.points[0], s.points[1]));
-            pieces.push(PieceInfo {
+            PieceInfo {
                 piece: k,
-                label: LabelInfo {
-                    quantity: 1,
-                    ..LabelInfo::default()
-                },
+                label: unlabelled(),
                 grain,
-            });
-        }
-    }
-    // Ids for comments and messages: piece name (or number) and kind.
+            }
+        })
+        .collect()
+}
+
+/// Ids for comments and messages: piece name (or number), kind and a count.
+fn assign_ids(strokes: &mut [Stroke], pieces: &[PieceInfo]) {
     let mut counters: BTreeMap<(Option<u32>, StrokeKind), usize> = BTreeMap::new();
-    for s in &mut strokes {
+    for s in strokes {
         let c = counters.entry((s.piece, s.kind)).or_default();
         *c += 1;
         let owner = match s.piece {
@@ -930,10 +1153,6 @@ fn classify(
             None => "loose".into(),
         };
         s.id = format!("{owner}-{}-{c}", kind_name(s.kind));
-    }
-    DxfImport {
-        drawing: Drawing { strokes, pieces },
-        warnings,
     }
 }
 
