@@ -257,6 +257,7 @@ const DOCUMENTED_CRATES: &[&str] = &[
     "crates/motion",
     "crates/nest",
     "crates/pattern",
+    "crates/report",
     "crates/step",
     "crates/surface",
     "crates/testkit",
