@@ -258,6 +258,7 @@ const DOCUMENTED_CRATES: &[&str] = &[
     "crates/nest",
     "crates/pattern",
     "crates/report",
+    "crates/server",
     "crates/step",
     "crates/surface",
     "crates/testkit",
