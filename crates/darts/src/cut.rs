@@ -76,6 +76,8 @@ impl CutMesh {
 /// vertex (side 0 is the side of the triangle in which the path's edges run forward).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Legs {
+    /// Side 0's and side 1's cut-mesh vertices (0-based), one per path vertex in path order
+    /// (mouth first).
     pub sides: [Vec<u32>; 2],
 }
 

@@ -20,6 +20,7 @@ pub const SNAP_REL: f64 = 0.12;
 /// A piece with paths embedded in it.
 #[derive(Clone, Debug)]
 pub struct Embedded {
+    /// The piece re-triangulated so every path runs along its edges.
     pub mesh: TriMesh,
     /// Per triangle, the triangle of the original piece it lies in.
     pub parent: Vec<u32>,

@@ -16,6 +16,7 @@ use flatcut_mesh::seams::{nearest_vertex, seam_from_points};
 /// Vertices no dart may use (indexed like the piece's vertices).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct KeepOut {
+    /// Per vertex (0-based, the piece's order), true when no dart may use it.
     pub blocked: Vec<bool>,
 }
 
@@ -23,10 +24,20 @@ pub struct KeepOut {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum KeepOutError {
+    /// A region's outline has fewer than three points.
     #[error("no_cut region {region}: it needs at least three points")]
-    TooFewPoints { region: usize },
+    TooFewPoints {
+        /// 0-based index of the region in the design's list.
+        region: usize,
+    },
+    /// A region's outline cannot be traced on the surface between its points.
     #[error("no_cut region {region}: {reason}")]
-    Path { region: usize, reason: String },
+    Path {
+        /// 0-based index of the region in the design's list.
+        region: usize,
+        /// Why the tracing failed.
+        reason: String,
+    },
 }
 
 impl KeepOut {
@@ -37,6 +48,7 @@ impl KeepOut {
         }
     }
 
+    /// True when vertex `v` is blocked; false for an index beyond the keep-out.
     pub fn is_blocked(&self, v: u32) -> bool {
         self.blocked.get(v as usize).copied().unwrap_or(false)
     }

@@ -72,6 +72,7 @@
 //! Cuts no longer needed are sewn back (`resew`): a slit ending inside a part is closed, and parts
 //! whose union lies within the limits are merged (the fewest pieces), kept only if their joint solve
 //! holds.
+#![warn(missing_docs)]
 
 pub mod band;
 pub mod crossing;
@@ -125,8 +126,11 @@ pub struct DartOptions {
 }
 
 impl DartOptions {
+    /// Default [`DartOptions::max_darts`].
     pub const DEFAULT_MAX_DARTS: usize = 24;
+    /// Default [`DartOptions::min_spacing_mm`] (mm).
     pub const DEFAULT_MIN_SPACING_MM: f64 = 10.0;
+    /// Default [`DartOptions::drill_offset_mm`] (mm).
     pub const DEFAULT_DRILL_OFFSET_MM: f64 = 5.0;
 
     /// Darts for stretch and compression limits in percent, with the default count, spacing and
@@ -156,26 +160,31 @@ impl DartOptions {
         self
     }
 
+    /// Sets [`DartOptions::max_darts`].
     pub fn with_max_darts(mut self, n: usize) -> Self {
         self.max_darts = n;
         self
     }
 
+    /// Sets [`DartOptions::min_spacing_mm`] (mm).
     pub fn with_min_spacing_mm(mut self, mm: f64) -> Self {
         self.min_spacing_mm = mm;
         self
     }
 
+    /// Sets [`DartOptions::drill_offset_mm`] (mm).
     pub fn with_drill_offset_mm(mut self, mm: f64) -> Self {
         self.drill_offset_mm = mm;
         self
     }
 
+    /// Sets the vertices no dart may use ([`DartOptions::keep_out`]).
     pub fn with_keep_out(mut self, k: KeepOut) -> Self {
         self.keep_out = Some(k);
         self
     }
 
+    /// Sets how the final map uses the material's give ([`DartOptions::fit`]).
     pub fn with_fit(mut self, fit: DartFit) -> Self {
         self.fit = fit;
         self
@@ -189,8 +198,11 @@ pub struct Dart {
     pub path: Vec<u32>,
     /// Its two legs in the cut mesh (vertex paths from mouth to point).
     pub legs: Legs,
+    /// The mouth: the path's first vertex, on the outline (3D, mm).
     pub start_3d: DVec3,
+    /// The point: the path's last vertex (3D, mm).
     pub apex_3d: DVec3,
+    /// Length of the path along the surface (mm).
     pub length_3d_mm: f64,
     /// 2D length of each leg (mm).
     pub leg_2d_mm: [f64; 2],
@@ -199,6 +211,7 @@ pub struct Dart {
     /// The drill mark, on the dart a set distance short of its point: in 3D, and in the plane
     /// (midway between the legs).
     pub drill_3d: DVec3,
+    /// The drill mark in the plane (mm), midway between the legs.
     pub drill_2d: DVec2,
 }
 
@@ -248,10 +261,13 @@ impl Dart {
 /// One count of darts the search tried.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Attempt {
+    /// Number of darts placed.
     pub darts: usize,
+    /// Their total 3D length (mm).
     pub total_length_mm: f64,
     /// Largest limit excess reached (log strain).
     pub excess: f64,
+    /// True when this count brought every face within the limits.
     pub feasible: bool,
 }
 
@@ -262,9 +278,11 @@ pub struct Darted {
     pub mesh: TriMesh,
     /// For every vertex of `mesh`, the piece's vertex it copies.
     pub origin: Vec<u32>,
+    /// The darts, with their measures in the final map.
     pub darts: Vec<Dart>,
     /// Largest limit excess over the faces (log strain; negative within the limits).
     pub excess: f64,
+    /// True when every face is within the limits (`excess` ≤ 0).
     pub feasible: bool,
     /// Where the largest excess is (3D).
     pub worst_3d: DVec3,
@@ -286,12 +304,17 @@ impl Darted {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum DartError {
+    /// The piece, or the piece cut along the darts, is not a surface darts can be cut into
+    /// (not a manifold disk).
     #[error(transparent)]
     Topology(#[from] TopologyError),
+    /// The flattening of the piece cut along the darts failed.
     #[error("flattening the cut piece failed: {0}")]
     Flatten(flatcut_flatten::FlattenError),
+    /// The solve that holds every face within the limits failed.
     #[error("the limit solve failed: {0}")]
     Limits(#[from] limits::LimitError),
+    /// A numerical solve failed; the message says which and why.
     #[error("the solver failed: {0}")]
     Solver(String),
     /// A placement that cannot be made (too many darts for the outline, a dart that cannot
@@ -304,10 +327,13 @@ pub enum DartError {
         excess_pct(*excess), at.x, at.y, at.z
     )]
     Infeasible {
+        /// The darts of the closest attempt (0 when no dart could be placed or help).
         darts: usize,
         /// Largest limit excess reached (log strain).
         excess: f64,
+        /// Where the largest excess is (3D, mm).
         at: DVec3,
+        /// Why no dart set works (none fits, none can help, none up to the cap suffices).
         reason: String,
     },
     /// The darts that hold the limits close past their mouths: the flat outline overlaps itself,
@@ -316,7 +342,12 @@ pub enum DartError {
         "the darts that bring the piece within the limits ({darts} of them) close past their mouths: the flat piece overlaps itself near ({:.2}, {:.2}, {:.2})",
         at.x, at.y, at.z
     )]
-    Overlap { darts: usize, at: DVec3 },
+    Overlap {
+        /// The number of darts.
+        darts: usize,
+        /// A point near the overlap (3D, mm).
+        at: DVec3,
+    },
     /// The darts that hold the limits cannot keep a dart's two legs at equal 2D lengths: they
     /// could not be sewn point to point.
     #[error(
@@ -324,8 +355,12 @@ pub enum DartError {
         LEG_MATCH_MM, at.x, at.y, at.z
     )]
     LegsApart {
+        /// The number of darts.
         darts: usize,
+        /// The largest difference between a dart's two 2D leg lengths (mm), over
+        /// [`LEG_MATCH_MM`].
         apart_mm: f64,
+        /// Near that dart (3D, mm).
         at: DVec3,
     },
     /// The parts of a split, each within the limits, still include one whose flat outline
@@ -334,14 +369,23 @@ pub enum DartError {
         "split into {parts} parts, one still overlaps itself flat near ({:.2}, {:.2}, {:.2}): no pattern can be cut from it (it needs more parts or more time)",
         at.x, at.y, at.z
     )]
-    SplitOverlap { parts: usize, at: DVec3 },
+    SplitOverlap {
+        /// The number of parts of the split.
+        parts: usize,
+        /// A point near the overlap (3D, mm).
+        at: DVec3,
+    },
     /// A flat piece (not split) whose outline crosses itself: it overlaps itself flat, however
     /// well each face keeps its limits.
     #[error(
         "the flat piece overlaps itself near ({:.2}, {:.2}, {:.2}): its outline crosses itself, so no pattern can be cut from it (splitting it, --split auto, cuts it into parts that lie flat)",
         at.x, at.y, at.z
     )]
-    OutlineCrossing { at: DVec3 },
+    OutlineCrossing {
+        /// A point near the crossing (3D, mm).
+        at: DVec3,
+    },
+    /// A state the algorithm should never reach (a bug); the message says which.
     #[error("internal error (please report): {0}")]
     Internal(String),
 }

@@ -39,7 +39,9 @@ pub use crate::band::Band;
 /// ([`Threads`], with the grain where it lies in the plane of the solve).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Limits {
+    /// Bounds on both principal stretches, whatever their direction.
     Band(Band),
+    /// Bounds per thread direction (warp, weft, both biases).
     Threads(Threads),
 }
 
@@ -196,9 +198,13 @@ const INTERIOR_ITERS: usize = 40;
 /// stretch and the compression wall, the walls `wall` (log strain) beyond the limits.
 #[derive(Clone, Copy, Debug)]
 pub struct BandBarrier {
+    /// The limits.
     pub band: Band,
+    /// How far beyond the limits the barriers' walls stand (log strain).
     pub wall: f64,
+    /// The barriers' weight (smaller: a map closer to the walls).
     pub mu: f64,
+    /// The weight of δ2.
     pub reg: f64,
 }
 
@@ -292,8 +298,11 @@ separable_iso_energy!(BandBarrier);
 /// p-th powers is dominated by the faces nearest the largest excess).
 #[derive(Clone, Copy, Debug)]
 pub struct BandPower {
+    /// The limits.
     pub band: Band,
+    /// The exponent (larger: closer to the min-max).
     pub p: f64,
+    /// The weight of δ2.
     pub reg: f64,
 }
 
@@ -359,6 +368,7 @@ pub struct Held {
     pub excess: f64,
     /// The face with the largest excess.
     pub worst_face: usize,
+    /// True when every face is within the limits (`excess` ≤ 0).
     pub feasible: bool,
     /// Newton iterations spent.
     pub iterations: usize,
@@ -368,10 +378,13 @@ pub struct Held {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum LimitError {
+    /// A triangle (0-based index) has zero area on the surface.
     #[error("triangle {0} is degenerate")]
     Degenerate(usize),
+    /// A triangle (0-based index) is flipped in the start map, which must be flip-free.
     #[error("the start map has an inverted triangle ({0})")]
     Inverted(usize),
+    /// The Newton solve failed; the message says why.
     #[error("the solver failed: {0}")]
     Solver(String),
 }

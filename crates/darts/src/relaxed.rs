@@ -26,11 +26,15 @@ const COMPRESS_PENALTY: f64 = 100.0;
 /// The yielding energy of the dart limit (see the module doc).
 #[derive(Clone, Copy, Debug)]
 pub struct Yield {
+    /// S, the largest stretch factor before the material yields (1 + stretch %/100).
     pub s_max: f64,
+    /// C, the smallest stretch factor (1 − compression %/100); below it compression is
+    /// penalised.
     pub s_min: f64,
 }
 
 impl Yield {
+    /// The yielding energy of the limits `band`.
     pub fn new(band: Band) -> Self {
         Self {
             s_max: band.s_max(),

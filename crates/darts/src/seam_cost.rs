@@ -65,8 +65,12 @@ impl Visibility {
 /// A seam's length (mm), visibility-weighted length (mm) and turning (rad).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SeamCost {
+    /// Length along the surface (mm).
     pub length_mm: f64,
+    /// Length weighted by each point's visibility factor (mm; at most `length_mm` where the
+    /// factors are at most 1).
     pub visible_mm: f64,
+    /// Sum of the angles between consecutive segments (radians; 0 for a straight seam).
     pub turning_rad: f64,
 }
 

@@ -10,6 +10,8 @@ use std::ops::Range;
 /// copies of one cut edge, one on each leg of a dart.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct EdgePairs {
+    /// Each pair: two edges as (from, to) vertex indices (0-based) of the cut mesh, one per
+    /// leg, both directed from the mouth towards the point.
     pub pairs: Vec<[(usize, usize); 2]>,
     /// The pairs of each dart's legs: `pairs[legs[k]]` (a dart's legs are sewn as a whole).
     pub legs: Vec<Range<usize>>,
@@ -41,6 +43,7 @@ impl EdgePairs {
 /// from crossing. Empty for the least-strained fit.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Closing {
+    /// One pull per dart drawn shut.
     pub pulls: Vec<Pull>,
     /// Triangles (counter-clockwise in the map the closing is made for) that must not turn over.
     pub guards: Vec<[usize; 3]>,

@@ -19,7 +19,9 @@ use crate::sewn::{Closing, EdgePairs};
 
 /// Result of a Newton run.
 pub struct Run {
+    /// The map: a 2D position (mm) per vertex.
     pub x: Vec<DVec2>,
+    /// Newton iterations spent.
     pub iterations: usize,
 }
 

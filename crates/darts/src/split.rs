@@ -121,6 +121,7 @@ pub struct SplitOptions {
 }
 
 impl SplitOptions {
+    /// Default [`SplitOptions::max_pieces`].
     pub const DEFAULT_MAX_PIECES: usize = 32;
 }
 
@@ -136,6 +137,7 @@ pub struct Split {
     pub cuts: Vec<Vec<DVec3>>,
     /// Largest limit excess over every piece's faces (log strain; negative within the limits).
     pub excess: f64,
+    /// True when every piece's faces are within the limits (`excess` ≤ 0).
     pub feasible: bool,
     /// Where the largest excess is (3D).
     pub worst_3d: DVec3,

@@ -58,7 +58,9 @@ pub struct Threads {
 /// A grain line on the surface: the warp runs along `dir` at `at`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GrainAnchor {
+    /// A point of the grain line on the surface (3D, mm).
     pub at: DVec3,
+    /// The warp's direction there (3D, unit).
     pub dir: DVec3,
 }
 
@@ -289,8 +291,11 @@ fn thread_eval<T: ThreadTerm>(
 /// The p-norm stand-in for the largest thread excess (phase 0 of [`crate::limits::reach`]).
 #[derive(Clone, Copy, Debug)]
 pub struct ThreadPower {
+    /// The limits per thread.
     pub threads: Threads,
+    /// The exponent (larger: closer to the min-max).
     pub p: f64,
+    /// The weight of δ2.
     pub reg: f64,
 }
 
@@ -330,9 +335,13 @@ impl TriEnergy for ThreadPower {
 /// (phases 1 and 2 of [`crate::limits`]).
 #[derive(Clone, Copy, Debug)]
 pub struct ThreadBarrier {
+    /// The limits per thread.
     pub threads: Threads,
+    /// How far beyond each thread's limits the walls stand (log strain).
     pub wall: f64,
+    /// The barriers' weight.
     pub mu: f64,
+    /// The weight of δ2.
     pub reg: f64,
 }
 

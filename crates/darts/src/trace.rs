@@ -24,6 +24,7 @@ pub struct Adjacency {
 }
 
 impl Adjacency {
+    /// The adjacency of `mesh`, from its topology `topo`.
     pub fn new(mesh: &TriMesh, topo: &Topology) -> Self {
         let n = mesh.positions.len();
         let mut across = vec![[None; 3]; mesh.triangles.len()];
@@ -89,7 +90,9 @@ pub fn inward_direction(mesh: &TriMesh, adj: &Adjacency, lp: &[u32], i: usize) -
 /// its end, and the triangles it crossed in order.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Geodesic {
+    /// The start vertex's position, then each edge crossing, then the end (3D, mm).
     pub points: Vec<DVec3>,
+    /// The triangles crossed, in order (0-based).
     pub faces: Vec<u32>,
     /// Length traced (mm).
     pub length: f64,

@@ -59,6 +59,7 @@
 //! **Architecture invariant:** depends on the sender (`flatcut-grbl`), the simulator and the
 //! motion model only — never on the G-code writer: it streams any G-code. It writes no file
 //! but the journal the options name, and owns no process-wide state (no signal handler).
+#![warn(missing_docs)]
 
 mod device;
 mod embedded;

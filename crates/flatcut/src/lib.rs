@@ -64,7 +64,6 @@ pub mod plot;
 pub mod project;
 pub mod run;
 pub mod sanity;
-#[allow(missing_docs)] // field docs still to be written
 pub mod splitting;
 
 pub use flatcut_darts as darts;

@@ -51,7 +51,12 @@ const BALANCE_NOTCHES: [f64; 2] = [1.0 / 3.0, 2.0 / 3.0];
 /// A piece split into parts and the seams between them (sides index `pieces`).
 #[derive(Clone, Debug)]
 pub struct SplitPieces {
+    /// The parts, in the order the cuts made them (part `k` is named `<piece>-<k+1>`), each with
+    /// its share of the marks and notches and the balance notches of its new seams; the piece
+    /// itself, alone, when it needed no split.
     pub pieces: Vec<FlatPiece>,
+    /// The new seams between parts, named `<piece> <seam>`; each side's `piece` is a 0-based
+    /// index into `pieces`. Empty when the piece came back whole.
     pub seams: Vec<MatingSeam>,
     /// Total 3D length of the cuts (mm).
     pub cut_mm: f64,

@@ -34,7 +34,9 @@ use crate::{Topology, TopologyError, TriMesh, check_disk};
 /// The topology of one connected surface: its genus and number of boundary loops.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SurfaceType {
+    /// The number of handles g (0 for a disk or sphere, 1 for a torus or a tube with a handle).
     pub genus: usize,
+    /// The number of boundary loops b (0 for a closed surface).
     pub boundaries: usize,
 }
 

@@ -29,8 +29,12 @@ const MAX_CELLS_PER_TRIANGLE: usize = 4096;
     at.x, at.y, at.z
 )]
 pub struct SelfIntersection {
+    /// 0-based index in `TriMesh::triangles` of one triangle; always less than `second`.
     pub first: usize,
+    /// 0-based index of the other triangle.
     pub second: usize,
+    /// The mean of the two triangles' six corners (mm): a point near the crossing, for the
+    /// message, not on it.
     pub at: DVec3,
 }
 

@@ -27,49 +27,97 @@ use crate::TriMesh;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum MeshIoError {
+    /// The file could not be opened, read or written (atomic writes: also the rename of the
+    /// temporary file over the target).
     #[error("{}: {source}", path.display())]
     Io {
+        /// The file being read or written.
         path: PathBuf,
+        /// The operating system's error.
         source: std::io::Error,
     },
+    /// An OBJ statement is malformed: a token is not a number or an index, or a statement has
+    /// too few values.
     #[error("{}:{line}:{col}: {msg}", path.display())]
     Parse {
+        /// The OBJ file.
         path: PathBuf,
+        /// 1-based line number.
         line: usize,
+        /// 1-based column, in characters, of the offending token (or just past the line's last
+        /// token when a value is missing).
         col: usize,
+        /// What is wrong, naming the statement and the token.
         msg: String,
     },
+    /// An OBJ face corner refers to a vertex, texture coordinate or normal that does not exist
+    /// (yet) at that line; OBJ indices are 1-based, negative ones count back from the last.
     #[error("{}:{line}:{col}: {what} index {index} is out of range (the file has {} at this point)", path.display(), count_of(*count, what))]
     BadIndex {
+        /// The OBJ file.
         path: PathBuf,
+        /// 1-based line number.
         line: usize,
+        /// 1-based column, in characters, of the corner holding the index.
         col: usize,
+        /// The kind of element indexed: `"vertex"`, `"texture coordinate"` or `"normal"`.
         what: &'static str,
+        /// The index as written in the file (1-based or negative; 0 is always invalid).
         index: i64,
+        /// How many elements of that kind the file had defined before this line.
         count: usize,
     },
+    /// An OBJ coordinate is NaN or infinite.
     #[error("{}:{line}:{col}: {what} has a non-finite coordinate ({text})", path.display())]
     NonFinite {
+        /// The OBJ file.
         path: PathBuf,
+        /// 1-based line number.
         line: usize,
+        /// 1-based column, in characters, of the coordinate.
         col: usize,
+        /// The statement the coordinate belongs to, e.g. `"vertex"`.
         what: &'static str,
+        /// The coordinate exactly as written (`nan`, `inf`, …).
         text: String,
     },
+    /// An OBJ coordinate is finite but farther than
+    /// [`MAX_COORD_MM`](flatcut_geom::limits::MAX_COORD_MM) from zero.
     #[error("{}:{line}:{col}: {what} coordinate {}", path.display(), flatcut_geom::limits::out_of_range_reason(*value))]
     OutOfRange {
+        /// The OBJ file.
         path: PathBuf,
+        /// 1-based line number.
         line: usize,
+        /// 1-based column, in characters, of the coordinate.
         col: usize,
+        /// The statement the coordinate belongs to, e.g. `"vertex"`.
         what: &'static str,
+        /// The coordinate's value (mm).
         value: f64,
     },
+    /// An STL or PLY file is malformed (the decoding library's message or a missing element),
+    /// or a vertex coordinate in it is non-finite or out of range.
     #[error("{}: {msg}", path.display())]
-    Format { path: PathBuf, msg: String },
+    Format {
+        /// The STL or PLY file.
+        path: PathBuf,
+        /// What is wrong.
+        msg: String,
+    },
+    /// The file is empty or holds no triangle (for STL: none left after welding, since
+    /// triangles collapsed by the weld are dropped).
     #[error("{}: the file contains no triangles", path.display())]
-    Empty { path: PathBuf },
+    Empty {
+        /// The mesh file.
+        path: PathBuf,
+    },
+    /// The extension is none of `.obj`, `.stl`, `.ply` (in any case).
     #[error("{}: unknown mesh format (expected .obj, .stl or .ply)", path.display())]
-    UnknownFormat { path: PathBuf },
+    UnknownFormat {
+        /// The file whose extension was not recognised.
+        path: PathBuf,
+    },
 }
 
 /// "1 vertex", "121 vertices", "3 texture coordinates": a count with its noun.

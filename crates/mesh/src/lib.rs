@@ -7,7 +7,6 @@
 //! patterns, sheets or machines.
 #![warn(missing_docs)]
 
-#[allow(missing_docs)] // field docs still to be written
 pub mod cut_graph;
 pub mod disk;
 pub mod distortion;
@@ -15,9 +14,7 @@ pub mod fixed;
 pub mod geodesic;
 pub mod grain_strain;
 pub mod grid;
-#[allow(missing_docs)] // field docs still to be written
 pub mod intersect;
-#[allow(missing_docs)] // field docs still to be written
 pub mod io;
 pub mod joins;
 pub mod lines;

@@ -17,8 +17,9 @@ pub struct DartReport {
     pub leg_2d_mm: [f64; 2],
     /// Width of the mouth in the flat piece.
     pub opening_mm: f64,
-    /// The drill mark short of the point: on the surface and in the flat piece.
+    /// The drill mark short of the point, on the surface.
     pub drill_3d: [f64; 3],
+    /// The same drill mark in the flat piece.
     pub drill_2d: [f64; 2],
 }
 

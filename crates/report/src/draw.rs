@@ -17,8 +17,12 @@ use crate::{Measure, Report, ReportError};
 
 /// One input of a (side-by-side) picture.
 pub struct Column<'a> {
+    /// The caption drawn above the column.
     pub title: String,
+    /// The flattened piece drawn (its `flat` positions, mm); `report` must have been computed
+    /// from it.
     pub mesh: &'a TriMesh,
+    /// The piece's report: its per-face measures colour the faces.
     pub report: &'a Report,
 }
 

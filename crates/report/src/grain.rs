@@ -18,17 +18,29 @@ pub struct GrainReport {
     pub grain_auto: bool,
     /// The warp's direction on the surface (unit) in the face nearest the piece's centroid.
     pub grain_3d: [f64; 3],
+    /// Largest stretch of the warp over the faces (percent, at least 0).
     pub stretch_max_pct_along: f64,
+    /// Largest stretch of the weft (percent, at least 0).
     pub stretch_max_pct_across: f64,
+    /// Largest stretch of either 45° bias thread (percent, at least 0).
     pub stretch_max_pct_bias: f64,
+    /// Largest compression of the warp (percent, positive, at least 0).
     pub compress_max_pct_along: f64,
+    /// Largest compression of the weft (percent, positive, at least 0).
     pub compress_max_pct_across: f64,
+    /// Largest compression of either bias thread (percent, positive, at least 0).
     pub compress_max_pct_bias: f64,
+    /// The material's stretch limit along the warp (percent).
     pub limit_stretch_pct_along: f64,
+    /// The material's stretch limit along the weft (percent).
     pub limit_stretch_pct_across: f64,
+    /// The material's stretch limit on the bias (percent).
     pub limit_stretch_pct_bias: f64,
+    /// The material's compression limit along the warp (percent, positive).
     pub limit_compress_pct_along: f64,
+    /// The material's compression limit along the weft (percent, positive).
     pub limit_compress_pct_across: f64,
+    /// The material's compression limit on the bias (percent, positive).
     pub limit_compress_pct_bias: f64,
     /// Faces whose warp, weft or bias strain exceeds the material's limits.
     pub faces_over_material_limits: usize,

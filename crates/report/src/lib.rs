@@ -10,6 +10,7 @@
 //!
 //! **Architecture invariant:** the per-face kernel is `flatcut_mesh::face_distortion`, the same the
 //! flattener uses, so the report and the optimiser can never disagree on a number.
+#![warn(missing_docs)]
 
 pub mod darts;
 pub mod delta0;

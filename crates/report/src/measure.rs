@@ -27,6 +27,8 @@ pub enum Measure {
 }
 
 impl Measure {
+    /// The measure named on the command line (`delta1`, `delta2`, `stretch`, `area`,
+    /// `material`; exact, lowercase), or `None` for any other name.
     pub fn from_name(s: &str) -> Option<Self> {
         match s {
             "delta1" => Some(Self::Delta1),
@@ -38,6 +40,7 @@ impl Measure {
         }
     }
 
+    /// The lowercase name [`Measure::from_name`] reads and the JSON writes.
     pub fn name(self) -> &'static str {
         match self {
             Self::Delta1 => "delta1",
@@ -82,6 +85,9 @@ impl Measure {
         matches!(self, Self::Stretch | Self::Area | Self::Material)
     }
 
+    /// The measure's value for one face, unfloored: δ1 or δ2 (dimensionless), the signed
+    /// principal stretch or the area change (percent), or the material excess (percentage
+    /// points; NaN when the face has none because the piece has no material).
     pub fn of(self, f: &FaceMeasure) -> f64 {
         match self {
             Self::Delta1 => f.delta1,
@@ -101,11 +107,18 @@ impl Measure {
 
 /// Area-weighted statistics of one quantity.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+/// Each face is weighted by its 3D area; all zero for an empty or zero-area set. Units are the
+/// quantity's own.
 pub struct Stats {
+    /// Area-weighted mean.
     pub mean: f64,
+    /// Largest value over the faces (unweighted).
     pub max: f64,
+    /// Median: the least value such that faces at or below it cover half the area.
     pub p50: f64,
+    /// The least value such that faces at or below it cover 90 % of the area.
     pub p90: f64,
+    /// The least value such that faces at or below it cover 99 % of the area.
     pub p99: f64,
 }
 
@@ -113,9 +126,13 @@ pub struct Stats {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct BoundarySegment {
     /// Boundary vertices where the segment starts and ends (equal for a whole loop).
+    /// 0-based index into the mesh's vertices of the segment's first vertex.
     pub from_vertex: u32,
+    /// 0-based vertex index of the segment's last vertex.
     pub to_vertex: u32,
+    /// Length along the surface's boundary (mm).
     pub length_3d_mm: f64,
+    /// Length along the flat piece's outline (mm).
     pub length_2d_mm: f64,
     /// (2D − 3D) / 3D.
     pub relative_error: f64,
@@ -126,16 +143,20 @@ pub struct BoundarySegment {
 pub struct Region {
     /// "stretch" or "compress".
     pub kind: &'static str,
+    /// Number of faces in the region (at least 1).
     pub faces: usize,
+    /// The region's 3D area (mm²).
     pub area_mm2: f64,
     /// The worst value in the region, percent.
     pub worst_pct: f64,
     /// The region's area-weighted centroid: off a curved surface (inside a dome, say).
     pub centroid_3d: [f64; 3],
+    /// The region's area-weighted centroid in the flat piece (mm; 3D areas weigh it).
     pub centroid_2d: [f64; 2],
     /// Where the worst value is: the centroid of the region's worst face, a point on the
     /// surface (and in the flat map), where a limit's message points to.
     pub worst_at_3d: [f64; 3],
+    /// The same face's centroid in the flat piece (mm).
     pub worst_at_2d: [f64; 2],
 }
 
@@ -145,44 +166,78 @@ pub struct Region {
 pub struct ReportOptions {
     /// Boundary vertices that split the boundary into seam segments (match marks).
     pub boundary_marks: Vec<u32>,
+    /// Stretch limit (percent): faces stretched beyond it form the report's `regions`; `None`
+    /// looks for no stretch region.
     pub limit_stretch_pct: Option<f64>,
+    /// Compression limit (percent, positive): faces compressed beyond it form `regions`.
     pub limit_compress_pct: Option<f64>,
 }
 
 impl ReportOptions {
+    /// Sets [`ReportOptions::limit_stretch_pct`] (percent).
     pub fn with_limit_stretch_pct(mut self, p: Option<f64>) -> Self {
         self.limit_stretch_pct = p;
         self
     }
 
+    /// Sets [`ReportOptions::limit_compress_pct`] (percent, positive).
     pub fn with_limit_compress_pct(mut self, p: Option<f64>) -> Self {
         self.limit_compress_pct = p;
         self
     }
 
+    /// Sets [`ReportOptions::boundary_marks`] (0-based vertex indices).
     pub fn with_boundary_marks(mut self, marks: Vec<u32>) -> Self {
         self.boundary_marks = marks;
         self
     }
 }
 
+/// Why a report could not be computed or drawn. `name` is the piece's name as given to
+/// [`Report::compute`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ReportError {
+    /// The mesh carries no 2D positions (`TriMesh::flat` is `None`).
     #[error("{name}: the mesh has no flattening (no `vt` coordinates); flatten it first")]
-    NoFlattening { name: String },
+    NoFlattening {
+        /// The piece.
+        name: String,
+    },
+    /// The flattening's length differs from the vertex count.
     #[error("{name}: the flattening has {got} positions for {want} vertices")]
     FlatCount {
+        /// The piece.
         name: String,
+        /// 2D positions in the flattening.
         got: usize,
+        /// Vertices of the mesh.
         want: usize,
     },
+    /// A triangle has zero area on the surface, so its distortion is undefined.
     #[error("{name}: face {face} is degenerate in 3D (zero area)")]
-    DegenerateFace { name: String, face: usize },
+    DegenerateFace {
+        /// The piece.
+        name: String,
+        /// 0-based triangle index.
+        face: usize,
+    },
+    /// A 3D or 2D vertex coordinate is NaN or infinite.
     #[error("{name}: vertex {vertex} has a non-finite coordinate")]
-    NonFinite { name: String, vertex: usize },
+    NonFinite {
+        /// The piece.
+        name: String,
+        /// 0-based vertex index.
+        vertex: usize,
+    },
+    /// The mesh has no triangle.
     #[error("{name}: the mesh has no triangles")]
-    Empty { name: String },
+    Empty {
+        /// The piece.
+        name: String,
+    },
+    /// The SVG could not be rasterised to PNG (parse failure or a pixmap too large to allocate);
+    /// the message says which.
     #[error("cannot render the picture: {0}")]
     Render(String),
 }
@@ -190,10 +245,16 @@ pub enum ReportError {
 /// The distortion report of one flattened piece. Field names are the JSON contract.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Report {
+    /// The piece's name (also the prefix of every error about it).
     pub name: String,
+    /// Number of triangles.
     pub faces: usize,
+    /// Triangles whose flat image is reversed or degenerate (σ1σ2 ≤ 0); any makes the piece
+    /// fail [`Report::within_limits`].
     pub flipped: usize,
+    /// Surface area (mm²).
     pub area_3d_mm2: f64,
+    /// Area of the flat piece (mm²; 0 when it cannot be computed).
     pub area_2d_mm2: f64,
     /// Duncan's global distortion δ0 = log(s2/s1), intrinsic distances in the flat piece
     /// against geodesic distances on the surface ([`crate::delta0`]).
@@ -208,26 +269,45 @@ pub struct Report {
     pub delta0_error_bound: f64,
     /// Pairs of points sampled for δ0 (0: exact, none sampled).
     pub delta0_pairs: usize,
+    /// Area-weighted mean of Duncan's conformal distortion δ1 = log(μ1/μ2) (dimensionless,
+    /// 0 for a conformal map); the `delta1_*` figures are its [`Stats`].
     pub delta1_mean: f64,
+    /// Largest δ1 of any face.
     pub delta1_max: f64,
+    /// Area-weighted median of δ1.
     pub delta1_p50: f64,
+    /// Area-weighted 90th percentile of δ1.
     pub delta1_p90: f64,
+    /// Area-weighted 99th percentile of δ1.
     pub delta1_p99: f64,
+    /// Area-weighted mean of Duncan's isometric distortion δ2 = (μ1 + 1/μ1 + μ2 + 1/μ2 − 4)/2
+    /// (dimensionless, 0 for an isometry); the `delta2_*` figures are its [`Stats`].
     pub delta2_mean: f64,
+    /// Largest δ2 of any face.
     pub delta2_max: f64,
+    /// Area-weighted median of δ2.
     pub delta2_p50: f64,
+    /// Area-weighted 90th percentile of δ2.
     pub delta2_p90: f64,
+    /// Area-weighted 99th percentile of δ2.
     pub delta2_p99: f64,
     /// Area-weighted mean of the area ratio σ1σ2 (1 = area kept).
     pub area_mean: f64,
     /// Area-weighted mean of |log(σ1σ2)| (metrics.py's "area").
     pub area_log_mean: f64,
+    /// Largest stretch (σ1 − 1)·100 of any face (percent, at least 0).
     pub stretch_max_pct: f64,
+    /// Area-weighted 90th percentile of the stretch (percent).
     pub stretch_p90_pct: f64,
+    /// Largest compression (1 − σ2)·100 of any face (percent, positive, at least 0).
     pub compress_max_pct: f64,
+    /// Area-weighted 90th percentile of the compression (percent).
     pub compress_p90_pct: f64,
     /// (2D boundary length − 3D boundary length) / 3D, all loops.
     pub boundary_length_error: f64,
+    /// The boundary loops cut at the marks of [`ReportOptions::boundary_marks`], segment by
+    /// segment with its 3D and 2D lengths (a loop with one mark is one whole-loop segment; a
+    /// loop with none gives no segment).
     pub boundary_segments: Vec<BoundarySegment>,
     /// Regions beyond the limits asked for (empty when within or when no limit was given).
     pub regions: Vec<Region>,
@@ -244,6 +324,8 @@ pub struct Report {
     /// The strain along the material's grain and its limits per direction (with a material).
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub grain: Option<crate::GrainReport>,
+    /// Each face's measures, indexed like `TriMesh::triangles` (not in the JSON; the pictures
+    /// and [`Report::stats`] read it).
     #[serde(skip)]
     pub per_face: Vec<FaceMeasure>,
 }
@@ -455,7 +537,6 @@ impl Report {
             && self.grain.as_ref().is_none_or(crate::GrainReport::within)
     }
 
-    /// Area-weighted statistics of a measure.
     /// Sets the grain section and each face's excess over the material's limits from it.
     pub fn set_grain(&mut self, grain: Option<crate::GrainReport>) {
         if let Some(g) = &grain {
@@ -466,6 +547,8 @@ impl Report {
         self.grain = grain;
     }
 
+    /// Area-weighted statistics of a measure over the faces (values as [`Measure::of`] gives
+    /// them, unfloored).
     pub fn stats(&self, m: Measure) -> Stats {
         weighted_stats(
             &self

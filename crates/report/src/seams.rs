@@ -12,13 +12,17 @@ pub const DEFAULT_SEAM_TOLERANCE_MM: f64 = 0.1;
 /// A notch on a mating seam: its distance from the seam's start along each side (flat, mm).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct NotchOffset {
+    /// The notch's name.
     pub name: String,
+    /// Arc length in the flat piece from the seam's start to the notch, on side 0 and side 1
+    /// (mm); equal on a seam that sews true.
     pub offset_mm: [f64; 2],
 }
 
 /// The figures of one mating seam. Field names are the JSON contract.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct MatingSeamReport {
+    /// The seam's name.
     pub name: String,
     /// The pieces of its two sides (the same piece twice for a dart or a tube's seam).
     pub pieces: [String; 2],
@@ -29,6 +33,7 @@ pub struct MatingSeamReport {
     pub length_2d_mm: [f64; 2],
     /// |side a − side b| in the plane.
     pub mismatch_mm: f64,
+    /// The seam's notches, in the seam's order.
     pub notches: Vec<NotchOffset>,
     /// Its length weighted by how visible it is (mm; less than `length_3d_mm` where it hides in
     /// a crease or on the hidden side), when measured.

@@ -14,8 +14,12 @@ use crate::task::Slot;
 
 /// A design flattened: its pieces and the page's view of them (serialised once).
 pub struct Flattened {
+    /// The design revision flattened (1 when opened, one more for each edit that changes it).
     pub revision: u64,
+    /// The flattened pieces, in the design's order (every size's of a graded design when all
+    /// sizes were asked for).
     pub flats: Vec<Flat>,
+    /// The JSON answer of `POST /api/flatten`, serialised.
     pub view: String,
 }
 
@@ -23,18 +27,22 @@ pub struct Flattened {
 pub struct Finished {
     /// The design revision they were made for.
     pub revision: u64,
+    /// The outputs, held in memory (pattern, layouts, jobs, report).
     pub outputs: ProjectOutputs,
 }
 
 /// The server's state, shared by every request.
 pub struct App {
     bench: Mutex<Bench>,
+    /// The server-sent event stream the pages listen to.
     pub events: Events,
+    /// The options the run stages take here (`RunOptions::default()`).
     pub run: RunOptions,
     /// The live flattening: a graded design's base size (every piece of an ungraded one).
     pub flatten: Mutex<Slot<Flattened>>,
     /// Every size of a graded design: for the pattern, nest and jobs, and on demand.
     pub graded: Mutex<Slot<Flattened>>,
+    /// Everything after the flattening (pattern, nest, jobs) for the latest revision asked.
     pub finish: Mutex<Slot<Finished>>,
     /// The last regions view: (revision, JSON text).
     pub regions: Mutex<Option<(u64, Arc<String>)>>,
@@ -43,6 +51,7 @@ pub struct App {
 }
 
 impl App {
+    /// The state for a design bench: no computation yet, no device open.
     pub fn new(bench: Bench) -> App {
         let events = Events::default();
         App {

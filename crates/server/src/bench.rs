@@ -17,18 +17,28 @@ pub const UNDO_DEPTH: usize = 200;
 /// same file.
 #[derive(Debug, thiserror::Error)]
 pub enum BenchError {
+    /// The design text (TOML or JSON) cannot be parsed or edited.
     #[error(transparent)]
     Document(#[from] DocumentError),
+    /// The design loader refuses the edited design.
     #[error(transparent)]
     Design(#[from] flatcut::design::DesignError),
+    /// The design file could not be written.
     #[error("{path}: {message}")]
-    Save { path: String, message: String },
+    Save {
+        /// The design file.
+        path: String,
+        /// The operating system's error.
+        message: String,
+    },
+    /// Undo or redo with an empty history; the operation's name (`"undo"`, `"redo"`).
     #[error("nothing to {0}")]
     Nothing(&'static str),
 }
 
 /// The design being edited.
 pub struct Bench {
+    /// The input the workbench was started on.
     pub opened: Opened,
     doc: DesignDocument,
     design: Design,
@@ -67,10 +77,12 @@ impl Bench {
         &self.doc
     }
 
+    /// The design as loaded from the current document.
     pub fn design(&self) -> &Design {
         &self.design
     }
 
+    /// The design's revision: 1 when opened, one more for each change (edit, undo, redo).
     pub fn revision(&self) -> u64 {
         self.revision
     }
@@ -80,10 +92,12 @@ impl Bench {
         self.saved_text.as_deref() == Some(self.doc.text().as_str())
     }
 
+    /// Whether there is an edit to undo (at most [`UNDO_DEPTH`] are kept).
     pub fn can_undo(&self) -> bool {
         !self.undo.is_empty()
     }
 
+    /// Whether there is an undone edit to redo (a new edit clears them).
     pub fn can_redo(&self) -> bool {
         !self.redo.is_empty()
     }

@@ -74,6 +74,7 @@ pub async fn get_design(State(app): AppState) -> Response {
         .into_response()
 }
 
+/// The query string of `PUT /api/design`.
 #[derive(Deserialize, Default)]
 pub struct PutQuery {
     /// `name`: give every region no piece names a piece of its own, and drop pieces that name a
@@ -109,14 +110,21 @@ pub async fn put_design(
 /// What an edit computed away from the lock needs: the tree and design it starts from, where
 /// mesh files resolve, and the tessellation tolerance of the run.
 pub struct EditCtx {
+    /// The design document as it is before the edit.
     pub doc: crate::document::DesignDocument,
+    /// The same design as its JSON tree, which edits transform.
     pub tree: Value,
+    /// The same design as loaded.
     pub design: Design,
+    /// The design file: relative mesh paths resolve from its directory.
     pub design_path: PathBuf,
+    /// The run's tolerances (tessellation, weld; mm).
     pub tol: Tolerances,
 }
 
 impl EditCtx {
+    /// The directory relative paths in the design resolve from (the design file's; empty for a
+    /// bare file name, i.e. the current directory).
     pub fn base(&self) -> PathBuf {
         self.design_path
             .parent()
@@ -213,6 +221,7 @@ pub async fn save(State(app): AppState, _body: Unread) -> Result<Json<Value>, Ap
     Ok(Json(v))
 }
 
+/// The body of `POST /api/lines`: a style line's part, name, points and notches (mm).
 #[derive(Deserialize)]
 pub struct LineRequest {
     /// The part's name (or index; may be left out when the design has one part).
@@ -258,6 +267,8 @@ pub async fn add_line(
     Ok(Json(v))
 }
 
+/// The body of `POST /api/regions/name`: the part, a point `at` in the region (mm) and the
+/// name to give it.
 #[derive(Deserialize)]
 pub struct NameRequest {
     #[serde(default)]

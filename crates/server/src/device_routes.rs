@@ -390,6 +390,8 @@ async fn answer(
     Ok(Json(app.devices.answer(id, b.question, b.yes)?))
 }
 
+/// The device panel's routes: `/api/devices…` (choose, connect, status, jog, frame, the
+/// simulator) and `/api/jobs…` (start, list, hold, resume, stop, answer a question).
 pub fn routes() -> Router<Arc<App>> {
     Router::new()
         .route("/api/devices", get(devices))

@@ -18,6 +18,7 @@ use crate::events::Events;
 /// What a job is doing, as the page shows it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum JobState {
+    /// Lines are streaming.
     Running,
     /// Feed hold asked for by the operator.
     Held,
@@ -25,13 +26,16 @@ pub enum JobState {
     Paused,
     /// A question waits for the operator's answer.
     Asking,
+    /// Every line ran; the job ended well.
     Done,
+    /// The job ended on an error (the record's `message` says which).
     Failed,
     /// Stopped by the operator (or the server stopping): tool off, journal written.
     Stopped,
 }
 
 impl JobState {
+    /// The state's lowercase name in the JSON (`running`, `held`, …).
     pub fn name(self) -> &'static str {
         match self {
             JobState::Running => "running",
@@ -44,6 +48,7 @@ impl JobState {
         }
     }
 
+    /// True for the final states: done, failed, stopped.
     pub fn ended(self) -> bool {
         matches!(self, JobState::Done | JobState::Failed | JobState::Stopped)
     }
@@ -51,9 +56,11 @@ impl JobState {
 
 /// One job streamed from the workbench.
 pub struct JobRecord {
+    /// The job's number: 1 for the first, one more than the last job's for each next.
     pub id: u64,
     /// Its file name as `flatcut run` writes it (`job-1.gcode`).
     pub name: String,
+    /// The sheet it cuts (1-based).
     pub sheet: usize,
     /// The design revision its G-code was made from.
     pub revision: u64,
@@ -61,15 +68,23 @@ pub struct JobRecord {
     pub device: String,
     /// Its device's id (`simulator`, a port's path).
     pub device_id: String,
+    /// The journal file the job writes (and resumes from).
     pub journal: PathBuf,
+    /// Whether the job was started as a resume (from its journal, or from `resume_from`).
     pub resume: bool,
     /// The line of the file the operator resumed from (1-based).
     pub resume_from: Option<usize>,
+    /// What the job is doing.
     pub state: JobState,
+    /// The latest progress event's JSON (lines, path, ETA, position); `None` before the first.
     pub progress: Option<Json>,
+    /// The controller's and sender's notices so far, in order.
     pub notices: Vec<String>,
+    /// The question waiting for the operator's answer, if any.
     pub question: Option<Asked>,
+    /// The latest word for the page: why it paused, `complete`, or the error that ended it.
     pub message: String,
+    /// The send report's JSON once the job has ended well.
     pub report: Option<Json>,
     /// The lines a refused resume could not tell ran or not: the page
     /// asks for the line to continue from.
@@ -218,17 +233,22 @@ pub(crate) fn closed_view(id: &str, what: &str, message: Option<&str>) -> Json {
 /// Why the device panel could not do what it was asked.
 #[derive(Debug, thiserror::Error)]
 pub enum PanelError {
+    /// The device session refused or failed.
     #[error(transparent)]
     Device(#[from] DeviceError),
     /// A job is running: nothing else but hold, resume, stop and answers.
     #[error("{0}")]
     Busy(String),
+    /// The request is wrong (an unknown device, a missing job file); the message says how.
     #[error("{0}")]
     Bad(String),
+    /// No device is open and the request needs one.
     #[error("no device is open: connect one first")]
     NotOpen,
+    /// The device named by its id is not open.
     #[error("the device {0} is not open: connect it first")]
     NotOpenId(String),
+    /// No job has this number.
     #[error("no job {0}")]
     NoJob(u64),
 }

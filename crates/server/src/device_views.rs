@@ -15,6 +15,7 @@ pub fn question_view(a: &Asked) -> Json {
     json!({ "id": a.id, "text": a.question.to_string(), "prompt": a.question.prompt() })
 }
 
+/// The machine state as GRBL writes it in a status report (`Idle`, `Run`, `Hold:0`, `Alarm`, …).
 pub fn state_name(s: MachineState) -> String {
     s.name()
 }
@@ -38,6 +39,8 @@ pub fn progress_view(p: &Progress, wall_per_machine_s: Option<f64>) -> Json {
     })
 }
 
+/// A finished job's send report: lines sent, times (s), the controller's buffer figures,
+/// version and notices.
 pub fn report_view(r: &SendReport) -> Json {
     json!({
         "lines_sent": r.lines_sent,
@@ -54,6 +57,8 @@ pub fn report_view(r: &SendReport) -> Json {
     })
 }
 
+/// What the controller said when connected: version, receive buffer (bytes), planner blocks,
+/// state, and the work area from its `$130`/`$131` max travel (mm; null when unset).
 pub fn controller_view(i: &ControllerInfo) -> Json {
     json!({
         "version": i.version,
@@ -65,6 +70,7 @@ pub fn controller_view(i: &ControllerInfo) -> Json {
     })
 }
 
+/// A status report: the state and the work and machine positions (mm).
 pub fn status_view(s: &MachineStatus) -> Json {
     json!({ "state": state_name(s.state), "work": s.work, "machine": s.machine })
 }

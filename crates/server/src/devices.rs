@@ -65,6 +65,7 @@ pub struct Devices {
 }
 
 impl Devices {
+    /// The panel with no device open and no job, publishing its changes on `events`.
     pub fn new(events: Events) -> Devices {
         Devices {
             shared: Arc::new(Shared {
@@ -491,13 +492,19 @@ impl Devices {
 
 /// A job to start.
 pub struct StartJob {
+    /// The job file's name as `flatcut run` writes it (`job-1.gcode`).
     pub name: String,
+    /// The sheet it cuts (1-based).
     pub sheet: usize,
+    /// The design revision the G-code was made from.
     pub revision: u64,
+    /// The G-code text, streamed from memory.
     pub gcode: String,
     /// Where its journal goes (beside the design): see [`journal_path`].
     pub dir: PathBuf,
+    /// Resume from the journal where the last attempt stopped.
     pub resume: bool,
+    /// Send `$X` first if the controller is alarm-locked.
     pub unlock: bool,
     /// Resume from this line of the file (1-based), whatever the journal says.
     pub resume_from: Option<usize>,
@@ -508,8 +515,11 @@ pub struct StartJob {
 /// What the page asks of a running job.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Steer {
+    /// Feed hold (`!`): the machine decelerates and waits.
     Hold,
+    /// Cycle start (`~`) after a hold or a pause.
     Resume,
+    /// Stop the job: tool off, journal written.
     Stop,
 }
 

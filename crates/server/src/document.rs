@@ -15,20 +15,29 @@ use toml_edit::{Array, ArrayOfTables, DocumentMut, InlineTable, Item, Table, Val
 /// The design's text in the format of its file.
 #[derive(Clone, Debug)]
 pub enum DesignDocument {
+    /// A TOML design, edited in place so its comments and layout survive.
     Toml(DocumentMut),
+    /// A JSON design, written back pretty-printed.
     Json(Json),
 }
 
 /// A document that cannot be read or an edit that cannot be written as TOML.
 #[derive(Debug, thiserror::Error)]
 pub enum DocumentError {
+    /// The text is not valid TOML or JSON.
     #[error("{file}:{line}:{col}: {message}")]
     Syntax {
+        /// The design file.
         file: String,
+        /// 1-based line (0 when the parser gives no position).
         line: usize,
+        /// 1-based column (0 when the parser gives no position).
         col: usize,
+        /// The parser's message.
         message: String,
     },
+    /// The design tree has a shape the document cannot hold (a root that is not an object, a
+    /// value TOML cannot write); the message says which.
     #[error("{0}")]
     Shape(String),
 }

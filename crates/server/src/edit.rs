@@ -21,8 +21,11 @@ const DECIMALS: i32 = 4;
 /// Why an edit cannot be made; the message says what the page or script got wrong.
 #[derive(Debug, thiserror::Error)]
 pub enum EditError {
+    /// The edit request itself is malformed (a missing name, points not `[[x, y, z], …]` in
+    /// mm); the message says what.
     #[error("{0}")]
     Request(String),
+    /// The edited design fails the design's own checks.
     #[error(transparent)]
     Design(#[from] flatcut::design::DesignError),
 }

@@ -8,7 +8,9 @@ use serde_json::json;
 /// An error answered as `{"error": message}`.
 #[derive(Clone, Debug)]
 pub struct ApiError {
+    /// The HTTP status: 4xx when the request is at fault, 5xx when the server is.
     pub status: StatusCode,
+    /// The message sent as `error`, saying what is wrong.
     pub message: String,
 }
 
@@ -37,6 +39,7 @@ impl ApiError {
         }
     }
 
+    /// True for the error [`ApiError::cancelled`] makes.
     pub fn is_cancelled(&self) -> bool {
         self.status == StatusCode::CONFLICT && self.message == "cancelled"
     }

@@ -22,6 +22,7 @@
 //! `devices` (what the pages ask of them), `device_watch` (each device's events and each job's
 //! end turned into that state and the pages' events),
 //! `device_views` (their JSON).
+#![warn(missing_docs)]
 
 pub mod app;
 pub mod assets;
@@ -69,16 +70,24 @@ pub struct ServeOptions {
 /// Why the server could not start or stopped.
 #[derive(Debug, thiserror::Error)]
 pub enum ServeError {
+    /// The project, design or model given could not be opened.
     #[error(transparent)]
     Open(#[from] opened::OpenError),
+    /// The design bench could not be set up from what was opened.
     #[error(transparent)]
     Bench(#[from] bench::BenchError),
     #[error("cannot listen on {addr}: {source}{hint}")]
+    /// An address could not be bound.
     Listen {
+        /// The address and port tried.
         addr: SocketAddr,
+        /// The operating system's error.
         source: std::io::Error,
+        /// Advice appended to the message (" (the port is taken: choose another with --port)"
+        /// when the port is in use, else empty).
         hint: &'static str,
     },
+    /// Serving failed after the start (accepting a connection, or the server task itself).
     #[error("{0}")]
     Io(#[from] std::io::Error),
 }
@@ -86,7 +95,11 @@ pub enum ServeError {
 /// A server listening: where, and the token requests need (when bound beyond loopback).
 #[derive(Clone, Debug)]
 pub struct Listening {
+    /// The addresses bound, with the port actually chosen (the loopback ones, or the `--bind`
+    /// address).
     pub addrs: Vec<SocketAddr>,
+    /// The access token (32 hex digits) every request must carry when bound beyond loopback;
+    /// `None` on loopback.
     pub token: Option<String>,
     /// The address to open in a browser (with the token, when one is needed).
     pub url: String,
@@ -96,7 +109,9 @@ pub struct Listening {
 pub struct Server {
     listeners: Vec<TcpListener>,
     router: axum::Router,
+    /// Where the server listens.
     pub listening: Listening,
+    /// The state the routes share.
     pub app: Arc<App>,
 }
 
@@ -247,7 +262,9 @@ pub fn run(
 /// A server running on a thread of its own (for tests and embedding): where it listens, and how
 /// to stop it.
 pub struct Background {
+    /// Where the server listens.
     pub listening: Listening,
+    /// The state the routes share, for inspection by the embedding program.
     pub app: Arc<App>,
     stop: Option<tokio::sync::oneshot::Sender<()>>,
     thread: Option<std::thread::JoinHandle<Result<(), ServeError>>>,

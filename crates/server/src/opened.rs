@@ -31,14 +31,18 @@ profile = "knife"
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum InputKind {
+    /// A project file (`project.toml`) naming its design.
     Project,
+    /// A design file (TOML or JSON).
     Design,
+    /// A mesh or CAD model, around which a design is drawn.
     Model,
 }
 
 /// The opened input.
 #[derive(Clone, Debug)]
 pub struct Opened {
+    /// What kind of file `input` is.
     pub kind: InputKind,
     /// The file named on the command line.
     pub input: PathBuf,
@@ -54,10 +58,18 @@ pub struct Opened {
 /// Why the input cannot be opened; the message names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum OpenError {
+    /// The file is missing, unreadable or of a kind the workbench does not open.
     #[error("{path}: {message}")]
-    Input { path: String, message: String },
+    Input {
+        /// The file.
+        path: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// The project file is invalid.
     #[error(transparent)]
     Project(#[from] flatcut::project::ProjectError),
+    /// The design is invalid.
     #[error(transparent)]
     Design(#[from] flatcut::design::DesignError),
 }

@@ -183,6 +183,7 @@ pub fn prefetch(app: &Arc<App>) {
     });
 }
 
+/// The query string of `POST /api/flatten`.
 #[derive(Deserialize)]
 pub struct FlattenQuery {
     /// `all`: every size of a graded design (default: the base size, the live preview).
@@ -274,6 +275,7 @@ fn bytes(name: &str, kind: &'static str, body: Vec<u8>) -> Response {
         .into_response()
 }
 
+/// The query string of the routes that serve one sheet's layout or job (`sheet`, `profile`).
 #[derive(Deserialize)]
 pub struct SheetQuery {
     /// 1-based sheet number (default 1).

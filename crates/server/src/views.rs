@@ -155,28 +155,46 @@ pub fn part_error_view(
 /// and its meshes.
 #[derive(Serialize)]
 pub struct PieceView<'a> {
+    /// The piece's name (`<piece> <size>` for a graded design's sizes).
     pub name: &'a str,
+    /// The name of the design part the piece belongs to (`None` when no part lists it).
     pub part: Option<String>,
     /// The size of a graded design's piece.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub size: Option<String>,
+    /// How many to cut as drawn.
     pub quantity: u32,
+    /// How many mirror images to cut besides.
     pub mirrored: u32,
+    /// Number of triangles.
     pub faces: usize,
+    /// Triangles whose flat image is reversed or degenerate.
     pub flipped: usize,
+    /// Surface area (mm²).
     pub area_3d_mm2: f64,
+    /// Flat area (mm²).
     pub area_2d_mm2: f64,
+    /// Area-weighted mean of Duncan's isometric distortion δ2 (dimensionless).
     pub delta2_mean: f64,
+    /// Largest stretch of any face (percent).
     pub stretch_max_pct: f64,
+    /// Largest compression of any face (percent, positive).
     pub compress_max_pct: f64,
+    /// The project's stretch limit (percent), if it sets one.
     pub limit_stretch_pct: Option<f64>,
+    /// The project's compression limit (percent, positive), if it sets one.
     pub limit_compress_pct: Option<f64>,
+    /// True when no region exceeds the limits, no face is flipped and the material's grain
+    /// limits hold.
     pub within_limits: bool,
     /// Regions beyond the limits, worst first.
     pub regions: &'a [flatcut::report::Region],
+    /// The darts cut into the piece.
     pub darts: &'a [flatcut::report::DartReport],
+    /// The strain along the material's grain, with a material.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub grain: Option<&'a flatcut::report::GrainReport>,
+    /// The flattening's warnings for this piece.
     pub warnings: Vec<String>,
     /// positions (3D), triangles, flat (2D, mm) and per face the signed strain drawn by the
     /// report's stretch heat map (% ; + stretch, − compression).
