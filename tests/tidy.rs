@@ -250,6 +250,7 @@ const DOCUMENTED_CRATES: &[&str] = &[
     "crates/design",
     "crates/device",
     "crates/flatcut",
+    "crates/flatten",
     "crates/font",
     "crates/gcode",
     "crates/geom",

@@ -58,9 +58,12 @@ pub enum Grain {
 /// The orthotropic flattening's material: stiffness, limits and grain.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Anisotropy {
+    /// The material's stiffness along the warp, across it and in shear, weighting the Green
+    /// strain in the grain frame.
     pub stiffness: Stiffness,
     /// The limits `Grain::Auto` minimises the excess over (none: the strain energy is minimised).
     pub limits: Option<DirectionalLimits>,
+    /// Where the warp runs: a grain line, an angle in radians, or `Auto` to search the angle.
     pub grain: Grain,
 }
 

@@ -54,8 +54,11 @@ pub struct Budget {
 /// short.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct StageCount {
+    /// The stage's name, as reported to the user.
     pub stage: &'static str,
+    /// Iterations the stage took, summed over all its solves.
     pub iterations: usize,
+    /// The stage's iteration cap.
     pub cap: usize,
     /// True when the stage stopped at its iteration cap or its time limit.
     pub stopped: bool,

@@ -9,16 +9,30 @@ use crate::Method;
 pub enum InternalError {
     /// A triangle of a mesh that passed the disk check has no rest frame (zero area).
     #[error("triangle {triangle} is degenerate after the disk check")]
-    DegenerateTriangle { triangle: usize },
+    DegenerateTriangle {
+        /// The triangle (0-based).
+        triangle: usize,
+    },
     /// The developable unfolding reached a triangle with no edge placed yet.
     #[error("developable: triangle {triangle} reached without a placed edge")]
-    UnfoldWithoutEdge { triangle: usize },
+    UnfoldWithoutEdge {
+        /// The triangle (0-based).
+        triangle: usize,
+    },
     /// The developable unfolding placed an edge's two ends at one point.
     #[error("developable: edge {a}-{b} collapsed while unfolding")]
-    UnfoldEdgeCollapsed { a: u32, b: u32 },
+    UnfoldEdgeCollapsed {
+        /// The edge's first vertex (0-based).
+        a: u32,
+        /// The edge's second vertex (0-based).
+        b: u32,
+    },
     /// A reduced system has no free unknown left to solve for.
     #[error("{stage}: every unknown is fixed")]
-    EveryUnknownFixed { stage: &'static str },
+    EveryUnknownFixed {
+        /// The solver stage (a static name of the step that failed).
+        stage: &'static str,
+    },
     /// The conformal-boundary method found no boundary loop on a disk.
     #[error("conformal-boundary: no boundary loop")]
     ConformalBoundaryNoLoop,
@@ -30,13 +44,24 @@ pub enum InternalError {
     LscmSingleVertex,
     /// Tutte's embedding was given a mesh with other than one boundary loop.
     #[error("tutte: a disk has one boundary loop, this mesh has {loops}")]
-    TutteLoops { loops: usize },
+    TutteLoops {
+        /// Boundary loops found.
+        loops: usize,
+    },
     /// A linear method was sent down the nonlinear methods' path.
     #[error("method {method} is not a nonlinear method")]
-    NotNonlinear { method: Method },
+    NotNonlinear {
+        /// The method.
+        method: Method,
+    },
     /// Material limits that exclude the identity map got past the parameter checks.
     #[error("material limits must allow the identity (σ ≤ {hi}, σ ≥ {lo})")]
-    LimitsExcludeIdentity { hi: f64, lo: f64 },
+    LimitsExcludeIdentity {
+        /// The upper stretch limit σ1 (factor, not percent).
+        hi: f64,
+        /// The lower stretch limit σ2 (factor).
+        lo: f64,
+    },
     /// ARAP's solver asked for its cost before it had a start map.
     #[error("arap: no start map")]
     ArapNoStartMap,
@@ -55,53 +80,83 @@ pub enum InternalError {
     /// The unknowns' grouping into nodes does not cover them.
     #[error("{labels} node labels (< {nodes}) for {unknowns} unknowns")]
     NodeLabels {
+        /// Labels given (one per unknown).
         labels: usize,
+        /// Number of nodes the labels must stay below.
         nodes: usize,
+        /// Number of unknowns.
         unknowns: usize,
     },
     /// A matrix's values do not match its triplet pattern.
     #[error("{stage}: {got} values for a pattern of {want} triplets")]
     TripletCount {
+        /// The solver stage.
         stage: &'static str,
+        /// Values given.
         got: usize,
+        /// Triplets in the pattern.
         want: usize,
     },
     /// A compressed-column pattern was asked for its triplet order.
     #[error("{stage}: a compressed-column pattern has no triplet order")]
-    NoTripletOrder { stage: &'static str },
+    NoTripletOrder {
+        /// The solver stage (a static name of the step that failed).
+        stage: &'static str,
+    },
     /// A compressed pattern's values do not fit the solver built for it.
     #[error(
         "{stage}: {values} values of a {size}×{size} pattern for a solver of {solver_values} values and size {solver_size}"
     )]
     GatherMismatch {
+        /// The solver stage.
         stage: &'static str,
+        /// Values given.
         values: usize,
+        /// The pattern's size (rows = columns).
         size: usize,
+        /// Values the solver was built for.
         solver_values: usize,
+        /// The solver's size.
         solver_size: usize,
     },
     /// A factorisation's values do not match the solver's pattern.
     #[error("{stage}: {got} values for a pattern of {want} entries")]
     ValueCount {
+        /// The solver stage.
         stage: &'static str,
+        /// Values given.
         got: usize,
+        /// Entries in the pattern.
         want: usize,
     },
     /// The factorisation's workspace was missing after it was made.
     #[error("{stage}: no factorisation scratch")]
-    NoScratch { stage: &'static str },
+    NoScratch {
+        /// The solver stage (a static name of the step that failed).
+        stage: &'static str,
+    },
     /// A right-hand side of the wrong length.
     #[error("{stage}: right-hand side of length {len} for {columns} columns of size {size}")]
     RhsLength {
+        /// The solver stage.
         stage: &'static str,
+        /// The right-hand side's length.
         len: usize,
+        /// Number of right-hand sides.
         columns: usize,
+        /// The system's size.
         size: usize,
     },
     /// A solve asked of a solver whose last factorisation failed or never ran.
     #[error("{stage}: solve before a successful factorization")]
-    SolveBeforeFactor { stage: &'static str },
+    SolveBeforeFactor {
+        /// The solver stage (a static name of the step that failed).
+        stage: &'static str,
+    },
     /// A solve found no factor although the solver counts itself factored.
     #[error("{stage}: no factor to solve with")]
-    NoFactor { stage: &'static str },
+    NoFactor {
+        /// The solver stage (a static name of the step that failed).
+        stage: &'static str,
+    },
 }

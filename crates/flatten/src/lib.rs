@@ -58,6 +58,8 @@
 //! `examples/flatten_bench.rs` is the benchmark driver (`tools/flatten/bench.py` runs it against
 //! libigl's SLIM).
 
+#![warn(missing_docs)]
+
 pub mod anisotropy;
 pub mod arap;
 pub mod assembly;

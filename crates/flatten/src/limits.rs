@@ -92,7 +92,9 @@ impl Limits {
 /// a limit (hi = ∞, lo = 0) has no term.
 #[derive(Clone, Copy, Debug)]
 pub struct Barrier<E> {
+    /// The energy the barrier is added to (δ2 by default).
     pub inner: E,
+    /// The stretch limits the barrier keeps each principal stretch inside.
     pub limits: Limits,
     /// Barrier weight μ (relative to the inner density).
     pub mu: f64,

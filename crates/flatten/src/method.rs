@@ -28,6 +28,7 @@ pub enum Method {
 }
 
 impl Method {
+    /// Every method, in the order the CLI lists them when a method name is unknown.
     pub const ALL: [Method; 9] = [
         Method::Isometric,
         Method::Conformal,

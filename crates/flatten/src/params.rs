@@ -12,7 +12,9 @@ use crate::Method;
 /// A vertex held at a fixed 2D position (mm) during the flattening.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pin {
+    /// The pinned vertex (0-based index into the mesh's positions).
     pub vertex: u32,
+    /// Where it is held, in mm.
     pub position: DVec2,
 }
 
@@ -20,6 +22,7 @@ pub struct Pin {
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct FlattenParams {
+    /// The flattening method.
     pub method: Method,
     /// Largest allowed stretch in percent (principal stretch σ1 ≤ 1 + P/100), if any.
     pub max_stretch_pct: Option<f64>,
@@ -89,6 +92,7 @@ impl FlattenParams {
         self
     }
 
+    /// The default iteration cap of a stage that is one solve (every method but `minmax`).
     pub const DEFAULT_MAX_ITERS: usize = 200;
     /// The default cap of the stages of many solves: the darts' search took 318–509 Newton
     /// steps on the bench's 20k hemisphere, toe and cap at ±3 %, the split of the 20k saddle
@@ -101,9 +105,12 @@ impl FlattenParams {
     /// `minmax`'s default cap: 200 L-BFGS steps for each of its descent's five sharpness
     /// stages.
     pub const DEFAULT_MINMAX_ITERS: usize = 1000;
+    /// The default relative energy decrease below which a nonlinear method stops.
     pub const DEFAULT_REL_TOLERANCE: f64 = 1e-9;
+    /// The default relative length error below which `developable` accepts a surface as developable.
     pub const DEFAULT_DEVELOPABLE_TOLERANCE: f64 = 1e-6;
 
+    /// The defaults for `method`: no limits, no pins, no time limit, the default caps and tolerances.
     pub fn new(method: Method) -> Self {
         Self {
             method,
@@ -130,16 +137,19 @@ impl FlattenParams {
         }
     }
 
+    /// Sets the largest allowed stretch in percent (σ1 ≤ 1 + p/100); `None` for no limit.
     pub fn with_max_stretch_pct(mut self, p: Option<f64>) -> Self {
         self.max_stretch_pct = p;
         self
     }
 
+    /// Sets the largest allowed compression in percent (σ2 ≥ 1 − p/100); `None` for no limit.
     pub fn with_max_compress_pct(mut self, p: Option<f64>) -> Self {
         self.max_compress_pct = p;
         self
     }
 
+    /// Sets the pinned vertices (replacing any set before).
     pub fn with_pins(mut self, pins: Vec<Pin>) -> Self {
         self.pins = pins;
         self
@@ -153,16 +163,19 @@ impl FlattenParams {
         self
     }
 
+    /// Sets the wall-clock limit of every stage; `None` for no limit.
     pub fn with_time_limit(mut self, t: Option<Duration>) -> Self {
         self.time_limit = t;
         self
     }
 
+    /// Sets the progress and cancel hooks.
     pub fn with_hooks(mut self, hooks: FlattenHooks) -> Self {
         self.hooks = hooks;
         self
     }
 
+    /// Sets the material of the orthotropic method; `None` for none.
     pub fn with_anisotropy(mut self, a: Option<crate::anisotropy::Anisotropy>) -> Self {
         self.anisotropy = a;
         self
@@ -254,6 +267,8 @@ impl PartialEq for FlattenHooks {
 /// How the solve went.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FlattenInfo {
+    /// Iterations of the method's main solve (1 for the direct methods: LSCM, conformal-boundary,
+    /// developable).
     pub iterations: usize,
     /// Final value of the method's energy (area-weighted mean density where that applies).
     pub final_energy: f64,
@@ -270,7 +285,9 @@ pub struct FlattenInfo {
 /// A flattening: one 2D position per vertex of the input mesh, in mm at true scale.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Flattening {
+    /// One 2D position in mm per vertex of the input mesh, indexed like `mesh.positions`.
     pub uv: Vec<DVec2>,
+    /// How the solve went.
     pub info: FlattenInfo,
 }
 
@@ -286,25 +303,49 @@ pub enum FlattenError {
         "the surface is not developable: largest |K| = {max_abs_k:.3e} /mm² (angle defect {angle_defect:.3e} rad) at vertex {vertex} ({x:.3}, {y:.3}, {z:.3}); the isometric method flattens it with the least distortion"
     )]
     NotDevelopable {
+        /// Largest |Gaussian curvature| in 1/mm².
         max_abs_k: f64,
+        /// The angle defect at that vertex, radians.
         angle_defect: f64,
+        /// The vertex (0-based).
         vertex: u32,
+        /// Its x in mm.
         x: f64,
+        /// Its y in mm.
         y: f64,
+        /// Its z in mm.
         z: f64,
     },
     /// A pin refers to a vertex that does not exist, or pins contradict each other.
     #[error("pin {index}: {reason}")]
-    BadPin { index: usize, reason: String },
+    BadPin {
+        /// The pin's 0-based index in `FlattenParams::pins`.
+        index: usize,
+        /// What is wrong with it.
+        reason: String,
+    },
     /// The linear solver failed (the system was singular or not positive definite).
     #[error("linear solve failed in {stage}: {reason}")]
-    Solver { stage: &'static str, reason: String },
+    Solver {
+        /// The solver stage (a static name of the step that failed).
+        stage: &'static str,
+        /// The solver's message.
+        reason: String,
+    },
     /// The caller's cancel flag was set ([`FlattenHooks::with_cancel`]).
     #[error("{method} was cancelled")]
-    Cancelled { method: Method },
+    Cancelled {
+        /// The method that was cancelled.
+        method: Method,
+    },
     /// The method did not reach a valid (finite, flip-free) result.
     #[error("{method} did not converge: {reason}")]
-    NoConvergence { method: Method, reason: String },
+    NoConvergence {
+        /// The method.
+        method: Method,
+        /// Why its result is not valid.
+        reason: String,
+    },
     /// The orthotropic method's material or grain cannot be used.
     #[error("orthotropic: {0}")]
     Anisotropy(String),

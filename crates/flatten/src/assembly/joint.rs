@@ -20,8 +20,11 @@ use crate::nonlinear::spd::SpdSystem;
 /// length (the mean of the two sides').
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EdgePair {
+    /// The first edge's two vertices (joint numbering, 0-based).
     pub a: [usize; 2],
+    /// The second edge's two vertices (joint numbering, 0-based).
     pub b: [usize; 2],
+    /// The target flat length of both edges in mm (the mean of the two 3D lengths).
     pub l: f64,
 }
 

@@ -54,10 +54,18 @@ const INNER_REL_TIGHTENING: f64 = 1e-4;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum AssemblyError {
+    /// One piece could not be flattened.
     #[error("piece {piece}: {source}")]
-    Piece { piece: usize, source: FlattenError },
+    Piece {
+        /// The piece (0-based, in the order given).
+        piece: usize,
+        /// Why it failed.
+        source: FlattenError,
+    },
+    /// The mating seams are inconsistent.
     #[error(transparent)]
     Seam(#[from] MatingError),
+    /// Pins were given; pieces flattened together take none.
     #[error("pieces flattened together cannot be pinned (pins place one piece)")]
     Pins,
 }

@@ -78,9 +78,13 @@ pub fn rest_frames(mesh: &TriMesh) -> Result<Vec<RestTri>, usize> {
 /// reflected map (signed SVD).
 #[derive(Clone, Copy, Debug)]
 pub struct Svd2 {
+    /// The left rotation U (determinant +1).
     pub u: DMat2,
+    /// The right rotation V (determinant +1).
     pub v: DMat2,
+    /// The larger singular value σ1 (stretch factor, ≥ |σ2|).
     pub s1: f64,
+    /// The smaller singular value σ2, negative for a reflected map.
     pub s2: f64,
 }
 
@@ -180,10 +184,15 @@ pub trait IsoEnergy: Sync {
 /// ([`IsoEnergy::derivs`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IsoDerivs {
+    /// The energy density Ψ(σ1, σ2) per unit rest area.
     pub psi: f64,
+    /// The gradient (∂Ψ/∂σ1, ∂Ψ/∂σ2).
     pub grad: [f64; 2],
+    /// The 2×2 Hessian of Ψ in (σ1, σ2).
     pub hess: [[f64; 2]; 2],
+    /// The twist eigenvalue (Ψ1 − Ψ2)/(σ1 − σ2) of the F-space Hessian (its limit at σ1 = σ2).
     pub twist: f64,
+    /// The flip eigenvalue (Ψ1 + Ψ2)/(σ1 + σ2), the one that goes negative.
     pub flip: f64,
 }
 
@@ -428,6 +437,7 @@ impl IsoEnergy for GuardedGreen {
 /// k·(σ − s_max)₊² + k·(s_min − σ)₊², added to an inner energy.
 #[derive(Clone, Copy, Debug)]
 pub struct WithLimits<E> {
+    /// The energy the penalty is added to.
     pub inner: E,
     /// Largest allowed stretch factor σ1 (∞ for none).
     pub s_max: f64,
@@ -490,8 +500,11 @@ impl<E: IsoEnergy> IsoEnergy for WithLimits<E> {
 /// Energy, gradient (3 corners × 2) and projected Hessian (6×6, dof order (v0x, v0y, v1x, …))
 /// of one triangle, all multiplied by the triangle's area.
 pub struct TriEval {
+    /// The triangle's energy (density times rest area).
     pub energy: f64,
+    /// The gradient with respect to each corner's 2D position, corners in the triangle's order.
     pub grad: [DVec2; 3],
+    /// The projected (positive semidefinite) Hessian, dofs ordered (v0x, v0y, v1x, v1y, v2x, v2y).
     pub hess: [[f64; 6]; 6],
 }
 

@@ -68,6 +68,7 @@ pub struct Delta0 {
 /// Sampled far pairs: (source vertex, other vertex, geodesic distance in mm).
 #[derive(Clone, Debug, Default)]
 pub struct PairSet {
+    /// The sampled pairs (0-based vertex indices, distance in mm), in sampling order.
     pub pairs: Vec<(u32, u32, f64)>,
 }
 

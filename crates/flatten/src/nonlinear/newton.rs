@@ -104,8 +104,11 @@ pub struct EdgeTerms {
 /// Hessian's pattern when the problem is built ([`MapProblem::new`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pull {
+    /// The first vertex (0-based index into the map's positions).
     pub a: usize,
+    /// The second vertex (0-based index into the map's positions).
     pub b: usize,
+    /// The spring's stiffness k (energy per mm²).
     pub k: f64,
 }
 
@@ -114,9 +117,13 @@ pub struct Pull {
 /// direction t, k·|v|² sin² of the angle between them otherwise.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DirectionTerm {
+    /// The triangle's three corner vertices (0-based indices into the map's positions).
     pub verts: [usize; 3],
+    /// The weight coef_i of each corner's position in v (a rest-frame gradient component).
     pub coef: [f64; 3],
+    /// The unit target direction t in the plane.
     pub t: DVec2,
+    /// The term's weight k (energy per mm²).
     pub k: f64,
 }
 
@@ -183,8 +190,12 @@ impl EdgeTerms {
 /// The energy of a map: Σ_t A_t Ψ(σ(J_t)) (+ optional boundary-length terms), with the sparse
 /// Newton system.
 pub struct MapProblem<'a, E> {
+    /// The rest frame of each triangle, in the mesh's triangle order.
     pub rest: &'a [RestTri],
+    /// The per-triangle energy density Ψ.
     pub energy: E,
+    /// Optional edge-length, pull and direction terms ([`EdgeTerms`]), added to the triangles'
+    /// energy.
     pub edges: Option<EdgeTerms>,
     n: usize,
     sys: SpdSystem,
@@ -725,6 +736,7 @@ pub struct ProjectedNewton {
 }
 
 impl ProjectedNewton {
+    /// A solver stopping at relative decrease `rel_tolerance` or Newton decrement `abs_tolerance` (energy units), capped at `max_iters` iterations within `budget`.
     pub fn new(rel_tolerance: f64, abs_tolerance: f64, budget: Budget, max_iters: usize) -> Self {
         Self {
             rel_tolerance,
@@ -1121,8 +1133,11 @@ impl Observe<NState> for TraceObserver {
 
 /// Result of a Newton run.
 pub struct NewtonRun {
+    /// The final map: one 2D position (mm) per vertex, indexed like the start map.
     pub x: Vec<DVec2>,
+    /// The energy of the final map.
     pub energy: f64,
+    /// Newton iterations taken.
     pub iterations: usize,
     /// Set when the run stopped at the caller's request rather than by convergence.
     pub early: Option<EarlyStop>,

@@ -34,11 +34,13 @@ use crate::anisotropy::Stiffness;
 /// The orthotropic energy of a material (see the module's documentation).
 #[derive(Clone, Copy, Debug)]
 pub struct Orthotropic {
+    /// The material's stiffness.
     pub k: Stiffness,
     guard: CollapseGuard,
 }
 
 impl Orthotropic {
+    /// The orthotropic energy of a material of stiffness `k`.
     pub fn new(k: Stiffness) -> Self {
         Self {
             k,
