@@ -10,9 +10,8 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// Package name → set of its normal (non-dev) dependency names, for every workspace member.
-fn workspace_deps() -> BTreeMap<String, Vec<String>> {
-    let mut out = BTreeMap::new();
+/// Every package directory of the workspace (each crate under `crates/`, and firmware-sim), sorted.
+fn package_dirs() -> Vec<PathBuf> {
     let mut dirs: Vec<PathBuf> = std::fs::read_dir(root().join("crates"))
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -20,7 +19,13 @@ fn workspace_deps() -> BTreeMap<String, Vec<String>> {
         .collect();
     dirs.push(root().join("firmware-sim"));
     dirs.sort();
-    for d in dirs {
+    dirs
+}
+
+/// Package name → set of its normal (non-dev) dependency names, for every workspace member.
+fn workspace_deps() -> BTreeMap<String, Vec<String>> {
+    let mut out = BTreeMap::new();
+    for d in package_dirs() {
         let text = std::fs::read_to_string(d.join("Cargo.toml")).unwrap();
         let v: toml::Value = toml::from_str(&text).unwrap();
         let name = v["package"]["name"].as_str().unwrap().to_string();
@@ -825,13 +830,7 @@ fn architecture_sections() -> Vec<(String, Vec<String>)> {
 
 /// Every package directory of the workspace with its package name.
 fn packages() -> Vec<(String, String)> {
-    let mut dirs: Vec<PathBuf> = std::fs::read_dir(root().join("crates"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.join("Cargo.toml").exists())
-        .collect();
-    dirs.push(root().join("firmware-sim"));
-    dirs.sort();
+    let dirs = package_dirs();
     dirs.iter()
         .map(|d| {
             let v: toml::Value =
