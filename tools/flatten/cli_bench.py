@@ -12,7 +12,7 @@ The table gives the median wall time of `--repeat` runs with its CPU time (user 
 sensitive to other work on the machine than the wall time) and the stage times of that run,
 the largest peak memory, and the machine's one-minute load before and after each mesh (the
 machine is shared: compare the ratios of one run, not absolute times). `--ratio-to M` adds each
-method's time over method M's on the same mesh in the same run. Meshes of the shared bench:
+method's time over method M's on the same mesh in the same run, wall and CPU. Meshes of the shared bench:
 `make_meshes.py` (its surfaces at any size through `SURFACES[name](faces)`). A benchmark, never
 a test.
 """
@@ -68,12 +68,14 @@ def main():
     os.makedirs(a.out, exist_ok=True)
     methods = a.methods.split(",")
     print("| mesh | faces | method | s | CPU s | peak MB | steps (factorisations) | "
-          + " | ".join(STAGES) + (f" | × {a.ratio_to} |" if a.ratio_to else " |") + " load |")
-    print("|---|---|---|---|---|---|---|" + "---|" * len(STAGES) + ("---|" if a.ratio_to else "")
+          + " | ".join(STAGES)
+          + (f" | × {a.ratio_to} | × {a.ratio_to} (CPU) |" if a.ratio_to else " |") + " load |")
+    print("|---|---|---|---|---|---|---|" + "---|" * len(STAGES) + ("---|---|" if a.ratio_to else "")
           + "---|")
     for mesh in a.meshes:
         stem = os.path.splitext(os.path.basename(mesh))[0]
         times = {}
+        cpus = {}
         rows = []
         for method in methods:
             load0 = os.getloadavg()[0]
@@ -89,6 +91,7 @@ def main():
             wall, cpu, _, info = runs[len(runs) // 2]
             peak = max(r[2] for r in runs)
             times[method] = wall
+            cpus[method] = cpu
             load = max(load0, os.getloadavg()[0])
             rows.append((method, wall, cpu, peak, info, load))
         for method, wall, cpu, peak, info, load in rows:
@@ -96,8 +99,8 @@ def main():
             stages = " | ".join(f"{info[s]:.2f}" if s in info else "–" for s in STAGES)
             ratio = ""
             if a.ratio_to:
-                base = times.get(a.ratio_to)
-                ratio = f" {wall / base:.2f} |" if base else " – |"
+                base, base_cpu = times.get(a.ratio_to), cpus.get(a.ratio_to)
+                ratio = f" {wall / base:.2f} | {cpu / base_cpu:.2f} |" if base else " – | – |"
             print(f"| {stem} | {info.get('faces', '–')} | {method} | {wall:.2f} | {cpu:.2f} | {peak:.0f} | "
                   f"{steps} | {stages} |{ratio} {load:.1f} |", flush=True)
 
