@@ -54,7 +54,7 @@ use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
 use super::kernel::{GuardShape, GuardedGreen, RestTri, SymDirichlet, singular_values};
-use super::newton::{Budget, EarlyStop, EdgeTerms, MapProblem, run, run_flat, to_flat};
+use super::newton::{Budget, EarlyStop, EdgeTerms, MapProblem, NewtonRun, run, run_flat, to_flat};
 use super::{ABS_DECREMENT_PER_AREA, mean_density, time_limit_warning, total_area};
 use crate::conformal_boundary::{Closing, conformal_map, log_scale_factors};
 use crate::ops::{angle_sums, boundary_mask, corner_angles, count_flips, flat_corner_angles};
@@ -86,7 +86,9 @@ const INEXACT_ABOVE: f64 = 1e-1;
 const INEXACT_REL_TOLERANCE: f64 = 1e-5;
 /// Newton steps of the isometric start. Its energy is not f1's: its first step from LSCM takes
 /// most of its gain (the 200k toe: 1.00 → 0.736, the optimum 0.715), and the three more of a
-/// solve to convergence saved the length phase nothing.
+/// solve to convergence saved the length phase nothing. Where the start still has a stretch
+/// below `DEGENERATE_STRETCH / START_COLLAPSE_FRACTION` after them, the guard would be loosened
+/// from it, and the start is solved out.
 const START_ITERS: usize = 1;
 /// Newton steps per inner solve while the violation is above [`INEXACT_ABOVE`].
 const INEXACT_INNER_ITERS: usize = 30;
@@ -308,7 +310,7 @@ fn free_outline(
     let abs = ABS_DECREMENT_PER_AREA * total_area(rest);
     let flat = to_flat(&x0);
     drop(x0);
-    let (iso, iso_problem) = run_flat(
+    let (mut iso, mut iso_problem) = run_flat(
         iso_problem,
         flat,
         START_ITERS.min(params.max_iters),
@@ -317,6 +319,29 @@ fn free_outline(
         &start,
     )
     .map_err(|reason| FlattenError::NoConvergence { method, reason })?;
+    if iso.early.is_none()
+        && min_stretch(rest, &iso.x).0 < DEGENERATE_STRETCH / START_COLLAPSE_FRACTION
+    {
+        // The short start still crushes triangles beyond what the guard admits (a cap deeper
+        // than a hemisphere): the guard would be set from it, so the start is solved out.
+        let (more, p) = run(
+            iso_problem,
+            &iso.x,
+            params.max_iters.saturating_sub(iso.iterations),
+            params.rel_tolerance,
+            abs,
+            &start,
+        )
+        .map_err(|reason| FlattenError::NoConvergence { method, reason })?;
+        iso_problem = p;
+        let mut timings = iso.timings;
+        timings.add(&more.timings);
+        iso = NewtonRun {
+            iterations: iso.iterations + more.iterations,
+            timings,
+            ..more
+        };
+    }
     if iso.early == Some(EarlyStop::Cancelled) {
         return Err(FlattenError::Cancelled { method });
     }
