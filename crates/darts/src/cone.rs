@@ -65,7 +65,8 @@ pub fn worst_cone(mesh: &TriMesh, defects: &[f64], t: usize) -> Option<u32> {
 
 /// Cuts from the outline `rim` through vertex `cone` to the outline again (3D points along the
 /// piece's edges): the first end is the outline vertex nearest the cone, the second the nearest
-/// in each of the middle arcs of the outline opposite it (see [`ARCS`]).
+/// in each of the middle arcs of the outline opposite it (the outline in six arcs from the
+/// first end).
 pub fn cuts_through(mesh: &TriMesh, defects: &[f64], rim: &[u32], cone: u32) -> Vec<Vec<DVec3>> {
     let n = rim.len();
     if n < ARCS {
