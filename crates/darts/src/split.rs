@@ -14,8 +14,9 @@
 //!    farthest from a full turn) and on to the outline ([`crate::cone`]): no chord beside a cone
 //!    frees it, however small the parts get.
 //! 2. **Choice.** A chord that splits the piece into two disks, neither smaller than
-//!    [`MIN_AREA_SHARE`] of it nor [`MIN_SURFACE_SHARE`] of the whole surface, is scored by the larger of the two halves' limit excess, each half
-//!    flattened on its own (isometric, without limits). The lowest score wins, the cheaper seam
+//!    [`MIN_AREA_SHARE`] of it nor [`MIN_SURFACE_SHARE`] of the whole surface, is scored by
+//!    the larger of the two halves' limit excess, each half flattened on its own (isometric,
+//!    without limits). The lowest score wins, the cheaper seam
 //!    on a tie (below).
 //! 3. **All pieces together.** The pieces are flattened together, the two sides of every seam
 //!    kept at equal lengths edge by edge and the limits held ([`flatcut_flatten::assembly`]); while
