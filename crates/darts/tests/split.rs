@@ -198,63 +198,6 @@ fn parts_whose_union_holds_the_limits_are_merged_back() {
     }
 }
 
-/// The narrowest neck of a flat outline, measured here: the least distance between two outline
-/// vertices at least three times as far apart round the outline and a tenth of it.
-fn neck(mesh: &TriMesh) -> f64 {
-    let topo = Topology::build(mesh).unwrap();
-    let rim = topo.boundary_loops.iter().max_by_key(|l| l.len()).unwrap();
-    let x = mesh.flat.as_deref().unwrap();
-    let p: Vec<DVec2> = rim.iter().map(|&v| x[v as usize]).collect();
-    let n = p.len();
-    let edge = |i: usize| p[i].distance(p[(i + 1) % n]);
-    let round: f64 = (0..n).map(edge).sum();
-    let mut best = f64::INFINITY;
-    for i in 0..n {
-        let mut along = 0.0;
-        for j in i + 1..n {
-            along += edge(j - 1);
-            let a = along.min(round - along);
-            let d = p[i].distance(p[j]);
-            if a >= 3.0 * d && a >= 0.1 * round {
-                best = best.min(d);
-            }
-        }
-    }
-    best
-}
-
-/// The neck guard at work: within ±3 % the saddle's parts merge back into the whole square
-/// (above), whose narrowest way across is its width, about 200 mm; with a seam allowance of
-/// 120 mm a merged part must be 240 mm across everywhere, so the merge is refused and no part
-/// that is left has a neck narrower than the guard's where it is a merge of others.
-#[test]
-fn a_merged_part_keeps_no_neck_narrower_than_the_guard() {
-    use flatcut_darts::split::merged_neck;
-    let mesh = saddle(200.0, 24);
-    let x0 = isometric(&mesh);
-    let params = FlattenParams::new(Method::Isometric);
-    let whole = split(&mesh, &x0, &params, &options(3.0, 8)).unwrap();
-    assert_eq!(whole.pieces.len(), 1);
-    let width = neck(&whole.pieces[0]);
-    assert!(width > 150.0 && width < 240.0, "{width}");
-    let wide = SplitOptions {
-        seam_allowance_mm: 120.0,
-        ..options(3.0, 8)
-    };
-    let s = split(&mesh, &x0, &params, &wide).unwrap();
-    assert!(s.feasible, "excess {}", s.excess);
-    assert!(s.pieces.len() >= 2, "{} parts", s.pieces.len());
-    for (k, p) in s.pieces.iter().enumerate() {
-        // A part bigger than either half of the first cut is a merge: it must be wide enough.
-        let merged = p.area() > 0.95 * mesh.area();
-        let n = neck(p);
-        assert!(
-            !merged || n >= merged_neck(p.area(), 120.0),
-            "part {k}: neck {n} mm"
-        );
-    }
-}
-
 #[test]
 fn a_merged_part_keeps_no_neck_narrower_than_twice_the_seam_allowance() {
     use flatcut_darts::split::{MERGED_NECK, merged_neck};
