@@ -20,6 +20,7 @@ interior edges whose two sides have different UV.
 """
 import argparse
 import glob
+import resource
 import json
 import os
 import shutil
@@ -91,25 +92,38 @@ def one(metrics, path, stretch, compress):
     }
 
 
+def children_cpu():
+    """CPU seconds (user + system) of the finished child processes so far."""
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def genus(path):
+    """Genus of a closed connected OBJ surface, from its Euler characteristic."""
+    V, F, _, _ = load_obj(path)
+    edges = {(min(a, b), max(a, b)) for t in F for a, b in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
+    return (2 - (len(V) - len(edges) + len(F))) // 2
+
+
 def run_flatcut(binary, mesh, out, stretch, compress, timeout, extra=()):
     obj, rep = os.path.join(out, "flatcut.obj"), os.path.join(out, "flatcut.json")
     cmd = [binary, "flatten", mesh, "-o", obj, "--report", rep, "--darts", "auto", "--split", "auto",
            "--max-stretch", str(stretch), "--max-compress", str(compress)] + list(extra)
-    t0 = time.monotonic()
+    t0, c0 = time.monotonic(), children_cpu()
     try:
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired:
         return {"error": f"no result in {timeout} s"}
-    dt = time.monotonic() - t0
+    dt, cpu = time.monotonic() - t0, children_cpu() - c0
     objs = [obj] if os.path.exists(obj) else sorted(glob.glob(os.path.join(out, "flatcut-*.obj")))
     if p.returncode != 0 or not objs:
         return {"error": p.stderr.strip().splitlines()[-1] if p.stderr.strip() else f"exit {p.returncode}",
-                "seconds": dt}
+                "seconds": dt, "cpu": cpu}
     report = json.load(open(rep))
     reports = report if isinstance(report, list) else [report]
     darts = [d for r in reports for d in r.get("darts", [])]
     seams = {s["name"]: s["length_3d_mm"] for r in reports for s in r.get("mating_seams", [])}
-    return {"obj": objs, "seconds": dt, "cuts": len(darts) + len(seams),
+    return {"obj": objs, "seconds": dt, "cpu": cpu, "cuts": len(darts) + len(seams),
             "darts": len(darts), "seams": len(seams),
             "mouths_mm": sum(d.get("opening_mm", 0.0) for d in darts),
             "dart_mm": sum(d["length_3d_mm"] for d in darts) + sum(seams.values())}
@@ -127,16 +141,16 @@ def run_optcuts(binary, mesh, out, stretch, compress, timeout):
             f.write("f %d %d %d\n" % tuple(t + 1))
     # progMode 100: headless optimisation; λ 0.999, method 1 (OptCuts), bound, bijectivity on
     cmd = [binary, "100", name + ".obj", "0.999", "1", "0", "%.6f" % bound, "1", "0"]
-    t0 = time.monotonic()
+    t0, c0 = time.monotonic(), children_cpu()
     try:
         p = subprocess.run(cmd, cwd=out, capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired:
         return {"error": f"no result in {timeout} s", "bound": bound}
-    dt = time.monotonic() - t0
+    dt, cpu = time.monotonic() - t0, children_cpu() - c0
     found = glob.glob(os.path.join(out, "output", name + "_*", "finalResult_mesh.obj"))
     if not found:
-        return {"error": f"exit {p.returncode}, no finalResult_mesh.obj", "seconds": dt, "bound": bound}
-    return {"obj": found, "seconds": dt, "bound": bound}
+        return {"error": f"exit {p.returncode}, no finalResult_mesh.obj", "seconds": dt, "cpu": cpu, "bound": bound}
+    return {"obj": found, "seconds": dt, "cpu": cpu, "bound": bound}
 
 
 def main():
@@ -156,7 +170,10 @@ def main():
     a = ap.parse_args()
     root = a.out or tempfile.mkdtemp(prefix="darts-bench-")
     rows = []
+    meta = {}
     for mesh in a.meshes:
+        tag0 = os.path.splitext(os.path.basename(mesh))[0]
+        meta[tag0] = (genus(mesh), len(load_obj(mesh)[1]))
         tag = os.path.splitext(os.path.basename(mesh))[0]
         extra = a.flatcut_args.split()
         tools = [("flatcut" + (" " + a.flatcut_args if extra else ""),
@@ -171,7 +188,7 @@ def main():
             r = run(binary, os.path.abspath(mesh), out, s, c, a.timeout)
             if "obj" in r:
                 r.update(measure(a.bench, r["obj"], a.stretch, a.compress))
-            r.update({"mesh": tag, "tool": label})
+            r.update({"mesh": tag, "tool": label, "load": os.getloadavg()[0]})
             print(json.dumps(r), file=sys.stderr, flush=True)
             rows.append(r)
     print(f"\nLimits: stretch {a.stretch} %, compression {a.compress} %, measured by metrics.py's singular values.\n")
@@ -187,6 +204,42 @@ def main():
         length = r.get("dart_mm", r["cut_mm"])
         print(f"| {r['mesh']} | {r['tool']} | {cuts} | {length:.1f} | {mouths} | {r['stretch_max_pct']:.2f} | "
               f"{r['compress_max_pct']:.2f} | {r['faces_over']} of {r['faces']} | {r['flips']} | {r['seconds']:.1f} |")
+    genus_table(rows, meta, a.stretch, a.compress)
+
+
+def genus_table(rows, meta, stretch, compress):
+    """The closed surfaces' table: pieces, seams, the worst stretches measured, faces over, wall
+    and CPU time, and the load (1-minute average) when the run ended."""
+    print("\n| mesh | genus | faces | limits | tool | pieces | total seam mm | worst stretch % | "
+          "worst compr. % | faces over | wall s | CPU s | load |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        g, f = meta[r["mesh"]]
+        head = f"| {r['mesh']} | {g} | {f} | ±{stretch:g} / {compress:g} % | {r['tool'].split()[0]} |"
+        tail = f" {r.get('seconds', float('nan')):.1f} | {r.get('cpu', float('nan')):.1f} | {r['load']:.1f} |"
+        if "error" in r:
+            print(head + f" – | – | – | – | – ({r['error'][:90]}) |" + tail)
+            continue
+        pieces = r["parts"] if r["tool"].startswith("flatcut") else charts(r["obj"][0])
+        print(head + f" {pieces} | {r.get('dart_mm', r['cut_mm']):.0f} | {r['stretch_max_pct']:.2f} | {r['compress_max_pct']:.2f} | "
+              f"{r['faces_over']} |" + tail)
+
+
+def charts(path):
+    """Connected pieces of an OBJ's UV layout (faces joined by shared texture vertices)."""
+    _, F, _, FT = load_obj(path)
+    parent = list(range(int(FT.max()) + 1))
+
+    def find(x):
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        return x
+    for t in FT:
+        for k in (1, 2):
+            a, b = find(t[0]), find(t[k])
+            parent[a] = b
+    return len({find(t[0]) for t in FT})
 
 
 if __name__ == "__main__":

@@ -3,6 +3,8 @@
 # run, both scored by the bench's metrics.py (tools/flatten/darts_bench.py does the measuring).
 #
 # usage: tools/genus/bench.sh OUT_DIR [STRETCH COMPRESS [OPTCUTS_SOURCE_DIR]]
+# env: BENCH (the shared bench with metrics.py; ../shared/bench), SPLIT_TIME (flatcut's --split-time, s; 240), TIMEOUT (per mesh and tool, s; 900), MESHES
+# (names, space-separated; the nine below)
 # needs: python3 with numpy; for the meshes Debian's libcgal-demo (downloaded here with
 # apt-get download); for OptCuts its source (tools/genus/build_optcuts.sh builds it).
 set -euo pipefail
@@ -25,7 +27,7 @@ if [ -n "$optcuts" ]; then
   extra=(--optcuts "$optcuts/build/OptCuts_bin")
 fi
 meshes=()
-for m in sphere torus eight knot1 elephant boot12 bull bear bunny00; do meshes+=("$out/meshes/$m.obj"); done
-python3 "$root/tools/flatten/darts_bench.py" --bench "$root/../shared/bench" \
-  --flatcut "$root/target/release/flatcut" --flatcut-args "--max-pieces 64 --split-time 240" \
-  --stretch "$stretch" --compress "$compress" --timeout 900 --out "$out/runs" "${extra[@]}" "${meshes[@]}"
+for m in ${MESHES:-sphere torus eight knot1 elephant boot12 bull bear bunny00}; do meshes+=("$out/meshes/$m.obj"); done
+python3 "$root/tools/flatten/darts_bench.py" --bench "${BENCH:-$root/../shared/bench}" \
+  --flatcut "$root/target/release/flatcut" --flatcut-args "--max-pieces 64 --split-time ${SPLIT_TIME:-240}" \
+  --stretch "$stretch" --compress "$compress" --timeout "${TIMEOUT:-900}" --out "$out/runs" "${extra[@]}" "${meshes[@]}"

@@ -75,6 +75,7 @@
 #![warn(missing_docs)]
 
 pub mod band;
+pub mod cone;
 pub mod crossing;
 pub mod cut;
 pub mod embed;

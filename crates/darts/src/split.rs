@@ -9,10 +9,14 @@
 //!    the face of largest limit excess and through the piece's middle, in [`DIRECTIONS`]
 //!    directions each. A chord is carried onto the surface (its points found in the flat
 //!    triangles and lifted to 3D, then traced along the surface as a style line,
-//!    [`flatcut_mesh::lines`]), so the cut is a smooth line the sewer can follow.
+//!    [`flatcut_mesh::lines`]), so the cut is a smooth line the sewer can follow. And the cuts
+//!    from the outline through the cone next to that face (the vertex whose 3D angle sum is
+//!    farthest from a full turn) and on to the outline ([`crate::cone`]): no chord beside a cone
+//!    frees it, however small the parts get.
 //! 2. **Choice.** A chord that splits the piece into two disks, neither smaller than
-//!    [`MIN_AREA_SHARE`] of it, is scored by the larger of the two halves' limit excess, each half
-//!    flattened on its own (isometric, without limits). The lowest score wins, the cheaper seam
+//!    [`MIN_AREA_SHARE`] of it nor [`MIN_SURFACE_SHARE`] of the whole surface, is scored by
+//!    the larger of the two halves' limit excess, each half flattened on its own (isometric,
+//!    without limits). The lowest score wins, the cheaper seam
 //!    on a tie (below).
 //! 3. **All pieces together.** The pieces are flattened together, the two sides of every seam
 //!    kept at equal lengths edge by edge and the limits held ([`flatcut_flatten::assembly`]); while
@@ -70,6 +74,7 @@ use flatcut_mesh::{Topology, TriMesh, check_disk};
 
 use rayon::prelude::*;
 
+use crate::cone;
 use crate::crossing::outline_crossing;
 use crate::limits::{Band, Limits, face_excess};
 use crate::resew::{close_slits, merge};
@@ -97,6 +102,10 @@ const CHORD_SAMPLES: usize = 16;
 /// Neither side of a cut may be smaller than this share of the piece's area: a sliver cut off
 /// the rim relieves nothing and is a piece no one wants to sew.
 pub const MIN_AREA_SHARE: f64 = 0.05;
+/// Nor smaller than this share of the whole surface being split: measured against the piece
+/// alone, the least side shrinks with every split, and a piece cut from pieces cut from pieces
+/// ends as slivers.
+pub const MIN_SURFACE_SHARE: f64 = 0.003;
 /// Excesses (log strain) this close count as a tie, broken by the seam cost.
 pub const SCORE_TIE: f64 = 2e-3;
 /// Newton steps a candidate's half is flattened with to rank the candidates.
@@ -558,7 +567,7 @@ fn best_cut(
         .with_hooks(flatcut_flatten::FlattenHooks::default());
     free.max_iters = free.max_iters.min(CANDIDATE_ITERS);
     free.time_limit = None;
-    let area = piece.area();
+    let least = (MIN_AREA_SHARE * piece.area()).max(MIN_SURFACE_SHARE * guard.area);
     let tri = piece.triangles[worst_face];
     let mut centres = vec![tri.iter().map(|&v| x[v as usize]).sum::<DVec2>() / 3.0];
     centres.extend(polygon::area_centroid(&outline).filter(|&c| polygon::contains(&outline, c)));
@@ -577,6 +586,16 @@ fn best_cut(
         .collect();
     if necks {
         lines.extend(self::necks(piece, rim).into_iter().map(Line::Path));
+    } else {
+        // Through the cone next to the worst face, which no chord beside it frees.
+        let defects = cone::angle_defects(piece, &topo);
+        if let Some(v) = cone::worst_cone(piece, &defects, worst_face) {
+            lines.extend(
+                cone::cuts_through(piece, &defects, rim, v)
+                    .into_iter()
+                    .map(Line::Path),
+            );
+        }
     }
     // Judged side by side; taken in the candidates' order.
     let judged: Vec<Option<Candidate>> = lines
@@ -593,7 +612,7 @@ fn best_cut(
                 mut sides,
                 path,
                 closed_slit,
-            } = cut_in_two(&bare, points, area)?;
+            } = cut_in_two(&bare, points, least)?;
             if guard.blocks(&path) {
                 return None;
             }
@@ -704,6 +723,8 @@ impl Candidate {
 /// against the original piece's vertices, a path point taking the flag of its nearest one.
 struct Guard {
     mesh: TriMesh,
+    /// The area of the whole surface being split (mm²).
+    area: f64,
     blocked: Vec<bool>,
     /// The seams' visibility factor at every vertex.
     factors: Vec<f64>,
@@ -713,6 +734,7 @@ impl Guard {
     fn new(mesh: &TriMesh, keep_out: Option<&KeepOut>, visibility: &Visibility) -> Self {
         Self {
             mesh: mesh.clone(),
+            area: mesh.area(),
             blocked: keep_out.map_or_else(Vec::new, |k| k.blocked.clone()),
             factors: visibility.vertex_factors(mesh),
         }
@@ -777,8 +799,8 @@ fn chord_on_surface(
 }
 
 /// The piece cut along the surface line through `points` into exactly two disks, neither under
-/// [`MIN_AREA_SHARE`] of `area`, and the cut's 3D path.
-fn cut_in_two(bare: &TriMesh, points: Vec<DVec3>, area: f64) -> Option<Halves> {
+/// `least` (mm²), and the cut's 3D path.
+fn cut_in_two(bare: &TriMesh, points: Vec<DVec3>, least: f64) -> Option<Halves> {
     let spec = LineSpec {
         points,
         notches: Vec::new(),
@@ -788,7 +810,7 @@ fn cut_in_two(bare: &TriMesh, points: Vec<DVec3>, area: f64) -> Option<Halves> {
     let [a, b] = <[_; 2]>::try_from(s.regions).ok()?;
     for r in [&a, &b] {
         check_disk(&r.mesh).ok()?;
-        if r.mesh.area() < MIN_AREA_SHARE * area {
+        if r.mesh.area() < least {
             return None;
         }
     }

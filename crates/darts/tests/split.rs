@@ -98,6 +98,13 @@ fn a_saddle_is_split_into_parts_within_the_limits_that_sew_back_together() {
                 "part {k} face {t}: {s1} {s2}"
             );
         }
+        // No sliver: no part under the stated share of the whole surface.
+        assert!(
+            p.area() >= flatcut_darts::split::MIN_SURFACE_SHARE * mesh.area(),
+            "part {k}: {} mm² of {}",
+            p.area(),
+            mesh.area()
+        );
         area += p.area();
     }
     assert!(
