@@ -1,6 +1,6 @@
-//! What a device's handle and its worker say to each other: the requests ([`Cmd`], [`Op`]), the
-//! answers ([`Reply`]), the controls of the job running ([`Running`]), and what a closed device
-//! leaves ([`Closed`]); shared by the GRBL worker (`device`) and the plotter's (`plot_worker`).
+//! What a device's handle and its worker say to each other: the requests (`Cmd`, `Op`), the
+//! answers (`Reply`), the controls of the job running (`Running`), and what a closed device
+//! leaves (`Closed`); shared by the GRBL worker (`device`) and the plotter's (`plot_worker`).
 
 use crate::job::{JobOutcome, JobRequest};
 use crate::plotter::{PlotOutcome, PlotRequest, PlotterReport};
