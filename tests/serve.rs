@@ -1273,3 +1273,224 @@ fn serve_runs_jobs_on_two_devices_at_once_and_a_stop_on_one_leaves_the_other() {
     assert!(journal2.finished);
     srv.stop().unwrap();
 }
+
+/// The pen-down segments of an HP-GL job (mm), read here from its text (absolute and relative
+/// moves, `PU`/`PD`, `SP`/`IN` lifting the pen), independently of the writer and the plotter.
+fn hpgl_strokes(text: &str) -> Vec<([f64; 2], [f64; 2])> {
+    let (mut pos, mut down, mut rel) = ([0.0f64; 2], false, false);
+    let mut out = Vec::new();
+    for instr in text.split(';') {
+        let instr = instr.trim();
+        if instr.len() < 2 {
+            continue;
+        }
+        let (op, args) = instr.split_at(2);
+        let nums: Vec<f64> = args
+            .split([',', ' '])
+            .filter(|t| !t.is_empty())
+            .map(|t| t.parse().unwrap())
+            .collect();
+        match op {
+            "PU" | "SP" | "IN" => down = false,
+            "PD" => down = true,
+            "PA" => rel = false,
+            "PR" => rel = true,
+            _ => continue,
+        }
+        if !matches!(op, "PU" | "PD" | "PA" | "PR") {
+            continue;
+        }
+        for p in nums.chunks_exact(2) {
+            let to = match rel {
+                true => [pos[0] + p[0] / 40.0, pos[1] + p[1] / 40.0],
+                false => [p[0] / 40.0, p[1] / 40.0],
+            };
+            if down && to != pos {
+                out.push((pos, to));
+            }
+            pos = to;
+        }
+    }
+    out
+}
+
+/// The embedded plotter's pen strokes (`GET /api/devices/sim?device=plotter-sim`) once it has
+/// drawn everything it received, and whether its pen is down.
+fn plotter_drained(a: SocketAddr) -> (Vec<([f64; 2], [f64; 2])>, bool) {
+    let t0 = std::time::Instant::now();
+    loop {
+        let s = get(a, "/api/devices/sim?device=plotter-sim").json();
+        if s["idle"] == true {
+            let xy = |v: &Value| [v[0].as_f64().unwrap(), v[1].as_f64().unwrap()];
+            let strokes = s["strokes"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|k| (xy(&k["from"]), xy(&k["to"])))
+                .collect();
+            assert_eq!(s["bytes_lost"], 0, "{}", s["bytes_lost"]);
+            return (strokes, s["pen_down"] == true);
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(120),
+            "the plotter never idled"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn bytes_sent(j: &Value) -> u64 {
+    j["progress"]["bytes_sent"].as_u64().unwrap_or(0)
+}
+
+/// An HP-GL plotter in the device panel: the embedded HP-GL plotter (`plotter-sim`, opened with a
+/// pen plotter profile for the lampshade's A0 sheet) takes `POST /api/jobs` as the sheet's HP-GL
+/// (`GET /api/job.plt`'s bytes for that profile). Followed on `/api/events` to its end, its
+/// progress is the bytes sent and says so; paused, the feed stops at an instruction's end and the
+/// plotter's pen is up (nothing drawn until the resume); resumed, the job ends and the plotter
+/// drew the job's pen-down moves, each once, in order. A second job stopped part-way: the
+/// plotter drew the job's beginning and nothing after the stop. GRBL's commands are refused.
+#[test]
+fn serve_plots_hpgl_on_the_embedded_plotter_with_pause_pen_up_and_stop() {
+    let dir = lampshade();
+    let profile = std::fs::read_to_string(root().join("crates/gcode/profiles/pen-hpgl.toml"))
+        .unwrap()
+        .replace(
+            "work_area_mm = [400.0, 270.0]",
+            "work_area_mm = [1200.0, 920.0]",
+        );
+    let prof = dir.path().join("pen-a0.toml");
+    std::fs::write(&prof, profile).unwrap();
+    let prof = prof.to_str().unwrap().to_string();
+    let srv = serve(&dir.path().join("project.toml"));
+    let a = srv.addr();
+    // Every event of the session, read until the server stops.
+    let mut s = TcpStream::connect(a).unwrap();
+    write!(
+        s,
+        "GET /api/events HTTP/1.1\r\nHost: localhost:{}\r\n\r\n",
+        a.port()
+    )
+    .unwrap();
+    let follow = std::thread::spawn(move || {
+        let mut text = String::new();
+        let _ = BufReader::new(s).read_to_string(&mut text);
+        text
+    });
+    let d = get(a, "/api/devices").json();
+    let listed = d["devices"].as_array().unwrap();
+    assert!(
+        listed
+            .iter()
+            .any(|x| x["id"] == "plotter-sim" && x["protocol"] == "hpgl"),
+        "{d}"
+    );
+    let c = send(
+        a,
+        "POST",
+        "/api/devices/connect",
+        &json!({"device": "plotter-sim", "profile": prof, "speed": 100, "baud": 115_200}),
+    );
+    assert_eq!(c.status, 200, "{}", String::from_utf8_lossy(&c.body));
+    let c = c.json();
+    assert_eq!(c["protocol"], "hpgl", "{c}");
+    assert_eq!(c["plotter"]["flow_control"], "xon-xoff", "{c}");
+    let home = send(
+        a,
+        "POST",
+        "/api/devices/home",
+        &json!({"device": "plotter-sim"}),
+    );
+    assert_eq!(home.status, 409);
+    assert!(String::from_utf8_lossy(&home.body).contains("HP-GL plotter"));
+    let plt = get(a, &format!("/api/job.plt?profile={prof}"));
+    assert_eq!(plt.status, 200);
+    let want = hpgl_strokes(std::str::from_utf8(&plt.body).unwrap());
+    assert!(want.len() > 100, "{} strokes", want.len());
+    let total = plt.body.len() as u64;
+    // A job, paused a third of the way and resumed.
+    let r = send(a, "POST", "/api/jobs", &json!({"device": "plotter-sim"}));
+    assert_eq!(r.status, 201, "{}", String::from_utf8_lossy(&r.body));
+    let j = r.json();
+    assert_eq!(
+        (j["id"].as_u64(), j["protocol"].as_str()),
+        (Some(1), Some("hpgl"))
+    );
+    assert!(j["journal"].is_null());
+    assert_eq!(send(a, "POST", "/api/jobs", &json!({})).status, 409);
+    job_until(a, 1, "sent a third", |j| bytes_sent(j) > total / 3);
+    assert_eq!(send(a, "POST", "/api/jobs/1/hold", &json!({})).status, 200);
+    let held = job_until(a, 1, "paused", |j| {
+        j["state"] == "held" && j["progress"]["paused"] == true
+    });
+    assert_eq!(held["progress"]["progress_basis"], "bytes_sent");
+    let at = bytes_sent(&held) as usize;
+    assert_eq!(plt.body[at - 1], b';', "paused inside an instruction");
+    let (paused, pen_down) = plotter_drained(a);
+    assert!(!pen_down, "the pen is up while paused");
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(
+        plotter_drained(a).0.len(),
+        paused.len(),
+        "drawn while paused"
+    );
+    assert_eq!(bytes_sent(&get(a, "/api/jobs/1").json()) as usize, at);
+    assert_eq!(
+        send(a, "POST", "/api/jobs/1/resume", &json!({})).status,
+        200
+    );
+    let done = job_until(a, 1, "ended", |j| {
+        ["done", "failed", "stopped"].contains(&j["state"].as_str().unwrap())
+    });
+    assert_eq!(done["state"], "done", "{done}");
+    assert_eq!(done["report"]["bytes_sent"].as_u64(), Some(total));
+    assert_eq!(done["report"]["pauses"], 1);
+    let (drawn, pen_down) = plotter_drained(a);
+    assert!(!pen_down);
+    assert_eq!(drawn.len(), want.len(), "strokes drawn and in the job");
+    for (k, (got, exp)) in drawn.iter().zip(&want).enumerate() {
+        let far = (0..2)
+            .map(|i| (got.0[i] - exp.0[i]).abs().max((got.1[i] - exp.1[i]).abs()))
+            .fold(0.0f64, f64::max);
+        assert!(far < 1e-9, "stroke {k}: {got:?} vs {exp:?}");
+    }
+    // A second job, stopped part-way: the beginning of the job drawn, nothing after the stop.
+    assert_eq!(send(a, "POST", "/api/jobs", &json!({})).status, 201);
+    job_until(a, 2, "sent a quarter", |j| bytes_sent(j) > total / 4);
+    assert_eq!(send(a, "POST", "/api/jobs/2/stop", &json!({})).status, 200);
+    let stopped = job_until(a, 2, "ended", |j| j["state"] == "stopped");
+    assert!(
+        stopped["message"].as_str().unwrap().contains("aborted"),
+        "{stopped}"
+    );
+    let (after, pen_down) = plotter_drained(a);
+    assert!(!pen_down);
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(
+        plotter_drained(a).0.len(),
+        after.len(),
+        "drawn after the stop"
+    );
+    let second = &after[drawn.len()..];
+    assert!(
+        !second.is_empty() && second.len() < want.len(),
+        "{} of {} strokes",
+        second.len(),
+        want.len()
+    );
+    assert_eq!(second, &want[..second.len()]);
+    srv.stop().unwrap();
+    // Every page heard the plot: progress in bytes sent, growing, to the end of job 1.
+    let text = follow.join().unwrap();
+    let jobs: Vec<Value> = text
+        .split("event: job\ndata: ")
+        .skip(1)
+        .map(|t| serde_json::from_str(t.lines().next().unwrap()).unwrap())
+        .filter(|j: &Value| j["id"] == 1)
+        .collect();
+    let sent: Vec<u64> = jobs.iter().map(bytes_sent).collect();
+    assert!(sent.len() > 3, "{} job events", sent.len());
+    assert!(sent.windows(2).all(|w| w[0] <= w[1]), "{sent:?}");
+    assert_eq!(jobs.last().unwrap()["state"], "done");
+    assert!(jobs.iter().any(|j| j["state"] == "held"));
+}

@@ -13,7 +13,8 @@
 // executed motions against the G-code's moves (each once, in order, the same end point); open a
 // second device (another embedded simulator) on a tab of its own beside the first, run sheet 2
 // on it while sheet 1 runs again on the first, and check the second simulator executed sheet 2's
-// moves, each once; then Ctrl-C the server during a job and check the job stopped with the tool off and its journal
+// moves, each once; plot sheet 1 on the embedded HP-GL plotter, paused (pen up) and resumed, and
+// check its strokes against the job's HP-GL; then Ctrl-C the server during a job and check the job stopped with the tool off and its journal
 // says so; then kill a server outright during sheet 3's job (a crash), resume from the journal
 // on a new server, see the panel refuse and name the lines in doubt (drawn over the layout
 // where the G-code moves), type a line among them, answer the origin question, and check the
@@ -154,6 +155,29 @@ function gcodeMoves(gcode) {
     }
   }
   return { moves, end: pos };
+}
+
+/** The pen-down moves of an HP-GL job (mm), read from its text: `PU`/`PD`, absolute and relative
+ * moves, `SP`/`IN` lifting the pen. */
+function hpglStrokes(text) {
+  const out = [];
+  let pos = [0, 0]; let down = false; let rel = false;
+  for (const raw of text.split(';')) {
+    const instr = raw.trim();
+    const op = instr.slice(0, 2);
+    if (['PU', 'SP', 'IN'].includes(op)) down = false;
+    if (op === 'PD') down = true;
+    if (op === 'PA') rel = false;
+    if (op === 'PR') rel = true;
+    if (!['PU', 'PD', 'PA', 'PR'].includes(op)) continue;
+    const n = instr.slice(2).split(/[ ,]+/).filter(Boolean).map(Number);
+    for (let k = 0; k + 1 < n.length; k += 2) {
+      const to = rel ? [pos[0] + n[k] / 40, pos[1] + n[k + 1] / 40] : [n[k] / 40, n[k + 1] / 40];
+      if (down && (to[0] !== pos[0] || to[1] !== pos[1])) out.push({ from: pos, to });
+      pos = to;
+    }
+  }
+  return out;
 }
 
 /** What the simulator executed (`GET /api/devices/sim`), the motions that moved; a line a hold
@@ -462,6 +486,43 @@ try {
   step('a second device runs a job beside the first, each on its own tab', twoRunning.length === 2 && tabs.length === 2
     && tabs.every((t) => t.busy) && second.state === 'done' && second.sheet === 2 && again.state === 'done' && again.sheet === 1 && !w2.bad,
   `running at once: ${twoRunning.join(', ')}; tabs: ${tabs.map((t) => t.text).join(' | ')}; simulator 2 executed ${w2.k} motions of sheet 2's ${gcodeMoves(gcode2).moves.length} moves${w2.bad ? `; first difference at move ${w2.bad.at}` : ''}`);
+  // 5c. An HP-GL plotter: the embedded HP-GL plotter (opened at 115200 baud, so the sheet plots
+  // in seconds), sheet 1 plotted from the panel, paused with the pen up and resumed, watched to
+  // its end; the GRBL controls are hidden, the panel says the progress is bytes sent, and the
+  // plotter drew the job's pen-down moves (`GET /api/job.plt`'s), each once, in order.
+  await page.evaluate(() => fetch('/api/devices/connect', { method: 'POST', headers: { 'content-type': 'application/json' }, body: '{"device":"plotter-sim","speed":200,"baud":115200}' }));
+  await page.waitForSelector('#dev-tabs [data-device="plotter-sim"]', { timeout: 60000 });
+  await page.click('#dev-tabs [data-device="plotter-sim"]');
+  await page.waitForSelector('#dev-tabs [data-device="plotter-sim"].on', { timeout: 30000 });
+  await page.selectOption('#job-sheet', '1');
+  const grblHidden = await page.isHidden('#dev-grbl-row') && await page.isVisible('#dev-grbl-note');
+  await page.click('#job-start');
+  await page.waitForFunction(() => { const j = window.__flatcut.lastJob; return j && j.device_id === 'plotter-sim' && j.progress && j.progress.bytes_sent > j.progress.bytes_total / 4; }, null, { timeout: 120000 });
+  await page.click('#job-hold');
+  await page.waitForFunction(() => { const j = window.__flatcut.lastJob; return j.state === 'held' && j.progress.paused; }, null, { timeout: 30000 });
+  const basis = await page.textContent('#job-basis');
+  const penUp = await page.evaluate(async () => {
+    for (;;) {
+      const s = await (await fetch('/api/devices/sim?device=plotter-sim')).json();
+      if (s.idle) return !s.pen_down;
+      await new Promise((r) => setTimeout(r, 50));
+    }
+  });
+  await shot('device-plotter');
+  await page.click('#job-resume');
+  await page.waitForFunction(() => ['done', 'failed', 'stopped'].includes(window.__flatcut.lastJob.state), null, { timeout: 600000 });
+  const plot = await jobState();
+  const [plt, plotted] = await page.evaluate(async () => [
+    await (await fetch('/api/job.plt?sheet=1')).text(),
+    await (await fetch('/api/devices/sim?device=plotter-sim')).json(),
+  ]);
+  const pd = hpglStrokes(plt);
+  const sameStrokes = plotted.strokes.length === pd.length && pd.every((s, i) => [0, 1].every((k) => Math.abs(s.from[k] - plotted.strokes[i].from[k]) < 1e-9 && Math.abs(s.to[k] - plotted.strokes[i].to[k]) < 1e-9));
+  step('an HP-GL job plots on the embedded plotter: pause lifts the pen, the strokes are the job\'s', plot.state === 'done' && plot.protocol === 'hpgl'
+    && plot.progress.progress_basis === 'bytes_sent' && grblHidden && penUp && /bytes the plotter.s link accepted/.test(basis) && sameStrokes,
+  `${plot.progress.bytes_sent} of ${plot.progress.bytes_total} bytes, state ${plot.state}: ${plot.message}; GRBL controls hidden: ${grblHidden}; pen up while paused: ${penUp}; ${plotted.strokes.length} strokes drawn, the job has ${pd.length}`);
+  await page.click('#dev-tabs [data-device="simulator"]');
+  await page.waitForFunction(() => window.__flatcut.lastJob?.device_id === 'simulator', null, { timeout: 30000 });
   step('no script error on the page', pageErrors.length === 0, pageErrors.join('; '));
 
   // 6. Ctrl-C to the server while a job runs: the job stops with the tool off, its journal says

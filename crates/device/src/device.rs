@@ -8,15 +8,20 @@
 //! sender's own handshake (which sees the banner of a controller that resets as the port opens),
 //! and only an explicit [`Device::connect`] (or a job) starts the status polling between jobs.
 
+use crate::commands::{Closed, Cmd, Op, Reply, Running, plotter_report};
 use crate::embedded::SimSetup;
 use crate::error::DeviceError;
 use crate::events::{DeviceEvent, Hub, Subscription};
 use crate::job::{JobHandle, JobOutcome, JobRequest};
 use crate::operator::Questions;
+use crate::plot_worker::PlotWorker;
+use crate::plotter::{PlotHandle, PlotRequest, PlotterReport, PlotterSimSetup};
 use crate::target::Target;
+use flatcut_firmware_sim::hpgl::HpglPtySim;
 use flatcut_firmware_sim::{PtySim, SimReport};
+use flatcut_grbl::hpgl::HpglFlow;
 use flatcut_grbl::{
-    CancelToken, Console, ControllerInfo, Jog, MachineStatus, Progress, SendError, SendOptions,
+    Console, ControllerInfo, Jog, MachineStatus, Progress, SendError, SendOptions, SerialTransport,
 };
 use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -42,46 +47,6 @@ impl Default for DeviceOptions {
     }
 }
 
-/// What a closed device leaves: the embedded simulator's trace, counters and simulated time
-/// (`None` on a serial port).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Closed {
-    /// The simulator's report.
-    pub sim: Option<SimReport>,
-}
-
-/// Something asked of the controller between jobs.
-enum Op {
-    Connect,
-    Status,
-    Unlock,
-    Home,
-    Jog(Jog),
-    JogCancel,
-    Frame {
-        lo: [f64; 2],
-        hi: [f64; 2],
-        feed: f64,
-    },
-    Command(String),
-    SimReport,
-}
-
-enum Reply {
-    Info(ControllerInfo),
-    Status(Option<MachineStatus>),
-    Sim(Option<SimReport>),
-    Done,
-}
-
-type JobDone = Sender<Result<JobOutcome, SendError>>;
-
-enum Cmd {
-    Op(Op, Sender<Result<Reply, SendError>>),
-    Job(Box<JobRequest>, JobDone),
-    Close,
-}
-
 /// An open device; see the module docs.
 #[derive(Debug)]
 pub struct Device {
@@ -90,8 +55,10 @@ pub struct Device {
     tx: Sender<Cmd>,
     hub: Arc<Hub>,
     questions: Arc<Questions>,
-    running: Arc<Mutex<Option<CancelToken>>>,
+    running: Arc<Mutex<Option<Running>>>,
     worker: Mutex<Option<JoinHandle<Closed>>>,
+    /// The embedded HP-GL plotter, shared with the worker.
+    plotter_sim: Option<Arc<HpglPtySim>>,
 }
 
 impl Device {
@@ -105,19 +72,18 @@ impl Device {
     /// to the controller yet.
     pub fn open_with(target: Target, opts: DeviceOptions) -> Result<Device, DeviceError> {
         target.check()?;
+        if matches!(target, Target::Plotter { .. } | Target::PlotterSim(_)) {
+            return Device::open_plotter(target);
+        }
         let (sim, path) = match &target {
-            Target::Port { path, .. } => (None, path.clone()),
             Target::Simulator(s) => {
                 let sim = spawn_sim(s)?;
                 let p = sim.path().display().to_string();
                 (Some(sim), p)
             }
+            t => (None, t.path().unwrap_or_default().to_string()),
         };
-        let link =
-            flatcut_grbl::open_port(&path, target.baud()).map_err(|source| DeviceError::Open {
-                path: path.clone(),
-                source,
-            })?;
+        let link = open_link(&path, target.baud())?;
         let hub = Arc::new(Hub::default());
         let questions = Arc::new(Questions::default());
         let running = Arc::new(Mutex::new(None));
@@ -143,6 +109,57 @@ impl Device {
             questions,
             running,
             worker: Mutex::new(Some(handle)),
+            plotter_sim: None,
+        })
+    }
+
+    /// Opens an HP-GL plotter: the embedded one started on its pseudo-terminal, the link opened
+    /// with the profile's flow control (RTS/CTS set on the port), the worker started.
+    fn open_plotter(target: Target) -> Result<Device, DeviceError> {
+        let (sim, path, link) = match &target {
+            Target::PlotterSim(s) => {
+                let sim = Arc::new(spawn_plotter(s)?);
+                let p = sim.path().display().to_string();
+                (Some(sim), p, s.link)
+            }
+            Target::Plotter { path, link } => (None, path.clone(), *link),
+            _ => unreachable!("a plotter target"),
+        };
+        let mut port = open_link(&path, link.baud)?;
+        if link.flow == HpglFlow::RtsCts {
+            port.port_mut()
+                .set_flow_control(serialport::FlowControl::Hardware)
+                .map_err(|e| DeviceError::Open {
+                    path: path.clone(),
+                    source: flatcut_grbl::TransportError::Open {
+                        path: path.clone(),
+                        reason: format!("cannot enable RTS/CTS: {e}"),
+                    },
+                })?;
+        }
+        let hub = Arc::new(Hub::default());
+        let running = Arc::new(Mutex::new(None));
+        let (tx, rx) = channel();
+        let worker = PlotWorker {
+            port,
+            sim: sim.clone(),
+            hub: hub.clone(),
+            running: running.clone(),
+            link,
+        };
+        let handle = std::thread::Builder::new()
+            .name("flatcut-plotter".into())
+            .spawn(move || worker.run(rx))
+            .map_err(DeviceError::Simulator)?;
+        Ok(Device {
+            target,
+            link: path,
+            tx,
+            hub,
+            questions: Arc::new(Questions::default()),
+            running,
+            worker: Mutex::new(Some(handle)),
+            plotter_sim: sim,
         })
     }
 
@@ -162,7 +179,7 @@ impl Device {
         self.hub.subscribe()
     }
 
-    fn running(&self) -> MutexGuard<'_, Option<CancelToken>> {
+    fn running(&self) -> MutexGuard<'_, Option<Running>> {
         self.running.lock().unwrap_or_else(|p| p.into_inner())
     }
 
@@ -174,6 +191,12 @@ impl Device {
 
     /// Asks the worker to do `op` and waits for it; refused while a job runs.
     fn op(&self, op: Op) -> Result<Reply, DeviceError> {
+        if let Some(what) = op.grbl_only().filter(|_| self.target.is_plotter()) {
+            return Err(DeviceError::NotGrbl {
+                device: self.target.describe(),
+                what,
+            });
+        }
         let (tx, rx) = channel();
         {
             let running = self.running();
@@ -249,9 +272,48 @@ impl Device {
         }
     }
 
+    /// What the embedded HP-GL plotter drew so far (its strokes, counters, pen), as
+    /// [`Device::close`] gives it at the end; `None` on a serial port or a GRBL device. Read from
+    /// the simulator itself, so also while a job runs.
+    pub fn plotter_report(&self) -> Option<PlotterReport> {
+        self.plotter_sim.as_deref().map(plotter_report)
+    }
+
+    /// Starts streaming an HP-GL job to a plotter; refused while another runs, and on a GRBL
+    /// device. Its progress ([`DeviceEvent::Plot`]: bytes sent, never what was drawn) and its
+    /// end come as events; [`PlotHandle::wait`] gives its end. [`Device::hold`] pauses it at an
+    /// instruction boundary with the pen lifted, [`Device::resume`] puts the pen back and goes
+    /// on, [`Device::stop`] makes the device drop its buffer (`ESC.K`) and lift the pen.
+    pub fn start_plot(&self, req: PlotRequest) -> Result<PlotHandle, DeviceError> {
+        if !self.target.is_plotter() {
+            return Err(DeviceError::NotPlotter {
+                device: self.target.describe(),
+            });
+        }
+        let mut running = self.running();
+        if running.is_some() {
+            return Err(DeviceError::Busy {
+                device: self.target.describe(),
+            });
+        }
+        let (tx, rx) = channel();
+        let control = req.control.clone();
+        self.tx
+            .send(Cmd::Plot(Box::new(req), tx))
+            .map_err(|_| self.closed())?;
+        *running = Some(Running::Plot(control.clone()));
+        Ok(PlotHandle { control, done: rx })
+    }
+
     /// Starts a job; refused while another runs. Its progress, notices, pauses and questions
     /// come as events; [`JobHandle::wait`] gives its end.
     pub fn start(&self, req: JobRequest) -> Result<JobHandle, DeviceError> {
+        if self.target.is_plotter() {
+            return Err(DeviceError::NotGrbl {
+                device: self.target.describe(),
+                what: "G-code job",
+            });
+        }
         let mut running = self.running();
         if running.is_some() {
             return Err(DeviceError::Busy {
@@ -263,7 +325,7 @@ impl Device {
         self.tx
             .send(Cmd::Job(Box::new(req), tx))
             .map_err(|_| self.closed())?;
-        *running = Some(control.clone());
+        *running = Some(Running::Grbl(control.clone()));
         Ok(JobHandle { control, done: rx })
     }
 
@@ -272,7 +334,7 @@ impl Device {
         self.running().is_some()
     }
 
-    fn with_job(&self, f: impl FnOnce(&CancelToken)) -> Result<(), DeviceError> {
+    fn with_job(&self, f: impl FnOnce(&Running)) -> Result<(), DeviceError> {
         match self.running().as_ref() {
             Some(c) => {
                 f(c);
@@ -284,20 +346,21 @@ impl Device {
         }
     }
 
-    /// Holds the running job's feed (`!`).
+    /// Holds the running job's feed (`!`); a plot pauses at an instruction boundary, pen up.
     pub fn hold(&self) -> Result<(), DeviceError> {
-        self.with_job(CancelToken::hold)
+        self.with_job(Running::hold)
     }
 
-    /// Resumes the running job after a hold or its own pause (`~`).
+    /// Resumes the running job after a hold or its own pause (`~`); a plot's pen goes back
+    /// down if it was.
     pub fn resume(&self) -> Result<(), DeviceError> {
-        self.with_job(CancelToken::resume)
+        self.with_job(Running::resume)
     }
 
     /// Stops the running job: feed hold, soft reset, tool off; the journal says what ran. An
-    /// open question is answered no.
+    /// open question is answered no. A plot: `ESC.K` (the device drops its buffer) and `PU;`.
     pub fn stop(&self) -> Result<(), DeviceError> {
-        self.with_job(CancelToken::abort)
+        self.with_job(Running::abort)
     }
 
     /// Answers the question numbered `id` ([`DeviceEvent::Question`]).
@@ -341,13 +404,24 @@ fn spawn_sim(s: &SimSetup) -> Result<PtySim, DeviceError> {
     PtySim::spawn(s.config()?).map_err(DeviceError::Simulator)
 }
 
+fn spawn_plotter(s: &PlotterSimSetup) -> Result<HpglPtySim, DeviceError> {
+    HpglPtySim::spawn(s.config(), s.link.baud, s.speed).map_err(DeviceError::Simulator)
+}
+
+fn open_link(path: &str, baud: u32) -> Result<SerialTransport, DeviceError> {
+    flatcut_grbl::open_port(path, baud).map_err(|source| DeviceError::Open {
+        path: path.to_string(),
+        source,
+    })
+}
+
 /// The thread that owns the link.
 struct Worker {
     console: Console,
     sim: Option<PtySim>,
     hub: Arc<Hub>,
     questions: Arc<Questions>,
-    running: Arc<Mutex<Option<CancelToken>>>,
+    running: Arc<Mutex<Option<Running>>>,
     opts: DeviceOptions,
     /// A restart was already published.
     restarted: bool,
@@ -366,6 +440,8 @@ impl Worker {
                     let r = self.job(*req);
                     let _ = done.send(r);
                 }
+                // A plot is refused before it reaches a GRBL device's worker.
+                Ok(Cmd::Plot(..)) => {}
                 Ok(Cmd::Close) | Err(RecvTimeoutError::Disconnected) => break,
                 Err(RecvTimeoutError::Timeout) => self.poll(),
             }
@@ -376,6 +452,7 @@ impl Worker {
         drop(console);
         Closed {
             sim: sim.map(PtySim::stop),
+            plotter: None,
         }
     }
 

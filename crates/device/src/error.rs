@@ -56,6 +56,20 @@ pub enum DeviceError {
         /// The 1-based line of the file given.
         line: usize,
     },
+    /// A GRBL command or a G-code job asked of an HP-GL plotter.
+    #[error("{device} is an HP-GL plotter: it takes no {what} (GRBL controllers only)")]
+    NotGrbl {
+        /// The device.
+        device: String,
+        /// What was asked.
+        what: &'static str,
+    },
+    /// An HP-GL job asked of a GRBL device.
+    #[error("{device} is a GRBL device: it takes G-code, not HP-GL")]
+    NotPlotter {
+        /// The device.
+        device: String,
+    },
     /// The device was closed (its link failed or it was shut).
     #[error("the device {device} is closed")]
     Closed {

@@ -3,6 +3,7 @@
 //! behind (a paused terminal, a slow web client) finds the newest progress or status in place of
 //! the ones it missed (only the newest matters), and every other event kept.
 
+use crate::plotter::PlotProgress;
 use flatcut_grbl::driver::LineRef;
 use flatcut_grbl::{ControllerInfo, MachineStatus, Progress, Question};
 use std::collections::VecDeque;
@@ -37,6 +38,9 @@ pub enum DeviceEvent {
     },
     /// A job's progress: lines, path done, ETA (machine time), state, live work position.
     Progress(Box<Progress>),
+    /// A plot's progress on an HP-GL device: the bytes the link accepted (never what was drawn),
+    /// the device's hold (XOFF), the operator's pause, the ETA of the rest at the rate so far.
+    Plot(PlotProgress),
     /// Something the operator should know before the machine runs (a feed over a max rate, a
     /// work frame kept across the reset, a homing before a resume), once each.
     Notice(String),
@@ -64,6 +68,7 @@ impl DeviceEvent {
         matches!(
             (self, older),
             (DeviceEvent::Progress(_), DeviceEvent::Progress(_))
+                | (DeviceEvent::Plot(_), DeviceEvent::Plot(_))
                 | (DeviceEvent::Status(_), DeviceEvent::Status(_))
         )
     }

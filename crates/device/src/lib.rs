@@ -17,6 +17,13 @@
 //! * Events: [`Device::subscribe`] gives a [`Subscription`] of [`DeviceEvent`]s — progress
 //!   (lines, path done, ETA, state, live position), status between jobs, notices, the job's own
 //!   pauses, restarts, the job's end. A subscriber that falls behind never holds the device up.
+//! * HP-GL plotters and vinyl cutters: [`Target::Plotter`] (a serial port with the profile's
+//!   flow control: [`PlotterLink`]) and [`Target::PlotterSim`] (the embedded HP-GL plotter,
+//!   which records its pen strokes: [`PlotterReport`]). [`Device::start_plot`] streams HP-GL
+//!   bytes ([`PlotRequest`]); [`Device::hold`] pauses at an instruction boundary with the pen
+//!   lifted, [`Device::resume`] puts it back, [`Device::stop`] sends `ESC.K` and `PU;`. Progress
+//!   is [`DeviceEvent::Plot`]: bytes the link accepted, never what was drawn (HP-GL has no
+//!   acknowledgements). GRBL's commands (connect, unlock, home, jog, frame) are refused.
 //! * The operator's questions (a resume whose machine position is unknown, a job file edited
 //!   since its journal): with [`JobRequest::ask`] they come as [`DeviceEvent::Question`] and the
 //!   job waits for [`Device::answer`]; a stop answers no.
@@ -61,19 +68,26 @@
 //! but the journal the options name, and owns no process-wide state (no signal handler).
 #![warn(missing_docs)]
 
+mod commands;
 mod device;
 mod embedded;
 mod error;
 mod events;
 mod job;
 mod operator;
+mod plot_worker;
+mod plotter;
 mod target;
 
-pub use device::{Closed, Device, DeviceOptions};
+pub use commands::Closed;
+pub use device::{Device, DeviceOptions};
 pub use embedded::{SimMachine, SimSetup};
 pub use error::DeviceError;
 pub use events::{Asked, DeviceEvent, Subscription};
 pub use job::{JobHandle, JobOutcome, JobRequest};
+pub use plotter::{
+    PlotHandle, PlotOutcome, PlotProgress, PlotRequest, PlotterLink, PlotterReport, PlotterSimSetup,
+};
 pub use target::{DeviceInfo, Target, list};
 
 /// The simulator (its trace, counters, configuration and faults).

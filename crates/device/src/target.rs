@@ -1,9 +1,11 @@
-//! Which device: [`Target`] (a serial port at a baud rate, or the embedded simulator), the check
+//! Which device: [`Target`] (a GRBL controller on a serial port at a baud rate, the embedded
+//! GRBL simulator, an HP-GL plotter on a serial port, the embedded HP-GL plotter), the check
 //! that it is there before any work starts, and [`list`], the devices an operator can choose
 //! from.
 
 use crate::embedded::SimSetup;
 use crate::error::DeviceError;
+use crate::plotter::{PlotterLink, PlotterSimSetup};
 
 /// Where jobs go.
 // A target is made once per session and moved rarely: boxing the simulator's set-up would change
@@ -21,6 +23,16 @@ pub enum Target {
     /// The embedded GRBL simulator, started on its own pseudo-terminal when the device opens and
     /// stopped when it closes.
     Simulator(SimSetup),
+    /// An HP-GL plotter or vinyl cutter on a serial port, with its link's flow control.
+    Plotter {
+        /// Device path.
+        path: String,
+        /// Flow control, buffer queries, baud rate.
+        link: PlotterLink,
+    },
+    /// The embedded HP-GL plotter simulator, started on its own pseudo-terminal when the device
+    /// opens and stopped when it closes.
+    PlotterSim(PlotterSimSetup),
 }
 
 impl Target {
@@ -29,7 +41,7 @@ impl Target {
     /// Arduino's DTR), so the port is looked for, not opened.
     pub fn check(&self) -> Result<(), DeviceError> {
         match self {
-            Target::Port { path, .. } => {
+            Target::Port { path, .. } | Target::Plotter { path, .. } => {
                 let listed = || {
                     serialport::available_ports()
                         .map(|ps| ps.iter().any(|p| p.port_name == *path))
@@ -42,6 +54,26 @@ impl Target {
                 }
             }
             Target::Simulator(s) => s.config().map(|_| ()),
+            Target::PlotterSim(s) if s.link.baud > 0 && s.speed.is_finite() && s.speed > 0.0 => {
+                Ok(())
+            }
+            Target::PlotterSim(_) => Err(DeviceError::Simulator(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "the HP-GL plotter simulator needs a baud rate and a time scale > 0",
+            ))),
+        }
+    }
+
+    /// Whether it speaks HP-GL (a plotter or vinyl cutter, or the embedded one).
+    pub fn is_plotter(&self) -> bool {
+        matches!(self, Target::Plotter { .. } | Target::PlotterSim(_))
+    }
+
+    /// The serial port's path (`None` for an embedded simulator).
+    pub fn path(&self) -> Option<&str> {
+        match self {
+            Target::Port { path, .. } | Target::Plotter { path, .. } => Some(path),
+            Target::Simulator(_) | Target::PlotterSim(_) => None,
         }
     }
 
@@ -59,6 +91,10 @@ impl Target {
             Target::Simulator(_) => {
                 "the embedded simulator (GRBL defaults and the settings given)".into()
             }
+            Target::Plotter { path, link } => {
+                format!("the HP-GL plotter on {path} at {} baud", link.baud)
+            }
+            Target::PlotterSim(_) => "the embedded HP-GL plotter simulator".into(),
         }
     }
 
@@ -67,6 +103,8 @@ impl Target {
         match self {
             Target::Port { baud, .. } => *baud,
             Target::Simulator(s) => s.baud,
+            Target::Plotter { link, .. } => link.baud,
+            Target::PlotterSim(s) => s.link.baud,
         }
     }
 
@@ -75,8 +113,9 @@ impl Target {
     /// is instant.
     pub fn wall_per_machine_second(&self) -> Option<f64> {
         match self {
-            Target::Port { .. } => Some(1.0),
+            Target::Port { .. } | Target::Plotter { .. } => Some(1.0),
             Target::Simulator(s) => s.wall_per_machine_second(),
+            Target::PlotterSim(s) => Some(1.0 / s.speed),
         }
     }
 }

@@ -20,8 +20,9 @@ use serde_json::{Value, json};
 
 use crate::app::App;
 use crate::device_state::PanelError;
-use crate::devices::{OpenRequest, StartJob, Steer, project_id};
+use crate::devices::{OpenRequest, PlotJob, StartJob, Steer, project_id};
 use crate::error::ApiError;
+use crate::plotters::{PLOTTER_SIM, PlotterChoice};
 
 type AppState = State<Arc<App>>;
 
@@ -38,6 +39,8 @@ impl From<PanelError> for ApiError {
                 | DeviceError::NoJob { .. }
                 | DeviceError::NoQuestion(_)
                 | DeviceError::Closed { .. }
+                | DeviceError::NotGrbl { .. }
+                | DeviceError::NotPlotter { .. }
                 | DeviceError::Controller(_) => StatusCode::CONFLICT,
                 DeviceError::PortMissing { .. }
                 | DeviceError::Open { .. }
@@ -107,20 +110,49 @@ struct ConnectBody {
     speed: Option<f64>,
     #[serde(default)]
     instant: bool,
+    /// `grbl` (default; `hpgl` for `plotter-sim`) or `hpgl`: a serial port opened as an HP-GL
+    /// plotter.
+    protocol: Option<String>,
+    /// An HP-GL plotter's profile (`vinyl`, `pen-hpgl`, a profile file with `[hpgl]`; default:
+    /// the project's when it has `[hpgl]`, else `vinyl`).
+    profile: Option<String>,
 }
 
-/// `POST /api/devices/connect`: opens the device and connects (banner, `$I`, `$$`).
+/// `POST /api/devices/connect`: opens the device and connects (banner, `$I`, `$$`); an HP-GL
+/// plotter (`plotter-sim`, or `protocol: "hpgl"`) is opened with its profile's flow control.
 async fn connect(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Value>, ApiError> {
     let b: ConnectBody = body(&raw)?;
     let project_device = app.bench().opened.project.device.clone();
     let device = b.device.unwrap_or_else(|| project_id(&project_device));
+    let profile = profile(&app)?;
+    let hpgl = match b.protocol.as_deref() {
+        None => device == PLOTTER_SIM,
+        Some("hpgl") => true,
+        Some("grbl") if device != PLOTTER_SIM => false,
+        Some(p) => {
+            return Err(ApiError::bad(format!(
+                "protocol {p:?} for {device}: `grbl` or `hpgl` (the embedded plotter is HP-GL)"
+            )));
+        }
+    };
+    if !hpgl && b.profile.is_some() {
+        return Err(ApiError::bad(
+            "a profile is for an HP-GL plotter: add `protocol: \"hpgl\"`",
+        ));
+    }
+    let plotter = match hpgl {
+        true => Some(
+            PlotterChoice::new(b.profile.as_deref(), &profile, b.baud).map_err(ApiError::bad)?,
+        ),
+        false => None,
+    };
     let req = OpenRequest {
+        baud: b.baud.or(project_device.baud.filter(|_| !hpgl)),
         device,
-        baud: b.baud.or(project_device.baud),
         speed: b.speed,
         instant: b.instant,
+        plotter,
     };
-    let profile = profile(&app)?;
     let a = app.clone();
     blocking(move || Ok(Json(a.devices.connect(&req, &profile)?))).await
 }
@@ -302,9 +334,21 @@ async fn frame(State(app): AppState, raw: axum::body::Bytes) -> Result<Json<Valu
 /// embedded simulator as its machine by default),
 /// from its journal with `resume`, from line `resume_from` of the file with it; 201 with the
 /// job, 409 while another job runs, 400 for a `resume_from` after which nothing is sent.
+/// On an HP-GL plotter (the device named or the default one, or `plotter-sim`), the sheet's
+/// HP-GL for the plotter's profile (`GET /api/job.plt`'s bytes) instead.
 async fn start_job(State(app): AppState, raw: axum::body::Bytes) -> Result<Response, ApiError> {
     let b: SheetBody = body(&raw)?;
     let n = b.sheet.unwrap_or(1);
+    let plotter = match app.devices.plotter_of(b.device.as_deref()) {
+        Some(p) => Some(p),
+        None if b.device.as_deref() == Some(PLOTTER_SIM) => {
+            Some(PlotterChoice::new(None, &profile(&app)?, None).map_err(ApiError::bad)?)
+        }
+        None => None,
+    };
+    if let Some(plotter) = plotter {
+        return start_plot(app, b, n, plotter).await;
+    }
     let (name, gcode, revision) = sheet_job(&app, n).await?;
     let (project_device, dir) = {
         let bench = app.bench();
@@ -330,6 +374,35 @@ async fn start_job(State(app): AppState, raw: axum::body::Bytes) -> Result<Respo
     };
     let a = app.clone();
     let view = blocking(move || Ok(a.devices.start(job, &project_device, &profile)?)).await?;
+    Ok((StatusCode::CREATED, Json(view)).into_response())
+}
+
+/// A job on an HP-GL plotter: the sheet's HP-GL for the plotter's profile, streamed.
+async fn start_plot(
+    app: Arc<App>,
+    b: SheetBody,
+    n: usize,
+    plotter: PlotterChoice,
+) -> Result<Response, ApiError> {
+    if b.resume || b.resume_from.is_some() || b.unlock {
+        return Err(ApiError::bad(
+            "an HP-GL plotter has no journal to resume from and no alarm to unlock: start the \
+             sheet anew",
+        ));
+    }
+    let (name, hpgl, revision) =
+        crate::solve_routes::sheet_hpgl(&app, n, Some(&plotter.profile)).await?;
+    let job = PlotJob {
+        name,
+        sheet: n,
+        revision,
+        hpgl,
+        device: b.device,
+        plotter,
+    };
+    let profile = profile(&app)?;
+    let a = app.clone();
+    let view = blocking(move || Ok(a.devices.start_plot(job, &profile)?)).await?;
     Ok((StatusCode::CREATED, Json(view)).into_response())
 }
 

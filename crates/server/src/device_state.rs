@@ -7,13 +7,48 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, MutexGuard};
 
+use flatcut_device::grbl::hpgl::HpglControl;
 use flatcut_device::grbl::{CancelToken, Job};
 use flatcut_device::sim::SimReport;
-use flatcut_device::{Asked, Device, DeviceError};
+use flatcut_device::{Asked, Device, DeviceError, PlotterReport};
 use serde_json::{Value as Json, json};
 
 use crate::device_views::question_view;
 use crate::events::Events;
+use crate::plotters::PlotterChoice;
+
+/// The controls of a job: a G-code job's (feed hold, cycle start, stop with the tool off) or a
+/// plot's (pause at an instruction boundary with the pen up, resume, `ESC.K` and pen up).
+#[derive(Clone, Debug)]
+pub(crate) enum JobControl {
+    Grbl(CancelToken),
+    Plot(HpglControl),
+}
+
+impl JobControl {
+    pub(crate) fn hold(&self) {
+        match self {
+            JobControl::Grbl(c) => c.hold(),
+            JobControl::Plot(c) => c.pause(),
+        }
+    }
+    pub(crate) fn resume(&self) {
+        match self {
+            JobControl::Grbl(c) => c.resume(),
+            JobControl::Plot(c) => c.resume(),
+        }
+    }
+    pub(crate) fn abort(&self) {
+        match self {
+            JobControl::Grbl(c) => c.abort(),
+            JobControl::Plot(c) => c.abort(),
+        }
+    }
+    /// A plot whose pause is asked for (and not yet resumed).
+    pub(crate) fn pause_asked(&self) -> bool {
+        matches!(self, JobControl::Plot(c) if c.is_paused())
+    }
+}
 
 /// What a job is doing, as the page shows it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,8 +103,11 @@ pub struct JobRecord {
     pub device: String,
     /// Its device's id (`simulator`, a port's path).
     pub device_id: String,
-    /// The journal file the job writes (and resumes from).
-    pub journal: PathBuf,
+    /// The journal file the job writes (and resumes from); `None` for a plot (HP-GL has no
+    /// acknowledgements to journal).
+    pub journal: Option<PathBuf>,
+    /// `grbl` (G-code) or `hpgl` (a plot).
+    pub protocol: &'static str,
     /// Whether the job was started as a resume (from its journal, or from `resume_from`).
     pub resume: bool,
     /// The line of the file the operator resumed from (1-based).
@@ -89,11 +127,11 @@ pub struct JobRecord {
     /// The lines a refused resume could not tell ran or not: the page
     /// asks for the line to continue from.
     pub in_doubt: Option<Json>,
-    /// The job as parsed (what the lines in doubt are, and where).
-    pub(crate) job: Arc<Job>,
+    /// The job as parsed (what the lines in doubt are, and where); `None` for a plot.
+    pub(crate) job: Option<Arc<Job>>,
     /// Wall-clock seconds per second of machine time (for the ETA), `None`: instant motion.
     pub(crate) wall_per_machine_s: Option<f64>,
-    pub(crate) control: CancelToken,
+    pub(crate) control: JobControl,
     pub(crate) stop_asked: bool,
 }
 
@@ -107,7 +145,8 @@ impl JobRecord {
             "revision": self.revision,
             "device": self.device,
             "device_id": self.device_id,
-            "journal": self.journal.display().to_string(),
+            "journal": self.journal.as_ref().map(|j| j.display().to_string()),
+            "protocol": self.protocol,
             "resume": self.resume,
             "resume_from": self.resume_from,
             "state": self.state.name(),
@@ -134,6 +173,8 @@ pub(crate) struct OpenDevice {
     pub(crate) speed: Option<f64>,
     /// The job running on it.
     pub(crate) job: Option<u64>,
+    /// An HP-GL plotter's profile and link (`None`: a GRBL device).
+    pub(crate) plotter: Option<PlotterChoice>,
 }
 
 impl OpenDevice {
@@ -150,6 +191,8 @@ impl OpenDevice {
             "speed": self.speed,
             "controller": self.controller,
             "status": self.status,
+            "protocol": if self.plotter.is_some() { "hpgl" } else { "grbl" },
+            "plotter": self.plotter.as_ref().map(PlotterChoice::view),
         })
     }
 }
@@ -163,6 +206,8 @@ pub(crate) struct Inner {
     pub(crate) jobs: BTreeMap<u64, JobRecord>,
     /// What each embedded simulator closed had executed, by id, and which closed last.
     pub(crate) last_sim: BTreeMap<String, SimReport>,
+    /// What each embedded HP-GL plotter closed had drawn, by id.
+    pub(crate) last_plotter: BTreeMap<String, PlotterReport>,
     pub(crate) last_closed: Option<String>,
     /// Openings so far.
     pub(crate) generations: u64,

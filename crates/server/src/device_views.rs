@@ -3,11 +3,12 @@
 //! simulator executed, the lines a refused resume leaves in doubt — the keys `API.md` documents for `/api/devices`, `/api/jobs` and the
 //! `device` and `job` events.
 
-use flatcut_device::Asked;
+use flatcut_device::grbl::hpgl::HpglReport;
 use flatcut_device::grbl::{
     ControllerInfo, Job, MachineState, MachineStatus, Progress, SendError, SendReport,
 };
 use flatcut_device::sim::SimReport;
+use flatcut_device::{Asked, PlotProgress, PlotterReport};
 use serde_json::{Value as Json, json};
 
 /// A question for the operator: its number, the whole story and the yes/no prompt.
@@ -36,6 +37,61 @@ pub fn progress_view(p: &Progress, wall_per_machine_s: Option<f64>) -> Json {
         "position": p.position,
         "holding": p.holding,
         "paused_at": p.paused_at.as_ref().map(|l| json!({"line": l.source_line, "text": l.text})),
+    })
+}
+
+/// A plot's progress for the page. HP-GL has no acknowledgements: `progress_basis` says the
+/// fraction is of the bytes the link accepted (`bytes_sent`), not of what the plotter drew; the
+/// ETA is of the rest of the bytes at the rate so far (wall clock, pauses not counted).
+pub fn plot_progress_view(p: &PlotProgress) -> Json {
+    json!({
+        "progress_basis": "bytes_sent",
+        "bytes_sent": p.bytes_sent,
+        "bytes_total": p.bytes_total,
+        "fraction": p.fraction(),
+        "eta_s": p.eta.map(|e| e.as_secs_f64()),
+        "elapsed_s": p.elapsed.as_secs_f64(),
+        "device_holding": p.held,
+        "paused": p.paused,
+        "pen_down": p.pen_down,
+        "device_buffer_free": p.device_free,
+    })
+}
+
+/// A finished plot's report: bytes sent, flow control seen, buffer queries, pauses, time (s).
+pub fn plot_report_view(r: &HpglReport) -> Json {
+    json!({
+        "bytes_sent": r.bytes_sent,
+        "xoff_received": r.xoff_received,
+        "xon_received": r.xon_received,
+        "queries": r.queries,
+        "device_buffer": r.device_buffer,
+        "min_free_reported": r.min_free_reported,
+        "pauses": r.pauses,
+        "stream_time_s": r.elapsed_s,
+    })
+}
+
+/// What the embedded HP-GL plotter drew: its pen-down strokes (mm), its pen now, its counters.
+pub fn plotter_view(r: &PlotterReport) -> Json {
+    let strokes: Vec<Json> = r
+        .strokes
+        .iter()
+        .map(|s| json!({ "from": s.from, "to": s.to, "pen": s.pen }))
+        .collect();
+    let st = &r.stats;
+    json!({
+        "strokes": strokes,
+        "pen_down": r.pen_down,
+        "idle": r.idle,
+        "bytes_received": st.bytes_received,
+        "bytes_lost": st.bytes_lost,
+        "high_water": st.high_water,
+        "xoff_sent": st.xoff_sent,
+        "xon_sent": st.xon_sent,
+        "queries": st.queries,
+        "aborts": st.aborts,
+        "commands": st.commands,
     })
 }
 

@@ -5,6 +5,11 @@
 //! every open page sees the same state. The session itself — the link, the sender, the journal,
 //! the operator's questions — is the `flatcut-device` library's, as it is for `flatcut send`.
 //!
+//! An HP-GL plotter or vinyl cutter is a device too: the embedded HP-GL plotter
+//! ([`PLOTTER_SIM`]), or a serial port opened with `protocol: "hpgl"` and a profile with an
+//! `[hpgl]` section (its flow control and baud rate); its jobs are the sheet's HP-GL (the bytes
+//! of `GET /api/job.plt` for its profile), their progress the bytes the link accepted.
+//!
 //! One job per device at a time (the library refuses a second: 409); two devices run jobs at
 //! once. A request that names no device means the default one: the device opened (or connected)
 //! last that is still open, else the project's `[device]` (by default the embedded GRBL simulator
@@ -17,17 +22,22 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use flatcut::gcode::Profile;
+use flatcut_device::grbl::hpgl::HpglControl;
 use flatcut_device::grbl::{CancelToken, PausePolicy, SendOptions};
 use flatcut_device::sim::SimReport;
-use flatcut_device::{Device, DeviceError, JobRequest, SimMachine, SimSetup, Target};
+use flatcut_device::{
+    Closed, Device, DeviceError, JobRequest, PlotRequest, PlotterReport, PlotterSimSetup,
+    SimMachine, SimSetup, Target,
+};
 use serde_json::{Value as Json, json};
 
 use crate::device_state::{
-    Inner, JobRecord, JobState, OpenDevice, PanelError, Shared, closed_view,
+    Inner, JobControl, JobRecord, JobState, OpenDevice, PanelError, Shared, closed_view,
 };
-use crate::device_views::{controller_view, sim_view};
-use crate::device_watch::{forward, wait_for_end};
+use crate::device_views::{controller_view, plotter_view, sim_view};
+use crate::device_watch::{forward, wait_for_end, wait_for_plot};
 use crate::events::Events;
+use crate::plotters::{PLOTTER_SIM, PlotterChoice};
 
 /// The device id of the embedded simulator in the API; `simulator:<name>` is another one.
 pub const SIMULATOR: &str = "simulator";
@@ -57,6 +67,8 @@ pub struct OpenRequest {
     pub speed: Option<f64>,
     /// The simulator's motion completes at once.
     pub instant: bool,
+    /// Open it as an HP-GL plotter with this profile and link (always for [`PLOTTER_SIM`]).
+    pub plotter: Option<PlotterChoice>,
 }
 
 /// The device panel: see the module docs.
@@ -86,23 +98,30 @@ impl Devices {
             .into_iter()
             .map(|d| {
                 let id = match &d.target {
-                    Target::Port { path, .. } => path.clone(),
                     Target::Simulator(_) => SIMULATOR.to_string(),
+                    Target::PlotterSim(_) => PLOTTER_SIM.to_string(),
+                    t => t.path().unwrap_or_default().to_string(),
                 };
                 let open = inner.open.contains_key(&id);
                 listed.push(id.clone());
                 match d.target {
-                    Target::Port { baud, .. } => json!({
-                        "id": id, "kind": "port", "baud": baud, "description": d.description,
-                        "open": open,
-                    }),
                     Target::Simulator(_) => json!({
                         "id": id, "kind": "simulator", "description": d.description,
-                        "speed": DEFAULT_SIM_SPEED, "open": open,
+                        "speed": DEFAULT_SIM_SPEED, "open": open, "protocol": "grbl",
+                    }),
+                    t => json!({
+                        "id": id, "kind": "port", "baud": t.baud(), "description": d.description,
+                        "open": open, "protocol": "grbl",
                     }),
                 }
             })
             .collect();
+        listed.push(PLOTTER_SIM.to_string());
+        devices.push(json!({
+            "id": PLOTTER_SIM, "kind": "plotter-simulator", "protocol": "hpgl",
+            "description": "the embedded HP-GL plotter simulator", "speed": DEFAULT_SIM_SPEED,
+            "open": inner.open.contains_key(PLOTTER_SIM),
+        }));
         for o in inner.open.values().filter(|o| !listed.contains(&o.id)) {
             let kind = if is_simulator(&o.id) {
                 "simulator"
@@ -112,6 +131,7 @@ impl Devices {
             devices.push(json!({
                 "id": o.id, "kind": kind, "description": o.device.target().describe(),
                 "baud": o.device.target().baud(), "speed": o.speed, "open": true,
+                "protocol": if o.plotter.is_some() { "hpgl" } else { "grbl" },
             }));
         }
         let default = inner.default.as_ref().and_then(|d| inner.open.get(d));
@@ -128,11 +148,15 @@ impl Devices {
 
     /// Opens `req` (beside the devices open already) and connects to it (its banner, `$I`,
     /// `$$`); it becomes the default device; status reports follow as `device` events. Blocking.
+    /// An HP-GL plotter has no handshake: it is opened, its link ready.
     pub fn connect(&self, req: &OpenRequest, profile: &Profile) -> Result<Json, PanelError> {
         let device = self.open(req, profile)?;
-        let info = device.connect()?;
+        let info = match device.target().is_plotter() {
+            true => None,
+            false => Some(device.connect()?),
+        };
         let mut inner = self.shared.lock();
-        if let Some(o) = inner.open.get_mut(&req.device) {
+        if let Some((o, info)) = inner.open.get_mut(&req.device).zip(info) {
             o.controller = Some(controller_view(&info));
         }
         inner.default = Some(req.device.clone());
@@ -146,7 +170,7 @@ impl Devices {
     /// The device `req` names, opened (the one open under that id already when it is the same
     /// device; one set up otherwise is closed and opened anew, unless it runs a job).
     fn open(&self, req: &OpenRequest, profile: &Profile) -> Result<Arc<Device>, PanelError> {
-        let target = target(req, profile)?;
+        let (target, plotter) = target(req, profile)?;
         {
             let inner = self.shared.lock();
             if let Some(o) = inner.open.get(&req.device) {
@@ -166,7 +190,8 @@ impl Devices {
         }
         let speed = match &target {
             Target::Simulator(s) => Some(s.speed),
-            Target::Port { .. } => None,
+            Target::PlotterSim(s) => Some(s.speed),
+            _ => None,
         };
         let device = Arc::new(Device::open(target)?);
         let sub = device.subscribe();
@@ -183,6 +208,7 @@ impl Devices {
                 status: None,
                 speed,
                 job: None,
+                plotter,
             },
         );
         inner.default = Some(req.device.clone());
@@ -222,9 +248,18 @@ impl Devices {
             device: id.clone(),
             speed: None,
             instant: false,
+            plotter: None,
         };
         let device = self.open(&req, profile)?;
         Ok((id, device))
+    }
+
+    /// The plotter a job for `named` (the default device when `None`) goes to: the open device's
+    /// profile and link when it is a plotter; [`PLOTTER_SIM`] not open yet: `None` too (the
+    /// route opens it with the default plotter profile).
+    pub fn plotter_of(&self, named: Option<&str>) -> Option<PlotterChoice> {
+        let inner = self.shared.lock();
+        inner.resolve(named).ok().and_then(|o| o.plotter.clone())
     }
 
     /// Closes device `id` (the default one when `None`): a running job is stopped with the tool
@@ -244,6 +279,8 @@ impl Devices {
             return Err(PanelError::NotOpen);
         };
         let closed = close_device(o.device);
+        let plotted = closed.plotter;
+        let closed = closed.sim;
         // The job's end is recorded by its waiter as soon as the closed worker gives it.
         let t0 = Instant::now();
         let running = |inner: &Inner| {
@@ -254,10 +291,16 @@ impl Devices {
             std::thread::sleep(Duration::from_millis(10));
         }
         let mut inner = self.shared.lock();
-        let view = closed.as_ref().map(sim_view);
+        let view = closed
+            .as_ref()
+            .map(sim_view)
+            .or_else(|| plotted.as_ref().map(plotter_view));
         if let Some(r) = closed {
             inner.last_sim.insert(o.id.clone(), r);
             inner.last_closed = Some(o.id.clone());
+        }
+        if let Some(r) = plotted {
+            inner.last_plotter.insert(o.id.clone(), r);
         }
         self.shared.publish_device(&inner, &o.id, "closed");
         Ok(json!({ "closed": o.id, "sim": view }))
@@ -286,10 +329,24 @@ impl Devices {
         self.shared.lock().last_sim.get(id).cloned()
     }
 
+    /// What the embedded HP-GL plotter `id` had drawn when it was closed last.
+    pub fn last_plotter_of(&self, id: &str) -> Option<PlotterReport> {
+        self.shared.lock().last_plotter.get(id).cloned()
+    }
+
     /// What the embedded simulator `id` (the default device when `None`) executed so far
-    /// (between jobs).
+    /// (between jobs); for the embedded HP-GL plotter, its strokes so far.
     pub fn sim(&self, id: Option<&str>) -> Result<Json, PanelError> {
         let device = self.device(id)?;
+        if device.target().is_plotter() {
+            return match device.plotter_report() {
+                Some(r) => Ok(plotter_view(&r)),
+                None => Err(PanelError::Bad(format!(
+                    "{} is a serial port, not the simulator",
+                    device.target().describe()
+                ))),
+            };
+        }
         match device.sim_report()? {
             Some(r) => Ok(sim_view(&r)),
             None => Err(PanelError::Bad(format!(
@@ -363,7 +420,7 @@ impl Devices {
         if let Some(other) = inner
             .jobs
             .values()
-            .find(|j| !j.state.ended() && j.journal == journal)
+            .find(|j| !j.state.ended() && j.journal.as_ref() == Some(&journal))
         {
             return Err(PanelError::Busy(format!(
                 "{} is streaming to {} (job {}): its journal {} is that job's, so one device at a \
@@ -388,7 +445,8 @@ impl Devices {
                 revision: job.revision,
                 device: describe,
                 device_id: device_id.clone(),
-                journal,
+                journal: Some(journal),
+                protocol: "grbl",
                 resume: job.resume || job.resume_from.is_some(),
                 resume_from: job.resume_from,
                 state: JobState::Running,
@@ -398,9 +456,9 @@ impl Devices {
                 message: String::new(),
                 report: None,
                 in_doubt: None,
-                job: lines,
+                job: Some(lines),
                 wall_per_machine_s: wall,
-                control,
+                control: JobControl::Grbl(control),
                 stop_asked: false,
             },
         );
@@ -415,6 +473,99 @@ impl Devices {
         std::thread::Builder::new()
             .name("flatcut-serve-job".into())
             .spawn(move || wait_for_end(&shared, id, &device_id, handle))
+            .map_err(|e| PanelError::Bad(format!("cannot watch the job: {e}")))?;
+        Ok(view)
+    }
+
+    /// Starts plotting `job.hpgl` (sheet `sheet` of revision `revision`) on the HP-GL plotter
+    /// the job names, or the default device: the one open, or the embedded plotter opened with
+    /// `job.plotter`. Blocking (it may open the device).
+    pub fn start_plot(&self, job: PlotJob, profile: &Profile) -> Result<Json, PanelError> {
+        let found = {
+            let inner = self.shared.lock();
+            inner
+                .resolve(job.device.as_deref())
+                .ok()
+                .map(|o| (o.id.clone(), o.device.clone()))
+        };
+        let (device_id, device) = match found {
+            Some(d) => d,
+            None => {
+                let id = job
+                    .device
+                    .clone()
+                    .unwrap_or_else(|| PLOTTER_SIM.to_string());
+                let req = OpenRequest {
+                    device: id.clone(),
+                    baud: None,
+                    speed: None,
+                    instant: false,
+                    plotter: Some(job.plotter.clone()),
+                };
+                (id, self.open(&req, profile)?)
+            }
+        };
+        let control = HpglControl::new();
+        let mut req = PlotRequest::new(job.name.clone(), job.hpgl.into_bytes());
+        req.control = control.clone();
+        let describe = device.target().describe();
+        let mut inner = self.shared.lock();
+        match inner.open.get(&device_id) {
+            Some(o) if Arc::ptr_eq(&o.device, &device) => {
+                if o.job.is_some() {
+                    return Err(PanelError::Busy(format!(
+                        "a job is running on {describe}: it takes one job at a time"
+                    )));
+                }
+            }
+            _ => {
+                return Err(PanelError::Busy(format!(
+                    "{describe} was closed meanwhile: open it again"
+                )));
+            }
+        }
+        let id = inner.jobs.keys().next_back().map_or(1, |k| k + 1);
+        let handle = device.start_plot(req).map_err(|e| match e {
+            DeviceError::Busy { .. } => PanelError::Busy(e.to_string()),
+            e => PanelError::Device(e),
+        })?;
+        inner.jobs.insert(
+            id,
+            JobRecord {
+                id,
+                name: job.name,
+                sheet: job.sheet,
+                revision: job.revision,
+                device: describe,
+                device_id: device_id.clone(),
+                journal: None,
+                protocol: "hpgl",
+                resume: false,
+                resume_from: None,
+                state: JobState::Running,
+                progress: None,
+                notices: Vec::new(),
+                question: None,
+                message: String::new(),
+                report: None,
+                in_doubt: None,
+                job: None,
+                wall_per_machine_s: None,
+                control: JobControl::Plot(control),
+                stop_asked: false,
+            },
+        );
+        if let Some(o) = inner.open.get_mut(&device_id) {
+            o.job = Some(id);
+        }
+        self.shared.publish_job(&inner, id);
+        self.shared.publish_device(&inner, &device_id, "busy");
+        let view = inner.jobs[&id].view();
+        drop(inner);
+        let shared = self.shared.clone();
+        std::thread::Builder::new()
+            .name("flatcut-serve-plot".into())
+            .spawn(move || wait_for_plot(&shared, id, &device_id, handle))
             .map_err(|e| PanelError::Bad(format!("cannot watch the job: {e}")))?;
         Ok(view)
     }
@@ -512,6 +663,22 @@ pub struct StartJob {
     pub device: Option<String>,
 }
 
+/// An HP-GL job to plot.
+pub struct PlotJob {
+    /// Its file name (`job-1.plt`).
+    pub name: String,
+    /// The sheet it plots (1-based).
+    pub sheet: usize,
+    /// The design revision the HP-GL was made from.
+    pub revision: u64,
+    /// The HP-GL, streamed from memory: `GET /api/job.plt`'s bytes for the plotter's profile.
+    pub hpgl: String,
+    /// The device's id (`None`: the default device, else the embedded plotter).
+    pub device: Option<String>,
+    /// The plotter to open when the device is not open.
+    pub plotter: PlotterChoice,
+}
+
 /// What the page asks of a running job.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Steer {
@@ -563,8 +730,19 @@ fn machine(profile: &Profile) -> SimMachine {
     }
 }
 
-/// The device a request names.
-fn target(req: &OpenRequest, profile: &Profile) -> Result<Target, PanelError> {
+/// The device a request names, and the plotter's profile and link when it is one.
+fn target(
+    req: &OpenRequest,
+    profile: &Profile,
+) -> Result<(Target, Option<PlotterChoice>), PanelError> {
+    if req.device == PLOTTER_SIM || req.plotter.is_some() {
+        return plotter_target(req, profile);
+    }
+    grbl_target(req, profile).map(|t| (t, None))
+}
+
+/// A GRBL device: the embedded simulator set up as the profile's machine, or a serial port.
+fn grbl_target(req: &OpenRequest, profile: &Profile) -> Result<Target, PanelError> {
     if is_simulator(&req.device) {
         let speed = req.speed.unwrap_or(DEFAULT_SIM_SPEED);
         if !(speed.is_finite() && speed > 0.0 && speed <= 1000.0) {
@@ -600,27 +778,63 @@ fn target(req: &OpenRequest, profile: &Profile) -> Result<Target, PanelError> {
     })
 }
 
+/// An HP-GL plotter: the embedded one at the speed asked for, or a serial port, with the
+/// request's plotter profile (the default plotter profile when it names none).
+fn plotter_target(
+    req: &OpenRequest,
+    profile: &Profile,
+) -> Result<(Target, Option<PlotterChoice>), PanelError> {
+    let choice = match &req.plotter {
+        Some(c) => c.clone(),
+        None => PlotterChoice::new(None, profile, req.baud).map_err(PanelError::Bad)?,
+    };
+    if req.device == PLOTTER_SIM {
+        let speed = req.speed.unwrap_or(DEFAULT_SIM_SPEED);
+        if !(speed.is_finite() && speed > 0.0 && speed <= 1000.0) {
+            return Err(PanelError::Bad(format!(
+                "speed {speed}: the simulator's time scale is a number in (0, 1000]"
+            )));
+        }
+        let t = Target::PlotterSim(PlotterSimSetup {
+            link: choice.link,
+            speed,
+        });
+        return Ok((t, Some(choice)));
+    }
+    if req.device.is_empty() || is_simulator(&req.device) {
+        return Err(PanelError::Bad(format!(
+            "{:?}: an HP-GL plotter is `{PLOTTER_SIM}` or a serial port",
+            req.device
+        )));
+    }
+    let t = Target::Plotter {
+        path: req.device.clone(),
+        link: choice.link,
+    };
+    Ok((t, Some(choice)))
+}
+
 /// Longest wait for a request that still uses a device being closed (a command's own timeout
 /// bounds it) before the device is left to close when that request ends.
 const CLOSE_WAIT: Duration = Duration::from_secs(30);
 
 /// Closes a device no longer listed as open: a running job is stopped first (feed hold, soft
-/// reset, tool off, journal written), then the link and the simulator, whose record comes back.
-/// A request still using the device (a command under way) is waited for up to [`CLOSE_WAIT`];
-/// beyond, the device closes when that request lets go of it.
-fn close_device(mut device: Arc<Device>) -> Option<SimReport> {
+/// reset, tool off, journal written; a plot: `ESC.K`, pen up), then the link and the simulator,
+/// whose record comes back. A request still using the device (a command under way) is waited
+/// for up to [`CLOSE_WAIT`]; beyond, the device closes when that request lets go of it.
+fn close_device(mut device: Arc<Device>) -> Closed {
     if device.is_busy() {
         let _ = device.stop();
     }
     let t0 = Instant::now();
     loop {
         match Arc::try_unwrap(device) {
-            Ok(d) => return d.close().sim,
+            Ok(d) => return d.close(),
             Err(d) if t0.elapsed() < CLOSE_WAIT => {
                 device = d;
                 std::thread::sleep(Duration::from_millis(20));
             }
-            Err(_) => return None,
+            Err(_) => return Closed::default(),
         }
     }
 }

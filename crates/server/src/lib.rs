@@ -21,7 +21,8 @@
 //! handlers), `device_state` (the device panel's state: the devices open, their jobs),
 //! `devices` (what the pages ask of them), `device_watch` (each device's events and each job's
 //! end turned into that state and the pages' events),
-//! `device_views` (their JSON).
+//! `device_views` (their JSON), `plotters` (HP-GL plotters: the embedded one's id, the profile
+//! and link a plotter is opened with).
 #![warn(missing_docs)]
 
 pub mod app;
@@ -39,6 +40,7 @@ pub mod error;
 pub mod events;
 pub mod guard;
 pub mod opened;
+pub mod plotters;
 pub mod routes;
 pub mod solve_routes;
 pub mod task;

@@ -354,13 +354,32 @@ pub async fn job_hpgl(
     Query(q): Query<SheetQuery>,
 ) -> Result<Response, ApiError> {
     let n = sheet(&q)?;
-    let f = finished(&app).await?;
-    let project_profile = &f.outputs.profile;
     let profile = match &q.profile {
-        Some(p) => flatcut::gcode::Profile::resolve(p).map_err(|e| ApiError::bad(e.to_string()))?,
-        None if project_profile.hpgl.is_some() => project_profile.clone(),
-        None => flatcut::gcode::Profile::resolve("vinyl")
-            .map_err(|e| ApiError::internal(e.to_string()))?,
+        Some(p) => {
+            Some(flatcut::gcode::Profile::resolve(p).map_err(|e| ApiError::bad(e.to_string()))?)
+        }
+        None => None,
+    };
+    let (name, text, _) = sheet_hpgl(&app, n, profile.as_ref()).await?;
+    Ok(bytes(&name, "application/vnd.hp-hpgl", text.into_bytes()))
+}
+
+/// Sheet `n` as HP-GL/1 for `profile` (`None`: the project's when it has `[hpgl]`, else
+/// `vinyl`), as `flatcut hpgl layout-N.svg --profile P` writes it: its file name (`job-N.plt`),
+/// its text and the revision it was made for. `GET /api/job.plt` serves it, and a plotter's
+/// job streams it.
+pub async fn sheet_hpgl(
+    app: &Arc<App>,
+    n: usize,
+    profile: Option<&flatcut::gcode::Profile>,
+) -> Result<(String, String, u64), ApiError> {
+    if n == 0 {
+        return Err(ApiError::bad("sheets are numbered from 1"));
+    }
+    let f = finished(app).await?;
+    let profile = match profile {
+        Some(p) => p.clone(),
+        None => crate::plotters::default_profile(&f.outputs.profile).map_err(ApiError::internal)?,
     };
     let svg = f
         .outputs
@@ -375,9 +394,5 @@ pub async fn job_hpgl(
     let (text, _warnings) =
         flatcut::plot::hpgl_of_svg(&String::from_utf8_lossy(&svg.bytes), &name, &profile)
             .map_err(|e| ApiError::bad(e.to_string()))?;
-    Ok(bytes(
-        &format!("job-{n}.plt"),
-        "application/vnd.hp-hpgl",
-        text.into_bytes(),
-    ))
+    Ok((format!("job-{n}.plt"), text, f.revision))
 }

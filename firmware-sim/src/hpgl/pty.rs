@@ -29,6 +29,7 @@ struct Shared {
     trace: Vec<PenSegment>,
     stats: PlotterStats,
     idle: bool,
+    pen_down: bool,
     clock: f64,
 }
 
@@ -77,6 +78,16 @@ impl HpglPtySim {
     /// Device counters so far.
     pub fn stats(&self) -> PlotterStats {
         lock(&self.shared).stats.clone()
+    }
+
+    /// The pen-down segments drawn so far (mm).
+    pub fn trace(&self) -> Vec<PenSegment> {
+        lock(&self.shared).trace.clone()
+    }
+
+    /// Whether the pen is down now (after the last instruction executed).
+    pub fn pen_down(&self) -> bool {
+        lock(&self.shared).pen_down
     }
 
     /// True when every byte received has been executed.
@@ -168,6 +179,7 @@ fn run(
         }
         sh.stats = dev.stats.clone();
         sh.idle = dev.idle() && txq.is_empty();
+        sh.pen_down = dev.interp.pen_down;
         sh.clock = dev.clock();
     }
     drop(slave);

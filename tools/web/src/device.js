@@ -7,13 +7,20 @@
 // which lines ran (those lines drawn over the layout).
 // Every page follows the same devices and jobs through the `device` and `job` events (each names
 // its device).
+// An HP-GL plotter or vinyl cutter (the embedded HP-GL plotter, or a port opened as one) shows
+// what makes sense for it: start, pause (pen up), resume, stop, its progress in bytes sent (HP-GL
+// has no acknowledgements: the panel says so), the ETA, and the job's strokes sent so far over
+// the layout; GRBL's unlock, home, jog and frame are hidden with the reason.
 
 const esc = (s) => String(s).replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' }[c]));
 const mm = (p) => (p ? `X ${p[0].toFixed(2)}  Y ${p[1].toFixed(2)}  Z ${p[2].toFixed(2)}` : '–');
 const SVG = 'http://www.w3.org/2000/svg';
 const ENDED = ['done', 'failed', 'stopped'];
 /** How the panel names a device: the embedded simulator, another one, or the port's path. */
-const label = (id) => (id === 'simulator' ? 'embedded simulator' : id.startsWith('simulator:') ? `simulator ${id.slice(10)}` : id);
+const PLOTTER_SIM = 'plotter-sim';
+const label = (id) => (id === 'simulator' ? 'embedded simulator' : id === PLOTTER_SIM ? 'embedded HP-GL plotter'
+  : id.startsWith('simulator:') ? `simulator ${id.slice(10)}` : id);
+const isSim = (id) => id.startsWith('simulator') || id === PLOTTER_SIM;
 
 function secs(s) {
   if (s == null) return '–';
@@ -29,8 +36,11 @@ export async function devicePanel(el, api, hooks) {
     <div class="row"><select id="dev-select" aria-label="device to open"></select>
       <label title="Time scale of the embedded simulator (1: real time)">speed <input id="dev-speed" type="number" min="0.1" max="1000" step="any" value="50" style="width:5em"></label>
       <button id="dev-connect">Connect</button><button id="dev-close">Disconnect</button></div>
+    <div class="row" id="dev-hpgl-row"><label title="Open the port as an HP-GL plotter or vinyl cutter, with the profile's flow control"><input type="checkbox" id="dev-hpgl"> HP-GL plotter</label>
+      <label>profile <select id="dev-profile" aria-label="plotter profile"><option value="">the project's, else vinyl</option><option>vinyl</option><option>pen-hpgl</option></select></label></div>
     <p id="dev-state" class="dev-pos">not connected</p>
-    <div class="row"><button id="dev-unlock" title="Clear an alarm lock ($X): only when the position is known to be right">Unlock</button>
+    <p id="dev-grbl-note" class="muted" hidden>An HP-GL plotter takes no GRBL commands: unlock, home, jog and frame are for GRBL controllers. Pause stops the feed at the end of an instruction and lifts the pen.</p>
+    <div class="row" id="dev-grbl-row"><button id="dev-unlock" title="Clear an alarm lock ($X): only when the position is known to be right">Unlock</button>
       <button id="dev-home" title="Home the machine ($H)">Home</button>
       <span>Jog <select id="jog-step" aria-label="jog step">${[0.1, 1, 10, 50].map((s) => `<option ${s === 10 ? 'selected' : ''}>${s}</option>`).join('')}</select> mm</span>
       ${['X-', 'X+', 'Y-', 'Y+', 'Z-', 'Z+'].map((a) => `<button data-jog="${a}">${a.replace('-', '−')}</button>`).join('')}
@@ -58,7 +68,7 @@ export async function devicePanel(el, api, hooks) {
   const order = [info.project_device, ...ids.filter((i) => i !== info.project_device)];
   sel.innerHTML = order.filter((id) => ids.includes(id)).map((id) => {
     const d = info.devices.find((x) => x.id === id);
-    const text = d.kind === 'simulator' ? `${label(d.id)} (GRBL 1.1h)` : `${d.id} (${d.description})`;
+    const text = d.kind === 'simulator' ? `${label(d.id)} (GRBL 1.1h)` : d.kind === 'plotter-simulator' ? `${label(d.id)} (HP-GL)` : `${d.id} (${d.description})`;
     return `<option value="${esc(d.id)}">${esc(text)}${id === info.project_device ? ' · the project\'s' : ''}</option>`;
   }).join('') + '<option value="simulator:new">another embedded simulator</option>';
 
@@ -66,7 +76,7 @@ export async function devicePanel(el, api, hooks) {
   try { sheets = Math.max(1, (await api('GET', '/api/summary.json')).sheets); } catch { /* the run's error shows on start */ }
   $('job-sheet').innerHTML = Array.from({ length: sheets }, (_, i) => `<option>${i + 1}</option>`).join('');
 
-  const view = { sheet: null, height: 0, dot: null, doubt: null, from: null };
+  const view = { sheet: null, height: 0, dot: null, doubt: null, from: null, plot: null };
   async function showSheet(n) {
     if (view.sheet === n) return;
     view.sheet = n;
@@ -87,7 +97,13 @@ export async function devicePanel(el, api, hooks) {
       g.innerHTML = '<circle r="6" fill="none" stroke="#3b82c4" stroke-width="1.5"/><path d="M-10 0H10M0-10V10" stroke="#3b82c4" stroke-width="1"/><circle r="2" fill="#3b82c4"/>';
       const doubt = document.createElementNS(SVG, 'g');
       doubt.setAttribute('id', 'job-doubt-path');
-      svg.append(doubt, g);
+      const sent = document.createElementNS(SVG, 'path');
+      sent.setAttribute('id', 'job-sent-path');
+      sent.setAttribute('fill', 'none');
+      sent.setAttribute('stroke', '#3b82c4');
+      sent.setAttribute('stroke-width', '2');
+      sent.setAttribute('vector-effect', 'non-scaling-stroke');
+      svg.append(doubt, sent, g);
       box.replaceChildren(document.importNode(svg, true));
       view.dot = box.querySelector('#job-overlay');
       drawDoubtPath();
@@ -108,6 +124,50 @@ export async function devicePanel(el, api, hooks) {
     const [r, b] = [node.getBoundingClientRect(), box.getBoundingClientRect()];
     if (r.height && (r.top < b.top || r.bottom > b.bottom)) box.scrollTop += (r.top + r.bottom) / 2 - (b.top + b.bottom) / 2;
     if (r.width && (r.left < b.left || r.right > b.right)) box.scrollLeft += (r.left + r.right) / 2 - (b.left + b.right) / 2;
+  }
+
+  /** A plot's HP-GL (`GET /api/job.plt`, the bytes it streams) read into its pen-down strokes,
+   * each with the byte offset where it ends, so the strokes sent so far can be drawn. */
+  async function loadPlot(j, d) {
+    const spec = d && d.plotter ? d.plotter.profile_spec : '';
+    const key = `${j.id}`;
+    if (view.plot && view.plot.key === key) return;
+    view.plot = { key, strokes: [] };
+    try {
+      const text = await api('GET', `/api/job.plt?sheet=${j.sheet}${spec ? `&profile=${encodeURIComponent(spec)}` : ''}`);
+      const strokes = [];
+      let pos = [0, 0]; let down = false; let rel = false; let at = 0;
+      const bytes = new TextEncoder();
+      for (const instr of text.split(';')) {
+        at += bytes.encode(instr).length + 1;
+        const op = instr.trim().slice(0, 2).toUpperCase();
+        const nums = instr.trim().slice(2).split(/[ ,]+/).filter(Boolean).map(Number);
+        if (op === 'PU' || op === 'SP' || op === 'IN') down = false;
+        if (op === 'PD') down = true;
+        if (op === 'PA') rel = false;
+        if (op === 'PR') rel = true;
+        if (!['PU', 'PD', 'PA', 'PR'].includes(op)) continue;
+        for (let k = 0; k + 1 < nums.length; k += 2) {
+          const to = rel ? [pos[0] + nums[k] / 40, pos[1] + nums[k + 1] / 40] : [nums[k] / 40, nums[k + 1] / 40];
+          if (down) strokes.push({ from: pos, to, end: at });
+          pos = to;
+        }
+      }
+      view.plot.strokes = strokes;
+    } catch { /* the layout stays without the strokes sent */ }
+  }
+
+  /** The strokes of the plot sent so far (their instruction accepted by the link), over the
+   * layout: sent, not necessarily drawn yet (the plotter's buffer holds some). */
+  function drawSent(j) {
+    const path = $('job-view').querySelector('#job-sent-path');
+    if (!path) return;
+    const sent = j && j.protocol === 'hpgl' && j.progress ? j.progress.bytes_sent : 0;
+    if (!sent || !view.plot) { path.setAttribute('d', ''); return; }
+    const h = view.height;
+    const d = view.plot.strokes.filter((s) => s.end <= sent)
+      .map((s) => `M${s.from[0]} ${h - s.from[1]}L${s.to[0]} ${h - s.to[1]}`).join('');
+    path.setAttribute('d', d);
   }
 
   // Every device open (by id), the latest job of each device, and the device shown.
@@ -153,22 +213,41 @@ export async function devicePanel(el, api, hooks) {
     $('job-question').hidden = true;
     $('job-notices').innerHTML = '';
     drawDoubt({ id: null });
+    drawSent(null);
     if (view.dot) view.dot.setAttribute('visibility', 'hidden');
+  }
+
+  // A GRBL job's machine state before the controller has reported one since the job began: the
+  // status from before the job (Idle) would say the machine stands while the job starts.
+  const ran = new Set();
+  function machineState(p) {
+    const st = p && p.machine_state;
+    if (st && st !== 'Idle') ran.add(job.id);
+    return !st || (st === 'Idle' && !ran.has(job.id)) ? 'Starting' : st;
   }
 
   function drawDevice() {
     const d = device;
     const open = d && d.open;
+    const plotter = open && d.protocol === 'hpgl';
     // While a job runs its progress says where the machine is; between jobs, the status reports.
-    const p = busy() && job.progress;
-    const st = open && (p ? { state: p.machine_state, work: p.position } : d.status);
-    $('dev-state').textContent = open
-      ? `${label(d.id)}: ${d.description}${d.controller ? `, GRBL ${d.controller.version}` : ''} · ${st && st.state ? `${st.state} · ${mm(st.work)}` : 'connected'}`
-      : closedNote || 'not connected';
+    const p = busy() && !plotter && (job.progress || {});
+    const st = open && (p ? { state: machineState(p), work: p.position } : d.status);
+    const pl = plotter && d.plotter;
+    $('dev-state').textContent = !open ? closedNote || 'not connected'
+      : plotter ? `${label(d.id)}: ${d.description} · HP-GL, profile ${pl.profile}, ${pl.flow_control}${pl.buffer_query ? ' with buffer query' : ''}, ${pl.baud} baud · ${busy() ? 'plotting' : 'ready'}`
+        : `${label(d.id)}: ${d.description}${d.controller ? `, GRBL ${d.controller.version}` : ''} · ${st && st.state ? `${st.state} · ${mm(st.work)}` : 'connected'}`;
     $('dev-close').disabled = !open;
-    for (const id of ['dev-unlock', 'dev-home', 'dev-frame']) $(id).disabled = !open || busy();
-    for (const b of el.querySelectorAll('[data-jog]')) b.disabled = !open || busy();
-    $('dev-speed').disabled = !sel.value.startsWith('simulator');
+    $('dev-grbl-row').hidden = !!plotter;
+    $('dev-grbl-note').hidden = !plotter;
+    for (const id of ['dev-unlock', 'dev-home', 'dev-frame']) $(id).disabled = !open || busy() || !!plotter;
+    for (const b of el.querySelectorAll('[data-jog]')) b.disabled = !open || busy() || !!plotter;
+    $('dev-speed').disabled = !isSim(sel.value);
+    $('dev-hpgl-row').hidden = isSim(sel.value) && sel.value !== PLOTTER_SIM;
+    $('dev-hpgl').disabled = sel.value === PLOTTER_SIM;
+    $('dev-hpgl').checked = sel.value === PLOTTER_SIM || (!isSim(sel.value) && $('dev-hpgl').checked);
+    $('job-hold').textContent = plotter ? 'Pause (pen up)' : 'Pause';
+    $('job-stop').title = plotter ? 'The plotter drops its buffer (ESC.K), pen up' : 'Feed hold, soft reset, tool off';
     if (st && !p && st.work) mark(st.work);
   }
 
@@ -187,12 +266,18 @@ export async function devicePanel(el, api, hooks) {
     $('job-progress').value = frac;
     // A resume refused before anything was sent: the box below says why and asks.
     const refused = j.in_doubt && j.state === 'failed' && !(p && p.lines_done);
+    const plot = j.protocol === 'hpgl';
     const what = refused ? 'resume refused: lines in doubt' : {
-      running: 'running', held: 'paused (feed hold)', paused: 'paused by the job', asking: 'waiting for your answer',
-      done: 'done', failed: 'failed', stopped: 'stopped (tool off)',
+      running: 'running', held: plot ? 'paused (pen up)' : 'paused (feed hold)', paused: 'paused by the job', asking: 'waiting for your answer',
+      done: 'done', failed: 'failed', stopped: plot ? 'stopped (buffer dropped, pen up)' : 'stopped (tool off)',
     }[j.state] || j.state;
+    // HP-GL has no acknowledgements: a plot's progress is the bytes its link accepted.
+    const where = !p || refused ? '' : plot
+      ? ` · ${p.bytes_sent} of ${p.bytes_total} bytes sent (${(100 * frac).toFixed(1)} %) · ETA ${secs(p.eta_s)}${p.device_holding ? ' · the plotter holds the feed (XOFF)' : ''}
+        <br><span class="muted" id="job-basis">progress counts the bytes the plotter's link accepted, not what it has drawn: its buffer may still hold some</span>`
+      : ` · line ${p.lines_done} of ${p.lines_total} · ${(100 * frac).toFixed(1)} % of the path · ETA ${secs(p.eta_s)} · <span class="dev-pos">${mm(p.position)}</span>`;
     $('job-text').innerHTML = `<strong id="job-state">${esc(what)}</strong> · ${esc(j.name)}
-      ${p && !refused ? ` · line ${p.lines_done} of ${p.lines_total} · ${(100 * frac).toFixed(1)} % of the path · ETA ${secs(p.eta_s)} · <span class="dev-pos">${mm(p.position)}</span>` : ''}
+      ${where}
       ${j.message && j.state !== 'done' && !refused ? `<br><span class="${j.state === 'failed' ? 'over' : 'muted'}">${esc(j.message)}</span>` : ''}`;
     const q = $('job-question');
     if (j.question) {
@@ -210,6 +295,10 @@ export async function devicePanel(el, api, hooks) {
     drawDoubt(j);
     $('job-notices').innerHTML = j.notices.map((n) => `<p class="muted">${esc(n)}</p>`).join('');
     if (p && p.position) mark(p.position);
+    if (plot) {
+      if (view.dot) view.dot.setAttribute('visibility', 'hidden');
+      loadPlot(j, devices.get(j.device_id)).then(() => drawSent(job));
+    } else drawSent(null);
     drawDevice();
   }
 
@@ -352,7 +441,11 @@ export async function devicePanel(el, api, hooks) {
     while (devices.has(`simulator:${n}`)) n++;
     return `simulator:${n}`;
   }
-  const connectBody = (id) => ({ device: id, ...(id.startsWith('simulator') ? { speed: Number($('dev-speed').value) || 50 } : {}) });
+  const connectBody = (id) => ({
+    device: id,
+    ...(isSim(id) ? { speed: Number($('dev-speed').value) || 50 } : {}),
+    ...((id === PLOTTER_SIM || (!isSim(id) && $('dev-hpgl').checked)) ? { protocol: 'hpgl', ...($('dev-profile').value ? { profile: $('dev-profile').value } : {}) } : {}),
+  });
   $('dev-connect').addEventListener('click', async () => {
     $('dev-state').textContent = 'connecting…';
     const id = chosen();

@@ -4,13 +4,10 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::AtomicBool;
-use std::time::Duration;
 
 use anyhow::Context as _;
-use flatcut::gcode::{FlowControl, GcodeOptions, Profile};
-use flatcut_device::grbl::hpgl::{HpglFlow, HpglStreamOptions, stream_hpgl};
-use flatcut_device::sim::hpgl::{HpglPtySim, PlotterConfig};
+use flatcut::gcode::{GcodeOptions, Profile};
+use flatcut_device::{Device, DeviceEvent, PlotRequest, PlotterSimSetup, Target};
 
 use super::common::{self, FlattenArgs, PieceArgs};
 
@@ -59,17 +56,9 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The plotter the embedded simulator models: the profile's flow control and queries, a
-/// 512-byte buffer (smaller than any job worth streaming).
-pub fn embedded_plotter(buffer_query: bool) -> PlotterConfig {
-    PlotterConfig {
-        buffer_query,
-        ..PlotterConfig::default()
-    }
-}
-
 /// Streams an HP-GL job as the profile says, to `port` or to the embedded plotter (whose pen
-/// trace is written as SVG to `trace` when given).
+/// trace is written as SVG to `trace` when given): the device library's plotter, as the
+/// workbench streams it.
 pub fn send(
     job: &Path,
     profile: &str,
@@ -77,77 +66,72 @@ pub fn send(
     trace: Option<&Path>,
 ) -> anyhow::Result<ExitCode> {
     let profile = Profile::resolve(profile)?;
-    let h = profile.hpgl.clone().with_context(|| {
-        format!(
-            "profile {} has no [hpgl] section: use vinyl, pen-hpgl or a profile with one",
-            profile.name
-        )
-    })?;
+    let link = flatcut_server::plotters::plotter_link(&profile).map_err(anyhow::Error::msg)?;
     let bytes = std::fs::read(job).with_context(|| format!("cannot read {}", job.display()))?;
-    let flow = match h.flow_control {
-        FlowControl::XonXoff => HpglFlow::XonXoff,
-        FlowControl::RtsCts => HpglFlow::RtsCts,
+    let target = match port {
+        Some(p) => Target::Plotter {
+            path: p.to_string(),
+            link,
+        },
+        None => Target::PlotterSim(PlotterSimSetup {
+            link,
+            speed: EMBEDDED_SPEED,
+        }),
     };
-    let opts = HpglStreamOptions::new(flow, h.buffer_query, h.baud);
-    let sim = match port {
-        Some(_) => None,
-        None => Some(HpglPtySim::spawn(
-            embedded_plotter(h.buffer_query),
-            h.baud,
-            20.0,
-        )?),
-    };
-    let path = match (&sim, port) {
-        (Some(s), _) => s.path().display().to_string(),
-        (None, Some(p)) => p.to_string(),
-        (None, None) => unreachable!("a port or the simulator"),
-    };
-    let mut t = flatcut_device::grbl::open_port(&path, h.baud)?;
-    if flow == HpglFlow::RtsCts {
-        t.port_mut()
-            .set_flow_control(serialport::FlowControl::Hardware)
-            .with_context(|| format!("cannot enable RTS/CTS on {path}"))?;
-    }
-    let abort = AtomicBool::new(false);
+    let device = Device::open(target)?;
+    let path = device.link().to_string();
+    let events = device.subscribe();
+    let handle = device.start_plot(PlotRequest::new(job.display().to_string(), bytes.clone()))?;
     let bar = indicatif::ProgressBar::new(bytes.len() as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("sending {bar:30} {pos}/{len} bytes {msg}")
             .expect("valid template"),
     );
-    let report = stream_hpgl(&mut t, &bytes, &opts, &abort, &mut |p| {
-        bar.set_position(p.sent as u64);
-        bar.set_message(if p.held {
-            "(device buffer full: XOFF)"
-        } else {
-            ""
-        });
-    })
-    .with_context(|| format!("streaming {} to {path}", job.display()))?;
+    while let Some(e) = events.recv() {
+        match e {
+            DeviceEvent::Plot(p) => {
+                bar.set_position(p.bytes_sent as u64);
+                bar.set_message(if p.held {
+                    "(device buffer full: XOFF)"
+                } else {
+                    ""
+                });
+            }
+            DeviceEvent::JobFinished { .. } => break,
+            _ => {}
+        }
+    }
+    let report = handle
+        .wait()
+        .with_context(|| format!("streaming {} to {path}", job.display()))?;
     bar.finish_and_clear();
     crate::outln!(
         "sent {} bytes to {path} in {:.1} s: XOFF {} / XON {}, {} buffer queries{}",
-        report.bytes_sent,
-        report.elapsed_s,
-        report.xoff_received,
-        report.xon_received,
-        report.queries,
+        report.report.bytes_sent,
+        report.report.elapsed_s,
+        report.report.xoff_received,
+        report.report.xon_received,
+        report.report.queries,
         report
+            .report
             .device_buffer
             .map(|b| format!(", device buffer {b} bytes"))
             .unwrap_or_default()
     );
-    if let Some(sim) = sim {
-        sim.wait_idle(Duration::from_secs(600));
-        let (tr, st) = sim.stop();
+    if let Some(plotter) = device.close().plotter {
+        let st = &plotter.stats;
         crate::outln!(
             "plotter: {} pen-down segments, {} bytes received, {} lost, buffer high-water {} bytes",
-            tr.len(),
+            plotter.strokes.len(),
             st.bytes_received,
             st.bytes_lost,
             st.high_water
         );
         if let Some(p) = trace {
-            common::write(p, flatcut_device::sim::hpgl::trace_svg(&tr).as_bytes())?;
+            common::write(
+                p,
+                flatcut_device::sim::hpgl::trace_svg(&plotter.strokes).as_bytes(),
+            )?;
         }
         anyhow::ensure!(
             st.bytes_lost == 0,
@@ -157,3 +141,6 @@ pub fn send(
     }
     Ok(ExitCode::SUCCESS)
 }
+
+/// The embedded plotter's time scale for `flatcut send --protocol hpgl`.
+const EMBEDDED_SPEED: f64 = 20.0;

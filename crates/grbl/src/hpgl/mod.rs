@@ -9,8 +9,18 @@
 //! must exceed one chunk plus the bytes on the wire during one read (documented in
 //! [`HpglStreamOptions::chunk`]). Progress is reported after every chunk; an abort sends
 //! `ESC.K` (abort: the device clears its buffer) and `PU;` so the tool lifts.
+//!
+//! A stream steered by an [`HpglControl`] can also pause: the feed stops at the end of an
+//! instruction (the next `;`), `PU;` lifts the pen if it was down, and on resume `PD;` puts it
+//! back where it was before the rest of the job follows. HP-GL has no acknowledgements: what a
+//! stream knows is the bytes the link accepted (and, with the buffer query, what the device says
+//! is still free), never what the device has drawn.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+mod control;
+
+pub use control::{HpglControl, Steering};
+
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use serde::Serialize;
@@ -81,6 +91,13 @@ pub struct HpglProgress {
     pub total: usize,
     /// Waiting for XON.
     pub held: bool,
+    /// Paused by the operator at an instruction boundary (the pen lifted).
+    pub paused: bool,
+    /// Whether the pen is down after the last instruction sent (as the job left it; the lift of
+    /// a pause is not counted).
+    pub pen_down: bool,
+    /// The free bytes the device reported last (`ESC.B`), when it is asked.
+    pub device_free: Option<usize>,
 }
 
 /// What a stream did.
@@ -102,6 +119,8 @@ pub struct HpglReport {
     pub elapsed_s: f64,
     /// True when the stream was aborted (`ESC.K` sent) before the job's end.
     pub aborted: bool,
+    /// Pauses (the feed stopped at an instruction boundary, the pen lifted).
+    pub pauses: u64,
 }
 
 /// Why a stream stopped.
@@ -185,89 +204,245 @@ pub fn stream_hpgl<T: Transport>(
     abort: &AtomicBool,
     progress: &mut dyn FnMut(HpglProgress),
 ) -> Result<HpglReport, HpglError> {
+    stream_hpgl_steered(transport, job, opts, abort, progress)
+}
+
+/// Streams `job` (HP-GL bytes) to the device, steered by `control`: a pause stops the feed at
+/// the next instruction boundary and lifts the pen (`PU;`), a resume puts it back (`PD;`) and
+/// goes on, an abort sends `ESC.K` and `PU;` and ends the stream with [`HpglError::Aborted`].
+pub fn stream_hpgl_steered<T: Transport>(
+    transport: &mut T,
+    job: &[u8],
+    opts: &HpglStreamOptions,
+    control: &dyn Steering,
+    progress: &mut dyn FnMut(HpglProgress),
+) -> Result<HpglReport, HpglError> {
     let t0 = Instant::now();
-    let mut link = Link {
-        t: transport,
-        held: false,
-        answer: Vec::new(),
-        report: HpglReport::default(),
+    let mut s = Stream {
+        link: Link {
+            t: transport,
+            held: false,
+            answer: Vec::new(),
+            report: HpglReport::default(),
+        },
+        job,
+        opts,
+        sent: 0,
+        pen: Pen::default(),
+        // Bytes we may still send before asking ESC.B again.
+        allowance: usize::MAX,
+        credit: 0.0,
+        last: Instant::now(),
+        device_free: None,
     };
+    if opts.buffer_query {
+        s.link.report.device_buffer = Some(s.link.query(QUERY_SIZE)?);
+    }
     let rate = f64::from(opts.baud.max(1)) / 10.0;
     let chunk = opts.chunk.max(1);
-    if opts.buffer_query {
-        link.report.device_buffer = Some(link.query(QUERY_SIZE)?);
-    }
-    // Bytes we may still send before asking ESC.B again.
-    let mut allowance = usize::MAX;
-    let mut sent = 0;
-    let mut credit = 0.0f64;
-    let mut last = Instant::now();
-    while sent < job.len() {
-        if abort.load(Ordering::SeqCst) {
-            link.t.write_all(ABORT)?;
-            link.t.write_all(b"PU;")?;
-            link.report.aborted = true;
-            return Err(HpglError::Aborted(sent, job.len()));
+    while s.sent < job.len() {
+        if control.aborted() {
+            s.extra(ABORT)?;
+            s.extra(b"PU;")?;
+            s.link.report.aborted = true;
+            return Err(HpglError::Aborted(s.sent, job.len()));
         }
-        link.poll(Duration::ZERO)?;
-        if link.held && opts.flow == HpglFlow::XonXoff {
-            progress(HpglProgress {
-                sent,
-                total: job.len(),
-                held: true,
-            });
-            let waited = Instant::now();
-            while link.held {
-                if abort.load(Ordering::SeqCst) {
-                    break;
-                }
-                if waited.elapsed() > STALL_LIMIT {
-                    return Err(HpglError::Stalled(STALL_LIMIT, sent, job.len()));
-                }
-                link.poll(Duration::from_millis(10))?;
-            }
-            last = Instant::now();
+        s.link.poll(Duration::ZERO)?;
+        if s.link.held && opts.flow == HpglFlow::XonXoff {
+            s.wait_xon(control, progress)?;
             continue;
         }
-        if opts.buffer_query && allowance == 0 {
-            let free = link.query(QUERY_FREE)?;
-            let r = &mut link.report.min_free_reported;
-            *r = Some(r.map_or(free, |m| m.min(free)));
-            allowance = free.saturating_sub(opts.query_reserve);
-            if allowance == 0 {
-                link.poll(Duration::from_millis(10))?;
-                continue;
-            }
+        if control.paused() && s.at_boundary() {
+            s.pause(control, progress)?;
+            continue;
         }
-        if opts.buffer_query && allowance == usize::MAX {
-            allowance = 0;
+        if !s.allowed()? {
             continue;
         }
         // Pace at the line rate so at most one chunk waits in the OS buffer.
         let now = Instant::now();
-        credit = (credit + now.duration_since(last).as_secs_f64() * rate).min(chunk as f64);
-        last = now;
-        if credit < 1.0 {
-            link.poll(Duration::from_millis(2))?;
+        s.credit = (s.credit + now.duration_since(s.last).as_secs_f64() * rate).min(chunk as f64);
+        s.last = now;
+        if s.credit < 1.0 {
+            s.link.poll(Duration::from_millis(2))?;
             continue;
         }
-        let n = (credit as usize)
+        let mut n = (s.credit as usize)
             .min(chunk)
-            .min(job.len() - sent)
-            .min(allowance);
-        link.t.write_all(&job[sent..sent + n])?;
-        credit -= n as f64;
-        sent += n;
-        if opts.buffer_query {
-            allowance -= n;
+            .min(job.len() - s.sent)
+            .min(s.allowance);
+        if control.paused() {
+            n = n.min(s.next_boundary() - s.sent);
         }
-        link.report.bytes_sent = sent;
-        progress(HpglProgress {
-            sent,
-            total: job.len(),
-            held: false,
-        });
+        s.send(n)?;
+        progress(s.progress(false));
     }
-    link.report.elapsed_s = t0.elapsed().as_secs_f64();
-    Ok(link.report)
+    s.link.report.elapsed_s = t0.elapsed().as_secs_f64();
+    Ok(s.link.report)
+}
+
+/// Whether the pen is down, from the instructions sent: `PD` puts it down, `PU`, `SP` and `IN`
+/// lift it.
+#[derive(Default)]
+struct Pen {
+    /// Where the instruction being sent starts.
+    start: usize,
+    down: bool,
+}
+
+impl Pen {
+    /// Takes in the instructions completed by bytes `at..at + n` of the job.
+    fn advance(&mut self, job: &[u8], at: usize, n: usize) {
+        for (i, b) in job.iter().enumerate().take(at + n).skip(at) {
+            if *b != b';' {
+                continue;
+            }
+            let instr: Vec<u8> = job[self.start..i]
+                .iter()
+                .filter(|b| b.is_ascii_alphabetic())
+                .take(2)
+                .map(u8::to_ascii_uppercase)
+                .collect();
+            match instr.as_slice() {
+                b"PD" => self.down = true,
+                b"PU" | b"SP" | b"IN" => self.down = false,
+                _ => {}
+            }
+            self.start = i + 1;
+        }
+    }
+}
+
+struct Stream<'a, 'j, T: Transport> {
+    link: Link<'a, T>,
+    job: &'j [u8],
+    opts: &'j HpglStreamOptions,
+    sent: usize,
+    pen: Pen,
+    allowance: usize,
+    credit: f64,
+    last: Instant,
+    device_free: Option<usize>,
+}
+
+impl<T: Transport> Stream<'_, '_, T> {
+    fn progress(&self, paused: bool) -> HpglProgress {
+        HpglProgress {
+            sent: self.sent,
+            total: self.job.len(),
+            held: self.link.held,
+            paused,
+            pen_down: self.pen.down,
+            device_free: self.device_free,
+        }
+    }
+
+    /// Whether the next byte ends an instruction boundary: nothing sent, or a `;` last.
+    fn at_boundary(&self) -> bool {
+        self.sent == 0 || self.job[self.sent - 1] == b';'
+    }
+
+    /// The end of the instruction being sent (just past its `;`).
+    fn next_boundary(&self) -> usize {
+        self.job[self.sent..]
+            .iter()
+            .position(|b| *b == b';')
+            .map_or(self.job.len(), |k| self.sent + k + 1)
+    }
+
+    /// Writes `n` bytes of the job.
+    fn send(&mut self, n: usize) -> Result<(), HpglError> {
+        let at = self.sent;
+        self.link.t.write_all(&self.job[at..at + n])?;
+        self.credit -= n as f64;
+        self.sent += n;
+        if self.opts.buffer_query {
+            self.allowance -= n;
+        }
+        self.pen.advance(self.job, at, n);
+        self.link.report.bytes_sent = self.sent;
+        Ok(())
+    }
+
+    /// Writes bytes that are not the job's (a pause's `PU;`, an abort), counted against the
+    /// buffer the device reported.
+    fn extra(&mut self, bytes: &[u8]) -> Result<(), HpglError> {
+        self.link.t.write_all(bytes)?;
+        if self.opts.buffer_query && self.allowance != usize::MAX {
+            self.allowance = self.allowance.saturating_sub(bytes.len());
+        }
+        Ok(())
+    }
+
+    /// With the buffer query: whether bytes may be sent now (asking `ESC.B` when the allowance
+    /// is spent, waiting a little when the device has no room).
+    fn allowed(&mut self) -> Result<bool, HpglError> {
+        if !self.opts.buffer_query {
+            return Ok(true);
+        }
+        if self.allowance == usize::MAX {
+            self.allowance = 0;
+        }
+        if self.allowance > 0 {
+            return Ok(true);
+        }
+        let free = self.link.query(QUERY_FREE)?;
+        self.device_free = Some(free);
+        let r = &mut self.link.report.min_free_reported;
+        *r = Some(r.map_or(free, |m| m.min(free)));
+        self.allowance = free.saturating_sub(self.opts.query_reserve);
+        if self.allowance == 0 {
+            self.link.poll(Duration::from_millis(10))?;
+            return Ok(false);
+        }
+        Ok(true)
+    }
+
+    /// Waits for XON (an abort ends the wait); [`STALL_LIMIT`] without it is a stall.
+    fn wait_xon(
+        &mut self,
+        control: &dyn Steering,
+        progress: &mut dyn FnMut(HpglProgress),
+    ) -> Result<(), HpglError> {
+        progress(self.progress(false));
+        let waited = Instant::now();
+        while self.link.held {
+            if control.aborted() {
+                break;
+            }
+            if waited.elapsed() > STALL_LIMIT {
+                return Err(HpglError::Stalled(STALL_LIMIT, self.sent, self.job.len()));
+            }
+            self.link.poll(Duration::from_millis(10))?;
+        }
+        self.last = Instant::now();
+        Ok(())
+    }
+
+    /// A pause at an instruction boundary: the pen lifted if it was down, the feed stopped until
+    /// the resume (the pen then put back down) or an abort.
+    fn pause(
+        &mut self,
+        control: &dyn Steering,
+        progress: &mut dyn FnMut(HpglProgress),
+    ) -> Result<(), HpglError> {
+        let lift = self.pen.down;
+        if lift {
+            self.extra(b"PU;")?;
+        }
+        self.link.report.pauses += 1;
+        progress(self.progress(true));
+        while control.paused() && !control.aborted() {
+            self.link.poll(Duration::from_millis(10))?;
+        }
+        if control.aborted() {
+            return Ok(());
+        }
+        if lift {
+            self.extra(b"PD;")?;
+        }
+        self.last = Instant::now();
+        progress(self.progress(false));
+        Ok(())
+    }
 }

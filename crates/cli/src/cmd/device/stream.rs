@@ -101,6 +101,10 @@ pub fn stream_text_with_control(
             }
             device
         }
+        t => bail!(
+            "{} is an HP-GL plotter: G-code goes to a GRBL controller",
+            t.describe()
+        ),
     };
     let req = JobRequest::new(name, job)
         .with_options(opts)
