@@ -672,3 +672,232 @@ fn a_ball_is_split_into_the_fewest_parts_that_take_a_seam_allowance() {
         }
     }
 }
+
+/// A plush-like body as OBJ text: an ellipsoid (semi-axes 70, 50, 90 mm) with an ear toward
+/// each direction of `ears`, over an icosphere of `levels` subdivisions turned (0.41 rad about
+/// (0.3, 0.7, 0.2)) so that its triangles are symmetric about no plane. With the two ears at
+/// ±x it is symmetric across x = 0.
+fn plush_obj(levels: usize, ears: &[DVec3]) -> String {
+    let sphere = icosphere_obj(1.0, levels);
+    let axis = DVec3::new(0.3, 0.7, 0.2).normalize();
+    let turn = flatcut::geom::DMat3::from_axis_angle(axis, 0.41);
+    let mut s = String::new();
+    for line in sphere.lines() {
+        let Some(r) = line.strip_prefix("v ") else {
+            s.push_str(line);
+            s.push('\n');
+            continue;
+        };
+        let c: Vec<f64> = r.split_whitespace().map(|x| x.parse().unwrap()).collect();
+        let d = (turn * DVec3::new(c[0], c[1], c[2])).normalize();
+        let e = 1.0 / ((d.x / 70.0).powi(2) + (d.y / 50.0).powi(2) + (d.z / 90.0).powi(2)).sqrt();
+        let bumps: f64 = ears
+            .iter()
+            .map(|&c| 0.35 * (-(d - c.normalize()).length_squared() / 0.12).exp())
+            .sum();
+        let p = d * e * (1.0 + bumps);
+        s.push_str(&format!("v {:.9} {:.9} {:.9}\n", p.x, p.y, p.z));
+    }
+    s
+}
+
+/// The flat outline of `a` matched to `b`'s by the 3D mirror image across x = 0 (a point on the
+/// plane is its own image): the largest distance between `a`'s outline reflected and moved
+/// onto `b`'s (the best rotation and shift, least squares) at corresponding vertices, and the
+/// outline's length.
+fn mirrored_outline_gap(a: &Obj, b: &Obj) -> (f64, f64) {
+    let next = crate::darts::boundary_next(a);
+    let flat = |o: &Obj, v: usize| {
+        o.f.iter()
+            .flatten()
+            .find(|c| c.0 == v)
+            .map(|c| o.vt[c.1])
+            .unwrap()
+    };
+    let mut pa = Vec::new();
+    let mut pb = Vec::new();
+    for &u in next.keys() {
+        let q = DVec3::new(-a.v[u].x, a.v[u].y, a.v[u].z);
+        let (w, d) = (0..b.v.len())
+            .map(|w| (w, b.v[w].distance(q)))
+            .min_by(|x, y| x.1.total_cmp(&y.1))
+            .unwrap();
+        assert!(
+            d < 0.5,
+            "outline vertex {} has no mirror image ({d} mm)",
+            a.v[u]
+        );
+        let p = flat(a, u);
+        pa.push(flatcut::geom::DVec2::new(-p.x, p.y));
+        pb.push(flat(b, w));
+    }
+    let n = pa.len() as f64;
+    let (ca, cb) = (
+        pa.iter().copied().sum::<flatcut::geom::DVec2>() / n,
+        pb.iter().copied().sum::<flatcut::geom::DVec2>() / n,
+    );
+    let (mut dot, mut cross) = (0.0, 0.0);
+    for (p, q) in pa.iter().zip(&pb) {
+        let (p, q) = (*p - ca, *q - cb);
+        dot += p.dot(q);
+        cross += p.perp_dot(q);
+    }
+    let rot = flatcut::geom::DVec2::from_angle(cross.atan2(dot));
+    let gap = pa
+        .iter()
+        .zip(&pb)
+        .map(|(p, q)| (rot.rotate(*p - ca) + cb).distance(*q))
+        .fold(0.0, f64::max);
+    let length: f64 = next
+        .iter()
+        .map(|(&u, &w)| flat(a, u).distance(flat(a, w)))
+        .sum();
+    (gap, length)
+}
+
+/// A plush-like body symmetric across x = 0 (its triangles not) split with `--symmetry auto`:
+/// the parts come as left and right pairs (`-<k>L`, `-<k>R`), each right part's flat outline the
+/// left one's mirror image (matched through the 3D reflection, to 0.01 mm), every face within
+/// the limits (singular values measured here), every outline edge sewn to another at the same
+/// two 3D points and the same flat length (the seams across the mirror plane too), the areas
+/// covering the body, and every seam in the report within 0.1 mm. The same body with one ear
+/// is split without symmetry; an axis it is not symmetric across is refused.
+#[test]
+fn a_symmetric_plush_is_split_into_left_and_right_pairs() {
+    let dir = tempfile::tempdir().unwrap();
+    let ears = [DVec3::new(0.55, 0.25, 0.8), DVec3::new(-0.55, 0.25, 0.8)];
+    let body = dir.path().join("plush.obj");
+    std::fs::write(&body, plush_obj(3, &ears)).unwrap();
+    let pct = 8.0;
+    let mut args = vec![
+        "--max-stretch",
+        "8",
+        "--max-compress",
+        "8",
+        "--split",
+        "auto",
+    ];
+    args.extend(["--symmetry", "auto"]);
+    let code = flatten(&body, dir.path(), &args).unwrap();
+    assert_eq!(code, format!("{:?}", std::process::ExitCode::SUCCESS));
+    let side = |s: &str| -> Vec<Obj> {
+        (1..)
+            .map(|k| dir.path().join(format!("flat-plush-{k}{s}.obj")))
+            .take_while(|p| p.exists())
+            .map(|p| read_obj(&p))
+            .collect()
+    };
+    let (left, right) = (side("L"), side("R"));
+    assert!(
+        !left.is_empty() && left.len() == right.len(),
+        "{} / {}",
+        left.len(),
+        right.len()
+    );
+    assert!(split_parts(dir.path(), "flat-plush").is_empty());
+    for (k, (l, r)) in left.iter().zip(&right).enumerate() {
+        let (gap, length) = mirrored_outline_gap(l, r);
+        assert!(
+            gap < 0.01,
+            "pair {}: outlines {gap} mm apart over {length} mm",
+            k + 1
+        );
+    }
+    let parts: Vec<&Obj> = left.iter().chain(&right).collect();
+    let whole = area3(&read_obj(&body));
+    let total: f64 = parts.iter().map(|p| area3(p)).sum();
+    assert!((total - whole).abs() < 2e-3 * whole, "{total} vs {whole}");
+    for (i, a) in parts.iter().enumerate() {
+        let (s, c) = measured_limits(a);
+        assert!(
+            s <= pct + 1e-6 && c <= pct + 1e-6,
+            "part {i}: {s} % / {c} %"
+        );
+        for (&u, &w) in &crate::darts::boundary_next(a) {
+            let sewn = parts.iter().any(|b| {
+                sewn_lengths(a, (u, w), b).is_some_and(|(la, lb)| (la - lb).abs() < SEWN_MM)
+            });
+            assert!(
+                sewn,
+                "part {i}: outline edge {} – {} is sewn to nothing",
+                a.v[u], a.v[w]
+            );
+        }
+    }
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("flat.json")).unwrap())
+            .unwrap();
+    let pieces = report
+        .as_array()
+        .cloned()
+        .unwrap_or_else(|| vec![report.clone()]);
+    let seams: Vec<&serde_json::Value> = pieces
+        .iter()
+        .flat_map(|p| p["mating_seams"].as_array().into_iter().flatten())
+        .collect();
+    assert!(seams.iter().any(|s| {
+        s["name"]
+            .as_str()
+            .is_some_and(|n| n.contains("L/") && n.contains(" R"))
+    }));
+    for s in seams {
+        assert!(s["mismatch_mm"].as_f64().unwrap() <= 0.1, "{s}");
+    }
+
+    // One ear: no mirror plane; split without symmetry, with a note saying how far it is.
+    let one = dir.path().join("oneear.obj");
+    std::fs::write(&one, plush_obj(3, &ears[..1])).unwrap();
+    let out = dir.path().join("one");
+    std::fs::create_dir(&out).unwrap();
+    let code = flatten(&one, &out, &args).unwrap();
+    assert_eq!(code, format!("{:?}", std::process::ExitCode::SUCCESS));
+    assert!(!split_parts(&out, "flat-oneear").is_empty());
+    assert!(!out.join("flat-oneear-1L.obj").exists());
+    let params = flatcut::flatten::FlattenParams::new(flatcut::flatten::Method::Isometric)
+        .with_max_stretch_pct(Some(pct))
+        .with_max_compress_pct(Some(pct));
+    let mut split = flatcut::splitting::SplitSettings::default();
+    split.symmetry.mode = flatcut::splitting::SymmetryMode::Auto;
+    let limits = flatcut::flat::Limits {
+        stretch_pct: Some(pct),
+        compress_pct: Some(pct),
+        darts: None,
+        split: Some(split),
+        material: None,
+    };
+    let flats = flatcut::flat::flatten_and_report(
+        &one,
+        &flatcut::geom::Tolerances::default(),
+        &params,
+        limits,
+        &mut |_, _, _| {},
+    )
+    .unwrap();
+    let notes: Vec<&String> = flats
+        .iter()
+        .flat_map(|f| f.info.iter().flat_map(|i| &i.warnings))
+        .collect();
+    assert!(
+        notes.iter().any(|w| w.contains("split without symmetry") && w.contains("mm from its mirror image")),
+        "{notes:?}"
+    );
+
+    // An axis the body is not symmetric across is refused, nothing written.
+    let refused = dir.path().join("refused");
+    std::fs::create_dir(&refused).unwrap();
+    let mut y = args.clone();
+    y.truncate(6);
+    y.extend(["--symmetry", "y"]);
+    let err = flatten(&body, &refused, &y).unwrap_err();
+    assert!(
+        err.contains("no mirrored split") && err.contains("beyond the tolerance"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_dir(&refused).unwrap().count(), 0);
+    // A bad mode or tolerance is a usage error.
+    for bad in [["--symmetry", "w"], ["--symmetry-tolerance", "-1"]] {
+        let mut argv = vec!["flatcut", "flatten", body.to_str().unwrap()];
+        argv.extend(bad);
+        assert!(flatcut_cli::Cli::try_parse_from(argv).is_err(), "{bad:?}");
+    }
+}

@@ -82,6 +82,7 @@ pub mod embed;
 pub mod fit;
 pub mod keepout;
 pub mod limits;
+pub mod mirror;
 pub mod open;
 pub mod place;
 pub mod relaxed;

@@ -195,6 +195,14 @@ pub enum PipelineError {
         /// The piece's name.
         piece: String,
     },
+    /// The mirror plane asked for (`--symmetry x|y|z`) is not one of the surface.
+    #[error("piece '{piece}': no mirrored split: {reason}")]
+    Symmetry {
+        /// The piece's name.
+        piece: String,
+        /// How far the surface is from its mirror image, or why it cannot be cut there.
+        reason: String,
+    },
     /// A bug: the pipeline broke its own invariant.
     #[error("piece '{piece}': internal error: {what}")]
     Internal {

@@ -427,7 +427,7 @@ fn split_where_wanted(
             None => params.clone(),
         };
         let parts = match closed.get(&k) {
-            Some(whole) => crate::splitting::split_surface_piece(piece, whole, &limits, settings)?,
+            Some(whole) => crate::mirrored::split_closed(piece, whole, &limits, settings)?,
             None => crate::splitting::split_piece(piece, &limits, settings)?,
         };
         let base = out.len();

@@ -53,6 +53,7 @@ pub mod inspect;
 pub mod inspect_figures;
 pub mod inspect_step;
 pub mod material;
+pub mod mirrored;
 pub mod nesting;
 pub mod notch_points;
 mod obj_vertex;

@@ -33,6 +33,41 @@ pub struct SplitSettings {
     /// The seam allowance (mm) of pieces whose design gives none: merged parts keep no neck
     /// narrower than twice the allowance.
     pub seam_allowance_mm: f64,
+    /// Whether a closed surface is split as mirrored left and right pairs.
+    pub symmetry: SymmetrySettings,
+}
+
+/// Whether a closed surface's split looks for a mirror plane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SymmetryMode {
+    /// Split without symmetry (the default: a mirrored layout can take more pieces than the
+    /// fewest, as a ball's tennis-ball halves are no mirror pair).
+    Off,
+    /// The best plane through the principal axes, taken when within the tolerance; a surface
+    /// with none is split without symmetry, with a note.
+    Auto,
+    /// A plane normal to this axis (through the surface's middle, refined), taken when within
+    /// the tolerance; an error otherwise.
+    Axis(DVec3),
+}
+
+/// How a split looks for symmetry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SymmetrySettings {
+    /// Whether, and across which axis.
+    pub mode: SymmetryMode,
+    /// Largest deviation of the surface from its mirror image, as a share of its bounding box
+    /// diagonal (`flatcut_mesh::symmetry::DEFAULT_TOLERANCE`).
+    pub tolerance: f64,
+}
+
+impl Default for SymmetrySettings {
+    fn default() -> Self {
+        Self {
+            mode: SymmetryMode::Off,
+            tolerance: flatcut_mesh::symmetry::DEFAULT_TOLERANCE,
+        }
+    }
 }
 
 impl Default for SplitSettings {
@@ -41,6 +76,7 @@ impl Default for SplitSettings {
             max_pieces: SplitOptions::DEFAULT_MAX_PIECES,
             time_limit: None,
             seam_allowance_mm: 0.0,
+            symmetry: SymmetrySettings::default(),
         }
     }
 }
@@ -163,7 +199,7 @@ pub fn visibility(def: &PieceDef, mesh: &TriMesh) -> Result<Visibility, Pipeline
 
 /// What a split of `piece` (its surface `mesh`) is for: the limits of `params`, the most parts,
 /// and the design's no_cut regions and marks kept out of the cuts.
-fn options(
+pub(crate) fn options(
     piece: &FlatPiece,
     mesh: &TriMesh,
     params: &FlattenParams,
@@ -183,7 +219,7 @@ fn options(
 }
 
 /// The parts of a split as pieces of the pattern, or the error saying what was reached.
-fn into_parts(
+pub(crate) fn into_parts(
     piece: FlatPiece,
     s: flatcut_darts::split::Split,
     settings: &SplitSettings,

@@ -14,6 +14,7 @@ pub mod fixed;
 pub mod geodesic;
 pub mod grain_strain;
 pub mod grid;
+pub mod halve;
 pub mod intersect;
 pub mod io;
 pub mod joins;
@@ -23,11 +24,16 @@ pub mod nearest;
 pub mod regions;
 pub mod seams;
 pub mod stats;
+pub mod symmetry;
 pub mod tessellate;
 /// The geometry testkit: grid meshes for tests (feature `testkit`), not part of the public API.
 #[cfg(any(test, feature = "testkit"))]
 #[doc(hidden)]
 pub mod test_grid;
+/// Closed test shapes (feature `testkit`), not part of the public API.
+#[cfg(any(test, feature = "testkit"))]
+#[doc(hidden)]
+pub mod test_shapes;
 pub mod topology;
 pub mod trimesh;
 pub mod trimmed;

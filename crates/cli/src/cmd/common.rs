@@ -11,7 +11,7 @@ use flatcut::flatten::{FlattenHooks, FlattenParams, FlattenProgress, Method};
 use flatcut::geom::Tolerances;
 use flatcut::pattern::{CornerStyle, NotchStyle, Piece, PieceOptions};
 use flatcut::pieces::PieceSettings;
-use flatcut::splitting::SplitSettings;
+use flatcut::splitting::{SplitSettings, SymmetryMode, SymmetrySettings};
 
 use crate::values;
 
@@ -83,6 +83,18 @@ pub struct FlattenArgs {
     /// far is written, with a warning (and exit code 3 while a face is beyond the limits).
     #[arg(long, value_name = "S", value_parser = values::seconds)]
     pub split_time: Option<std::time::Duration>,
+    /// With --split auto, a closed surface that is its own mirror image as left and right
+    /// pairs: `auto` finds the mirror plane (through the principal axes, refined), `x`, `y` or
+    /// `z` takes the plane normal to that axis (an error when the surface is not symmetric
+    /// across it), `off` (the default) splits without symmetry. One half is split, the other's
+    /// parts are its mirror images (`<piece>-<k>L` and `-<k>R`); a surface with no mirror
+    /// plane is split without symmetry, with a note.
+    #[arg(long, value_name = "MODE", default_value = "off", value_parser = parse_symmetry)]
+    pub symmetry: SymmetryMode,
+    /// Largest deviation of the surface from its mirror image that --symmetry accepts, in
+    /// percent of its bounding box diagonal.
+    #[arg(long, value_name = "PCT", default_value_t = 100.0 * flatcut::mesh::symmetry::DEFAULT_TOLERANCE, value_parser = values::material_percent)]
+    pub symmetry_tolerance: f64,
     /// The material of pieces that name none: leather, woven-cotton, canvas, knit,
     /// carbon-prepreg, sailcloth, or a material file (TOML). Flattens with the orthotropic
     /// energy along each piece's grain (chosen when the piece has none) and checks the limits
@@ -152,6 +164,20 @@ fn parse_darts(s: &str) -> Result<DartMode, String> {
 fn parse_dart_fit(s: &str) -> Result<DartFit, String> {
     DartFit::from_name(s)
         .ok_or_else(|| format!("unknown dart fit '{s}'; the fits are least-strain and tight"))
+}
+
+fn parse_symmetry(s: &str) -> Result<SymmetryMode, String> {
+    use flatcut::geom::DVec3;
+    match s {
+        "off" => Ok(SymmetryMode::Off),
+        "auto" => Ok(SymmetryMode::Auto),
+        "x" => Ok(SymmetryMode::Axis(DVec3::X)),
+        "y" => Ok(SymmetryMode::Axis(DVec3::Y)),
+        "z" => Ok(SymmetryMode::Axis(DVec3::Z)),
+        _ => Err(format!(
+            "unknown symmetry '{s}'; one of: off, auto, x, y, z"
+        )),
+    }
 }
 
 fn parse_split(s: &str) -> Result<DartMode, String> {
@@ -233,6 +259,10 @@ impl FlattenArgs {
         Ok(Some(SplitSettings {
             max_pieces: self.max_pieces,
             time_limit: self.split_time,
+            symmetry: SymmetrySettings {
+                mode: self.symmetry,
+                tolerance: self.symmetry_tolerance / 100.0,
+            },
             ..SplitSettings::default()
         }))
     }
