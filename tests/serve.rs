@@ -1364,7 +1364,7 @@ fn serve_plots_hpgl_on_the_embedded_plotter_with_pause_pen_up_and_stop() {
     let prof = prof.to_str().unwrap().to_string();
     let srv = serve(&dir.path().join("project.toml"));
     let a = srv.addr();
-    // Every event of the session, read until the server stops.
+    // Every event the server sends, read until it stops.
     let mut s = TcpStream::connect(a).unwrap();
     write!(
         s,
