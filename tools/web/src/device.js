@@ -235,7 +235,7 @@ export async function devicePanel(el, api, hooks) {
     const st = open && (p ? { state: machineState(p), work: p.position } : d.status);
     const pl = plotter && d.plotter;
     $('dev-state').textContent = !open ? closedNote || 'not connected'
-      : plotter ? `${label(d.id)}: ${d.description} · HP-GL, profile ${pl.profile}, ${pl.flow_control}${pl.buffer_query ? ' with buffer query' : ''}, ${pl.baud} baud · ${busy() ? 'plotting' : 'ready'}`
+      : plotter ? `${label(d.id)}: ${d.description} · HP-GL, profile ${pl.profile}, ${pl.flow_control}${pl.buffer_query ? ' with buffer query' : ''}, ${pl.baud} baud · ${!busy() ? 'ready' : ['held', 'paused'].includes(job.state) ? 'paused, pen up' : 'plotting'}`
         : `${label(d.id)}: ${d.description}${d.controller ? `, GRBL ${d.controller.version}` : ''} · ${st && st.state ? `${st.state} · ${mm(st.work)}` : 'connected'}`;
     $('dev-close').disabled = !open;
     $('dev-grbl-row').hidden = !!plotter;
