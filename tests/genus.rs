@@ -9,6 +9,8 @@ use std::path::Path;
 
 use clap::Parser;
 use flatcut::geom::DVec3;
+use flatcut::mesh::TriMesh;
+use flatcut::mesh::test_shapes::{plush_radius, star_shaped, turn};
 
 use crate::darts::{Obj, measured_limits, read_obj, sewn_lengths, split_parts};
 
@@ -519,68 +521,22 @@ fn a_flat_piece_that_overlaps_itself_is_refused_unless_split() {
 }
 
 /// An icosahedron subdivided `levels` times onto the sphere of radius `r` (mm) as OBJ text to
-/// the nanometre: 20·4^levels faces (320 at two levels, the size of CGAL's demo sphere).
+/// the micrometre: 20·4^levels faces (320 at two levels, the size of CGAL's demo sphere).
 fn icosphere_obj(r: f64, levels: usize) -> String {
-    let t = (1.0 + 5f64.sqrt()) / 2.0;
-    let mut p: Vec<DVec3> = [
-        [-1.0, t, 0.0],
-        [1.0, t, 0.0],
-        [-1.0, -t, 0.0],
-        [1.0, -t, 0.0],
-        [0.0, -1.0, t],
-        [0.0, 1.0, t],
-        [0.0, -1.0, -t],
-        [0.0, 1.0, -t],
-        [t, 0.0, -1.0],
-        [t, 0.0, 1.0],
-        [-t, 0.0, -1.0],
-        [-t, 0.0, 1.0],
-    ]
-    .iter()
-    .map(|c| DVec3::from_array(*c).normalize())
-    .collect();
-    let mut f: Vec<[usize; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut mid = std::collections::BTreeMap::new();
-        let mut next = Vec::new();
-        for [a, b, c] in f {
-            let mut m = |x: usize, y: usize| {
-                *mid.entry((x.min(y), x.max(y))).or_insert_with(|| {
-                    p.push((p[x] + p[y]).normalize());
-                    p.len() - 1
-                })
-            };
-            let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        f = next;
-    }
+    let sphere = star_shaped(levels, flatcut::geom::DMat3::IDENTITY, |_| r);
+    obj_text(&sphere, 6)
+}
+
+/// `mesh` as OBJ text, its coordinates written with `decimals` decimals.
+fn obj_text(mesh: &TriMesh, decimals: usize) -> String {
     let mut s = String::new();
-    for q in &p {
-        s.push_str(&format!("v {:.6} {:.6} {:.6}\n", q.x * r, q.y * r, q.z * r));
+    for q in &mesh.positions {
+        s.push_str(&format!(
+            "v {:.*} {:.*} {:.*}\n",
+            decimals, q.x, decimals, q.y, decimals, q.z
+        ));
     }
-    for [a, b, c] in f {
+    for [a, b, c] in &mesh.triangles {
         s.push_str(&format!("f {} {} {}\n", a + 1, b + 1, c + 1));
     }
     s
@@ -678,27 +634,8 @@ fn a_ball_is_split_into_the_fewest_parts_that_take_a_seam_allowance() {
 /// (0.3, 0.7, 0.2)) so that its triangles are symmetric about no plane. With the two ears at
 /// ±x it is symmetric across x = 0.
 fn plush_obj(levels: usize, ears: &[DVec3]) -> String {
-    let sphere = icosphere_obj(1.0, levels);
-    let axis = DVec3::new(0.3, 0.7, 0.2).normalize();
-    let turn = flatcut::geom::DMat3::from_axis_angle(axis, 0.41);
-    let mut s = String::new();
-    for line in sphere.lines() {
-        let Some(r) = line.strip_prefix("v ") else {
-            s.push_str(line);
-            s.push('\n');
-            continue;
-        };
-        let c: Vec<f64> = r.split_whitespace().map(|x| x.parse().unwrap()).collect();
-        let d = (turn * DVec3::new(c[0], c[1], c[2])).normalize();
-        let e = 1.0 / ((d.x / 70.0).powi(2) + (d.y / 50.0).powi(2) + (d.z / 90.0).powi(2)).sqrt();
-        let bumps: f64 = ears
-            .iter()
-            .map(|&c| 0.35 * (-(d - c.normalize()).length_squared() / 0.12).exp())
-            .sum();
-        let p = d * e * (1.0 + bumps);
-        s.push_str(&format!("v {:.9} {:.9} {:.9}\n", p.x, p.y, p.z));
-    }
-    s
+    let turned = turn(DVec3::new(0.3, 0.7, 0.2), 0.41);
+    obj_text(&star_shaped(levels, turned, |d| plush_radius(d, ears)), 9)
 }
 
 /// The flat outline of `a` matched to `b`'s by the 3D mirror image across x = 0 (a point on the
