@@ -18,7 +18,7 @@
 //! each running job with the tool off and its journal written.
 
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 use flatcut::gcode::Profile;
@@ -402,7 +402,7 @@ impl Devices {
         }
         let wall = device.target().wall_per_machine_second();
         let describe = device.target().describe();
-        let mut inner = self.shared.lock();
+        let inner = self.shared.lock();
         match inner.open.get(&device_id) {
             Some(o) if Arc::ptr_eq(&o.device, &device) => {
                 if o.job.is_some() {
@@ -436,8 +436,8 @@ impl Devices {
             DeviceError::Busy { .. } => PanelError::Busy(e.to_string()),
             e => PanelError::Device(e),
         })?;
-        inner.jobs.insert(
-            id,
+        self.launch(
+            inner,
             JobRecord {
                 id,
                 name: job.name,
@@ -461,20 +461,9 @@ impl Devices {
                 control: JobControl::Grbl(control),
                 stop_asked: false,
             },
-        );
-        if let Some(o) = inner.open.get_mut(&device_id) {
-            o.job = Some(id);
-        }
-        self.shared.publish_job(&inner, id);
-        self.shared.publish_device(&inner, &device_id, "busy");
-        let view = inner.jobs[&id].view();
-        drop(inner);
-        let shared = self.shared.clone();
-        std::thread::Builder::new()
-            .name("flatcut-serve-job".into())
-            .spawn(move || wait_for_end(&shared, id, &device_id, handle))
-            .map_err(|e| PanelError::Bad(format!("cannot watch the job: {e}")))?;
-        Ok(view)
+            "flatcut-serve-job",
+            move |shared, id, device| wait_for_end(shared, id, device, handle),
+        )
     }
 
     /// Starts plotting `job.hpgl` (sheet `sheet` of revision `revision`) on the HP-GL plotter
@@ -509,7 +498,7 @@ impl Devices {
         let mut req = PlotRequest::new(job.name.clone(), job.hpgl.into_bytes());
         req.control = control.clone();
         let describe = device.target().describe();
-        let mut inner = self.shared.lock();
+        let inner = self.shared.lock();
         match inner.open.get(&device_id) {
             Some(o) if Arc::ptr_eq(&o.device, &device) => {
                 if o.job.is_some() {
@@ -529,8 +518,8 @@ impl Devices {
             DeviceError::Busy { .. } => PanelError::Busy(e.to_string()),
             e => PanelError::Device(e),
         })?;
-        inner.jobs.insert(
-            id,
+        self.launch(
+            inner,
             JobRecord {
                 id,
                 name: job.name,
@@ -554,7 +543,22 @@ impl Devices {
                 control: JobControl::Plot(control),
                 stop_asked: false,
             },
-        );
+            "flatcut-serve-plot",
+            move |shared, id, device| wait_for_plot(shared, id, device, handle),
+        )
+    }
+
+    /// Files a job its device has started as `record`, tells every tab, and watches it to its
+    /// end on a thread of its own named `thread` (`watch`: the protocol's wait for the end).
+    fn launch(
+        &self,
+        mut inner: MutexGuard<'_, Inner>,
+        record: JobRecord,
+        thread: &str,
+        watch: impl FnOnce(&Shared, u64, &str) + Send + 'static,
+    ) -> Result<Json, PanelError> {
+        let (id, device_id) = (record.id, record.device_id.clone());
+        inner.jobs.insert(id, record);
         if let Some(o) = inner.open.get_mut(&device_id) {
             o.job = Some(id);
         }
@@ -564,8 +568,8 @@ impl Devices {
         drop(inner);
         let shared = self.shared.clone();
         std::thread::Builder::new()
-            .name("flatcut-serve-plot".into())
-            .spawn(move || wait_for_plot(&shared, id, &device_id, handle))
+            .name(thread.into())
+            .spawn(move || watch(&shared, id, &device_id))
             .map_err(|e| PanelError::Bad(format!("cannot watch the job: {e}")))?;
         Ok(view)
     }
