@@ -195,7 +195,8 @@ pub enum PipelineError {
         /// The piece's name.
         piece: String,
     },
-    /// The mirror plane asked for (`--symmetry x|y|z`) is not one of the surface.
+    /// The mirror plane asked for (`--symmetry x|y|z`, `--symmetry-plane`) is not one of the
+    /// surface.
     #[error("piece '{piece}': no mirrored split: {reason}")]
     Symmetry {
         /// The piece's name.

@@ -5,14 +5,16 @@
 //! images of the first's ([`flatcut_darts::mirror`]). The parts are named `<piece>-<k>L` and
 //! `<piece>-<k>R` (a pair: `R` is `L` reversed), their seams `<piece> <k> L/<j> R`, with balance
 //! notches as every new seam's. A surface with no such plane is split without symmetry, with a
-//! note saying how far it is from one.
+//! note saying how far it is from one; a plane the user named (an axis, or a point and a normal,
+//! taken as given) that is none is an error saying how far the surface is from its mirror image
+//! across it and the tolerance.
 
 use flatcut_darts::mirror::{SIDES, mirror_split};
 use flatcut_flatten::FlattenParams;
 use flatcut_geom::DVec3;
 use flatcut_mesh::TriMesh;
 use flatcut_mesh::halve::half_of;
-use flatcut_mesh::symmetry::{Symmetry, SymmetryOptions, find_mirror};
+use flatcut_mesh::symmetry::{Symmetry, SymmetryOptions, find_mirror, mirror_across};
 
 use crate::error::PipelineError;
 use crate::flat_piece::FlatPiece;
@@ -42,8 +44,8 @@ pub fn split_closed(
 
 /// The split of a closed surface (`whole`) as mirrored pairs, or `Ok(None)` with the note to
 /// give when the settings ask for none or the surface has no mirror plane within the tolerance
-/// (the caller splits it without symmetry). An axis the user named that is no mirror plane is
-/// an error.
+/// (the caller splits it without symmetry). An axis or a plane the user named that is no mirror
+/// plane is an error.
 pub fn split_mirrored(
     piece: &FlatPiece,
     whole: &TriMesh,
@@ -51,16 +53,20 @@ pub fn split_mirrored(
     settings: &SplitSettings,
 ) -> Result<Result<SplitPieces, Option<String>>, PipelineError> {
     let name = &piece.def.name;
-    let normal = match settings.symmetry.mode {
+    let (normal, given) = match settings.symmetry.mode {
         SymmetryMode::Off => return Ok(Err(None)),
-        SymmetryMode::Auto => None,
-        SymmetryMode::Axis(n) => Some(n),
+        SymmetryMode::Auto => (None, None),
+        SymmetryMode::Axis(n) => (Some(n), None),
+        SymmetryMode::Plane(p) => (None, Some(p)),
     };
     let opts = SymmetryOptions {
         tolerance: settings.symmetry.tolerance,
         normal,
     };
-    let best = find_mirror(whole, &opts);
+    let best = match given {
+        Some(p) => mirror_across(whole, p, opts.tolerance),
+        None => find_mirror(whole, &opts),
+    };
     let half = best
         .filter(|s| s.accepted)
         .map(|s| (s, half_of(whole, &s.plane)));
@@ -69,9 +75,9 @@ pub fn split_mirrored(
         other => {
             let why = match other {
                 Some((_, Err(e))) => format!("it cannot be cut along its mirror plane: {e}"),
-                _ => no_plane(best, &opts),
+                _ => no_plane(best, &opts, given.is_some()),
             };
-            if normal.is_some() {
+            if normal.is_some() || given.is_some() {
                 return Err(PipelineError::Symmetry {
                     piece: name.clone(),
                     reason: why,
@@ -122,14 +128,25 @@ fn found_note(name: &str, s: &Symmetry, snapped_mm: f64) -> String {
     )
 }
 
-/// Why no plane was taken: the best one's deviation against the tolerance.
-fn no_plane(best: Option<Symmetry>, opts: &SymmetryOptions) -> String {
+/// Why no plane was taken: the best one's (or the `given` one's) deviation against the
+/// tolerance.
+fn no_plane(best: Option<Symmetry>, opts: &SymmetryOptions, given: bool) -> String {
     match best {
         Some(s) => format!(
-            "its best mirror plane (normal ({:.4}, {:.4}, {:.4})) leaves it {:.2} mm from its mirror image, beyond the tolerance of {:.2} mm ({} % of its {:.1} mm size; --symmetry-tolerance)",
-            s.plane.normal.x,
-            s.plane.normal.y,
-            s.plane.normal.z,
+            "{} leaves it {:.2} mm from its mirror image, beyond the tolerance of {:.2} mm ({} % of its {:.1} mm size; --symmetry-tolerance)",
+            if given {
+                let (p, n) = (s.plane.point, s.plane.normal);
+                format!(
+                    "the mirror plane given (through ({:.2}, {:.2}, {:.2}) normal to ({:.4}, {:.4}, {:.4}))",
+                    p.x, p.y, p.z, n.x, n.y, n.z
+                )
+            } else {
+                let n = s.plane.normal;
+                format!(
+                    "its best mirror plane (normal ({:.4}, {:.4}, {:.4}))",
+                    n.x, n.y, n.z
+                )
+            },
             s.max_mm,
             opts.tolerance * s.size_mm,
             opts.tolerance * 100.0,

@@ -8,6 +8,10 @@
 //! seam_mm = 10.0                # allowance where the design gives none
 //! darts = "auto"                # optional: cut darts where a piece exceeds the limits
 //! split = "auto"                # optional: split a piece darts cannot bring within them
+//! symmetry = "auto"             # optional, with split: a closed surface as L/R pairs
+//!                               # (off | auto | x | y | z, as --symmetry; default off)
+//! symmetry_tolerance_pct = 1.0  # its largest deviation from its mirror image (% of its size)
+//! # symmetry_plane = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0]   # or this plane: a point, a normal (mm)
 //! [material]
 //! name = "parchment"
 //! max_stretch_pct = 2.0
@@ -36,6 +40,8 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use flatcut_nest::GrainDirections;
+
+use crate::splitting::{SymmetryMode, SymmetrySettings};
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -180,6 +186,20 @@ pub struct Project {
     /// limits into parts sewn together.
     #[serde(default)]
     pub split: Option<flatcut_design::DartsDef>,
+    /// With `split = "auto"`, whether a closed surface is split as left and right pairs, as
+    /// `--symmetry`: `"off"` (the default), `"auto"`, `"x"`, `"y"` or `"z"`
+    /// ([`SymmetryMode::NAMES`]).
+    #[serde(default)]
+    pub symmetry: Option<String>,
+    /// The largest deviation of the surface from its mirror image the split accepts, in percent
+    /// of its bounding box diagonal, as `--symmetry-tolerance`.
+    #[serde(default)]
+    pub symmetry_tolerance_pct: Option<f64>,
+    /// With `split = "auto"`, the mirror plane as a point and a normal, `[x, y, z, nx, ny, nz]`
+    /// (mm; the normal of any length), taken as given, as `--symmetry-plane`; in place of
+    /// `symmetry`.
+    #[serde(default)]
+    pub symmetry_plane: Option<[f64; 6]>,
     /// The material the pieces are cut from.
     pub material: Material,
     /// What the pieces are nested on.
@@ -328,6 +348,7 @@ impl Project {
         {
             return Err(format!("unknown method '{m}'"));
         }
+        self.symmetry_settings()?;
         if let Some(order) = &self.order {
             if let Some((size, n)) = order
                 .iter()
@@ -343,6 +364,47 @@ impl Project {
             }
         }
         self.device.validate()
+    }
+
+    /// How a split looks for symmetry (`symmetry`, `symmetry_tolerance_pct`, `symmetry_plane`),
+    /// or what is wrong with those keys: an unknown mode, a tolerance that is no percentage, a
+    /// plane that is none, a mode and a plane both, or a mirrored split or its tolerance asked
+    /// for without `split = "auto"`.
+    pub fn symmetry_settings(&self) -> Result<SymmetrySettings, String> {
+        let mut s = SymmetrySettings::default();
+        if let Some(m) = &self.symmetry {
+            s.mode = SymmetryMode::from_name(m).ok_or_else(|| {
+                format!(
+                    "symmetry = \"{m}\": unknown symmetry; one of: {}",
+                    SymmetryMode::NAMES.join(", ")
+                )
+            })?;
+        }
+        if let Some(v) = self.symmetry_plane {
+            if let Some(m) = &self.symmetry {
+                return Err(format!(
+                    "symmetry = \"{m}\" and symmetry_plane both say where the mirror plane is: give one"
+                ));
+            }
+            s.mode = SymmetryMode::plane(v).map_err(|e| {
+                format!("symmetry_plane = {v:?}: {e}; give a point and a normal, [x, y, z, nx, ny, nz] (mm)")
+            })?;
+        }
+        if let Some(t) = self.symmetry_tolerance_pct {
+            if !(t.is_finite() && (0.0..100.0).contains(&t)) {
+                return Err(format!(
+                    "symmetry_tolerance_pct = {t}: a percentage in [0, 100)"
+                ));
+            }
+            s.tolerance = t / 100.0;
+        }
+        let asked = s.mode != SymmetryMode::Off || self.symmetry_tolerance_pct.is_some();
+        if asked && self.split != Some(flatcut_design::DartsDef::Auto) {
+            return Err(
+                "symmetry, symmetry_plane and symmetry_tolerance_pct are for the split: they need split = \"auto\"".into(),
+            );
+        }
+        Ok(s)
     }
 
     /// The design file's path.

@@ -18,6 +18,7 @@ use flatcut_geom::DVec3;
 use flatcut_mesh::TriMesh;
 use flatcut_mesh::grain_strain::{central_face, centroid, pattern_direction_near};
 use flatcut_mesh::mating::{MatingSeam, SeamNotch, arc_lengths};
+use flatcut_mesh::symmetry::MirrorPlane;
 
 use crate::darting;
 use crate::error::PipelineError;
@@ -49,6 +50,39 @@ pub enum SymmetryMode {
     /// A plane normal to this axis (through the surface's middle, refined), taken when within
     /// the tolerance; an error otherwise.
     Axis(DVec3),
+    /// This plane, as it is (a point and a normal: a plane off the coordinate planes or the
+    /// surface's middle), taken when within the tolerance; an error otherwise.
+    Plane(MirrorPlane),
+}
+
+impl SymmetryMode {
+    /// The names of the modes a word selects (`--symmetry`, a project's `symmetry`).
+    pub const NAMES: [&'static str; 5] = ["off", "auto", "x", "y", "z"];
+
+    /// The mode named `name` (one of [`Self::NAMES`]).
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "off" => Some(Self::Off),
+            "auto" => Some(Self::Auto),
+            "x" => Some(Self::Axis(DVec3::X)),
+            "y" => Some(Self::Axis(DVec3::Y)),
+            "z" => Some(Self::Axis(DVec3::Z)),
+            _ => None,
+        }
+    }
+
+    /// The plane through the point `[x, y, z]` (mm) normal to `[nx, ny, nz]` (of any length)
+    /// (`--symmetry-plane`, a project's `symmetry_plane`), or why there is none: a number that
+    /// is not finite or beyond the coordinates' range, or a normal of no length.
+    pub fn plane(v: [f64; 6]) -> Result<Self, String> {
+        if let Some(bad) = v.iter().find(|x| !flatcut_geom::limits::in_range(**x)) {
+            return Err(flatcut_geom::limits::out_of_range_reason(*bad));
+        }
+        let [x, y, z, nx, ny, nz] = v;
+        MirrorPlane::new(DVec3::new(x, y, z), DVec3::new(nx, ny, nz))
+            .map(Self::Plane)
+            .ok_or_else(|| format!("the normal ({nx}, {ny}, {nz}) has no direction"))
+    }
 }
 
 /// How a split looks for symmetry.

@@ -16,6 +16,11 @@
 //!    measures both), and its root mean square. The candidate of least RMS wins; it is accepted
 //!    when the largest deviation is within the tolerance, a share of the bounding box diagonal.
 //!
+//! A plane the caller gives whole (a point and a normal: a design whose plane is known, off the
+//! principal axes or the centroid) is measured as it is ([`mirror_across`]), step 3 alone: the
+//! refinement would move it by the triangulation's own asymmetry, and the caller's plane is the
+//! one the pattern must be mirrored across.
+//!
 //! The samples are points of the surface, not its vertices matched to vertices, so a
 //! triangulation that is not itself symmetric still finds its plane (its deviation is then the
 //! chordal error of the triangles, far inside the tolerance).
@@ -124,19 +129,44 @@ pub fn find_mirror(mesh: &TriMesh, opts: &SymmetryOptions) -> Option<Symmetry> {
             continue;
         };
         let plane = refine(mesh, &bvh, &few, start, size_mm);
-        let (max_mm, rms_mm) = deviation(mesh, &bvh, &samples, &plane);
-        let s = Symmetry {
-            plane,
-            max_mm,
-            rms_mm,
-            size_mm,
-            accepted: max_mm <= opts.tolerance * size_mm,
-        };
+        let s = measured(mesh, &bvh, &samples, plane, opts.tolerance);
         if best.is_none_or(|b| s.rms_mm < b.rms_mm) {
             best = Some(s);
         }
     }
     best
+}
+
+/// How far `mesh` is from its mirror image across `plane`, the plane taken as it is (not
+/// refined), accepted when within `tolerance` (a share of the bounding box diagonal); `None`
+/// for a mesh whose bounding box has no size or is not finite.
+pub fn mirror_across(mesh: &TriMesh, plane: MirrorPlane, tolerance: f64) -> Option<Symmetry> {
+    let size_mm = mesh.bbox().diagonal();
+    if !(size_mm.is_finite() && size_mm > 0.0) {
+        return None;
+    }
+    let bvh = Bvh::new(&mesh.positions, &mesh.triangles);
+    Some(measured(mesh, &bvh, &sample_points(mesh), plane, tolerance))
+}
+
+/// `plane` with the deviation of `mesh` across it, measured at `samples`, and whether it is
+/// within `tolerance` of the bounding box diagonal.
+fn measured(
+    mesh: &TriMesh,
+    bvh: &Bvh,
+    samples: &[DVec3],
+    plane: MirrorPlane,
+    tolerance: f64,
+) -> Symmetry {
+    let size_mm = mesh.bbox().diagonal();
+    let (max_mm, rms_mm) = deviation(mesh, bvh, samples, &plane);
+    Symmetry {
+        plane,
+        max_mm,
+        rms_mm,
+        size_mm,
+        accepted: max_mm <= tolerance * size_mm,
+    }
 }
 
 /// Largest and root-mean-square distance from the reflections of `samples` to the surface.

@@ -111,3 +111,41 @@ fn the_reflection_maps_the_plane_to_itself() {
     assert!(p.distance(p.project(q)).abs() < 1e-12);
     assert!(MirrorPlane::new(DVec3::ZERO, DVec3::ZERO).is_none());
 }
+
+/// A plane given whole is measured where it is: the posed body's analytic plane (through a
+/// point off its centroid, its normal not unit) is accepted and kept exactly; the same plane
+/// moved 10 mm, or turned 5°, is refused, the body then some 20 mm (twice the move) from its
+/// mirror image.
+#[test]
+fn a_given_plane_is_measured_as_it_is() {
+    let m = plush(3, skew());
+    let r = turn(DVec3::new(-0.4, 0.2, 0.9), 1.1);
+    let shift = DVec3::new(310.0, -45.0, 120.0);
+    let posed = TriMesh::new(
+        m.positions.iter().map(|&p| r * p + shift).collect(),
+        m.triangles.clone(),
+    );
+    // A point of the plane x = 0 (before the pose) far from the centroid.
+    let point = r * DVec3::new(0.0, 80.0, -60.0) + shift;
+    let plane = MirrorPlane::new(point, 3.0 * (r * DVec3::X)).unwrap();
+    let s = mirror_across(&posed, plane, DEFAULT_TOLERANCE).unwrap();
+    assert!(s.accepted, "{s:?}");
+    assert_eq!(s.plane, plane);
+    assert!(s.max_mm < 2.0 && s.rms_mm < 0.3, "{s:?}");
+    let moved = MirrorPlane::new(point + 10.0 * plane.normal, plane.normal).unwrap();
+    let s = mirror_across(&posed, moved, DEFAULT_TOLERANCE).unwrap();
+    assert!(!s.accepted && s.max_mm > 15.0 && s.max_mm < 21.0, "{s:?}");
+    let tilted = r * turn(DVec3::Z, 5f64.to_radians()) * DVec3::X;
+    let s = mirror_across(
+        &posed,
+        MirrorPlane::new(point, tilted).unwrap(),
+        DEFAULT_TOLERANCE,
+    )
+    .unwrap();
+    assert!(!s.accepted, "{s:?}");
+    assert!(mirror_across(&TriMesh::default(), plane, DEFAULT_TOLERANCE).is_none());
+    for bad in [DVec3::ZERO, DVec3::new(f64::NAN, 1.0, 0.0)] {
+        assert!(MirrorPlane::new(DVec3::ZERO, bad).is_none());
+    }
+    assert!(MirrorPlane::new(DVec3::splat(f64::INFINITY), DVec3::X).is_none());
+}

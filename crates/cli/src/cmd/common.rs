@@ -88,9 +88,17 @@ pub struct FlattenArgs {
     /// `z` takes the plane normal to that axis (an error when the surface is not symmetric
     /// across it), `off` (the default) splits without symmetry. One half is split, the other's
     /// parts are its mirror images (`<piece>-<k>L` and `-<k>R`); a surface with no mirror
-    /// plane is split without symmetry, with a note.
+    /// plane is split without symmetry, with a note. A plane in any other pose:
+    /// --symmetry-plane.
     #[arg(long, value_name = "MODE", default_value = "off", value_parser = parse_symmetry)]
     pub symmetry: SymmetryMode,
+    /// With --split auto, a closed surface split as left and right pairs across this plane: a
+    /// point of it and its normal, `X,Y,Z,NX,NY,NZ` in mm (the normal of any length), for a
+    /// model whose plane is no coordinate plane through its middle. The plane is taken as
+    /// given, not refined; a surface that is not its own mirror image across it within
+    /// --symmetry-tolerance is an error, nothing written. In place of --symmetry.
+    #[arg(long, value_name = "X,Y,Z,NX,NY,NZ", value_parser = parse_symmetry_plane, conflicts_with = "symmetry", allow_hyphen_values = true)]
+    pub symmetry_plane: Option<SymmetryMode>,
     /// Largest deviation of the surface from its mirror image that --symmetry accepts, in
     /// percent of its bounding box diagonal.
     #[arg(long, value_name = "PCT", default_value_t = 100.0 * flatcut::mesh::symmetry::DEFAULT_TOLERANCE, value_parser = values::material_percent)]
@@ -167,17 +175,29 @@ fn parse_dart_fit(s: &str) -> Result<DartFit, String> {
 }
 
 fn parse_symmetry(s: &str) -> Result<SymmetryMode, String> {
-    use flatcut::geom::DVec3;
-    match s {
-        "off" => Ok(SymmetryMode::Off),
-        "auto" => Ok(SymmetryMode::Auto),
-        "x" => Ok(SymmetryMode::Axis(DVec3::X)),
-        "y" => Ok(SymmetryMode::Axis(DVec3::Y)),
-        "z" => Ok(SymmetryMode::Axis(DVec3::Z)),
-        _ => Err(format!(
-            "unknown symmetry '{s}'; one of: off, auto, x, y, z"
-        )),
+    SymmetryMode::from_name(s).ok_or_else(|| {
+        format!(
+            "unknown symmetry '{s}'; one of: {}",
+            SymmetryMode::NAMES.join(", ")
+        )
+    })
+}
+
+/// `X,Y,Z,NX,NY,NZ`: a point of the mirror plane and its normal.
+fn parse_symmetry_plane(s: &str) -> Result<SymmetryMode, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let Ok(v) = <[&str; 6]>::try_from(parts) else {
+        return Err(format!(
+            "'{s}' is not a plane: give a point and a normal as six numbers X,Y,Z,NX,NY,NZ (mm)"
+        ));
+    };
+    let mut n = [0.0; 6];
+    for (x, t) in n.iter_mut().zip(v) {
+        *x = t
+            .parse()
+            .map_err(|_| format!("'{t}' in '{s}' is not a number"))?;
     }
+    SymmetryMode::plane(n).map_err(|e| format!("'{s}' is not a plane: {e}"))
 }
 
 fn parse_split(s: &str) -> Result<DartMode, String> {
@@ -260,7 +280,7 @@ impl FlattenArgs {
             max_pieces: self.max_pieces,
             time_limit: self.split_time,
             symmetry: SymmetrySettings {
-                mode: self.symmetry,
+                mode: self.symmetry_plane.unwrap_or(self.symmetry),
                 tolerance: self.symmetry_tolerance / 100.0,
             },
             ..SplitSettings::default()

@@ -295,6 +295,8 @@ fn limits(project: &Project) -> Limits {
         split: (project.split == Some(flatcut_design::DartsDef::Auto)).then(|| {
             crate::splitting::SplitSettings {
                 seam_allowance_mm: project.seam_mm.unwrap_or(0.0),
+                // Checked when the project was loaded.
+                symmetry: project.symmetry_settings().unwrap_or_default(),
                 ..Default::default()
             }
         }),
@@ -679,6 +681,70 @@ mod tests {
         let l = limits(&write(""));
         assert!(l.darts.is_none() && l.split.is_none());
         assert_eq!((l.stretch_pct, l.compress_pct), (Some(3.0), Some(3.0)));
+    }
+
+    /// `symmetry`, `symmetry_tolerance_pct` and `symmetry_plane` reach the split as the flags
+    /// do; an unknown mode, a plane that is none, both a mode and a plane, or either without
+    /// `split = "auto"` are refused naming the file, the key and the value.
+    #[test]
+    fn a_projects_symmetry_reaches_the_split_and_bad_values_are_refused() {
+        use crate::splitting::SymmetryMode;
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("project.toml");
+        let load = |extra: &str| {
+            std::fs::write(
+                &p,
+                format!(
+                    "name = \"t\"\ndesign = \"d.obj\"\n{extra}[material]\nname = \"m\"\nmax_stretch_pct = 3.0\n[sheet]\nwidth_mm = 600.0\nheight_mm = 400.0\n[machine]\nprofile = \"pen\"\n"
+                ),
+            )
+            .unwrap();
+            Project::load(&p)
+        };
+        let symmetry = |extra: &str| limits(&load(extra).unwrap()).split.unwrap().symmetry;
+        let s = symmetry("split = \"auto\"\n");
+        assert_eq!(s, crate::splitting::SymmetrySettings::default());
+        let s = symmetry("split = \"auto\"\nsymmetry = \"y\"\nsymmetry_tolerance_pct = 2.5\n");
+        assert_eq!(s.mode, SymmetryMode::Axis(flatcut_geom::DVec3::Y));
+        assert!((s.tolerance - 0.025).abs() < 1e-15);
+        assert_eq!(
+            symmetry("split = \"auto\"\nsymmetry = \"auto\"\n").mode,
+            SymmetryMode::Auto
+        );
+        let s = symmetry("split = \"auto\"\nsymmetry_plane = [10, 0, 5, 0, 0, -2]\n");
+        let SymmetryMode::Plane(plane) = s.mode else {
+            panic!("{s:?}")
+        };
+        assert_eq!(plane.point, flatcut_geom::DVec3::new(10.0, 0.0, 5.0));
+        assert_eq!(plane.normal, -flatcut_geom::DVec3::Z);
+        for (extra, said) in [
+            ("split = \"auto\"\nsymmetry = \"w\"\n", "symmetry = \"w\""),
+            (
+                "split = \"auto\"\nsymmetry_plane = [0, 0, 0, 0, 0, 0]\n",
+                "symmetry_plane = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]: the normal (0, 0, 0) has no direction",
+            ),
+            (
+                "split = \"auto\"\nsymmetry_plane = [0, 0, nan, 1, 0, 0]\n",
+                "symmetry_plane = [0.0, 0.0, NaN, 1.0, 0.0, 0.0]: NaN is not a finite number",
+            ),
+            (
+                "split = \"auto\"\nsymmetry = \"x\"\nsymmetry_plane = [0, 0, 0, 1, 0, 0]\n",
+                "symmetry = \"x\" and symmetry_plane",
+            ),
+            (
+                "split = \"auto\"\nsymmetry_tolerance_pct = 100.0\n",
+                "symmetry_tolerance_pct = 100",
+            ),
+            ("symmetry = \"auto\"\n", "need split = \"auto\""),
+        ] {
+            let e = load(extra).unwrap_err().to_string();
+            assert!(
+                e.starts_with(&p.display().to_string()) && e.contains(said),
+                "{extra}: {e}"
+            );
+        }
+        // Off is no request: harmless without a split.
+        assert!(load("symmetry = \"off\"\n").is_ok());
     }
 
     /// A darted piece's OBJ from a run carries its darts' sew lines, as `flatten` writes it, and
