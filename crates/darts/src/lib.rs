@@ -61,7 +61,7 @@
 //! (`flatcut_flatten::assembly`), the worst part split again until every face is within the limits
 //! or `max_pieces` is reached (the chords judged side by side, a tie broken by the seam's cost,
 //! `seam_cost`: length weighted by visibility from curvature, a hidden side or region, and turning;
-//! a time limit returns the best split so far). A part whose flat outline crosses itself
+//! a time limit, of the process's CPU time (`clock`), returns the best split so far). A part whose flat outline crosses itself
 //! (`crossing`) is cut again, by chords and by its necks, and a split that cannot undo the overlap
 //! is an error, never a result; an unsplit piece whose outline crosses itself is refused the same
 //! way (`flatcut::darting::no_crossing`). A surface that is not a disk (`split_surface`) is first
@@ -75,6 +75,7 @@
 #![warn(missing_docs)]
 
 pub mod band;
+pub mod clock;
 pub mod cone;
 pub mod crossing;
 pub mod cut;

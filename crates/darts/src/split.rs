@@ -122,7 +122,8 @@ pub struct SplitOptions {
     pub keep_out: Option<KeepOut>,
     /// Where seams should hide (its flags index the piece's vertices).
     pub visibility: Visibility,
-    /// Time after which the best split so far is returned (`timed_out`).
+    /// CPU time of the process ([`crate::clock`]) after which the best split so far is
+    /// returned (`timed_out`).
     pub time_limit: Option<std::time::Duration>,
     /// The seam allowance the parts will be cut with (mm): no merged part gets a neck too
     /// narrow to take it on both sides ([`merged_neck`]).
@@ -232,6 +233,7 @@ fn split_on(
     let held = held_params(params, opts);
     let guard = Guard::new(mesh, opts.keep_out.as_ref(), &opts.visibility);
     let started = std::time::Instant::now();
+    let cpu = crate::clock::CpuClock::start();
     let mut timed_out = false;
     // Whether neighbours were tried for merging, and whether any cut was sewn back.
     let (mut merged, mut resewn) = (false, false);
@@ -251,7 +253,7 @@ fn split_on(
             energy: excess,
             elapsed: started.elapsed(),
         });
-        timed_out |= opts.time_limit.is_some_and(|t| started.elapsed() >= t);
+        timed_out |= opts.time_limit.is_some_and(|t| cpu.elapsed() >= t);
         let full = pieces.len() >= opts.max_pieces.max(1) || timed_out;
         let done = excess <= 0.0 && crossing.is_none();
         if (done || full) && !together {

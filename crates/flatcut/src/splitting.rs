@@ -29,7 +29,8 @@ use crate::flat_piece::{FlatNotch, FlatPiece};
 pub struct SplitSettings {
     /// Most parts one piece may become.
     pub max_pieces: usize,
-    /// Time after which a piece's best split so far is taken, with a warning.
+    /// CPU time of the process after which a piece's best split so far is taken, with a
+    /// warning (`flatcut_darts::clock`).
     pub time_limit: Option<std::time::Duration>,
     /// The seam allowance (mm) of pieces whose design gives none: merged parts keep no neck
     /// narrower than twice the allowance.

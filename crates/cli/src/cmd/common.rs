@@ -79,8 +79,10 @@ pub struct FlattenArgs {
     /// Most parts one piece may be split into.
     #[arg(long, value_name = "N", default_value_t = SplitSettings::default().max_pieces, value_parser = values::piece_count)]
     pub max_pieces: usize,
-    /// Time limit of one piece's split in seconds: when it runs out, the best split found so
-    /// far is written, with a warning (and exit code 3 while a face is beyond the limits).
+    /// Time limit of one piece's split in seconds of the process's CPU time (all its threads,
+    /// so a busy machine does not change how far the split gets; two cores at work spend it
+    /// twice as fast as the wall clock): when it runs out, the best split found so far is
+    /// written, with a warning (and exit code 3 while a face is beyond the limits).
     #[arg(long, value_name = "S", value_parser = values::seconds)]
     pub split_time: Option<std::time::Duration>,
     /// With --split auto, a closed surface that is its own mirror image as left and right

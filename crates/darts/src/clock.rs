@@ -1,0 +1,112 @@
+//! The split's clock: the CPU time the process has used, so that the split's time limit
+//! (`--split-time`) measures the work done rather than the wall time, and a busy machine (other
+//! builds, other jobs) does not change how far a split gets.
+//!
+//! It is `clock_gettime(CLOCK_PROCESS_CPUTIME_ID)`, read through `nix` (a maintained safe
+//! wrapper the workspace already builds; the `cpu-time` crate wraps the same call but has had no
+//! release since 2019, and calling `libc` directly needs `unsafe`, which the workspace denies).
+//! The clock counts every thread of the process: the split's candidates are judged side by side
+//! on the rayon pool, so two cores busy for a second spend two seconds of it; and work the same
+//! process does beside the split (a second job of the workbench's server) counts too. Where the
+//! clock cannot be read (a system without it), the clock falls back to wall time.
+
+use std::time::{Duration, Instant};
+
+/// A stopwatch of the process's CPU time.
+#[derive(Clone, Copy, Debug)]
+pub struct CpuClock {
+    /// The CPU time used when the clock started; `None` where it cannot be read.
+    cpu: Option<Duration>,
+    /// The wall time it started at, for the fallback.
+    wall: Instant,
+}
+
+impl CpuClock {
+    /// A stopwatch started now.
+    pub fn start() -> Self {
+        Self {
+            cpu: cpu_time(),
+            wall: Instant::now(),
+        }
+    }
+
+    /// The CPU time the process has used since the clock started (all its threads); the wall
+    /// time where the CPU time cannot be read.
+    pub fn elapsed(&self) -> Duration {
+        match (self.cpu, cpu_time()) {
+            (Some(a), Some(b)) => b.saturating_sub(a),
+            _ => self.wall.elapsed(),
+        }
+    }
+}
+
+/// The CPU time the process has used so far, all its threads together.
+#[cfg(unix)]
+pub fn cpu_time() -> Option<Duration> {
+    nix::time::ClockId::CLOCK_PROCESS_CPUTIME_ID
+        .now()
+        .ok()
+        .map(Duration::from)
+}
+
+/// The CPU time the process has used so far: not read on this system.
+#[cfg(not(unix))]
+pub fn cpu_time() -> Option<Duration> {
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Environment variable that makes [`clock_child`] measure.
+    const CHILD_ENV: &str = "FLATCUT_CPU_CLOCK_CHILD";
+
+    /// The measuring half of [`the_clock_counts_work_and_not_sleep`], run alone in a child
+    /// process: the tests beside it in this one would spend CPU time while it sleeps. Without
+    /// the variable set it does nothing.
+    #[test]
+    fn clock_child() {
+        if std::env::var_os(CHILD_ENV).is_none() {
+            return;
+        }
+        // Asleep for 300 ms: the clock stands (a wall clock would read 300 ms).
+        let c = CpuClock::start();
+        std::thread::sleep(Duration::from_millis(300));
+        let asleep = c.elapsed();
+        assert!(asleep < Duration::from_millis(60), "asleep: {asleep:?}");
+        // Busy for 300 ms of wall time on one thread: the clock runs, never ahead of the wall
+        // (one thread cannot spend more), and behind it only by what other processes took.
+        let (c, t0) = (CpuClock::start(), Instant::now());
+        let mut x = 1u64;
+        while t0.elapsed() < Duration::from_millis(300) {
+            for _ in 0..1000 {
+                x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
+            }
+        }
+        let (busy, wall) = (c.elapsed(), t0.elapsed());
+        assert!(
+            busy > Duration::from_millis(30) && busy <= wall + Duration::from_millis(5),
+            "busy: {busy:?} in {wall:?}"
+        );
+        println!("CPU-CLOCK-CHECKED");
+    }
+
+    /// The clock advances with busy work and stands still while the process sleeps: measured
+    /// in a child process running [`clock_child`] alone.
+    #[test]
+    #[cfg(unix)]
+    fn the_clock_counts_work_and_not_sleep() {
+        let out = std::process::Command::new(std::env::current_exe().unwrap())
+            .args(["clock::tests::clock_child", "--exact", "--nocapture"])
+            .env(CHILD_ENV, "1")
+            .output()
+            .unwrap();
+        let said = String::from_utf8_lossy(&out.stdout).into_owned()
+            + &String::from_utf8_lossy(&out.stderr);
+        assert!(
+            out.status.success() && said.contains("CPU-CLOCK-CHECKED"),
+            "{said}"
+        );
+    }
+}
