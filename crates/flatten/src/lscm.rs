@@ -17,12 +17,42 @@ use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
 use crate::ops::{QuadraticBuilder, corner_cotans, used_mask, uv_area};
+use crate::ordering::Graph;
+use crate::sparse::Ordering;
 use crate::{FlattenError, FlattenInfo, Flattening, Method, Pin, Timings};
 use std::time::Instant;
 
 /// Solves LSCM on the disk `mesh` (topology from `check_disk`) with the (validated) `pins`.
 pub fn lscm(mesh: &TriMesh, topo: &Topology, pins: &[Pin]) -> Result<Flattening, FlattenError> {
+    let (uv, timings) = conformal_map(mesh, topo, pins)?;
     let mut warnings = Vec::new();
+    let flips = crate::ops::count_flips(&mesh.triangles, &uv);
+    if flips > 0 {
+        warnings.push(format!(
+            "lscm: {flips} triangle(s) flipped (first: {}); the isometric method is flip-free",
+            crate::ops::first_flip(&mesh.triangles, &uv).unwrap_or(0)
+        ));
+    }
+    let energy = conformal_energy(mesh, &uv) / mesh.area();
+    Ok(Flattening {
+        uv,
+        info: FlattenInfo {
+            iterations: 1,
+            final_energy: energy,
+            warnings,
+            timings,
+            ..Default::default()
+        },
+    })
+}
+
+/// The map of [`lscm`] and where its time went, without the report of its flips and energy
+/// (a start map's caller checks its own, and needs no energy: a pass over every face).
+pub fn conformal_map(
+    mesh: &TriMesh,
+    topo: &Topology,
+    pins: &[Pin],
+) -> Result<(Vec<DVec2>, Timings), FlattenError> {
     let hard: Vec<(u32, DVec2)> = if pins.len() >= 2 {
         pins.iter().map(|p| (p.vertex, p.position)).collect()
     } else {
@@ -46,24 +76,7 @@ pub fn lscm(mesh: &TriMesh, topo: &Topology, pins: &[Pin]) -> Result<Flattening,
             uv.iter_mut().for_each(|q| *q += shift);
         }
     }
-    let flips = crate::ops::count_flips(&mesh.triangles, &uv);
-    if flips > 0 {
-        warnings.push(format!(
-            "lscm: {flips} triangle(s) flipped (first: {}); the isometric method is flip-free",
-            crate::ops::first_flip(&mesh.triangles, &uv).unwrap_or(0)
-        ));
-    }
-    let energy = conformal_energy(mesh, &uv) / mesh.area();
-    Ok(Flattening {
-        uv,
-        info: FlattenInfo {
-            iterations: 1,
-            final_energy: energy,
-            warnings,
-            timings,
-            ..Default::default()
-        },
-    })
+    Ok((uv, timings))
 }
 
 /// The LSCM minimizer with the vertices of `hard` held at their positions (at least two
@@ -102,6 +115,11 @@ fn solve_pinned_timed(
     }
     let cot = corner_cotans(&mesh.positions, &mesh.triangles);
     let mut q = QuadraticBuilder::new(&fixed, 6 * mesh.triangles.len()).dofs_per_vertex(2);
+    if Ordering::for_nodes(n) == Ordering::NestedDissection {
+        // The mesh's graph, pins included: the Newton solve this map starts orders the same
+        // graph, and reuses this order.
+        q = q.vertex_graph(Graph::of_triangles(n, &mesh.triangles));
+    }
     for (tri, c) in mesh.triangles.iter().zip(&cot) {
         for k in 0..3 {
             let (a, b) = (tri[(k + 1) % 3] as usize, tri[(k + 2) % 3] as usize);

@@ -149,6 +149,8 @@ pub struct QuadraticBuilder {
     /// Consecutive dofs that belong to one mesh vertex (1, or 2 for u and v), for the
     /// fill-reducing ordering.
     dofs_per_vertex: u32,
+    /// The vertex graph to order, when given ([`QuadraticBuilder::vertex_graph`]).
+    vertex_graph: Option<crate::ordering::Graph>,
 }
 
 impl QuadraticBuilder {
@@ -171,6 +173,7 @@ impl QuadraticBuilder {
             coupling: Vec::new(),
             triplets,
             dofs_per_vertex: 1,
+            vertex_graph: None,
         }
     }
 
@@ -180,6 +183,14 @@ impl QuadraticBuilder {
     /// ([`crate::sparse::SymPattern::by_field`]).
     pub fn dofs_per_vertex(mut self, k: u32) -> Self {
         self.dofs_per_vertex = k.max(1);
+        self
+    }
+
+    /// Orders the vertices by the mesh's vertex graph `g` rather than by the graph of the free
+    /// unknowns ([`crate::sparse::SymPattern::with_node_graph`]): LSCM then shares its ordering
+    /// with the Newton solve it starts.
+    pub fn vertex_graph(mut self, g: crate::ordering::Graph) -> Self {
+        self.vertex_graph = Some(g);
         self
     }
 
@@ -215,7 +226,10 @@ impl QuadraticBuilder {
         let n_vertices = (self.free_index.len() as u32).div_ceil(k) as usize;
         let node_of = self.free.iter().map(|&d| d / k).collect();
         let (pattern, values) = SymPattern::compress(self.triplets, stage)?;
-        let pattern = pattern.with_nodes(node_of, n_vertices)?;
+        let mut pattern = pattern.with_nodes(node_of, n_vertices)?;
+        if let Some(g) = self.vertex_graph {
+            pattern = pattern.with_node_graph(g)?;
+        }
         let pattern = if k > 1 { pattern.by_field() } else { pattern };
         let mut solver = SpdSolver::new(&pattern, stage)?;
         let values = solver.gather(&pattern, &values)?;

@@ -163,6 +163,9 @@ pub struct SymPattern {
     /// Nested dissection orders the unknowns field by field ([`ordering::expand_by_field`])
     /// rather than node by node.
     by_field: bool,
+    /// The graph of the nodes to order, when it is given rather than read off the pattern
+    /// ([`SymPattern::with_node_graph`]).
+    node_graph: Option<ordering::Graph>,
 }
 
 impl SymPattern {
@@ -186,6 +189,7 @@ impl SymPattern {
             argsort: Some(argsort),
             nodes: None,
             by_field: false,
+            node_graph: None,
         })
     }
 
@@ -208,6 +212,7 @@ impl SymPattern {
                 n_values,
                 nodes: None,
                 by_field: false,
+                node_graph: None,
             },
             values,
         ))
@@ -238,12 +243,30 @@ impl SymPattern {
         self
     }
 
+    /// Orders the nodes of [`SymPattern::with_nodes`] by the graph `g` (the mesh's vertex graph,
+    /// [`ordering::Graph::of_triangles`]) instead of the quotient of this pattern: a system whose
+    /// pinned unknowns are not in its matrix (LSCM's) then orders the graph of the map's other
+    /// systems, and shares their order ([`ordering::shared_dissection`]). `g` must couple at
+    /// least the nodes the pattern couples, or the order costs fill (never correctness).
+    pub fn with_node_graph(mut self, g: ordering::Graph) -> Result<Self, FlattenError> {
+        if g.len() != self.n_nodes() {
+            return Err(FlattenError::Internal(InternalError::NodeLabels {
+                labels: g.len(),
+                nodes: self.n_nodes(),
+                unknowns: self.n,
+            }));
+        }
+        self.node_graph = Some(g);
+        Ok(self)
+    }
+
     /// Number of nodes: of the grouping given to [`SymPattern::with_nodes`], else of unknowns.
     pub fn n_nodes(&self) -> usize {
         self.nodes.as_ref().map_or(self.n, |(_, k)| *k)
     }
 
-    /// The nested-dissection elimination order of the node graph ([`crate::ordering`]).
+    /// The nested-dissection elimination order of the node graph ([`crate::ordering`]), shared
+    /// with the last system of the same graph ([`ordering::shared_dissection`]).
     fn nested_dissection(&self) -> Vec<usize> {
         let identity;
         let (node_of, n_nodes) = match &self.nodes {
@@ -254,8 +277,11 @@ impl SymPattern {
             }
         };
         let (col_ptr, row_idx) = self.csc();
-        let graph = ordering::Graph::quotient(col_ptr, row_idx, node_of, n_nodes);
-        let nodes = ordering::nested_dissection(&graph);
+        let graph = match &self.node_graph {
+            Some(g) => g.clone(),
+            None => ordering::Graph::quotient(col_ptr, row_idx, node_of, n_nodes),
+        };
+        let nodes = ordering::shared_dissection(graph);
         if self.by_field {
             ordering::expand_by_field(&nodes, node_of, col_ptr, row_idx)
         } else {
@@ -292,6 +318,7 @@ impl SymPattern {
             n_values,
             nodes: None,
             by_field: false,
+            node_graph: None,
         })
     }
 

@@ -22,8 +22,7 @@ pub fn tutte(mesh: &TriMesh, topo: &Topology) -> Result<Vec<DVec2>, FlattenError
 /// needs several times fewer iterations from it; LSCM is not guaranteed flip-free, hence the
 /// check and the fallback.
 pub fn lscm_or_tutte(mesh: &TriMesh, topo: &Topology) -> Result<Vec<DVec2>, FlattenError> {
-    if let Ok(f) = crate::lscm::lscm(mesh, topo, &[]) {
-        let mut uv = f.uv;
+    if let Ok((mut uv, _)) = crate::lscm::conformal_map(mesh, topo, &[]) {
         let total: f64 = (0..mesh.triangles.len())
             .map(|t| signed_area(mesh, &uv, t))
             .sum();
