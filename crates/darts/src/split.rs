@@ -63,7 +63,7 @@
 //! across the strain) at the cost of a handful of solves per cut, and the limit solve of the
 //! assembled pieces is the proof that the limits hold.
 
-use flatcut_flatten::assembly::flatten_assembly;
+use flatcut_flatten::flatten_assembly_from;
 use flatcut_flatten::nonlinear::kernel::rest_frames;
 use flatcut_flatten::{FlattenParams, Method};
 use flatcut_geom::{DVec2, DVec3, polygon};
@@ -533,7 +533,9 @@ fn flatten_together(pieces: &mut [TriMesh], params: &FlattenParams) -> Result<()
     let seams = seams_of(pieces);
     let flats = {
         let refs: Vec<&TriMesh> = pieces.iter().collect();
-        flatten_assembly(&refs, &seams, params).map_err(|e| DartError::Solver(e.to_string()))?
+        let starts: Vec<&[DVec2]> = pieces.iter().filter_map(|p| p.flat.as_deref()).collect();
+        flatten_assembly_from(&refs, &seams, &starts, params)
+            .map_err(|e| DartError::Solver(e.to_string()))?
     };
     for (p, f) in pieces.iter_mut().zip(flats) {
         p.flat = Some(f.uv);

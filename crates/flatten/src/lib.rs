@@ -84,6 +84,7 @@ pub(crate) mod sparse;
 pub mod testmesh;
 pub mod timings;
 pub mod tutte;
+pub mod warm;
 
 pub use budget::{Budget, StageCount};
 pub use internal::InternalError;
@@ -93,6 +94,7 @@ pub use params::{
     ProgressFn,
 };
 pub use timings::Timings;
+pub use warm::flatten_assembly_from;
 
 use flatcut_mesh::{TriMesh, check_disk};
 
