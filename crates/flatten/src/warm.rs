@@ -13,7 +13,8 @@
 //! ([`crate::limits::BARRIER_WEIGHTS`]) optimise δ2 there, each keeping the seams equal. Every
 //! solve is the joint problem's augmented Lagrangian ([`crate::assembly::joint`]): Newton solves
 //! of the energy plus the pair terms, multipliers λ ← λ + w c, the weight ×10 while the mismatch
-//! does not shrink fast enough, until every pair agrees to
+//! does not shrink fast enough (the loop of the cold solve, its inner solves cut short while the
+//! seams are far apart), until every pair agrees to
 //! [`crate::assembly::SEAM_REL_TOLERANCE`]. Without limits, one solve of δ2 and the seams.
 //! The limits are checked and reported as by [`crate::assembly::flatten_assembly`]; a start
 //! that is missing, of the wrong size or not flip-free is flattened from scratch by it instead.
@@ -24,24 +25,15 @@ use flatcut_geom::DVec2;
 use flatcut_mesh::TriMesh;
 use flatcut_mesh::mating::MatingSeam;
 
-use crate::assembly::joint::{EdgePair, Joint};
-use crate::assembly::{AssemblyError, SEAM_REL_TOLERANCE, SEAM_REPORT_REL, flatten_assembly};
+use crate::assembly::joint::Joint;
+use crate::assembly::{
+    AssemblyError, GroupSolve, INITIAL_WEIGHT, SEAM_REL_TOLERANCE, SEAM_REPORT_REL, edge_pairs,
+    flatten_assembly,
+};
 use crate::limits::{self, BARRIER_WEIGHTS, Barrier, Limits, MARGIN_SHRINK, PENALTY_STIFFNESS};
-use crate::nonlinear::kernel::{IsoEnergy, RestTri, SymDirichlet, WithLimits};
+use crate::nonlinear::kernel::{RestTri, SymDirichlet, WithLimits};
 use crate::nonlinear::{ABS_DECREMENT_PER_AREA, mean_density, rest_frames};
-use crate::{Budget, FlattenError, FlattenInfo, FlattenParams, Flattening, Method, Timings};
-
-/// Outer augmented-Lagrangian iterations per solve.
-const MAX_OUTER: usize = 16;
-/// Initial penalty weight of the seam terms (relative to the δ2 density).
-const INITIAL_WEIGHT: f64 = 10.0;
-/// Weight growth when the mismatch shrank by less than [`REQUIRED_SHRINK`].
-const WEIGHT_GROWTH: f64 = 10.0;
-/// Factor by which one outer iteration must shrink the mismatch to count as progress.
-const REQUIRED_SHRINK: f64 = 0.25;
-/// Inner relative energy tolerance as a fraction of the caller's (the seam terms are a tiny
-/// part of the energy near the end).
-const INNER_REL_TIGHTENING: f64 = 1e-4;
+use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method, Timings};
 
 /// Flattens the pieces together as [`flatten_assembly`] does, starting from `starts` (one map
 /// per mesh, flip-free). Falls back to [`flatten_assembly`] when a start is unusable, the
@@ -77,7 +69,8 @@ pub fn flatten_assembly_from(
         }));
         x.extend_from_slice(s);
     }
-    let pairs = edge_pairs(meshes, seams, &offset);
+    let seam_refs: Vec<&MatingSeam> = seams.iter().collect();
+    let pairs = edge_pairs(meshes, &seam_refs, &offset);
     let fail = |source: FlattenError| AssemblyError::Piece { piece: 0, source };
     let joint = Joint::new(&rest, &pairs, x.len()).map_err(|reason| {
         fail(FlattenError::Solver {
@@ -90,10 +83,11 @@ pub fn flatten_assembly_from(
     }
     let started = Instant::now();
     let area: f64 = rest.iter().map(|r| r.area).sum();
-    let mut solve = WarmSolve {
+    let mut solve = GroupSolve {
         joint,
         params,
         abs: ABS_DECREMENT_PER_AREA * area,
+        iterations: 0,
         budget: params.stage_budget("seams", started),
     };
     solve.joint.weight = INITIAL_WEIGHT;
@@ -167,7 +161,7 @@ pub fn flatten_assembly_from(
 /// caller). From a start within the limits the penalty starts at its highest stiffness; from
 /// one beyond them it rises through every stiffness first, as from scratch.
 fn within_limits(
-    solve: &mut WarmSolve,
+    solve: &mut GroupSolve,
     rest: &[RestTri],
     mut x: Vec<DVec2>,
     l: Limits,
@@ -197,7 +191,7 @@ fn within_limits(
 /// δ2 optimised within the limits by the barrier stages, the seams kept equal; a stage whose
 /// result breaks a limit or the seams is not taken.
 fn optimise_within(
-    solve: &mut WarmSolve,
+    solve: &mut GroupSolve,
     rest: &[RestTri],
     mut x: Vec<DVec2>,
     l: Limits,
@@ -221,65 +215,6 @@ fn optimise_within(
         }
     }
     Ok(x)
-}
-
-/// The joint problem's Newton solves within the budget of the stage they belong to.
-struct WarmSolve<'a> {
-    joint: Joint<'a>,
-    params: &'a FlattenParams,
-    abs: f64,
-    budget: Budget,
-}
-
-impl WarmSolve<'_> {
-    /// Minimises `energy` with the seam terms from `x` until the seams agree (or stall, or the
-    /// stage's budget is spent).
-    fn run<E: IsoEnergy>(&mut self, energy: &E, mut x: Vec<DVec2>) -> Result<Vec<DVec2>, String> {
-        let mut viol = self.joint.max_mismatch(&x);
-        let rel = self.params.rel_tolerance * INNER_REL_TIGHTENING;
-        for outer in 0..MAX_OUTER {
-            if outer > 0 && viol <= SEAM_REL_TOLERANCE || self.budget.spent() {
-                break;
-            }
-            let (y, _) = self.joint.minimise(
-                energy,
-                &x,
-                self.params.max_iters,
-                rel,
-                self.abs,
-                &self.budget,
-            )?;
-            x = y;
-            self.joint.update_multipliers(&x);
-            let v = self.joint.max_mismatch(&x);
-            if v > REQUIRED_SHRINK * viol {
-                self.joint.weight *= WEIGHT_GROWTH;
-            }
-            viol = v;
-        }
-        Ok(x)
-    }
-}
-
-/// The corresponding edges of every seam, in the joint numbering (as the cold solve pairs them).
-fn edge_pairs(meshes: &[&TriMesh], seams: &[MatingSeam], offset: &[usize]) -> Vec<EdgePair> {
-    let mut out = Vec::new();
-    for s in seams {
-        let [a, b] = &s.sides;
-        let (ma, mb) = (meshes[a.piece], meshes[b.piece]);
-        for k in 0..a.vertices.len() - 1 {
-            let (a0, a1) = (a.vertices[k] as usize, a.vertices[k + 1] as usize);
-            let (b0, b1) = (b.vertices[k] as usize, b.vertices[k + 1] as usize);
-            let la = ma.positions[a0].distance(ma.positions[a1]);
-            let lb = mb.positions[b0].distance(mb.positions[b1]);
-            out.push(EdgePair {
-                a: [offset[a.piece] + a0, offset[a.piece] + a1],
-                b: [offset[b.piece] + b0, offset[b.piece] + b1],
-                l: 0.5 * (la + lb),
-            });
-        }
-    }
-    out
 }
 
 #[cfg(test)]

@@ -37,7 +37,7 @@ pub const SEAM_REPORT_REL: f64 = 1e-6;
 /// Outer augmented-Lagrangian iterations per solve.
 const MAX_OUTER: usize = 16;
 /// Initial penalty weight (relative to the δ2 density).
-const INITIAL_WEIGHT: f64 = 10.0;
+pub(crate) const INITIAL_WEIGHT: f64 = 10.0;
 /// Weight growth when the mismatch shrank by less than [`REQUIRED_SHRINK`].
 const WEIGHT_GROWTH: f64 = 10.0;
 /// Factor by which one outer iteration must shrink the mismatch to count as progress.
@@ -143,18 +143,22 @@ fn groups(n: usize, seams: &[MatingSeam]) -> Vec<Vec<usize>> {
 
 /// The Newton solves of the joined pieces, each run to seam convergence, within the budget of
 /// the stage they belong to (the seams, then the limits).
-struct GroupSolve<'a> {
-    joint: Joint<'a>,
-    params: &'a FlattenParams,
-    abs: f64,
-    iterations: usize,
-    budget: Budget,
+pub(crate) struct GroupSolve<'a> {
+    pub(crate) joint: Joint<'a>,
+    pub(crate) params: &'a FlattenParams,
+    pub(crate) abs: f64,
+    pub(crate) iterations: usize,
+    pub(crate) budget: Budget,
 }
 
 impl GroupSolve<'_> {
     /// Minimises `energy` with the seam terms from `x` until the seams agree (or stall, or the
     /// stage's budget is spent).
-    fn run<E: IsoEnergy>(&mut self, energy: &E, mut x: Vec<DVec2>) -> Result<Vec<DVec2>, String> {
+    pub(crate) fn run<E: IsoEnergy>(
+        &mut self,
+        energy: &E,
+        mut x: Vec<DVec2>,
+    ) -> Result<Vec<DVec2>, String> {
         let mut viol = self.joint.max_mismatch(&x);
         for outer in 0..MAX_OUTER {
             if outer > 0 && viol <= SEAM_REL_TOLERANCE || self.budget.spent() {
@@ -324,7 +328,11 @@ fn flatten_group(
 }
 
 /// The corresponding edges of every seam, in the joint numbering.
-fn edge_pairs(meshes: &[&TriMesh], seams: &[&MatingSeam], offset: &[usize]) -> Vec<EdgePair> {
+pub(crate) fn edge_pairs(
+    meshes: &[&TriMesh],
+    seams: &[&MatingSeam],
+    offset: &[usize],
+) -> Vec<EdgePair> {
     let mut out = Vec::new();
     for s in seams {
         let [a, b] = &s.sides;
