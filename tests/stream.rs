@@ -701,11 +701,16 @@ fn flatcut_sim_power_cycles_on_sigusr1() {
         }
         acc
     };
-    let moved = ask("G1 X5 F600\n?", ">\r\n");
-    assert!(
-        moved.contains("ok") && moved.contains("MPos:5.000,0.000,0.000"),
-        "{moved:?}"
-    );
+    // `?` is a realtime byte: the board answers it the moment it arrives, ahead of the line
+    // before it, so the move is confirmed by its `ok` and its end by polling the status.
+    assert!(ask("G1 X5 F600\n", "ok").contains("ok"));
+    let t0 = Instant::now();
+    let mut moved = ask("?", ">\r\n");
+    while !moved.contains("MPos:5.000,0.000,0.000") && t0.elapsed() < Duration::from_secs(5) {
+        std::thread::sleep(Duration::from_millis(50));
+        moved = ask("?", ">\r\n");
+    }
+    assert!(moved.contains("MPos:5.000,0.000,0.000"), "{moved:?}");
     assert!(ask("?", ">\r\n").contains("MPos:5.000,0.000,0.000"));
     let kill = |sig: &str| {
         let st = std::process::Command::new("kill")
