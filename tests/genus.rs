@@ -717,50 +717,9 @@ fn a_symmetric_plush_is_split_into_left_and_right_pairs() {
     args.extend(["--symmetry", "auto"]);
     let code = flatten(&body, dir.path(), &args).unwrap();
     assert_eq!(code, format!("{:?}", std::process::ExitCode::SUCCESS));
-    let side = |s: &str| -> Vec<Obj> {
-        (1..)
-            .map(|k| dir.path().join(format!("flat-plush-{k}{s}.obj")))
-            .take_while(|p| p.exists())
-            .map(|p| read_obj(&p))
-            .collect()
-    };
-    let (left, right) = (side("L"), side("R"));
-    assert!(
-        !left.is_empty() && left.len() == right.len(),
-        "{} / {}",
-        left.len(),
-        right.len()
-    );
+    let (left, right) = mirrored_pairs(dir.path(), "flat-plush");
     assert!(split_parts(dir.path(), "flat-plush").is_empty());
-    for (k, (l, r)) in left.iter().zip(&right).enumerate() {
-        let (gap, length) = mirrored_outline_gap(l, r);
-        assert!(
-            gap < 0.01,
-            "pair {}: outlines {gap} mm apart over {length} mm",
-            k + 1
-        );
-    }
-    let parts: Vec<&Obj> = left.iter().chain(&right).collect();
-    let whole = area3(&read_obj(&body));
-    let total: f64 = parts.iter().map(|p| area3(p)).sum();
-    assert!((total - whole).abs() < 2e-3 * whole, "{total} vs {whole}");
-    for (i, a) in parts.iter().enumerate() {
-        let (s, c) = measured_limits(a);
-        assert!(
-            s <= pct + 1e-6 && c <= pct + 1e-6,
-            "part {i}: {s} % / {c} %"
-        );
-        for (&u, &w) in &crate::darts::boundary_next(a) {
-            let sewn = parts.iter().any(|b| {
-                sewn_lengths(a, (u, w), b).is_some_and(|(la, lb)| (la - lb).abs() < SEWN_MM)
-            });
-            assert!(
-                sewn,
-                "part {i}: outline edge {} – {} is sewn to nothing",
-                a.v[u], a.v[w]
-            );
-        }
-    }
+    check_mirrored_parts(&left, &right, area3(&read_obj(&body)), pct);
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("flat.json")).unwrap())
             .unwrap();
