@@ -27,10 +27,10 @@ use flatcut_mesh::mating::MatingSeam;
 
 use crate::assembly::joint::Joint;
 use crate::assembly::{
-    AssemblyError, GroupSolve, INITIAL_WEIGHT, SEAM_REL_TOLERANCE, SEAM_REPORT_REL, edge_pairs,
-    flatten_assembly,
+    AssemblyError, GroupSolve, INITIAL_WEIGHT, SEAM_REL_TOLERANCE, edge_pairs, flatten_assembly,
+    group_warnings,
 };
-use crate::limits::{self, BARRIER_WEIGHTS, Barrier, Limits, MARGIN_SHRINK, PENALTY_STIFFNESS};
+use crate::limits::{BARRIER_WEIGHTS, Barrier, Limits, MARGIN_SHRINK, PENALTY_STIFFNESS};
 use crate::nonlinear::kernel::{RestTri, SymDirichlet, WithLimits};
 use crate::nonlinear::{ABS_DECREMENT_PER_AREA, mean_density, rest_frames};
 use crate::{FlattenError, FlattenInfo, FlattenParams, Flattening, Method, Timings};
@@ -127,20 +127,7 @@ pub fn flatten_assembly_from(
         .enumerate()
         .map(|(p, m)| {
             let uv = x[offset[p]..offset[p] + m.positions.len()].to_vec();
-            let mut warnings = Vec::new();
-            if let Some(l) = limits {
-                warnings.extend(limits::violations(m, &uv, l));
-            }
-            if mismatch > SEAM_REPORT_REL {
-                warnings.push(format!(
-                    "mating seams of this piece's group agree only to {mismatch:.2e} of an edge's length"
-                ));
-            }
-            if timed_out {
-                warnings.push(
-                    "the joint solve of this piece's group stopped at the time limit: the map is flip-free but not fully converged".into(),
-                );
-            }
+            let warnings = group_warnings(m, &uv, limits, mismatch, timed_out);
             let frames = rest_frames(m).unwrap_or_default();
             Flattening {
                 info: FlattenInfo {
@@ -220,6 +207,7 @@ fn optimise_within(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::assembly::SEAM_REPORT_REL;
     use crate::testmesh::spherical_cap;
     use crate::{flatten, nonlinear::kernel::singular_values};
     use flatcut_mesh::mating::coincident_seams;

@@ -299,19 +299,7 @@ fn flatten_group(
         let uv = x[offset[p]..offset[p] + n].to_vec();
         let frames = rest_frames(meshes[p]).unwrap_or_default();
         let mut warnings = own.warnings;
-        if let Some(l) = limits {
-            warnings.extend(limits::violations(meshes[p], &uv, l));
-        }
-        if mismatch > SEAM_REPORT_REL {
-            warnings.push(format!(
-                "mating seams of this piece's group agree only to {mismatch:.2e} of an edge's length"
-            ));
-        }
-        if timed_out {
-            warnings.push(
-                "the joint solve of this piece's group stopped at the time limit: the map is flip-free but not fully converged".into(),
-            );
-        }
+        warnings.extend(group_warnings(meshes[p], &uv, limits, mismatch, timed_out));
         let stages: Vec<StageCount> = own.stages.into_iter().chain(group_stages.clone()).collect();
         out.push(Flattening {
             info: FlattenInfo {
@@ -325,6 +313,33 @@ fn flatten_group(
         });
     }
     Ok(out)
+}
+
+/// The warnings a piece of a group flattened together carries: the faces beyond `limits`, the
+/// group's seams agreeing only to `mismatch` (relative) when above [`SEAM_REPORT_REL`], and a
+/// joint solve stopped at its time limit.
+pub(crate) fn group_warnings(
+    mesh: &TriMesh,
+    uv: &[DVec2],
+    limits: Option<Limits>,
+    mismatch: f64,
+    timed_out: bool,
+) -> Vec<String> {
+    let mut warnings = Vec::new();
+    if let Some(l) = limits {
+        warnings.extend(limits::violations(mesh, uv, l));
+    }
+    if mismatch > SEAM_REPORT_REL {
+        warnings.push(format!(
+            "mating seams of this piece's group agree only to {mismatch:.2e} of an edge's length"
+        ));
+    }
+    if timed_out {
+        warnings.push(
+            "the joint solve of this piece's group stopped at the time limit: the map is flip-free but not fully converged".into(),
+        );
+    }
+    warnings
 }
 
 /// The corresponding edges of every seam, in the joint numbering.
