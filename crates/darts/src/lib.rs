@@ -366,17 +366,20 @@ pub enum DartError {
         /// Near that dart (3D, mm).
         at: DVec3,
     },
-    /// The parts of a split, each within the limits, still include one whose flat outline
-    /// crosses itself, and no further cut the split may make undoes it.
+    /// The parts of a split still include one whose flat outline crosses itself, and no further
+    /// cut the split may make undoes it (its pieces or time ran out, or the part beyond the limits
+    /// it would have cut next has no cut left).
     #[error(
-        "split into {parts} parts, one still overlaps itself flat near ({:.2}, {:.2}, {:.2}): no pattern can be cut from it (it needs more parts or more time)",
-        at.x, at.y, at.z
+        "split into {parts} parts, one still overlaps itself flat near ({:.2}, {:.2}, {:.2}){}: no pattern can be cut from it (it needs more parts or more time)",
+        at.x, at.y, at.z, beyond_note(*excess)
     )]
     SplitOverlap {
         /// The number of parts of the split.
         parts: usize,
         /// A point near the overlap (3D, mm).
         at: DVec3,
+        /// The largest limit excess over the parts' faces (log strain; negative within them).
+        excess: f64,
     },
     /// A flat piece (not split) whose outline crosses itself: it overlaps itself flat, however
     /// well each face keeps its limits.
@@ -391,6 +394,19 @@ pub enum DartError {
     /// A state the algorithm should never reach (a bug); the message says which.
     #[error("internal error (please report): {0}")]
     Internal(String),
+}
+
+/// What a split that ends on an overlap says of its limits: nothing when every face is within
+/// them, else how far beyond them it stopped.
+fn beyond_note(excess: f64) -> String {
+    if excess > 0.0 {
+        format!(
+            ", and it stopped {:.2} % beyond the limits",
+            excess_pct(excess)
+        )
+    } else {
+        String::new()
+    }
 }
 
 /// A log-strain excess as a percentage of stretch.

@@ -6,7 +6,7 @@
 //! faked.
 
 use flatcut_darts::limits::Band;
-use flatcut_darts::split::{SplitOptions, split};
+use flatcut_darts::split::{SplitOptions, split, split_surface};
 use flatcut_flatten::testmesh::{cylinder_patch, saddle, spherical_cap};
 use flatcut_flatten::{FlattenParams, Method, flatten};
 use flatcut_geom::{DVec2, DVec3};
@@ -473,4 +473,65 @@ fn a_merge_that_would_leave_a_thin_waist_is_refused() {
         area += p.area();
     }
     assert!((area - mesh.area()).abs() < 1e-6 * mesh.area());
+}
+
+/// A torus of radii `r1` (to the tube's centre) and `r2` (the tube's), `n` × `m` quads of two
+/// triangles, facing out.
+fn torus(r1: f64, r2: f64, n: usize, m: usize) -> TriMesh {
+    use std::f64::consts::TAU;
+    let mut positions = Vec::new();
+    for i in 0..n {
+        for j in 0..m {
+            let (u, v) = (TAU * i as f64 / n as f64, TAU * j as f64 / m as f64);
+            let r = r1 + r2 * v.cos();
+            positions.push(DVec3::new(r * u.cos(), r * u.sin(), r2 * v.sin()));
+        }
+    }
+    let id = |i: usize, j: usize| ((i % n) * m + j % m) as u32;
+    let mut triangles = Vec::new();
+    for i in 0..n {
+        for j in 0..m {
+            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    TriMesh::new(positions, triangles)
+}
+
+/// Where the excess is spread, the worst face is one of many and a chord through it or through
+/// the piece's middle passes beside most of them: a fat ring (tube radius half the ring's) at
+/// ±10 % opens into a disk beyond the limits all along its inner equator, and the chords through
+/// the middle of that excess part it in few pieces. Through the worst face and the middle alone
+/// the same ring came in 10 parts.
+#[test]
+fn spread_excess_is_cut_through_its_middle_into_few_parts() {
+    let mesh = torus(50.0, 25.0, 48, 24);
+    let pct = 10.0;
+    let s = split_surface(
+        &mesh,
+        &FlattenParams::new(Method::Isometric),
+        &options(pct, 16),
+    )
+    .unwrap();
+    assert!(s.feasible, "excess {}", s.excess);
+    assert!(s.pieces.len() <= 5, "{} parts", s.pieces.len());
+    let mut area = 0.0;
+    for (k, p) in s.pieces.iter().enumerate() {
+        check_disk(p).unwrap();
+        let x = p.flat.as_deref().unwrap();
+        for t in 0..p.triangles.len() {
+            let (s1, s2, det) = stretches(p, x, t);
+            assert!(
+                det > 0.0 && s1 <= 1.0 + pct / 100.0 + 1e-9 && s2 >= 1.0 - pct / 100.0 - 1e-9,
+                "part {k} face {t}: {s1} {s2}"
+            );
+        }
+        area += p.area();
+    }
+    // The parts tile the surface (to the tolerance of the command-line torus test).
+    assert!(
+        (area - mesh.area()).abs() < 1e-5 * mesh.area(),
+        "{area} mm² of parts, {} mm² of surface",
+        mesh.area()
+    );
 }
