@@ -28,6 +28,7 @@ CGAL = [
     ("eight", 200, "figure eight, genus 2"),
     ("bunny00", 200, "Stanford bunny, closed scan, genus 0"),
     ("sphere", 200, "sphere (a ball), genus 0"),
+    ("refined_elephant", 300, "elephant, refined closed scan (88,928 faces), trunk joined: genus 3"),
 ]
 
 

@@ -54,7 +54,9 @@
 //! themselves rank last. A split that cannot undo an overlap within its pieces or time is an
 //! error ([`DartError::SplitOverlap`]), never a result.
 //!
-//! The loop stops early on its time limit (returning the best split so far, `timed_out`) and
+//! The loop stops early on its time limit (returning the best split so far, `timed_out`; once
+//! every part is within the limits, the merging of neighbours stops there too, the parts then
+//! all valid but perhaps more than needed) and
 //! on the flattening hooks' cancel flag (an error; the candidates not yet judged are skipped);
 //! it reports its progress through them.
 //!
@@ -159,7 +161,8 @@ pub struct Split {
     pub feasible: bool,
     /// Where the largest excess is (3D).
     pub worst_3d: DVec3,
-    /// The time limit ended the search before the limits were met or the pieces ran out.
+    /// The time limit ended the search before the limits were met or the pieces ran out, or
+    /// (every piece within the limits) before neighbours that could be sewn back were merged.
     pub timed_out: bool,
 }
 
@@ -243,8 +246,10 @@ fn split_on(
     let started = std::time::Instant::now();
     let cpu = crate::clock::CpuClock::start();
     let mut timed_out = false;
-    // Whether neighbours were tried for merging, and whether any cut was sewn back.
-    let (mut merged, mut resewn) = (false, false);
+    let out_of_time = || opts.time_limit.is_some_and(|t| cpu.elapsed() >= t);
+    // Whether neighbours were tried for merging, whether any cut was sewn back, and whether the
+    // time limit left neighbours unmerged.
+    let (mut merged, mut resewn, mut merge_cut_short) = (false, false, false);
     // New parts are judged flattened on their own with the limits held; the parts are flattened
     // together (seams equal) only when that says they are done, and split further if the seams
     // then push one beyond the limits.
@@ -261,7 +266,7 @@ fn split_on(
             energy: excess,
             elapsed: started.elapsed(),
         });
-        timed_out |= opts.time_limit.is_some_and(|t| cpu.elapsed() >= t);
+        timed_out |= out_of_time();
         let full = pieces.len() >= opts.max_pieces.max(1) || timed_out;
         let done = excess <= 0.0 && crossing.is_none();
         if (done || full) && !together {
@@ -303,9 +308,20 @@ fn split_on(
             // The fewest pieces: neighbours whose union lies within the limits are sewn back.
             if excess <= 0.0 && !merged {
                 merged = true;
-                if let Some(fewer) =
-                    merge_within(&pieces, &held, opts.band, opts.seam_allowance_mm, params)?
-                {
+                let (mw, short) = if out_of_time() {
+                    (None, true)
+                } else {
+                    merge_within(
+                        &pieces,
+                        &held,
+                        opts.band,
+                        opts.seam_allowance_mm,
+                        params,
+                        &out_of_time,
+                    )?
+                };
+                merge_cut_short = short;
+                if let Some(fewer) = mw {
                     pieces = fewer;
                     resewn = true;
                     continue;
@@ -324,7 +340,7 @@ fn split_on(
                 cuts,
                 excess,
                 feasible: excess <= 0.0,
-                timed_out: timed_out && excess > 0.0,
+                timed_out: (timed_out && excess > 0.0) || merge_cut_short,
             });
         };
         resewn |= halves.closed_slit;
@@ -346,22 +362,35 @@ fn split_on(
 /// limits held (`held`), lies within `band` and does not overlap itself ([`merge`]): in rounds,
 /// the pairs that share the longest seams first, each part in one merge a round. The result is
 /// flattened together and kept only when every piece is then within the limits without
-/// overlap; `None` when no pair merges or the joint solve undoes them.
+/// overlap; `None` when no pair merges or the joint solve undoes them. Once `out_of_time`,
+/// no pair is judged further and the merges made so far are the result (the flag returned).
 fn merge_within(
     pieces: &[TriMesh],
     held: &FlattenParams,
     band: Band,
     allowance_mm: f64,
     params: &FlattenParams,
-) -> Result<Option<Vec<TriMesh>>, DartError> {
+    out_of_time: &(dyn Fn() -> bool + Sync),
+) -> Result<(Option<Vec<TriMesh>>, bool), DartError> {
     let alone = held
         .clone()
         .with_hooks(flatcut_flatten::FlattenHooks::default());
     let mut cur = pieces.to_vec();
-    let mut any = false;
+    // Every part's identity (a merged part is a new one), and the judgement of every pair of
+    // parts judged so far: a pair of the same two parts is judged the same way in a later
+    // round, so it is judged once.
+    let mut ids: Vec<usize> = (0..cur.len()).collect();
+    let mut next_id = cur.len();
+    let mut judged_before: std::collections::BTreeMap<(usize, usize), Option<TriMesh>> =
+        Default::default();
+    let (mut any, mut cut_short) = (false, false);
     loop {
         if params.hooks.cancelled() {
             return Err(cancelled());
+        }
+        if out_of_time() {
+            cut_short = true;
+            break;
         }
         let refs: Vec<&TriMesh> = cur.iter().collect();
         let mut shared: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
@@ -374,50 +403,88 @@ fn merge_within(
         }
         let mut pairs: Vec<((usize, usize), f64)> = shared.into_iter().collect();
         pairs.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
-        // Judged side by side; taken in the pairs' order.
-        let judged: Vec<Option<TriMesh>> = pairs
+        // The pairs not judged before, judged side by side; taken in the pairs' order.
+        let fresh: Vec<(usize, usize)> = pairs
+            .iter()
+            .map(|&(ij, _)| ij)
+            .filter(|&(i, j)| !judged_before.contains_key(&(ids[i], ids[j])))
+            .collect();
+        // `None`: not judged (out of time).
+        let new: Vec<Option<Option<TriMesh>>> = fresh
             .par_iter()
-            .map(|&((i, j), _)| {
-                if params.hooks.cancelled() {
+            .map(|&(i, j)| {
+                if params.hooks.cancelled() || out_of_time() {
                     return None;
                 }
-                let mut m = merge(&cur[i], &cur[j])?;
-                m.flat = Some(flatcut_flatten::flatten(&m, &alone).ok()?.uv);
-                let (_, e, _) = worst(std::slice::from_ref(&m), band).ok()?;
-                let x = m.flat.as_deref()?;
-                let wide = narrowest_neck(&m, x)? >= merged_neck(m.area(), allowance_mm);
-                (e <= 0.0 && wide && matches!(outline_crossing(&m, x), Ok(None))).then_some(m)
+                Some(merged_within(&cur[i], &cur[j], &alone, band, allowance_mm))
             })
             .collect();
+        if params.hooks.cancelled() {
+            return Err(cancelled());
+        }
+        for ((i, j), m) in fresh.into_iter().zip(new) {
+            match m {
+                Some(m) => {
+                    judged_before.insert((ids[i], ids[j]), m);
+                }
+                None => cut_short = true,
+            }
+        }
         let mut used = vec![false; cur.len()];
         let mut gone = vec![false; cur.len()];
         let mut next = cur.clone();
-        for (&((i, j), _), m) in pairs.iter().zip(judged) {
-            let Some(m) = m else { continue };
+        for &((i, j), _) in &pairs {
+            let Some(Some(m)) = judged_before.get(&(ids[i], ids[j])) else {
+                continue;
+            };
             if used[i] || used[j] {
                 continue;
             }
             (used[i], used[j], gone[j]) = (true, true, true);
-            next[i] = m;
+            next[i] = m.clone();
+            ids[i] = next_id;
+            next_id += 1;
         }
         if !gone.iter().any(|&g| g) {
             break;
         }
         any = true;
-        cur = next
-            .into_iter()
-            .zip(gone)
-            .filter_map(|(p, g)| (!g).then_some(p))
-            .collect();
+        cur = kept(next, &gone);
+        ids = kept(ids, &gone);
     }
     if !any || flatten_together(&mut cur, held).is_err() {
-        return Ok(None);
+        return Ok((None, cut_short));
     }
     let (_, e, _) = worst(&cur, band)?;
     if e > 0.0 || first_crossing(&cur)?.is_some() {
-        return Ok(None);
+        return Ok((None, cut_short));
     }
-    Ok(Some(cur))
+    Ok((Some(cur), cut_short))
+}
+
+/// `a` and `b` sewn into one part, flattened alone with `alone` (the limits held), when it lies
+/// within `band`, has no neck too narrow for `allowance_mm` and does not overlap itself flat.
+fn merged_within(
+    a: &TriMesh,
+    b: &TriMesh,
+    alone: &FlattenParams,
+    band: Band,
+    allowance_mm: f64,
+) -> Option<TriMesh> {
+    let mut m = merge(a, b)?;
+    m.flat = Some(flatcut_flatten::flatten(&m, alone).ok()?.uv);
+    let (_, e, _) = worst(std::slice::from_ref(&m), band).ok()?;
+    let x = m.flat.as_deref()?;
+    let wide = narrowest_neck(&m, x)? >= merged_neck(m.area(), allowance_mm);
+    (e <= 0.0 && wide && matches!(outline_crossing(&m, x), Ok(None))).then_some(m)
+}
+
+/// The items of `v` whose `gone` flag is not set, in order.
+fn kept<T>(v: Vec<T>, gone: &[bool]) -> Vec<T> {
+    v.into_iter()
+        .zip(gone)
+        .filter_map(|(p, &g)| (!g).then_some(p))
+        .collect()
 }
 
 /// The narrowest neck a merged part may have, as a share of the square root of its area: two
@@ -941,4 +1008,68 @@ fn polyline_length(p: &[DVec3]) -> f64 {
 
 fn centroid(mesh: &TriMesh, t: usize) -> DVec3 {
     mesh.corners(t).iter().sum::<DVec3>() / 3.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flatcut_flatten::Method;
+
+    /// Four flat strips 10 mm × 40 mm side by side (a 40 mm square cut along x = 10, 20, 30),
+    /// each mapped flat as it lies: every neighbour pair merges within any limits.
+    fn strips() -> Vec<TriMesh> {
+        (0..4)
+            .map(|k| {
+                let mut p = Vec::new();
+                for j in 0..=4 {
+                    for i in 0..=1 {
+                        p.push(DVec3::new(10.0 * (k + i) as f64, 10.0 * j as f64, 0.0));
+                    }
+                }
+                let t = (0..4u32)
+                    .flat_map(|j| {
+                        let (a, b, c, d) = (2 * j, 2 * j + 1, 2 * j + 3, 2 * j + 2);
+                        [[a, b, c], [a, c, d]]
+                    })
+                    .collect();
+                let mut m = TriMesh::new(p, t);
+                m.flat = Some(m.positions.iter().map(|q| DVec2::new(q.x, q.y)).collect());
+                m
+            })
+            .collect()
+    }
+
+    fn limits() -> (FlattenParams, Band) {
+        let band = Band::from_pct(Some(10.0), Some(10.0));
+        let opts = SplitOptions {
+            band,
+            max_pieces: 8,
+            keep_out: None,
+            visibility: Visibility::default(),
+            time_limit: None,
+            seam_allowance_mm: 0.0,
+        };
+        let params = FlattenParams::new(Method::Isometric);
+        (held_params(&params, &opts), band)
+    }
+
+    #[test]
+    fn neighbours_within_the_limits_are_merged_into_one_part() {
+        let (held, band) = limits();
+        let (merged, cut_short) =
+            merge_within(&strips(), &held, band, 0.0, &held, &|| false).unwrap();
+        assert!(!cut_short);
+        let merged = merged.expect("the strips merge");
+        assert_eq!(merged.len(), 1);
+        assert!((merged[0].area() - 1600.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn merging_stops_when_the_time_is_out_and_says_so() {
+        let (held, band) = limits();
+        let (merged, cut_short) =
+            merge_within(&strips(), &held, band, 0.0, &held, &|| true).unwrap();
+        assert!(cut_short);
+        assert!(merged.is_none());
+    }
 }

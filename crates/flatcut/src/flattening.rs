@@ -212,7 +212,33 @@ fn flatten_one(
     let isotropic: Vec<bool> = (0..asm.pieces.len())
         .map(|k| joined[k] || closed.contains_key(&k) || materials[k].is_none())
         .collect();
-    let mut flats = flatten_isotropic(design, &asm, &isotropic, params)?.into_iter();
+    // A closed piece's stand-in is split from the whole, never used as it is: it is flattened
+    // without the limits (one solve, where holding them on a surface that is no disk's shape
+    // took minutes on a 90k-face scan for a map the split throws away).
+    let stand_ins: Vec<bool> = (0..asm.pieces.len())
+        .map(|k| closed.contains_key(&k) && !joined[k])
+        .collect();
+    let others: Vec<bool> = (0..asm.pieces.len())
+        .map(|k| isotropic[k] && !stand_ins[k])
+        .collect();
+    let mut solved = flatten_isotropic(design, &asm, &others, params)?.into_iter();
+    let free = params
+        .clone()
+        .with_max_stretch_pct(None)
+        .with_max_compress_pct(None);
+    let mut freed = flatten_isotropic(design, &asm, &stand_ins, &free)?.into_iter();
+    let mut flats = (0..asm.pieces.len())
+        .filter(|&k| isotropic[k])
+        .map(|k| {
+            let f = if stand_ins[k] {
+                freed.next()
+            } else {
+                solved.next()
+            };
+            f.ok_or_else(|| unsolved(&asm.pieces[k].def.name))
+        })
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter();
     let mut notches: Vec<Vec<FlatNotch>> = asm
         .pieces
         .iter()

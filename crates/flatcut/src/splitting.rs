@@ -264,7 +264,13 @@ pub(crate) fn into_parts(
     let count = stage.count();
     // The stand-in's own warnings do not carry over to the parts.
     let mut timed_out_warning = None;
-    if s.timed_out {
+    if s.timed_out && s.feasible {
+        // Every part within the limits; the time ran out before all could be tried sewn back.
+        timed_out_warning = Some(format!(
+            "{name}: the split's time limit ended the merging of parts at {} parts, every one within the limits; fewer might do",
+            s.pieces.len()
+        ));
+    } else if s.timed_out {
         // The best split found in the time: written, its excess left to the report's check.
         timed_out_warning = Some(format!(
             "{name}: the split's time limit ended the search at {} parts, {:.2} % beyond the limits near ({:.1}, {:.1}, {:.1}); this is the best split found",
