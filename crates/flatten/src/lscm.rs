@@ -17,10 +17,11 @@ use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
 use crate::ops::{QuadraticBuilder, corner_cotans, used_mask, uv_area};
-use crate::ordering::Graph;
+use crate::ordering::{Graph, shared_dissection};
 use crate::sparse::Ordering;
 use crate::{FlattenError, FlattenInfo, Flattening, Method, Pin, Timings};
-use std::time::Instant;
+use rayon::prelude::*;
+use std::time::{Duration, Instant};
 
 /// Solves LSCM on the disk `mesh` (topology from `check_disk`) with the (validated) `pins`.
 pub fn lscm(mesh: &TriMesh, topo: &Topology, pins: &[Pin]) -> Result<Flattening, FlattenError> {
@@ -113,13 +114,69 @@ fn solve_pinned_timed(
         fixed[2 * v as usize] = true;
         fixed[2 * v as usize + 1] = true;
     }
-    let cot = corner_cotans(&mesh.positions, &mesh.triangles);
-    let mut q = QuadraticBuilder::new(&fixed, 6 * mesh.triangles.len()).dofs_per_vertex(2);
-    if Ordering::for_nodes(n) == Ordering::NestedDissection {
-        // The mesh's graph, pins included: the Newton solve this map starts orders the same
-        // graph, and reuses this order.
-        q = q.vertex_graph(Graph::of_triangles(n, &mesh.triangles));
+    // The order depends on the mesh's graph alone: it is made on a thread of its own while the
+    // matrix is assembled on this one (its time beyond the assembly's is the ordering's). Not
+    // the other way round, nor both on rayon's threads: the assembly's buffers, freed before the
+    // Newton solve a start map leads to, would then be held in another thread's heap, which
+    // that solve does not reuse (34 MB more at the peak of a million-face isometric map).
+    let dissect = || {
+        (Ordering::for_nodes(n) == Ordering::NestedDissection).then(|| {
+            let started = Instant::now();
+            // The mesh's graph, pins included: the Newton solve this map starts orders the
+            // same graph, and reuses this order.
+            let order = shared_dissection(Graph::of_triangles(n, &mesh.triangles));
+            (order, started.elapsed())
+        })
+    };
+    let assemble = || {
+        let started = Instant::now();
+        let q = QuadraticBuilder::new(&fixed, 6 * mesh.triangles.len()).dofs_per_vertex(2);
+        (conformal_terms(q, mesh, topo), started.elapsed())
+    };
+    let (order, (mut q, assembling)) = std::thread::scope(|s| {
+        let order = s.spawn(dissect);
+        let q = assemble();
+        // A panic there is a bug, carried on here as if it were this thread's.
+        let order = order
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e));
+        (order, q)
+    });
+    let mut overhang = Duration::ZERO;
+    if let Some((order, ordering)) = order {
+        q = q.vertex_order(order);
+        overhang = ordering.saturating_sub(assembling);
     }
+    let sys = q.build("lscm")?;
+    let built = started.elapsed();
+    // The map's vector after the factorisation, the memory peak of a large map.
+    let mut x = vec![0.0; 2 * n];
+    for &(v, p) in hard {
+        x[2 * v as usize] = p.x;
+        x[2 * v as usize + 1] = p.y;
+    }
+    let mut fields = vec![x];
+    sys.solve(&mut fields, None)?;
+    let x = &fields[0];
+    let solver = sys.timings();
+    // The builder's own time: what the solver did not account for while building, but for
+    // the ordering's overhang.
+    let timings = Timings {
+        assembly: built.saturating_sub(solver.ordering + solver.factorisation + overhang),
+        ordering: solver.ordering + overhang,
+        ..solver
+    };
+    Ok((
+        (0..n).map(|v| DVec2::new(x[2 * v], x[2 * v + 1])).collect(),
+        timings,
+    ))
+}
+
+/// Adds the conformal energy of `mesh` to `q` (u and v of vertex `v` are dofs 2v and 2v + 1):
+/// the cotangent Dirichlet energy of both coordinates and minus the signed area, which the
+/// boundary loops of `topo` give alone (the interior edges' contributions cancel exactly).
+fn conformal_terms(mut q: QuadraticBuilder, mesh: &TriMesh, topo: &Topology) -> QuadraticBuilder {
+    let cot = corner_cotans(&mesh.positions, &mesh.triangles);
     for (tri, c) in mesh.triangles.iter().zip(&cot) {
         for k in 0..3 {
             let (a, b) = (tri[(k + 1) % 3] as usize, tri[(k + 2) % 3] as usize);
@@ -138,39 +195,31 @@ fn solve_pinned_timed(
             q.add(2 * b, 2 * a + 1, 0.5);
         }
     }
-    let sys = q.build("lscm")?;
-    let built = started.elapsed();
-    // The map's vector after the factorisation, the memory peak of a large map.
-    let mut x = vec![0.0; 2 * n];
-    for &(v, p) in hard {
-        x[2 * v as usize] = p.x;
-        x[2 * v as usize + 1] = p.y;
-    }
-    let mut fields = vec![x];
-    sys.solve(&mut fields, None)?;
-    let x = &fields[0];
-    let solver = sys.timings();
-    // The builder's own time: what the solver did not account for while building.
-    let timings = Timings {
-        assembly: built.saturating_sub(solver.ordering + solver.factorisation),
-        ..solver
-    };
-    Ok((
-        (0..n).map(|v| DVec2::new(x[2 * v], x[2 * v + 1])).collect(),
-        timings,
-    ))
+    q
 }
 
-/// `Σ_T A_T (½‖J‖² − det J) = Σ_T ½ A_T (σ1 − σ2)²` of the map `uv`.
+/// Triangles per block of the energy's parallel sum: fixed, so the partial sums, and the
+/// total's bits, are the same with any number of threads.
+const ENERGY_BLOCK: usize = 4096;
+
+/// `Σ_T A_T (½‖J‖² − det J) = Σ_T ½ A_T (σ1 − σ2)²` of the map `uv`: summed block by block in
+/// parallel, the blocks' sums added in order.
 pub fn conformal_energy(mesh: &TriMesh, uv: &[DVec2]) -> f64 {
-    (0..mesh.triangles.len())
-        .filter_map(|t| {
-            let tri = mesh.triangles[t];
-            let d = flatcut_mesh::face_distortion(mesh.corners(t), tri.map(|v| uv[v as usize]))?;
-            let s2 = if d.det < 0.0 { -d.sigma2 } else { d.sigma2 };
-            Some(0.5 * mesh.triangle_area(t) * (d.sigma1 - s2).powi(2))
+    let term = |t: usize| {
+        let tri = mesh.triangles[t];
+        let d = flatcut_mesh::face_distortion(mesh.corners(t), tri.map(|v| uv[v as usize]))?;
+        let s2 = if d.det < 0.0 { -d.sigma2 } else { d.sigma2 };
+        Some(0.5 * mesh.triangle_area(t) * (d.sigma1 - s2).powi(2))
+    };
+    let blocks = mesh.triangles.len().div_ceil(ENERGY_BLOCK);
+    let partial: Vec<f64> = (0..blocks)
+        .into_par_iter()
+        .map(|b| {
+            let end = ((b + 1) * ENERGY_BLOCK).min(mesh.triangles.len());
+            (b * ENERGY_BLOCK..end).filter_map(term).sum()
         })
-        .sum()
+        .collect();
+    partial.iter().sum()
 }
 
 /// Two boundary vertices far apart (the double sweep: the farthest from the first boundary

@@ -8,6 +8,7 @@ use flatcut_mesh::{Topology, TriMesh};
 
 use crate::FlattenError;
 use crate::sparse::{SpdSolver, SymPattern, SymTriplets};
+use rayon::prelude::*;
 
 /// Interior angle at each corner of each triangle (radians), corner `k` at `triangles[t][k]`.
 pub fn corner_angles(mesh: &TriMesh) -> Vec<[f64; 3]> {
@@ -104,10 +105,10 @@ pub fn first_flip(triangles: &[[u32; 3]], uv: &[DVec2]) -> Option<usize> {
     })
 }
 
-/// Number of triangles whose image in `uv` is flipped or degenerate.
+/// Number of triangles whose image in `uv` is flipped or degenerate (counted in parallel).
 pub fn count_flips(triangles: &[[u32; 3]], uv: &[DVec2]) -> usize {
     triangles
-        .iter()
+        .par_iter()
         .filter(|t| {
             let o = orient2(uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]);
             o.is_nan() || o <= 0.0
@@ -149,8 +150,8 @@ pub struct QuadraticBuilder {
     /// Consecutive dofs that belong to one mesh vertex (1, or 2 for u and v), for the
     /// fill-reducing ordering.
     dofs_per_vertex: u32,
-    /// The vertex graph to order, when given ([`QuadraticBuilder::vertex_graph`]).
-    vertex_graph: Option<crate::ordering::Graph>,
+    /// The order of the vertices, when given ([`QuadraticBuilder::vertex_order`]).
+    vertex_order: Option<std::sync::Arc<crate::ordering::Dissected>>,
 }
 
 impl QuadraticBuilder {
@@ -173,7 +174,7 @@ impl QuadraticBuilder {
             coupling: Vec::new(),
             triplets,
             dofs_per_vertex: 1,
-            vertex_graph: None,
+            vertex_order: None,
         }
     }
 
@@ -186,11 +187,11 @@ impl QuadraticBuilder {
         self
     }
 
-    /// Orders the vertices by the mesh's vertex graph `g` rather than by the graph of the free
-    /// unknowns ([`crate::sparse::SymPattern::with_node_graph`]): LSCM then shares its ordering
-    /// with the Newton solve it starts.
-    pub fn vertex_graph(mut self, g: crate::ordering::Graph) -> Self {
-        self.vertex_graph = Some(g);
+    /// Orders the vertices by `d`, the nested dissection of the mesh's vertex graph, rather than
+    /// by the graph of the free unknowns ([`crate::sparse::SymPattern::with_node_order`]): LSCM
+    /// then shares its ordering with the Newton solve it starts.
+    pub fn vertex_order(mut self, d: std::sync::Arc<crate::ordering::Dissected>) -> Self {
+        self.vertex_order = Some(d);
         self
     }
 
@@ -227,8 +228,8 @@ impl QuadraticBuilder {
         let node_of = self.free.iter().map(|&d| d / k).collect();
         let (pattern, values) = SymPattern::compress(self.triplets, stage)?;
         let mut pattern = pattern.with_nodes(node_of, n_vertices)?;
-        if let Some(g) = self.vertex_graph {
-            pattern = pattern.with_node_graph(g)?;
+        if let Some(d) = self.vertex_order {
+            pattern = pattern.with_node_order(d)?;
         }
         let pattern = if k > 1 { pattern.by_field() } else { pattern };
         let mut solver = SpdSolver::new(&pattern, stage)?;

@@ -14,19 +14,22 @@
 //!
 //! Written here (not taken from a library) because faer 0.24 ships only AMD/COLAMD, and the Rust
 //! bindings of METIS compile its C sources, which this pure-Rust crate does not take on; the
-//! algorithm is ~250 lines. It is sequential and uses no hashing,
-//! so the ordering, and with it every bit of every factorisation, is the same on every run.
+//! algorithm is ~250 lines. It uses no hashing, and the split of a region depends on its nodes
+//! alone, so the halves of large regions are ordered side by side on rayon's threads
+//! ([`PARALLEL_FROM`]) and the ordering, and with it every bit of every factorisation, is the
+//! same on every run with any number of threads.
 //!
 //! The ordering works on a quotient graph: unknowns that belong to one mesh vertex (its u and v
 //! coordinates) form one node, so the graph is the mesh's vertex graph, half or a quarter the
 //! size of the matrix graph, and the unknowns of a node are eliminated together ([`expand`]), or,
-//! where the matrix couples them at few nodes only (LSCM's u and v), field by field
-//! ([`expand_by_field`]).
+//! where the matrix couples them at few nodes only (LSCM's u and v), field by field within each
+//! leaf and separator of the dissection ([`expand_by_block`]).
 //!
 //! The order depends on the vertex graph alone, so a map orders it once: LSCM orders the mesh's
 //! graph ([`Graph::of_triangles`], its pins included) rather than the graph of its free
-//! unknowns, and the Newton solve it starts, whose matrix has that graph, gets the same order
-//! back from [`shared_dissection`] (about 2 s of CPU each time at a million faces).
+//! unknowns, while it assembles its matrix, and the Newton solve it starts, whose matrix has
+//! that graph, gets the same order back from [`shared_dissection`] (about 2 s of CPU each time
+//! at a million faces).
 
 /// Regions of at most this many nodes are not dissected further: their fill is bounded by a
 /// dense block of this size, and splitting them would cost more than it saves.
@@ -149,11 +152,35 @@ struct Dissection<'g> {
     /// Index of each node within the leaf being ordered (scratch of [`Self::order_leaf`]).
     local: Vec<u32>,
     next_id: u32,
+    /// The position in the whole order of the first entry of the slice this dissection writes.
+    base: usize,
+    /// The first positions of the leaves and separators placed ([`Dissected::groups`]).
+    groups: Vec<u32>,
 }
 
 const UNSEEN: u32 = u32::MAX;
 
-impl Dissection<'_> {
+impl<'g> Dissection<'g> {
+    /// Scratch for ordering region `r` of `g` into a slice of the order that starts at its
+    /// first position: its nodes marked as its, every other node as outside it.
+    fn for_region(g: &'g Graph, r: &Region) -> Self {
+        let n = g.len();
+        let mut region = vec![UNSEEN; n];
+        for &v in &r.nodes {
+            region[v as usize] = r.id;
+        }
+        Self {
+            g,
+            region,
+            level: vec![UNSEEN; n],
+            queue: Vec::new(),
+            local: vec![0; n],
+            next_id: r.id,
+            base: r.first,
+            groups: Vec::new(),
+        }
+    }
+
     /// Breadth-first search from `root` inside region `id`: fills `queue` with the nodes reached
     /// in BFS order and `level` with their distances; returns the number of levels.
     fn bfs(&mut self, id: u32, root: u32) -> u32 {
@@ -282,7 +309,9 @@ impl Dissection<'_> {
             self.region[v as usize] = above;
         }
         let sep_first = r.first + a.len() + b.len();
-        order[sep_first..sep_first + sep.len()].copy_from_slice(&sep);
+        let at = sep_first - self.base;
+        order[at..at + sep.len()].copy_from_slice(&sep);
+        self.groups.push(sep_first as u32);
         for &v in &sep {
             self.region[v as usize] = UNSEEN;
         }
@@ -307,6 +336,7 @@ impl Dissection<'_> {
     /// factorisation ran 4× slower than with AMD alone.
     fn order_leaf(&mut self, r: &Region, order: &mut [u32]) {
         let n = r.nodes.len();
+        self.groups.push(r.first as u32);
         for (k, &v) in r.nodes.iter().enumerate() {
             self.local[v as usize] = k as u32;
         }
@@ -339,7 +369,7 @@ impl Dissection<'_> {
         .is_ok();
         for k in 0..n {
             let local = if amd_ok { perm[k] } else { k };
-            order[r.first + k] = r.nodes[local];
+            order[r.first - self.base + k] = r.nodes[local];
         }
     }
 
@@ -386,40 +416,97 @@ impl Dissection<'_> {
     }
 }
 
+/// A nested-dissection order of a graph's nodes, with the blocks it is made of.
+#[derive(Debug, PartialEq, Eq)]
+pub struct Dissected {
+    /// `order[k]` is the node eliminated k-th.
+    pub order: Vec<u32>,
+    /// The first position of every leaf and separator in `order`, increasing (from 0): the
+    /// nodes of one block are eliminated together, and their unknowns can be ordered block by
+    /// block ([`expand_by_block`]).
+    pub groups: Vec<u32>,
+}
+
 /// The nested-dissection elimination order of `g`: `order[k]` is the node eliminated k-th.
+#[cfg(test)]
 pub fn nested_dissection(g: &Graph) -> Vec<u32> {
+    dissection(g).order
+}
+
+/// The nested-dissection order of `g` with its blocks.
+pub fn dissection(g: &Graph) -> Dissected {
     let n = g.len();
     let mut order = vec![0u32; n];
-    let mut d = Dissection {
-        g,
-        region: vec![0; n],
-        level: vec![UNSEEN; n],
-        queue: Vec::new(),
-        local: vec![0; n],
-        next_id: 0,
-    };
-    let mut stack = vec![Region {
+    let root = Region {
         id: 0,
         nodes: (0..n as u32).collect(),
         first: 0,
-    }];
-    while let Some(r) = stack.pop() {
-        stack.extend(d.split(r, &mut order));
+    };
+    let mut groups = dissect(g, root, &mut order);
+    groups.sort_unstable();
+    if groups.first() != Some(&0) {
+        groups.insert(0, 0);
     }
-    order
+    Dissected { order, groups }
+}
+
+/// Regions of at least this many nodes, in the top [`PARALLEL_LEVELS`] levels of the
+/// dissection, have their two halves ordered side by side (rayon): the first half on the
+/// region's scratch, the second on scratch of its own (12 bytes a node of the graph). The split
+/// of a region depends on its nodes alone, so the order is the same bits as one thread's.
+const PARALLEL_FROM: usize = 60_000;
+/// Levels of the dissection whose halves are ordered side by side: four parts at the most,
+/// enough for two cores, and four sets of scratch.
+const PARALLEL_LEVELS: usize = 2;
+
+/// Orders region `r` into `order`, the slice of the whole order from `r.first` on; returns the
+/// first positions of the blocks placed (in no particular order).
+fn dissect(g: &Graph, r: Region, order: &mut [u32]) -> Vec<u32> {
+    let d = Dissection::for_region(g, &r);
+    dissect_on(d, r, order, 0)
+}
+
+/// [`dissect`] on the scratch `d` (its region marks hold `r`'s nodes as `r`'s), `level` levels
+/// below the top.
+fn dissect_on(mut d: Dissection<'_>, r: Region, order: &mut [u32], level: usize) -> Vec<u32> {
+    if r.nodes.len() < PARALLEL_FROM || level >= PARALLEL_LEVELS {
+        let mut stack = vec![r];
+        while let Some(r) = stack.pop() {
+            stack.extend(d.split(r, order));
+        }
+        return d.groups;
+    }
+    let first = r.first;
+    let mut halves = d.split(r, order);
+    let mut groups = std::mem::take(&mut d.groups);
+    let (Some(b), Some(a)) = (halves.pop(), halves.pop()) else {
+        return groups;
+    };
+    // The first half starts where the region did, so the region's scratch writes it.
+    let (lo, hi) = order.split_at_mut(b.first - first);
+    let lo = &mut lo[..a.nodes.len()];
+    let hi = &mut hi[..b.nodes.len()];
+    let g = d.g;
+    let (ga, gb) = rayon::join(
+        move || dissect_on(d, a, lo, level + 1),
+        || dissect_on(Dissection::for_region(g, &b), b, hi, level + 1),
+    );
+    groups.extend(ga);
+    groups.extend(gb);
+    groups
 }
 
 /// The last nested-dissection order made, with its graph, until an equal graph asks for it: a
 /// map's start (LSCM) and the Newton solve after it order the same vertex graph. Handed out
 /// once and then dropped, so that the graph (16 MB at a million faces) is not held through
 /// the Newton solve's factorisations, the memory peak of a large map.
-static LAST: Mutex<Option<(Graph, Arc<[u32]>)>> = Mutex::new(None);
+static LAST: Mutex<Option<(Graph, Arc<Dissected>)>> = Mutex::new(None);
 
 /// [`nested_dissection`] of `g`, made once for two equal graphs in a row: the order of the last
 /// graph ordered is kept, and handed to the next call if its graph is equal (compared whole,
 /// so the order is always the one `g` would get: the same bits as computing it again). The
 /// lock is not held while an order is computed.
-pub fn shared_dissection(g: Graph) -> Arc<[u32]> {
+pub fn shared_dissection(g: Graph) -> Arc<Dissected> {
     let kept = LAST.lock().ok().and_then(|mut memo| {
         let equal = memo.as_ref().is_some_and(|(h, _)| *h == g);
         equal.then(|| memo.take().map(|(_, order)| order)).flatten()
@@ -427,7 +514,7 @@ pub fn shared_dissection(g: Graph) -> Arc<[u32]> {
     if let Some(order) = kept {
         return order;
     }
-    let order: Arc<[u32]> = nested_dissection(&g).into();
+    let order = Arc::new(dissection(&g));
     if let Ok(mut memo) = LAST.lock() {
         *memo = Some((g, Arc::clone(&order)));
     }
@@ -444,55 +531,33 @@ pub fn expand(node_order: &[u32], node_of: &[u32]) -> Vec<usize> {
         .collect()
 }
 
-/// The elimination order of the unknowns field by field, for a system whose fields (the k-th
-/// unknown of each node: a vertex's u, then its v) are coupled at few nodes only, as LSCM's u and
-/// v are, in the boundary's area term. The symmetric pattern is given by one triangle in
-/// compressed-column form.
-///
-/// The first field comes first, all of it in `node_order`: its factor is a Laplacian's, with
-/// rows to the other fields only where they couple. The other fields follow in `node_order`,
-/// except at the coupled nodes: eliminating the first field couples those to each other (a dense
-/// block), so they come last. Against [`expand`], which keeps a node's unknowns together and
-/// factors every node as a 2 × 2 block, this holds about half the values.
-pub fn expand_by_field(
-    node_order: &[u32],
-    node_of: &[u32],
-    col_ptr: &[usize],
-    row_idx: &[usize],
-) -> Vec<usize> {
-    let members = Members::new(node_of, node_order.len());
-    let mut field = vec![0u32; node_of.len()];
-    for v in 0..node_order.len() as u32 {
-        for (f, &i) in members.of(v).iter().enumerate() {
-            field[i] = f as u32;
-        }
-    }
-    let mut coupled = vec![false; node_order.len()];
-    for c in 0..col_ptr.len().saturating_sub(1) {
-        for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
-            if field[r] != field[c] {
-                coupled[node_of[r] as usize] = true;
-                coupled[node_of[c] as usize] = true;
-            }
-        }
-    }
-    let fields = (0..node_order.len() as u32)
+/// The elimination order of the unknowns block by block ([`Dissected::groups`]): within each
+/// leaf or separator of the dissection, the first field of its nodes (in the dissection's
+/// order), then the second, and so on. For a system whose fields are coupled at few nodes
+/// only (LSCM's u and v along the outline), the blocks whose subtree reaches no coupled node
+/// factor as one Laplacian per field, and the coupling fills only the blocks above the coupled
+/// nodes. Ordering every first field before every second one, the coupled nodes' second field
+/// last (a dense block after eliminating the first field), makes every column keep rows to
+/// them: on a million-face toe LSCM's factor held 75.6M values that way, 73.6M block by
+/// block, and factored 8 % faster.
+pub fn expand_by_block(d: &Dissected, node_of: &[u32]) -> Vec<usize> {
+    let members = Members::new(node_of, d.order.len());
+    let fields = (0..d.order.len() as u32)
         .map(|v| members.of(v).len())
         .max()
         .unwrap_or(0);
     let mut out = Vec::with_capacity(node_of.len());
-    let mut push = |f: usize, last: bool| {
-        for &v in node_order {
-            if f == 0 || coupled[v as usize] == last {
-                out.extend(members.of(v).get(f).copied());
-            }
+    let ends = d
+        .groups
+        .iter()
+        .skip(1)
+        .copied()
+        .chain([d.order.len() as u32]);
+    for (start, end) in d.groups.iter().copied().zip(ends) {
+        let block = &d.order[start as usize..end as usize];
+        for f in 0..fields {
+            out.extend(block.iter().filter_map(|&v| members.of(v).get(f).copied()));
         }
-    };
-    for f in 0..fields {
-        push(f, false);
-    }
-    for f in 1..fields {
-        push(f, true);
     }
     out
 }
@@ -663,14 +728,73 @@ mod tests {
         assert_eq!(g.neighbours(0), &[1, 4, 5]);
         assert!(g.neighbours(12).is_empty());
         // Shared or made again, the order is the same.
+        assert_eq!(*shared_dissection(g.clone()), dissection(&g));
+        assert_eq!(*shared_dissection(g.clone()), dissection(&g));
+    }
+
+    #[test]
+    fn the_halves_ordered_side_by_side_give_the_sequential_order_with_any_threads() {
+        // Large enough for the top region's halves to be ordered side by side.
+        let (w, h) = (330, 240);
+        let (col_ptr, row_idx) = grid(w, h);
+        let n = w * h;
+        assert!(n >= PARALLEL_FROM);
+        let node_of: Vec<u32> = (0..n as u32).collect();
+        let g = Graph::quotient(&col_ptr, &row_idx, &node_of, n);
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| dissection(&g))
+        };
+        let (one, two) = (run(1), run(2));
         assert_eq!(
-            &*shared_dissection(g.clone()),
-            nested_dissection(&g).as_slice()
+            one, two,
+            "the same order and blocks with one thread and two"
         );
-        assert_eq!(
-            &*shared_dissection(g.clone()),
-            nested_dissection(&g).as_slice()
-        );
+        // The regions one after another on one scratch, as the order was made before its
+        // halves were shared out.
+        let root = Region {
+            id: 0,
+            nodes: (0..n as u32).collect(),
+            first: 0,
+        };
+        let mut order = vec![0u32; n];
+        let mut d = Dissection::for_region(&g, &root);
+        let mut stack = vec![root];
+        while let Some(r) = stack.pop() {
+            stack.extend(d.split(r, &mut order));
+        }
+        assert_eq!(two.order, order, "the sequential order");
+        let mut groups = d.groups;
+        groups.sort_unstable();
+        assert_eq!(two.groups, groups, "the sequential blocks");
+        // The blocks tile the order from 0; the last is the top separator: without it the
+        // grid falls apart.
+        assert_eq!(two.groups[0], 0);
+        assert!(two.groups.windows(2).all(|p| p[0] < p[1]));
+        let top = *two.groups.last().unwrap() as usize;
+        assert!(n - top <= w.max(h) + 1, "a separator of {} nodes", n - top);
+        let mut cut = vec![false; n];
+        two.order[top..]
+            .iter()
+            .for_each(|&v| cut[v as usize] = true);
+        let start = (0..n).find(|&v| !cut[v]).unwrap();
+        let mut seen = cut.clone();
+        let mut stack = vec![start as u32];
+        seen[start] = true;
+        let mut reached = 1;
+        while let Some(v) = stack.pop() {
+            for &u in g.neighbours(v) {
+                if !seen[u as usize] {
+                    seen[u as usize] = true;
+                    reached += 1;
+                    stack.push(u);
+                }
+            }
+        }
+        assert!(reached < top, "the top separator splits the grid");
     }
 
     #[test]
