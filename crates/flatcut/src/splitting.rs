@@ -288,8 +288,19 @@ pub(crate) fn into_parts(
                 excess: s.excess,
                 at: s.worst_3d,
                 reason: format!(
-                    "no split into at most {} parts brought every face within them{}",
-                    settings.max_pieces,
+                    "{}{}",
+                    if s.pieces.len() < settings.max_pieces {
+                        // Parts to spare: the worst part has no cut left that relieves it.
+                        format!(
+                            "split into {} parts, the worst has no cut left that brings it within them",
+                            s.pieces.len()
+                        )
+                    } else {
+                        format!(
+                            "no split into at most {} parts brought every face within them",
+                            settings.max_pieces
+                        )
+                    },
                     if count.stopped {
                         format!(
                             " before the split stopped at its cap ({count}; --max-iters, --flatten-time)"
