@@ -383,10 +383,16 @@ fn flatten_isotropic(
 ) -> Result<Vec<flatcut_flatten::Flattening>, PipelineError> {
     let index: Vec<usize> = (0..asm.pieces.len()).filter(|&k| wanted[k]).collect();
     let meshes: Vec<&TriMesh> = index.iter().map(|&k| &asm.pieces[k].mesh).collect();
-    // Seams join only pieces that are solved here: their sides renumbered among those.
+    // The seams between pieces solved here, their sides renumbered among those (a joined piece
+    // is solved with every piece it is joined to, so no seam has one side here and one not).
     let seams: Vec<MatingSeam> = asm
         .seams
         .iter()
+        .filter(|s| {
+            s.sides
+                .iter()
+                .all(|side| wanted.get(side.piece) == Some(&true))
+        })
         .map(|s| {
             let mut s = s.clone();
             for side in &mut s.sides {
