@@ -10,6 +10,7 @@ use flatcut_darts::split::{SplitOptions, split, split_surface};
 use flatcut_flatten::testmesh::{cylinder_patch, saddle, spherical_cap};
 use flatcut_flatten::{FlattenParams, Method, flatten};
 use flatcut_geom::{DVec2, DVec3};
+use flatcut_mesh::test_shapes::torus;
 use flatcut_mesh::{Topology, TriMesh, check_disk};
 
 /// Principal stretches (σ1 ≥ σ2) and the sign of the map's orientation of triangle `t`.
@@ -473,29 +474,6 @@ fn a_merge_that_would_leave_a_thin_waist_is_refused() {
         area += p.area();
     }
     assert!((area - mesh.area()).abs() < 1e-6 * mesh.area());
-}
-
-/// A torus of radii `r1` (to the tube's centre) and `r2` (the tube's), `n` × `m` quads of two
-/// triangles, facing out.
-fn torus(r1: f64, r2: f64, n: usize, m: usize) -> TriMesh {
-    use std::f64::consts::TAU;
-    let mut positions = Vec::new();
-    for i in 0..n {
-        for j in 0..m {
-            let (u, v) = (TAU * i as f64 / n as f64, TAU * j as f64 / m as f64);
-            let r = r1 + r2 * v.cos();
-            positions.push(DVec3::new(r * u.cos(), r * u.sin(), r2 * v.sin()));
-        }
-    }
-    let id = |i: usize, j: usize| ((i % n) * m + j % m) as u32;
-    let mut triangles = Vec::new();
-    for i in 0..n {
-        for j in 0..m {
-            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    TriMesh::new(positions, triangles)
 }
 
 /// Where the excess is spread, the worst face is one of many and a chord through it or through

@@ -414,29 +414,7 @@ mod tests {
     use super::*;
     use flatcut_geom::DVec3;
 
-    /// A torus (major radius `r1`, minor `r2`) of `n` × `m` quads.
-    pub(crate) fn torus(r1: f64, r2: f64, n: usize, m: usize) -> TriMesh {
-        let mut p = Vec::new();
-        for i in 0..n {
-            for j in 0..m {
-                let (u, v) = (
-                    std::f64::consts::TAU * i as f64 / n as f64,
-                    std::f64::consts::TAU * j as f64 / m as f64,
-                );
-                let r = r1 + r2 * v.cos();
-                p.push(DVec3::new(r * u.cos(), r * u.sin(), r2 * v.sin()));
-            }
-        }
-        let id = |i: usize, j: usize| ((i % n) * m + j % m) as u32;
-        let mut t = Vec::new();
-        for i in 0..n {
-            for j in 0..m {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        TriMesh::new(p, t)
-    }
+    use crate::test_shapes::torus;
 
     #[test]
     fn a_torus_opens_along_a_meridian_and_a_longitude_into_one_disk() {

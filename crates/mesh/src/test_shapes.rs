@@ -1,11 +1,34 @@
-//! Closed test shapes (testkit, not part of the public API): star-shaped surfaces over an
-//! icosphere, and a plush-like body symmetric across the plane x = 0, whose triangulation can be
+//! Closed test shapes (testkit, not part of the public API): a torus, star-shaped surfaces over
+//! an icosphere, and a plush-like body symmetric across the plane x = 0, whose triangulation can be
 //! turned so that it is not itself symmetric.
 
 use flatcut_geom::{DMat3, DVec3};
 use std::collections::BTreeMap;
 
 use crate::TriMesh;
+
+/// A torus of radii `r1` (to the tube's centre) and `r2` (the tube's), `n` × `m` quads of two
+/// triangles, facing out.
+pub fn torus(r1: f64, r2: f64, n: usize, m: usize) -> TriMesh {
+    use std::f64::consts::TAU;
+    let mut positions = Vec::new();
+    for i in 0..n {
+        for j in 0..m {
+            let (u, v) = (TAU * i as f64 / n as f64, TAU * j as f64 / m as f64);
+            let r = r1 + r2 * v.cos();
+            positions.push(DVec3::new(r * u.cos(), r * u.sin(), r2 * v.sin()));
+        }
+    }
+    let id = |i: usize, j: usize| ((i % n) * m + j % m) as u32;
+    let mut triangles = Vec::new();
+    for i in 0..n {
+        for j in 0..m {
+            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    TriMesh::new(positions, triangles)
+}
 
 /// The icosphere of `levels` subdivisions (20·4^levels faces, outward, counter-clockwise), its
 /// directions turned by `turn`, each vertex at `radius(direction)` along its direction.
