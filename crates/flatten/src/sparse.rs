@@ -1203,9 +1203,15 @@ mod tests {
     /// Values of the supernodal factor of `pattern` (without amalgamation, as LSCM's is made)
     /// in the elimination order `fwd`.
     fn factor_values(pattern: &SymPattern, fwd: &[usize]) -> usize {
-        let upper = permuted_triangle(pattern, &inverse(fwd), Side::Upper).unwrap();
         let mut params = supernodal();
         params.supernodal_params = faer::sparse::linalg::SymbolicSupernodalParams { relax: None };
+        factor_len(pattern, fwd, params)
+    }
+
+    /// Values of the Cholesky factor of `pattern` in the elimination order `fwd`, made with
+    /// `params`.
+    fn factor_len(pattern: &SymPattern, fwd: &[usize], params: CholeskySymbolicParams) -> usize {
+        let upper = permuted_triangle(pattern, &inverse(fwd), Side::Upper).unwrap();
         factorize_symbolic_cholesky(
             upper.as_ref(),
             Side::Upper,
@@ -1223,16 +1229,11 @@ mod tests {
                 faer::sparse::linalg::SupernodalThreshold::FORCE_SIMPLICIAL,
             ..Default::default()
         };
-        let inv = inverse(&elimination_order(pattern, ordering).unwrap());
-        let upper = permuted_triangle(pattern, &inv, Side::Upper).unwrap();
-        factorize_symbolic_cholesky(
-            upper.as_ref(),
-            Side::Upper,
-            SymmetricOrdering::Identity,
+        factor_len(
+            pattern,
+            &elimination_order(pattern, ordering).unwrap(),
             params,
         )
-        .unwrap()
-        .len_val()
     }
 
     /// The factor of `pattern`'s matrix `t` as faer computes it when handed the matrix in its
