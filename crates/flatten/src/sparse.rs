@@ -10,12 +10,12 @@
 //! values of the matrix already renumbered into the factor's order (so faer factors them in
 //! place, with no copy).
 //!
-//! Every faer call is given its parallelism explicitly: sequential ([`PAR`]) except the numeric
-//! factorisations of large factors ([`PARALLEL_FACTOR_FROM`]), which run on rayon's threads.
-//! Below that size the threads' hand-over costs more than they gain (a 20k-face Newton solve was
-//! 25 % slower with two), above it two threads factor 1.15–1.2× faster. faer's parallel
-//! supernodal factorisation splits the dense updates by output blocks, so the factor is the
-//! same bits with any number of threads (checked by `the_parallel_factorisation_gives_the_same_bits`).
+//! Every faer call is given its parallelism explicitly, and every one is sequential ([`PAR`]),
+//! the numeric factorisations too (see [`PAR`] for the measurements): a map's second core is
+//! given whole tasks beside them instead (the Newton solve's analysis beside its start map's
+//! factorisation, `nonlinear::solve`). faer's parallel supernodal factorisation would split
+//! the dense updates by output blocks, so the factor is the same bits with any number of
+//! threads (checked by `the_parallel_factorisation_gives_the_same_bits`).
 //!
 //! A solver asked for refined solves ([`SpdSolver::refined`]) makes large factors ([`SINGLE_PRECISION_FROM`]) in
 //! single precision, half the memory, and refines every solve with them by conjugate gradients
@@ -52,13 +52,20 @@ use crate::timings::{SharedDuration, Timings};
 /// −6 % at 90k, −13 % at 360k; with two (u, v) +4 % at 12k, equal at 62k and 109k, −13 % at 200k.
 pub const NESTED_DISSECTION_FROM: usize = 150_000;
 
-/// The parallelism of the faer calls in this crate other than large factorisations (see the
-/// module docs).
+/// The parallelism of every faer call in this crate, the numeric factorisations included:
+/// sequential. faer's supernodal factorisation is a sequential loop over the supernodes that
+/// hands each one's dense updates to rayon, hundreds of thousands of small tasks at a million
+/// faces (1.56 million futex and 0.9 million `sched_yield` calls in one isometric map): on two
+/// cores the second thread's waiting takes the first one's time. Measured through the CLI,
+/// one thread against two (`RAYON_NUM_THREADS`, the same binary, alternately, with other work on
+/// the machine at load 4–7), the factorisation stage of a toe / saddle map: 100k faces,
+/// isometric 1.13 / 0.51 s against 0.92 / 0.84 s, then 1.17 / 0.54 s against 1.58 / 0.84 s;
+/// 200k, isometric 2.36 / 1.44 s against 3.95 / 1.78 s, LSCM 0.51 / 0.40 s against 0.72 /
+/// 0.54 s; the 1M toe, isometric 9.04 s against 12.71 s (5.64 s against 7.71 s at load 1.3),
+/// LSCM 3.17 s against 3.16 s. Two threads paid only on a quiet machine and below a million
+/// faces (5 % at 100k, 17 % at 200k, an earlier build), and lost up to 1.7× as soon as
+/// anything else ran.
 pub const PAR: Par = Par::Seq;
-
-/// Values of the Cholesky factor from which the numeric factorisation runs in parallel (a
-/// 100k-face map has about 8M: two threads were 5 % faster there, 17 % at 200k faces).
-pub const PARALLEL_FACTOR_FROM: usize = 8_000_000;
 
 /// Values of the Cholesky factor from which a solver asked for refined solves
 /// ([`SpdSolver::refined`]) makes it in single precision and refines its solutions by conjugate
@@ -604,12 +611,6 @@ impl SpdSolver {
         drop(upper);
         let lower = permuted_triangle(pattern, &inv, Side::Lower).ok_or_else(too_large)?;
         let n_lower = lower.row_idx().len();
-        let size = symbolic.len_val();
-        let par = if size >= PARALLEL_FACTOR_FROM {
-            Par::rayon(0)
-        } else {
-            PAR
-        };
         Ok(Self {
             stage,
             n: pattern.n,
@@ -622,7 +623,7 @@ impl SpdSolver {
             factored: false,
             refine: None,
             slow_refinement: AtomicBool::new(false),
-            par,
+            par: PAR,
             scratch: None,
             analysis_time: started.elapsed(),
             factor_time: Duration::ZERO,

@@ -4,8 +4,7 @@
 //! straight into precomputed slots, and the factorisation is the crate's one sparse
 //! Cholesky, `crate::sparse::SpdSolver` (faer; AMD, or nested dissection of the vertex graph
 //! from `crate::sparse::NESTED_DISSECTION_FROM` vertices; symbolic factorisation computed
-//! once and reused for every step; sequential below `crate::sparse::PARALLEL_FACTOR_FROM`
-//! factor values, the same bits with any number of threads above).
+//! once and reused for every step; sequential, `crate::sparse::PAR`).
 //!
 //! The pattern is handed to `crate::sparse::SymPattern` in compressed-column form and then
 //! dropped; the slots are the solver's (`crate::sparse::SpdSolver::slot`), and the values are
