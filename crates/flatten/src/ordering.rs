@@ -40,7 +40,7 @@ const PERIPHERAL_SWEEPS: usize = 4;
 /// Each side of a separator must hold at least this fraction of its region's nodes.
 const MIN_BALANCE: f64 = 0.3;
 
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SymbolicSparseColMatRef;
@@ -496,29 +496,90 @@ fn dissect_on(mut d: Dissection<'_>, r: Region, order: &mut [u32], level: usize)
     groups
 }
 
-/// The last nested-dissection order made, with its graph, until an equal graph asks for it: a
-/// map's start (LSCM) and the Newton solve after it order the same vertex graph. Handed out
-/// once and then dropped, so that the graph (16 MB at a million faces) is not held through
-/// the Newton solve's factorisations, the memory peak of a large map.
-static LAST: Mutex<Option<(Graph, Arc<Dissected>)>> = Mutex::new(None);
+/// The last nested-dissection order made (or being made), with its graph, until an equal graph
+/// asks for it: a map's start (LSCM) and the Newton solve after it order the same vertex graph,
+/// the Newton solve's analysis on a thread of its own while the start map is made
+/// (`nonlinear::solve`). Handed out once and then dropped, so that the graph (16 MB at a
+/// million faces) is not held through the Newton solve's factorisations, the memory peak of a
+/// large map.
+static LAST: Mutex<Memo> = Mutex::new(Memo::Empty);
+/// Woken when an order being made is made (or its making has failed).
+static MADE: Condvar = Condvar::new();
+
+/// What [`LAST`] holds.
+enum Memo {
+    Empty,
+    /// The order of this graph is being made by a thread: a call with an equal graph waits for it.
+    Making(Arc<Graph>),
+    /// The order of this graph, made and not yet handed out.
+    Made(Arc<Graph>, Arc<Dissected>),
+}
 
 /// [`nested_dissection`] of `g`, made once for two equal graphs in a row: the order of the last
 /// graph ordered is kept, and handed to the next call if its graph is equal (compared whole,
-/// so the order is always the one `g` would get: the same bits as computing it again). The
-/// lock is not held while an order is computed.
+/// so the order is always the one `g` would get: the same bits as computing it again). A call
+/// made while an equal graph is being ordered waits for that order instead of making its own
+/// (except on one of rayon's threads); the lock is not held while an order is computed.
 pub fn shared_dissection(g: Graph) -> Arc<Dissected> {
-    let kept = LAST.lock().ok().and_then(|mut memo| {
-        let equal = memo.as_ref().is_some_and(|(h, _)| *h == g);
-        equal.then(|| memo.take().map(|(_, order)| order)).flatten()
-    });
-    if let Some(order) = kept {
-        return order;
+    let g = Arc::new(g);
+    let Ok(mut memo) = LAST.lock() else {
+        return Arc::new(dissection(&g));
+    };
+    loop {
+        match &*memo {
+            Memo::Made(h, _) if **h == *g => {
+                if let Memo::Made(_, order) = std::mem::replace(&mut *memo, Memo::Empty) {
+                    return order;
+                }
+            }
+            // One of rayon's threads never waits: the order it would wait for may be held up
+            // behind it (its maker's halves, `dissect_on`, waiting in a join that this thread
+            // would otherwise take part in). It orders the graph itself, as before there was a
+            // memo.
+            Memo::Making(h) if **h == *g && rayon::current_thread_index().is_some() => {
+                drop(memo);
+                return Arc::new(dissection(&g));
+            }
+            Memo::Making(h) if **h == *g => match MADE.wait(memo) {
+                Ok(m) => memo = m,
+                Err(_) => return Arc::new(dissection(&g)),
+            },
+            _ => break,
+        }
     }
+    *memo = Memo::Making(Arc::clone(&g));
+    drop(memo);
+    let making = Making(&g);
     let order = Arc::new(dissection(&g));
-    if let Ok(mut memo) = LAST.lock() {
-        *memo = Some((g, Arc::clone(&order)));
-    }
+    making.made(Some(&order));
     order
+}
+
+/// The order of a graph being made by this thread ([`shared_dissection`]): when it is dropped
+/// unmade (a panic), the memo is cleared and the waiting calls are woken to make their own.
+struct Making<'a>(&'a Arc<Graph>);
+
+impl Making<'_> {
+    /// Keeps `order` (if any) as the order of this graph, unless the memo has moved on to
+    /// another graph, and wakes the waiting calls.
+    fn made(self, order: Option<&Arc<Dissected>>) {
+        if let Ok(mut memo) = LAST.lock()
+            && matches!(&*memo, Memo::Making(h) if Arc::ptr_eq(h, self.0))
+        {
+            *memo = match order {
+                Some(o) => Memo::Made(Arc::clone(self.0), Arc::clone(o)),
+                None => Memo::Empty,
+            };
+        }
+        MADE.notify_all();
+        std::mem::forget(self);
+    }
+}
+
+impl Drop for Making<'_> {
+    fn drop(&mut self) {
+        Making(self.0).made(None);
+    }
 }
 
 /// The elimination order of the unknowns: nodes in `node_order`, the unknowns of one node
@@ -611,6 +672,42 @@ mod tests {
             col_ptr.push(row_idx.len());
         }
         (col_ptr, row_idx)
+    }
+
+    #[test]
+    fn calls_made_while_an_equal_graph_is_ordered_get_its_order() {
+        // Four threads at once on one graph (a unique size, so no other test's graph is
+        // equal): whichever makes the order, every one gets the graph's own order, and none
+        // hangs waiting.
+        let (w, h) = (171, 97);
+        let (col_ptr, row_idx) = grid(w, h);
+        let node_of: Vec<u32> = (0..(w * h) as u32).collect();
+        let g = Graph::quotient(&col_ptr, &row_idx, &node_of, w * h);
+        let want = dissection(&g);
+        let got: Vec<Arc<Dissected>> = std::thread::scope(|s| {
+            let calls: Vec<_> = (0..4)
+                .map(|_| s.spawn(|| shared_dissection(g.clone())))
+                .collect();
+            calls.into_iter().map(|c| c.join().unwrap()).collect()
+        });
+        for order in got {
+            assert_eq!(*order, want);
+        }
+        // And on rayon's threads, which order the graph themselves while it is being ordered.
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(4)
+            .build()
+            .unwrap();
+        let got: Vec<Arc<Dissected>> = pool.install(|| {
+            use rayon::prelude::*;
+            (0..8)
+                .into_par_iter()
+                .map(|_| shared_dissection(g.clone()))
+                .collect()
+        });
+        for order in got {
+            assert_eq!(*order, want);
+        }
     }
 
     #[test]
