@@ -35,8 +35,9 @@
 //! not stop while they still close in; vertices can be held in place (`MapProblem::with_fixed`:
 //! f1's interior inside a kept outline where a free one would crimp), pulled together (`Pull`, zero
 //! rest length) and kept from turning over in triangles of their own (`MapProblem::with_guards`):
-//! the darts' tight fit. The sparse Cholesky is always supernodal and runs in parallel from 8M
-//! factor values; from 40M (about 300k faces) the factor is single precision and each solve is
+//! the darts' tight fit. The sparse Cholesky is always supernodal and sequential (the second
+//! core gets whole tasks instead: an isometric map's Newton analysis is made beside its LSCM
+//! start, `nonlinear::solve`); from 40M (about 300k faces) the factor is single precision and each solve is
 //! refined to double precision by conjugate gradients (`refine.rs`). Long solves report progress
 //! and honour a time limit and a cancel flag (`FlattenParams::time_limit`, `FlattenHooks`). Every
 //! stage of a flattening (a method's own solve, the limits, the joint solve's seams, the darts, the
@@ -127,8 +128,15 @@ const PIN_COINCIDENT_REL: f64 = 1e-9;
 /// # Ok::<(), flatcut_flatten::FlattenError>(())
 /// ```
 pub fn flatten(mesh: &TriMesh, params: &FlattenParams) -> Result<Flattening, FlattenError> {
-    let topo = check_disk(mesh)?;
+    let mut topo = check_disk(mesh)?;
     validate_pins(mesh, &params.pins)?;
+    if matches!(params.method, Method::Isometric | Method::Lscm) {
+        // Their start maps read the outline alone (LSCM's pins and area term, Tutte's circle):
+        // the edge map and the components (42 MB at a million faces) are dropped before their
+        // factorisations, the memory peak of a large map.
+        topo.edges = Default::default();
+        topo.component_of_triangle = Vec::new();
+    }
     match params.method {
         Method::Isometric
         | Method::Conformal

@@ -12,7 +12,8 @@ use std::time::{Duration, Instant};
 pub struct Timings {
     /// The start map (LSCM or Tutte, with their own factorisations).
     pub start: Duration,
-    /// Fill-reducing orderings and symbolic factorisations.
+    /// Fill-reducing orderings and symbolic factorisations (of an isometric map's Newton
+    /// system, made beside its start map, only the time it took beyond the start).
     pub ordering: Duration,
     /// Gradients, Hessians and the scatter into the sparse matrix.
     pub assembly: Duration,

@@ -17,7 +17,7 @@ pub mod orthotropic;
 pub mod spd;
 
 use crate::internal::InternalError;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
@@ -44,6 +44,26 @@ pub fn solve(
     let mut out = match params.method {
         // f1 decides on its own start (see its module).
         Method::BoundaryIsometric => boundary::boundary_isometric(mesh, topo, params, &budget)?,
+        Method::Isometric => {
+            let n = mesh.positions.len();
+            let ahead = start_beside_analysis(mesh, topo);
+            let x0 = ahead.x0?;
+            // After the start, as for the other methods.
+            let rest = rest_frames(mesh)?;
+            let sys = ahead.system.map_err(|reason| FlattenError::Solver {
+                stage: "newton",
+                reason,
+            })?;
+            let problem = newton::MapProblem::on_system(&rest, n, SymDirichlet, None, sys);
+            let analysis = problem.timings().ordering;
+            let mut out = isometric_with(mesh, problem, x0, params, &budget)?;
+            // The analysis ran beside the start map: the ordering's wall time is what it kept
+            // the Newton solve waiting.
+            let t = &mut out.info.timings;
+            t.ordering = t.ordering.saturating_sub(analysis) + ahead.waited;
+            t.start += ahead.start;
+            out
+        }
         method => {
             // The start before the rest frames: LSCM's factor is the memory peak of a large
             // map, and the frames (64 MB at a million faces) are not needed until the descent.
@@ -54,7 +74,6 @@ pub fn solve(
             let start = started.elapsed();
             let rest = rest_frames(mesh)?;
             let mut out = match method {
-                Method::Isometric => isometric(mesh, &rest, x0, params, &budget)?,
                 Method::Conformal => conformal(mesh, &rest, x0, params, &budget)?,
                 Method::Minmax => minmax::minmax(mesh, topo, &rest, x0, params, &budget)?,
                 Method::Orthotropic => grain::orthotropic(mesh, &rest, x0, params, &budget)?,
@@ -71,6 +90,48 @@ pub fn solve(
     check_flip_free(mesh, &out.uv, params.method)?;
     apply_pins(&mut out, mesh, params)?;
     Ok(out)
+}
+
+/// An isometric map's start ([`init::lscm_or_tutte`]) and the analysis of its Newton system
+/// ([`newton::analyse`]: the pattern, its order and symbolic factorisation), made side by side.
+struct StartAndAnalysis {
+    /// The start map, or why there is none.
+    x0: Result<Vec<DVec2>, FlattenError>,
+    /// The Newton solve's system ([`newton::analyse`]), or why there is none.
+    system: Result<spd::SpdSystem, String>,
+    /// Wall time until the start map was made.
+    start: Duration,
+    /// Wall time the analysis took beyond the start map.
+    waited: Duration,
+}
+
+/// Makes the start map of an isometric solve on this thread while another one analyses the
+/// Newton system after it (its pattern, order and symbolic factorisation). Both depend on the
+/// mesh alone, and the analysis (0.5–1 s at a million faces) fits beside the start map's
+/// factorisation, which leaves the second core idle; it takes the nested-dissection order the
+/// start map makes of the same vertex graph ([`crate::ordering::shared_dissection`] waits for
+/// it rather than ordering the graph twice). The map is the same bits as when they run one
+/// after the other. The rest frames (64 MB at a million faces) are left until after the start:
+/// its factor is the memory peak.
+fn start_beside_analysis(mesh: &TriMesh, topo: &Topology) -> StartAndAnalysis {
+    let started = Instant::now();
+    let n = mesh.positions.len();
+    let triangles = || mesh.triangles.iter().map(|t| t.map(|v| v as usize));
+    std::thread::scope(|s| {
+        let analysis = s.spawn(|| newton::analyse(triangles(), n, None));
+        let x0 = init::lscm_or_tutte(mesh, topo);
+        let start = started.elapsed();
+        // A panic there is a bug, carried on here as if it were this thread's.
+        let system = analysis
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e));
+        StartAndAnalysis {
+            x0,
+            system,
+            start,
+            waited: started.elapsed().saturating_sub(start),
+        }
+    })
 }
 
 /// The rest frames of a mesh that passed the disk check.
@@ -96,6 +157,17 @@ pub(crate) fn newton_solve<E: TriEnergy>(
             stage: "newton",
             reason,
         })?;
+    newton_solve_on(problem, x0, params, method, budget)
+}
+
+/// [`newton_solve`] of a problem already made.
+fn newton_solve_on<E: TriEnergy>(
+    problem: newton::MapProblem<'_, E>,
+    x0: Vec<f64>,
+    params: &FlattenParams,
+    method: Method,
+    budget: &Budget,
+) -> Result<newton::NewtonRun, FlattenError> {
     let abs = ABS_DECREMENT_PER_AREA * problem.total_area;
     let (run, _) = newton::run_flat(
         problem,
@@ -165,7 +237,27 @@ pub(crate) fn isometric(
     budget: &Budget,
 ) -> Result<Flattening, FlattenError> {
     let n = mesh.positions.len();
-    let run = isometric_run(rest, n, x0, params, Method::Isometric, budget)?;
+    let problem = newton::MapProblem::new(rest, n, SymDirichlet, None).map_err(|reason| {
+        FlattenError::Solver {
+            stage: "newton",
+            reason,
+        }
+    })?;
+    isometric_with(mesh, problem, x0, params, budget)
+}
+
+/// [`isometric`] with its Newton problem already made (on its rest frames).
+fn isometric_with(
+    mesh: &TriMesh,
+    problem: newton::MapProblem<'_, SymDirichlet>,
+    x0: Vec<DVec2>,
+    params: &FlattenParams,
+    budget: &Budget,
+) -> Result<Flattening, FlattenError> {
+    let (rest, n) = (problem.rest, mesh.positions.len());
+    let flat = newton::to_flat(&x0);
+    drop(x0);
+    let run = newton_solve_on(problem, flat, params, Method::Isometric, budget)?;
     let mut info = FlattenInfo {
         iterations: run.iterations,
         final_energy: run.energy / total_area(rest),
@@ -334,4 +426,43 @@ fn apply_pins(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testmesh::spherical_cap;
+
+    /// The isometric solve with its Newton analysis made beside the start map gives the map of
+    /// the start and the solve made one after the other, bit for bit, on one rayon thread and
+    /// on two.
+    #[test]
+    fn the_analysis_beside_the_start_gives_the_sequential_map_with_any_threads() {
+        let mesh = spherical_cap(40.0, 1.2, 30);
+        let topo = flatcut_mesh::check_disk(&mesh).unwrap();
+        let params = FlattenParams::new(Method::Isometric);
+        let one_after = {
+            let budget = params.budget(params.method.name(), Instant::now());
+            let x0 = init::lscm_or_tutte(&mesh, &topo).unwrap();
+            let rest = rest_frames(&mesh).unwrap();
+            isometric(&mesh, &rest, x0, &params, &budget).unwrap()
+        };
+        assert!(one_after.info.iterations > 1);
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let side_by_side = pool.install(|| solve(&mesh, &topo, &params)).unwrap();
+            assert_eq!(side_by_side.info.iterations, one_after.info.iterations);
+            assert!(
+                side_by_side
+                    .uv
+                    .iter()
+                    .zip(&one_after.uv)
+                    .all(|(a, b)| a.x.to_bits() == b.x.to_bits() && a.y.to_bits() == b.y.to_bits()),
+                "{threads} thread(s): the maps differ"
+            );
+        }
+    }
 }

@@ -371,6 +371,34 @@ fn slots_for(sys: &SpdSystem, dofs: &[usize]) -> Vec<u32> {
     out
 }
 
+/// The Newton system of a map on `n` vertices with these `triangles` (and `edges`' pulls): its
+/// pattern, the order and the symbolic factorisation. It depends on the mesh's connectivity
+/// alone, so it can be made before the rest frames, and beside the start map.
+pub fn analyse(
+    triangles: impl ExactSizeIterator<Item = [usize; 3]>,
+    n: usize,
+    edges: Option<&EdgeTerms>,
+) -> Result<SpdSystem, String> {
+    // Vertex pairs sharing a triangle (each vertex with itself too): the 2×2 dof blocks of
+    // the pattern. Built from the edges rather than from every element entry, which would
+    // hold 36 pairs per triangle at once.
+    let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(triangles.len() * 3 + n);
+    for v in triangles {
+        for k in 0..3 {
+            let (a, b) = (v[k] as u32, v[(k + 1) % 3] as u32);
+            pairs.push((a.min(b), a.max(b)));
+        }
+    }
+    pairs.extend((0..n as u32).map(|v| (v, v)));
+    if let Some(e) = edges {
+        for p in &e.pulls {
+            let (a, b) = (p.a as u32, p.b as u32);
+            pairs.push((a.min(b), a.max(b)));
+        }
+    }
+    SpdSystem::from_vertex_pairs(n, pairs)
+}
+
 impl<'a, E> MapProblem<'a, E> {
     /// Builds the problem and the symbolic factorisation for `n` vertices.
     pub fn new(
@@ -379,24 +407,19 @@ impl<'a, E> MapProblem<'a, E> {
         energy: E,
         edges: Option<EdgeTerms>,
     ) -> Result<Self, String> {
-        // Vertex pairs sharing a triangle (each vertex with itself too): the 2×2 dof blocks of
-        // the pattern. Built from the edges rather than from every element entry, which would
-        // hold 36 pairs per triangle at once.
-        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(rest.len() * 3 + n);
-        for r in rest {
-            for k in 0..3 {
-                let (a, b) = (r.v[k] as u32, r.v[(k + 1) % 3] as u32);
-                pairs.push((a.min(b), a.max(b)));
-            }
-        }
-        pairs.extend((0..n as u32).map(|v| (v, v)));
-        if let Some(e) = &edges {
-            for p in &e.pulls {
-                let (a, b) = (p.a as u32, p.b as u32);
-                pairs.push((a.min(b), a.max(b)));
-            }
-        }
-        let sys = SpdSystem::from_vertex_pairs(n, pairs)?;
+        let sys = analyse(rest.iter().map(|r| r.v), n, edges.as_ref())?;
+        Ok(Self::on_system(rest, n, energy, edges, sys))
+    }
+
+    /// [`MapProblem::new`] on the system [`analyse`] made of `rest`'s triangles (and `edges`'
+    /// pulls).
+    pub fn on_system(
+        rest: &'a [RestTri],
+        n: usize,
+        energy: E,
+        edges: Option<EdgeTerms>,
+        sys: SpdSystem,
+    ) -> Self {
         let tri_slots = (rest.len() < SLOT_TABLE_BELOW).then(|| {
             let slots = sys.slots();
             rest.par_iter().map(|r| tri_slots(slots, r)).collect()
@@ -405,7 +428,7 @@ impl<'a, E> MapProblem<'a, E> {
         let pull_slots = pull_slots(&sys, edges.as_ref());
         let align_slots = align_slots(&sys, edges.as_ref());
         let total_area = rest.iter().map(|r| r.area).sum();
-        Ok(Self {
+        Self {
             rest,
             energy,
             edges,
@@ -419,7 +442,7 @@ impl<'a, E> MapProblem<'a, E> {
             guards: Vec::new(),
             total_area,
             assembly_time: Duration::ZERO,
-        })
+        }
     }
 
     /// The same problem with the triangles `guards` (counter-clockwise in the maps it will be
