@@ -357,6 +357,81 @@ fn hot_spots(
     v
 }
 
+/// Faces from which the per-face measures are computed on two threads, each half of the faces
+/// ([`face_measures`]); below, a thread costs more than it saves.
+const TWO_THREADS_FROM: usize = 50_000;
+
+/// `a` on another thread and `b` on this one if `apart`, else one after the other: the results
+/// are the same.
+fn beside<A: Send, B>(apart: bool, a: impl FnOnce() -> A + Send, b: impl FnOnce() -> B) -> (A, B) {
+    if !apart {
+        return (a(), b());
+    }
+    std::thread::scope(|s| {
+        let a = s.spawn(a);
+        let b = b();
+        // A panic there is a bug, carried on here as if it were this thread's.
+        (a.join().unwrap_or_else(|e| std::panic::resume_unwind(e)), b)
+    })
+}
+
+/// Every face's measures, in face order; `Err(t)` for the first face `t` that is degenerate.
+/// Each face's measures are its own, so a large mesh's two halves are measured side by side.
+fn face_measures(mesh: &TriMesh) -> Result<Vec<FaceMeasure>, usize> {
+    let n = mesh.triangles.len();
+    if n < TWO_THREADS_FROM {
+        return (0..n).map(|t| face_measure(mesh, t)).collect();
+    }
+    let half = n / 2;
+    let (first, second) = beside(
+        true,
+        || {
+            (0..half)
+                .map(|t| face_measure(mesh, t))
+                .collect::<Result<Vec<_>, _>>()
+        },
+        || {
+            (half..n)
+                .map(|t| face_measure(mesh, t))
+                .collect::<Result<Vec<_>, _>>()
+        },
+    );
+    let mut all = first?;
+    all.extend(second?);
+    Ok(all)
+}
+
+/// The measures of face `t`; `Err(t)` if it is degenerate.
+fn face_measure(mesh: &TriMesh, t: usize) -> Result<FaceMeasure, usize> {
+    let tri3 = mesh.corners(t);
+    let tri2 = mesh.flat_corners(t).expect("flat checked");
+    let d = face_distortion(tri3, tri2).ok_or(t)?;
+    let flipped = d.flipped();
+    // A flipped or collapsed face is infinitely distorted: never hidden as "undistorted".
+    let (delta1, delta2) = if flipped {
+        (f64::INFINITY, f64::INFINITY)
+    } else {
+        (d.delta1(), d.delta2())
+    };
+    Ok(FaceMeasure {
+        mu1: d.mu1(),
+        mu2: d.mu2(),
+        delta1,
+        delta2,
+        area_ratio: d.det,
+        stretch_pct: ((d.sigma1 - 1.0) * 100.0).max(0.0),
+        compress_pct: if flipped {
+            100.0
+        } else {
+            ((1.0 - d.sigma2) * 100.0).max(0.0)
+        },
+        flipped,
+        dir_max_2d: d.dir_max_2d,
+        area_3d: mesh.triangle_area(t),
+        material_excess_pct: None,
+    })
+}
+
 fn weighted_stats(values: &[(f64, f64)]) -> Stats {
     // values: (value, weight)
     let total: f64 = values.iter().map(|v| v.1).sum();
@@ -416,54 +491,24 @@ impl Report {
                 });
             }
         }
-        let mut per_face = Vec::with_capacity(mesh.triangles.len());
-        for t in 0..mesh.triangles.len() {
-            let tri3 = mesh.corners(t);
-            let tri2 = mesh.flat_corners(t).expect("flat checked");
-            let d = face_distortion(tri3, tri2).ok_or_else(|| ReportError::DegenerateFace {
-                name: name.into(),
-                face: t,
-            })?;
-            let flipped = d.flipped();
-            // A flipped or collapsed face is infinitely distorted: never hidden as "undistorted".
-            let (delta1, delta2) = if flipped {
-                (f64::INFINITY, f64::INFINITY)
-            } else {
-                (d.delta1(), d.delta2())
-            };
-            per_face.push(FaceMeasure {
-                mu1: d.mu1(),
-                mu2: d.mu2(),
-                delta1,
-                delta2,
-                area_ratio: d.det,
-                stretch_pct: ((d.sigma1 - 1.0) * 100.0).max(0.0),
-                compress_pct: if flipped {
-                    100.0
-                } else {
-                    ((1.0 - d.sigma2) * 100.0).max(0.0)
-                },
-                flipped,
-                dir_max_2d: d.dir_max_2d,
-                area_3d: mesh.triangle_area(t),
-                material_excess_pct: None,
-            });
-        }
+        let per_face = face_measures(mesh).map_err(|face| ReportError::DegenerateFace {
+            name: name.into(),
+            face,
+        })?;
         let flipped = per_face.iter().filter(|f| f.flipped).count();
-        let w = |f: &FaceMeasure, v: f64| (v, f.area_3d);
-        let s1 = weighted_stats(&per_face.iter().map(|f| w(f, f.delta1)).collect::<Vec<_>>());
-        let s2 = weighted_stats(&per_face.iter().map(|f| w(f, f.delta2)).collect::<Vec<_>>());
-        let st = weighted_stats(
-            &per_face
-                .iter()
-                .map(|f| w(f, f.stretch_pct))
-                .collect::<Vec<_>>(),
-        );
-        let co = weighted_stats(
-            &per_face
-                .iter()
-                .map(|f| w(f, f.compress_pct))
-                .collect::<Vec<_>>(),
+        let stats = |m: fn(&FaceMeasure) -> f64| {
+            weighted_stats(
+                &per_face
+                    .iter()
+                    .map(|f| (m(f), f.area_3d))
+                    .collect::<Vec<_>>(),
+            )
+        };
+        // Each statistic sorts every face's value: two on another thread, two on this one.
+        let ((s1, s2), (st, co)) = beside(
+            per_face.len() >= TWO_THREADS_FROM,
+            || (stats(|f| f.delta1), stats(|f| f.delta2)),
+            || (stats(|f| f.stretch_pct), stats(|f| f.compress_pct)),
         );
         let area3: f64 = per_face.iter().map(|f| f.area_3d).sum();
         let area_mean = per_face
@@ -678,4 +723,62 @@ fn over_limit(
     }
     regions.sort_by(|a, b| b.worst_pct.total_cmp(&a.worst_pct));
     regions
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A wavy 3D grid of `2 n²` faces mapped to the plane by a shear that varies over it: every
+    /// face's measures differ.
+    fn wavy(n: usize) -> TriMesh {
+        let mut m = flatcut_mesh::test_grid::grid_mesh(n, n, |i, j| {
+            let (x, y) = (i as f64, j as f64);
+            DVec3::new(x, y, 0.3 * (0.2 * x).sin() * (0.15 * y).cos())
+        });
+        let flat = m
+            .positions
+            .iter()
+            .map(|p| DVec2::new(p.x + 0.01 * p.y * (0.1 * p.x).cos(), 1.02 * p.y))
+            .collect();
+        m.flat = Some(flat);
+        m
+    }
+
+    #[test]
+    fn faces_measured_in_two_halves_are_the_faces_measured_in_order() {
+        let m = wavy(170);
+        assert!(m.triangles.len() >= TWO_THREADS_FROM);
+        let r = Report::compute("wavy", &m, &ReportOptions::default()).unwrap();
+        assert_eq!(r.per_face.len(), m.triangles.len());
+        for (t, f) in r.per_face.iter().enumerate() {
+            let want = face_measure(&m, t).unwrap();
+            // Bit for bit (Debug prints every digit of each value).
+            assert_eq!(format!("{f:?}"), format!("{want:?}"), "face {t}");
+        }
+        // And the statistics are those of the faces in order.
+        let delta2: Vec<(f64, f64)> = r.per_face.iter().map(|f| (f.delta2, f.area_3d)).collect();
+        let s2 = weighted_stats(&delta2);
+        assert_eq!(r.delta2_mean.to_bits(), s2.mean.to_bits());
+        assert_eq!(r.delta2_p90.to_bits(), s2.p90.to_bits());
+    }
+
+    #[test]
+    fn the_first_degenerate_face_is_named_whichever_half_it_is_in() {
+        let mut m = wavy(170);
+        let n = m.triangles.len();
+        // Collapse a face in the second half, then also one in the first half.
+        let collapse = |m: &mut TriMesh, t: usize| {
+            let [a, b, _] = m.triangles[t];
+            m.triangles[t] = [a, b, b];
+        };
+        collapse(&mut m, n - 10);
+        let face = |m: &TriMesh| match Report::compute("wavy", m, &ReportOptions::default()) {
+            Err(ReportError::DegenerateFace { face, .. }) => face,
+            other => panic!("expected a degenerate face, got {other:?}"),
+        };
+        assert_eq!(face(&m), n - 10);
+        collapse(&mut m, 7);
+        assert_eq!(face(&m), 7);
+    }
 }
