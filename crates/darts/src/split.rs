@@ -525,9 +525,9 @@ fn merge_within(
     let alone = held
         .clone()
         .with_hooks(flatcut_flatten::FlattenHooks::default());
-    let again = alone
-        .clone()
-        .with_max_iters(params.max_iters.max(alone.max_iters));
+    // Each solve's own cap raised; the stages' caps are the split's.
+    let mut again = alone.clone();
+    again.max_iters = params.max_iters.max(alone.max_iters);
     let solves = Solves {
         alone: &alone,
         again: &again,
