@@ -45,7 +45,9 @@
 //! part is a V no seam allowance fits in), and once every part is within the limits,
 //! neighbours whose union still lies within them are merged, the pairs sharing the longest
 //! seams first (the fewest pieces for the limits: a ball within ±10 % comes as the two halves
-//! of a tennis ball). The merged pieces are kept only when their joint solve holds the limits.
+//! of a tennis ball). A union the split's capped solve leaves just beyond the limits
+//! ([`MERGE_NEAR_MISS`]) is solved again with the flattener's full steps before it is refused.
+//! The merged pieces are kept only when their joint solve holds the limits.
 //!
 //! A part within the limits can still overlap itself flat (a long limb or a ring laid out past
 //! a full turn): its outline crossing itself ([`crate::crossing`]) makes it a piece to cut like
@@ -58,7 +60,13 @@
 //! every part is within the limits, the merging of neighbours stops there too, the parts then
 //! all valid but perhaps more than needed) and
 //! on the flattening hooks' cancel flag (an error; the candidates not yet judged are skipped);
-//! it reports its progress through them.
+//! it reports its progress through them. The time limit bounds the whole split, from the
+//! opening on: every solve runs within the time left ([`until_limit`]), the candidates stop
+//! being judged, and a joint solve the limit stops with a seam's sides still apart is not the
+//! result: the last split whose joint solve held them is (or, where none did, these parts,
+//! `seams_apart`). The split ends within its limit and the Newton step, or the candidate, under
+//! way when it ran out, and the checks after (a 9,216-face ring with a limit of 0.5 s CPU: 0.52
+//! s, where the joint solve used to run on for 13 s).
 //!
 //! The seams between the final pieces are found by their coincident vertices
 //! ([`flatcut_mesh::mating::coincident_seams`]): a cut's vertices are copied to both of its sides
@@ -70,6 +78,7 @@
 //! across the strain) at the cost of a handful of solves per cut, and the limit solve of the
 //! assembled pieces is the proof that the limits hold.
 
+use flatcut_flatten::assembly::SEAM_REPORT_REL;
 use flatcut_flatten::flatten_assembly_from;
 use flatcut_flatten::nonlinear::kernel::rest_frames;
 use flatcut_flatten::{FlattenParams, Method};
@@ -80,7 +89,9 @@ use flatcut_mesh::regions::split_along_lines;
 use flatcut_mesh::{Topology, TriMesh, check_disk};
 
 use rayon::prelude::*;
+use std::time::Duration;
 
+use crate::clock::CpuClock;
 use crate::cone;
 use crate::crossing::outline_crossing;
 use crate::limits::{Band, Limits, face_excess};
@@ -164,6 +175,10 @@ pub struct Split {
     /// The time limit ended the search before the limits were met or the pieces ran out, or
     /// (every piece within the limits) before neighbours that could be sewn back were merged.
     pub timed_out: bool,
+    /// The time limit stopped the joint solve of these parts with a seam's two sides still
+    /// apart, and no earlier joint solve had held them equal (`timed_out` is set too): the
+    /// best cut found, its seams to be solved again (the report says how far apart they are).
+    pub seams_apart: bool,
 }
 
 impl Split {
@@ -183,9 +198,10 @@ pub fn split(
     params: &FlattenParams,
     opts: &SplitOptions,
 ) -> Result<Split, DartError> {
+    let cpu = CpuClock::start();
     let mut first = mesh.clone();
     first.flat = Some(x0.to_vec());
-    split_on(mesh, vec![first], Vec::new(), true, params, opts)
+    split_on(mesh, vec![first], Vec::new(), true, params, opts, cpu)
 }
 
 /// Splits a surface that is not a disk (closed, of any genus, or with several boundary loops):
@@ -197,6 +213,7 @@ pub fn split_surface(
     params: &FlattenParams,
     opts: &SplitOptions,
 ) -> Result<Split, DartError> {
+    let cpu = CpuClock::start();
     let mut vis = opts.visibility.clone();
     if let Some(k) = &opts.keep_out {
         vis.blocked = k.blocked.clone();
@@ -209,10 +226,43 @@ pub fn split_surface(
         .with_max_compress_pct(None);
     let mut pieces = opened.pieces;
     for p in &mut pieces {
+        let free = until_limit(&free, opts.time_limit, &cpu);
         let f = flatcut_flatten::flatten(p, &free).map_err(DartError::Flatten)?;
         p.flat = Some(f.uv);
     }
-    split_on(mesh, pieces, opened.cuts, false, params, opts)
+    split_on(mesh, pieces, opened.cuts, false, params, opts, cpu)
+}
+
+/// `p` with every solve stopped where the split's time limit `limit` (CPU time, from `cpu`'s
+/// start) runs out: the time left, from now, as the deadline of the stage its solves run within
+/// (the split's own, or one made for it), so that a joint solve of a large scan started just
+/// before the limit stops there with its best map rather than running on. The deadline is wall
+/// time: a solve on one core spends as much CPU time, one that keeps both cores busy may spend
+/// twice the time left.
+fn until_limit(p: &FlattenParams, limit: Option<Duration>, cpu: &CpuClock) -> FlattenParams {
+    let Some(limit) = limit else {
+        return p.clone();
+    };
+    let left = limit.saturating_sub(cpu.elapsed());
+    let stage = match &p.within {
+        Some(b) => {
+            let mut b = b.clone();
+            let until = std::time::Instant::now().checked_add(left);
+            b.deadline = match (b.deadline, until) {
+                (Some(d), Some(u)) => Some(d.min(u)),
+                (d, u) => d.or(u),
+            };
+            b
+        }
+        None => flatcut_flatten::Budget::stage(
+            "split",
+            p.split_iters,
+            Some(left),
+            p.hooks.clone(),
+            std::time::Instant::now(),
+        ),
+    };
+    p.clone().with_within(Some(stage))
 }
 
 /// The flattening parameters that hold the limits of `opts` (a little inside them).
@@ -240,13 +290,36 @@ fn split_on(
     mut together: bool,
     params: &FlattenParams,
     opts: &SplitOptions,
+    cpu: CpuClock,
 ) -> Result<Split, DartError> {
-    let held = held_params(params, opts);
+    let held_unbounded = held_params(params, opts);
+    // The limit-holding solves, stopped where the time limit runs out.
+    let held = || until_limit(&held_unbounded, opts.time_limit, &cpu);
     let guard = Guard::new(mesh, opts.keep_out.as_ref(), &opts.visibility);
     let started = std::time::Instant::now();
-    let cpu = crate::clock::CpuClock::start();
     let mut timed_out = false;
     let out_of_time = || opts.time_limit.is_some_and(|t| cpu.elapsed() >= t);
+    // The parts flattened together within the time left ([`flatten_together`]). The solve's
+    // deadline is the CPU time left counted on the wall clock; where the wall clock runs out
+    // first (a busy machine gives the process less than a core), the solve goes on from where
+    // it stopped, until the CPU time is out too (or the enclosing stage's own deadline).
+    let together_in_time = |pieces: &mut [TriMesh]| -> Result<bool, DartError> {
+        loop {
+            let left = opts.time_limit.map(|t| t.saturating_sub(cpu.elapsed()));
+            let began = std::time::Instant::now();
+            let held_seams = flatten_together(pieces, &held())?;
+            let wall_first = left.is_some_and(|l| began.elapsed() >= l) && !out_of_time();
+            let theirs = params.within.as_ref().is_some_and(|b| b.expired());
+            if held_seams || !wall_first || theirs {
+                return Ok(held_seams);
+            }
+        }
+    };
+    // The split whose joint solve last held its seams equal, with the least excess: what is
+    // returned when the time limit stops a later joint solve with its seams apart.
+    let mut valid: Option<Valid> = None;
+    // Whether the last joint solve left its seams apart (stopped by its cap or the time).
+    let mut apart = false;
     // Whether neighbours were tried for merging, whether any cut was sewn back, and whether the
     // time limit left neighbours unmerged.
     let (mut merged, mut resewn, mut merge_cut_short) = (false, false, false);
@@ -259,6 +332,14 @@ fn split_on(
         }
         let (w, excess, face) = worst(&pieces, opts.band)?;
         let crossing = first_crossing(&pieces)?;
+        if together && !apart && valid.as_ref().is_none_or(|v| excess <= v.excess) {
+            valid = Some(Valid {
+                pieces: pieces.clone(),
+                cuts: cuts.clone(),
+                resewn,
+                excess,
+            });
+        }
         params.hooks.report(&flatcut_flatten::FlattenProgress {
             stage: "split",
             iteration: pieces.len(),
@@ -270,7 +351,10 @@ fn split_on(
         let full = pieces.len() >= opts.max_pieces.max(1) || timed_out;
         let done = excess <= 0.0 && crossing.is_none();
         if (done || full) && !together {
-            flatten_together(&mut pieces, &held)?;
+            apart = !together_in_time(&mut pieces)?;
+            if apart && out_of_time() {
+                return stopped_apart(pieces, cuts, resewn, valid, opts.band);
+            }
             together = true;
             continue;
         }
@@ -282,18 +366,29 @@ fn split_on(
             crossing.map(|(k, v)| (k, face_at(&pieces[k], v)))
         };
         let next = match target {
-            Some((k, t)) if !full => {
-                best_cut(&pieces[k], t, excess <= 0.0, opts.band, params, &guard)?
-                    .map(|cut| (k, cut))
-            }
+            Some((k, t)) if !full => best_cut(
+                &pieces[k],
+                t,
+                excess <= 0.0,
+                opts.band,
+                &until_limit(params, opts.time_limit, &cpu),
+                &guard,
+                &out_of_time,
+            )?
+            .map(|cut| (k, cut)),
             _ => None,
         };
         if params.hooks.cancelled() {
             return Err(cancelled());
         }
         let Some((k, halves)) = next else {
+            // The candidates stop being judged when the time runs out.
+            timed_out |= out_of_time();
             if !together {
-                flatten_together(&mut pieces, &held)?;
+                apart = !together_in_time(&mut pieces)?;
+                if apart && out_of_time() {
+                    return stopped_apart(pieces, cuts, resewn, valid, opts.band);
+                }
                 together = true;
                 continue;
             }
@@ -313,7 +408,7 @@ fn split_on(
                 } else {
                     merge_within(
                         &pieces,
-                        &held,
+                        &held(),
                         opts.band,
                         opts.seam_allowance_mm,
                         params,
@@ -327,27 +422,18 @@ fn split_on(
                     continue;
                 }
             }
-            let seams = seams_of(&pieces);
-            if resewn {
-                // The seams that remain are the cuts.
-                let refs: Vec<&TriMesh> = pieces.iter().collect();
-                cuts = seams.iter().map(|s| s.points_3d(0, &refs)).collect();
+            if apart && timed_out {
+                return stopped_apart(pieces, cuts, resewn, valid, opts.band);
             }
-            return Ok(Split {
-                worst_3d: centroid(&pieces[w], face),
-                pieces,
-                seams,
-                cuts,
-                excess,
-                feasible: excess <= 0.0,
-                timed_out: (timed_out && excess > 0.0) || merge_cut_short,
-            });
+            let mut s = finish(pieces, cuts, resewn, opts.band)?;
+            s.timed_out = (timed_out && excess > 0.0) || merge_cut_short;
+            return Ok(s);
         };
         resewn |= halves.closed_slit;
         let cut = halves.path;
         let mut parts = halves.sides;
         for p in &mut parts {
-            let f = flatcut_flatten::flatten(p, &held).map_err(DartError::Flatten)?;
+            let f = flatcut_flatten::flatten(p, &held()).map_err(DartError::Flatten)?;
             p.flat = Some(f.uv);
         }
         let [a, b] = parts;
@@ -356,6 +442,70 @@ fn split_on(
         cuts.push(cut);
         together = false;
     }
+}
+
+/// A split whose parts were flattened together with their seams equal, and its excess.
+struct Valid {
+    pieces: Vec<TriMesh>,
+    cuts: Vec<Vec<DVec3>>,
+    resewn: bool,
+    excess: f64,
+}
+
+/// The split of `pieces` (flattened), made by `cuts` (replaced by the seams that remain where a
+/// cut was sewn back, `resewn`), judged against `band`; not `timed_out`.
+fn finish(
+    pieces: Vec<TriMesh>,
+    mut cuts: Vec<Vec<DVec3>>,
+    resewn: bool,
+    band: Band,
+) -> Result<Split, DartError> {
+    let (w, excess, face) = worst(&pieces, band)?;
+    if let Some((k, v)) = first_crossing(&pieces)? {
+        return Err(DartError::SplitOverlap {
+            parts: pieces.len(),
+            at: pieces[k].positions[v as usize],
+            excess,
+        });
+    }
+    let seams = seams_of(&pieces);
+    if resewn {
+        // The seams that remain are the cuts.
+        let refs: Vec<&TriMesh> = pieces.iter().collect();
+        cuts = seams.iter().map(|s| s.points_3d(0, &refs)).collect();
+    }
+    Ok(Split {
+        worst_3d: centroid(&pieces[w], face),
+        pieces,
+        seams,
+        cuts,
+        excess,
+        feasible: excess <= 0.0,
+        timed_out: false,
+        seams_apart: false,
+    })
+}
+
+/// The result of a split whose joint solve the time limit stopped with the seams of `pieces`
+/// apart: the split before it whose seams were equal (`valid`), else these pieces as they are
+/// (`seams_apart`; the report's seam check says how far apart); `timed_out` either way.
+fn stopped_apart(
+    pieces: Vec<TriMesh>,
+    cuts: Vec<Vec<DVec3>>,
+    resewn: bool,
+    valid: Option<Valid>,
+    band: Band,
+) -> Result<Split, DartError> {
+    let mut s = match valid {
+        Some(v) => finish(v.pieces, v.cuts, v.resewn, band)?,
+        None => {
+            let mut s = finish(pieces, cuts, resewn, band)?;
+            s.seams_apart = true;
+            s
+        }
+    };
+    s.timed_out = true;
+    Ok(s)
 }
 
 /// The pieces with neighbours sewn back together wherever their union, flattened alone with the
@@ -375,6 +525,13 @@ fn merge_within(
     let alone = held
         .clone()
         .with_hooks(flatcut_flatten::FlattenHooks::default());
+    // Each solve's own cap raised; the stages' caps are the split's.
+    let mut again = alone.clone();
+    again.max_iters = params.max_iters.max(alone.max_iters);
+    let solves = Solves {
+        alone: &alone,
+        again: &again,
+    };
     let mut cur = pieces.to_vec();
     // Every part's identity (a merged part is a new one), and the judgement of every pair of
     // parts judged so far: a pair of the same two parts is judged the same way in a later
@@ -416,7 +573,7 @@ fn merge_within(
                 if params.hooks.cancelled() || out_of_time() {
                     return None;
                 }
-                Some(merged_within(&cur[i], &cur[j], &alone, band, allowance_mm))
+                Some(merged_within(&cur[i], &cur[j], solves, band, allowance_mm))
             })
             .collect();
         if params.hooks.cancelled() {
@@ -452,7 +609,7 @@ fn merge_within(
         cur = kept(next, &gone);
         ids = kept(ids, &gone);
     }
-    if !any || flatten_together(&mut cur, held).is_err() {
+    if !any || !matches!(flatten_together(&mut cur, held), Ok(true)) {
         return Ok((None, cut_short));
     }
     let (_, e, _) = worst(&cur, band)?;
@@ -462,18 +619,42 @@ fn merge_within(
     Ok((Some(cur), cut_short))
 }
 
-/// `a` and `b` sewn into one part, flattened alone with `alone` (the limits held), when it lies
-/// within `band`, has no neck too narrow for `allowance_mm` and does not overlap itself flat.
+/// How far beyond the limits (log strain) a merged part flattened alone may come out and still
+/// be solved again with the flattener's full steps ([`Solves::again`]). The solves that hold the
+/// limits stop at [`HELD_SOLVE_ITERS`] steps, and a union that lies within the limits can come
+/// out a hair beyond them there: the quarters of the ±10 % ball at 0.02 % beyond on one
+/// diagonal and within on the other, so that it came in three parts instead of the two halves
+/// of a tennis ball. A union far beyond them is not worth the longer solve.
+pub const MERGE_NEAR_MISS: f64 = 5e-3;
+
+/// The flattenings a merged part is judged by: `alone` (the limits held, the split's capped
+/// steps), and `again` from that map (the flattener's full steps) where it came out within
+/// [`MERGE_NEAR_MISS`] beyond the limits.
+#[derive(Clone, Copy)]
+struct Solves<'a> {
+    alone: &'a FlattenParams,
+    again: &'a FlattenParams,
+}
+
+/// `a` and `b` sewn into one part, flattened alone with `solves` (the limits held), when it
+/// lies within `band`, has no neck too narrow for `allowance_mm` and does not overlap itself
+/// flat.
 fn merged_within(
     a: &TriMesh,
     b: &TriMesh,
-    alone: &FlattenParams,
+    solves: Solves,
     band: Band,
     allowance_mm: f64,
 ) -> Option<TriMesh> {
     let mut m = merge(a, b)?;
-    m.flat = Some(flatcut_flatten::flatten(&m, alone).ok()?.uv);
-    let (_, e, _) = worst(std::slice::from_ref(&m), band).ok()?;
+    m.flat = Some(flatcut_flatten::flatten(&m, solves.alone).ok()?.uv);
+    let (_, mut e, _) = worst(std::slice::from_ref(&m), band).ok()?;
+    if e > 0.0 && e <= MERGE_NEAR_MISS {
+        let start = m.flat.as_deref()?;
+        let f = flatten_assembly_from(&[&m], &[], &[start], solves.again).ok()?;
+        m.flat = f.into_iter().next().map(|f| f.uv);
+        e = worst(std::slice::from_ref(&m), band).ok()?.1;
+    }
     let x = m.flat.as_deref()?;
     let wide = narrowest_neck(&m, x)? >= merged_neck(m.area(), allowance_mm);
     (e <= 0.0 && wide && matches!(outline_crossing(&m, x), Ok(None))).then_some(m)
@@ -604,8 +785,10 @@ fn seams_of(pieces: &[TriMesh]) -> Vec<MatingSeam> {
     coincident_seams(&refs, &names)
 }
 
-/// Flattens the pieces together: seams at equal lengths, the limits of `params` held.
-fn flatten_together(pieces: &mut [TriMesh], params: &FlattenParams) -> Result<(), DartError> {
+/// Flattens the pieces together: seams at equal lengths, the limits of `params` held. False
+/// when the solve stopped (at its cap or its time) with a seam's two sides still apart, by more
+/// than the flattener reports ([`SEAM_REPORT_REL`] of an edge's length).
+fn flatten_together(pieces: &mut [TriMesh], params: &FlattenParams) -> Result<bool, DartError> {
     let seams = seams_of(pieces);
     let flats = {
         let refs: Vec<&TriMesh> = pieces.iter().collect();
@@ -613,16 +796,47 @@ fn flatten_together(pieces: &mut [TriMesh], params: &FlattenParams) -> Result<()
         flatten_assembly_from(&refs, &seams, &starts, params)
             .map_err(|e| DartError::Solver(e.to_string()))?
     };
+    let stopped = flats
+        .iter()
+        .any(|f| f.info.stages.iter().any(|s| s.stopped));
     for (p, f) in pieces.iter_mut().zip(flats) {
         p.flat = Some(f.uv);
     }
-    Ok(())
+    Ok(!stopped || seams_apart(pieces, &seams) <= SEAM_REPORT_REL)
+}
+
+/// The largest difference between the flat lengths of a seam's two sides, edge by edge, as a
+/// share of the edge's 3D length.
+fn seams_apart(pieces: &[TriMesh], seams: &[MatingSeam]) -> f64 {
+    let mut apart: f64 = 0.0;
+    for s in seams {
+        let [a, b] = &s.sides;
+        let (Some(xa), Some(xb)) = (
+            pieces[a.piece].flat.as_deref(),
+            pieces[b.piece].flat.as_deref(),
+        ) else {
+            return f64::INFINITY;
+        };
+        let pa = &pieces[a.piece].positions;
+        for (va, vb) in a.vertices.windows(2).zip(b.vertices.windows(2)) {
+            let (a0, a1, b0, b1) = (
+                va[0] as usize,
+                va[1] as usize,
+                vb[0] as usize,
+                vb[1] as usize,
+            );
+            let flat = (xa[a0].distance(xa[a1]) - xb[b0].distance(xb[b1])).abs();
+            apart = apart.max(flat / pa[a0].distance(pa[a1]));
+        }
+    }
+    apart
 }
 
 /// The best cut of `piece` (see the module documentation): its two sides (each with its own
 /// map, flattened alone) and the cut's 3D path. `None` when no chord splits the piece.
 /// With `necks`, the shortest ways across the piece from points round its outline are judged
-/// too ([`necks`]).
+/// too ([`necks`]). Once `out_of_time`, no further candidate is judged (the best of those
+/// judged is taken).
 fn best_cut(
     piece: &TriMesh,
     worst_face: usize,
@@ -630,6 +844,7 @@ fn best_cut(
     band: Band,
     params: &FlattenParams,
     guard: &Guard,
+    out_of_time: &(dyn Fn() -> bool + Sync),
 ) -> Result<Option<Halves>, DartError> {
     let x = piece
         .flat
@@ -673,7 +888,7 @@ fn best_cut(
         lines
             .par_iter()
             .map(|line| {
-                if params.hooks.cancelled() {
+                if params.hooks.cancelled() || out_of_time() {
                     return None;
                 }
                 let points = match line {

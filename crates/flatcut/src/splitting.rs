@@ -264,7 +264,13 @@ pub(crate) fn into_parts(
     let count = stage.count();
     // The stand-in's own warnings do not carry over to the parts.
     let mut timed_out_warning = None;
-    if s.timed_out && s.feasible {
+    if s.seams_apart {
+        // No joint solve of the parts finished in the time: their seams are not yet equal.
+        timed_out_warning = Some(format!(
+            "{name}: the split's time limit stopped the joint solve of its {} parts before their seams agreed; this is the best cut found, its seams not yet sewable (a longer --split-time solves them)",
+            s.pieces.len()
+        ));
+    } else if s.timed_out && s.feasible {
         // Every part within the limits; the time ran out before all could be tried sewn back.
         timed_out_warning = Some(format!(
             "{name}: the split's time limit ended the merging of parts at {} parts, every one within the limits; fewer might do",
