@@ -61,7 +61,7 @@
 //! all valid but perhaps more than needed) and
 //! on the flattening hooks' cancel flag (an error; the candidates not yet judged are skipped);
 //! it reports its progress through them. The time limit bounds the whole split, from the
-//! opening on: every solve runs within the time left ([`until_limit`]), the candidates stop
+//! opening on: every solve runs within the time left (`until_limit`), the candidates stop
 //! being judged, and a joint solve the limit stops with a seam's sides still apart is not the
 //! result: the last split whose joint solve held them is (or, where none did, these parts,
 //! `seams_apart`). The split ends within its limit and the Newton step, or the candidate, under
@@ -620,7 +620,7 @@ fn merge_within(
 }
 
 /// How far beyond the limits (log strain) a merged part flattened alone may come out and still
-/// be solved again with the flattener's full steps ([`Solves::again`]). The solves that hold the
+/// be solved again with the flattener's full steps (`Solves::again`). The solves that hold the
 /// limits stop at [`HELD_SOLVE_ITERS`] steps, and a union that lies within the limits can come
 /// out a hair beyond them there: the quarters of the ±10 % ball at 0.02 % beyond on one
 /// diagonal and within on the other, so that it came in three parts instead of the two halves
