@@ -9,7 +9,7 @@
 //!
 //! Method (isometric, δ2): each piece's own δ2 optimum is the flip-free start; then an augmented
 //! Lagrangian on the edge pairs ([`joint`]): Newton solves of δ2 plus the pair terms,
-//! multipliers λ ← λ + w c, weight ×10 (up to [`MAX_WEIGHT`]) while the mismatch does not shrink
+//! multipliers λ ← λ + w c, weight ×10 (up to `MAX_WEIGHT`) while the mismatch does not shrink
 //! fast enough, until every pair agrees to [`SEAM_REL_TOLERANCE`]. Material limits are then brought in as for one piece
 //! ([`crate::limits`]), every solve keeping the seam terms. Other methods flatten each piece on
 //! its own (a seam then matches only as far as the method keeps boundary lengths: exactly for
