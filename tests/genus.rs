@@ -10,7 +10,7 @@ use std::path::Path;
 use clap::Parser;
 use flatcut::geom::DVec3;
 use flatcut::mesh::TriMesh;
-use flatcut::mesh::test_shapes::{plush_radius, star_shaped, turn};
+use flatcut_mesh::test_shapes::{plush_radius, star_shaped, turn};
 
 use crate::darts::{Obj, measured_limits, read_obj, sewn_lengths, split_parts};
 
