@@ -46,6 +46,19 @@ fn stretches(mesh: &TriMesh, x: &[DVec2], t: usize) -> (f64, f64, f64) {
     (s1, s2, det)
 }
 
+/// Every face of part `k` in its flat map turned the right way, its principal stretches within
+/// `pct` % either way.
+fn assert_faces_within(k: usize, p: &TriMesh, pct: f64) {
+    let x = p.flat.as_deref().unwrap();
+    for t in 0..p.triangles.len() {
+        let (s1, s2, det) = stretches(p, x, t);
+        assert!(
+            det > 0.0 && s1 <= 1.0 + pct / 100.0 + 1e-9 && s2 >= 1.0 - pct / 100.0 - 1e-9,
+            "part {k} face {t}: {s1} {s2} (orientation {det})"
+        );
+    }
+}
+
 fn isometric(mesh: &TriMesh) -> Vec<DVec2> {
     flatten(mesh, &FlattenParams::new(Method::Isometric))
         .unwrap()
@@ -86,19 +99,10 @@ fn a_saddle_is_split_into_parts_within_the_limits_that_sew_back_together() {
         s.pieces.len()
     );
     assert_eq!(s.cuts.len(), s.pieces.len() - 1);
-    let (hi, lo) = (1.0 + pct / 100.0, 1.0 - pct / 100.0);
     let mut area = 0.0;
     for (k, p) in s.pieces.iter().enumerate() {
         check_disk(p).unwrap_or_else(|e| panic!("part {k}: {e}"));
-        let x = p.flat.as_deref().unwrap();
-        for t in 0..p.triangles.len() {
-            let (s1, s2, det) = stretches(p, x, t);
-            assert!(det > 0.0, "part {k} face {t} flipped");
-            assert!(
-                s1 <= hi + 1e-9 && s2 >= lo - 1e-9,
-                "part {k} face {t}: {s1} {s2}"
-            );
-        }
+        assert_faces_within(k, p, pct);
         // No sliver: no part under the stated share of the whole surface.
         assert!(
             p.area() >= flatcut_darts::split::MIN_SURFACE_SHARE * mesh.area(),
@@ -189,14 +193,7 @@ fn parts_whose_union_holds_the_limits_are_merged_back() {
     let p = &s.pieces[0];
     check_disk(p).unwrap();
     assert!((p.area() - mesh.area()).abs() < 1e-6 * mesh.area());
-    let x = p.flat.as_deref().unwrap();
-    for t in 0..p.triangles.len() {
-        let (s1, s2, det) = stretches(p, x, t);
-        assert!(
-            det > 0.0 && s1 <= 1.03 + 1e-9 && s2 >= 0.97 - 1e-9,
-            "face {t}: {s1} {s2}"
-        );
-    }
+    assert_faces_within(0, p, 3.0);
 }
 
 #[test]
@@ -333,10 +330,7 @@ fn a_piece_that_overlaps_itself_flat_is_cut_until_no_part_does() {
     for (k, p) in s.pieces.iter().enumerate() {
         let x = p.flat.as_deref().unwrap();
         assert_eq!(outline_crossings(p, x), 0, "part {k} overlaps itself");
-        for t in 0..p.triangles.len() {
-            let (s1, s2, det) = stretches(p, x, t);
-            assert!(det > 0.0 && s1 <= 1.05 + 1e-9 && s2 >= 0.95 - 1e-9);
-        }
+        assert_faces_within(k, p, 5.0);
         area += p.area();
     }
     assert!((area - mesh.area()).abs() < 1e-9 * mesh.area());
@@ -496,14 +490,7 @@ fn spread_excess_is_cut_through_its_middle_into_few_parts() {
     let mut area = 0.0;
     for (k, p) in s.pieces.iter().enumerate() {
         check_disk(p).unwrap();
-        let x = p.flat.as_deref().unwrap();
-        for t in 0..p.triangles.len() {
-            let (s1, s2, det) = stretches(p, x, t);
-            assert!(
-                det > 0.0 && s1 <= 1.0 + pct / 100.0 + 1e-9 && s2 >= 1.0 - pct / 100.0 - 1e-9,
-                "part {k} face {t}: {s1} {s2}"
-            );
-        }
+        assert_faces_within(k, p, pct);
         area += p.area();
     }
     // The parts tile the surface (to the tolerance of the command-line torus test).
@@ -534,14 +521,7 @@ fn a_ball_within_ten_percent_comes_as_the_two_halves_of_a_tennis_ball() {
         let mut area = 0.0;
         for (k, p) in s.pieces.iter().enumerate() {
             check_disk(p).unwrap_or_else(|e| panic!("part {k}: {e}"));
-            let x = p.flat.as_deref().unwrap();
-            for t in 0..p.triangles.len() {
-                let (s1, s2, det) = stretches(p, x, t);
-                assert!(
-                    det > 0.0 && s1 <= 1.0 + pct / 100.0 + 1e-9 && s2 >= 1.0 - pct / 100.0 - 1e-9,
-                    "part {k} face {t}: {s1} {s2}"
-                );
-            }
+            assert_faces_within(k, p, pct);
             // Halves, not a cap and the rest.
             assert!(
                 (p.area() - mesh.area() / 2.0).abs() < 0.05 * mesh.area(),
