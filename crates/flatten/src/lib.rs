@@ -37,7 +37,8 @@
 //! rest length) and kept from turning over in triangles of their own (`MapProblem::with_guards`):
 //! the darts' tight fit. The sparse Cholesky is always supernodal and sequential (the second
 //! core gets whole tasks instead: an isometric map's Newton analysis is made beside its LSCM
-//! start, `nonlinear::solve`); from 40M (about 300k faces) the factor is single precision and each solve is
+//! start, `nonlinear::solve`, and LSCM's own analysis, whose pattern it makes from the mesh's
+//! graph, beside the assembly of its values, `lscm.rs`); from 40M (about 300k faces) the factor is single precision and each solve is
 //! refined to double precision by conjugate gradients (`refine.rs`). Long solves report progress
 //! and honour a time limit and a cancel flag (`FlattenParams::time_limit`, `FlattenHooks`). Every
 //! stage of a flattening (a method's own solve, the limits, the joint solve's seams, the darts, the

@@ -16,12 +16,15 @@ use crate::internal::InternalError;
 use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
 
-use crate::ops::{QuadraticBuilder, corner_cotans, used_mask, uv_area};
-use crate::ordering::{Graph, shared_dissection};
-use crate::sparse::Ordering;
+use crate::ops::{
+    QuadraticBuilder, laplacian_terms, triangle_cotans, used_mask, uv_area, vertex_triangles,
+};
+use crate::ordering::{Graph, shared_dissection_of};
+use crate::sparse::{Ordering, SpdSolver, SymPattern};
 use crate::{FlattenError, FlattenInfo, Flattening, Method, Pin, Timings};
 use rayon::prelude::*;
-use std::time::{Duration, Instant};
+use std::sync::Arc;
+use std::time::Instant;
 
 /// Solves LSCM on the disk `mesh` (topology from `check_disk`) with the (validated) `pins`.
 pub fn lscm(mesh: &TriMesh, topo: &Topology, pins: &[Pin]) -> Result<Flattening, FlattenError> {
@@ -93,9 +96,18 @@ pub fn solve_pinned(
     solve_pinned_timed(mesh, topo, hard).map(|(uv, _)| uv)
 }
 
-/// [`solve_pinned`], with where its time went: the assembly of the matrix (cotangents, the
-/// Dirichlet and boundary-area terms, their compression), the ordering and symbolic analysis,
-/// the numeric factorisation and the solve, for `flatten --timings`.
+/// [`solve_pinned`], with where its time went: the ordering and symbolic analysis, the assembly
+/// of the matrix beyond it (cotangents, the Dirichlet and boundary-area terms), the numeric
+/// factorisation and the solve, for `flatten --timings`.
+///
+/// The pattern of the matrix depends only on the mesh's graph, the fixed dofs and the boundary
+/// loops, never on the coordinates: this thread makes it and analyses it (its order and symbolic
+/// factorisation, [`analyse`]) while another one assembles the values ([`ConformalValues`]),
+/// which are then put straight into the factor's order. The factor, and the map, are the same
+/// bits as those of the matrix assembled from triplets ([`conformal_terms`] into a
+/// [`QuadraticBuilder`]), with any number of threads. Everything the map keeps or frees is made
+/// on this thread (the other one fills it): the Newton solve a start map leads to reuses this
+/// thread's freed memory, not another thread's.
 fn solve_pinned_timed(
     mesh: &TriMesh,
     topo: &Topology,
@@ -103,52 +115,52 @@ fn solve_pinned_timed(
 ) -> Result<(Vec<DVec2>, Timings), FlattenError> {
     let started = Instant::now();
     let n = mesh.positions.len();
-    let mut fixed = vec![false; 2 * n];
-    for (v, used) in used_mask(mesh).into_iter().enumerate() {
-        if !used {
-            fixed[2 * v] = true;
-            fixed[2 * v + 1] = true;
-        }
+    let fixed = fixed_dofs(mesh, hard);
+    let mut q = QuadraticBuilder::new(&fixed, 0).dofs_per_vertex(2);
+    if q.free_index().iter().all(|&i| i == usize::MAX) {
+        return Err(FlattenError::Internal(InternalError::EveryUnknownFixed {
+            stage: "lscm",
+        }));
     }
-    for &(v, _) in hard {
-        fixed[2 * v as usize] = true;
-        fixed[2 * v as usize + 1] = true;
-    }
-    // The order depends on the mesh's graph alone: it is made on a thread of its own while the
-    // matrix is assembled on this one (its time beyond the assembly's is the ordering's). Not
-    // the other way round, nor both on rayon's threads: the assembly's buffers, freed before the
-    // Newton solve a start map leads to, would then be held in another thread's heap, which
-    // that solve does not reuse (34 MB more at the peak of a million-face isometric map).
-    let dissect = || {
-        (Ordering::for_nodes(n) == Ordering::NestedDissection).then(|| {
-            let started = Instant::now();
-            // The mesh's graph, pins included: the Newton solve this map starts orders the
-            // same graph, and reuses this order.
-            let order = shared_dissection(Graph::of_triangles(n, &mesh.triangles));
-            (order, started.elapsed())
-        })
-    };
-    let assemble = || {
-        let started = Instant::now();
-        let q = QuadraticBuilder::new(&fixed, 6 * mesh.triangles.len()).dofs_per_vertex(2);
-        (conformal_terms(q, mesh, topo), started.elapsed())
-    };
-    let (order, (mut q, assembling)) = std::thread::scope(|s| {
-        let order = s.spawn(dissect);
-        let q = assemble();
+    let area = AreaTerms::of(topo);
+    // The mesh's graph, pins included (the Newton solve this map may start orders the same
+    // graph, and reuses the order), made on a thread of its own, as the order is: the graph
+    // outlives the map in the order's memo, and the room its making frees (28 MB at a million
+    // faces) is not left among this thread's memory.
+    let (graph, (ptr, tris)) = std::thread::scope(|s| {
+        let graph = s.spawn(|| Arc::new(Graph::of_triangles(n, &mesh.triangles)));
+        let incidence = vertex_triangles(n, &mesh.triangles);
         // A panic there is a bug, carried on here as if it were this thread's.
-        let order = order
+        let graph = graph
             .join()
             .unwrap_or_else(|e| std::panic::resume_unwind(e));
-        (order, q)
+        (graph, incidence)
     });
-    let mut overhang = Duration::ZERO;
-    if let Some((order, ordering)) = order {
-        q = q.vertex_order(order);
-        overhang = ordering.saturating_sub(assembling);
-    }
-    let sys = q.build("lscm")?;
+    // Each triangle's cotangents where they are needed (a triangle's thrice, not held: 24 MB at
+    // a million faces).
+    let cot = |t: usize| triangle_cotans(&mesh.positions, mesh.triangles[t]);
+    let mut values = ConformalValues::zeroed(&graph);
+    let (analysis, analysing) = std::thread::scope(|s| {
+        let assembly = s.spawn(|| values.fill(&mesh.triangles, &graph, (&ptr, &tris), cot));
+        let started = Instant::now();
+        let analysis = analyse(&graph, q.free_index(), &area);
+        let analysing = started.elapsed();
+        // A panic there is a bug, carried on here as if it were this thread's.
+        assembly
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e));
+        (analysis, analysing)
+    });
+    drop((ptr, tris));
+    // The couplings of the free unknowns to the fixed ones, in the order of the triplets'.
+    let at_fixed = |vs: &[u32]| vs.iter().any(|&v| fixed[2 * v as usize]);
+    conformal_terms(mesh, topo, cot, at_fixed, &mut |i, j, w| q.add(i, j, w));
+    let (solver, free) = analysis?;
+    let matrix = solver.values_of(|i, j| values.entry(&graph, &area, free[i], free[j]));
+    drop((values, graph, free));
     let built = started.elapsed();
+    let mut sys = q.with_solver(solver);
+    sys.factor(matrix)?;
     // The map's vector after the factorisation, the memory peak of a large map.
     let mut x = vec![0.0; 2 * n];
     for &(v, p) in hard {
@@ -159,11 +171,11 @@ fn solve_pinned_timed(
     sys.solve(&mut fields, None)?;
     let x = &fields[0];
     let solver = sys.timings();
-    // The builder's own time: what the solver did not account for while building, but for
-    // the ordering's overhang.
+    // The assembly ran beside the analysis: what it took beyond it, the set-up and the
+    // values' gathering are the assembly's time.
     let timings = Timings {
-        assembly: built.saturating_sub(solver.ordering + solver.factorisation + overhang),
-        ordering: solver.ordering + overhang,
+        assembly: built.saturating_sub(analysing),
+        ordering: analysing,
         ..solver
     };
     Ok((
@@ -172,30 +184,302 @@ fn solve_pinned_timed(
     ))
 }
 
-/// Adds the conformal energy of `mesh` to `q` (u and v of vertex `v` are dofs 2v and 2v + 1):
-/// the cotangent Dirichlet energy of both coordinates and minus the signed area, which the
-/// boundary loops of `topo` give alone (the interior edges' contributions cancel exactly).
-fn conformal_terms(mut q: QuadraticBuilder, mesh: &TriMesh, topo: &Topology) -> QuadraticBuilder {
-    let cot = corner_cotans(&mesh.positions, &mesh.triangles);
-    for (tri, c) in mesh.triangles.iter().zip(&cot) {
-        for k in 0..3 {
-            let (a, b) = (tri[(k + 1) % 3] as usize, tri[(k + 2) % 3] as usize);
-            // Dirichlet energy ¼ Σ cot (u_a − u_b)² = ½ Σ (cot/2)(u_a − u_b)², both coordinates.
-            let w = 0.5 * c[k];
-            q.add_edge(2 * a, 2 * b, w);
-            q.add_edge(2 * a + 1, 2 * b + 1, w);
+/// Which dofs are held (u of vertex `v` is dof 2v, its v 2v + 1): both of every vertex in `hard`
+/// and of every vertex no triangle uses.
+fn fixed_dofs(mesh: &TriMesh, hard: &[(u32, DVec2)]) -> Vec<bool> {
+    let mut fixed = vec![false; 2 * mesh.positions.len()];
+    for (v, used) in used_mask(mesh).into_iter().enumerate() {
+        if !used {
+            fixed[2 * v] = true;
+            fixed[2 * v + 1] = true;
         }
     }
-    drop(cot);
+    for &(v, _) in hard {
+        fixed[2 * v as usize] = true;
+        fixed[2 * v as usize + 1] = true;
+    }
+    fixed
+}
+
+/// The pattern of the free block of the conformal energy's matrix and its solver (ordering and
+/// symbolic factorisation, no values), with the dof of each of its unknowns. Nested dissection
+/// orders the mesh's `graph` ([`shared_dissection_of`]), which the Newton solve a start map
+/// leads to shares.
+fn analyse(
+    graph: &Arc<Graph>,
+    free_index: &[usize],
+    area: &AreaTerms,
+) -> Result<(SpdSolver, Vec<u32>), FlattenError> {
+    let n = graph.len();
+    let (pattern, order) = std::thread::scope(|s| {
+        let order = s.spawn(|| {
+            (Ordering::for_nodes(n) == Ordering::NestedDissection)
+                .then(|| shared_dissection_of(Arc::clone(graph)))
+        });
+        let pattern = conformal_pattern(graph, free_index, area);
+        // A panic there is a bug, carried on here as if it were this thread's.
+        let order = order
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e));
+        (pattern, order)
+    });
+    let (pattern, free) = pattern?;
+    let node_of = free.iter().map(|&d| d / 2).collect();
+    let mut pattern = pattern.with_nodes(node_of, n)?;
+    if let Some(d) = order {
+        pattern = pattern.with_node_order(d)?;
+    }
+    let solver = SpdSolver::new_sooner(&pattern.by_field(), "lscm")?;
+    Ok((solver, free))
+}
+
+/// The lower triangle of the free block of the conformal energy's matrix, as the triplets of
+/// [`conformal_terms`] would give it (every entry they touch, zeros included), made from the
+/// mesh's graph: u–u and v–v of every edge, u–v of the boundary edges ([`AreaTerms`]), and the
+/// diagonal. With the dof of each unknown (unknowns numbered by `free_index`).
+fn conformal_pattern(
+    graph: &Graph,
+    free_index: &[usize],
+    area: &AreaTerms,
+) -> Result<(SymPattern, Vec<u32>), FlattenError> {
+    // Every boundary edge is an edge of the graph, or its term would be dropped.
+    if let Some(&((x, y), _)) = area
+        .terms
+        .iter()
+        .find(|((x, y), _)| graph.neighbours(*x).binary_search(y).is_err())
+    {
+        return Err(FlattenError::Solver {
+            stage: "lscm",
+            reason: format!("the boundary edge {x}–{y} is not an edge of the mesh's triangles"),
+        });
+    }
+    // The vertices some u–v entry is at: the others' columns need no look-up of one.
+    let mut coupled_at = vec![false; graph.len()];
+    for &((x, y), _) in &area.terms {
+        coupled_at[x as usize] = true;
+        coupled_at[y as usize] = true;
+    }
+    let free: Vec<u32> = (0..free_index.len() as u32)
+        .filter(|&d| free_index[d as usize] != usize::MAX)
+        .collect();
+    let mut col_ptr = Vec::with_capacity(free.len() + 1);
+    let mut row_idx = Vec::with_capacity(free.len() + graph.n_neighbours());
+    col_ptr.push(0);
+    for &d in &free {
+        let (c, f) = (d / 2, d % 2);
+        row_idx.push(free_index[d as usize]);
+        for &a in graph.neighbours(c).iter().filter(|&&a| a > c) {
+            // u and v of `a`, in this order: the same field, and the other one where a
+            // boundary edge couples them.
+            let (ua, va) = (2 * a as usize, 2 * a as usize + 1);
+            let (same, other) = if f == 0 { (ua, va) } else { (va, ua) };
+            let coupled = coupled_at[c as usize]
+                && if f == 0 {
+                    area.get(c, a).is_some()
+                } else {
+                    area.get(a, c).is_some()
+                };
+            for dof in [ua, va] {
+                if (dof == same || (dof == other && coupled)) && free_index[dof] != usize::MAX {
+                    row_idx.push(free_index[dof]);
+                }
+            }
+        }
+        col_ptr.push(row_idx.len());
+    }
+    let pattern = SymPattern::from_lower_csc(free.len(), col_ptr, row_idx, "lscm")?;
+    Ok((pattern, free))
+}
+
+/// Adds the conformal energy's terms to `add` (u and v of vertex `v` are dofs 2v and 2v + 1), in
+/// the order their sums are made: the cotangent Dirichlet energy of both coordinates of each
+/// triangle whose vertices `at` accepts, then minus the signed area of each boundary edge whose
+/// ends it accepts (the boundary loops of `topo` give the area alone: the interior edges'
+/// contributions cancel exactly). `cot(t)` gives the corner cotangents of triangle `t`
+/// ([`triangle_cotans`]).
+fn conformal_terms(
+    mesh: &TriMesh,
+    topo: &Topology,
+    cot: impl Fn(usize) -> [f64; 3],
+    at: impl Fn(&[u32]) -> bool,
+    add: &mut impl FnMut(usize, usize, f64),
+) {
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        if at(tri) {
+            dirichlet_terms(*tri, cot(t), add);
+        }
+    }
     for lp in &topo.boundary_loops {
         for i in 0..lp.len() {
-            let (a, b) = (lp[i] as usize, lp[(i + 1) % lp.len()] as usize);
-            // Minus the signed area ½ (x_a y_b − x_b y_a) of the boundary edge a → b.
-            q.add(2 * a, 2 * b + 1, -0.5);
-            q.add(2 * b, 2 * a + 1, 0.5);
+            let (a, b) = (lp[i], lp[(i + 1) % lp.len()]);
+            if at(&[a, b]) {
+                area_terms(a, b, add);
+            }
         }
     }
-    q
+}
+
+/// The Dirichlet energy ¼ Σ cot (u_a − u_b)² = ½ Σ (cot/2)(u_a − u_b)² of both coordinates on
+/// one triangle with corner cotangents `cot` ([`laplacian_terms`] of each edge, u then v).
+fn dirichlet_terms(tri: [u32; 3], cot: [f64; 3], add: &mut impl FnMut(usize, usize, f64)) {
+    for k in 0..3 {
+        let (a, b) = (tri[(k + 1) % 3] as usize, tri[(k + 2) % 3] as usize);
+        let w = 0.5 * cot[k];
+        laplacian_terms(2 * a, 2 * b, w, add);
+        laplacian_terms(2 * a + 1, 2 * b + 1, w, add);
+    }
+}
+
+/// Minus the signed area ½ (x_a y_b − x_b y_a) of the boundary edge a → b.
+fn area_terms(a: u32, b: u32, add: &mut impl FnMut(usize, usize, f64)) {
+    let (a, b) = (a as usize, b as usize);
+    add(2 * a, 2 * b + 1, -0.5);
+    add(2 * b, 2 * a + 1, 0.5);
+}
+
+/// The u–v entries of the conformal energy's matrix: `((x, y), q)` for the entry between u of
+/// vertex `x` and v of vertex `y`, sorted, the terms at one entry summed in their order.
+struct AreaTerms {
+    terms: Vec<((u32, u32), f64)>,
+}
+
+impl AreaTerms {
+    fn of(topo: &Topology) -> Self {
+        let mut terms = Vec::new();
+        for lp in &topo.boundary_loops {
+            for i in 0..lp.len() {
+                area_terms(lp[i], lp[(i + 1) % lp.len()], &mut |i, j, q| {
+                    // Each term is between a u (even dof) and a v (odd).
+                    let (u, v) = if i.is_multiple_of(2) { (i, j) } else { (j, i) };
+                    terms.push(((u as u32 / 2, v as u32 / 2), q));
+                });
+            }
+        }
+        // Stable: the terms at one entry stay in their order.
+        terms.sort_by_key(|&(at, _)| at);
+        let mut merged: Vec<((u32, u32), f64)> = Vec::with_capacity(terms.len());
+        for (at, q) in terms {
+            match merged.last_mut() {
+                Some((last, s)) if *last == at => *s += q,
+                _ => merged.push((at, q)),
+            }
+        }
+        Self { terms: merged }
+    }
+
+    /// The entry between u of `x` and v of `y`, if a boundary edge joins them.
+    fn get(&self, x: u32, y: u32) -> Option<f64> {
+        let k = self
+            .terms
+            .binary_search_by_key(&(x, y), |&(at, _)| at)
+            .ok()?;
+        Some(self.terms[k].1)
+    }
+}
+
+/// The Dirichlet part of the conformal energy's matrix, vertex by vertex (u's and v's are the
+/// same): the diagonal, and the entry of each edge beside the mesh's graph's neighbour lists.
+/// Each entry is summed as the triplets of [`conformal_terms`] are (in the order of the
+/// triangles), so the matrix is the same bits; the vertices are summed in parallel.
+struct ConformalValues {
+    diag: Vec<f64>,
+    /// The entry of vertex `v` and its `k`-th neighbour at `graph.first_neighbour(v) + k`.
+    edge: Vec<f64>,
+}
+
+/// Vertices per task of [`ConformalValues::fill`].
+const VALUES_BLOCK: usize = 4096;
+
+impl ConformalValues {
+    /// Room for the entries of the mesh with `graph`, zero.
+    fn zeroed(graph: &Graph) -> Self {
+        Self {
+            diag: vec![0.0; graph.len()],
+            edge: vec![0.0; graph.n_neighbours()],
+        }
+    }
+
+    /// The entries of the mesh with `triangles`, its `graph`, the triangles at each vertex
+    /// ([`vertex_triangles`]) and the corner cotangents of each (`cot`), blocks of vertices in
+    /// parallel.
+    fn fill(
+        &mut self,
+        triangles: &[[u32; 3]],
+        graph: &Graph,
+        (ptr, tris): (&[usize], &[u32]),
+        cot: impl Fn(usize) -> [f64; 3] + Sync,
+    ) {
+        let n = graph.len();
+        let mut blocks = Vec::with_capacity(n.div_ceil(VALUES_BLOCK));
+        let (mut diag, mut edge) = (self.diag.as_mut_slice(), self.edge.as_mut_slice());
+        for first in (0..n).step_by(VALUES_BLOCK) {
+            let end = (first + VALUES_BLOCK).min(n);
+            let entries = graph.first_neighbour(end as u32) - graph.first_neighbour(first as u32);
+            let (d, d_rest) = std::mem::take(&mut diag).split_at_mut(end - first);
+            let (e, e_rest) = std::mem::take(&mut edge).split_at_mut(entries);
+            blocks.push((first..end, d, e));
+            (diag, edge) = (d_rest, e_rest);
+        }
+        blocks.into_par_iter().for_each(|(vertices, diag, edge)| {
+            let base = graph.first_neighbour(vertices.start as u32);
+            let mut sums: Vec<Option<f64>> = Vec::new();
+            for v in vertices.clone() {
+                let nb = graph.neighbours(v as u32);
+                sums.clear();
+                sums.resize(nb.len(), None);
+                let mut d = 0.0;
+                for &t in &tris[ptr[v]..ptr[v + 1]] {
+                    let t = t as usize;
+                    dirichlet_terms(triangles[t], cot(t), &mut |i, j, w| {
+                        // u's terms: v's are the same.
+                        if i % 2 != 0 || j % 2 != 0 {
+                            return;
+                        }
+                        let (a, b) = (i / 2, j / 2);
+                        if a == v && b == v {
+                            d += w;
+                        } else if a == v || b == v {
+                            let other = (a + b - v) as u32;
+                            if let Ok(k) = nb.binary_search(&other) {
+                                // The first term as it is, as a sum of triplets starts.
+                                sums[k] = Some(sums[k].map_or(w, |s| s + w));
+                            }
+                        }
+                    });
+                }
+                diag[v - vertices.start] = d;
+                let at = graph.first_neighbour(v as u32) - base;
+                for (e, s) in edge[at..at + nb.len()].iter_mut().zip(&sums) {
+                    *e = s.unwrap_or(0.0);
+                }
+            }
+        });
+    }
+
+    /// The matrix's entry between dofs `i` and `j` (both free, in its pattern); NaN, which the
+    /// factorisation refuses, for one that is not.
+    fn entry(&self, graph: &Graph, area: &AreaTerms, i: u32, j: u32) -> f64 {
+        let (vi, vj) = (i / 2, j / 2);
+        if vi == vj {
+            return if i == j {
+                self.diag[vi as usize]
+            } else {
+                f64::NAN
+            };
+        }
+        if i % 2 == j % 2 {
+            return match graph.neighbours(vi).binary_search(&vj) {
+                Ok(k) => self.edge[graph.first_neighbour(vi) + k],
+                Err(_) => f64::NAN,
+            };
+        }
+        let (x, y) = if i.is_multiple_of(2) {
+            (vi, vj)
+        } else {
+            (vj, vi)
+        };
+        area.get(x, y).unwrap_or(f64::NAN)
+    }
 }
 
 /// Triangles per block of the energy's parallel sum: fixed, so the partial sums, and the
@@ -246,4 +530,132 @@ pub fn farthest_boundary_pair(mesh: &TriMesh, topo: &Topology) -> Result<(u32, u
         return Err(FlattenError::Internal(InternalError::LscmSingleVertex));
     }
     Ok((a.min(b), a.max(b)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ops::corner_cotans;
+    use crate::testmesh::{saddle, spherical_cap};
+
+    /// A cap with two pins inside its boundary's reach and a vertex no triangle uses, with its
+    /// topology and the pins.
+    fn pinned_cap() -> (TriMesh, Topology, Vec<(u32, DVec2)>) {
+        let mut mesh = spherical_cap(40.0, 1.1, 24);
+        let topo = flatcut_mesh::check_disk(&mesh).unwrap();
+        mesh.positions.push(flatcut_geom::DVec3::new(1e3, 0.0, 0.0));
+        let (a, b) = farthest_boundary_pair(&mesh, &topo).unwrap();
+        let hard = vec![(a, DVec2::ZERO), (b, DVec2::new(70.0, 0.0)), (7, DVec2::Y)];
+        (mesh, topo, hard)
+    }
+
+    /// The matrix of the free unknowns as the triplets of every term give it (the assembly the
+    /// map had before its pattern was made from the graph), in compressed-column form, and the
+    /// builder that holds its numbering and couplings.
+    fn triplet_matrix(
+        mesh: &TriMesh,
+        topo: &Topology,
+        hard: &[(u32, DVec2)],
+    ) -> (SymPattern, Vec<f64>, Vec<u32>) {
+        let fixed = fixed_dofs(mesh, hard);
+        let mut q = QuadraticBuilder::new(&fixed, 6 * mesh.triangles.len());
+        let cot = corner_cotans(&mesh.positions, &mesh.triangles);
+        conformal_terms(mesh, topo, |t| cot[t], |_| true, &mut |i, j, w| {
+            q.add(i, j, w)
+        });
+        let free = (0..fixed.len() as u32)
+            .filter(|&d| !fixed[d as usize])
+            .collect();
+        let (pattern, values) = q.into_triplet_matrix("test").unwrap();
+        (pattern, values, free)
+    }
+
+    #[test]
+    fn the_matrix_made_from_the_graph_is_the_triplets_matrix_bit_for_bit() {
+        for (mesh, topo, hard) in [pinned_cap(), {
+            let m = saddle(50.0, 30);
+            let t = flatcut_mesh::check_disk(&m).unwrap();
+            (m, t, vec![(0, DVec2::ZERO), (5, DVec2::X)])
+        }] {
+            let (want, want_values, free) = triplet_matrix(&mesh, &topo, &hard);
+            let n = mesh.positions.len();
+            let fixed = fixed_dofs(&mesh, &hard);
+            let q = QuadraticBuilder::new(&fixed, 0);
+            let graph = Graph::of_triangles(n, &mesh.triangles);
+            let area = AreaTerms::of(&topo);
+            let (got, got_free) = conformal_pattern(&graph, q.free_index(), &area).unwrap();
+            assert_eq!(got_free, free);
+            assert_eq!(got.csc(), want.csc(), "the pattern");
+            let (ptr, tris) = vertex_triangles(n, &mesh.triangles);
+            let cot = corner_cotans(&mesh.positions, &mesh.triangles);
+            let mut values = ConformalValues::zeroed(&graph);
+            values.fill(&mesh.triangles, &graph, (&ptr, &tris), |t| cot[t]);
+            let (col_ptr, row_idx) = want.csc();
+            for c in 0..free.len() {
+                for k in col_ptr[c]..col_ptr[c + 1] {
+                    let got = values.entry(&graph, &area, free[row_idx[k]], free[c]);
+                    assert_eq!(
+                        got.to_bits(),
+                        want_values[k].to_bits(),
+                        "entry ({}, {c}): {got} against {}",
+                        row_idx[k],
+                        want_values[k]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_analysis_beside_the_assembly_gives_the_triplets_map_with_any_threads() {
+        let (mesh, topo, hard) = pinned_cap();
+        let n = mesh.positions.len();
+        // The map of the matrix assembled from triplets and factored after it.
+        let want = {
+            let fixed = fixed_dofs(&mesh, &hard);
+            let mut q = QuadraticBuilder::new(&fixed, 6 * mesh.triangles.len()).dofs_per_vertex(2);
+            let cot = corner_cotans(&mesh.positions, &mesh.triangles);
+            conformal_terms(&mesh, &topo, |t| cot[t], |_| true, &mut |i, j, w| {
+                q.add(i, j, w)
+            });
+            let sys = q.build("test").unwrap();
+            let mut x = vec![0.0; 2 * n];
+            for &(v, p) in &hard {
+                x[2 * v as usize] = p.x;
+                x[2 * v as usize + 1] = p.y;
+            }
+            let mut fields = vec![x];
+            sys.solve(&mut fields, None).unwrap();
+            fields.remove(0)
+        };
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let uv = pool.install(|| solve_pinned(&mesh, &topo, &hard)).unwrap();
+            for v in 0..n {
+                assert_eq!(uv[v].x.to_bits(), want[2 * v].to_bits(), "u of {v}");
+                assert_eq!(uv[v].y.to_bits(), want[2 * v + 1].to_bits(), "v of {v}");
+            }
+        }
+        // The pins hold, and the unused vertex is at the origin.
+        for &(v, p) in &hard {
+            let uv = solve_pinned(&mesh, &topo, &hard).unwrap();
+            assert_eq!(uv[v as usize], p);
+        }
+    }
+
+    #[test]
+    fn every_unknown_fixed_is_an_error() {
+        let mesh = crate::testmesh::skew_triangle();
+        let topo = flatcut_mesh::check_disk(&mesh).unwrap();
+        let hard: Vec<(u32, DVec2)> = (0..3).map(|v| (v, DVec2::splat(v as f64))).collect();
+        assert!(matches!(
+            solve_pinned(&mesh, &topo, &hard),
+            Err(FlattenError::Internal(
+                InternalError::EveryUnknownFixed { .. }
+            ))
+        ));
+    }
 }

@@ -44,19 +44,23 @@ pub fn flat_corner_angles(triangles: &[[u32; 3]], uv: &[DVec2]) -> Vec<[f64; 3]>
 }
 
 /// Cotangent of the angle at each corner: `cot[t][k]` weights the edge opposite corner `k`,
-/// i.e. the edge `(triangles[t][k+1], triangles[t][k+2])`.
+/// i.e. the edge `(triangles[t][k+1], triangles[t][k+2])`. Computed in parallel, each
+/// triangle's by itself ([`triangle_cotans`]): the same bits with any number of threads.
 pub fn corner_cotans(positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {
     triangles
-        .iter()
-        .map(|tri| {
-            let p = tri.map(|v| positions[v as usize]);
-            std::array::from_fn(|k| {
-                let a = p[(k + 1) % 3] - p[k];
-                let b = p[(k + 2) % 3] - p[k];
-                a.dot(b) / a.cross(b).length()
-            })
-        })
+        .par_iter()
+        .map(|&tri| triangle_cotans(positions, tri))
         .collect()
+}
+
+/// The cotangents of the corners of one triangle, as [`corner_cotans`] gives them.
+pub fn triangle_cotans(positions: &[DVec3], tri: [u32; 3]) -> [f64; 3] {
+    let p = tri.map(|v| positions[v as usize]);
+    std::array::from_fn(|k| {
+        let a = p[(k + 1) % 3] - p[k];
+        let b = p[(k + 2) % 3] - p[k];
+        a.dot(b) / a.cross(b).length()
+    })
 }
 
 /// Which vertices lie on the boundary (`true`) of a mesh with topology `topo`.
@@ -68,6 +72,47 @@ pub fn boundary_mask(n: usize, topo: &Topology) -> Vec<bool> {
         }
     }
     b
+}
+
+/// The triangles at each vertex, in increasing index, in compressed form: those of vertex `v`
+/// are `tris[ptr[v]..ptr[v + 1]]` (a triangle that names a vertex twice is listed once).
+pub fn vertex_triangles(n: usize, triangles: &[[u32; 3]]) -> (Vec<usize>, Vec<u32>) {
+    let mut ptr = vec![0usize; n + 1];
+    let distinct = |tri: &[u32; 3], k: usize| tri[..k].iter().all(|&w| w != tri[k]);
+    for tri in triangles {
+        for k in 0..3 {
+            if distinct(tri, k) {
+                ptr[tri[k] as usize + 1] += 1;
+            }
+        }
+    }
+    for v in 0..n {
+        ptr[v + 1] += ptr[v];
+    }
+    let mut tris = vec![0u32; ptr[n]];
+    // Filled by each vertex's offset, moved along and then back.
+    for (t, tri) in triangles.iter().enumerate() {
+        for k in 0..3 {
+            if distinct(tri, k) {
+                let v = tri[k] as usize;
+                tris[ptr[v]] = t as u32;
+                ptr[v] += 1;
+            }
+        }
+    }
+    for v in (1..=n).rev() {
+        ptr[v] = ptr[v - 1];
+    }
+    ptr[0] = 0;
+    (ptr, tris)
+}
+
+/// The terms `add(i, i, w)`, `add(j, j, w)`, `add(i, j, −w)` of the Laplacian energy
+/// `w (x_i − x_j)²/2`, in this order (the order their sums are made in).
+pub fn laplacian_terms(i: usize, j: usize, w: f64, add: &mut impl FnMut(usize, usize, f64)) {
+    add(i, i, w);
+    add(j, j, w);
+    add(i, j, -w);
 }
 
 /// Which vertices are used by at least one triangle.
@@ -150,8 +195,6 @@ pub struct QuadraticBuilder {
     /// Consecutive dofs that belong to one mesh vertex (1, or 2 for u and v), for the
     /// fill-reducing ordering.
     dofs_per_vertex: u32,
-    /// The order of the vertices, when given ([`QuadraticBuilder::vertex_order`]).
-    vertex_order: Option<std::sync::Arc<crate::ordering::Dissected>>,
 }
 
 impl QuadraticBuilder {
@@ -174,7 +217,6 @@ impl QuadraticBuilder {
             coupling: Vec::new(),
             triplets,
             dofs_per_vertex: 1,
-            vertex_order: None,
         }
     }
 
@@ -184,14 +226,6 @@ impl QuadraticBuilder {
     /// ([`crate::sparse::SymPattern::by_field`]).
     pub fn dofs_per_vertex(mut self, k: u32) -> Self {
         self.dofs_per_vertex = k.max(1);
-        self
-    }
-
-    /// Orders the vertices by `d`, the nested dissection of the mesh's vertex graph, rather than
-    /// by the graph of the free unknowns ([`crate::sparse::SymPattern::with_node_order`]): LSCM
-    /// then shares its ordering with the Newton solve it starts.
-    pub fn vertex_order(mut self, d: std::sync::Arc<crate::ordering::Dissected>) -> Self {
-        self.vertex_order = Some(d);
         self
     }
 
@@ -208,9 +242,39 @@ impl QuadraticBuilder {
 
     /// Adds the Laplacian term `w (x_i − x_j)²/2` to the energy.
     pub fn add_edge(&mut self, i: usize, j: usize, w: f64) {
-        self.add(i, i, w);
-        self.add(j, j, w);
-        self.add(i, j, -w);
+        laplacian_terms(i, j, w, &mut |i, j, v| self.add(i, j, v));
+    }
+
+    /// The index of each dof among the free ones (`usize::MAX` for a fixed dof): the numbering
+    /// of the unknowns of `Q_ff`.
+    pub fn free_index(&self) -> &[usize] {
+        &self.free_index
+    }
+
+    /// The problem of a matrix `Q_ff` assembled apart from this builder, whose values `solver`
+    /// (its unknowns numbered by [`QuadraticBuilder::free_index`]) is then given by
+    /// [`Reduced::factor`], with the couplings to fixed dofs added here. Entries of `Q_ff` added
+    /// here are dropped, and so is the builder's index (before the factorisation, the memory
+    /// peak).
+    pub fn with_solver(self, solver: SpdSolver) -> Reduced {
+        Reduced {
+            free: self.free,
+            coupling: self.coupling,
+            solver,
+        }
+    }
+
+    /// `Q_ff` in compressed-column form (lower triangle), its diagonal added last, as
+    /// [`QuadraticBuilder::build`] factors it.
+    #[cfg(test)]
+    pub fn into_triplet_matrix(
+        mut self,
+        stage: &'static str,
+    ) -> Result<(SymPattern, Vec<f64>), FlattenError> {
+        for (i, &d) in self.diag.iter().enumerate() {
+            self.triplets.add(i, i, d);
+        }
+        SymPattern::compress(self.triplets, stage)
     }
 
     /// Factors `Q_ff`.
@@ -230,10 +294,7 @@ impl QuadraticBuilder {
         drop(std::mem::take(&mut self.free_index));
         let node_of = self.free.iter().map(|&d| d / k).collect();
         let (pattern, values) = SymPattern::compress(self.triplets, stage)?;
-        let mut pattern = pattern.with_nodes(node_of, n_vertices)?;
-        if let Some(d) = self.vertex_order {
-            pattern = pattern.with_node_order(d)?;
-        }
+        let pattern = pattern.with_nodes(node_of, n_vertices)?;
         let pattern = if k > 1 { pattern.by_field() } else { pattern };
         let mut solver = SpdSolver::new(&pattern, stage)?;
         let values = solver.gather(&pattern, &values)?;
@@ -248,6 +309,11 @@ impl QuadraticBuilder {
 }
 
 impl Reduced {
+    /// Factors `Q_ff` with these `values` (in the order of [`SpdSolver::factor`]).
+    pub fn factor(&mut self, values: Vec<f64>) -> Result<(), FlattenError> {
+        self.solver.factor(values)
+    }
+
     /// Where the solver's time went: the ordering and symbolic analysis, the numeric
     /// factorisation and the solves so far.
     pub fn timings(&self) -> crate::Timings {
@@ -347,6 +413,20 @@ pub fn mean_delta2(mesh: &TriMesh, uv: &[DVec2]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_triangles_at_each_vertex_are_listed_once_in_increasing_order() {
+        // Two triangles sharing the edge 1–2, a third naming vertex 3 twice, vertex 5 unused.
+        let tris = [[0, 1, 2], [2, 1, 3], [3, 4, 3]];
+        let (ptr, at) = vertex_triangles(6, &tris);
+        let of = |v: usize| &at[ptr[v]..ptr[v + 1]];
+        assert_eq!(of(0), &[0]);
+        assert_eq!(of(1), &[0, 1]);
+        assert_eq!(of(2), &[0, 1]);
+        assert_eq!(of(3), &[1, 2]);
+        assert_eq!(of(4), &[2]);
+        assert!(of(5).is_empty());
+    }
 
     #[test]
     fn angles_and_cotans_of_a_right_triangle() {

@@ -131,8 +131,20 @@ impl Graph {
         self.ptr.len() - 1
     }
 
-    fn neighbours(&self, v: u32) -> &[u32] {
+    /// The neighbours of `v`, sorted.
+    pub(crate) fn neighbours(&self, v: u32) -> &[u32] {
         &self.adj[self.ptr[v as usize]..self.ptr[v as usize + 1]]
+    }
+
+    /// Where the neighbours of `v` start among all nodes' neighbours (node by node, as
+    /// [`Graph::neighbours`] lists them): a value per entry can be kept beside the graph.
+    pub(crate) fn first_neighbour(&self, v: u32) -> usize {
+        self.ptr[v as usize]
+    }
+
+    /// The number of entries of all nodes' neighbour lists (twice the number of edges).
+    pub(crate) fn n_neighbours(&self) -> usize {
+        self.adj.len()
     }
 }
 
@@ -521,7 +533,11 @@ enum Memo {
 /// made while an equal graph is being ordered waits for that order instead of making its own
 /// (except on one of rayon's threads); the lock is not held while an order is computed.
 pub fn shared_dissection(g: Graph) -> Arc<Dissected> {
-    let g = Arc::new(g);
+    shared_dissection_of(Arc::new(g))
+}
+
+/// [`shared_dissection`] of a graph its caller holds too (LSCM keeps its values beside it).
+pub fn shared_dissection_of(g: Arc<Graph>) -> Arc<Dissected> {
     let Ok(mut memo) = LAST.lock() else {
         return Arc::new(dissection(&g));
     };
