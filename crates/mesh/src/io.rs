@@ -148,7 +148,11 @@ pub fn read_mesh_with(path: &Path, tol: &Tolerances) -> Result<TriMesh, MeshIoEr
     })?;
     match ext.as_str() {
         "obj" => {
-            let text = String::from_utf8_lossy(&bytes);
+            // Valid UTF-8 is read as it is (the lossy reading's result, found faster).
+            let text = match std::str::from_utf8(&bytes) {
+                Ok(t) => std::borrow::Cow::Borrowed(t),
+                Err(_) => String::from_utf8_lossy(&bytes),
+            };
             parse_obj(&text, path)
         }
         "stl" => parse_stl(&bytes, path, tol.weld_mm),
@@ -282,26 +286,116 @@ impl ObjCtx<'_> {
     }
 }
 
-/// Parses OBJ text. `path` only names the source in errors.
-///
-/// Supported: `v x y z [w]` (extra values such as vertex colours are ignored), `vt u [v [w]]`,
-/// `vn` (validated, not kept: normals are recomputed from the geometry), `f` with `a`, `a/b`,
-/// `a/b/c`, `a//c` corners and negative (relative) indices, polygons fan-triangulated. `o`, `g`,
-/// `s`, `usemtl`, `mtllib`, `l`, `p` and unknown statements are ignored; `#` starts a comment.
-pub fn parse_obj(text: &str, path: &Path) -> Result<TriMesh, MeshIoError> {
-    let mut positions: Vec<DVec3> = Vec::new();
-    let mut texcoords: Vec<DVec2> = Vec::new();
-    let mut normal_count = 0usize;
-    // Triangles of (position, texcoord) corners.
-    let mut corners: Vec<[(u32, Option<u32>); 3]> = Vec::new();
+/// What the lines of an OBJ text (or a part of one) define, in file order.
+#[derive(Debug, Default, PartialEq)]
+struct ObjParts {
+    /// Lines read.
+    lines: usize,
+    positions: Vec<DVec3>,
+    texcoords: Vec<DVec2>,
+    normal_count: usize,
+    /// Triangles of (position, texcoord) corners, indices counted from the file's start.
+    corners: Vec<[(u32, Option<u32>); 3]>,
+}
+
+/// What the lines before a part of an OBJ text define: the part's line numbers and its indices
+/// (relative ones too) count from them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct ObjBefore {
+    lines: usize,
+    positions: usize,
+    texcoords: usize,
+    normals: usize,
+}
+
+/// Texts (bytes) from which an OBJ is parsed in two halves on two threads; below, a thread
+/// costs more than it saves.
+const OBJ_PARSE_TWO_THREADS_FROM: usize = 1 << 20;
+
+/// The lines of `text` parsed, a large text in two halves side by side: the second half's
+/// thread first counts the lines, vertices, texture coordinates and normals of the first (by
+/// the statement keyword alone, a fast pass), then parses its half as if it had read the first.
+/// Every line is parsed as in one pass; the first half's error is the file's first, and the
+/// second half's errors name their lines and the counts of the whole file at that point.
+fn parse_obj_parts(text: &str, path: &Path) -> Result<ObjParts, MeshIoError> {
+    let mid = text.len() / 2;
+    let split = (text.len() >= OBJ_PARSE_TWO_THREADS_FROM)
+        .then(|| text.as_bytes()[mid..].iter().position(|&b| b == b'\n'))
+        .flatten()
+        .map(|i| mid + i + 1);
+    let Some(split) = split else {
+        return parse_obj_lines(text, path, ObjBefore::default());
+    };
+    let (first, second) = text.split_at(split);
+    let (a, (before, b)) = std::thread::scope(|s| {
+        let b = s.spawn(|| {
+            let before = obj_counts(first);
+            (before, parse_obj_lines(second, path, before))
+        });
+        let a = parse_obj_lines(first, path, ObjBefore::default());
+        // A panic there is a bug, carried on here as if it were this thread's.
+        (a, b.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+    });
+    let mut a = a?;
+    let read = ObjBefore {
+        lines: a.lines,
+        positions: a.positions.len(),
+        texcoords: a.texcoords.len(),
+        normals: a.normal_count,
+    };
+    if read != before {
+        // The keywords counted what the parse read, so this is never met; were it met, the
+        // second half was numbered wrong, and one pass is right.
+        return parse_obj_lines(text, path, ObjBefore::default());
+    }
+    let b = b?;
+    a.lines += b.lines;
+    a.positions.extend(b.positions);
+    a.texcoords.extend(b.texcoords);
+    a.normal_count += b.normal_count;
+    a.corners.extend(b.corners);
+    Ok(a)
+}
+
+/// A line without its comment.
+fn uncommented(raw: &str) -> &str {
+    // A byte loop: lines are short, and a search's setup costs more than it saves on them.
+    match raw.bytes().position(|b| b == b'#') {
+        Some(i) => &raw[..i],
+        None => raw,
+    }
+}
+
+/// The lines of `text` and the vertices, texture coordinates and normals they define, by their
+/// keywords, as [`parse_obj_lines`] would read them if they parse.
+fn obj_counts(text: &str) -> ObjBefore {
+    let mut c = ObjBefore::default();
+    for raw in text.lines() {
+        c.lines += 1;
+        match tokens(uncommented(raw)).next() {
+            Some((_, "v")) => c.positions += 1,
+            Some((_, "vt")) => c.texcoords += 1,
+            Some((_, "vn")) => c.normals += 1,
+            _ => {}
+        }
+    }
+    c
+}
+
+/// Parses the lines of `text`, a part of an OBJ file after the lines `before` counts.
+fn parse_obj_lines(text: &str, path: &Path, before: ObjBefore) -> Result<ObjParts, MeshIoError> {
+    let mut out = ObjParts::default();
     let mut ctx = ObjCtx {
         path,
         line: 0,
         text: "",
     };
+    // A face's corners, the buffer reused from face to face.
+    let mut poly: Vec<(u32, Option<u32>)> = Vec::new();
     for (ln, raw) in text.lines().enumerate() {
-        ctx.line = ln + 1;
-        let line = raw.split('#').next().unwrap_or("");
+        ctx.line = before.lines + ln + 1;
+        out.lines = ln + 1;
+        let line = uncommented(raw);
         ctx.text = line;
         let mut toks = tokens(line);
         let Some((_, kw)) = toks.next() else {
@@ -312,7 +406,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<TriMesh, MeshIoError> {
                 let x = ctx.float(toks.next(), "vertex")?;
                 let y = ctx.float(toks.next(), "vertex")?;
                 let z = ctx.float(toks.next(), "vertex")?;
-                positions.push(DVec3::new(x, y, z));
+                out.positions.push(DVec3::new(x, y, z));
             }
             "vt" => {
                 let u = ctx.float(toks.next(), "texture coordinate")?;
@@ -320,30 +414,33 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<TriMesh, MeshIoError> {
                     Some(t) => ctx.float(Some(t), "texture coordinate")?,
                     None => 0.0,
                 };
-                texcoords.push(DVec2::new(u, v));
+                out.texcoords.push(DVec2::new(u, v));
             }
             "vn" => {
                 for _ in 0..3 {
                     ctx.float(toks.next(), "normal")?;
                 }
-                normal_count += 1;
+                out.normal_count += 1;
             }
             "f" | "fo" => {
-                let mut poly: Vec<(u32, Option<u32>)> = Vec::new();
+                poly.clear();
                 for (col, t) in toks {
                     let mut parts = t.split('/');
                     let vi = parts.next().unwrap_or("");
-                    let v = ctx.index(vi, col, "vertex", positions.len())?;
+                    let v = ctx.index(vi, col, "vertex", before.positions + out.positions.len())?;
                     let vt = match parts.next() {
                         Some("") | None => None,
-                        Some(s) => {
-                            Some(ctx.index(s, col, "texture coordinate", texcoords.len())?)
-                        }
+                        Some(s) => Some(ctx.index(
+                            s,
+                            col,
+                            "texture coordinate",
+                            before.texcoords + out.texcoords.len(),
+                        )?),
                     };
                     if let Some(s) = parts.next()
                         && !s.is_empty()
                     {
-                        ctx.index(s, col, "normal", normal_count)?;
+                        ctx.index(s, col, "normal", before.normals + out.normal_count)?;
                     }
                     if parts.next().is_some() {
                         return Err(ctx.parse_err(
@@ -363,12 +460,28 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<TriMesh, MeshIoError> {
                     ));
                 }
                 for k in 1..poly.len() - 1 {
-                    corners.push([poly[0], poly[k], poly[k + 1]]);
+                    out.corners.push([poly[0], poly[k], poly[k + 1]]);
                 }
             }
             _ => {}
         }
     }
+    Ok(out)
+}
+
+/// Parses OBJ text. `path` only names the source in errors.
+///
+/// Supported: `v x y z [w]` (extra values such as vertex colours are ignored), `vt u [v [w]]`,
+/// `vn` (validated, not kept: normals are recomputed from the geometry), `f` with `a`, `a/b`,
+/// `a/b/c`, `a//c` corners and negative (relative) indices, polygons fan-triangulated. `o`, `g`,
+/// `s`, `usemtl`, `mtllib`, `l`, `p` and unknown statements are ignored; `#` starts a comment.
+pub fn parse_obj(text: &str, path: &Path) -> Result<TriMesh, MeshIoError> {
+    let ObjParts {
+        positions,
+        texcoords,
+        corners,
+        ..
+    } = parse_obj_parts(text, path)?;
     if corners.is_empty() {
         return Err(MeshIoError::Empty {
             path: path.to_path_buf(),
@@ -604,7 +717,7 @@ pub fn parse_ply(bytes: &[u8], path: &Path, weld_mm: f64) -> Result<TriMesh, Mes
 /// tolerance, and fixed formatting makes the output byte-identical across runs), never `-0`
 /// for a zero.
 pub fn obj_string(mesh: &TriMesh) -> String {
-    use crate::fixed::{push, push_uint};
+    use crate::fixed::push_uint;
     // About 30 bytes a vertex line and 25 a face.
     let mut s = String::with_capacity(
         64 + 30 * mesh.positions.len() * (1 + usize::from(mesh.flat.is_some()))
@@ -615,6 +728,36 @@ pub fn obj_string(mesh: &TriMesh) -> String {
     s.push_str(" vertices, ");
     push_uint(&mut s, mesh.triangles.len() as u64);
     s.push_str(" triangles, millimetres\n");
+    if mesh.triangles.len() < OBJ_TWO_THREADS_FROM {
+        push_vertex_lines(&mut s, mesh);
+        push_face_lines(&mut s, mesh);
+        return s;
+    }
+    // Each part's text is its own: the faces are written on another thread while the vertices
+    // are written here, then appended.
+    std::thread::scope(|scope| {
+        let faces = scope.spawn(|| {
+            let mut f = String::with_capacity(25 * mesh.triangles.len());
+            push_face_lines(&mut f, mesh);
+            f
+        });
+        push_vertex_lines(&mut s, mesh);
+        // A panic there is a bug, carried on here as if it were this thread's.
+        let faces = faces
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e));
+        s.push_str(&faces);
+    });
+    s
+}
+
+/// Faces from which [`obj_string`] writes the vertex and face lines on two threads; below, a
+/// thread costs more than it saves.
+const OBJ_TWO_THREADS_FROM: usize = 50_000;
+
+/// The `v` lines, then the `vt` lines of a flattened mesh.
+fn push_vertex_lines(s: &mut String, mesh: &TriMesh) {
+    use crate::fixed::push;
     let z = |x: f64| if x == 0.0 { 0.0 } else { x }; // no "-0.000000"
     let coords = |s: &mut String, tag: &str, xs: &[f64]| {
         s.push_str(tag);
@@ -625,26 +768,30 @@ pub fn obj_string(mesh: &TriMesh) -> String {
         s.push('\n');
     };
     for p in &mesh.positions {
-        coords(&mut s, "v", &[p.x, p.y, p.z]);
+        coords(s, "v", &[p.x, p.y, p.z]);
     }
     if let Some(f) = &mesh.flat {
         for q in f {
-            coords(&mut s, "vt", &[q.x, q.y]);
+            coords(s, "vt", &[q.x, q.y]);
         }
     }
+}
+
+/// The `f` lines, `f a/a b/b c/c` for a flattened mesh (1-based).
+fn push_face_lines(s: &mut String, mesh: &TriMesh) {
+    use crate::fixed::push_uint;
     for t in &mesh.triangles {
         s.push('f');
         for i in t.map(|i| u64::from(i) + 1) {
             s.push(' ');
-            push_uint(&mut s, i);
+            push_uint(s, i);
             if mesh.flat.is_some() {
                 s.push('/');
-                push_uint(&mut s, i);
+                push_uint(s, i);
             }
         }
         s.push('\n');
     }
-    s
 }
 
 /// Writes bytes atomically: to a temporary file in the target's directory, then renamed.
@@ -854,6 +1001,78 @@ mod tests {
         assert_eq!(back.positions, m.positions);
         assert_eq!(back.triangles, m.triangles);
         assert_eq!(back.flat, m.flat);
+    }
+
+    #[test]
+    fn a_large_obj_is_parsed_in_two_halves_as_in_one_pass() {
+        let mut m = crate::test_grid::grid_mesh(120, 120, |i, j| {
+            DVec3::new(i as f64 * 0.3, j as f64 * 0.7, (i * j) as f64 * 1e-3)
+        });
+        m.flat = Some(m.positions.iter().map(|p| DVec2::new(p.x, -p.y)).collect());
+        let text = obj_string(&m);
+        assert!(text.len() >= OBJ_PARSE_TWO_THREADS_FROM);
+        let faces_at = text.find("\nf ").unwrap() + 1;
+        // The halves split among the faces, which refer to vertices of the first half.
+        assert!(faces_at < text.len() / 2);
+        let same = |t: &str| {
+            let one = parse_obj_lines(t, p(), ObjBefore::default());
+            let two = parse_obj_parts(t, p());
+            assert_eq!(format!("{two:?}"), format!("{one:?}"));
+            two
+        };
+        let whole = same(&text).unwrap();
+        assert_eq!(whole.corners.len(), m.triangles.len());
+        // Relative indices and vertices defined after faces, in the second half.
+        let more = format!("{text}v 1 2 3\nvt 4 5\nf -1/-1 1/1 2/2\nf -3/1 -2/2 -1/3 # end\n");
+        assert_eq!(same(&more).unwrap().corners.len(), m.triangles.len() + 2);
+        // Errors in the second half name their line and the whole file's counts there.
+        let e = same(&format!("{text}f 1 2 {}\n", m.positions.len() + 1)).unwrap_err();
+        let lines = text.lines().count();
+        assert!(
+            matches!(e, MeshIoError::BadIndex { line, count, .. }
+                if line == lines + 1 && count == m.positions.len()),
+            "{e:?}"
+        );
+        let e = same(&format!("{text}v 1 x 3\n")).unwrap_err();
+        assert!(matches!(e, MeshIoError::Parse { line, col: 5, .. } if line == lines + 1));
+        // Faces before the vertices they name: the first half's error, the file's first.
+        let (head, faces) = text.split_at(faces_at);
+        let e = same(&format!("{faces}{head}")).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                MeshIoError::BadIndex {
+                    line: 1,
+                    count: 0,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        // An error in each half: the first half's.
+        let e = same(&format!("{text}\nf 0 1 2\n").replacen("\nv ", "\nv 1 2 zz\nv ", 1));
+        assert!(
+            matches!(e, Err(MeshIoError::Parse { line: 2, .. })),
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn a_large_mesh_is_written_on_two_threads_as_on_one() {
+        let mut m = crate::test_grid::grid_mesh(170, 170, |i, j| {
+            DVec3::new(i as f64 * 0.3, j as f64 * 0.7, (i * j) as f64 * 1e-3)
+        });
+        assert!(m.triangles.len() >= OBJ_TWO_THREADS_FROM);
+        m.flat = Some(m.positions.iter().map(|p| DVec2::new(p.x, -p.y)).collect());
+        let s = obj_string(&m);
+        let mut one = String::new();
+        push_vertex_lines(&mut one, &m);
+        push_face_lines(&mut one, &m);
+        let header_end = s.find('\n').unwrap() + 1;
+        assert_eq!(&s[header_end..], one);
+        assert!(s.starts_with("# flatcut mesh: 29241 vertices, 57800 triangles"));
+        let back = parse_obj(&s, p()).unwrap();
+        assert_eq!(back.triangles, m.triangles);
     }
 
     fn tmpdir(tag: &str) -> PathBuf {
