@@ -65,6 +65,7 @@
 pub mod anisotropy;
 pub mod arap;
 pub mod assembly;
+pub(crate) mod beside;
 pub mod budget;
 pub mod conformal_boundary;
 pub mod developable;

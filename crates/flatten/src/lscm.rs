@@ -12,6 +12,7 @@
 //! planar input exactly at scale). With one user pin the same map is translated onto the pin;
 //! with two or more user pins the pins are hard constraints and fix the scale themselves.
 
+use crate::beside::beside;
 use crate::internal::InternalError;
 use flatcut_geom::DVec2;
 use flatcut_mesh::{Topology, TriMesh};
@@ -127,30 +128,22 @@ fn solve_pinned_timed(
     // graph, and reuses the order), made on a thread of its own, as the order is: the graph
     // outlives the map in the order's memo, and the room its making frees (28 MB at a million
     // faces) is not left among this thread's memory.
-    let (graph, (ptr, tris)) = std::thread::scope(|s| {
-        let graph = s.spawn(|| Arc::new(Graph::of_triangles(n, &mesh.triangles)));
-        let incidence = vertex_triangles(n, &mesh.triangles);
-        // A panic there is a bug, carried on here as if it were this thread's.
-        let graph = graph
-            .join()
-            .unwrap_or_else(|e| std::panic::resume_unwind(e));
-        (graph, incidence)
-    });
+    let (graph, (ptr, tris)) = beside(
+        || Arc::new(Graph::of_triangles(n, &mesh.triangles)),
+        || vertex_triangles(n, &mesh.triangles),
+    );
     // Each triangle's cotangents where they are needed (a triangle's thrice, not held: 24 MB at
     // a million faces).
     let cot = |t: usize| triangle_cotans(&mesh.positions, mesh.triangles[t]);
     let mut values = ConformalValues::zeroed(&graph);
-    let (analysis, analysing) = std::thread::scope(|s| {
-        let assembly = s.spawn(|| values.fill(&mesh.triangles, &graph, (&ptr, &tris), cot));
-        let started = Instant::now();
-        let analysis = analyse(&graph, q.free_index(), &area);
-        let analysing = started.elapsed();
-        // A panic there is a bug, carried on here as if it were this thread's.
-        assembly
-            .join()
-            .unwrap_or_else(|e| std::panic::resume_unwind(e));
-        (analysis, analysing)
-    });
+    let ((), (analysis, analysing)) = beside(
+        || values.fill(&mesh.triangles, &graph, (&ptr, &tris), cot),
+        || {
+            let started = Instant::now();
+            let analysis = analyse(&graph, q.free_index(), &area);
+            (analysis, started.elapsed())
+        },
+    );
     drop((ptr, tris));
     // The couplings of the free unknowns to the fixed ones, in the order of the triplets'.
     let at_fixed = |vs: &[u32]| vs.iter().any(|&v| fixed[2 * v as usize]);
@@ -211,18 +204,13 @@ fn analyse(
     area: &AreaTerms,
 ) -> Result<(SpdSolver, Vec<u32>), FlattenError> {
     let n = graph.len();
-    let (pattern, order) = std::thread::scope(|s| {
-        let order = s.spawn(|| {
+    let (order, pattern) = beside(
+        || {
             (Ordering::for_nodes(n) == Ordering::NestedDissection)
                 .then(|| shared_dissection_of(Arc::clone(graph)))
-        });
-        let pattern = conformal_pattern(graph, free_index, area);
-        // A panic there is a bug, carried on here as if it were this thread's.
-        let order = order
-            .join()
-            .unwrap_or_else(|e| std::panic::resume_unwind(e));
-        (pattern, order)
-    });
+        },
+        || conformal_pattern(graph, free_index, area),
+    );
     let (pattern, free) = pattern?;
     let node_of = free.iter().map(|&d| d / 2).collect();
     let mut pattern = pattern.with_nodes(node_of, n)?;

@@ -42,6 +42,7 @@ use std::sync::atomic::{AtomicBool, Ordering as Memory};
 use std::time::{Duration, Instant};
 
 use crate::FlattenError;
+use crate::beside::beside;
 use crate::ordering;
 use crate::refine::preconditioned_cg;
 use crate::timings::{SharedDuration, Timings};
@@ -723,16 +724,11 @@ impl SpdSolver {
             // thread's memory, which the allocations after it reuse (another thread's would not).
             Triangles::SideBySide => {
                 let storage = TriangleStorage::for_pattern(pattern).ok_or_else(too_large)?;
-                std::thread::scope(|s| {
-                    let lower =
-                        s.spawn(|| permuted_triangle_in(pattern, &inv, Side::Lower, storage));
-                    let symbolic = symbolic_of(upper);
-                    // A panic there is a bug, carried on here as if it were this thread's.
-                    let lower = lower
-                        .join()
-                        .unwrap_or_else(|e| std::panic::resume_unwind(e));
-                    (symbolic, Some(lower))
-                })
+                let (lower, symbolic) = beside(
+                    || permuted_triangle_in(pattern, &inv, Side::Lower, storage),
+                    || symbolic_of(upper),
+                );
+                (symbolic, Some(lower))
             }
         };
         let lower = lower.ok_or_else(too_large)?;
