@@ -1327,6 +1327,14 @@ mod tests {
     /// The Laplacian-plus-identity of a `w × h` grid of vertices split into triangles along one
     /// diagonal (the 7-point pattern of a triangle mesh), with `k` unknowns per vertex coupled
     /// in full blocks. Unknowns `k·v … k·v + k − 1` belong to vertex `v`.
+    /// The pattern of the triplets `t` with its unknowns grouped into `nodes` nodes by `node_of`.
+    fn node_pattern(t: &SymTriplets, node_of: Vec<u32>, nodes: usize) -> SymPattern {
+        SymPattern::new(t, "test")
+            .unwrap()
+            .with_nodes(node_of, nodes)
+            .unwrap()
+    }
+
     fn grid_mesh(w: usize, h: usize, k: usize) -> (SymTriplets, Vec<u32>) {
         let nv = w * h;
         let mut t = SymTriplets::new(k * nv);
@@ -1429,10 +1437,7 @@ mod tests {
     #[test]
     fn the_matrix_held_in_the_factors_order_factors_to_faers_bits() {
         let (t, node_of) = grid_mesh(70, 60, 2);
-        let pattern = SymPattern::new(&t, "test")
-            .unwrap()
-            .with_nodes(node_of, 70 * 60)
-            .unwrap();
+        let pattern = node_pattern(&t, node_of, 70 * 60);
         for ordering in [Ordering::Amd, Ordering::NestedDissection] {
             let mut s = SpdSolver::with_ordering(&pattern, "test", ordering).unwrap();
             s.factor(values_of(&s, &pattern, &t)).unwrap();
@@ -1448,10 +1453,7 @@ mod tests {
     #[test]
     fn nested_dissection_is_a_permutation_that_keeps_vertices_together() {
         let (t, node_of) = grid_mesh(60, 50, 2);
-        let p = SymPattern::new(&t, "test")
-            .unwrap()
-            .with_nodes(node_of, 3000)
-            .unwrap();
+        let p = node_pattern(&t, node_of, 3000);
         let order = p.nested_dissection();
         let mut seen = vec![false; p.n];
         for &i in &order {
@@ -1470,10 +1472,7 @@ mod tests {
     fn nested_dissection_fills_a_grid_mesh_no_more_than_amd() {
         for (w, h, k) in [(400, 400, 1), (500, 400, 2)] {
             let (t, node_of) = grid_mesh(w, h, k);
-            let p = SymPattern::new(&t, "test")
-                .unwrap()
-                .with_nodes(node_of, w * h)
-                .unwrap();
+            let p = node_pattern(&t, node_of, w * h);
             let (nd, amd) = (
                 fill(&p, Ordering::NestedDissection),
                 fill(&p, Ordering::Amd),
@@ -1486,10 +1485,7 @@ mod tests {
     fn nested_dissection_solves_like_amd_and_repeats_its_bits() {
         let (t, node_of) = grid_mesh(80, 70, 2);
         let n = 2 * 80 * 70;
-        let pattern = SymPattern::new(&t, "test")
-            .unwrap()
-            .with_nodes(node_of, 80 * 70)
-            .unwrap();
+        let pattern = node_pattern(&t, node_of, 80 * 70);
         let x_true: Vec<f64> = (0..n).map(|i| (i as f64 * 0.11).cos()).collect();
         let a = pattern.matrix(t.values(), "test").unwrap();
         let mut b = vec![0.0; n];
@@ -1514,10 +1510,7 @@ mod tests {
     fn the_parallel_factorisation_gives_the_same_bits() {
         let (w, h) = (160, 120);
         let (t, node_of) = grid_mesh(w, h, 2);
-        let pattern = SymPattern::new(&t, "test")
-            .unwrap()
-            .with_nodes(node_of, w * h)
-            .unwrap();
+        let pattern = node_pattern(&t, node_of, w * h);
         let solver =
             || SpdSolver::with_ordering(&pattern, "test", Ordering::NestedDissection).unwrap();
         let factor = |threads: usize| {
@@ -1586,10 +1579,7 @@ mod tests {
     fn fields_ordered_apart_factor_in_fewer_values_to_the_same_solution() {
         let (w, h) = (300, 240);
         let (t, node_of) = fields_coupled_at_the_outline(w, h);
-        let by_node = SymPattern::new(&t, "test")
-            .unwrap()
-            .with_nodes(node_of, w * h)
-            .unwrap();
+        let by_node = node_pattern(&t, node_of, w * h);
         let by_field = by_node.clone().by_field();
         // The order: a permutation, the unknowns of a block of the dissection field by field.
         let order = by_field.nested_dissection();
@@ -1691,10 +1681,7 @@ mod tests {
     fn the_solver_made_sooner_is_the_solver_made_one_triangle_after_the_other() {
         let (w, h) = (90, 70);
         let (t, node_of) = grid_mesh(w, h, 2);
-        let pattern = SymPattern::new(&t, "test")
-            .unwrap()
-            .with_nodes(node_of, w * h)
-            .unwrap();
+        let pattern = node_pattern(&t, node_of, w * h);
         let mut after = SpdSolver::new(&pattern, "test").unwrap();
         let mut sooner = SpdSolver::new_sooner(&pattern, "test").unwrap();
         assert_eq!(after.fwd, sooner.fwd);
@@ -1780,10 +1767,7 @@ mod tests {
         let (mut t, node_of) = grid_mesh(w, h, 2);
         // A weaker diagonal, so the system is less well conditioned than the grid's own.
         t.values_mut().iter_mut().for_each(|v| *v *= 1.0 + 1e-3);
-        let pattern = SymPattern::new(&t, "test")
-            .unwrap()
-            .with_nodes(node_of, w * h)
-            .unwrap();
+        let pattern = node_pattern(&t, node_of, w * h);
         let n = 2 * w * h;
         let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).sin() + 0.3).collect();
         let (single, xs, xd) = single_and_double(&pattern, &t, &b);
