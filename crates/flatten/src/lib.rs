@@ -22,7 +22,7 @@
 //! `flatten(mesh, params) -> Flattening`. Linear methods (LSCM, ARAP, conformal with isometric
 //! boundary, developable unfolding) on faer's sparse Cholesky with a reused symbolic factorisation
 //! (AMD ordering; from 150k vertices our nested dissection of the vertex graph, `ordering.rs`, with
-//! LSCM's u and v ordered field by field in each block of it, as they are coupled only along the outline, made once
+//! LSCM's u and v one complex unknown per vertex, `sparse/hermitian.rs`, the order made once
 //! per graph and shared by the LSCM start and the Newton solves after it; 32-bit indices); nonlinear flip-free methods (isometric δ2, conformal δ1, min-max δ0,
 //! boundary-isometric f1, orthotropic) as argmin solvers whose heavy steps are our own sparse
 //! Newton/local-global iterations. The projected Newton (`nonlinear/newton.rs`) evaluates triangles

@@ -190,11 +190,8 @@ pub struct QuadraticBuilder {
     /// Off-diagonal entries of `Q_ff`.
     triplets: SymTriplets,
     /// Diagonal of `Q_ff`, summed as it comes: a third of the entries of a Laplacian, which
-    /// would otherwise each be a triplet (the memory peak of LSCM on large meshes).
+    /// would otherwise each be a triplet.
     diag: Vec<f64>,
-    /// Consecutive dofs that belong to one mesh vertex (1, or 2 for u and v), for the
-    /// fill-reducing ordering.
-    dofs_per_vertex: u32,
 }
 
 impl QuadraticBuilder {
@@ -216,17 +213,7 @@ impl QuadraticBuilder {
             free,
             coupling: Vec::new(),
             triplets,
-            dofs_per_vertex: 1,
         }
-    }
-
-    /// Declares that dofs `k·i … k·i + k − 1` are the fields of vertex `i` (u and v of a map:
-    /// `k = 2`), coupled at few vertices (as LSCM's are, at the boundary only): nested
-    /// dissection orders the vertices, and the unknowns field by field
-    /// ([`crate::sparse::SymPattern::by_field`]).
-    pub fn dofs_per_vertex(mut self, k: u32) -> Self {
-        self.dofs_per_vertex = k.max(1);
-        self
     }
 
     /// Adds `v` to `Q[i][j]` and, when `i ≠ j`, to `Q[j][i]`.
@@ -243,25 +230,6 @@ impl QuadraticBuilder {
     /// Adds the Laplacian term `w (x_i − x_j)²/2` to the energy.
     pub fn add_edge(&mut self, i: usize, j: usize, w: f64) {
         laplacian_terms(i, j, w, &mut |i, j, v| self.add(i, j, v));
-    }
-
-    /// The index of each dof among the free ones (`usize::MAX` for a fixed dof): the numbering
-    /// of the unknowns of `Q_ff`.
-    pub fn free_index(&self) -> &[usize] {
-        &self.free_index
-    }
-
-    /// The problem of a matrix `Q_ff` assembled apart from this builder, whose values `solver`
-    /// (its unknowns numbered by [`QuadraticBuilder::free_index`]) is then given by
-    /// [`Reduced::factor`], with the couplings to fixed dofs added here. Entries of `Q_ff` added
-    /// here are dropped, and so is the builder's index (before the factorisation, the memory
-    /// peak).
-    pub fn with_solver(self, solver: SpdSolver) -> Reduced {
-        Reduced {
-            free: self.free,
-            coupling: self.coupling,
-            solver,
-        }
     }
 
     /// `Q_ff` in compressed-column form (lower triangle), its diagonal added last, as
@@ -287,15 +255,14 @@ impl QuadraticBuilder {
                 stage,
             }));
         }
-        let k = self.dofs_per_vertex;
-        let n_vertices = (self.free_index.len() as u32).div_ceil(k) as usize;
-        // Done with before the factorisation, the memory peak (16 MB at a million faces).
+        // The nodes of the ordering are the dofs, the fixed ones too.
+        let n_nodes = self.free_index.len();
+        // Done with before the factorisation, the memory peak.
         drop(std::mem::take(&mut self.diag));
         drop(std::mem::take(&mut self.free_index));
-        let node_of = self.free.iter().map(|&d| d / k).collect();
+        let node_of = self.free.clone();
         let (pattern, values) = SymPattern::compress(self.triplets, stage)?;
-        let pattern = pattern.with_nodes(node_of, n_vertices)?;
-        let pattern = if k > 1 { pattern.by_field() } else { pattern };
+        let pattern = pattern.with_nodes(node_of, n_nodes)?;
         let mut solver = SpdSolver::new(&pattern, stage)?;
         let values = solver.gather(&pattern, &values)?;
         drop(pattern);
@@ -309,17 +276,6 @@ impl QuadraticBuilder {
 }
 
 impl Reduced {
-    /// Factors `Q_ff` with these `values` (in the order of [`SpdSolver::factor`]).
-    pub fn factor(&mut self, values: Vec<f64>) -> Result<(), FlattenError> {
-        self.solver.factor(values)
-    }
-
-    /// Where the solver's time went: the ordering and symbolic analysis, the numeric
-    /// factorisation and the solves so far.
-    pub fn timings(&self) -> crate::Timings {
-        self.solver.timings()
-    }
-
     /// Minimizes for several fields at once: `values[c]` holds the values of field `c` at the
     /// fixed dofs (free entries are overwritten with the solution); `source[c]`, when given, is
     /// the linear term `b` (read at free dofs).

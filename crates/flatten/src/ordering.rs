@@ -21,9 +21,7 @@
 //!
 //! The ordering works on a quotient graph: unknowns that belong to one mesh vertex (its u and v
 //! coordinates) form one node, so the graph is the mesh's vertex graph, half or a quarter the
-//! size of the matrix graph, and the unknowns of a node are eliminated together ([`expand`]), or,
-//! where the matrix couples them at few nodes only (LSCM's u and v), field by field within each
-//! leaf and separator of the dissection ([`expand_by_block`]).
+//! size of the matrix graph, and the unknowns of a node are eliminated together ([`expand`]).
 //!
 //! The order depends on the vertex graph alone, so a map orders it once: LSCM orders the mesh's
 //! graph ([`Graph::of_triangles`], its pins included) rather than the graph of its free
@@ -434,8 +432,7 @@ pub struct Dissected {
     /// `order[k]` is the node eliminated k-th.
     pub order: Vec<u32>,
     /// The first position of every leaf and separator in `order`, increasing (from 0): the
-    /// nodes of one block are eliminated together, and their unknowns can be ordered block by
-    /// block ([`expand_by_block`]).
+    /// nodes of one block are eliminated together.
     pub groups: Vec<u32>,
 }
 
@@ -606,37 +603,6 @@ pub fn expand(node_order: &[u32], node_of: &[u32]) -> Vec<usize> {
         .iter()
         .flat_map(|&v| members.of(v).iter().copied())
         .collect()
-}
-
-/// The elimination order of the unknowns block by block ([`Dissected::groups`]): within each
-/// leaf or separator of the dissection, the first field of its nodes (in the dissection's
-/// order), then the second, and so on. For a system whose fields are coupled at few nodes
-/// only (LSCM's u and v along the outline), the blocks whose subtree reaches no coupled node
-/// factor as one Laplacian per field, and the coupling fills only the blocks above the coupled
-/// nodes. Ordering every first field before every second one, the coupled nodes' second field
-/// last (a dense block after eliminating the first field), makes every column keep rows to
-/// them: on a million-face toe LSCM's factor held 75.6M values that way, 73.6M block by
-/// block, and factored 8 % faster.
-pub fn expand_by_block(d: &Dissected, node_of: &[u32]) -> Vec<usize> {
-    let members = Members::new(node_of, d.order.len());
-    let fields = (0..d.order.len() as u32)
-        .map(|v| members.of(v).len())
-        .max()
-        .unwrap_or(0);
-    let mut out = Vec::with_capacity(node_of.len());
-    let ends = d
-        .groups
-        .iter()
-        .skip(1)
-        .copied()
-        .chain([d.order.len() as u32]);
-    for (start, end) in d.groups.iter().copied().zip(ends) {
-        let block = &d.order[start as usize..end as usize];
-        for f in 0..fields {
-            out.extend(block.iter().filter_map(|&v| members.of(v).get(f).copied()));
-        }
-    }
-    out
 }
 
 /// The unknowns of each node, in increasing index.

@@ -48,6 +48,8 @@ use crate::refine::preconditioned_cg;
 use crate::timings::{SharedDuration, Timings};
 use rayon::prelude::*;
 
+pub(crate) mod hermitian;
+
 /// Nodes (mesh vertices) from which the factorisations use nested dissection instead of AMD.
 /// Measured on triangulated grids (`nested_dissection_fills_a_grid_mesh_no_more_than_amd`), the
 /// fill of nested dissection against AMD's: with one unknown per vertex +3 % at 22k vertices,
@@ -97,7 +99,7 @@ const VALUES_BLOCK: usize = 1 << 16;
 /// The index type of the solvers' matrices and factors: half the memory of `usize` for their
 /// row indices (a million-face map's factor has 8M, its matrix 7.5M). A system too large for
 /// it is refused with an error.
-type Idx = u32;
+pub(crate) type Idx = u32;
 
 /// Entries of a symmetric matrix, accumulated as `(row, col, value)` triplets. Only the lower
 /// triangle is stored: an entry above the diagonal is mirrored below it. Duplicate positions
@@ -173,9 +175,6 @@ pub struct SymPattern {
     /// The node (mesh vertex) of each unknown, for the fill-reducing ordering; `None`: each
     /// unknown is its own node.
     nodes: Option<(Vec<u32>, usize)>,
-    /// Nested dissection orders the unknowns field by field in each of its blocks
-    /// ([`ordering::expand_by_block`]) rather than node by node.
-    by_field: bool,
     /// The order of the nodes, when it is given rather than made from the pattern's graph
     /// ([`SymPattern::with_node_order`]).
     node_order: Option<Arc<ordering::Dissected>>,
@@ -201,7 +200,6 @@ impl SymPattern {
             symbolic,
             argsort: Some(argsort),
             nodes: None,
-            by_field: false,
             node_order: None,
         })
     }
@@ -224,7 +222,6 @@ impl SymPattern {
                 argsort: None,
                 n_values,
                 nodes: None,
-                by_field: false,
                 node_order: None,
             },
             values,
@@ -245,15 +242,6 @@ impl SymPattern {
         }
         self.nodes = Some((node_of, n_nodes));
         Ok(self)
-    }
-
-    /// Declares the unknowns of a node to be fields (a vertex's u and v) that the matrix couples
-    /// at few nodes only, as LSCM's does at the boundary: nested dissection then orders the
-    /// unknowns of each of its blocks field by field ([`ordering::expand_by_block`]), so that
-    /// the factor keeps the fields apart wherever the elimination does.
-    pub fn by_field(mut self) -> Self {
-        self.by_field = true;
-        self
     }
 
     /// Orders the nodes of [`SymPattern::with_nodes`] by the nested dissection `d` of a graph
@@ -297,11 +285,7 @@ impl SymPattern {
                 col_ptr, row_idx, node_of, n_nodes,
             )),
         };
-        if self.by_field {
-            ordering::expand_by_block(&nodes, node_of)
-        } else {
-            ordering::expand(&nodes.order, node_of)
-        }
+        ordering::expand(&nodes.order, node_of)
     }
 
     /// The upper triangle (row ≤ column) in compressed-column form: `col_ptr` (n + 1 offsets) and
@@ -358,7 +342,6 @@ impl SymPattern {
             argsort: None,
             n_values,
             nodes: None,
-            by_field: false,
             node_order: None,
         })
     }
@@ -545,7 +528,7 @@ const PAGE_IN_BLOCK: usize = 1 << 20;
 /// Makes `l` `size` entries long, its new entries zero and written in parallel: a new factor's
 /// storage (590 MB at a million faces) is paged in by both cores rather than one (0.4 s of
 /// page faults alone). faer zeroes the factor itself before it factors.
-fn paged_in<T: Copy + Default + Send + Sync>(l: &mut Vec<T>, size: usize) {
+pub(crate) fn paged_in<T: Copy + Default + Send + Sync>(l: &mut Vec<T>, size: usize) {
     if l.len() == size {
         return;
     }
@@ -556,13 +539,138 @@ fn paged_in<T: Copy + Default + Send + Sync>(l: &mut Vec<T>, size: usize) {
         .for_each(|c| c.fill(T::default()));
 }
 
-/// How [`SpdSolver::analysed`] makes the two triangles of the matrix in the factor's order.
+/// The values a factorisation of an analysis (its order `fwd` and its lower triangle `lower`)
+/// reads, of the matrix whose entry between unknowns `i` and `j` (numbered as in the pattern
+/// analysed, `i` the row of the lower triangle in the factor's order) is `entry(i, j)`, asked
+/// once for each entry of the pattern's triangle: made in parallel, blocks of the factor's
+/// columns at once, each value by `entry` alone, so the same bits with any number of threads.
+pub(crate) fn values_in_order<T: Copy + Default + Send>(
+    fwd: &[Idx],
+    lower: &SymbolicSparseColMat<Idx>,
+    entry: impl Fn(usize, usize) -> T + Sync,
+) -> Vec<T> {
+    let n = fwd.len();
+    let col_ptr = lower.col_ptr();
+    let rows = lower.row_idx();
+    let mut out = vec![T::default(); rows.len()];
+    // Blocks of whole columns of about VALUES_BLOCK values.
+    let mut blocks = Vec::new();
+    let mut rest = out.as_mut_slice();
+    let mut first = 0;
+    while first < n {
+        let start = col_ptr[first] as usize;
+        let mut end = first + 1;
+        while end < n && (col_ptr[end] as usize) - start < VALUES_BLOCK {
+            end += 1;
+        }
+        let (block, tail) = rest.split_at_mut(col_ptr[end] as usize - start);
+        blocks.push((first..end, block));
+        rest = tail;
+        first = end;
+    }
+    blocks.into_par_iter().for_each(|(cols, block)| {
+        let base = col_ptr[cols.start] as usize;
+        for c in cols {
+            let j = fwd[c] as usize;
+            for k in col_ptr[c] as usize..col_ptr[c + 1] as usize {
+                block[k - base] = entry(fwd[rows[k] as usize] as usize, j);
+            }
+        }
+    });
+    out
+}
+
+/// How an [`Analysis`] makes the two triangles of the matrix in the factor's order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Triangles {
+pub(crate) enum Triangles {
     /// The upper one, faer's analysis of it, then the lower one: never both held at once.
     OneAfterTheOther,
-    /// The lower one beside faer's analysis of the upper one.
+    /// The lower one beside faer's analysis of the upper one (both sequential, 0.1 and 0.3 s at
+    /// a million faces), the two held together: sooner, for an analysis the map waits for, made
+    /// before its factor's memory (LSCM's).
     SideBySide,
+}
+
+/// The analysis of a sparse pattern, which a factorisation of its values reads: the elimination
+/// order, the pattern of P A Pᵀ's lower triangle (the form faer's supernodal factorisation reads
+/// in place) and faer's symbolic factor. The same for real symmetric values ([`SpdSolver`]) and
+/// complex Hermitian ones ([`crate::hermitian::HermitianSolver`]).
+#[derive(Debug)]
+pub(crate) struct Analysis {
+    /// The elimination order: unknown `fwd[k]` is the factor's k-th, and `inv` its inverse.
+    pub fwd: Vec<Idx>,
+    pub inv: Vec<Idx>,
+    /// The pattern of P A Pᵀ's lower triangle.
+    pub lower: SymbolicSparseColMat<Idx>,
+    pub symbolic: SymbolicCholesky<Idx>,
+    /// How long the analysis took.
+    pub time: Duration,
+}
+
+impl Analysis {
+    /// Orders `pattern` by `ordering` and analyses it, its two triangles made as `triangles`
+    /// says, with faer's supernode amalgamation or without (`amalgamate`: a factor with the
+    /// explicit zeros it adds, for fewer and larger dense blocks). `stage` names the
+    /// computation in errors.
+    pub(crate) fn of(
+        pattern: &SymPattern,
+        stage: &'static str,
+        ordering: Ordering,
+        triangles: Triangles,
+        amalgamate: bool,
+    ) -> Result<Self, FlattenError> {
+        let failed = |reason: String| FlattenError::Solver {
+            stage,
+            reason: format!("symbolic factorization failed: {reason}"),
+        };
+        let started = Instant::now();
+        let fwd = elimination_order(pattern, ordering).map_err(failed)?;
+        let inv = inverse(&fwd);
+        // faer's symbolic analysis reads the upper triangle when no ordering is asked of it, its
+        // supernodal numeric factorisation the lower one.
+        let too_large = || failed(format!("{} unknowns are too many to index", pattern.n));
+        let upper = permuted_triangle(pattern, &inv, Side::Upper).ok_or_else(too_large)?;
+        let mut params = supernodal();
+        if !amalgamate {
+            params.supernodal_params =
+                faer::sparse::linalg::SymbolicSupernodalParams { relax: None };
+        }
+        let symbolic_of = |upper: SymbolicSparseColMat<Idx>| {
+            factorize_symbolic_cholesky(
+                upper.as_ref(),
+                Side::Upper,
+                SymmetricOrdering::Identity,
+                params,
+            )
+        };
+        let (symbolic, lower) = match triangles {
+            Triangles::OneAfterTheOther => {
+                let symbolic = symbolic_of(upper);
+                let lower = TriangleStorage::for_pattern(pattern)
+                    .map(|storage| permuted_triangle_in(pattern, &inv, Side::Lower, storage));
+                (symbolic, lower)
+            }
+            // The lower triangle in storage made here: what the solver keeps, and frees, is this
+            // thread's memory, which the allocations after it reuse (another thread's would not).
+            Triangles::SideBySide => {
+                let storage = TriangleStorage::for_pattern(pattern).ok_or_else(too_large)?;
+                let (lower, symbolic) = beside(
+                    || permuted_triangle_in(pattern, &inv, Side::Lower, storage),
+                    || symbolic_of(upper),
+                );
+                (symbolic, Some(lower))
+            }
+        };
+        let lower = lower.ok_or_else(too_large)?;
+        let symbolic = symbolic.map_err(|e| failed(format!("{e:?}")))?;
+        Ok(Self {
+            fwd: fwd.into_iter().map(|i| i as Idx).collect(),
+            inv: inv.into_iter().map(|i| i as Idx).collect(),
+            lower,
+            symbolic,
+            time: started.elapsed(),
+        })
+    }
 }
 
 /// Sparse Cholesky `P A Pᵀ = L Lᵀ` of a symmetric positive definite matrix with a fixed pattern:
@@ -655,17 +763,7 @@ impl SpdSolver {
     /// computation in errors ("lscm", "arap global step", ...).
     pub fn new(pattern: &SymPattern, stage: &'static str) -> Result<Self, FlattenError> {
         let ordering = Ordering::for_nodes(pattern.n_nodes());
-        Self::analysed(pattern, stage, ordering, Triangles::OneAfterTheOther)
-    }
-
-    /// [`SpdSolver::new`] sooner, for more memory at once: the matrix's lower triangle is made on
-    /// a thread of its own beside faer's analysis of the upper one (both sequential, 0.1 and
-    /// 0.5 s at a million faces), and the two triangles are held together (20 MB more at a
-    /// million-face LSCM). For an analysis the map waits for, made before its factor's memory
-    /// (LSCM's), not one beside a factorisation (the Newton analysis beside the start map).
-    pub fn new_sooner(pattern: &SymPattern, stage: &'static str) -> Result<Self, FlattenError> {
-        let ordering = Ordering::for_nodes(pattern.n_nodes());
-        Self::analysed(pattern, stage, ordering, Triangles::SideBySide)
+        Self::analysed(pattern, stage, ordering)
     }
 
     /// [`SpdSolver::new`] with a chosen fill-reducing ordering.
@@ -675,70 +773,32 @@ impl SpdSolver {
         stage: &'static str,
         ordering: Ordering,
     ) -> Result<Self, FlattenError> {
-        Self::analysed(pattern, stage, ordering, Triangles::OneAfterTheOther)
+        Self::analysed(pattern, stage, ordering)
     }
 
-    /// The analysis of [`SpdSolver::with_ordering`], its two triangles made as `triangles` says.
+    /// The analysis of [`SpdSolver::with_ordering`]: its two triangles one after the other, so
+    /// that an analysis made beside a factorisation (the Newton solve's, beside its start map's)
+    /// holds the least memory.
     fn analysed(
         pattern: &SymPattern,
         stage: &'static str,
         ordering: Ordering,
-        triangles: Triangles,
     ) -> Result<Self, FlattenError> {
-        let failed = |reason: String| FlattenError::Solver {
-            stage,
-            reason: format!("symbolic factorization failed: {reason}"),
-        };
-        let started = Instant::now();
-        let fwd = elimination_order(pattern, ordering).map_err(failed)?;
-        let inv = inverse(&fwd);
-        // faer's symbolic analysis reads the upper triangle when no ordering is asked of it, its
-        // supernodal numeric factorisation the lower one.
-        let too_large = || failed(format!("{} unknowns are too many to index", pattern.n));
-        let upper = permuted_triangle(pattern, &inv, Side::Upper).ok_or_else(too_large)?;
-        let mut params = supernodal();
-        // LSCM's large factor is made once: without faer's supernode amalgamation it holds 14 %
-        // fewer values (the explicit zeros amalgamation adds), 96 MB of a million-face map's
-        // peak, for 0.3–0.5 s more. The Newton factors, made every step, keep it (there it
-        // would save 9 % for 12 % more time).
-        if pattern.by_field && ordering == Ordering::NestedDissection {
-            params.supernodal_params =
-                faer::sparse::linalg::SymbolicSupernodalParams { relax: None };
-        }
-        let symbolic_of = |upper: SymbolicSparseColMat<Idx>| {
-            factorize_symbolic_cholesky(
-                upper.as_ref(),
-                Side::Upper,
-                SymmetricOrdering::Identity,
-                params,
-            )
-        };
-        let (symbolic, lower) = match triangles {
-            Triangles::OneAfterTheOther => {
-                let symbolic = symbolic_of(upper);
-                let lower = TriangleStorage::for_pattern(pattern)
-                    .map(|storage| permuted_triangle_in(pattern, &inv, Side::Lower, storage));
-                (symbolic, lower)
-            }
-            // The lower triangle in storage made here: what the solver keeps, and frees, is this
-            // thread's memory, which the allocations after it reuse (another thread's would not).
-            Triangles::SideBySide => {
-                let storage = TriangleStorage::for_pattern(pattern).ok_or_else(too_large)?;
-                let (lower, symbolic) = beside(
-                    || permuted_triangle_in(pattern, &inv, Side::Lower, storage),
-                    || symbolic_of(upper),
-                );
-                (symbolic, Some(lower))
-            }
-        };
-        let lower = lower.ok_or_else(too_large)?;
-        let symbolic = symbolic.map_err(|e| failed(format!("{e:?}")))?;
+        // Factors made at every Newton step amalgamate supernodes: without, a Newton factor
+        // would hold 9 % fewer values for 12 % more time.
+        let Analysis {
+            fwd,
+            inv,
+            lower,
+            symbolic,
+            time,
+        } = Analysis::of(pattern, stage, ordering, Triangles::OneAfterTheOther, true)?;
         let n_lower = lower.row_idx().len();
         Ok(Self {
             stage,
             n: pattern.n,
-            fwd: fwd.into_iter().map(|i| i as Idx).collect(),
-            inv: inv.into_iter().map(|i| i as Idx).collect(),
+            fwd,
+            inv,
             lower,
             values: vec![0.0; n_lower],
             symbolic,
@@ -748,7 +808,7 @@ impl SpdSolver {
             slow_refinement: AtomicBool::new(false),
             par: PAR,
             scratch: None,
-            analysis_time: started.elapsed(),
+            analysis_time: time,
             factor_time: Duration::ZERO,
             factorisations: 0,
             solve_time: SharedDuration::default(),
@@ -847,42 +907,6 @@ impl SpdSolver {
             }));
         }
         Ok(self.gather_matrix(SparseColMatRef::new(pattern.symbolic.as_ref(), values)))
-    }
-
-    /// The values [`SpdSolver::factor`] reads of the matrix whose entry between unknowns `i`
-    /// and `j` (numbered as in the pattern this solver was built for, either order) is
-    /// `entry(i, j)`, asked once for each entry of the pattern's triangle: made in parallel,
-    /// blocks of the factor's columns at once, each value by `entry` alone, so the same bits
-    /// with any number of threads.
-    pub fn values_of(&self, entry: impl Fn(usize, usize) -> f64 + Sync) -> Vec<f64> {
-        let col_ptr = self.lower.col_ptr();
-        let rows = self.lower.row_idx();
-        let mut out = vec![0.0; self.n_values()];
-        // Blocks of whole columns of about VALUES_BLOCK values.
-        let mut blocks = Vec::new();
-        let mut rest = out.as_mut_slice();
-        let mut first = 0;
-        while first < self.n {
-            let start = col_ptr[first] as usize;
-            let mut end = first + 1;
-            while end < self.n && (col_ptr[end] as usize) - start < VALUES_BLOCK {
-                end += 1;
-            }
-            let (block, tail) = rest.split_at_mut(col_ptr[end] as usize - start);
-            blocks.push((first..end, block));
-            rest = tail;
-            first = end;
-        }
-        blocks.into_par_iter().for_each(|(cols, block)| {
-            let base = col_ptr[cols.start] as usize;
-            for c in cols {
-                let j = self.fwd[c] as usize;
-                for k in col_ptr[c] as usize..col_ptr[c + 1] as usize {
-                    block[k - base] = entry(self.fwd[rows[k] as usize] as usize, j);
-                }
-            }
-        });
-        out
     }
 
     /// [`SpdSolver::gather`] of a matrix with the pattern this solver was built for.
@@ -1202,7 +1226,7 @@ enum Factor {
 /// one scattered read an entry, where following the permutation's cycles in place read and
 /// wrote four places at random (a twentieth of a million-face solve's time, for the 8 MB a
 /// column saved).
-fn permute_in_place(a: &mut [f64], perm: &[Idx], scratch: &mut Vec<f64>) {
+pub(crate) fn permute_in_place<T: Copy>(a: &mut [T], perm: &[Idx], scratch: &mut Vec<T>) {
     scratch.clear();
     scratch.extend(perm.iter().map(|&p| a[p as usize]));
     a.copy_from_slice(scratch);
@@ -1210,7 +1234,7 @@ fn permute_in_place(a: &mut [f64], perm: &[Idx], scratch: &mut Vec<f64>) {
 
 /// faer's numeric Cholesky factorisation of `a` (lower triangle, in `symbolic`'s order) into
 /// `l`, in `mem`; the error says why it failed.
-fn llt<T: ComplexField>(
+pub(crate) fn llt<T: ComplexField>(
     symbolic: &SymbolicCholesky<Idx>,
     a: SparseColMatRef<'_, Idx, T>,
     l: &mut [T],
@@ -1324,9 +1348,6 @@ mod tests {
         }
     }
 
-    /// The Laplacian-plus-identity of a `w × h` grid of vertices split into triangles along one
-    /// diagonal (the 7-point pattern of a triangle mesh), with `k` unknowns per vertex coupled
-    /// in full blocks. Unknowns `k·v … k·v + k − 1` belong to vertex `v`.
     /// The pattern of the triplets `t` with its unknowns grouped into `nodes` nodes by `node_of`.
     fn node_pattern(t: &SymTriplets, node_of: Vec<u32>, nodes: usize) -> SymPattern {
         SymPattern::new(t, "test")
@@ -1335,6 +1356,9 @@ mod tests {
             .unwrap()
     }
 
+    /// The Laplacian-plus-identity of a `w × h` grid of vertices split into triangles along one
+    /// diagonal (the 7-point pattern of a triangle mesh), with `k` unknowns per vertex coupled
+    /// in full blocks. Unknowns `k·v … k·v + k − 1` belong to vertex `v`.
     fn grid_mesh(w: usize, h: usize, k: usize) -> (SymTriplets, Vec<u32>) {
         let nv = w * h;
         let mut t = SymTriplets::new(k * nv);
@@ -1366,14 +1390,6 @@ mod tests {
     /// The values of the triplets `t` (of `pattern`) in the order `s` factors them.
     fn values_of(s: &SpdSolver, pattern: &SymPattern, t: &SymTriplets) -> Vec<f64> {
         s.gather_matrix(pattern.matrix(t.values(), "test").unwrap().as_ref())
-    }
-
-    /// Values of the supernodal factor of `pattern` (without amalgamation, as LSCM's is made)
-    /// in the elimination order `fwd`.
-    fn factor_values(pattern: &SymPattern, fwd: &[usize]) -> usize {
-        let mut params = supernodal();
-        params.supernodal_params = faer::sparse::linalg::SymbolicSupernodalParams { relax: None };
-        factor_len(pattern, fwd, params)
     }
 
     /// Values of the Cholesky factor of `pattern` in the elimination order `fwd`, made with
@@ -1543,154 +1559,19 @@ mod tests {
         }
     }
 
-    /// An LSCM-like system on a `w × h` grid mesh: a Laplacian on u and one on v, coupled only
-    /// along the outline (as the area term couples them), with node labels for the ordering.
-    fn fields_coupled_at_the_outline(w: usize, h: usize) -> (SymTriplets, Vec<u32>) {
-        let nv = w * h;
-        let mut t = SymTriplets::new(2 * nv);
-        let rim = |x: usize, y: usize| x == 0 || y == 0 || x + 1 == w || y + 1 == h;
-        for y in 0..h {
-            for x in 0..w {
-                let v = y * w + x;
-                for f in 0..2 {
-                    t.add(2 * v + f, 2 * v + f, 7.0);
-                }
-                for (dx, dy) in [(1, 0), (0, 1), (1, 1)] {
-                    let (x2, y2) = (x + dx, y + dy);
-                    if x2 >= w || y2 >= h {
-                        continue;
-                    }
-                    let u = y2 * w + x2;
-                    for f in 0..2 {
-                        t.add(2 * u + f, 2 * v + f, -1.0);
-                    }
-                    if rim(x, y) && rim(x2, y2) && dx + dy == 1 {
-                        t.add(2 * u, 2 * v + 1, -0.5);
-                        t.add(2 * u + 1, 2 * v, 0.5);
-                    }
-                }
-            }
-        }
-        let node_of = (0..(2 * nv) as u32).map(|i| i / 2).collect();
-        (t, node_of)
-    }
-
     #[test]
-    fn fields_ordered_apart_factor_in_fewer_values_to_the_same_solution() {
-        let (w, h) = (300, 240);
-        let (t, node_of) = fields_coupled_at_the_outline(w, h);
-        let by_node = node_pattern(&t, node_of, w * h);
-        let by_field = by_node.clone().by_field();
-        // The order: a permutation, the unknowns of a block of the dissection field by field.
-        let order = by_field.nested_dissection();
-        let mut seen = vec![false; 2 * w * h];
-        order.iter().for_each(|&i| seen[i] = true);
-        assert!(seen.iter().all(|&s| s), "a permutation");
-        let switches = order.windows(2).filter(|p| p[0] % 2 != p[1] % 2).count();
-        assert!(
-            switches < order.len() / 8,
-            "{switches} switches between u and v"
-        );
-        // The factor: a node-by-node order stores every vertex pair as a 2 × 2 block, as a
-        // system coupling u and v everywhere would (the structural zero that made LSCM's
-        // supernodes); by field, the uncoupled fields factor as two Laplacians.
-        let mut coupled = t.clone();
-        for v in 0..w * h {
-            coupled.add(2 * v + 1, 2 * v, 0.0);
-        }
-        let blocks = SymPattern::new(&coupled, "test")
-            .unwrap()
-            .with_nodes(by_node.nodes.clone().unwrap().0, w * h)
-            .unwrap();
-        let nd = |p: &SymPattern| SpdSolver::with_ordering(p, "test", Ordering::NestedDissection);
-        let (fields, pairs) = (nd(&by_field).unwrap(), nd(&blocks).unwrap());
-        let ratio = fields.symbolic.len_val() as f64 / pairs.symbolic.len_val() as f64;
-        // Every u of the mesh first and the outline's v last (the order LSCM had before): the
-        // v of the outline are a dense block, and every column above them keeps a row to them.
-        let nodes = ordering::dissection(&ordering::Graph::quotient(
-            by_field.csc().0,
-            by_field.csc().1,
-            &by_node.nodes.clone().unwrap().0,
-            w * h,
-        ));
-        let rim = |v: usize| {
-            let (x, y) = (v % w, v / w);
-            x == 0 || y == 0 || x + 1 == w || y + 1 == h
-        };
-        let outline_last: Vec<usize> = (nodes.order.iter().map(|&v| 2 * v as usize))
-            .chain(
-                nodes
-                    .order
-                    .iter()
-                    .filter(|&&v| !rim(v as usize))
-                    .map(|&v| 2 * v as usize + 1),
-            )
-            .chain(
-                nodes
-                    .order
-                    .iter()
-                    .filter(|&&v| rim(v as usize))
-                    .map(|&v| 2 * v as usize + 1),
-            )
-            .collect();
-        let last = factor_values(&by_field, &outline_last);
-        eprintln!(
-            "factor values by block {}, outline last {last}, by node {} ({ratio:.3})",
-            fields.symbolic.len_val(),
-            pairs.symbolic.len_val()
-        );
-        // 0.607 here (0.615 with the outline last); on a million-face toe's LSCM system 73.6M
-        // values, against 75.6M with the outline last.
-        assert!(
-            ratio < 0.65,
-            "by field {ratio:.3} of the 2 × 2 blocks' values"
-        );
-        assert!(
-            fields.symbolic.len_val() < last,
-            "by block {} against {last} with the outline last",
-            fields.symbolic.len_val()
-        );
-        // The same solution as AMD's factor, to rounding.
-        let x_true: Vec<f64> = (0..2 * w * h).map(|i| (i as f64 * 0.37).sin()).collect();
-        let mut b = vec![0.0; x_true.len()];
-        sym_mul(
-            &by_node.matrix(t.values(), "test").unwrap(),
-            &x_true,
-            &mut b,
-        );
-        for (ordering, p) in [
-            (Ordering::NestedDissection, &by_field),
-            (Ordering::Amd, &by_node),
-        ] {
-            let mut s = SpdSolver::with_ordering(p, "test", ordering).unwrap();
-            s.factor(values_of(&s, p, &t)).unwrap();
-            let mut x = b.clone();
-            s.solve_in_place(&mut x).unwrap();
-            let (r, nb) = residual(p, &t, &x, &b);
-            assert!(r <= 1e-13 * nb, "{ordering:?}: residual {r:e} of {nb:e}");
-            let err = x
-                .iter()
-                .zip(&x_true)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max);
-            assert!(err < 1e-12, "{ordering:?}: error {err:e}");
-        }
-    }
-
-    #[test]
-    fn the_solver_made_sooner_is_the_solver_made_one_triangle_after_the_other() {
+    fn the_analysis_side_by_side_is_the_analysis_one_triangle_after_the_other() {
         let (w, h) = (90, 70);
         let (t, node_of) = grid_mesh(w, h, 2);
         let pattern = node_pattern(&t, node_of, w * h);
-        let mut after = SpdSolver::new(&pattern, "test").unwrap();
-        let mut sooner = SpdSolver::new_sooner(&pattern, "test").unwrap();
+        let after = SpdSolver::new(&pattern, "test").unwrap();
+        let ordering = Ordering::for_nodes(pattern.n_nodes());
+        let sooner = Analysis::of(&pattern, "test", ordering, Triangles::SideBySide, true).unwrap();
         assert_eq!(after.fwd, sooner.fwd);
+        assert_eq!(after.inv, sooner.inv);
         assert_eq!(after.lower.col_ptr(), sooner.lower.col_ptr());
         assert_eq!(after.lower.row_idx(), sooner.lower.row_idx());
         assert_eq!(after.symbolic.len_val(), sooner.symbolic.len_val());
-        after.factor(values_of(&after, &pattern, &t)).unwrap();
-        sooner.factor(values_of(&sooner, &pattern, &t)).unwrap();
-        assert!(same_bits(after.double_factor(), sooner.double_factor()));
         // The values made entry by entry are the values gathered from the matrix.
         let a = pattern.matrix(t.values(), "test").unwrap();
         let entry = |i: usize, j: usize| {
@@ -1699,8 +1580,8 @@ mod tests {
             a.val_of_col(c)[rows.binary_search(&r).unwrap()]
         };
         assert!(same_bits(
-            &sooner.values_of(entry),
-            &values_of(&sooner, &pattern, &t)
+            &values_in_order(&sooner.fwd, &sooner.lower, entry),
+            &values_of(&after, &pattern, &t)
         ));
     }
 
