@@ -2,14 +2,15 @@
 //! (`--split-time`) measures the work done rather than the wall time, and a busy machine (other
 //! builds, other jobs) does not change how far a split gets.
 //!
-//! It is `clock_gettime(CLOCK_PROCESS_CPUTIME_ID)`, read through `nix` (a maintained safe
-//! wrapper the workspace already builds; the `cpu-time` crate wraps the same call but has had no
-//! release since 2019, and calling `libc` directly needs `unsafe`, which the workspace denies).
-//! The clock counts every thread of the process: the split's candidates are judged side by side
-//! on the rayon pool, so two cores busy for a second spend two seconds of it; and work the same
-//! process does beside the split (a second job of the workbench's server) counts too. Where the
-//! clock cannot be read (a system without it), the clock falls back to wall time.
+//! It is [`flatcut_flatten::budget::cpu_time`], the clock the split's solves stop on too
+//! ([`flatcut_flatten::Budget::until_cpu`]): the limit and the deadlines of the solves inside
+//! it are one clock. The clock counts every thread of the process: the split's candidates are
+//! judged side by side on the rayon pool, so two cores busy for a second spend two seconds of
+//! it; and work the same process does beside the split (a second job of the workbench's
+//! server) counts too. Where the clock cannot be read (a system without it), the clock falls
+//! back to wall time.
 
+pub use flatcut_flatten::budget::cpu_time;
 use std::time::{Duration, Instant};
 
 /// A stopwatch of the process's CPU time.
@@ -30,6 +31,12 @@ impl CpuClock {
         }
     }
 
+    /// The process's CPU time at which `limit` from the clock's start is spent; `None` where
+    /// the CPU time cannot be read.
+    pub fn at(&self, limit: Duration) -> Option<Duration> {
+        self.cpu.map(|c| c.saturating_add(limit))
+    }
+
     /// The CPU time the process has used since the clock started (all its threads); the wall
     /// time where the CPU time cannot be read.
     pub fn elapsed(&self) -> Duration {
@@ -38,21 +45,6 @@ impl CpuClock {
             _ => self.wall.elapsed(),
         }
     }
-}
-
-/// The CPU time the process has used so far, all its threads together.
-#[cfg(unix)]
-pub fn cpu_time() -> Option<Duration> {
-    nix::time::ClockId::CLOCK_PROCESS_CPUTIME_ID
-        .now()
-        .ok()
-        .map(Duration::from)
-}
-
-/// The CPU time the process has used so far: not read on this system.
-#[cfg(not(unix))]
-pub fn cpu_time() -> Option<Duration> {
-    None
 }
 
 #[cfg(test)]

@@ -234,35 +234,29 @@ pub fn split_surface(
 }
 
 /// `p` with every solve stopped where the split's time limit `limit` (CPU time, from `cpu`'s
-/// start) runs out: the time left, from now, as the deadline of the stage its solves run within
-/// (the split's own, or one made for it), so that a joint solve of a large scan started just
-/// before the limit stops there with its best map rather than running on. The deadline is wall
-/// time: a solve on one core spends as much CPU time, one that keeps both cores busy may spend
-/// twice the time left.
+/// start) runs out: the stage its solves run within (the split's own, or one made for it)
+/// stopping at that CPU time ([`flatcut_flatten::Budget::until_cpu`]), so that a joint solve of
+/// a large scan started just before the limit stops there with its best map rather than
+/// running on. The limit and the solves' deadlines are one clock: a solve on one core spends
+/// the CPU time left in as much wall time or more (a busy machine), one that keeps both cores
+/// busy in half of it.
 fn until_limit(p: &FlattenParams, limit: Option<Duration>, cpu: &CpuClock) -> FlattenParams {
     let Some(limit) = limit else {
         return p.clone();
     };
     let left = limit.saturating_sub(cpu.elapsed());
     let stage = match &p.within {
-        Some(b) => {
-            let mut b = b.clone();
-            let until = std::time::Instant::now().checked_add(left);
-            b.deadline = match (b.deadline, until) {
-                (Some(d), Some(u)) => Some(d.min(u)),
-                (d, u) => d.or(u),
-            };
-            b
-        }
+        Some(b) => b.clone(),
         None => flatcut_flatten::Budget::stage(
             "split",
             p.split_iters,
-            Some(left),
+            None,
             p.hooks.clone(),
             std::time::Instant::now(),
         ),
     };
-    p.clone().with_within(Some(stage))
+    p.clone()
+        .with_within(Some(stage.until_cpu(cpu.at(limit), left)))
 }
 
 /// The flattening parameters that hold the limits of `opts` (a little inside them).
@@ -299,22 +293,9 @@ fn split_on(
     let started = std::time::Instant::now();
     let mut timed_out = false;
     let out_of_time = || opts.time_limit.is_some_and(|t| cpu.elapsed() >= t);
-    // The parts flattened together within the time left ([`flatten_together`]). The solve's
-    // deadline is the CPU time left counted on the wall clock; where the wall clock runs out
-    // first (a busy machine gives the process less than a core), the solve goes on from where
-    // it stopped, until the CPU time is out too (or the enclosing stage's own deadline).
-    let together_in_time = |pieces: &mut [TriMesh]| -> Result<bool, DartError> {
-        loop {
-            let left = opts.time_limit.map(|t| t.saturating_sub(cpu.elapsed()));
-            let began = std::time::Instant::now();
-            let held_seams = flatten_together(pieces, &held())?;
-            let wall_first = left.is_some_and(|l| began.elapsed() >= l) && !out_of_time();
-            let theirs = params.within.as_ref().is_some_and(|b| b.expired());
-            if held_seams || !wall_first || theirs {
-                return Ok(held_seams);
-            }
-        }
-    };
+    // The parts flattened together within the time left ([`flatten_together`]).
+    let together_in_time =
+        |pieces: &mut [TriMesh]| -> Result<bool, DartError> { flatten_together(pieces, &held()) };
     // The split whose joint solve last held its seams equal, with the least excess: what is
     // returned when the time limit stops a later joint solve with its seams apart.
     let mut valid: Option<Valid> = None;
@@ -1229,6 +1210,61 @@ fn centroid(mesh: &TriMesh, t: usize) -> DVec3 {
 mod tests {
     use super::*;
     use flatcut_flatten::Method;
+
+    /// Environment variable that makes [`limit_clock_child`] measure.
+    const LIMIT_CHILD_ENV: &str = "FLATCUT_SPLIT_LIMIT_CHILD";
+
+    /// The measuring half of [`the_solves_stop_on_the_clock_of_the_limit`], run alone in a
+    /// child process (the tests beside it spend CPU time while it sleeps); does nothing without
+    /// the variable set.
+    #[test]
+    fn limit_clock_child() {
+        if std::env::var_os(LIMIT_CHILD_ENV).is_none() {
+            return;
+        }
+        let params = FlattenParams::new(Method::Isometric);
+        let limit = Some(Duration::from_millis(200));
+        let cpu = CpuClock::start();
+        let budget = |p: &FlattenParams| p.within.clone().expect("a stage with the limit");
+        // A process that waits (a busy machine gives it no core) spends none of its CPU
+        // limit: after twice the limit of wall time, its solves still have time.
+        let held = until_limit(&params, limit, &cpu);
+        std::thread::sleep(Duration::from_millis(400));
+        assert!(!budget(&held).expired(), "stopped by the wall clock");
+        // Nor does the same stage made later, inside an enclosing stage.
+        let inside = params
+            .clone()
+            .with_within(Some(flatcut_flatten::Budget::none("outer")));
+        assert!(!budget(&until_limit(&inside, limit, &cpu)).expired());
+        // Once the limit's CPU time is spent, they stop.
+        let mut x = 1u64;
+        while cpu.elapsed() < Duration::from_millis(250) {
+            for _ in 0..1000 {
+                x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
+            }
+        }
+        assert!(budget(&held).expired(), "not stopped at the CPU limit");
+        assert!(budget(&until_limit(&inside, limit, &cpu)).expired());
+        println!("SPLIT-LIMIT-CLOCK-CHECKED");
+    }
+
+    /// The split's limit counts the process's CPU time, and its solves stop on that clock
+    /// too, not on the wall clock: measured in a child process running [`limit_clock_child`].
+    #[test]
+    #[cfg(unix)]
+    fn the_solves_stop_on_the_clock_of_the_limit() {
+        let out = std::process::Command::new(std::env::current_exe().unwrap())
+            .args(["split::tests::limit_clock_child", "--exact", "--nocapture"])
+            .env(LIMIT_CHILD_ENV, "1")
+            .output()
+            .unwrap();
+        let said = String::from_utf8_lossy(&out.stdout).into_owned()
+            + &String::from_utf8_lossy(&out.stderr);
+        assert!(
+            out.status.success() && said.contains("SPLIT-LIMIT-CLOCK-CHECKED"),
+            "{said}"
+        );
+    }
 
     /// Four flat strips 10 mm × 40 mm side by side (a 40 mm square cut along x = 10, 20, 30),
     /// each mapped flat as it lies: every neighbour pair merges within any limits.

@@ -14,6 +14,13 @@
 //! [`Budget::fork`] of the budget: the fork records how close each of its solves came to the
 //! cap, so its result is taken only where the iterations spent meanwhile would not have cut any
 //! of them short ([`Budget::join`]); otherwise it is computed again in order.
+//!
+//! A stage's time runs on one of two clocks: wall time (`deadline`, the flattener's
+//! `time_limit`), or the process's CPU time (`cpu_deadline`, [`cpu_time`]: all its threads
+//! together). A split's `--split-time` is CPU time, and every solve inside it stops on that
+//! same clock ([`Budget::until_cpu`]): a solve stopped by the wall clock while the CPU time was
+//! not yet spent (a busy machine giving the process less than a core) spent less than the limit
+//! on work the limit was meant to pay for, and the merging at the end was what it cut.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicI64, AtomicUsize, Ordering};
@@ -40,6 +47,9 @@ pub struct Budget {
     pub hooks: FlattenHooks,
     /// Stop after this instant (the best iterate so far is the result).
     pub deadline: Option<Instant>,
+    /// Stop once the process has used this much CPU time ([`cpu_time`]), all its threads
+    /// together: the clock of a split's time limit.
+    pub cpu_deadline: Option<Duration>,
     /// When the whole flattening started (for the progress reports).
     pub started: Instant,
     /// Name of the solve in the progress reports.
@@ -106,6 +116,7 @@ impl Budget {
         Self {
             hooks,
             deadline: time.and_then(|t| Instant::now().checked_add(t)),
+            cpu_deadline: None,
             started,
             stage: name,
             count: Arc::new(Count {
@@ -150,15 +161,42 @@ impl Budget {
         }
     }
 
-    /// The time the stage has left (`None`: no time limit).
-    pub fn time_left(&self) -> Option<Duration> {
-        self.deadline
-            .map(|d| d.saturating_duration_since(Instant::now()))
+    /// This budget stopping, besides its own deadlines, once the process has used `cpu` of
+    /// CPU time ([`cpu_time`]; where it cannot be read, `left` from now on the wall clock).
+    pub fn until_cpu(mut self, cpu: Option<Duration>, left: Duration) -> Self {
+        match cpu {
+            Some(c) => self.cpu_deadline = Some(self.cpu_deadline.map_or(c, |d| d.min(c))),
+            None => {
+                let until = Instant::now().checked_add(left);
+                self.deadline = match (self.deadline, until) {
+                    (Some(d), Some(u)) => Some(d.min(u)),
+                    (d, u) => d.or(u),
+                };
+            }
+        }
+        self
     }
 
-    /// True when the deadline has passed.
+    /// The time the stage has left, the less of its two clocks' (`None`: no time limit).
+    pub fn time_left(&self) -> Option<Duration> {
+        let wall = self
+            .deadline
+            .map(|d| d.saturating_duration_since(Instant::now()));
+        let cpu = self
+            .cpu_deadline
+            .map(|d| cpu_time().map_or(Duration::ZERO, |now| d.saturating_sub(now)));
+        match (wall, cpu) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// True when either deadline has passed.
     pub fn expired(&self) -> bool {
         self.deadline.is_some_and(|d| Instant::now() >= d)
+            || self
+                .cpu_deadline
+                .is_some_and(|d| cpu_time().is_none_or(|now| now >= d))
     }
 
     /// Iterations the stage may still take.
@@ -273,6 +311,24 @@ impl Budget {
     }
 }
 
+/// The CPU time the process has used so far, all its threads together
+/// (`clock_gettime(CLOCK_PROCESS_CPUTIME_ID)`, read through `nix`, a maintained safe wrapper:
+/// the `cpu-time` crate wraps the same call but has had no release since 2019, and calling
+/// `libc` directly needs `unsafe`, which the workspace denies); `None` where it cannot be read.
+#[cfg(unix)]
+pub fn cpu_time() -> Option<Duration> {
+    nix::time::ClockId::CLOCK_PROCESS_CPUTIME_ID
+        .now()
+        .ok()
+        .map(Duration::from)
+}
+
+/// The CPU time the process has used so far: not read on this system.
+#[cfg(not(unix))]
+pub fn cpu_time() -> Option<Duration> {
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -333,5 +389,35 @@ mod tests {
         b.spend(10);
         assert!(!b.join(&ahead, at), "10 left, the solve wanted 15");
         assert_eq!(b.used(), 90);
+    }
+
+    #[test]
+    #[cfg(unix)]
+    fn a_cpu_deadline_is_read_on_the_process_cpu_clock() {
+        let stage = || Budget::stage("s", 10, None, FlattenHooks::default(), Instant::now());
+        let now = cpu_time().expect("the CPU clock is read on unix");
+        // An hour of CPU time ahead: not expired, and the time left is about that hour, the
+        // less of the two clocks' where the wall clock has a deadline too.
+        let ahead = stage().until_cpu(Some(now + Duration::from_secs(3600)), Duration::ZERO);
+        assert!(!ahead.expired() && !ahead.spent());
+        let left = ahead.time_left().unwrap();
+        assert!(left > Duration::from_secs(3590) && left <= Duration::from_secs(3600));
+        let mut both = ahead.clone();
+        both.deadline = Instant::now().checked_add(Duration::from_secs(60));
+        assert!(both.time_left().unwrap() <= Duration::from_secs(60));
+        // A CPU time already spent: expired at once, whatever the wall clock says, and a later
+        // CPU deadline does not lift it.
+        let mut spent = stage().until_cpu(Some(now), Duration::from_secs(3600));
+        spent.deadline = Instant::now().checked_add(Duration::from_secs(3600));
+        assert!(spent.expired() && spent.spent());
+        assert_eq!(spent.time_left(), Some(Duration::ZERO));
+        assert!(
+            spent
+                .until_cpu(Some(now + Duration::from_secs(3600)), Duration::ZERO)
+                .expired()
+        );
+        // Where the CPU clock cannot be read, the time left runs on the wall clock.
+        let wall = stage().until_cpu(None, Duration::ZERO);
+        assert!(wall.cpu_deadline.is_none() && wall.expired());
     }
 }

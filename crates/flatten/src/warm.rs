@@ -207,7 +207,8 @@ fn optimise_within(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::assembly::SEAM_REPORT_REL;
+    use crate::Budget;
+    use crate::assembly::{SEAM_REPORT_REL, STAGE_WEIGHT};
     use crate::testmesh::spherical_cap;
     use crate::{flatten, nonlinear::kernel::singular_values};
     use flatcut_mesh::mating::coincident_seams;
@@ -328,5 +329,50 @@ mod tests {
         let warm = flatten_assembly_from(&refs, &seams, &x0, &params).unwrap();
         let cold = flatten_assembly(&refs, &seams, &params).unwrap();
         assert!(warm.iter().zip(&cold).all(|(a, b)| a.uv == b.uv));
+    }
+
+    #[test]
+    fn each_stage_starts_from_a_moderate_weight_whatever_the_last_left() {
+        // The feasibility stage from the halves' own maps (their seam apart), once after a
+        // stage that left the weight at its cap and once from the stage weight: the same steps
+        // and the same map, the weight the stage before raised not carried into it.
+        let (pieces, starts, seams, params) = halves();
+        let refs: Vec<&TriMesh> = pieces.iter().collect();
+        let mut offset = Vec::new();
+        let (mut rest, mut x0) = (Vec::new(), Vec::new());
+        for (m, s) in refs.iter().zip(&starts) {
+            offset.push(x0.len());
+            let o = x0.len();
+            rest.extend(rest_frames(m).unwrap().into_iter().map(|mut t| {
+                t.v = t.v.map(|v| v + o);
+                t
+            }));
+            x0.extend_from_slice(s);
+        }
+        let seam_refs: Vec<&MatingSeam> = seams.iter().collect();
+        let pairs = edge_pairs(&refs, &seam_refs, &offset);
+        let l = Limits::of(&params).unwrap().unwrap();
+        let e = WithLimits {
+            inner: SymDirichlet,
+            s_max: l.aim(1.0).hi,
+            s_min: l.aim(1.0).lo,
+            k: PENALTY_STIFFNESS[PENALTY_STIFFNESS.len() - 1],
+        };
+        let run = |weight: f64| {
+            let mut solve = GroupSolve {
+                joint: Joint::new(&rest, &pairs, x0.len()).unwrap(),
+                params: &params,
+                abs: 0.0,
+                iterations: 0,
+                budget: Budget::none("test"),
+            };
+            solve.joint.weight = weight;
+            let x = solve.run(&e, x0.clone()).unwrap();
+            (x, solve.iterations)
+        };
+        let (capped, moderate) = (run(crate::assembly::MAX_WEIGHT), run(STAGE_WEIGHT));
+        assert!(capped.1 > 0);
+        assert_eq!(capped.1, moderate.1, "Newton steps");
+        assert!(capped.0 == moderate.0, "maps differ");
     }
 }
