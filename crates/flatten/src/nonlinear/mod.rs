@@ -113,25 +113,29 @@ struct StartAndAnalysis {
 /// it rather than ordering the graph twice). The map is the same bits as when they run one
 /// after the other. The rest frames (64 MB at a million faces) are left until after the start:
 /// its factor is the memory peak.
+///
+/// On one of rayon's worker threads (a map flattened inside a parallel loop) the two run here
+/// one after the other ([`crate::beside::beside`]): a worker blocked joining a thread whose
+/// work waits for rayon's pool waits forever once every worker is so blocked.
 fn start_beside_analysis(mesh: &TriMesh, topo: &Topology) -> StartAndAnalysis {
     let started = Instant::now();
     let n = mesh.positions.len();
     let triangles = || mesh.triangles.iter().map(|t| t.map(|v| v as usize));
-    std::thread::scope(|s| {
-        let analysis = s.spawn(|| newton::analyse(triangles(), n, None));
-        let x0 = init::lscm_or_tutte(mesh, topo);
-        let start = started.elapsed();
-        // A panic there is a bug, carried on here as if it were this thread's.
-        let system = analysis
-            .join()
-            .unwrap_or_else(|e| std::panic::resume_unwind(e));
-        StartAndAnalysis {
-            x0,
-            system,
-            start,
-            waited: started.elapsed().saturating_sub(start),
-        }
-    })
+    let mut start = Duration::ZERO;
+    let (system, x0) = crate::beside::beside(
+        || newton::analyse(triangles(), n, None),
+        || {
+            let x0 = init::lscm_or_tutte(mesh, topo);
+            start = started.elapsed();
+            x0
+        },
+    );
+    StartAndAnalysis {
+        x0,
+        system,
+        start,
+        waited: started.elapsed().saturating_sub(start),
+    }
 }
 
 /// The rest frames of a mesh that passed the disk check.
