@@ -47,6 +47,35 @@ impl CpuClock {
     }
 }
 
+/// Test support for measuring the CPU clock: busy work, and a test run alone in a child
+/// process (the tests beside it in one process spend CPU time while it sleeps).
+#[cfg(test)]
+pub(crate) mod alone {
+    /// Spins one thread on arithmetic until `done` says so.
+    pub(crate) fn busy_until(mut done: impl FnMut() -> bool) {
+        let mut x = 1u64;
+        while !done() {
+            for _ in 0..1000 {
+                x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
+            }
+        }
+    }
+
+    /// Runs the test `name` of this test binary alone in a child process with `env` set, and
+    /// panics with its output unless it passes and prints `marker`.
+    #[cfg(unix)]
+    pub(crate) fn run_alone(name: &str, env: &str, marker: &str) {
+        let out = std::process::Command::new(std::env::current_exe().unwrap())
+            .args([name, "--exact", "--nocapture"])
+            .env(env, "1")
+            .output()
+            .unwrap();
+        let said = String::from_utf8_lossy(&out.stdout).into_owned()
+            + &String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success() && said.contains(marker), "{said}");
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -70,12 +99,7 @@ mod tests {
         // Busy for 300 ms of wall time on one thread: the clock runs, never ahead of the wall
         // (one thread cannot spend more), and behind it only by what other processes took.
         let (c, t0) = (CpuClock::start(), Instant::now());
-        let mut x = 1u64;
-        while t0.elapsed() < Duration::from_millis(300) {
-            for _ in 0..1000 {
-                x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
-            }
-        }
+        alone::busy_until(|| t0.elapsed() >= Duration::from_millis(300));
         let (busy, wall) = (c.elapsed(), t0.elapsed());
         assert!(
             busy > Duration::from_millis(30) && busy <= wall + Duration::from_millis(5),
@@ -89,16 +113,6 @@ mod tests {
     #[test]
     #[cfg(unix)]
     fn the_clock_counts_work_and_not_sleep() {
-        let out = std::process::Command::new(std::env::current_exe().unwrap())
-            .args(["clock::tests::clock_child", "--exact", "--nocapture"])
-            .env(CHILD_ENV, "1")
-            .output()
-            .unwrap();
-        let said = String::from_utf8_lossy(&out.stdout).into_owned()
-            + &String::from_utf8_lossy(&out.stderr);
-        assert!(
-            out.status.success() && said.contains("CPU-CLOCK-CHECKED"),
-            "{said}"
-        );
+        alone::run_alone("clock::tests::clock_child", CHILD_ENV, "CPU-CLOCK-CHECKED");
     }
 }

@@ -1237,12 +1237,7 @@ mod tests {
             .with_within(Some(flatcut_flatten::Budget::none("outer")));
         assert!(!budget(&until_limit(&inside, limit, &cpu)).expired());
         // Once the limit's CPU time is spent, they stop.
-        let mut x = 1u64;
-        while cpu.elapsed() < Duration::from_millis(250) {
-            for _ in 0..1000 {
-                x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
-            }
-        }
+        crate::clock::alone::busy_until(|| cpu.elapsed() >= Duration::from_millis(250));
         assert!(budget(&held).expired(), "not stopped at the CPU limit");
         assert!(budget(&until_limit(&inside, limit, &cpu)).expired());
         println!("SPLIT-LIMIT-CLOCK-CHECKED");
@@ -1253,16 +1248,10 @@ mod tests {
     #[test]
     #[cfg(unix)]
     fn the_solves_stop_on_the_clock_of_the_limit() {
-        let out = std::process::Command::new(std::env::current_exe().unwrap())
-            .args(["split::tests::limit_clock_child", "--exact", "--nocapture"])
-            .env(LIMIT_CHILD_ENV, "1")
-            .output()
-            .unwrap();
-        let said = String::from_utf8_lossy(&out.stdout).into_owned()
-            + &String::from_utf8_lossy(&out.stderr);
-        assert!(
-            out.status.success() && said.contains("SPLIT-LIMIT-CLOCK-CHECKED"),
-            "{said}"
+        crate::clock::alone::run_alone(
+            "split::tests::limit_clock_child",
+            LIMIT_CHILD_ENV,
+            "SPLIT-LIMIT-CLOCK-CHECKED",
         );
     }
 
