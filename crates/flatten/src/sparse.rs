@@ -1053,10 +1053,7 @@ impl SpdSolver {
 
     /// A workspace of `size`, or an out-of-memory solver error.
     fn buffer(&self, size: StackReq) -> Result<MemBuffer, FlattenError> {
-        MemBuffer::try_new(size).map_err(|e| FlattenError::Solver {
-            stage: self.stage,
-            reason: format!("out of memory: {e:?}"),
-        })
+        workspace(self.stage, size)
     }
 
     /// Solves `A x = rhs` in place for one right-hand side.
@@ -1268,6 +1265,14 @@ fn lower_mul<I: Index>(lower: SparseColMatRef<'_, I, f64>, v: &[f64], out: &mut 
             }
         }
     }
+}
+
+/// A workspace of `size` for a faer call of `stage`, or an out-of-memory solver error.
+fn workspace(stage: &'static str, size: StackReq) -> Result<MemBuffer, FlattenError> {
+    MemBuffer::try_new(size).map_err(|e| FlattenError::Solver {
+        stage,
+        reason: format!("out of memory: {e:?}"),
+    })
 }
 
 #[cfg(test)]

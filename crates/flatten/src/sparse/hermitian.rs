@@ -187,10 +187,7 @@ impl HermitianSolver {
 
     /// A workspace of `size`, or an out-of-memory solver error.
     fn buffer(&self, size: StackReq) -> Result<MemBuffer, FlattenError> {
-        MemBuffer::try_new(size).map_err(|e| FlattenError::Solver {
-            stage: self.stage,
-            reason: format!("out of memory: {e:?}"),
-        })
+        super::workspace(self.stage, size)
     }
 
     /// Where this solver's time went: the analysis, the numeric factorisation and the solves.
