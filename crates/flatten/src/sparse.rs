@@ -38,7 +38,7 @@ use faer::traits::ComplexField;
 use faer::{Conj, MatMut, Side};
 
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering as Memory};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering as Memory};
 use std::time::{Duration, Instant};
 
 use crate::FlattenError;
@@ -714,6 +714,8 @@ pub struct SpdSolver {
     factor_time: Duration,
     factorisations: usize,
     solve_time: SharedDuration,
+    /// Single-precision triangular solves made by refined solves.
+    refinements: AtomicUsize,
 }
 
 /// Where each entry of a solver's matrix is in its values: the pattern of the matrix in the
@@ -812,6 +814,7 @@ impl SpdSolver {
             factor_time: Duration::ZERO,
             factorisations: 0,
             solve_time: SharedDuration::default(),
+            refinements: AtomicUsize::new(0),
         })
     }
 
@@ -837,6 +840,21 @@ impl SpdSolver {
     /// residual `tol`. (By default factors are double precision.)
     pub fn refined(mut self, tol: f64) -> Self {
         self.refine = (self.symbolic.len_val() >= SINGLE_PRECISION_FROM).then_some(tol);
+        self
+    }
+
+    /// Refined solves (where the factor is single precision) are made to the relative residual
+    /// `tol` from now on: an inexact Newton step's direction is solved to its forcing term.
+    pub fn set_refinement_tol(&mut self, tol: f64) {
+        if self.refine.is_some() {
+            self.refine = Some(tol);
+        }
+    }
+
+    /// [`SpdSolver::refined`] whatever the factor's size (small systems in tests).
+    #[cfg(test)]
+    pub(crate) fn refined_always(mut self, tol: f64) -> Self {
+        self.refine = Some(tol);
         self
     }
 
@@ -967,6 +985,7 @@ impl SpdSolver {
             factorisation: self.factor_time,
             factorisations: self.factorisations,
             solve: self.solve_time.get(),
+            refinements: self.refinements.load(Memory::Relaxed),
             ..Timings::default()
         }
     }
@@ -1150,7 +1169,9 @@ impl SpdSolver {
     ) -> Result<(), FlattenError> {
         let n = self.n;
         let lower = SparseColMatRef::new(self.lower.as_ref(), self.values.as_slice());
+        let applied = AtomicUsize::new(0);
         let precondition = |r: &[f64], z: &mut [f64]| {
+            applied.fetch_add(1, Memory::Relaxed);
             // Scaled into f32's range whatever the residual's size.
             let scale = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             if scale == 0.0 || !scale.is_finite() {
@@ -1186,6 +1207,8 @@ impl SpdSolver {
                 stalled.push(j);
             }
         }
+        self.refinements
+            .fetch_add(applied.load(Memory::Relaxed), Memory::Relaxed);
         if stalled.is_empty() {
             return Ok(());
         }

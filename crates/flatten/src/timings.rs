@@ -25,6 +25,9 @@ pub struct Timings {
     pub line_search: Duration,
     /// Numeric factorisations made.
     pub factorisations: usize,
+    /// Single-precision triangular solves made to refine solutions (conjugate-gradient steps,
+    /// [`crate::refine`]; none where factors are double precision).
+    pub refinements: usize,
 }
 
 impl Timings {
@@ -48,6 +51,7 @@ impl Timings {
             solve: self.solve.saturating_sub(earlier.solve),
             line_search: self.line_search.saturating_sub(earlier.line_search),
             factorisations: self.factorisations.saturating_sub(earlier.factorisations),
+            refinements: self.refinements.saturating_sub(earlier.refinements),
         }
     }
 
@@ -60,23 +64,28 @@ impl Timings {
         self.solve += other.solve;
         self.line_search += other.line_search;
         self.factorisations += other.factorisations;
+        self.refinements += other.refinements;
     }
 }
 
 impl std::fmt::Display for Timings {
-    /// "start 1.20 s, ordering 0.80 s, assembly …": the parts in the order a solve runs them.
+    /// "start 1.20 s, ordering 0.80 s, assembly …": the parts in the order a solve runs them
+    /// (with the refinement steps of the solves where there were any).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "start {:.2} s, ordering {:.2} s, assembly {:.2} s, factorisation {:.2} s ({}), solves {:.2} s, line search {:.2} s",
+            "start {:.2} s, ordering {:.2} s, assembly {:.2} s, factorisation {:.2} s ({}), solves {:.2} s",
             self.start.as_secs_f64(),
             self.ordering.as_secs_f64(),
             self.assembly.as_secs_f64(),
             self.factorisation.as_secs_f64(),
             self.factorisations,
             self.solve.as_secs_f64(),
-            self.line_search.as_secs_f64()
-        )
+        )?;
+        if self.refinements > 0 {
+            write!(f, " ({} refinement steps)", self.refinements)?;
+        }
+        write!(f, ", line search {:.2} s", self.line_search.as_secs_f64())
     }
 }
 

@@ -17,7 +17,9 @@ use crate::sparse::{Slots, SpdSolver, SymPattern};
 /// (from `crate::sparse::SINGLE_PRECISION_FROM` factor values, about 300k faces). A Newton
 /// step needs its direction to a few digits, not to the last: on a million-face cap the
 /// isometric solve takes the same 3 steps to the same δ2 at 1e-4 as at 1e-12, with 1–2 refinement
-/// steps per solve instead of 7.
+/// steps per solve instead of 7. Far from the minimum a Newton step needs less still: the
+/// solver loosens it there ([`SpdSystem::set_direction_tol`], the forcing term of
+/// `super::newton`).
 pub const DIRECTION_TOL: f64 = 1e-4;
 
 /// A fixed-pattern SPD matrix and its reusable symbolic Cholesky factorisation.
@@ -199,6 +201,21 @@ impl SpdSystem {
             shift *= 100.0;
         }
         None
+    }
+
+    /// The relative residual the next solves are refined to where the factor is single
+    /// precision ([`DIRECTION_TOL`] until changed: an inexact Newton step's forcing term);
+    /// exact solves are unaffected.
+    pub fn set_direction_tol(&mut self, tol: f64) {
+        self.solver.set_refinement_tol(tol);
+    }
+
+    /// The same system with its factors made in single precision and its solves refined
+    /// whatever its size (small systems in tests).
+    #[cfg(test)]
+    pub(crate) fn refined_always(mut self) -> Self {
+        self.solver = self.solver.refined_always(DIRECTION_TOL);
+        self
     }
 
     /// Where this system's time went (analysis, factorisations, solves).
