@@ -17,7 +17,19 @@ mod allocator {
     /// 898,440 KiB for 0.6 s more system time in page faults), at 0.1 s of CPU time.
     const MMAP_THRESHOLD: i32 = 8 << 20;
 
-    /// Fixes glibc's mapping threshold at [`MMAP_THRESHOLD`] (which also stops its dynamic raise).
+    /// glibc's heaps ("arenas"). By default each thread that allocates while another holds
+    /// the heap gets one of its own (up to 8 per core), and a block freed into one is reused only
+    /// by allocations served from it: the rayon workers' assembly blocks and the solve's
+    /// vectors (a million-face map's are 8 MB, just below [`MMAP_THRESHOLD`]) each leave room
+    /// behind in their thread's heap, how much depending on which thread ran what, which the
+    /// machine's load decides. One heap for all threads reuses every freed block: the peak of a
+    /// million-face isometric map fell from 920,284–920,752 KiB to 892,924–895,128 KiB (toe and
+    /// hemisphere, alternately, load 13–17), its CPU time within the noise (the threads
+    /// allocate whole blocks, not per element).
+    const ARENA_MAX: i32 = 1;
+
+    /// Fixes glibc's mapping threshold at [`MMAP_THRESHOLD`] (which also stops its dynamic raise)
+    /// and its number of heaps at [`ARENA_MAX`].
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     #[allow(unsafe_code)]
     pub fn return_large_blocks() {
@@ -26,6 +38,7 @@ mod allocator {
         // refusal (return 0) leaves glibc's default, which is correct, only larger.
         unsafe {
             libc::mallopt(libc::M_MMAP_THRESHOLD, MMAP_THRESHOLD);
+            libc::mallopt(libc::M_ARENA_MAX, ARENA_MAX);
         }
     }
 
