@@ -38,7 +38,8 @@ def timed(cmd):
 
 
 def parse(stderr):
-    """Newton steps, faces and the stage times of flatten's `--timings` output."""
+    """Newton steps, faces, factorisations, refinement steps (single-precision triangular solves, where
+    there were any) and the stage times of flatten's `--timings` output."""
     out = {}
     m = re.search(r"(\d+) faces", stderr)
     if m:
@@ -49,6 +50,9 @@ def parse(stderr):
     m = re.search(r"factorisation [\d.]+ s \((\d+)\)", stderr)
     if m:
         out["factorisations"] = int(m.group(1))
+    m = re.search(r"\((\d+) refinement steps\)", stderr)
+    if m:
+        out["refinements"] = int(m.group(1))
     for stage in STAGES:
         m = re.search(rf"{stage} ([\d.]+) s", stderr)
         if m:
