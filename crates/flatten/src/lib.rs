@@ -39,7 +39,8 @@
 //! core gets whole tasks instead: an isometric map's Newton analysis is made beside its LSCM
 //! start, `nonlinear::solve`, and LSCM's own analysis, whose pattern it makes from the mesh's
 //! graph, beside the assembly of its values, `lscm.rs`); from 40M (about 300k faces) the factor is single precision and each solve is
-//! refined to double precision by conjugate gradients (`refine.rs`). Long solves report progress
+//! refined to double precision by conjugate gradients (`refine.rs`), a Newton direction far from the
+//! minimum only to its forcing term (inexact Newton, `nonlinear/newton.rs`). Long solves report progress
 //! and honour a time limit and a cancel flag (`FlattenParams::time_limit`, `FlattenHooks`). Every
 //! stage of a flattening (a method's own solve, the limits, the joint solve's seams, the darts, the
 //! split) draws on one `budget::Budget`: `max_iters` and `time_limit` cap the stage over all its
