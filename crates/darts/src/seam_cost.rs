@@ -83,7 +83,19 @@ impl SeamCost {
     /// The cost of the seam through `points` (3D, on the surface of `mesh`), each point taking
     /// the factor of its nearest vertex in `factors`.
     pub fn of_points(mesh: &TriMesh, factors: &[f64], points: &[DVec3]) -> Self {
-        let bvh = Bvh::new(&mesh.positions, &mesh.triangles);
+        Self::of_points_in(
+            mesh,
+            &Bvh::new(&mesh.positions, &mesh.triangles),
+            factors,
+            points,
+        )
+    }
+
+    /// [`SeamCost::of_points`] with the nearest-point hierarchy of `mesh` already built (`bvh`,
+    /// from its positions and triangles): a split costs dozens of candidate cuts of one surface
+    /// at every step, and building the hierarchy of a 100k-face scan for each took longer than
+    /// costing the cut.
+    pub fn of_points_in(mesh: &TriMesh, bvh: &Bvh, factors: &[f64], points: &[DVec3]) -> Self {
         let f: Vec<f64> = points
             .iter()
             .map(|&p| {

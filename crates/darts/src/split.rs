@@ -1064,6 +1064,8 @@ impl Candidate {
 /// against the original piece's vertices, a path point taking the flag of its nearest one.
 struct Guard {
     mesh: TriMesh,
+    /// The nearest-point hierarchy of `mesh`, built once for every cut costed.
+    bvh: flatcut_mesh::nearest::Bvh,
     /// The area of the whole surface being split (mm²).
     area: f64,
     blocked: Vec<bool>,
@@ -1075,6 +1077,7 @@ impl Guard {
     fn new(mesh: &TriMesh, keep_out: Option<&KeepOut>, visibility: &Visibility) -> Self {
         Self {
             mesh: mesh.clone(),
+            bvh: flatcut_mesh::nearest::Bvh::new(&mesh.positions, &mesh.triangles),
             area: mesh.area(),
             blocked: keep_out.map_or_else(Vec::new, |k| k.blocked.clone()),
             factors: visibility.vertex_factors(mesh),
@@ -1083,7 +1086,7 @@ impl Guard {
 
     /// What a cut along `path` costs as a seam.
     fn cost(&self, path: &[DVec3]) -> SeamCost {
-        SeamCost::of_points(&self.mesh, &self.factors, path)
+        SeamCost::of_points_in(&self.mesh, &self.bvh, &self.factors, path)
     }
 
     /// True when some point of the cut lies at a blocked vertex's place.
