@@ -11,7 +11,7 @@
 //! several (a UV seam), the vertex is split, one copy per distinct `vt`. When some faces have no
 //! `vt`, texture coordinates are ignored (a partial flattening is no flattening).
 //!
-//! Writers are deterministic (fixed float formatting) and atomic (a temporary file in the same
+//! Writers are deterministic (shortest round-trip float text) and atomic (a temporary file in the same
 //! directory is renamed over the target, so a crash never leaves a half-written pattern).
 
 use std::collections::BTreeMap;
@@ -712,12 +712,11 @@ pub fn parse_ply(bytes: &[u8], path: &Path, weld_mm: f64) -> Result<TriMesh, Mes
 }
 
 /// Formats a mesh as OBJ text: `v` per vertex, one `vt` per vertex (mm, true scale) when the mesh
-/// has a flattening, and `f a/a b/b c/c` (or `f a b c`). Coordinates have
-/// [`crate::fixed::DECIMALS`] digits after the point (1e-6 mm is far below any weld or chord
-/// tolerance, and fixed formatting makes the output byte-identical across runs), never `-0`
-/// for a zero.
+/// has a flattening, and `f a/a b/b c/c` (or `f a b c`). Coordinates are the shortest decimals
+/// that read back to the same bits ([`crate::decimal`]), so the file is the map that was
+/// measured, never `-0` for a zero.
 pub fn obj_string(mesh: &TriMesh) -> String {
-    use crate::fixed::push_uint;
+    use crate::decimal::push_uint;
     // About 30 bytes a vertex line and 25 a face.
     let mut s = String::with_capacity(
         64 + 30 * mesh.positions.len() * (1 + usize::from(mesh.flat.is_some()))
@@ -757,7 +756,7 @@ const OBJ_TWO_THREADS_FROM: usize = 50_000;
 
 /// The `v` lines, then the `vt` lines of a flattened mesh.
 fn push_vertex_lines(s: &mut String, mesh: &TriMesh) {
-    use crate::fixed::push;
+    use crate::decimal::push;
     let z = |x: f64| if x == 0.0 { 0.0 } else { x }; // no "-0.000000"
     let coords = |s: &mut String, tag: &str, xs: &[f64]| {
         s.push_str(tag);
@@ -779,7 +778,7 @@ fn push_vertex_lines(s: &mut String, mesh: &TriMesh) {
 
 /// The `f` lines, `f a/a b/b c/c` for a flattened mesh (1-based).
 fn push_face_lines(s: &mut String, mesh: &TriMesh) {
-    use crate::fixed::push_uint;
+    use crate::decimal::push_uint;
     for t in &mesh.triangles {
         s.push('f');
         for i in t.map(|i| u64::from(i) + 1) {
@@ -980,27 +979,46 @@ mod tests {
     }
 
     #[test]
-    fn obj_round_trip_is_exact_to_written_precision_and_deterministic() {
+    fn obj_round_trip_is_bit_exact_and_deterministic() {
+        // Values no fixed number of decimals writes exactly: thirds, a sliver's micrometres,
+        // the last bit of a large coordinate.
+        let third = 1.0 / 3.0;
         let mut m = TriMesh::new(
             vec![
                 DVec3::new(0.0, 0.0, 0.0),
-                DVec3::new(12.345678, -0.0, 1.0),
-                DVec3::new(0.0, 3.0, -7.25),
+                DVec3::new(12.345678, -0.0, 1.0 + f64::EPSILON),
+                DVec3::new(third, 3.0e-7, -7.25),
             ],
             vec![[0, 1, 2]],
         );
         m.flat = Some(vec![
-            DVec2::ZERO,
-            DVec2::new(12.0, 1.0),
-            DVec2::new(0.5, 7.0),
+            DVec2::new(-0.0, 0.0),
+            DVec2::new(12.0 + 2.0 * third, 1e-9),
+            DVec2::new(0.5, 123_456.789_012_345_67),
         ]);
         let s = obj_string(&m);
-        assert!(!s.contains("-0.000000"));
+        let body = &s[s.find('\n').unwrap()..];
+        assert!(!body.contains("-0") && !body.contains('e'), "{s}");
         assert_eq!(s, obj_string(&m.clone()));
         let back = parse_obj(&s, p()).unwrap();
-        assert_eq!(back.positions, m.positions);
+        let bits = |v: &[DVec3]| {
+            v.iter()
+                .map(|p| p.to_array().map(f64::to_bits))
+                .collect::<Vec<_>>()
+        };
+        let bits2 = |v: &[DVec2]| {
+            v.iter()
+                .map(|p| p.to_array().map(f64::to_bits))
+                .collect::<Vec<_>>()
+        };
+        let zeroed = |v: &[DVec3]| v.iter().map(|p| *p + DVec3::ZERO).collect::<Vec<_>>();
+        let zeroed2 = |v: &[DVec2]| v.iter().map(|p| *p + DVec2::ZERO).collect::<Vec<_>>();
+        assert_eq!(bits(&back.positions), bits(&zeroed(&m.positions)));
         assert_eq!(back.triangles, m.triangles);
-        assert_eq!(back.flat, m.flat);
+        assert_eq!(
+            bits2(back.flat.as_ref().unwrap()),
+            bits2(&zeroed2(m.flat.as_ref().unwrap()))
+        );
     }
 
     #[test]

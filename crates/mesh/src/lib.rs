@@ -8,9 +8,9 @@
 #![warn(missing_docs)]
 
 pub mod cut_graph;
+pub mod decimal;
 pub mod disk;
 pub mod distortion;
-pub mod fixed;
 pub mod geodesic;
 pub mod grain_strain;
 pub mod grid;
