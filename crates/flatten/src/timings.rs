@@ -26,7 +26,7 @@ pub struct Timings {
     /// Numeric factorisations made.
     pub factorisations: usize,
     /// Single-precision triangular solves made to refine solutions (conjugate-gradient steps,
-    /// [`crate::refine`]; none where factors are double precision).
+    /// `crate::refine`; none where factors are double precision).
     pub refinements: usize,
 }
 
