@@ -293,9 +293,6 @@ fn split_on(
     let started = std::time::Instant::now();
     let mut timed_out = false;
     let out_of_time = || opts.time_limit.is_some_and(|t| cpu.elapsed() >= t);
-    // The parts flattened together within the time left ([`flatten_together`]).
-    let together_in_time =
-        |pieces: &mut [TriMesh]| -> Result<bool, DartError> { flatten_together(pieces, &held()) };
     // The split whose joint solve last held its seams equal, with the least excess: what is
     // returned when the time limit stops a later joint solve with its seams apart.
     let mut valid: Option<Valid> = None;
@@ -332,7 +329,7 @@ fn split_on(
         let full = pieces.len() >= opts.max_pieces.max(1) || timed_out;
         let done = excess <= 0.0 && crossing.is_none();
         if (done || full) && !together {
-            apart = !together_in_time(&mut pieces)?;
+            apart = !flatten_together(&mut pieces, &held())?;
             if apart && out_of_time() {
                 return stopped_apart(pieces, cuts, resewn, valid, opts.band);
             }
@@ -366,7 +363,7 @@ fn split_on(
             // The candidates stop being judged when the time runs out.
             timed_out |= out_of_time();
             if !together {
-                apart = !together_in_time(&mut pieces)?;
+                apart = !flatten_together(&mut pieces, &held())?;
                 if apart && out_of_time() {
                     return stopped_apart(pieces, cuts, resewn, valid, opts.band);
                 }
