@@ -1,5 +1,5 @@
 //! Pictures of a report: the flattened piece coloured by a measure (SVG, true millimetres, one
-//! column per input), a histogram, a PNG rendered from the same SVG by resvg, and a
+//! cell per input, in rows), a histogram, a PNG rendered from the same SVG by resvg, and a
 //! self-contained HTML page.
 //!
 //! Legend and titles are drawn with the single-stroke font (flatcut-font) as paths, so the SVG,
@@ -171,8 +171,8 @@ fn text_path(text: &str, origin: DVec2, h: f64, colour: &str) -> Path {
         .set("stroke-linejoin", "round")
 }
 
-/// The heat map of one or more flattened pieces, side by side, at true scale in mm, with a legend
-/// in real units. `glyphs` adds short ticks along the principal stretch direction.
+/// The heat map of one or more flattened pieces at true scale in mm, each with its own legend in
+/// real units, laid out in rows toward a landscape page ([`Grid`]). `glyphs` adds short ticks along the principal stretch direction.
 pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
     let boxes: Vec<Aabb2> = cols
         .iter()
@@ -183,21 +183,10 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
             })
         })
         .collect();
-    // Annotation scale: 1 for drawings up to ANNOTATION_REF_W wide, in proportion beyond.
-    let nominal_w: f64 = boxes
-        .iter()
-        .map(|b| b.width().max(MIN_COL_W) + 2.0 * MARGIN)
-        .sum();
-    let u = (nominal_w / ANNOTATION_REF_W).max(1.0);
+    let grid = Grid::of(&boxes);
+    let (u, width, height) = (grid.u, grid.width, grid.height);
     let (margin, text_h) = (MARGIN * u, TEXT_H * u);
-    let col_w: Vec<f64> = boxes
-        .iter()
-        .map(|b| b.width().max(MIN_COL_W * u) + 2.0 * margin)
-        .collect();
-    let piece_h = boxes.iter().map(|b| b.height()).fold(0.0, f64::max);
     let title_h = 2.5 * text_h;
-    let width: f64 = col_w.iter().sum();
-    let height = title_h + piece_h + 2.0 * margin + LEGEND_H * u;
     let mut doc = Document::new()
         .set("xmlns", "http://www.w3.org/2000/svg")
         .set("width", format!("{}mm", n(width)))
@@ -211,11 +200,11 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
             .set("height", n(height))
             .set("fill", "#ffffff"),
     );
-    let mut x0 = 0.0;
     for (k, c) in cols.iter().enumerate() {
-        let b = boxes[k];
-        let ox = x0 + margin + (col_w[k] - 2.0 * margin - b.width()) / 2.0 - b.min.x;
-        let top = title_h + margin;
+        let (b, cell) = (boxes[k], grid.cells[k]);
+        let (x0, col_w) = (cell.x, cell.w);
+        let ox = x0 + margin + (col_w - 2.0 * margin - b.width()) / 2.0 - b.min.x;
+        let top = cell.y + title_h + margin;
         // Plane y up → SVG y down: y_svg = top + (b.max.y − y).
         let map = |p: DVec2| DVec2::new(ox + p.x, top + (b.max.y - p.y));
         let range = scale(c, m);
@@ -297,22 +286,92 @@ pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
             c.title, c.report.delta2_mean, c.report.stretch_max_pct
         );
         // Shrunk to its column when long (file names), so it never runs into its neighbour.
-        let room = col_w[k] - 2.0 * margin;
+        let room = col_w - 2.0 * margin;
         let th = text_h * 0.8;
         let th = th * (room / font::text_width(&title, th)).min(1.0);
         doc = doc.add(text_path(
             &title,
-            DVec2::new(x0 + margin, -(1.5 * text_h)),
+            DVec2::new(x0 + margin, -(cell.y + 1.5 * text_h)),
             th,
             "#000000",
         ));
         // Legend: this piece's colour bar with five ticks.
-        let ly = title_h + piece_h + 2.0 * margin;
-        let bar_w = (col_w[k] - 2.0 * margin).min(LEGEND_BAR_W * u);
+        let ly = cell.y + title_h + cell.piece_h + 2.0 * margin;
+        let bar_w = (col_w - 2.0 * margin).min(LEGEND_BAR_W * u);
         doc = legend(doc, m, range, DVec2::new(x0 + margin, ly), bar_w, u);
-        x0 += col_w[k];
     }
     doc.to_string()
+}
+
+/// The shape (width over height) a heat map of many pieces is laid out toward: a landscape page
+/// or screen, between A4 landscape (1.41) and 16:10 (1.6). Twelve graded shoe pieces in one row
+/// made a 4096 × 217 px strip with each piece a few dozen pixels high.
+const PAGE_ASPECT: f64 = 1.5;
+
+/// Where the pieces of a heat map sit: in rows, left to right in their given order (a graded
+/// set reads size by size), each with its title above and its legend below.
+struct Grid {
+    /// Annotation scale: 1 for a widest row of up to [`ANNOTATION_REF_W`], in proportion beyond.
+    u: f64,
+    /// One cell per piece.
+    cells: Vec<Cell>,
+    /// The drawing's width and height (mm).
+    width: f64,
+    height: f64,
+}
+
+/// A piece's place in a [`Grid`] (mm, SVG frame).
+#[derive(Clone, Copy)]
+struct Cell {
+    /// The cell's top-left corner.
+    x: f64,
+    y: f64,
+    /// The cell's width.
+    w: f64,
+    /// The height of the tallest piece in the cell's row.
+    piece_h: f64,
+}
+
+impl Grid {
+    /// The layout of pieces of these flat bounding boxes whose shape comes nearest
+    /// [`PAGE_ASPECT`]; among equally near ones, the one of fewest rows.
+    fn of(boxes: &[Aabb2]) -> Self {
+        let misfit = |g: &Grid| (g.width / g.height / PAGE_ASPECT).ln().abs();
+        (1..=boxes.len().max(1))
+            .rev()
+            .map(|per_row| Self::rows_of(boxes, per_row))
+            .reduce(|best, g| if misfit(&g) < misfit(&best) { g } else { best })
+            .expect("at least one layout is tried")
+    }
+
+    /// The layout of `per_row` pieces to a row.
+    fn rows_of(boxes: &[Aabb2], per_row: usize) -> Self {
+        let nominal = |b: &Aabb2| b.width().max(MIN_COL_W) + 2.0 * MARGIN;
+        let widest = boxes
+            .chunks(per_row)
+            .map(|row| row.iter().map(nominal).sum::<f64>())
+            .fold(0.0, f64::max);
+        let u = (widest / ANNOTATION_REF_W).max(1.0);
+        let (margin, title_h) = (MARGIN * u, 2.5 * TEXT_H * u);
+        let (mut cells, mut width, mut y) = (Vec::with_capacity(boxes.len()), 0.0_f64, 0.0);
+        for row in boxes.chunks(per_row) {
+            let piece_h = row.iter().map(|b| b.height()).fold(0.0, f64::max);
+            let mut x = 0.0;
+            for b in row {
+                let w = b.width().max(MIN_COL_W * u) + 2.0 * margin;
+                cells.push(Cell { x, y, w, piece_h });
+                x += w;
+            }
+            width = width.max(x);
+            y += title_h + piece_h + 2.0 * margin + LEGEND_H * u;
+        }
+        Grid {
+            u,
+            cells,
+            width,
+            height: y,
+        }
+    }
 }
 
 /// Faces drawn as one element each up to this many per piece; beyond, one element per colour.
@@ -795,6 +854,98 @@ mod tests {
         assert_eq!(piece.matches('Z').count(), m.triangles.len());
         let png = render_png(&svg, Some(600)).unwrap();
         assert!(png.starts_with(b"\x89PNG"));
+    }
+
+    /// The bounding box of a piece's faces in the SVG (mm), read from its group's paths.
+    fn piece_box(svg: &str, k: usize) -> Aabb2 {
+        let g = svg.split(&format!("id=\"piece-{k}\"")).nth(1).unwrap();
+        let g = g.split("</g>").next().unwrap();
+        let v: Vec<f64> = g
+            .split("d=\"")
+            .skip(1)
+            .flat_map(|p| p.split('"').next().unwrap().split_whitespace())
+            .filter_map(|t| {
+                t.trim_start_matches(['M', 'L'])
+                    .trim_end_matches('Z')
+                    .parse()
+                    .ok()
+            })
+            .collect();
+        let pts: Vec<DVec2> = v.chunks(2).map(|c| DVec2::new(c[0], c[1])).collect();
+        Aabb2::from_points(pts)
+    }
+
+    #[test]
+    fn a_graded_set_is_laid_out_in_rows_near_a_page_in_its_given_order() {
+        // Twelve 250 × 90 mm pieces (four pieces in three sizes): one row was a 45:1 strip.
+        let piece = |w: f64| {
+            let mut m = square(1.0);
+            if let Some(f) = &mut m.flat {
+                f.iter_mut()
+                    .for_each(|q| *q = DVec2::new(q.x * w, q.y * 90.0));
+            }
+            m.positions = m
+                .flat
+                .as_ref()
+                .unwrap()
+                .iter()
+                .map(|q| q.extend(0.0))
+                .collect();
+            m
+        };
+        let meshes: Vec<TriMesh> = (0..12).map(|k| piece(240.0 + k as f64)).collect();
+        let reports: Vec<Report> = meshes
+            .iter()
+            .map(|m| Report::compute("p", m, &ReportOptions::default()).unwrap())
+            .collect();
+        let cols: Vec<Column<'_>> = meshes
+            .iter()
+            .zip(&reports)
+            .enumerate()
+            .map(|(k, (mesh, report))| Column {
+                title: format!("P{k}"),
+                mesh,
+                report,
+            })
+            .collect();
+        let svg = heatmap_svg(&cols, Measure::Stretch, false);
+        let (_, w) = text_paths(&svg);
+        let h: f64 = svg
+            .split("viewBox=\"0 0 ")
+            .nth(1)
+            .unwrap()
+            .split(['"', ' '])
+            .nth(1)
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!((1.0..=2.25).contains(&(w / h)), "{w} × {h} mm");
+        let boxes: Vec<Aabb2> = (0..12).map(|k| piece_box(&svg, k)).collect();
+        // Every piece drawn at true size, inside the drawing, overlapping no other.
+        for (k, b) in boxes.iter().enumerate() {
+            assert!((b.width() - (240.0 + k as f64)).abs() < 1e-6, "{k}: {b:?}");
+            assert!((b.height() - 90.0).abs() < 1e-6, "{k}: {b:?}");
+            assert!(b.min.x >= 0.0 && b.min.y >= 0.0 && b.max.x <= w && b.max.y <= h);
+            for c in &boxes[..k] {
+                assert!(
+                    b.min.x >= c.max.x
+                        || c.min.x >= b.max.x
+                        || b.min.y >= c.max.y
+                        || c.min.y >= b.max.y,
+                    "{b:?} overlaps {c:?}"
+                );
+            }
+        }
+        // Several rows, read in the given order: left to right, then down.
+        let rows = 1 + boxes.windows(2).filter(|p| p[1].min.y > p[0].max.y).count();
+        assert!((2..=6).contains(&rows), "{rows} rows");
+        for p in boxes.windows(2) {
+            assert!(p[1].min.x > p[0].max.x || p[1].min.y > p[0].max.y);
+        }
+        // As a PNG of the default size, a piece is hundreds of pixels wide, not dozens.
+        let png = render_png(&svg, None).unwrap();
+        let png_w = u32::from_be_bytes(png[16..20].try_into().unwrap()) as f64;
+        assert!(png_w / w * 240.0 > 500.0, "{png_w} px over {w} mm");
     }
 
     #[test]
