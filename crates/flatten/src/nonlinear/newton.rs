@@ -818,10 +818,14 @@ impl Forcing {
         Self { last: None, max }
     }
 
-    /// The relative residual of the direction at a gradient of norm `g`.
+    /// The relative residual of the direction at a gradient of norm `g`; the same again at the
+    /// same gradient, where a direction is solved again with another projection (the
+    /// unprojected Hessian indefinite: clamped instead), so the fallback is not taken as a
+    /// gradient that did not fall and solved to [`FORCING_MAX`].
     fn next(&mut self, g: f64) -> f64 {
         let eta = match self.last {
             None => self.max,
+            Some((g0, eta0)) if g0 == g => return eta0,
             Some((g0, eta0)) => {
                 let eta = FORCING_GAMMA * (g / g0).powf(FORCING_ALPHA);
                 let safeguard = FORCING_GAMMA * eta0.powf(FORCING_ALPHA);
@@ -1472,15 +1476,19 @@ mod tests {
 
     /// The forcing term starts loose, follows the square of the gradient's fall, and is never
     /// below the full tolerance nor above its largest value; its safeguard keeps it from
-    /// falling faster than its own square while it is large.
+    /// falling faster than its own square while it is large; a retried direction keeps its η.
     #[test]
     fn the_forcing_term_follows_the_gradient_within_its_bounds() {
         let mut f = Forcing::new(FORCING_MAX);
         assert_eq!(f.next(1.0), FORCING_MAX);
-        // The gradient did not fall: η stays at its largest.
-        assert_eq!(f.next(1.0), FORCING_MAX);
+        // The gradient barely fell: η stays at its largest.
+        assert_eq!(f.next(0.99), FORCING_MAX);
         // Fallen tenfold: γ/100.
-        assert!((f.next(0.1) - FORCING_GAMMA * 0.01).abs() < 1e-15);
+        let eta = f.next(0.099);
+        assert!((eta - FORCING_GAMMA * 0.01).abs() < 1e-15);
+        // The same direction solved again with another projection: the same η, not the
+        // largest (as for a gradient that did not fall).
+        assert_eq!(f.next(0.099), eta);
         // Fallen a millionfold: the full tolerance.
         assert_eq!(f.next(1e-7), DIRECTION_TOL);
         // A rise: back to the largest.
