@@ -13,7 +13,8 @@
 //! Every faer call is given its parallelism explicitly, and every one is sequential ([`PAR`]),
 //! the numeric factorisations too (see [`PAR`] for the measurements): a map's second core is
 //! given whole tasks beside them instead (the Newton solve's analysis beside its start map's
-//! factorisation, `nonlinear::solve`). faer's parallel supernodal factorisation would split
+//! factorisation, `nonlinear::solve`), and the two halves of a large factorisation under its
+//! top separator beside each other ([`split`]). faer's parallel supernodal factorisation would split
 //! the dense updates by output blocks, so the factor is the same bits with any number of
 //! threads (checked by `the_parallel_factorisation_gives_the_same_bits`).
 //!
@@ -72,6 +73,18 @@ pub const NESTED_DISSECTION_FROM: usize = 150_000;
 /// LSCM 3.17 s against 3.16 s. Two threads paid only on a quiet machine and below a million
 /// faces (5 % at 100k, 17 % at 200k, an earlier build), and lost up to 1.7× as soon as
 /// anything else ran.
+///
+/// What is parallel instead is coarse and fixed: a system of [`split::SPLIT_FROM`] unknowns or
+/// more ordered by nested dissection is factored and solved in the two halves under its top
+/// separator, each sequential on a thread of its own, two tasks for the whole factorisation
+/// ([`split`]). Measured through the CLI against the sequential factor (the landed build,
+/// alternately, at load 1.9–3.0): the 1M toe's isometric factorisation stage 3.32 / 3.41 s
+/// against 5.45 / 6.46 s (the whole map 9.8 / 11.3 s against 12.5 / 16.8 s wall, 15.3 /
+/// 15.6 s against 14.8 / 15.8 s CPU), peak 893 / 900 MB against 871 / 876 MB; the 1M
+/// hemisphere 3.40 s against 5.85 / 5.91 s (and 6.19 s once, at load 2.7, while something
+/// else took the second core); a 330k-face toe 2.39 / 2.45 s against 2.32 / 2.33 s at load
+/// 4.4, no gain, for 30 MB more (its factor is double precision, whose halves copy their
+/// values).
 pub const PAR: Par = Par::Seq;
 
 /// Values of the Cholesky factor from which a solver asked for refined solves

@@ -56,12 +56,16 @@ use faer::{Accum, Conj, Mat, MatMut, MatRef, Par, Side};
 use super::{Idx, PAR, llt, supernodal};
 use crate::beside::beside;
 
-/// Unknowns from which a system ordered by nested dissection is factored in two halves beside
-/// each other: every such system of a map (nested dissection starts at
-/// [`super::NESTED_DISSECTION_FROM`] vertices, two unknowns each in the isometric Newton solve).
-/// Smaller systems, ordered by AMD, have no top separator and keep the whole factorisation.
-/// Measured through the CLI (see [`super::PAR`]).
-pub const SPLIT_FROM: usize = 2 * super::NESTED_DISSECTION_FROM;
+/// Unknowns from which a system ordered by nested dissection (from
+/// [`super::NESTED_DISSECTION_FROM`] vertices) is factored in two halves beside each other.
+/// Measured through the CLI (see [`super::PAR`]): a million-face isometric map (a million
+/// unknowns) gains 2 s of its factorisations; a 330k-face one (332k unknowns) gained nothing at
+/// load 4.4 and held 30 MB more, its factor double precision (below
+/// [`super::SINGLE_PRECISION_FROM`] values), whose halves copy their part of the matrix.
+/// Between them, this is about the size from which the Newton factor is single precision.
+/// Smaller systems (a split map's pieces among them) and AMD-ordered ones keep the whole
+/// factorisation.
+pub const SPLIT_FROM: usize = 600_000;
 
 /// Least share of the unknowns before the separator that the smaller half must hold: below it
 /// the larger half's thread is most of the time, and the separator's work is not paid back.
@@ -778,7 +782,7 @@ mod tests {
             let mut b = vec![0.0; n];
             super::super::sym_mul(&a, &x_true, &mut b);
             // Two right-hand sides at once: b and 2b.
-            let mut xs: Vec<f64> = b.iter().chain(&b).map(|&v| v).collect();
+            let mut xs: Vec<f64> = b.iter().chain(&b).copied().collect();
             xs[n..].iter_mut().for_each(|v| *v *= 2.0);
             let mut xw = xs.clone();
             split.solve_many_in_place(&mut xs, 2).unwrap();
