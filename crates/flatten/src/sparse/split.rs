@@ -20,8 +20,12 @@
 //!     Σ = K_SS − K_SA K_AA⁻¹ K_AS − K_SB K_BB⁻¹ K_BS = C_A C_Aᵀ + C_B C_Bᵀ − K_SS,
 //! ```
 //!
-//! a dense matrix of the separator's size, made in place from the two corners (its rows in two
-//! fixed blocks beside each other) and factored densely (`Σ = G Gᵀ`). The corner is positive
+//! a dense matrix of the separator's size, factored densely (`Σ = G Gᵀ`). It is made in the
+//! factors' own storage: each corner's product goes into the other corner's unused upper
+//! triangle (its rows in two fixed blocks beside each other), their sum over `C_A`, and `G` stays
+//! there. A half's substitutions only pass through its corner and back (`t_H` is multiplied
+//! back by what they divided it by), so any invertible lower triangle serves there, `G` as well
+//! as `C_A`. The corner is positive
 //! definite whenever `K` is (`K_SS − K_SH K_HH⁻¹ K_HS ≥ Σ > 0`), and `Σ` comes out of it with the
 //! cancellation of the whole factorisation, which subtracts the same products from `K_SS`. A
 //! solve is a forward substitution in each half (the separator's right-hand side zero: its
@@ -34,10 +38,10 @@
 //! factorisation) is extra, and waits for both halves.
 //!
 //! Memory: the whole factor is never analysed (its symbolic factor would hold as much as the
-//! halves' together); the halves' bordered patterns are copies of the whole one's, which the
-//! solver keeps for its slots and its refinement's products; each half's factor holds the
-//! separator's corner, so the two hold one `s × s` block more than the whole factor, and `Σ` is
-//! one more.
+//! halves' together); the matrix's pattern is kept only as the halves' bordered patterns, which
+//! the solver's slots and its refinement's products read; each half's factor holds the
+//! separator's corner, so the two hold one `s × s` block more than the whole factor (11 MB in
+//! single precision at a million faces), and `Σ` takes none.
 
 use std::ops::Range;
 
@@ -128,7 +132,9 @@ struct Half {
 #[derive(Debug)]
 pub(crate) struct SplitFactor<T> {
     halves: [HalfFactor<T>; 2],
-    schur: Mat<T>,
+    /// The complement's factor `G`, when it is not in place of the first half's corner
+    /// ([`Split::factor`]).
+    schur: Option<Mat<T>>,
 }
 
 /// A half's factor, and the workspace of its factorisation, kept between factorisations (the
@@ -267,7 +273,7 @@ impl Split {
         };
         SplitFactor {
             halves: [half(), half()],
-            schur: Mat::zeros(0, 0),
+            schur: None,
         }
     }
 
@@ -283,36 +289,57 @@ impl Split {
             halves: [fa, fb],
             schur,
         } = f;
+        let (ha, hb) = (&self.halves[0], &self.halves[1]);
         let (ra, rb) = beside(
-            || self.factor_half(&self.halves[0], values, fa),
-            || self.factor_half(&self.halves[1], values, fb),
+            || self.factor_half(ha, values, fa),
+            || self.factor_half(hb, values, fb),
         );
         ra?;
         rb?;
         let s = self.n_sep();
-        if schur.nrows() != s {
-            *schur = Mat::zeros(s, s);
-        }
-        // The corners, read in place when one supernode holds each (the top separator is one).
-        let (owned_a, owned_b);
-        let ca = match corner_block(&self.halves[0], &fa.l) {
-            Some(c) => c,
-            None => {
-                owned_a = corner_copy(&self.halves[0], &fa.l, s);
-                owned_a.as_ref()
+        // Σ in the first half's corner when one supernode holds each corner (the top separator
+        // is one): C_A C_Aᵀ made into the second corner's unused upper triangle, C_B C_Bᵀ into
+        // the first's, and their sum over C_A, which is then no longer needed.
+        let in_place = corner_block(ha, &fa.l).is_some() && corner_block(hb, &fb.l).is_some();
+        let mut sigma = if in_place {
+            *schur = None;
+            let (Some(ca), Some(b_mut)) =
+                (corner_block(ha, &fa.l), corner_block_mut(hb, &mut fb.l))
+            else {
+                return Err("the first half's corner is not one block".into());
+            };
+            let da = lower_product(b_mut.transpose_mut(), ca, Accum::Replace, true);
+            let (Some(cb), Some(a_mut)) =
+                (corner_block(hb, &fb.l), corner_block_mut(ha, &mut fa.l))
+            else {
+                return Err("the second half's corner is not one block".into());
+            };
+            let db = lower_product(a_mut.transpose_mut(), cb, Accum::Replace, true);
+            let (Some(b), Some(mut a)) = (corner_block(hb, &fb.l), corner_block_mut(ha, &mut fa.l))
+            else {
+                return Err("the halves' corners are not blocks".into());
+            };
+            for j in 0..s {
+                a[(j, j)] = T::of(da[j] + db[j]);
+                for i in j + 1..s {
+                    a[(i, j)] = T::of(b[(j, i)].wide() + a[(j, i)].wide());
+                }
             }
-        };
-        let cb = match corner_block(&self.halves[1], &fb.l) {
-            Some(c) => c,
-            None => {
-                owned_b = corner_copy(&self.halves[1], &fb.l, s);
-                owned_b.as_ref()
+            a
+        } else {
+            // The corners copied out of the supernodes that hold them, Σ a matrix of its own.
+            let (ca, cb) = (corner_copy(ha, &fa.l, s), corner_copy(hb, &fb.l, s));
+            let m = schur.get_or_insert_with(|| Mat::zeros(s, s));
+            if m.nrows() != s {
+                *m = Mat::zeros(s, s);
             }
+            lower_product(m.as_mut(), ca.as_ref(), Accum::Replace, false);
+            lower_product(m.as_mut(), cb.as_ref(), Accum::Add, false);
+            m.as_mut()
         };
-        complement_products(schur.as_mut(), ca, cb);
         // Σ = C_A C_Aᵀ + C_B C_Bᵀ − K_SS: K_SS's entries, the separator's columns of half A's
         // bordered pattern.
-        let lower = &self.halves[0].lower;
+        let lower = &ha.lower;
         let first = lower.ncols() - s;
         let (rows, ptr) = (lower.row_idx(), lower.col_ptr());
         let k_ss = &values[self.sep_values.clone()];
@@ -320,7 +347,7 @@ impl Split {
         for j in 0..s {
             for k in ptr[first + j] as usize..ptr[first + j + 1] as usize {
                 let i = rows[k] as usize - first;
-                schur[(i, j)] = T::of(schur[(i, j)].wide() - k_ss[k - base]);
+                sigma[(i, j)] = T::of(sigma[(i, j)].wide() - k_ss[k - base]);
             }
         }
         let mut mem = MemBuffer::try_new(
@@ -332,7 +359,7 @@ impl Split {
         )
         .map_err(|e| format!("out of memory: {e:?}"))?;
         faer::linalg::cholesky::llt::factor::cholesky_in_place(
-            schur.as_mut(),
+            sigma,
             LltRegularization::default(),
             Par::Seq,
             MemStack::new(&mut mem),
@@ -394,6 +421,11 @@ impl Split {
         k: usize,
     ) -> Result<(), String> {
         let s = self.n_sep();
+        let g = match &f.schur {
+            Some(m) => m.as_ref(),
+            None => corner_block(&self.halves[0], &f.halves[0].l)
+                .ok_or("the complement's factor is not in the first half's corner")?,
+        };
         for col in y.chunks_exact_mut(self.n).take(k) {
             let (a, rest) = col.split_at_mut(self.halves[1].interior.start);
             let (b, ys) = rest.split_at_mut(self.sep - self.halves[1].interior.start);
@@ -408,7 +440,7 @@ impl Split {
                 xs[(i, 0)] = T::of(ys[i].wide() + wa[i] + wb[i]);
             }
             faer::linalg::cholesky::llt::solve::solve_in_place_with_conj(
-                f.schur.as_ref(),
+                g,
                 Conj::No,
                 xs.as_mut(),
                 Par::Seq,
@@ -554,14 +586,25 @@ fn corner_copy<T: Precision>(h: &Half, l: &[T], s: usize) -> Mat<T> {
 /// rest `(s³ − r³) / 3`, equal at `r = s / ∛2`.
 const TOP_ROWS: f64 = 0.7937;
 
-/// `Σ ← C_A C_Aᵀ + C_B C_Bᵀ` (lower triangle) for the corners `ca` and `cb` (lower
-/// triangular), in place in `schur`: its rows in two fixed blocks ([`TOP_ROWS`]) beside each
-/// other, each the same sums whatever thread makes it.
-fn complement_products<T: Precision>(schur: MatMut<'_, T>, ca: MatRef<'_, T>, cb: MatRef<'_, T>) {
-    use BlockStructure::{Rectangular, TriangularLower, TriangularUpper};
-    let s = schur.nrows();
+/// `dst ← C Cᵀ` (or `dst += C Cᵀ`, as `accum` says), its lower triangle, strictly lower when
+/// `strict`, for `C` lower triangular: the rows of `dst` in two fixed blocks ([`TOP_ROWS`])
+/// beside each other, each the same sums whatever thread makes it. With `strict`, the diagonal
+/// it leaves is returned (`Σ_k c_ik²`, in double precision), else nothing.
+fn lower_product<T: Precision>(
+    dst: MatMut<'_, T>,
+    c: MatRef<'_, T>,
+    accum: Accum,
+    strict: bool,
+) -> Vec<f64> {
+    use BlockStructure::{Rectangular, StrictTriangularLower, TriangularLower, TriangularUpper};
+    let s = dst.nrows();
     let r = ((s as f64 * TOP_ROWS).round() as usize).min(s);
-    let (top, bottom) = schur.split_at_row_mut(r);
+    let out = if strict {
+        StrictTriangularLower
+    } else {
+        TriangularLower
+    };
+    let (top, bottom) = dst.split_at_row_mut(r);
     let product = |dst: MatMut<'_, T>,
                    dst_s: BlockStructure,
                    lhs: MatRef<'_, T>,
@@ -584,62 +627,81 @@ fn complement_products<T: Precision>(schur: MatMut<'_, T>, ca: MatRef<'_, T>, cb
     beside(
         || {
             // Rows 0..r, columns 0..r: C[..r, ..r] C[..r, ..r]ᵀ.
-            let mut top = top.submatrix_mut(0, 0, r, r);
-            for (c, accum) in [(ca, Accum::Replace), (cb, Accum::Add)] {
-                let c = c.submatrix(0, 0, r, r);
-                let dst = top.rb_mut();
-                product(
-                    dst,
-                    TriangularLower,
-                    c,
-                    TriangularLower,
-                    c.transpose(),
-                    TriangularUpper,
-                    accum,
-                );
-            }
+            let c = c.submatrix(0, 0, r, r);
+            product(
+                top.submatrix_mut(0, 0, r, r),
+                out,
+                c,
+                TriangularLower,
+                c.transpose(),
+                TriangularUpper,
+                accum,
+            );
         },
         || {
             // Rows r..s: columns 0..r are C[r.., ..r] C[..r, ..r]ᵀ, columns r..s the lower
             // triangle of C[r.., ..r] C[r.., ..r]ᵀ + C[r.., r..] C[r.., r..]ᵀ.
-            let (mut left, mut right) = bottom.split_at_col_mut(r);
+            let (left, mut right) = bottom.split_at_col_mut(r);
             let m = s - r;
-            for (c, accum) in [(ca, Accum::Replace), (cb, Accum::Add)] {
-                let (c_top, c_left, c_corner) = (
-                    c.submatrix(0, 0, r, r),
-                    c.submatrix(r, 0, m, r),
-                    c.submatrix(r, r, m, m),
-                );
-                product(
-                    left.rb_mut(),
-                    Rectangular,
-                    c_left,
-                    Rectangular,
-                    c_top.transpose(),
-                    TriangularUpper,
-                    accum,
-                );
-                product(
-                    right.rb_mut(),
-                    TriangularLower,
-                    c_left,
-                    Rectangular,
-                    c_left.transpose(),
-                    Rectangular,
-                    accum,
-                );
-                product(
-                    right.rb_mut(),
-                    TriangularLower,
-                    c_corner,
-                    TriangularLower,
-                    c_corner.transpose(),
-                    TriangularUpper,
-                    Accum::Add,
-                );
-            }
+            let (c_top, c_left, c_corner) = (
+                c.submatrix(0, 0, r, r),
+                c.submatrix(r, 0, m, r),
+                c.submatrix(r, r, m, m),
+            );
+            product(
+                left,
+                Rectangular,
+                c_left,
+                Rectangular,
+                c_top.transpose(),
+                TriangularUpper,
+                accum,
+            );
+            product(
+                right.rb_mut(),
+                out,
+                c_left,
+                Rectangular,
+                c_left.transpose(),
+                Rectangular,
+                accum,
+            );
+            product(
+                right,
+                out,
+                c_corner,
+                TriangularLower,
+                c_corner.transpose(),
+                TriangularUpper,
+                Accum::Add,
+            );
         },
     );
+    if !strict {
+        return Vec::new();
+    }
+    (0..s)
+        .map(|i| (0..=i).map(|k| c[(i, k)].wide() * c[(i, k)].wide()).sum())
+        .collect()
+}
+
+/// The corner of half `h`'s factor `l` as [`corner_block`] finds it, to be written.
+fn corner_block_mut<'a, T: Precision>(h: &Half, l: &'a mut [T]) -> Option<MatMut<'a, T>> {
+    let SymbolicCholeskyRaw::Supernodal(sym) = h.symbolic.raw() else {
+        return None;
+    };
+    let len = h.interior.len();
+    let last = sym.n_supernodes().checked_sub(1)?;
+    let start = sym.supernode_begin()[last] as usize;
+    let ncols = sym.supernode_end()[last] as usize - start;
+    let vals = sym.col_ptr_for_val()[last] as usize..sym.col_ptr_for_val()[last + 1] as usize;
+    // No rows below its columns: its values are a square block.
+    if start > len || vals.len() != ncols * ncols {
+        return None;
+    }
+    let off = len - start;
+    let m = MatMut::from_column_major_slice_mut(&mut l[vals], ncols, ncols);
+    Some(m.submatrix_mut(off, off, ncols - off, ncols - off))
 }
 
 /// faer's symbolic (supernodal, amalgamated) factorisation of the matrix whose lower triangle
@@ -775,7 +837,15 @@ mod tests {
     fn the_split_solve_is_the_whole_solve() {
         for (w, h, k) in [(90, 70, 2), (130, 60, 1)] {
             let (t, node_of) = grid_mesh(w, h, k);
-            let (pattern, split, whole) = split_and_whole(w, h, k, &t, node_of);
+            let (pattern, mut split, whole) = split_and_whole(w, h, k, &t, node_of);
+            // The complement is factored in place of the first half's corner.
+            let super::super::Factor::SplitDouble(f) = &split.factor else {
+                panic!("not a split double-precision factor");
+            };
+            assert!(
+                f.schur.is_none(),
+                "{w}×{h}×{k}: the complement is a matrix apart"
+            );
             let n = k * w * h;
             let x_true: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin() + 0.2).collect();
             let a = pattern.matrix(t.values(), "test").unwrap();
@@ -785,8 +855,13 @@ mod tests {
             let mut xs: Vec<f64> = b.iter().chain(&b).copied().collect();
             xs[n..].iter_mut().for_each(|v| *v *= 2.0);
             let mut xw = xs.clone();
+            let mut again = xs.clone();
             split.solve_many_in_place(&mut xs, 2).unwrap();
             whole.solve_many_in_place(&mut xw, 2).unwrap();
+            // Factored again over the corner the complement took: the same bits.
+            split.refactor().unwrap();
+            split.solve_many_in_place(&mut again, 2).unwrap();
+            assert!(same_bits(&xs, &again), "{w}×{h}×{k} refactored");
             let scale = largest(&xw);
             for i in 0..2 * n {
                 let want = x_true[i % n] * if i < n { 1.0 } else { 2.0 };
