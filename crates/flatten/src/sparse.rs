@@ -78,13 +78,14 @@ pub const NESTED_DISSECTION_FROM: usize = 150_000;
 /// more ordered by nested dissection is factored and solved in the two halves under its top
 /// separator, each sequential on a thread of its own, two tasks for the whole factorisation
 /// ([`split`]). Measured through the CLI against the sequential factor (the landed build,
-/// alternately, at load 1.9–3.0): the 1M toe's isometric factorisation stage 3.32 / 3.41 s
-/// against 5.45 / 6.46 s (the whole map 9.8 / 11.3 s against 12.5 / 16.8 s wall, 15.3 /
-/// 15.6 s against 14.8 / 15.8 s CPU), peak 893 / 900 MB against 871 / 876 MB; the 1M
-/// hemisphere 3.40 s against 5.85 / 5.91 s (and 6.19 s once, at load 2.7, while something
-/// else took the second core); a 330k-face toe 2.39 / 2.45 s against 2.32 / 2.33 s at load
-/// 4.4, no gain, for 30 MB more (its factor is double precision, whose halves copy their
-/// values).
+/// alternately), the factorisation stage of a 1M-face isometric map: at load 1.9–2.3, the toe
+/// 3.32 / 3.41 s against 5.45 / 6.46 s (the map 9.8 / 11.3 s wall against 12.5 / 16.8 s, CPU
+/// 15.3 / 15.6 s against 14.8 / 15.8 s), the hemisphere 3.40 s against 5.85 / 5.91 s; at load
+/// 3.1, the toe 4.34 s and once 6.73 s against 6.71 / 7.28 s; at load 4.6–6.2, with the second
+/// core taken by other work, no gain or a loss: the toe 6.16 / 6.99 s against 6.10 / 5.91 s,
+/// the hemisphere 7.06 / 7.12 s against 5.86 / 5.95 s (the split does 3 % more fill, and about
+/// four dense operations of `s³ / 3` flops more at the separator of `s` unknowns). Peak 889–901
+/// MB against 871–879 MB. A 330k-face toe gained nothing at load 4.4 ([`split::SPLIT_FROM`]).
 pub const PAR: Par = Par::Seq;
 
 /// Values of the Cholesky factor from which a solver asked for refined solves
