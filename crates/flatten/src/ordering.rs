@@ -37,6 +37,11 @@ const LEAF_NODES: usize = 256;
 const PERIPHERAL_SWEEPS: usize = 4;
 /// Each side of a separator must hold at least this fraction of its region's nodes.
 const MIN_BALANCE: f64 = 0.3;
+/// [`MIN_BALANCE`] of the root region (the whole graph), whose two halves a large factorisation
+/// factors beside each other (`sparse::split`): its time is the larger half's. At 0.3 a
+/// million-face toe split 301k / 699k unknowns (separator 1,554), the larger half 70 % of the
+/// factorisation; at 0.45, 451k / 549k (separator 1,634) with 0.4 % less fill.
+const ROOT_BALANCE: f64 = 0.45;
 
 use std::sync::{Arc, Condvar, Mutex};
 
@@ -392,7 +397,8 @@ impl<'g> Dissection<'g> {
     }
 
     /// The level whose nodes touching the next level form the smallest separator with at least
-    /// [`MIN_BALANCE`] of the region on each side (`None` if no level qualifies).
+    /// [`MIN_BALANCE`] of the region on each side ([`ROOT_BALANCE`] for the whole graph), `None`
+    /// if no level qualifies.
     fn separator_level(&self, depth: usize) -> Option<usize> {
         if depth < 3 {
             return None;
@@ -408,7 +414,12 @@ impl<'g> Dissection<'g> {
             }
         }
         let n = self.queue.len();
-        let min_side = (MIN_BALANCE * n as f64).ceil() as usize;
+        let balance = if n == self.g.len() {
+            ROOT_BALANCE
+        } else {
+            MIN_BALANCE
+        };
+        let min_side = (balance * n as f64).ceil() as usize;
         let mut before = 0;
         let mut best: Option<(usize, usize)> = None;
         for m in 0..depth {

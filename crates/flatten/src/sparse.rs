@@ -13,7 +13,8 @@
 //! Every faer call is given its parallelism explicitly, and every one is sequential ([`PAR`]),
 //! the numeric factorisations too (see [`PAR`] for the measurements): a map's second core is
 //! given whole tasks beside them instead (the Newton solve's analysis beside its start map's
-//! factorisation, `nonlinear::solve`). faer's parallel supernodal factorisation would split
+//! factorisation, `nonlinear::solve`), and the two halves of a large factorisation under its
+//! top separator beside each other ([`split`]). faer's parallel supernodal factorisation would split
 //! the dense updates by output blocks, so the factor is the same bits with any number of
 //! threads (checked by `the_parallel_factorisation_gives_the_same_bits`).
 //!
@@ -49,6 +50,9 @@ use crate::timings::{SharedDuration, Timings};
 use rayon::prelude::*;
 
 pub(crate) mod hermitian;
+pub(crate) mod split;
+
+use split::{Split, SplitFactor};
 
 /// Nodes (mesh vertices) from which the factorisations use nested dissection instead of AMD.
 /// Measured on triangulated grids (`nested_dissection_fills_a_grid_mesh_no_more_than_amd`), the
@@ -69,6 +73,19 @@ pub const NESTED_DISSECTION_FROM: usize = 150_000;
 /// LSCM 3.17 s against 3.16 s. Two threads paid only on a quiet machine and below a million
 /// faces (5 % at 100k, 17 % at 200k, an earlier build), and lost up to 1.7× as soon as
 /// anything else ran.
+///
+/// What is parallel instead is coarse and fixed: a system of [`split::SPLIT_FROM`] unknowns or
+/// more ordered by nested dissection is factored and solved in the two halves under its top
+/// separator, each sequential on a thread of its own, two tasks for the whole factorisation
+/// ([`split`]). Measured through the CLI against the sequential factor (the landed build,
+/// alternately), the factorisation stage of a 1M-face isometric map: at load 1.9–2.3, the toe
+/// 3.32 / 3.41 s against 5.45 / 6.46 s (the map 9.8 / 11.3 s wall against 12.5 / 16.8 s, CPU
+/// 15.3 / 15.6 s against 14.8 / 15.8 s), the hemisphere 3.40 s against 5.85 / 5.91 s; at load
+/// 3.1, the toe 4.34 s and once 6.73 s against 6.71 / 7.28 s; at load 4.6–6.2, with the second
+/// core taken by other work, no gain or a loss: the toe 6.16 / 6.99 s against 6.10 / 5.91 s,
+/// the hemisphere 7.06 / 7.12 s against 5.86 / 5.95 s (the split does 3 % more fill, and about
+/// four dense operations of `s³ / 3` flops more at the separator of `s` unknowns). Peak 889–901
+/// MB against 871–879 MB. A 330k-face toe gained nothing at load 4.4 ([`split::SPLIT_FROM`]).
 pub const PAR: Par = Par::Seq;
 
 /// Values of the Cholesky factor from which a solver asked for refined solves
@@ -268,8 +285,10 @@ impl SymPattern {
     }
 
     /// The nested-dissection elimination order of the node graph ([`crate::ordering`]), shared
-    /// with the last system of the same graph ([`ordering::shared_dissection`]).
-    fn nested_dissection(&self) -> Vec<usize> {
+    /// with the last system of the same graph ([`ordering::shared_dissection`]), and the position
+    /// in it of the first unknown of its last block (the top separator, when the graph was
+    /// split).
+    fn nested_dissection(&self) -> (Vec<usize>, usize) {
         let identity;
         let (node_of, n_nodes) = match &self.nodes {
             Some((v, k)) => (v.as_slice(), *k),
@@ -285,7 +304,16 @@ impl SymPattern {
                 col_ptr, row_idx, node_of, n_nodes,
             )),
         };
-        ordering::expand(&nodes.order, node_of)
+        let last = nodes.groups.last().map_or(0, |&g| g as usize);
+        let mut per_node = vec![0usize; n_nodes];
+        for &v in node_of {
+            per_node[v as usize] += 1;
+        }
+        let before: usize = nodes.order[..last]
+            .iter()
+            .map(|&v| per_node[v as usize])
+            .sum();
+        (ordering::expand(&nodes.order, node_of), before)
     }
 
     /// The upper triangle (row ≤ column) in compressed-column form: `col_ptr` (n + 1 offsets) and
@@ -419,9 +447,20 @@ fn supernodal() -> CholeskySymbolicParams<'static> {
 
 /// The fill-reducing elimination order of `pattern` under `ordering`: `fwd[k]` is the unknown
 /// eliminated k-th. AMD is faer's, called as its symbolic factorisation calls it.
+#[cfg(test)]
 fn elimination_order(pattern: &SymPattern, ordering: Ordering) -> Result<Vec<usize>, String> {
+    ordered(pattern, ordering).map(|(fwd, _)| fwd)
+}
+
+/// [`elimination_order`], and with nested dissection the position of the first unknown of the
+/// top separator ([`SymPattern::nested_dissection`]).
+fn ordered(
+    pattern: &SymPattern,
+    ordering: Ordering,
+) -> Result<(Vec<usize>, Option<usize>), String> {
     if ordering == Ordering::NestedDissection {
-        return Ok(pattern.nested_dissection());
+        let (fwd, sep) = pattern.nested_dissection();
+        return Ok((fwd, Some(sep)));
     }
     let n = pattern.n;
     let a = pattern.symbolic.as_ref();
@@ -439,7 +478,7 @@ fn elimination_order(pattern: &SymPattern, ordering: Ordering) -> Result<Vec<usi
         MemStack::new(&mut mem),
     )
     .map_err(|e| format!("{e:?}"))?;
-    Ok(fwd)
+    Ok((fwd, None))
 }
 
 /// The inverse of the permutation `fwd`.
@@ -608,6 +647,32 @@ pub(crate) struct Analysis {
 }
 
 impl Analysis {
+    /// The nested-dissection order of `pattern` (`fwd` and its inverse), the pattern of the
+    /// matrix's lower triangle in it, and the position of the top separator: all of
+    /// [`Analysis::of`] but faer's symbolic factorisation, which a split solver makes of its
+    /// halves instead ([`split`]).
+    #[allow(clippy::type_complexity)]
+    fn lower_of(
+        pattern: &SymPattern,
+        stage: &'static str,
+    ) -> Result<(Vec<Idx>, Vec<Idx>, SymbolicSparseColMat<Idx>, Option<usize>), FlattenError> {
+        let failed = |reason: String| FlattenError::Solver {
+            stage,
+            reason: format!("symbolic factorization failed: {reason}"),
+        };
+        let (fwd, separator) = ordered(pattern, Ordering::NestedDissection).map_err(failed)?;
+        let inv = inverse(&fwd);
+        let lower = TriangleStorage::for_pattern(pattern)
+            .map(|storage| permuted_triangle_in(pattern, &inv, Side::Lower, storage))
+            .ok_or_else(|| failed(format!("{} unknowns are too many to index", pattern.n)))?;
+        Ok((
+            fwd.into_iter().map(|i| i as Idx).collect(),
+            inv.into_iter().map(|i| i as Idx).collect(),
+            lower,
+            separator,
+        ))
+    }
+
     /// Orders `pattern` by `ordering` and analyses it, its two triangles made as `triangles`
     /// says, with faer's supernode amalgamation or without (`amalgamate`: a factor with the
     /// explicit zeros it adds, for fewer and larger dense blocks). `stage` names the
@@ -624,7 +689,7 @@ impl Analysis {
             reason: format!("symbolic factorization failed: {reason}"),
         };
         let started = Instant::now();
-        let fwd = elimination_order(pattern, ordering).map_err(failed)?;
+        let (fwd, _) = ordered(pattern, ordering).map_err(failed)?;
         let inv = inverse(&fwd);
         // faer's symbolic analysis reads the upper triangle when no ordering is asked of it, its
         // supernodal numeric factorisation the lower one.
@@ -689,9 +754,15 @@ pub struct SpdSolver {
     /// The elimination order: unknown `fwd[k]` is the factor's k-th, and `inv` its inverse.
     fwd: Vec<Idx>,
     inv: Vec<Idx>,
-    /// The pattern of P A Pᵀ's lower triangle.
-    lower: SymbolicSparseColMat<Idx>,
-    symbolic: SymbolicCholesky<Idx>,
+    /// The pattern of P A Pᵀ's lower triangle; none with `split`, whose halves' bordered
+    /// patterns hold it (a copy would be 34 MB at a million faces).
+    lower: Option<SymbolicSparseColMat<Idx>>,
+    /// faer's analysis of the whole factor, or with `split` none: the split's halves have
+    /// theirs, and the whole one would hold as much again.
+    symbolic: Option<SymbolicCholesky<Idx>>,
+    /// The split of a large system at its top separator ([`split`]): its factors are then made
+    /// of the two halves, beside each other.
+    split: Option<Split>,
     /// The matrix: the values of P A Pᵀ's lower triangle, in the order of [`SpdSolver::slot`].
     values: Vec<f64>,
     /// The storage of the factor, kept between factorisations.
@@ -723,8 +794,47 @@ pub struct SpdSolver {
 #[derive(Clone, Copy, Debug)]
 pub struct Slots<'a> {
     inv: &'a [Idx],
-    lower: &'a SymbolicSparseColMat<Idx>,
+    lower: Lower<'a>,
 }
+
+/// The pattern of a solver's matrix (its lower triangle in the factor's order): whole, or held
+/// by the halves of its split ([`Split::slot`]).
+#[derive(Clone, Copy, Debug)]
+enum Lower<'a> {
+    Whole(&'a SymbolicSparseColMat<Idx>),
+    Split(&'a Split),
+}
+
+impl<'a> Lower<'a> {
+    /// A solver's pattern: `lower`, or else `split`'s.
+    fn of(lower: &'a Option<SymbolicSparseColMat<Idx>>, split: &'a Option<Split>) -> Self {
+        match (lower, split) {
+            (_, Some(split)) => Self::Split(split),
+            (Some(lower), None) => Self::Whole(lower),
+            (None, None) => Self::Whole(&EMPTY),
+        }
+    }
+
+    /// Entries of the lower triangle: the values a factorisation reads.
+    fn len(self) -> usize {
+        match self {
+            Self::Whole(lower) => lower.row_idx().len(),
+            Self::Split(split) => split.n_values(),
+        }
+    }
+
+    /// `out = A v` for the symmetric `A` whose lower triangle has this pattern and `values`.
+    fn mul(self, values: &[f64], v: &[f64], out: &mut [f64]) {
+        match self {
+            Self::Whole(lower) => lower_mul(SparseColMatRef::new(lower.as_ref(), values), v, out),
+            Self::Split(split) => split.lower_mul(values, v, out),
+        }
+    }
+}
+
+/// The pattern of no matrix.
+static EMPTY: std::sync::LazyLock<SymbolicSparseColMat<Idx>> =
+    std::sync::LazyLock::new(|| SymbolicSparseColMat::new_checked(0, 0, vec![0], None, Vec::new()));
 
 impl Slots<'_> {
     /// The slot of entry `(r, c)` (or `(c, r)`); `None` if it is not in the pattern.
@@ -741,8 +851,12 @@ impl Slots<'_> {
     /// order ([`Slots::position`]); `None` if it is not in the pattern.
     pub fn slot_in_order(&self, a: usize, b: usize) -> Option<usize> {
         let (row, col) = (a.max(b), a.min(b));
-        let start = *self.lower.col_ptr().get(col)? as usize;
-        let rows = &self.lower.row_idx()[start..self.lower.col_ptr()[col + 1] as usize];
+        let lower = match self.lower {
+            Lower::Whole(lower) => lower,
+            Lower::Split(split) => return split.slot(row, col),
+        };
+        let start = *lower.col_ptr().get(col)? as usize;
+        let rows = &lower.row_idx()[start..lower.col_ptr()[col + 1] as usize];
         rows.binary_search(&(row as Idx)).ok().map(|k| start + k)
     }
 }
@@ -765,7 +879,7 @@ impl SpdSolver {
     /// computation in errors ("lscm", "arap global step", ...).
     pub fn new(pattern: &SymPattern, stage: &'static str) -> Result<Self, FlattenError> {
         let ordering = Ordering::for_nodes(pattern.n_nodes());
-        Self::analysed(pattern, stage, ordering)
+        Self::analysed(pattern, stage, ordering, split::SPLIT_FROM)
     }
 
     /// [`SpdSolver::new`] with a chosen fill-reducing ordering.
@@ -775,17 +889,39 @@ impl SpdSolver {
         stage: &'static str,
         ordering: Ordering,
     ) -> Result<Self, FlattenError> {
-        Self::analysed(pattern, stage, ordering)
+        Self::analysed(pattern, stage, ordering, split::SPLIT_FROM)
+    }
+
+    /// [`SpdSolver::with_ordering`] (nested dissection), split at its top separator whatever
+    /// its size when the separator allows it.
+    #[cfg(test)]
+    pub(crate) fn split_at_any_size(
+        pattern: &SymPattern,
+        stage: &'static str,
+    ) -> Result<Self, FlattenError> {
+        Self::analysed(pattern, stage, Ordering::NestedDissection, 0)
+    }
+
+    /// Whether this solver's factors are made in two halves.
+    #[cfg(test)]
+    pub(crate) fn is_split(&self) -> bool {
+        self.split.is_some()
     }
 
     /// The analysis of [`SpdSolver::with_ordering`]: its two triangles one after the other, so
     /// that an analysis made beside a factorisation (the Newton solve's, beside its start map's)
-    /// holds the least memory.
+    /// holds the least memory. A nested dissection of `split_from` unknowns or more is split at
+    /// its top separator ([`split`]) when the separator allows it, and the whole factor is then
+    /// not analysed at all.
     fn analysed(
         pattern: &SymPattern,
         stage: &'static str,
         ordering: Ordering,
+        split_from: usize,
     ) -> Result<Self, FlattenError> {
+        if ordering == Ordering::NestedDissection && pattern.n >= split_from {
+            return Self::analysed_split(pattern, stage);
+        }
         // Factors made at every Newton step amalgamate supernodes: without, a Newton factor
         // would hold 9 % fewer values for 12 % more time.
         let Analysis {
@@ -795,15 +931,61 @@ impl SpdSolver {
             symbolic,
             time,
         } = Analysis::of(pattern, stage, ordering, Triangles::OneAfterTheOther, true)?;
-        let n_lower = lower.row_idx().len();
-        Ok(Self {
+        Ok(Self::of_analysis(
             stage,
-            n: pattern.n,
+            (pattern.n, fwd, inv, lower),
+            Some(symbolic),
+            None,
+            time,
+        ))
+    }
+
+    /// [`SpdSolver::analysed`] of a nested dissection split at its top separator, or analysed
+    /// whole if the separator does not split it ([`Split::of`]).
+    fn analysed_split(pattern: &SymPattern, stage: &'static str) -> Result<Self, FlattenError> {
+        let started = Instant::now();
+        let (fwd, inv, lower, separator) = Analysis::lower_of(pattern, stage)?;
+        let failed = |reason: String| FlattenError::Solver {
+            stage,
+            reason: format!("symbolic factorization failed: {reason}"),
+        };
+        let split = match separator {
+            Some(sep) => Split::of(&lower, sep).map_err(failed)?,
+            None => None,
+        };
+        let symbolic = match split {
+            Some(_) => None,
+            None => Some(split::analyse(&lower).map_err(failed)?),
+        };
+        Ok(Self::of_analysis(
+            stage,
+            (pattern.n, fwd, inv, lower),
+            symbolic,
+            split,
+            started.elapsed(),
+        ))
+    }
+
+    /// A solver of `n` unknowns in the order `fwd` (`inv` its inverse) whose matrix's lower
+    /// triangle has the pattern `lower`, factored whole by `symbolic` or split by `split`, its
+    /// analysis having taken `time`.
+    fn of_analysis(
+        stage: &'static str,
+        (n, fwd, inv, lower): (usize, Vec<Idx>, Vec<Idx>, SymbolicSparseColMat<Idx>),
+        symbolic: Option<SymbolicCholesky<Idx>>,
+        split: Option<Split>,
+        time: Duration,
+    ) -> Self {
+        let n_lower = lower.row_idx().len();
+        Self {
+            stage,
+            n,
             fwd,
             inv,
-            lower,
+            lower: split.is_none().then_some(lower),
             values: vec![0.0; n_lower],
             symbolic,
+            split,
             factor: Factor::None,
             factored: false,
             refine: None,
@@ -815,7 +997,25 @@ impl SpdSolver {
             factorisations: 0,
             solve_time: SharedDuration::default(),
             refinements: AtomicUsize::new(0),
-        })
+        }
+    }
+
+    /// faer's analysis of the whole factor (not made for a split solver).
+    fn whole(&self) -> Result<&SymbolicCholesky<Idx>, FlattenError> {
+        self.symbolic
+            .as_ref()
+            .ok_or(FlattenError::Internal(InternalError::NoFactor {
+                stage: self.stage,
+            }))
+    }
+
+    /// Values of a factor: the whole one's, or the split halves' together.
+    fn factor_len(&self) -> usize {
+        match (&self.symbolic, &self.split) {
+            (Some(s), _) => s.len_val(),
+            (None, Some(split)) => split.len_val(),
+            (None, None) => 0,
+        }
     }
 
     /// The same solver with its factorisations run with `par`.
@@ -839,7 +1039,7 @@ impl SpdSolver {
     /// [`SINGLE_PRECISION_FROM`] values or more, and its solves then refined to the relative
     /// residual `tol`. (By default factors are double precision.)
     pub fn refined(mut self, tol: f64) -> Self {
-        self.refine = (self.symbolic.len_val() >= SINGLE_PRECISION_FROM).then_some(tol);
+        self.refine = (self.factor_len() >= SINGLE_PRECISION_FROM).then_some(tol);
         self
     }
 
@@ -883,7 +1083,7 @@ impl SpdSolver {
 
     /// Number of values a factorisation reads.
     pub fn n_values(&self) -> usize {
-        self.lower.row_idx().len()
+        Lower::of(&self.lower, &self.split).len()
     }
 
     /// Where the value of entry `(r, c)` (or `(c, r)`) of A goes in the values
@@ -897,7 +1097,7 @@ impl SpdSolver {
     pub fn slots(&self) -> Slots<'_> {
         Slots {
             inv: &self.inv,
-            lower: &self.lower,
+            lower: Lower::of(&self.lower, &self.split),
         }
     }
 
@@ -906,7 +1106,7 @@ impl SpdSolver {
         self.factored = false;
         let slots = Slots {
             inv: &self.inv,
-            lower: &self.lower,
+            lower: Lower::of(&self.lower, &self.split),
         };
         (slots, &mut self.values)
     }
@@ -999,10 +1199,14 @@ impl SpdSolver {
                 reason: format!("matrix entry {k} is not finite"),
             });
         }
-        // The factor's storage is reused: it is the same size every time.
-        let size = self.symbolic.len_val();
         let single = self.refine.is_some() && !self.slow_refinement.load(Memory::Relaxed);
-        if single && self.values.iter().all(|v| v.abs() <= f64::from(f32::MAX)) {
+        let single = single && self.values.iter().all(|v| v.abs() <= f64::from(f32::MAX));
+        if self.split.is_some() {
+            return self.refactor_split(single);
+        }
+        // The factor's storage is reused: it is the same size every time.
+        let size = self.factor_len();
+        if single {
             let mut l = match std::mem::take(&mut self.factor) {
                 Factor::Single(l) => l,
                 _ => Vec::new(),
@@ -1031,6 +1235,40 @@ impl SpdSolver {
         Ok(())
     }
 
+    /// [`SpdSolver::refactor_numeric`] of a split system: in single precision when `single`
+    /// says and it can, else in double.
+    fn refactor_split(&mut self, single: bool) -> Result<(), FlattenError> {
+        let Some(split) = &self.split else {
+            return Err(FlattenError::Internal(InternalError::NoFactor {
+                stage: self.stage,
+            }));
+        };
+        if single {
+            let mut f = match std::mem::take(&mut self.factor) {
+                Factor::SplitSingle(f) => f,
+                _ => split.empty(),
+            };
+            if split.factor::<f32>(&self.values, &mut f).is_ok() {
+                self.factor = Factor::SplitSingle(f);
+                self.factored = true;
+                return Ok(());
+            }
+        }
+        let mut f = match std::mem::take(&mut self.factor) {
+            Factor::SplitDouble(f) => f,
+            _ => split.empty(),
+        };
+        split
+            .factor::<f64>(&self.values, &mut f)
+            .map_err(|reason| FlattenError::Solver {
+                stage: self.stage,
+                reason,
+            })?;
+        self.factor = Factor::SplitDouble(f);
+        self.factored = true;
+        Ok(())
+    }
+
     /// faer's numeric factorisation of the matrix with `values` into `l`, in the precision of
     /// `T` (`double`: f64), with the kept scratch.
     fn factor_numeric<T: ComplexField>(
@@ -1045,13 +1283,14 @@ impl SpdSolver {
         // factor's order and triangle), so it is never paged in either.
         if !self.scratch.as_ref().is_some_and(|s| s.double || !double) {
             self.scratch = None;
-            let mut size = self
-                .symbolic
-                .factorize_numeric_llt_scratch::<f32>(self.par, Default::default());
+            let symbolic = self.whole()?;
+            let mut size =
+                symbolic.factorize_numeric_llt_scratch::<f32>(self.par, Default::default());
             if double {
-                size = size.or(self
-                    .symbolic
-                    .factorize_numeric_llt_scratch::<f64>(self.par, Default::default()));
+                size =
+                    size.or(
+                        symbolic.factorize_numeric_llt_scratch::<f64>(self.par, Default::default())
+                    );
             }
             self.scratch = Some(Scratch {
                 mem: self.buffer(size)?,
@@ -1063,8 +1302,13 @@ impl SpdSolver {
                 stage: self.stage,
             }));
         };
-        let a = SparseColMatRef::new(self.lower.as_ref(), values);
-        llt(&self.symbolic, a, l, self.par, mem).map_err(|reason| FlattenError::Solver {
+        let (Some(lower), Some(symbolic)) = (&self.lower, &self.symbolic) else {
+            return Err(FlattenError::Internal(InternalError::NoFactor {
+                stage: self.stage,
+            }));
+        };
+        let a = SparseColMatRef::new(lower.as_ref(), values);
+        llt(symbolic, a, l, self.par, mem).map_err(|reason| FlattenError::Solver {
             stage: self.stage,
             reason,
         })
@@ -1112,12 +1356,12 @@ impl SpdSolver {
         for col in rhs.chunks_exact_mut(n) {
             permute_in_place(col, &self.fwd, &mut scratch);
         }
+        let tol = self.refine.unwrap_or(REFINE_TOL);
         match &self.factor {
             Factor::Double(l) => self.solve_factored(l, rhs, k)?,
-            Factor::Single(l) => {
-                let tol = self.refine.unwrap_or(REFINE_TOL);
-                self.solve_refined(l, rhs, tol, REFINE_MAX)?
-            }
+            Factor::Single(l) => self.solve_refined(Single::Whole(l), rhs, tol, REFINE_MAX)?,
+            Factor::SplitDouble(f) => self.solve_split(f, rhs, k)?,
+            Factor::SplitSingle(f) => self.solve_refined(Single::Split(f), rhs, tol, REFINE_MAX)?,
             Factor::None => {
                 return Err(FlattenError::Internal(InternalError::NoFactor {
                     stage: self.stage,
@@ -1146,8 +1390,9 @@ impl SpdSolver {
         y: &mut [T],
         k: usize,
     ) -> Result<(), FlattenError> {
-        let mut mem = self.buffer(self.symbolic.solve_in_place_scratch::<T>(k, PAR))?;
-        LltRef::new(&self.symbolic, l).solve_in_place_with_conj(
+        let symbolic = self.whole()?;
+        let mut mem = self.buffer(symbolic.solve_in_place_scratch::<T>(k, PAR))?;
+        LltRef::new(symbolic, l).solve_in_place_with_conj(
             Conj::No,
             MatMut::from_column_major_slice_mut(y, self.n, k),
             PAR,
@@ -1156,19 +1401,38 @@ impl SpdSolver {
         Ok(())
     }
 
+    /// Solves in place, in the factor's order, for the `k` columns of `y` with the split factor
+    /// `f`.
+    fn solve_split<T: split::Precision>(
+        &self,
+        f: &SplitFactor<T>,
+        y: &mut [T],
+        k: usize,
+    ) -> Result<(), FlattenError> {
+        let Some(split) = &self.split else {
+            return Err(FlattenError::Internal(InternalError::NoFactor {
+                stage: self.stage,
+            }));
+        };
+        split.solve(f, y, k).map_err(|reason| FlattenError::Solver {
+            stage: self.stage,
+            reason,
+        })
+    }
+
     /// Solves in place, in the factor's order, for the columns of `y`: conjugate gradients on
     /// the matrix, preconditioned by its single-precision factor `l`, to the relative residual
     /// `tol`. A column that does not get there in `max_iter` iterations is solved with a
     /// double-precision factor of the matrix, made for it.
     fn solve_refined(
         &self,
-        l: &[f32],
+        l: Single<'_>,
         y: &mut [f64],
         tol: f64,
         max_iter: usize,
     ) -> Result<(), FlattenError> {
         let n = self.n;
-        let lower = SparseColMatRef::new(self.lower.as_ref(), self.values.as_slice());
+        let pattern = Lower::of(&self.lower, &self.split);
         let applied = AtomicUsize::new(0);
         let precondition = |r: &[f64], z: &mut [f64]| {
             applied.fetch_add(1, Memory::Relaxed);
@@ -1179,7 +1443,11 @@ impl SpdSolver {
                 return;
             }
             let mut r32: Vec<f32> = r.iter().map(|&v| (v / scale) as f32).collect();
-            if self.solve_factored(l, &mut r32, 1).is_err() {
+            let solved = match l {
+                Single::Whole(l) => self.solve_factored(l, &mut r32, 1),
+                Single::Split(f) => self.solve_split(f, &mut r32, 1),
+            };
+            if solved.is_err() {
                 z.copy_from_slice(r);
                 return;
             }
@@ -1193,7 +1461,7 @@ impl SpdSolver {
             let done = preconditioned_cg(
                 col,
                 &mut x,
-                |v, out| lower_mul(lower, v, out),
+                |v, out| pattern.mul(&self.values, v, out),
                 precondition,
                 tol,
                 max_iter,
@@ -1212,17 +1480,28 @@ impl SpdSolver {
         if stalled.is_empty() {
             return Ok(());
         }
-        let mut l64 = vec![0.0; l.len()];
-        let mut mem = self.buffer(
-            self.symbolic
-                .factorize_numeric_llt_scratch::<f64>(self.par, Default::default()),
-        )?;
-        llt(&self.symbolic, lower, &mut l64, self.par, &mut mem).map_err(|reason| {
-            FlattenError::Solver {
-                stage: self.stage,
-                reason,
+        let failed = |reason| FlattenError::Solver {
+            stage: self.stage,
+            reason,
+        };
+        if let Some(split) = &self.split {
+            let mut f = split.empty();
+            split.factor::<f64>(&self.values, &mut f).map_err(failed)?;
+            for j in stalled {
+                self.solve_split(&f, &mut y[j * n..(j + 1) * n], 1)?;
             }
-        })?;
+            return Ok(());
+        }
+        let (Some(lower), Some(symbolic)) = (&self.lower, &self.symbolic) else {
+            return Err(FlattenError::Internal(InternalError::NoFactor {
+                stage: self.stage,
+            }));
+        };
+        let lower = SparseColMatRef::new(lower.as_ref(), self.values.as_slice());
+        let mut l64 = vec![0.0; symbolic.len_val()];
+        let mut mem = self
+            .buffer(symbolic.factorize_numeric_llt_scratch::<f64>(self.par, Default::default()))?;
+        llt(symbolic, lower, &mut l64, self.par, &mut mem).map_err(failed)?;
         for j in stalled {
             self.solve_factored(&l64, &mut y[j * n..(j + 1) * n], 1)?;
         }
@@ -1240,6 +1519,17 @@ enum Factor {
     Double(Vec<f64>),
     /// In single precision: solves refine its solutions to double precision on the matrix.
     Single(Vec<f32>),
+    /// A split system's ([`split`]), in double precision.
+    SplitDouble(SplitFactor<f64>),
+    /// A split system's, in single precision, refined as [`Factor::Single`].
+    SplitSingle(SplitFactor<f32>),
+}
+
+/// A single-precision factor, which a refined solve is preconditioned with.
+#[derive(Clone, Copy)]
+enum Single<'a> {
+    Whole(&'a [f32]),
+    Split(&'a SplitFactor<f32>),
 }
 
 /// `a[k] ← a[perm[k]]` for every k, through `scratch` (as long as `a` once grown). A gather:
@@ -1377,7 +1667,7 @@ mod tests {
     }
 
     /// The pattern of the triplets `t` with its unknowns grouped into `nodes` nodes by `node_of`.
-    fn node_pattern(t: &SymTriplets, node_of: Vec<u32>, nodes: usize) -> SymPattern {
+    pub(super) fn node_pattern(t: &SymTriplets, node_of: Vec<u32>, nodes: usize) -> SymPattern {
         SymPattern::new(t, "test")
             .unwrap()
             .with_nodes(node_of, nodes)
@@ -1387,7 +1677,7 @@ mod tests {
     /// The Laplacian-plus-identity of a `w × h` grid of vertices split into triangles along one
     /// diagonal (the 7-point pattern of a triangle mesh), with `k` unknowns per vertex coupled
     /// in full blocks. Unknowns `k·v … k·v + k − 1` belong to vertex `v`.
-    fn grid_mesh(w: usize, h: usize, k: usize) -> (SymTriplets, Vec<u32>) {
+    pub(super) fn grid_mesh(w: usize, h: usize, k: usize) -> (SymTriplets, Vec<u32>) {
         let nv = w * h;
         let mut t = SymTriplets::new(k * nv);
         let block = |t: &mut SymTriplets, a: usize, b: usize, v: f64| {
@@ -1416,7 +1706,7 @@ mod tests {
     }
 
     /// The values of the triplets `t` (of `pattern`) in the order `s` factors them.
-    fn values_of(s: &SpdSolver, pattern: &SymPattern, t: &SymTriplets) -> Vec<f64> {
+    pub(super) fn values_of(s: &SpdSolver, pattern: &SymPattern, t: &SymTriplets) -> Vec<f64> {
         s.gather_matrix(pattern.matrix(t.values(), "test").unwrap().as_ref())
     }
 
@@ -1498,7 +1788,7 @@ mod tests {
     fn nested_dissection_is_a_permutation_that_keeps_vertices_together() {
         let (t, node_of) = grid_mesh(60, 50, 2);
         let p = node_pattern(&t, node_of, 3000);
-        let order = p.nested_dissection();
+        let (order, _) = p.nested_dissection();
         let mut seen = vec![false; p.n];
         for &i in &order {
             assert!(!seen[i], "unknown {i} twice");
@@ -1509,7 +1799,7 @@ mod tests {
             assert_eq!(pair[0] / 2, pair[1] / 2, "u and v of a vertex are adjacent");
         }
         // Deterministic: the same order on a second run, and on a clone of the pattern.
-        assert_eq!(order, p.clone().nested_dissection());
+        assert_eq!(order, p.clone().nested_dissection().0);
     }
 
     #[test]
@@ -1597,9 +1887,10 @@ mod tests {
         let sooner = Analysis::of(&pattern, "test", ordering, Triangles::SideBySide, true).unwrap();
         assert_eq!(after.fwd, sooner.fwd);
         assert_eq!(after.inv, sooner.inv);
-        assert_eq!(after.lower.col_ptr(), sooner.lower.col_ptr());
-        assert_eq!(after.lower.row_idx(), sooner.lower.row_idx());
-        assert_eq!(after.symbolic.len_val(), sooner.symbolic.len_val());
+        let lower = after.lower.as_ref().unwrap();
+        assert_eq!(lower.col_ptr(), sooner.lower.col_ptr());
+        assert_eq!(lower.row_idx(), sooner.lower.row_idx());
+        assert_eq!(after.factor_len(), sooner.symbolic.len_val());
         // The values made entry by entry are the values gathered from the matrix.
         let a = pattern.matrix(t.values(), "test").unwrap();
         let entry = |i: usize, j: usize| {
@@ -1634,12 +1925,17 @@ mod tests {
     }
 
     /// Whether `a` and `b` hold the same bits, pair by pair.
-    fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    pub(super) fn same_bits(a: &[f64], b: &[f64]) -> bool {
         a.iter().zip(b).all(|(p, q)| p.to_bits() == q.to_bits())
     }
 
     /// ‖A x − b‖ and ‖b‖ for the matrix of `t`.
-    fn residual(pattern: &SymPattern, t: &SymTriplets, x: &[f64], b: &[f64]) -> (f64, f64) {
+    pub(super) fn residual(
+        pattern: &SymPattern,
+        t: &SymTriplets,
+        x: &[f64],
+        b: &[f64],
+    ) -> (f64, f64) {
         let a = pattern.matrix(t.values(), "test").unwrap();
         let mut r = vec![0.0; b.len()];
         sym_mul(&a, x, &mut r);
@@ -1737,6 +2033,7 @@ mod tests {
         let Factor::Single(l) = &single.factor else {
             panic!("not single precision");
         };
+        let l = Single::Whole(l);
         // No iteration allowed: the column stalls and is solved directly (in the factor's
         // order, as the solver holds it).
         let mut y: Vec<f64> = single.fwd.iter().map(|&i| b[i as usize]).collect();
