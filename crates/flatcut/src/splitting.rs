@@ -259,7 +259,7 @@ pub(crate) fn options(
 fn spikes_note(s: &flatcut_darts::split::Split) -> String {
     match s.beyond_reach.first() {
         Some(p) if !s.feasible => format!(
-            "; {} vertices of the surface are spikes whose angle defect the faces round them cannot absorb within the limits (the worst at ({:.1}, {:.1}, {:.1})): no part within the limits holds one inside, so only seams through every one of them, or a smoother surface, can meet the limits",
+            "; {} vertices of the surface have more angle defect than the faces round them can absorb within the limits (a scan's spikes; the worst at ({:.1}, {:.1}, {:.1})): no part within the limits holds one inside, so only a seam through every one of them meets the limits",
             s.beyond_reach.len(),
             p.x,
             p.y,
