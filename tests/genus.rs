@@ -1061,3 +1061,46 @@ fn a_mirror_plane_given_as_a_point_and_a_normal_splits_a_posed_body_into_pairs()
         assert!(e.to_string().contains(said), "{bad:?}: {e}");
     }
 }
+
+/// A ball with one face raised into a spike (three faces round a point 25 mm out, far more angle
+/// defect than they can absorb within ±10 %): split into at most two parts it cannot meet the
+/// limits, and the error names the spike as a vertex no part can hold inside, where it is.
+#[test]
+fn a_spike_no_part_can_hold_inside_is_named_when_the_limits_are_not_met() {
+    let mut ball = star_shaped(2, flatcut::geom::DMat3::IDENTITY, |_| 100.0);
+    let [a, b, c] = ball.triangles[0];
+    let mid =
+        (ball.positions[a as usize] + ball.positions[b as usize] + ball.positions[c as usize])
+            / 3.0;
+    let top = mid + mid.normalize() * 25.0;
+    let s = ball.positions.len() as u32;
+    ball.positions.push(top);
+    ball.triangles[0] = [a, b, s];
+    ball.triangles.push([b, c, s]);
+    ball.triangles.push([c, a, s]);
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("spiked.obj");
+    std::fs::write(&file, obj_text(&ball, 6)).unwrap();
+    let args = [
+        "--max-stretch",
+        "10",
+        "--max-compress",
+        "10",
+        "--split",
+        "auto",
+        "--max-pieces",
+        "2",
+    ];
+    let text = flatten(&file, dir.path(), &args).unwrap_err();
+    let at = format!("({:.1}, {:.1}, {:.1})", top.x, top.y, top.z);
+    assert!(
+        text.contains("1 vertices of the surface have more angle defect") && text.contains(&at),
+        "{text}"
+    );
+    // The ball without the spike has none to name, whatever its split reaches.
+    let smooth = dir.path().join("ball.obj");
+    std::fs::write(&smooth, icosphere_obj(100.0, 2)).unwrap();
+    if let Err(text) = flatten(&smooth, dir.path(), &args) {
+        assert!(!text.contains("angle defect"), "{text}");
+    }
+}

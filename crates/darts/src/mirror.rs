@@ -57,10 +57,14 @@ pub fn mirror_split(
         check_closed(&pieces)?;
     }
     let cuts = seams.iter().map(|s| s.points_3d(0, &refs)).collect();
+    // The vertices beyond reach of the half, then their images.
+    let mut beyond_reach = half.beyond_reach.clone();
+    beyond_reach.extend(half.beyond_reach.iter().map(|&p| plane.reflect(p)));
     Ok(Split {
         pieces,
         seams,
         cuts,
+        beyond_reach,
         ..half
     })
 }

@@ -134,6 +134,7 @@ fn a_piece_that_is_not_closed_again_is_refused() {
         worst_3d: DVec3::ZERO,
         timed_out: false,
         seams_apart: false,
+        beyond_reach: Vec::new(),
     };
     let shifted = MirrorPlane::new(DVec3::new(1.0, 0.0, 0.0), DVec3::X).unwrap();
     let e = mirror_split(split, &shifted, &[], true).unwrap_err();

@@ -179,6 +179,11 @@ pub struct Split {
     /// apart, and no earlier joint solve had held them equal (`timed_out` is set too): the
     /// best cut found, its seams to be solved again (the report says how far apart they are).
     pub seams_apart: bool,
+    /// The inside vertices of the surface split (3D, the largest defect first) whose angle
+    /// defect their corners cannot absorb within the limits ([`cone::beyond_reach`]): no part
+    /// within the limits holds one inside, so only a split with a seam through every one of them
+    /// can meet the limits. A smooth surface has none; a raw scan's spikes are these.
+    pub beyond_reach: Vec<DVec3>,
 }
 
 impl Split {
@@ -201,7 +206,25 @@ pub fn split(
     let cpu = CpuClock::start();
     let mut first = mesh.clone();
     first.flat = Some(x0.to_vec());
-    split_on(mesh, vec![first], Vec::new(), true, params, opts, cpu)
+    let mut s = split_on(mesh, vec![first], Vec::new(), true, params, opts, cpu)?;
+    s.beyond_reach = beyond_reach(mesh, opts.band)?;
+    Ok(s)
+}
+
+/// The inside vertices of `mesh` whose angle defect their corners cannot absorb within `band`
+/// ([`cone::beyond_reach`]), the largest defect first (the lower index on a tie).
+fn beyond_reach(mesh: &TriMesh, band: Band) -> Result<Vec<DVec3>, DartError> {
+    let topo = Topology::build(mesh)?;
+    let defects = cone::angle_defects(mesh, &topo);
+    let beyond = cone::beyond_reach(mesh, &defects, band);
+    let mut at: Vec<usize> = (0..mesh.positions.len()).filter(|&v| beyond[v]).collect();
+    at.sort_by(|&a, &b| {
+        defects[b]
+            .abs()
+            .total_cmp(&defects[a].abs())
+            .then(a.cmp(&b))
+    });
+    Ok(at.into_iter().map(|v| mesh.positions[v]).collect())
 }
 
 /// Splits a surface that is not a disk (closed, of any genus, or with several boundary loops):
@@ -230,7 +253,9 @@ pub fn split_surface(
         let f = flatcut_flatten::flatten(p, &free).map_err(DartError::Flatten)?;
         p.flat = Some(f.uv);
     }
-    split_on(mesh, pieces, opened.cuts, false, params, opts, cpu)
+    let mut s = split_on(mesh, pieces, opened.cuts, false, params, opts, cpu)?;
+    s.beyond_reach = beyond_reach(mesh, opts.band)?;
+    Ok(s)
 }
 
 /// `p` with every solve stopped where the split's time limit `limit` (CPU time, from `cpu`'s
@@ -461,6 +486,7 @@ fn finish(
         feasible: excess <= 0.0,
         timed_out: false,
         seams_apart: false,
+        beyond_reach: Vec::new(),
     })
 }
 

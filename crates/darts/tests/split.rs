@@ -551,3 +551,60 @@ fn a_ball_within_ten_percent_comes_as_the_two_halves_of_a_tennis_ball() {
         }
     }
 }
+
+/// A flat 60 mm square (5 mm grid) with one face raised into a spike of three faces round a
+/// point `h` above its centroid (a raw scan's spike): the spike's vertex is the last.
+fn spiked_square(h: f64) -> TriMesh {
+    let mut m = flatcut_mesh::test_grid::grid_mesh(12, 12, |i, j| {
+        DVec3::new(5.0 * i as f64, 5.0 * j as f64, 0.0)
+    });
+    let t = 2 * (12 * 5 + 4);
+    let [a, b, c] = m.triangles[t];
+    let top = (m.positions[a as usize] + m.positions[b as usize] + m.positions[c as usize]) / 3.0
+        + DVec3::new(0.0, 0.0, h);
+    let s = m.positions.len() as u32;
+    m.positions.push(top);
+    m.triangles[t] = [a, b, s];
+    m.triangles.push([b, c, s]);
+    m.triangles.push([c, a, s]);
+    m
+}
+
+/// A spike whose angle defect its three faces cannot absorb within ±10 % (more than 3 × 0.2
+/// rad) is named as a vertex beyond reach, and, where the split meets the limits, it is on a
+/// part's outline; a lower bump and a smooth saddle have none.
+#[test]
+fn a_spike_no_part_can_hold_inside_is_named_and_left_on_a_seam() {
+    let pct = 10.0;
+    let params = FlattenParams::new(Method::Isometric);
+    for (h, beyond) in [(0.2, false), (3.0, true)] {
+        let mesh = spiked_square(h);
+        let top = *mesh.positions.last().unwrap();
+        let s = split(&mesh, &isometric(&mesh), &params, &options(pct, 6)).unwrap();
+        assert_eq!(
+            s.beyond_reach,
+            if beyond { vec![top] } else { vec![] },
+            "h = {h}"
+        );
+        if s.feasible {
+            for (k, p) in s.pieces.iter().enumerate() {
+                assert_faces_within(k, p, pct);
+                let topo = Topology::build(p).unwrap();
+                let inside = p.positions.iter().enumerate().any(|(v, &q)| {
+                    q == top
+                        && !topo
+                            .boundary_loops
+                            .iter()
+                            .flatten()
+                            .any(|&r| r as usize == v)
+                });
+                assert!(!(beyond && inside), "part {k} holds the spike inside");
+            }
+        } else {
+            assert!(beyond, "h = {h}: excess {}", s.excess);
+        }
+    }
+    let saddle = saddle(200.0, 24);
+    let s = split(&saddle, &isometric(&saddle), &params, &options(pct, 8)).unwrap();
+    assert!(s.beyond_reach.is_empty());
+}

@@ -253,6 +253,22 @@ pub(crate) fn options(
     })
 }
 
+/// What a split beyond the limits says of the surface's vertices beyond reach
+/// ([`flatcut_darts::split::Split::beyond_reach`]): how many, and where the worst is; empty
+/// when the split is within the limits or the surface has none.
+fn spikes_note(s: &flatcut_darts::split::Split) -> String {
+    match s.beyond_reach.first() {
+        Some(p) if !s.feasible => format!(
+            "; {} vertices of the surface have more angle defect than the faces round them can absorb within the limits (a scan's spikes; the worst at ({:.1}, {:.1}, {:.1})): no part within the limits holds one inside, so only a seam through every one of them meets the limits",
+            s.beyond_reach.len(),
+            p.x,
+            p.y,
+            p.z
+        ),
+        _ => String::new(),
+    }
+}
+
 /// The parts of a split as pieces of the pattern, or the error saying what was reached.
 pub(crate) fn into_parts(
     piece: FlatPiece,
@@ -264,10 +280,11 @@ pub(crate) fn into_parts(
     let count = stage.count();
     // The stand-in's own warnings do not carry over to the parts.
     let mut timed_out_warning = None;
+    let spikes = spikes_note(&s);
     if s.seams_apart {
         // No joint solve of the parts finished in the time: their seams are not yet equal.
         timed_out_warning = Some(format!(
-            "{name}: the split's time limit stopped the joint solve of its {} parts before their seams agreed; this is the best cut found, its seams not yet sewable (a longer --split-time solves them)",
+            "{name}: the split's time limit stopped the joint solve of its {} parts before their seams agreed; this is the best cut found, its seams not yet sewable (a longer --split-time solves them){spikes}",
             s.pieces.len()
         ));
     } else if s.timed_out && s.feasible {
@@ -279,7 +296,7 @@ pub(crate) fn into_parts(
     } else if s.timed_out {
         // The best split found in the time: written, its excess left to the report's check.
         timed_out_warning = Some(format!(
-            "{name}: the split's time limit ended the search at {} parts, {:.2} % beyond the limits near ({:.1}, {:.1}, {:.1}); this is the best split found",
+            "{name}: the split's time limit ended the search at {} parts, {:.2} % beyond the limits near ({:.1}, {:.1}, {:.1}); this is the best split found{spikes}",
             s.pieces.len(),
             flatcut_darts::excess_pct(s.excess),
             s.worst_3d.x,
@@ -294,7 +311,7 @@ pub(crate) fn into_parts(
                 excess: s.excess,
                 at: s.worst_3d,
                 reason: format!(
-                    "{}{}",
+                    "{}{}{spikes}",
                     if s.pieces.len() < settings.max_pieces {
                         // Parts to spare: the worst part has no cut left that relieves it.
                         format!(
