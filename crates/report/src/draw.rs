@@ -172,7 +172,8 @@ fn text_path(text: &str, origin: DVec2, h: f64, colour: &str) -> Path {
 }
 
 /// The heat map of one or more flattened pieces at true scale in mm, each with its own legend in
-/// real units, laid out in rows toward a landscape page ([`Grid`]). `glyphs` adds short ticks along the principal stretch direction.
+/// real units, laid out in rows, as many to a row as brings the drawing nearest a landscape page.
+/// `glyphs` adds short ticks along the principal stretch direction.
 pub fn heatmap_svg(cols: &[Column<'_>], m: Measure, glyphs: bool) -> String {
     let boxes: Vec<Aabb2> = cols
         .iter()
