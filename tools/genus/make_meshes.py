@@ -15,7 +15,9 @@ about 10k triangles.
 SCANS_DIR (optional) is a checkout of github.com/alecjacobson/common-3d-test-models (its commit
 below): the closed scans of about 100k faces taken from it for the closed-scan benchmark. Its
 README gives each model's source; it states no licence of its own for them, so the manifest
-names the source it gives. The meshes are not copied into this repository.
+names the source it gives. The meshes are not copied into this repository. The Igea scan
+(268,686 faces as distributed) is decimated to 100,000 by quadric error with the
+`fast-simplification` package (pip; MIT), deterministic: only this script needs it.
 """
 import json
 import math
@@ -44,6 +46,11 @@ SCANS = [
     ("nefertiti", 480, "bust of Nefertiti, closed scan (99,938 faces), genus 0",
      "Berlin Egyptian Museum scan via thingiverse.com/thing:3974391"),
 ]
+# Scans distributed as PLY triangle strips, decimated to a face count: name, extent in mm, faces,
+# what it stands for, source. (horse.zip's PLY, 96,966 faces, passes through itself: refused.)
+STRIP_SCANS = [
+    ("igea", 300, 100_000, "Igea head, closed scan decimated to 100,000 faces, genus 0", "Cyberware"),
+]
 
 
 def read_obj(path):
@@ -68,6 +75,37 @@ def read_off(path):
     V = np.array([list(map(float, ln.split()[:3])) for ln in lines[s:s + nv]])
     F = np.array([list(map(int, ln.split()[1:4])) for ln in lines[s + nv:s + nv + nf]])
     return V, F
+
+
+def read_ply_strips(path):
+    """A binary little-endian PLY of float x y z vertices and one `tristrips` element (strips
+    separated by -1, alternate triangles reversed to keep one orientation), as triangles."""
+    data = open(path, "rb").read()
+    head_end = data.index(b"end_header\n") + len(b"end_header\n")
+    head = data[:head_end].decode("ascii").split("\n")
+    assert "format binary_little_endian 1.0" in head and "element tristrips 1" in head, path
+    nv = int(next(ln for ln in head if ln.startswith("element vertex")).split()[2])
+    V = np.frombuffer(data, "<f4", nv * 3, head_end).reshape(nv, 3).astype(float)
+    at = head_end + 12 * nv
+    n = int(np.frombuffer(data, "<i4", 1, at)[0])
+    strips = np.frombuffer(data, "<i4", n, at + 4)
+    F = []
+    for strip in np.split(strips, np.flatnonzero(strips < 0)):
+        strip = strip[strip >= 0]
+        for k in range(len(strip) - 2):
+            a, b, c = strip[k], strip[k + 1], strip[k + 2]
+            if len({a, b, c}) == 3:
+                F.append((a, b, c) if k % 2 == 0 else (b, a, c))
+    return V, np.array(F)
+
+
+def decimated(V, F, faces):
+    """The mesh decimated to `faces` triangles by quadric error (fast-simplification)."""
+    import fast_simplification
+
+    V2, F2 = fast_simplification.simplify(V.astype(np.float32), F.astype(np.int32),
+                                          target_reduction=1 - faces / len(F))
+    return np.asarray(V2, float), np.asarray(F2, int)
 
 
 def write_obj(path, V, F):
@@ -167,6 +205,14 @@ def main():
             manifest.append({"file": name + ".obj", "what": what, "faces": len(F), "genus": int(genus(F)),
                              "source": f"github.com/alecjacobson/common-3d-test-models {SCANS_COMMIT} "
                                        f"data/{name}.obj: {source}",
+                             "licence": "none stated in that repository; see the source", "scaled_to_mm": size})
+        for name, size, faces, what, source in STRIP_SCANS:
+            V, F = decimated(*read_ply_strips(os.path.join(sys.argv[3], "data", name + ".ply")), faces)
+            V = (V - V.min(0)) * (size / np.ptp(V, axis=0).max())
+            write_obj(os.path.join(out, name + ".obj"), V, F)
+            manifest.append({"file": name + ".obj", "what": what, "faces": len(F), "genus": int(genus(F)),
+                             "source": f"github.com/alecjacobson/common-3d-test-models {SCANS_COMMIT} "
+                                       f"data/{name}.ply: {source}, decimated by fast-simplification",
                              "licence": "none stated in that repository; see the source", "scaled_to_mm": size})
     json.dump(manifest, open(os.path.join(out, "manifest.json"), "w"), indent=1)
     for m in manifest:
