@@ -181,6 +181,15 @@ def boot(holes_per_row=6, sub=4, cell=10.0, thick=5.0, bend_radius=60.0):
     return B, np.array(F)
 
 
+def write_scan(out, name, size, V, F, what, source):
+    """Writes a common-3d-test-models scan scaled to `size` mm; returns its manifest entry."""
+    V = (V - V.min(0)) * (size / np.ptp(V, axis=0).max())
+    write_obj(os.path.join(out, name + ".obj"), V, F)
+    return {"file": name + ".obj", "what": what, "faces": len(F), "genus": int(genus(F)),
+            "source": f"github.com/alecjacobson/common-3d-test-models {SCANS_COMMIT} {source}",
+            "licence": "none stated in that repository; see the source", "scaled_to_mm": size}
+
+
 def main():
     off_dir, out = sys.argv[1], sys.argv[2]
     os.makedirs(out, exist_ok=True)
@@ -200,20 +209,11 @@ def main():
     if len(sys.argv) > 3:
         for name, size, what, source in SCANS:
             V, F = read_obj(os.path.join(sys.argv[3], "data", name + ".obj"))
-            V = (V - V.min(0)) * (size / np.ptp(V, axis=0).max())
-            write_obj(os.path.join(out, name + ".obj"), V, F)
-            manifest.append({"file": name + ".obj", "what": what, "faces": len(F), "genus": int(genus(F)),
-                             "source": f"github.com/alecjacobson/common-3d-test-models {SCANS_COMMIT} "
-                                       f"data/{name}.obj: {source}",
-                             "licence": "none stated in that repository; see the source", "scaled_to_mm": size})
+            manifest.append(write_scan(out, name, size, V, F, what, f"data/{name}.obj: {source}"))
         for name, size, faces, what, source in STRIP_SCANS:
             V, F = decimated(*read_ply_strips(os.path.join(sys.argv[3], "data", name + ".ply")), faces)
-            V = (V - V.min(0)) * (size / np.ptp(V, axis=0).max())
-            write_obj(os.path.join(out, name + ".obj"), V, F)
-            manifest.append({"file": name + ".obj", "what": what, "faces": len(F), "genus": int(genus(F)),
-                             "source": f"github.com/alecjacobson/common-3d-test-models {SCANS_COMMIT} "
-                                       f"data/{name}.ply: {source}, decimated by fast-simplification",
-                             "licence": "none stated in that repository; see the source", "scaled_to_mm": size})
+            manifest.append(write_scan(out, name, size, V, F, what,
+                                       f"data/{name}.ply: {source}, decimated by fast-simplification"))
     json.dump(manifest, open(os.path.join(out, "manifest.json"), "w"), indent=1)
     for m in manifest:
         print(m["file"], m["faces"], "faces, genus", m["genus"])
