@@ -80,6 +80,7 @@ pub mod cone;
 pub mod crossing;
 pub mod cut;
 pub mod embed;
+pub mod fewest;
 pub mod fit;
 pub mod keepout;
 pub mod limits;

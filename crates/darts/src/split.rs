@@ -89,11 +89,13 @@ use flatcut_mesh::regions::split_along_lines;
 use flatcut_mesh::{Topology, TriMesh, check_disk};
 
 use rayon::prelude::*;
+use std::collections::BTreeMap;
 use std::time::Duration;
 
 use crate::clock::CpuClock;
 use crate::cone;
 use crate::crossing::outline_crossing;
+use crate::fewest::{Parts, Verdict, fewest};
 use crate::limits::{Band, Limits, face_excess};
 use crate::resew::{close_slits, merge};
 use crate::seam_cost::{SeamCost, Visibility};
@@ -514,10 +516,13 @@ fn stopped_apart(
 
 /// The pieces with neighbours sewn back together wherever their union, flattened alone with the
 /// limits held (`held`), lies within `band` and does not overlap itself ([`merge`]): in rounds,
-/// the pairs that share the longest seams first, each part in one merge a round. The result is
+/// the pairs that share the longest seams first, each part in one merge a round; then, for up
+/// to [`crate::fewest::FEWEST_EXACT`] pieces, the search for the grouping with the fewest parts and the
+/// shortest seams ([`crate::fewest`]), from the judgements of the rounds. The result is
 /// flattened together and kept only when every piece is then within the limits without
-/// overlap; `None` when no pair merges or the joint solve undoes them. Once `out_of_time`,
-/// no pair is judged further and the merges made so far are the result (the flag returned).
+/// overlap (else the rounds' grouping, if it differs, is tried the same way); `None` when no
+/// pair merges or the joint solve undoes them. Once `out_of_time`, no union is judged further
+/// and the best grouping so far is the result (the flag returned).
 fn merge_within(
     pieces: &[TriMesh],
     held: &FlattenParams,
@@ -536,15 +541,17 @@ fn merge_within(
         alone: &alone,
         again: &again,
     };
+    // Out of time or cancelled: no union is judged further.
+    let stop = || params.hooks.cancelled() || out_of_time();
+    let judge = |a: &TriMesh, b: &TriMesh| merged_within(a, b, solves, band, allowance_mm);
+    let shared = shared_seams(pieces);
+    // Every union judged, by the pieces it is made of (ascending): the same union met again,
+    // in a later round or in the search, is judged once.
+    let mut judged: BTreeMap<Vec<usize>, Verdict<TriMesh>> = BTreeMap::new();
+    // The rounds' grouping: each part, the pieces it is made of.
+    let mut groups: Vec<Vec<usize>> = (0..pieces.len()).map(|k| vec![k]).collect();
     let mut cur = pieces.to_vec();
-    // Every part's identity (a merged part is a new one), and the judgement of every pair of
-    // parts judged so far: a pair of the same two parts is judged the same way in a later
-    // round, so it is judged once.
-    let mut ids: Vec<usize> = (0..cur.len()).collect();
-    let mut next_id = cur.len();
-    let mut judged_before: std::collections::BTreeMap<(usize, usize), Option<TriMesh>> =
-        Default::default();
-    let (mut any, mut cut_short) = (false, false);
+    let mut cut_short = false;
     loop {
         if params.hooks.cancelled() {
             return Err(cancelled());
@@ -553,32 +560,23 @@ fn merge_within(
             cut_short = true;
             break;
         }
-        let refs: Vec<&TriMesh> = cur.iter().collect();
-        let mut shared: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
-        for s in seams_of(&cur) {
-            let (i, j) = (s.sides[0].piece, s.sides[1].piece);
-            if i != j {
-                *shared.entry((i.min(j), i.max(j))).or_default() +=
-                    polyline_length(&s.points_3d(0, &refs));
-            }
-        }
-        let mut pairs: Vec<((usize, usize), f64)> = shared.into_iter().collect();
+        let mut pairs: Vec<((usize, usize), f64)> = shared_seams(&cur).into_iter().collect();
         pairs.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        let union = |i: usize, j: usize| {
+            let mut u = [groups[i].as_slice(), groups[j].as_slice()].concat();
+            u.sort_unstable();
+            u
+        };
         // The pairs not judged before, judged side by side; taken in the pairs' order.
         let fresh: Vec<(usize, usize)> = pairs
             .iter()
             .map(|&(ij, _)| ij)
-            .filter(|&(i, j)| !judged_before.contains_key(&(ids[i], ids[j])))
+            .filter(|&(i, j)| !judged.contains_key(&union(i, j)))
             .collect();
         // `None`: not judged (out of time).
-        let new: Vec<Option<Option<TriMesh>>> = fresh
+        let new: Vec<Option<Verdict<TriMesh>>> = fresh
             .par_iter()
-            .map(|&(i, j)| {
-                if params.hooks.cancelled() || out_of_time() {
-                    return None;
-                }
-                Some(merged_within(&cur[i], &cur[j], solves, band, allowance_mm))
-            })
+            .map(|&(i, j)| (!stop()).then(|| judge(&cur[i], &cur[j])))
             .collect();
         if params.hooks.cancelled() {
             return Err(cancelled());
@@ -586,7 +584,7 @@ fn merge_within(
         for ((i, j), m) in fresh.into_iter().zip(new) {
             match m {
                 Some(m) => {
-                    judged_before.insert((ids[i], ids[j]), m);
+                    judged.insert(union(i, j), m);
                 }
                 None => cut_short = true,
             }
@@ -594,8 +592,9 @@ fn merge_within(
         let mut used = vec![false; cur.len()];
         let mut gone = vec![false; cur.len()];
         let mut next = cur.clone();
+        let mut next_groups = groups.clone();
         for &((i, j), _) in &pairs {
-            let Some(Some(m)) = judged_before.get(&(ids[i], ids[j])) else {
+            let Some(Verdict::Within(m)) = judged.get(&union(i, j)) else {
                 continue;
             };
             if used[i] || used[j] {
@@ -603,24 +602,73 @@ fn merge_within(
             }
             (used[i], used[j], gone[j]) = (true, true, true);
             next[i] = m.clone();
-            ids[i] = next_id;
-            next_id += 1;
+            next_groups[i] = union(i, j);
         }
         if !gone.iter().any(|&g| g) {
             break;
         }
-        any = true;
         cur = kept(next, &gone);
-        ids = kept(ids, &gone);
+        groups = kept(next_groups, &gone);
     }
-    if !any || !matches!(flatten_together(&mut cur, held), Ok(true)) {
-        return Ok((None, cut_short));
+    // The grouping with the fewest parts, from what the rounds judged.
+    let mut tries = Vec::new();
+    if !cut_short {
+        let parts = Parts {
+            parts: pieces,
+            shared: &shared,
+            judged: &judged,
+        };
+        if let Some(f) = fewest(&parts, &judge, &stop) {
+            if params.hooks.cancelled() {
+                return Err(cancelled());
+            }
+            cut_short |= f.cut_short;
+            judged.extend(f.judged);
+            if f.groups != groups {
+                tries.push(f.groups);
+            }
+        }
     }
-    let (_, e, _) = worst(&cur, band)?;
-    if e > 0.0 || first_crossing(&cur)?.is_some() {
-        return Ok((None, cut_short));
+    tries.push(groups);
+    for groups in tries {
+        if groups.len() == pieces.len() {
+            continue;
+        }
+        let mut cur: Vec<TriMesh> = groups
+            .iter()
+            .map(|g| match g.as_slice() {
+                [k] => Some(pieces[*k].clone()),
+                _ => match judged.get(g) {
+                    Some(Verdict::Within(m)) => Some(m.clone()),
+                    _ => None,
+                },
+            })
+            .collect::<Option<_>>()
+            .ok_or_else(|| DartError::Internal("a merged part was not judged".into()))?;
+        if !matches!(flatten_together(&mut cur, held), Ok(true)) {
+            continue;
+        }
+        let (_, e, _) = worst(&cur, band)?;
+        if e <= 0.0 && first_crossing(&cur)?.is_none() {
+            return Ok((Some(cur), cut_short));
+        }
     }
-    Ok((Some(cur), cut_short))
+    Ok((None, cut_short))
+}
+
+/// The seam length (mm, along the 3D seam) shared by each pair of neighbouring pieces
+/// `(i, j)`, `i < j`.
+fn shared_seams(pieces: &[TriMesh]) -> BTreeMap<(usize, usize), f64> {
+    let refs: Vec<&TriMesh> = pieces.iter().collect();
+    let mut shared: BTreeMap<(usize, usize), f64> = BTreeMap::new();
+    for s in seams_of(pieces) {
+        let (i, j) = (s.sides[0].piece, s.sides[1].piece);
+        if i != j {
+            *shared.entry((i.min(j), i.max(j))).or_default() +=
+                polyline_length(&s.points_3d(0, &refs));
+        }
+    }
+    shared
 }
 
 /// How far beyond the limits (log strain) a merged part flattened alone may come out and still
@@ -640,28 +688,39 @@ struct Solves<'a> {
     again: &'a FlattenParams,
 }
 
-/// `a` and `b` sewn into one part, flattened alone with `solves` (the limits held), when it
-/// lies within `band`, has no neck too narrow for `allowance_mm` and does not overlap itself
-/// flat.
+/// `a` and `b` sewn into one part, flattened alone with `solves` (the limits held): within
+/// when it lies within `band`, has no neck too narrow for `allowance_mm` and does not overlap
+/// itself flat; beyond when its map is beyond the limits or overlaps itself; unfit when the
+/// union is not one disk, its neck is too narrow or a solve fails.
 fn merged_within(
     a: &TriMesh,
     b: &TriMesh,
     solves: Solves,
     band: Band,
     allowance_mm: f64,
-) -> Option<TriMesh> {
-    let mut m = merge(a, b)?;
-    m.flat = Some(flatcut_flatten::flatten(&m, solves.alone).ok()?.uv);
-    let (_, mut e, _) = worst(std::slice::from_ref(&m), band).ok()?;
-    if e > 0.0 && e <= MERGE_NEAR_MISS {
-        let start = m.flat.as_deref()?;
-        let f = flatten_assembly_from(&[&m], &[], &[start], solves.again).ok()?;
-        m.flat = f.into_iter().next().map(|f| f.uv);
-        e = worst(std::slice::from_ref(&m), band).ok()?.1;
+) -> Verdict<TriMesh> {
+    let Some(mut m) = merge(a, b) else {
+        return Verdict::Unfit;
+    };
+    let judged = (|| {
+        m.flat = Some(flatcut_flatten::flatten(&m, solves.alone).ok()?.uv);
+        let (_, mut e, _) = worst(std::slice::from_ref(&m), band).ok()?;
+        if e > 0.0 && e <= MERGE_NEAR_MISS {
+            let start = m.flat.as_deref()?;
+            let f = flatten_assembly_from(&[&m], &[], &[start], solves.again).ok()?;
+            m.flat = f.into_iter().next().map(|f| f.uv);
+            e = worst(std::slice::from_ref(&m), band).ok()?.1;
+        }
+        let x = m.flat.as_deref()?;
+        let beyond = e > 0.0 || outline_crossing(&m, x).ok()?.is_some();
+        let wide = narrowest_neck(&m, x)? >= merged_neck(m.area(), allowance_mm);
+        Some((beyond, wide))
+    })();
+    match judged {
+        Some((true, _)) => Verdict::Beyond,
+        Some((false, true)) => Verdict::Within(m),
+        _ => Verdict::Unfit,
     }
-    let x = m.flat.as_deref()?;
-    let wide = narrowest_neck(&m, x)? >= merged_neck(m.area(), allowance_mm);
-    (e <= 0.0 && wide && matches!(outline_crossing(&m, x), Ok(None))).then_some(m)
 }
 
 /// The items of `v` whose `gone` flag is not set, in order.
