@@ -12,6 +12,8 @@
 //!                               # (off | auto | x | y | z, as --symmetry; default off)
 //! symmetry_tolerance_pct = 1.0  # its largest deviation from its mirror image (% of its size)
 //! # symmetry_plane = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0]   # or this plane: a point, a normal (mm)
+//! # despike = true              # optional, with split: move a scan's spikes back into its
+//! # despike_max_mm = 2.0        # surface first, no vertex farther than this (as --despike)
 //! [material]
 //! name = "parchment"
 //! max_stretch_pct = 2.0
@@ -200,6 +202,14 @@ pub struct Project {
     /// `symmetry`.
     #[serde(default)]
     pub symmetry_plane: Option<[f64; 6]>,
+    /// With `split = "auto"`, whether a scan's spikes are moved back into its surface before it
+    /// is flattened and split, as `--despike` ([`crate::despiking`]).
+    #[serde(default)]
+    pub despike: bool,
+    /// With `despike = true`, the largest move of a vertex (mm), as `--despike-max-mm`
+    /// ([`crate::despiking::DEFAULT_MAX_MM`] when absent).
+    #[serde(default)]
+    pub despike_max_mm: Option<f64>,
     /// The material the pieces are cut from.
     pub material: Material,
     /// What the pieces are nested on.
@@ -349,6 +359,7 @@ impl Project {
             return Err(format!("unknown method '{m}'"));
         }
         self.symmetry_settings()?;
+        self.despike_max_mm()?;
         if let Some(order) = &self.order {
             if let Some((size, n)) = order
                 .iter()
@@ -405,6 +416,28 @@ impl Project {
             );
         }
         Ok(s)
+    }
+
+    /// The largest move of a vertex when the split first removes a scan's spikes
+    /// (`despike`, `despike_max_mm`), `None` when it does not, or what is wrong with those keys:
+    /// a length that is not positive, or either key without `split = "auto"` (or the length
+    /// without `despike = true`).
+    pub fn despike_max_mm(&self) -> Result<Option<f64>, String> {
+        if let Some(mm) = self.despike_max_mm {
+            if !(mm > 0.0 && flatcut_geom::limits::in_range(mm)) {
+                return Err(format!("despike_max_mm = {mm}: a positive length in mm"));
+            }
+            if !self.despike {
+                return Err("despike_max_mm needs despike = true".into());
+            }
+        }
+        if self.despike && self.split != Some(flatcut_design::DartsDef::Auto) {
+            return Err("despike is for the split: it needs split = \"auto\"".into());
+        }
+        Ok(self.despike.then(|| {
+            self.despike_max_mm
+                .unwrap_or(crate::despiking::DEFAULT_MAX_MM)
+        }))
     }
 
     /// The design file's path.

@@ -37,6 +37,9 @@ pub struct SplitSettings {
     pub seam_allowance_mm: f64,
     /// Whether a closed surface is split as mirrored left and right pairs.
     pub symmetry: SymmetrySettings,
+    /// Whether the spikes of a piece are removed before it is flattened and split, and the
+    /// largest move of a vertex (mm) when they are ([`crate::despiking`]).
+    pub despike_max_mm: Option<f64>,
 }
 
 /// Whether a closed surface's split looks for a mirror plane.
@@ -112,6 +115,7 @@ impl Default for SplitSettings {
             time_limit: None,
             seam_allowance_mm: 0.0,
             symmetry: SymmetrySettings::default(),
+            despike_max_mm: None,
         }
     }
 }
@@ -259,7 +263,7 @@ pub(crate) fn options(
 fn spikes_note(s: &flatcut_darts::split::Split) -> String {
     match s.beyond_reach.first() {
         Some(p) if !s.feasible => format!(
-            "; {} vertices of the surface have more angle defect than the faces round them can absorb within the limits (a scan's spikes; the worst at ({:.1}, {:.1}, {:.1})): no part within the limits holds one inside, so only a seam through every one of them meets the limits",
+            "; {} vertices of the surface have more angle defect than the faces round them can absorb within the limits (a scan's spikes; the worst at ({:.1}, {:.1}, {:.1})): no part within the limits holds one inside, so only a seam through every one of them meets the limits; --despike (a project's despike = true) moves such spikes back into the surface before the split, within --despike-max-mm",
             s.beyond_reach.len(),
             p.x,
             p.y,
@@ -498,6 +502,7 @@ fn part(
             g
         }),
         grain_dir: grain_dir.filter(|_| piece.grain.is_none()),
+        despike: piece.despike.clone(),
     }
 }
 
