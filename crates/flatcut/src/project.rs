@@ -455,3 +455,42 @@ impl Project {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn project(extra: &str) -> Project {
+        let text = format!(
+            "name = \"p\"\ndesign = \"d.toml\"\n{extra}\n[material]\nname = \"m\"\nmax_stretch_pct = 10.0\n[sheet]\nwidth_mm = 600.0\nheight_mm = 400.0\n[machine]\nprofile = \"pen\"\n"
+        );
+        toml::from_str(&text).unwrap()
+    }
+
+    #[test]
+    fn despike_is_for_the_split_and_moves_at_most_its_length() {
+        assert_eq!(project("").despike_max_mm(), Ok(None));
+        assert_eq!(
+            project("split = \"auto\"\ndespike = true").despike_max_mm(),
+            Ok(Some(crate::despiking::DEFAULT_MAX_MM))
+        );
+        assert_eq!(
+            project("split = \"auto\"\ndespike = true\ndespike_max_mm = 5.0").despike_max_mm(),
+            Ok(Some(5.0))
+        );
+        for (bad, said) in [
+            ("despike = true", "needs split"),
+            (
+                "split = \"auto\"\ndespike_max_mm = 5.0",
+                "needs despike = true",
+            ),
+            (
+                "split = \"auto\"\ndespike = true\ndespike_max_mm = 0.0",
+                "a positive length",
+            ),
+        ] {
+            let e = project(bad).validate().unwrap_err();
+            assert!(e.contains(said), "{bad}: {e}");
+        }
+    }
+}
