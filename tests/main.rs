@@ -4,6 +4,7 @@
 mod assembly;
 mod dart_drawing;
 mod darts;
+mod despike;
 mod dxf;
 mod fuzz;
 mod genus;

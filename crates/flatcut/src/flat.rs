@@ -46,6 +46,8 @@ pub struct Flat {
     pub grain_dir: Option<flatcut_geom::DVec2>,
     /// Where the time went besides the solve (whose parts are in `info`).
     pub times: PieceTimes,
+    /// What removing its surface's spikes changed, when asked for ([`crate::despiking`]).
+    pub despike: Option<crate::despiking::DespikeRecord>,
 }
 
 /// Where a piece's time went besides the flattening's solve.
@@ -68,6 +70,27 @@ impl Flat {
             + &flatcut_mesh::io::obj_string(&self.mesh)
             + &crate::dart_lines::write(&self.darts)
             + &crate::notch_points::write(&self.notches)
+    }
+}
+
+/// A piece's report as `flatten --report` writes it: the distortion report, and after its keys
+/// what removing the surface's spikes changed (`despike`; absent without `--despike`, so the
+/// file is as it was).
+#[derive(serde::Serialize)]
+pub struct WrittenReport<'a> {
+    #[serde(flatten)]
+    report: &'a Report,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    despike: Option<&'a crate::despiking::DespikeRecord>,
+}
+
+impl Flat {
+    /// The piece's report as written ([`WrittenReport`]).
+    pub fn written_report(&self) -> WrittenReport<'_> {
+        WrittenReport {
+            report: &self.report,
+            despike: self.despike.as_ref(),
+        }
     }
 }
 
@@ -179,6 +202,7 @@ pub fn read_flat_mesh(path: &Path, limits: &Limits) -> Result<Option<Flat>, Pipe
         grain: None,
         grain_dir: None,
         times,
+        despike: None,
     }))
 }
 
@@ -238,6 +262,7 @@ fn report_flat_design(flat: FlatDesign, limits: &Limits) -> Result<Vec<Flat>, Pi
                  darts,
                  grain,
                  grain_dir,
+                 despike,
              }| {
                 let marks: Vec<u32> = notches.iter().map(|n| n.vertex).collect();
                 let reporting = Instant::now();
@@ -271,6 +296,7 @@ fn report_flat_design(flat: FlatDesign, limits: &Limits) -> Result<Vec<Flat>, Pi
                     grain,
                     grain_dir,
                     times,
+                    despike,
                 })
             },
         )

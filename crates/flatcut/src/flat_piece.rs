@@ -35,4 +35,7 @@ pub struct FlatPiece {
     /// The grain's direction in the flat map of a piece without a material whose grain line
     /// cannot be drawn from the design (a part of a split piece).
     pub grain_dir: Option<DVec2>,
+    /// What removing its surface's spikes changed, when asked for ([`crate::despiking`]); the
+    /// parts of a split piece carry the whole surface's.
+    pub despike: Option<crate::despiking::DespikeRecord>,
 }

@@ -175,6 +175,9 @@ fn flatten_one(
     let reading = Instant::now();
     let mut asm = design.assemble(base, tol)?;
     let read = reading.elapsed();
+    // A scan's spikes removed first, when asked for: the opening, the flattening and the split
+    // all see the repaired surface.
+    let despiked = despike_pieces(&mut asm, base, params, split, material)?;
     // Nothing flattens a surface that is not a disk (closed, of any genus, with several
     // boundary loops): one that may be split is flattened opened here as a stand-in and split
     // from the whole afterwards ([`crate::splitting::split_surface_piece`]).
@@ -286,6 +289,7 @@ fn flatten_one(
                     darts: Vec::new(),
                     grain: None,
                     grain_dir: None,
+                    despike: None,
                 })
                 }
                 Some(f) if joined => {
@@ -312,6 +316,7 @@ fn flatten_one(
                     darts: Vec::new(),
                     grain: None,
                     grain_dir: None,
+                    despike: None,
                 })
                 }
                 f => {
@@ -352,6 +357,7 @@ fn flatten_one(
                         darts: Vec::new(),
                         grain: grain.clone(),
                         grain_dir: None,
+                        despike: None,
                     }
                 });
                 match dart_if_wanted(p.def, p.mesh, f, notches, &limits, darts, grain) {
@@ -361,7 +367,11 @@ fn flatten_one(
                 }
             }
         })
-        .collect::<Result<Vec<_>, PipelineError>>()?;
+        .collect::<Result<Vec<FlatPiece>, PipelineError>>()?;
+    let mut pieces = pieces;
+    for (p, d) in pieces.iter_mut().zip(despiked) {
+        p.despike = d;
+    }
     let (pieces, seams) = match split {
         Some(s) => {
             split_where_wanted(pieces, asm.seams, &joined_copy, &closed, params, s, |def| {
@@ -371,6 +381,28 @@ fn flatten_one(
         None => (pieces, asm.seams),
     };
     Ok((pieces, seams, read))
+}
+
+/// Removes the spikes of every piece's surface when the split settings ask for it
+/// ([`crate::despiking`]), each with the limits its split holds; what each repair changed, in
+/// the order of the pieces (`None` throughout when not asked for).
+fn despike_pieces(
+    asm: &mut flatcut_design::Assembly,
+    base: &Path,
+    params: &FlattenParams,
+    split: Option<&crate::splitting::SplitSettings>,
+    material: Option<&MaterialSpec>,
+) -> Result<Vec<Option<crate::despiking::DespikeRecord>>, PipelineError> {
+    let Some(max_mm) = split.and_then(|s| s.despike_max_mm) else {
+        return Ok(vec![None; asm.pieces.len()]);
+    };
+    asm.pieces
+        .iter_mut()
+        .map(|p| {
+            let m = crate::material::of_piece(&p.def, base, material)?;
+            crate::despiking::despike_piece(&p.def.name, &mut p.mesh, params, m.as_ref(), max_mm)
+        })
+        .collect()
 }
 
 /// The isotropic flattening of every piece `wanted` marks (the others are left out of the
@@ -548,6 +580,7 @@ fn dart_if_wanted(
         darts,
         grain,
         grain_dir: None,
+        despike: None,
     })
 }
 

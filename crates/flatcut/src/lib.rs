@@ -45,6 +45,7 @@ pub mod check;
 pub mod dart_drawing;
 pub mod dart_lines;
 pub mod darting;
+pub mod despiking;
 pub mod error;
 pub mod flat;
 pub mod flat_piece;

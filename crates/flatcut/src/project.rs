@@ -12,6 +12,8 @@
 //!                               # (off | auto | x | y | z, as --symmetry; default off)
 //! symmetry_tolerance_pct = 1.0  # its largest deviation from its mirror image (% of its size)
 //! # symmetry_plane = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0]   # or this plane: a point, a normal (mm)
+//! # despike = true              # optional, with split: move a scan's spikes back into its
+//! # despike_max_mm = 2.0        # surface first, no vertex farther than this (as --despike)
 //! [material]
 //! name = "parchment"
 //! max_stretch_pct = 2.0
@@ -200,6 +202,14 @@ pub struct Project {
     /// `symmetry`.
     #[serde(default)]
     pub symmetry_plane: Option<[f64; 6]>,
+    /// With `split = "auto"`, whether a scan's spikes are moved back into its surface before it
+    /// is flattened and split, as `--despike` ([`crate::despiking`]).
+    #[serde(default)]
+    pub despike: bool,
+    /// With `despike = true`, the largest move of a vertex (mm), as `--despike-max-mm`
+    /// ([`crate::despiking::DEFAULT_MAX_MM`] when absent).
+    #[serde(default)]
+    pub despike_max_mm: Option<f64>,
     /// The material the pieces are cut from.
     pub material: Material,
     /// What the pieces are nested on.
@@ -349,6 +359,7 @@ impl Project {
             return Err(format!("unknown method '{m}'"));
         }
         self.symmetry_settings()?;
+        self.despike_max_mm()?;
         if let Some(order) = &self.order {
             if let Some((size, n)) = order
                 .iter()
@@ -407,6 +418,28 @@ impl Project {
         Ok(s)
     }
 
+    /// The largest move of a vertex when the split first removes a scan's spikes
+    /// (`despike`, `despike_max_mm`), `None` when it does not, or what is wrong with those keys:
+    /// a length that is not positive, or either key without `split = "auto"` (or the length
+    /// without `despike = true`).
+    pub fn despike_max_mm(&self) -> Result<Option<f64>, String> {
+        if let Some(mm) = self.despike_max_mm {
+            if !(mm > 0.0 && flatcut_geom::limits::in_range(mm)) {
+                return Err(format!("despike_max_mm = {mm}: a positive length in mm"));
+            }
+            if !self.despike {
+                return Err("despike_max_mm needs despike = true".into());
+            }
+        }
+        if self.despike && self.split != Some(flatcut_design::DartsDef::Auto) {
+            return Err("despike is for the split: it needs split = \"auto\"".into());
+        }
+        Ok(self.despike.then(|| {
+            self.despike_max_mm
+                .unwrap_or(crate::despiking::DEFAULT_MAX_MM)
+        }))
+    }
+
     /// The design file's path.
     pub fn design_path(&self) -> PathBuf {
         self.dir.join(&self.design)
@@ -419,6 +452,45 @@ impl Project {
             self.dir.join(p).display().to_string()
         } else {
             p.clone()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn project(extra: &str) -> Project {
+        let text = format!(
+            "name = \"p\"\ndesign = \"d.toml\"\n{extra}\n[material]\nname = \"m\"\nmax_stretch_pct = 10.0\n[sheet]\nwidth_mm = 600.0\nheight_mm = 400.0\n[machine]\nprofile = \"pen\"\n"
+        );
+        toml::from_str(&text).unwrap()
+    }
+
+    #[test]
+    fn despike_is_for_the_split_and_moves_at_most_its_length() {
+        assert_eq!(project("").despike_max_mm(), Ok(None));
+        assert_eq!(
+            project("split = \"auto\"\ndespike = true").despike_max_mm(),
+            Ok(Some(crate::despiking::DEFAULT_MAX_MM))
+        );
+        assert_eq!(
+            project("split = \"auto\"\ndespike = true\ndespike_max_mm = 5.0").despike_max_mm(),
+            Ok(Some(5.0))
+        );
+        for (bad, said) in [
+            ("despike = true", "needs split"),
+            (
+                "split = \"auto\"\ndespike_max_mm = 5.0",
+                "needs despike = true",
+            ),
+            (
+                "split = \"auto\"\ndespike = true\ndespike_max_mm = 0.0",
+                "a positive length",
+            ),
+        ] {
+            let e = project(bad).validate().unwrap_err();
+            assert!(e.contains(said), "{bad}: {e}");
         }
     }
 }

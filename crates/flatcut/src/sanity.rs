@@ -142,6 +142,7 @@ mod tests {
             grain: None,
             grain_dir: None,
             times: Default::default(),
+            despike: None,
         }
     }
 

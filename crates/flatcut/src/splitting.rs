@@ -37,6 +37,9 @@ pub struct SplitSettings {
     pub seam_allowance_mm: f64,
     /// Whether a closed surface is split as mirrored left and right pairs.
     pub symmetry: SymmetrySettings,
+    /// Whether the spikes of a piece are removed before it is flattened and split, and the
+    /// largest move of a vertex (mm) when they are ([`crate::despiking`]).
+    pub despike_max_mm: Option<f64>,
 }
 
 /// Whether a closed surface's split looks for a mirror plane.
@@ -112,6 +115,7 @@ impl Default for SplitSettings {
             time_limit: None,
             seam_allowance_mm: 0.0,
             symmetry: SymmetrySettings::default(),
+            despike_max_mm: None,
         }
     }
 }
@@ -254,12 +258,23 @@ pub(crate) fn options(
 }
 
 /// What a split beyond the limits says of the surface's vertices beyond reach
-/// ([`flatcut_darts::split::Split::beyond_reach`]): how many, and where the worst is; empty
-/// when the split is within the limits or the surface has none.
-fn spikes_note(s: &flatcut_darts::split::Split) -> String {
+/// ([`flatcut_darts::split::Split::beyond_reach`]): how many, and where the worst is, and the
+/// remedy (or what `despiked`, the repair already made, moved and left); empty when the split
+/// is within the limits or the surface has none.
+fn spikes_note(
+    s: &flatcut_darts::split::Split,
+    despiked: Option<&crate::despiking::DespikeRecord>,
+) -> String {
+    let remedy = match despiked {
+        None => "--despike (a project's despike = true) moves such spikes back into the surface before the split, within --despike-max-mm".to_string(),
+        Some(d) => format!(
+            "--despike moved {} vertices, at most {:.3} mm, and left {} beyond reach within --despike-max-mm; a larger one may move them",
+            d.moved, d.max_mm, d.left
+        ),
+    };
     match s.beyond_reach.first() {
         Some(p) if !s.feasible => format!(
-            "; {} vertices of the surface have more angle defect than the faces round them can absorb within the limits (a scan's spikes; the worst at ({:.1}, {:.1}, {:.1})): no part within the limits holds one inside, so only a seam through every one of them meets the limits",
+            "; {} vertices of the surface have more angle defect than the faces round them can absorb within the limits (a scan's spikes; the worst at ({:.1}, {:.1}, {:.1})): no part within the limits holds one inside, so only a seam through every one of them meets the limits; {remedy}",
             s.beyond_reach.len(),
             p.x,
             p.y,
@@ -280,7 +295,7 @@ pub(crate) fn into_parts(
     let count = stage.count();
     // The stand-in's own warnings do not carry over to the parts.
     let mut timed_out_warning = None;
-    let spikes = spikes_note(&s);
+    let spikes = spikes_note(&s, piece.despike.as_ref());
     if s.seams_apart {
         // No joint solve of the parts finished in the time: their seams are not yet equal.
         timed_out_warning = Some(format!(
@@ -498,6 +513,7 @@ fn part(
             g
         }),
         grain_dir: grain_dir.filter(|_| piece.grain.is_none()),
+        despike: piece.despike.clone(),
     }
 }
 

@@ -9,6 +9,7 @@
 
 pub mod cut_graph;
 pub mod decimal;
+pub mod despike;
 pub mod disk;
 pub mod distortion;
 pub mod geodesic;

@@ -105,6 +105,19 @@ pub struct FlattenArgs {
     /// percent of its bounding box diagonal.
     #[arg(long, value_name = "PCT", default_value_t = 100.0 * flatcut::mesh::symmetry::DEFAULT_TOLERANCE, value_parser = values::material_percent)]
     pub symmetry_tolerance: f64,
+    /// With --split auto, move a scan's spikes back into its surface before it is flattened and
+    /// split: the inside vertices whose angle defect is more than their corners can absorb
+    /// within the limits (no part within them holds one inside), each to the plane of its
+    /// neighbours or their centroid (their neighbours too, only where that is not enough),
+    /// never folding a face. Nothing else moves; what moved is printed and recorded in the
+    /// report (`despike`).
+    #[arg(long)]
+    pub despike: bool,
+    /// With --despike, the farthest a vertex may move (mm); a spike that needs more is left,
+    /// counted in the report, and the split refuses it as without --despike. The default is
+    /// about twice a scan's spike: a larger move changes the shape rather than its noise.
+    #[arg(long, value_name = "MM", default_value_t = flatcut::despiking::DEFAULT_MAX_MM, value_parser = values::positive_mm, requires = "despike")]
+    pub despike_max_mm: f64,
     /// The material of pieces that name none: leather, woven-cotton, canvas, knit,
     /// carbon-prepreg, sailcloth, or a material file (TOML). Flattens with the orthotropic
     /// energy along each piece's grain (chosen when the piece has none) and checks the limits
@@ -272,6 +285,10 @@ impl FlattenArgs {
     /// The split settings when splitting is asked for on the command line.
     pub fn split(&self) -> anyhow::Result<Option<SplitSettings>> {
         if self.split != Some(DartMode::Auto) {
+            anyhow::ensure!(
+                !self.despike,
+                "--despike needs --split auto: it removes the spikes no part within the limits can hold"
+            );
             return Ok(None);
         }
         anyhow::ensure!(
@@ -285,6 +302,7 @@ impl FlattenArgs {
                 mode: self.symmetry_plane.unwrap_or(self.symmetry),
                 tolerance: self.symmetry_tolerance / 100.0,
             },
+            despike_max_mm: self.despike.then_some(self.despike_max_mm),
             ..SplitSettings::default()
         }))
     }
@@ -422,6 +440,7 @@ fn load_with(
         format!("the {what} of {}", path.display())
     })?;
     let flats = flats.with_context(|| format!("cannot flatten {}", path.display()))?;
+    print_despiked(&flats);
     for f in &flats {
         let Some(info) = &f.info else { continue };
         for w in &info.warnings {
@@ -450,6 +469,18 @@ fn load_with(
         }
     }
     Ok(flats)
+}
+
+/// Prints on stderr what removing each piece's spikes changed (`--despike`), once per piece
+/// (its parts carry the same record).
+pub fn print_despiked(flats: &[Flat]) {
+    let mut seen: Vec<&str> = Vec::new();
+    for d in flats.iter().filter_map(|f| f.despike.as_ref()) {
+        if !seen.contains(&d.piece.as_str()) {
+            seen.push(&d.piece);
+            eprintln!("{}", d.line());
+        }
+    }
 }
 
 /// " (isometric 7/200, limits 12/200)": each stage's iterations against its cap, empty for a

@@ -55,13 +55,13 @@ pub fn run(a: Args) -> anyhow::Result<ExitCode> {
             f.report.delta2_mean,
             path.display()
         ));
-        reports.push(&f.report);
+        reports.push(f.written_report());
     }
     if let Some(path) = &a.report {
         let json = if several {
             serde_json::to_string_pretty(&reports)?
         } else {
-            serde_json::to_string_pretty(reports[0])?
+            serde_json::to_string_pretty(&reports[0])?
         };
         out.add(path, json.as_bytes())?;
     }

@@ -297,6 +297,7 @@ fn limits(project: &Project) -> Limits {
                 seam_allowance_mm: project.seam_mm.unwrap_or(0.0),
                 // Checked when the project was loaded.
                 symmetry: project.symmetry_settings().unwrap_or_default(),
+                despike_max_mm: project.despike_max_mm().unwrap_or_default(),
                 ..Default::default()
             }
         }),
@@ -632,6 +633,7 @@ fn summarise(
                 area_mm2: f.report.area_3d_mm2,
                 compress_max_pct: f.report.compress_max_pct,
                 delta2_mean: f.report.delta2_mean,
+                despike: f.despike.clone(),
                 name: f.name.clone(),
                 mirrored: f.mirrored,
                 quantity: f.quantity,

@@ -40,6 +40,9 @@ pub struct PieceSummary {
     pub compress_max_pct: f64,
     /// The mean of the report's δ² distortion measure over the piece.
     pub delta2_mean: f64,
+    /// What removing the surface's spikes changed (`despike = true`); absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub despike: Option<crate::despiking::DespikeRecord>,
     /// Mirror images cut besides (`pairs`).
     pub mirrored: u32,
     /// The piece's name.
