@@ -31,8 +31,9 @@
 //! A surface that is not a disk (closed, of any genus, or with several boundary loops) cannot be
 //! flattened at all: [`split_surface`] first opens it into disks ([`crate::open`]: its handles
 //! cut along short loops, its holes joined, a sphere slit) and goes on from those. New parts are
-//! judged flattened on their own with the limits held; all parts are flattened together only
-//! when they look done (step 3 is then the proof, or it sends the loop on).
+//! judged flattened on their own with the limits held (the two sides of a cut side by side);
+//! all parts are flattened together only when they look done (step 3 is then the proof, or it
+//! sends the loop on).
 //!
 //! Among the chords, one whose two halves both come within the limits, or that ties on the
 //! excess within [`SCORE_TIE`], is chosen by its seam cost ([`crate::seam_cost`]: length weighted
@@ -435,10 +436,17 @@ fn split_on(
         resewn |= halves.closed_slit;
         let cut = halves.path;
         let mut parts = halves.sides;
-        for p in &mut parts {
-            let f = flatcut_flatten::flatten(p, &held()).map_err(DartError::Flatten)?;
-            p.flat = Some(f.uv);
-        }
+        // The two sides side by side: each is its own solve, so the maps are those of one after
+        // the other, and an error is the first side's before the second's.
+        let solved: Vec<Result<(), DartError>> = parts
+            .par_iter_mut()
+            .map(|p| {
+                let f = flatcut_flatten::flatten(p, &held()).map_err(DartError::Flatten)?;
+                p.flat = Some(f.uv);
+                Ok(())
+            })
+            .collect();
+        solved.into_iter().collect::<Result<Vec<()>, DartError>>()?;
         let [a, b] = parts;
         pieces[k] = a;
         pieces.push(b);
