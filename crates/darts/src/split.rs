@@ -894,6 +894,13 @@ fn best_cut(
                     .map(Line::Path),
             );
         }
+        // Through the middle of the excess too: where it is spread, the worst face is one of
+        // many. Judged with the others, in one batch: judged apart, the second batch's eight
+        // chords waited for the slowest of the first.
+        if let Some(c) = excess_centre(piece, x, band)?.filter(|&c| polygon::contains(&outline, c))
+        {
+            lines.extend(chords(&[c]));
+        }
     }
     // Judged side by side; taken in the candidates' order.
     let judge = |lines: &[Line]| -> Vec<Candidate> {
@@ -944,7 +951,7 @@ fn best_cut(
             .flatten()
             .collect()
     };
-    let mut judged = judge(&lines);
+    let judged = judge(&lines);
     // The piece's own excess, flattened as the halves are: what a cut must bring down.
     let own = std::cell::OnceCell::new();
     let helps = |b: &Candidate| {
@@ -954,12 +961,6 @@ fn best_cut(
         });
         b.crossed == 0 && b.score < own - SCORE_TIE
     };
-    // Through the middle of the excess too: where it is spread, the worst face is one of many.
-    if !necks
-        && let Some(c) = excess_centre(piece, x, band)?.filter(|&c| polygon::contains(&outline, c))
-    {
-        judged.extend(judge(&chords(&[c])));
-    }
     let (small, sized): (Vec<Candidate>, Vec<Candidate>) =
         judged.into_iter().partition(|c| c.small);
     let best = sized
