@@ -31,8 +31,9 @@
 //! A surface that is not a disk (closed, of any genus, or with several boundary loops) cannot be
 //! flattened at all: [`split_surface`] first opens it into disks ([`crate::open`]: its handles
 //! cut along short loops, its holes joined, a sphere slit) and goes on from those. New parts are
-//! judged flattened on their own with the limits held; all parts are flattened together only
-//! when they look done (step 3 is then the proof, or it sends the loop on).
+//! judged flattened on their own with the limits held (the two sides of a cut side by side);
+//! all parts are flattened together only when they look done (step 3 is then the proof, or it
+//! sends the loop on).
 //!
 //! Among the chords, one whose two halves both come within the limits, or that ties on the
 //! excess within [`SCORE_TIE`], is chosen by its seam cost ([`crate::seam_cost`]: length weighted
@@ -437,10 +438,17 @@ fn split_on(
         resewn |= halves.closed_slit;
         let cut = halves.path;
         let mut parts = halves.sides;
-        for p in &mut parts {
-            let f = flatcut_flatten::flatten(p, &held()).map_err(DartError::Flatten)?;
-            p.flat = Some(f.uv);
-        }
+        // The two sides side by side: each is its own solve, so the maps are those of one after
+        // the other, and an error is the first side's before the second's.
+        let solved: Vec<Result<(), DartError>> = parts
+            .par_iter_mut()
+            .map(|p| {
+                let f = flatcut_flatten::flatten(p, &held()).map_err(DartError::Flatten)?;
+                p.flat = Some(f.uv);
+                Ok(())
+            })
+            .collect();
+        solved.into_iter().collect::<Result<Vec<()>, DartError>>()?;
         let [a, b] = parts;
         pieces[k] = a;
         pieces.push(b);
@@ -945,6 +953,13 @@ fn best_cut(
                     .map(Line::Path),
             );
         }
+        // Through the middle of the excess too: where it is spread, the worst face is one of
+        // many. Judged with the others, in one batch: judged apart, the second batch's eight
+        // chords waited for the slowest of the first.
+        if let Some(c) = excess_centre(piece, x, band)?.filter(|&c| polygon::contains(&outline, c))
+        {
+            lines.extend(chords(&[c]));
+        }
     }
     // Judged side by side; taken in the candidates' order.
     let judge = |lines: &[Line]| -> Vec<Candidate> {
@@ -995,7 +1010,7 @@ fn best_cut(
             .flatten()
             .collect()
     };
-    let mut judged = judge(&lines);
+    let judged = judge(&lines);
     // The piece's own excess, flattened as the halves are: what a cut must bring down.
     let own = std::cell::OnceCell::new();
     let helps = |b: &Candidate| {
@@ -1005,12 +1020,6 @@ fn best_cut(
         });
         b.crossed == 0 && b.score < own - SCORE_TIE
     };
-    // Through the middle of the excess too: where it is spread, the worst face is one of many.
-    if !necks
-        && let Some(c) = excess_centre(piece, x, band)?.filter(|&c| polygon::contains(&outline, c))
-    {
-        judged.extend(judge(&chords(&[c])));
-    }
     let (small, sized): (Vec<Candidate>, Vec<Candidate>) =
         judged.into_iter().partition(|c| c.small);
     let best = sized
