@@ -46,7 +46,10 @@
 //! part is a V no seam allowance fits in), and once every part is within the limits,
 //! neighbours whose union still lies within them are merged, the pairs sharing the longest
 //! seams first (the fewest pieces for the limits: a ball within ±10 % comes as the two halves
-//! of a tennis ball). A union the split's capped solve leaves just beyond the limits
+//! of a tennis ball); where those rounds leave at most [`crate::fewest::FEWEST_EXACT`] parts,
+//! the groupings of them are searched for the fewest parts, then the shortest seams
+//! ([`crate::fewest`]), as the longest seams first can pair parts so that none merges after.
+//! A union the split's capped solve leaves just beyond the limits
 //! ([`MERGE_NEAR_MISS`]) is solved again with the flattener's full steps before it is refused.
 //! The merged pieces are kept only when their joint solve holds the limits.
 //!
