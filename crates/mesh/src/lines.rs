@@ -24,7 +24,7 @@
 use flatcut_geom::DVec3;
 
 use crate::TriMesh;
-use crate::nearest::{Bvh, closest_on_triangle};
+use crate::nearest::closest_on_triangle;
 
 /// A crossing within this fraction of an edge's length from one of its ends goes through that
 /// end (a given point within this fraction of a triangle's shortest edge from a corner is that
@@ -171,13 +171,12 @@ pub enum LineError {
 /// Embeds the lines in the mesh (see the module documentation).
 pub fn embed_lines(mesh: &TriMesh, specs: &[LineSpec]) -> Result<Embedded, LineError> {
     let mut ed = Edit::new(mesh);
-    let surface = Surface::new(mesh);
     let diag = mesh.bbox().diagonal();
     let end_tol = END_REL * diag;
     // Project every point and check it is on the surface.
     let mut projected: Vec<Vec<Anchor>> = Vec::with_capacity(specs.len());
     for (k, s) in specs.iter().enumerate() {
-        projected.push(anchors(&surface, k, s, diag)?);
+        projected.push(anchors(&ed, k, s, diag)?);
     }
     ed.lines = vec![Vec::new(); specs.len()];
     let mut traced = vec![false; specs.len()];
@@ -228,15 +227,10 @@ struct Anchor {
 }
 
 /// The line's points projected onto the surface, with the notches inserted in order along it.
-fn anchors(
-    surface: &Surface,
-    line: usize,
-    s: &LineSpec,
-    diag: f64,
-) -> Result<Vec<Anchor>, LineError> {
+fn anchors(ed: &Edit, line: usize, s: &LineSpec, diag: f64) -> Result<Vec<Anchor>, LineError> {
     let mut out: Vec<Anchor> = Vec::with_capacity(s.points.len() + s.notches.len());
     for (i, &p) in s.points.iter().enumerate() {
-        let (q, d) = surface.nearest(p);
+        let (q, d) = ed.nearest(p);
         if d.is_nan() || d > OFF_SURFACE_REL * diag {
             return Err(LineError::OffSurface {
                 line,
@@ -263,7 +257,7 @@ fn anchors(
     }
     let tol = END_REL * diag;
     for (j, &n) in s.notches.iter().enumerate() {
-        let (q, dist) = surface.nearest(n);
+        let (q, dist) = ed.nearest(n);
         // Where along the polyline of the projected points the notch falls.
         let mut best = (f64::INFINITY, 0usize, 0.0f64);
         for i in 0..out.len() - 1 {
@@ -442,35 +436,6 @@ struct Stop {
     left_surface: bool,
 }
 
-/// The surface as given, for the points of the lines to be projected onto: the lines are
-/// projected before any is traced, so the edits never change what is asked here.
-struct Surface<'a> {
-    mesh: &'a TriMesh,
-    bvh: Bvh,
-}
-
-impl<'a> Surface<'a> {
-    fn new(mesh: &'a TriMesh) -> Self {
-        Self {
-            mesh,
-            bvh: Bvh::new(&mesh.positions, &mesh.triangles),
-        }
-    }
-
-    /// The nearest surface point to `p` and its distance (`p` itself at an infinite distance
-    /// on a mesh without triangles); the lowest-numbered triangle on a tie.
-    fn nearest(&self, p: DVec3) -> (DVec3, f64) {
-        let (pos, tris) = (&self.mesh.positions, &self.mesh.triangles);
-        match self.bvh.nearest(pos, tris, p) {
-            Some((t, _, d)) => {
-                let [a, b, c] = tris[t].map(|v| pos[v as usize]);
-                (closest_on_triangle(p, a, b, c).0, d)
-            }
-            None => (p, f64::INFINITY),
-        }
-    }
-}
-
 /// A triangle mesh under edit: triangles split in place, faces per vertex kept up to date, and
 /// the traced lines updated when one of their edges is split.
 struct Edit {
@@ -494,6 +459,21 @@ impl Edit {
             vf,
             lines: Vec::new(),
         }
+    }
+
+    /// The nearest surface point to `p` and its distance (brute force: the mesh changes
+    /// between queries, and they are few).
+    fn nearest(&self, p: DVec3) -> (DVec3, f64) {
+        let mut best = (p, f64::INFINITY);
+        for t in &self.tris {
+            let [a, b, c] = t.map(|v| self.pos[v as usize]);
+            let (q, _) = closest_on_triangle(p, a, b, c);
+            let d = q.distance(p);
+            if d < best.1 {
+                best = (q, d);
+            }
+        }
+        best
     }
 
     fn faces_of_edge(&self, a: u32, b: u32) -> Vec<u32> {

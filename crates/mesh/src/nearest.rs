@@ -53,9 +53,7 @@ impl Bvh {
         Self { nodes }
     }
 
-    /// Nearest triangle to `p`: `(triangle, barycentric coordinates, distance)`; of triangles
-    /// at the same distance, the lowest-numbered, so the answer is the one a scan of every
-    /// triangle in order gives, whatever the shape of the hierarchy.
+    /// Nearest triangle to `p`: `(triangle, barycentric coordinates, distance)`.
     pub fn nearest(
         &self,
         pos: &[DVec3],
@@ -67,8 +65,7 @@ impl Bvh {
         // The root is the last node pushed by `build`.
         let mut stack = vec![self.nodes.len().checked_sub(1)?];
         while let Some(i) = stack.pop() {
-            // A box at the best distance may hold a lower-numbered triangle at it.
-            if box_dist2(self.nodes[i].bbox(), p) > best_d2 {
+            if box_dist2(self.nodes[i].bbox(), p) >= best_d2 {
                 continue;
             }
             match &self.nodes[i] {
@@ -82,8 +79,7 @@ impl Bvh {
                             pos[tri[2] as usize],
                         );
                         let d2 = (q - p).length_squared();
-                        let lower = best.is_none_or(|(b, _, _)| (t as usize) < b);
-                        if d2 < best_d2 || (d2 == best_d2 && lower) {
+                        if d2 < best_d2 {
                             best_d2 = d2;
                             best = Some((t as usize, b, d2.sqrt()));
                         }
@@ -215,49 +211,5 @@ mod tests {
         assert!((q - DVec3::new(0.5, 0.5, 0.0)).length() < 1e-15);
         let (q, w) = closest_on_triangle(DVec3::new(-1.0, -1.0, 0.0), a, b, c);
         assert_eq!((q, w), (a, DVec3::X));
-    }
-
-    /// The triangle a scan of every triangle in order finds: the nearest, the first on a tie.
-    fn scanned(pos: &[DVec3], tris: &[[u32; 3]], p: DVec3) -> (usize, f64) {
-        let mut best = (usize::MAX, f64::INFINITY);
-        for (t, tri) in tris.iter().enumerate() {
-            let [a, b, c] = tri.map(|v| pos[v as usize]);
-            let d = (closest_on_triangle(p, a, b, c).0 - p).length_squared();
-            if d < best.1 {
-                best = (t, d);
-            }
-        }
-        best
-    }
-
-    #[test]
-    fn the_hierarchy_finds_the_triangle_a_scan_finds_ties_included() {
-        // A torus: points on its vertices and edges are at distance 0 from four to six
-        // triangles, off it at the same distance from several; the scan takes the first.
-        let m = crate::test_shapes::torus(30.0, 10.0, 24, 12);
-        let bvh = Bvh::new(&m.positions, &m.triangles);
-        let mut queries: Vec<DVec3> = m.positions.clone();
-        for t in &m.triangles {
-            let [a, b, c] = t.map(|v| m.positions[v as usize]);
-            queries.extend([
-                (a + b) / 2.0,
-                (a + b + c) / 3.0 * 1.2,
-                DVec3::new(0.0, 0.0, 0.0),
-            ]);
-        }
-        let mut ties = 0;
-        for &p in &queries {
-            let (t, d2) = scanned(&m.positions, &m.triangles, p);
-            let (u, _, d) = bvh.nearest(&m.positions, &m.triangles, p).unwrap();
-            assert_eq!(u, t, "at {p}");
-            assert_eq!(d, d2.sqrt());
-            let at_d2 = m.triangles.iter().filter(|tri| {
-                let [a, b, c] = tri.map(|v| m.positions[v as usize]);
-                (closest_on_triangle(p, a, b, c).0 - p).length_squared() == d2
-            });
-            ties += (at_d2.count() > 1) as usize;
-        }
-        // Most of the queries are ties (every vertex and every edge midpoint, the axis point).
-        assert!(ties > m.positions.len(), "{ties} ties");
     }
 }
