@@ -6,56 +6,12 @@
 //! ball without the spike (the spike's three faces lie in the plane of the face they replaced),
 //! and the report says what moved, how far and from where.
 
-use std::path::Path;
-
-use clap::Parser;
 use flatcut::geom::DVec3;
 use flatcut::mesh::TriMesh;
 use flatcut_mesh::test_shapes::star_shaped;
 
 use crate::darts::{measured_limits, split_parts};
-
-/// Runs `flatcut flatten FILE -o DIR/flat.obj --report DIR/flat.json ARGS…`: its exit code (as
-/// text) or its error.
-fn flatten(file: &Path, dir: &Path, args: &[&str]) -> Result<String, String> {
-    let (flat, report) = (dir.join("flat.obj"), dir.join("flat.json"));
-    let mut argv = vec![
-        "flatcut",
-        "flatten",
-        file.to_str().unwrap(),
-        "-o",
-        flat.to_str().unwrap(),
-        "--report",
-        report.to_str().unwrap(),
-    ];
-    argv.extend_from_slice(args);
-    let cli = flatcut_cli::Cli::try_parse_from(argv).unwrap();
-    flatcut_cli::run(cli)
-        .map(|c| format!("{c:?}"))
-        .map_err(|e| format!("{e:#}"))
-}
-
-/// `mesh` as OBJ text to the micrometre.
-fn obj_text(mesh: &TriMesh) -> String {
-    let mut s = String::new();
-    for q in &mesh.positions {
-        s.push_str(&format!("v {:.6} {:.6} {:.6}\n", q.x, q.y, q.z));
-    }
-    for [a, b, c] in &mesh.triangles {
-        s.push_str(&format!("f {} {} {}\n", a + 1, b + 1, c + 1));
-    }
-    s
-}
-
-fn area(mesh: &TriMesh) -> f64 {
-    mesh.triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
-            0.5 * (b - a).cross(c - a).length()
-        })
-        .sum()
-}
+use crate::genus::{flatten, obj_text};
 
 /// The 320-face ball of radius 100 mm with its first face raised into a spike: three faces round
 /// a point 25 mm out from the face's centroid; the ball, the spiked ball, the spike's tip and its
@@ -95,7 +51,7 @@ fn a_spiked_ball_is_refused_without_despike_and_split_within_the_limits_with_it(
     let (ball, spiked, top, height) = spiked_ball();
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("spiked.obj");
-    std::fs::write(&file, obj_text(&spiked)).unwrap();
+    std::fs::write(&file, obj_text(&spiked, 6)).unwrap();
 
     // Without --despike: refused, the spike named and the remedy given; nothing written.
     let plain = dir.path().join("plain");
@@ -153,12 +109,12 @@ fn a_spiked_ball_is_refused_without_despike_and_split_within_the_limits_with_it(
         })
         .sum();
     assert!(
-        (covered - area(&ball)).abs() < 1e-4 * area(&ball),
+        (covered - ball.area()).abs() < 1e-4 * ball.area(),
         "{covered} vs {} (spiked {})",
-        area(&ball),
-        area(&spiked)
+        ball.area(),
+        spiked.area()
     );
-    assert!(area(&spiked) - area(&ball) > 1e-3 * area(&ball));
+    assert!(spiked.area() - ball.area() > 1e-3 * ball.area());
     // The report of every part says what moved: one vertex, its height over the face, from the
     // spike's tip, none left.
     let json: serde_json::Value =
@@ -191,19 +147,13 @@ fn despike_moves_nothing_on_a_ball_without_spikes() {
     let (ball, _, _, _) = spiked_ball();
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("ball.obj");
-    std::fs::write(&file, obj_text(&ball)).unwrap();
-    let limits = [
-        "--max-stretch",
-        "10",
-        "--max-compress",
-        "10",
-        "--split",
-        "auto",
-    ];
+    std::fs::write(&file, obj_text(&ball, 6)).unwrap();
+    // The limits without the cap on the parts.
+    let limits = &LIMITS[..6];
     let (plain, with) = (dir.path().join("plain"), dir.path().join("with"));
     std::fs::create_dir(&plain).unwrap();
     std::fs::create_dir(&with).unwrap();
-    flatten(&file, &plain, &limits).unwrap();
+    flatten(&file, &plain, limits).unwrap();
     let mut args = limits.to_vec();
     args.push("--despike");
     flatten(&file, &with, &args).unwrap();

@@ -55,7 +55,7 @@ fn torus_obj(r1: f64, r2: f64, n: usize, m: usize) -> String {
 
 /// Runs `flatcut flatten FILE -o DIR/flat.obj --report DIR/flat.json ARGS…`: its exit code (as
 /// text) or its error.
-fn flatten(file: &Path, dir: &Path, args: &[&str]) -> Result<String, String> {
+pub(crate) fn flatten(file: &Path, dir: &Path, args: &[&str]) -> Result<String, String> {
     let (flat, report) = (dir.join("flat.obj"), dir.join("flat.json"));
     let mut argv = vec![
         "flatcut",
@@ -528,7 +528,7 @@ fn icosphere_obj(r: f64, levels: usize) -> String {
 }
 
 /// `mesh` as OBJ text, its coordinates written with `decimals` decimals.
-fn obj_text(mesh: &TriMesh, decimals: usize) -> String {
+pub(crate) fn obj_text(mesh: &TriMesh, decimals: usize) -> String {
     let mut s = String::new();
     for q in &mesh.positions {
         s.push_str(&format!(

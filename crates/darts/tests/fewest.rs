@@ -49,20 +49,32 @@ fn search(
     (f, calls)
 }
 
+/// The seams of four parts in a row, 2 – 0 – 1 – 3, the seam 0–1 the longest; what the greedy
+/// rounds judged of them (0 and 1 merged, neither 2 nor 3 joining them); and the unions within
+/// the limits.
+fn row_of_four() -> (
+    [((usize, usize), f64); 3],
+    [(Set, Verdict<Set>); 3],
+    [Set; 3],
+) {
+    (
+        [((0, 1), 30.0), ((0, 2), 20.0), ((1, 3), 20.0)],
+        [
+            (vec![0, 1], Verdict::Within(vec![0, 1])),
+            (vec![0, 1, 2], Verdict::Beyond),
+            (vec![0, 1, 3], Verdict::Beyond),
+        ],
+        [vec![0, 1], vec![0, 2], vec![1, 3]],
+    )
+}
+
 /// Four parts in a row, 2 – 0 – 1 – 3, the seam 0–1 the longest: the greedy rounds merge 0 and
 /// 1, and neither 2 nor 3 joins them (nor are 2 and 3 neighbours), three parts; 0 with 2 and 1
 /// with 3 lie within the limits, two parts. The unions holding one found beyond (0, 1, 2 and 0,
 /// 1, 3) are never judged again, nor is the whole.
 #[test]
 fn a_grouping_the_longest_seams_first_miss_is_found() {
-    let shared = [((0, 1), 30.0), ((0, 2), 20.0), ((1, 3), 20.0)];
-    // What the greedy rounds judged.
-    let judged = [
-        (vec![0, 1], Verdict::Within(vec![0, 1])),
-        (vec![0, 1, 2], Verdict::Beyond),
-        (vec![0, 1, 3], Verdict::Beyond),
-    ];
-    let within = [vec![0, 1], vec![0, 2], vec![1, 3]];
+    let (shared, judged, within) = row_of_four();
     let (f, calls) = search(4, &shared, &judged, &within, &[], &|| false);
     assert_eq!(f.groups, vec![vec![0, 2], vec![1, 3]]);
     assert!(!f.cut_short);
@@ -111,13 +123,7 @@ fn parts_no_pair_of_which_merges_stay_apart() {
 /// greedy rounds' three parts), saying it was cut short.
 #[test]
 fn out_of_time_the_best_grouping_known_is_the_result_and_says_so() {
-    let shared = [((0, 1), 30.0), ((0, 2), 20.0), ((1, 3), 20.0)];
-    let judged = [
-        (vec![0, 1], Verdict::Within(vec![0, 1])),
-        (vec![0, 1, 2], Verdict::Beyond),
-        (vec![0, 1, 3], Verdict::Beyond),
-    ];
-    let within = [vec![0, 1], vec![0, 2], vec![1, 3]];
+    let (shared, judged, within) = row_of_four();
     let (f, calls) = search(4, &shared, &judged, &within, &[], &|| true);
     assert!(f.cut_short);
     assert!(calls.is_empty());

@@ -266,7 +266,7 @@ fn flatten_one(
         }
     }
     let joined_copy = joined.clone();
-    let pieces = asm
+    let mut pieces = asm
         .pieces
         .into_iter()
         .zip(materials)
@@ -368,7 +368,6 @@ fn flatten_one(
             }
         })
         .collect::<Result<Vec<FlatPiece>, PipelineError>>()?;
-    let mut pieces = pieces;
     for (p, d) in pieces.iter_mut().zip(despiked) {
         p.despike = d;
     }
